@@ -1,0 +1,91 @@
+// vdmap info SEQ: what a sequence holds, what was dropped and why.
+#include <algorithm>
+#include <iostream>
+
+#include <nlohmann/json.hpp>
+
+#include "app/commands.h"
+#include "app/progress.h"
+
+namespace vdmap::app {
+namespace {
+
+struct DepthStats {
+  int frames_sampled = 0;
+  double min_m = 0, median_m = 0, max_m = 0;
+  double valid_fraction = 0;
+};
+
+// Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
+DepthStats sampleDepth(const TumSequence& seq, int samples) {
+  DepthStats stats;
+  std::vector<float> depths;
+  std::size_t pixels = 0;
+  const std::size_t n = std::min<std::size_t>(samples, seq.size());
+  ProgressBar progress("reading depth", n);
+  for (std::size_t k = 0; k < n; ++k) {
+    const RgbdFrame frame = seq.load(n == 1 ? 0 : k * (seq.size() - 1) / (n - 1));
+    pixels += frame.depth.total();
+    for (auto it = frame.depth.begin<std::uint16_t>(); it != frame.depth.end<std::uint16_t>(); ++it)
+      if (*it) depths.push_back(static_cast<float>(*it / seq.camera().depth_scale));
+    progress.update(k + 1);
+  }
+  stats.frames_sampled = static_cast<int>(n);
+  if (!depths.empty()) {
+    std::sort(depths.begin(), depths.end());
+    stats.min_m = depths.front();
+    stats.median_m = depths[depths.size() / 2];
+    stats.max_m = depths.back();
+    stats.valid_fraction = static_cast<double>(depths.size()) / pixels;
+  }
+  return stats;
+}
+
+void runInfo(const SequenceArgs& args, bool json) {
+  const TumSequence seq = openSequence(args);
+  const PinholeCamera& cam = seq.camera();
+  const DepthStats depth = sampleDepth(seq, 10);
+  const double t0 = seq.entries().front().t_depth, t1 = seq.entries().back().t_depth;
+  const DropCounts& d = seq.dropped();
+  if (json) {
+    nlohmann::json out = {
+        {"folder", seq.folder().string()},
+        {"listed_depth_frames", seq.listedDepthFrames()},
+        {"frames", seq.size()},
+        {"frames_with_pose", seq.size()},
+        {"time_span_s", {t0, t1}},
+        {"camera", {{"source", seq.cameraSource()}, {"width", cam.width}, {"height", cam.height},
+                    {"fx", cam.fx}, {"fy", cam.fy}, {"cx", cam.cx}, {"cy", cam.cy},
+                    {"depth_scale", cam.depth_scale}}},
+        {"depth_m", {{"frames_sampled", depth.frames_sampled}, {"min", depth.min_m},
+                     {"median", depth.median_m}, {"max", depth.max_m},
+                     {"valid_fraction", depth.valid_fraction}}},
+        {"dropped", {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}}},
+    };
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::printf("sequence   %s\n", seq.folder().c_str());
+  std::printf("frames     %zu usable (all with poses) of %d listed depth frames\n", seq.size(),
+              seq.listedDepthFrames());
+  std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
+  std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width,
+              cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
+  std::printf("depth      %.3f .. %.3f m, median %.3f m, %.0f%% of pixels valid (%d frames sampled)\n",
+              depth.min_m, depth.max_m, depth.median_m, 100.0 * depth.valid_fraction, depth.frames_sampled);
+  std::printf("dropped    %d without an rgb frame within 0.02 s, %d without a pose within 0.1 s, "
+              "%d outside --frames\n", d.no_rgb, d.no_pose, d.outside_range);
+}
+
+}  // namespace
+
+void addInfoCommand(CLI::App& app) {
+  auto* verb = app.add_subcommand("info", "Describe a sequence: frames, time span, camera, depth, drops");
+  auto args = std::make_shared<SequenceArgs>();
+  auto json = std::make_shared<bool>(false);
+  addSequenceArgs(*verb, *args);
+  verb->add_flag("--json", *json, "print JSON instead of text");
+  verb->callback([args, json] { runInfo(*args, *json); });
+}
+
+}  // namespace vdmap::app

@@ -1,0 +1,21 @@
+#include "app/commands.h"
+#include "mapping/io/camera_config.h"
+
+namespace vdmap::app {
+
+void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
+  std::string presets;
+  for (const std::string& n : cameraPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
+  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + presets);
+  verb.add_option("--frames", args.frames, "frames A:B of the depth list (B exclusive; A: or :B)");
+}
+
+TumSequence openSequence(const SequenceArgs& args) {
+  SequenceOptions options;
+  options.camera_preset = args.camera;
+  if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
+  return TumSequence::open(args.folder, options);
+}
+
+}  // namespace vdmap::app

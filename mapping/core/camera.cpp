@@ -1,0 +1,28 @@
+#include "mapping/core/camera.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace vdmap {
+
+Eigen::Matrix3d PinholeCamera::backProjectJacobian(double u, double v, double depth_m) const {
+  Eigen::Matrix3d J;
+  J << depth_m / fx, 0.0, (u - cx) / fx,  //
+      0.0, depth_m / fy, (v - cy) / fy,   //
+      0.0, 0.0, 1.0;
+  return J;
+}
+
+void PinholeCamera::validate() const {
+  auto fail = [](const std::string& what) { throw std::invalid_argument("camera: " + what); };
+  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
+    fail("image size " + std::to_string(width) + "x" + std::to_string(height) +
+         " must be within 1..16384");
+  if (!(std::isfinite(fx) && fx > 0) || !(std::isfinite(fy) && fy > 0))
+    fail("focal lengths fx, fy must be positive and finite");
+  if (!std::isfinite(cx) || !std::isfinite(cy)) fail("principal point cx, cy must be finite");
+  if (!(std::isfinite(depth_scale) && depth_scale > 0)) fail("depth_scale must be positive");
+}
+
+}  // namespace vdmap

@@ -1,0 +1,36 @@
+#pragma once
+#include <Eigen/Core>
+
+namespace vdmap {
+
+/// Pinhole camera without distortion. Pixel (u, v): u right, v down, origin at the centre of
+/// the top-left pixel. Points are in the camera frame (z forward), metres.
+struct PinholeCamera {
+  int width = 640;
+  int height = 480;
+  double fx = 525.0;
+  double fy = 525.0;
+  double cx = 319.5;
+  double cy = 239.5;
+  /// Depth PNG units per metre (metres = value / depth_scale).
+  double depth_scale = 5000.0;
+
+  /// Pixel of a point with z > 0 (the caller checks z).
+  Eigen::Vector2d project(const Eigen::Vector3d& p_C) const {
+    return {fx * p_C.x() / p_C.z() + cx, fy * p_C.y() / p_C.z() + cy};
+  }
+  /// The point at pixel (u, v) with depth d (z, metres).
+  Eigen::Vector3d backProject(double u, double v, double depth_m) const {
+    return {(u - cx) * depth_m / fx, (v - cy) * depth_m / fy, depth_m};
+  }
+  /// d backProject / d(u, v, d) (SPEC section 3).
+  Eigen::Matrix3d backProjectJacobian(double u, double v, double depth_m) const;
+  /// True when (u, v) rounds to a pixel inside the image.
+  bool inImage(double u, double v) const {
+    return u >= -0.5 && v >= -0.5 && u < width - 0.5 && v < height - 0.5;
+  }
+  /// Throws std::invalid_argument naming the first bad field (non-positive size/focal, ...).
+  void validate() const;
+};
+
+}  // namespace vdmap

@@ -1,0 +1,33 @@
+#pragma once
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "mapping/core/camera.h"
+#include "mapping/core/types.h"
+
+namespace vdmap {
+
+/// One decoded RGB-D frame with its pose.
+struct RgbdFrame {
+  int index = -1;          ///< position in the sequence's depth list (what --frames counts)
+  double timestamp = 0.0;  ///< depth timestamp, seconds
+  cv::Mat rgb;             ///< CV_8UC3, RGB channel order, camera size
+  cv::Mat depth;           ///< CV_16UC1, raw units: metres = value / camera.depth_scale
+  Transform T_W_C = Transform::Identity();
+};
+
+/// A coloured point cloud; points and colours are parallel arrays.
+struct ColoredPointCloud {
+  std::vector<Eigen::Vector3f> points;
+  std::vector<std::array<std::uint8_t, 3>> colors;
+  std::size_t size() const { return points.size(); }
+};
+
+/// Back-projects every pixel whose depth lies in `range` into the camera frame (points_C).
+ColoredPointCloud toPointCloud(const RgbdFrame& frame, const PinholeCamera& camera,
+                               const DepthRange& range = {});
+
+}  // namespace vdmap

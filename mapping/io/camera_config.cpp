@@ -1,0 +1,154 @@
+#include "mapping/io/camera_config.h"
+
+#include <algorithm>
+#include <cctype>
+#include <fstream>
+#include <stdexcept>
+
+#include <yaml-cpp/yaml.h>
+
+#include "mapping/core/error.h"
+
+namespace vdmap {
+namespace {
+
+struct Preset {
+  const char* name;
+  PinholeCamera camera;
+};
+
+// SPEC section 1. Sizes are those of the data sets the presets are named after.
+const std::vector<Preset>& presets() {
+  static const std::vector<Preset> kPresets = {
+      {"tum-fr1", {640, 480, 517.306, 516.469, 318.643, 255.314, 5000.0}},
+      {"tum-fr2", {640, 480, 520.909, 521.007, 325.141, 249.702, 5000.0}},
+      {"tum-fr3", {640, 480, 535.4, 539.2, 320.1, 247.6, 5000.0}},
+      {"tum-default", {640, 480, 525.0, 525.0, 319.5, 239.5, 5000.0}},
+      {"icl-nuim", {640, 480, 481.2, 480.0, 319.5, 239.5, 5000.0}},
+      {"7scenes", {640, 480, 585.0, 585.0, 320.0, 240.0, 1000.0}},
+      {"replica", {1200, 680, 600.0, 600.0, 599.5, 339.5, 6553.5}},
+  };
+  return kPresets;
+}
+
+std::string lower(std::string s) {
+  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
+  return s;
+}
+
+// Reads a number under one of `keys` (first present wins); returns false when none is present.
+bool readNumber(const YAML::Node& node, std::initializer_list<const char*> keys,
+                const std::string& file, double* out) {
+  for (const char* key : keys) {
+    const YAML::Node value = node[key];
+    if (!value) continue;
+    try {
+      *out = value.as<double>();
+    } catch (const YAML::Exception&) {
+      throw InputError(file, value.Mark().line + 1, std::string("key '") + key + "' must be a number");
+    }
+    return true;
+  }
+  return false;
+}
+
+}  // namespace
+
+const std::vector<std::string>& cameraPresetNames() {
+  static const std::vector<std::string> kNames = [] {
+    std::vector<std::string> names;
+    for (const Preset& p : presets()) names.push_back(p.name);
+    return names;
+  }();
+  return kNames;
+}
+
+PinholeCamera cameraPreset(const std::string& name) {
+  for (const Preset& p : presets())
+    if (name == p.name) return p.camera;
+  std::string list;
+  for (const std::string& n : cameraPresetNames()) list += (list.empty() ? "" : ", ") + n;
+  throw std::invalid_argument("unknown camera preset '" + name + "' (expected one of: " + list + ")");
+}
+
+PinholeCamera readCameraFile(const std::filesystem::path& file) {
+  const std::string name = file.string();
+  YAML::Node root;
+  try {
+    root = YAML::LoadFile(name);
+  } catch (const YAML::BadFile&) {
+    throw InputError(name, "cannot open camera file");
+  } catch (const YAML::ParserException& e) {
+    throw InputError(name, e.mark.line + 1, "not valid YAML/JSON: " + e.msg);
+  }
+  if (!root.IsMap()) throw InputError(name, "expected a map of camera keys (fx, fy, cx, cy, ...)");
+  const YAML::Node node = root["camera"] && root["camera"].IsMap() ? root["camera"] : root;
+
+  PinholeCamera camera;
+  const bool has_preset = static_cast<bool>(node["preset"]);
+  if (has_preset) {
+    try {
+      camera = cameraPreset(node["preset"].as<std::string>());
+    } catch (const std::exception& e) {
+      throw InputError(name, node["preset"].Mark().line + 1, e.what());
+    }
+  }
+  double value = 0.0;
+  auto field = [&](std::initializer_list<const char*> keys, auto setter) {
+    if (readNumber(node, keys, name, &value)) {
+      setter(value);
+    } else if (!has_preset) {
+      throw InputError(name, std::string("missing key '") + *keys.begin() +
+                                 "' (a camera file needs fx, fy, cx, cy, depth_scale, width, "
+                                 "height, or a 'preset' to start from)");
+    }
+  };
+  field({"fx"}, [&](double v) { camera.fx = v; });
+  field({"fy"}, [&](double v) { camera.fy = v; });
+  field({"cx"}, [&](double v) { camera.cx = v; });
+  field({"cy"}, [&](double v) { camera.cy = v; });
+  field({"depth_scale", "scale"}, [&](double v) { camera.depth_scale = v; });
+  field({"width", "w"}, [&](double v) { camera.width = static_cast<int>(v); });
+  field({"height", "h"}, [&](double v) { camera.height = static_cast<int>(v); });
+  try {
+    camera.validate();
+  } catch (const std::invalid_argument& e) {
+    throw InputError(name, e.what());
+  }
+  return camera;
+}
+
+CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string& preset_override) {
+  if (!preset_override.empty())
+    return {cameraPreset(preset_override), "preset " + preset_override + " (--camera)"};
+  for (const char* file : {"camera.yaml", "camera.yml", "camera.json", "cam_params.json"}) {
+    const auto path = folder / file;
+    if (std::filesystem::exists(path)) return {readCameraFile(path), std::string("file ") + file};
+  }
+  const std::string folder_name = std::filesystem::weakly_canonical(folder).filename().string();
+  const std::string name = lower(folder_name);
+  struct Hint {
+    const char* needle;
+    const char* preset;
+  };
+  for (const Hint& hint : {Hint{"7scenes", "7scenes"}, Hint{"7-scenes", "7scenes"},
+                           Hint{"icl", "icl-nuim"}, Hint{"replica", "replica"},
+                           Hint{"freiburg1", "tum-fr1"}, Hint{"freiburg2", "tum-fr2"},
+                           Hint{"freiburg3", "tum-fr3"}, Hint{"fr1_", "tum-fr1"},
+                           Hint{"fr2_", "tum-fr2"}, Hint{"fr3_", "tum-fr3"}}) {
+    if (name.find(hint.needle) != std::string::npos)
+      return {cameraPreset(hint.preset),
+              std::string("preset ") + hint.preset + " (folder name '" + folder_name + "')"};
+  }
+  // 7-Scenes names its depth maps frame-XXXXXX.depth.png.
+  std::ifstream depth_list(folder / "depth.txt");
+  for (std::string line; std::getline(depth_list, line);) {
+    if (line.empty() || line[0] == '#') continue;
+    if (line.find(".depth.png") != std::string::npos)
+      return {cameraPreset("7scenes"), "preset 7scenes (7-Scenes depth file names)"};
+    break;
+  }
+  return {cameraPreset("tum-default"), "preset tum-default (no camera file or hint in the folder)"};
+}
+
+}  // namespace vdmap

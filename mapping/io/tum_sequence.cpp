@@ -1,0 +1,277 @@
+#include "mapping/io/tum_sequence.h"
+
+#include <algorithm>
+#include <charconv>
+#include <cmath>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <stdexcept>
+
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+#include "mapping/core/error.h"
+#include "mapping/io/camera_config.h"
+
+namespace fs = std::filesystem;
+
+namespace vdmap {
+namespace {
+
+struct Line {
+  int number = 0;
+  std::vector<std::string> tokens;
+};
+
+// Non-comment, non-blank lines of a list file, each with `columns` whitespace-separated tokens.
+std::vector<Line> readList(const fs::path& file, int columns, const char* expected) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "cannot open (the sequence needs this file)");
+  std::vector<Line> lines;
+  std::string text;
+  for (int number = 1; std::getline(in, text); ++number) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();
+    const auto first = text.find_first_not_of(" \t");
+    if (first == std::string::npos || text[first] == '#') continue;
+    std::istringstream words(text);
+    Line line{number, {}};
+    for (std::string w; words >> w;) line.tokens.push_back(w);
+    if (static_cast<int>(line.tokens.size()) != columns)
+      throw InputError(file.string(), number,
+                       "expected '" + std::string(expected) + "', got " +
+                           std::to_string(line.tokens.size()) + " fields");
+    lines.push_back(std::move(line));
+  }
+  return lines;
+}
+
+double parseNumber(const std::string& token, const fs::path& file, int line, const char* what) {
+  double value = 0.0;
+  const char* end = token.data() + token.size();
+  const auto [ptr, ec] = std::from_chars(token.data(), end, value);
+  if (ec != std::errc() || ptr != end)
+    throw InputError(file.string(), line, std::string("expected a number for ") + what + ", got '" + token + "'");
+  if (!std::isfinite(value))
+    throw InputError(file.string(), line, std::string(what) + " is not finite ('" + token + "')");
+  return value;
+}
+
+// Checks timestamps strictly increase down the file.
+void checkMonotonic(double t, double* previous, const fs::path& file, int line) {
+  if (t <= *previous)
+    throw InputError(file.string(), line,
+                     "timestamp " + std::to_string(t) + " is not after the previous one (" +
+                         std::to_string(*previous) + "): timestamps must increase");
+  *previous = t;
+}
+
+struct Stamped {
+  double t;
+  fs::path path;
+  fs::path list;  // the list file that named it, for errors
+  int line;
+};
+
+std::vector<Stamped> readImageList(const fs::path& folder, const char* name) {
+  const fs::path file = folder / name;
+  std::vector<Stamped> list;
+  double previous = -INFINITY;
+  for (const Line& line : readList(file, 2, "timestamp path")) {
+    const double t = parseNumber(line.tokens[0], file, line.number, "the timestamp");
+    checkMonotonic(t, &previous, file, line.number);
+    list.push_back({t, folder / line.tokens[1], file, line.number});
+  }
+  return list;
+}
+
+struct StampedPose {
+  double t;
+  Eigen::Vector3d translation;
+  Eigen::Quaterniond rotation;
+};
+
+std::vector<StampedPose> readGroundTruth(const fs::path& file) {
+  std::vector<StampedPose> poses;
+  double previous = -INFINITY;
+  for (const Line& line : readList(file, 8, "timestamp tx ty tz qx qy qz qw")) {
+    double v[8];
+    const char* names[8] = {"the timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
+    for (int i = 0; i < 8; ++i) {
+      // NaN and inf are parsed by from_chars, so they reach the finiteness check.
+      v[i] = parseNumber(line.tokens[i], file, line.number, names[i]);
+    }
+    checkMonotonic(v[0], &previous, file, line.number);
+    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
+    if (q.norm() < 1e-6)
+      throw InputError(file.string(), line.number, "quaternion (qx qy qz qw) has zero norm");
+    poses.push_back({v[0], {v[1], v[2], v[3]}, q.normalized()});
+  }
+  return poses;
+}
+
+// Pose at time t: interpolated between the ground-truth poses around t (linear translation,
+// slerp rotation), or nothing when either is more than max_dt away.
+std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t, double max_dt) {
+  auto next = std::lower_bound(poses.begin(), poses.end(), t,
+                               [](const StampedPose& p, double time) { return p.t < time; });
+  auto make = [](const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
+    Transform T = Transform::Identity();
+    T.linear() = q.toRotationMatrix();
+    T.translation() = p;
+    return T;
+  };
+  constexpr double kSameTime = 1e-6;
+  if (next != poses.end() && next->t - t < kSameTime) return make(next->translation, next->rotation);
+  if (next != poses.begin() && t - std::prev(next)->t < kSameTime)
+    return make(std::prev(next)->translation, std::prev(next)->rotation);
+  if (next == poses.end() || next == poses.begin()) return std::nullopt;
+  const StampedPose& a = *std::prev(next);
+  const StampedPose& b = *next;
+  if (t - a.t > max_dt || b.t - t > max_dt) return std::nullopt;
+  const double s = (t - a.t) / (b.t - a.t);
+  return make((1.0 - s) * a.translation + s * b.translation, a.rotation.slerp(s, b.rotation));
+}
+
+std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
+
+std::string typeText(const cv::Mat& m) {
+  static const char* depths[] = {"8-bit", "8-bit signed", "16-bit", "16-bit signed", "32-bit int", "32-bit float", "64-bit float", "16-bit float"};
+  return std::string(depths[m.depth()]) + " " + std::to_string(m.channels()) + "-channel";
+}
+
+}  // namespace
+
+FrameRange parseFrameRange(const std::string& text) {
+  auto number = [&](const std::string& s) {
+    int value = 0;
+    const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+    if (ec != std::errc() || ptr != s.data() + s.size() || value < 0)
+      throw std::invalid_argument("--frames '" + text + "': expected A:B with frame numbers >= 0");
+    return value;
+  };
+  const auto colon = text.find(':');
+  FrameRange range;
+  if (colon == std::string::npos) {
+    range.first = number(text);
+    range.last = range.first + 1;
+    return range;
+  }
+  const std::string a = text.substr(0, colon), b = text.substr(colon + 1);
+  if (!a.empty()) range.first = number(a);
+  if (!b.empty()) range.last = number(b);
+  if (range.last >= 0 && range.last <= range.first)
+    throw std::invalid_argument("--frames '" + text + "': the end must be after the start");
+  return range;
+}
+
+TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& options) {
+  if (!fs::is_directory(folder))
+    throw InputError(folder.string(), fs::exists(folder) ? "is not a folder (expected a TUM RGB-D sequence folder)"
+                                                         : "no such sequence folder");
+  TumSequence seq;
+  seq.folder_ = folder;
+  try {
+    CameraChoice choice = chooseCamera(folder, options.camera_preset);
+    seq.camera_ = choice.camera;
+    seq.camera_source_ = choice.source;
+  } catch (const std::invalid_argument& e) {
+    throw InputError("--camera", e.what());
+  }
+
+  // Depth list with its rgb partner: from associations.txt when present, else by timestamps.
+  struct Pair {
+    Stamped depth;
+    std::optional<Stamped> rgb;
+  };
+  std::vector<Pair> pairs;
+  const fs::path assoc_file = folder / "associations.txt";
+  if (fs::exists(assoc_file)) {
+    double previous = -INFINITY;
+    for (const Line& line : readList(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
+      const double t_rgb = parseNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
+      const double t_depth = parseNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
+      checkMonotonic(t_depth, &previous, assoc_file, line.number);
+      pairs.push_back({{t_depth, folder / line.tokens[3], assoc_file, line.number},
+                       Stamped{t_rgb, folder / line.tokens[1], assoc_file, line.number}});
+    }
+  } else {
+    const std::vector<Stamped> rgb = readImageList(folder, "rgb.txt");
+    for (const Stamped& depth : readImageList(folder, "depth.txt")) {
+      auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t,
+                                 [](const Stamped& s, double t) { return s.t < t; });
+      std::optional<Stamped> best;
+      for (auto c : {it, it == rgb.begin() ? rgb.end() : std::prev(it)}) {
+        if (c == rgb.end() || std::abs(c->t - depth.t) > options.max_rgb_dt_s) continue;
+        if (!best || std::abs(c->t - depth.t) < std::abs(best->t - depth.t)) best = *c;
+      }
+      pairs.push_back({depth, best});
+    }
+  }
+  const fs::path gt_file = folder / "groundtruth.txt";
+  const std::vector<StampedPose> poses = readGroundTruth(gt_file);
+
+  seq.listed_ = static_cast<int>(pairs.size());
+  if (pairs.empty())
+    throw InputError((fs::exists(assoc_file) ? assoc_file : folder / "depth.txt").string(), "lists no frames");
+  if (options.frames.first >= seq.listed_)
+    throw InputError(folder.string(), "--frames starts at " + std::to_string(options.frames.first) +
+                                          " but the sequence lists only " + std::to_string(seq.listed_) +
+                                          " depth frames");
+  for (int i = 0; i < seq.listed_; ++i) {
+    const Pair& pair = pairs[i];
+    if (i < options.frames.first || (options.frames.last >= 0 && i >= options.frames.last)) {
+      ++seq.dropped_.outside_range;
+      continue;
+    }
+    if (!pair.rgb) {
+      ++seq.dropped_.no_rgb;
+      continue;
+    }
+    const std::optional<Transform> pose = poseAt(poses, pair.depth.t, options.max_pose_dt_s);
+    if (!pose) {
+      ++seq.dropped_.no_pose;
+      continue;
+    }
+    for (const Stamped* image : {&pair.depth, &*pair.rgb}) {
+      if (!fs::is_regular_file(image->path))
+        throw InputError(image->list.string(), image->line,
+                         "image '" + image->path.lexically_relative(folder).string() + "' does not exist");
+    }
+    seq.entries_.push_back({i, pair.depth.t, pair.rgb->t, pair.rgb->path, pair.depth.path, *pose});
+  }
+  if (seq.entries_.empty())
+    throw InputError(folder.string(),
+                     "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
+                         std::to_string(seq.dropped_.no_rgb) + " without an rgb frame within " +
+                         std::to_string(options.max_rgb_dt_s) + " s, " + std::to_string(seq.dropped_.no_pose) +
+                         " without a ground-truth pose within " + std::to_string(options.max_pose_dt_s) +
+                         " s, " + std::to_string(seq.dropped_.outside_range) + " outside --frames");
+  return seq;
+}
+
+RgbdFrame TumSequence::load(std::size_t i) const {
+  const FrameEntry& e = entries_.at(i);
+  RgbdFrame frame;
+  frame.index = e.index;
+  frame.timestamp = e.t_depth;
+  frame.T_W_C = e.T_W_C;
+
+  const cv::Mat bgr = cv::imread(e.rgb_path.string(), cv::IMREAD_COLOR);
+  if (bgr.empty()) throw InputError(e.rgb_path.string(), "cannot decode colour image (corrupt, or not PNG/JPEG)");
+  if (bgr.cols != camera_.width || bgr.rows != camera_.height)
+    throw InputError(e.rgb_path.string(), "colour image is " + sizeText(bgr) + " but the camera is " +
+                                              std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  cv::cvtColor(bgr, frame.rgb, cv::COLOR_BGR2RGB);
+
+  frame.depth = cv::imread(e.depth_path.string(), cv::IMREAD_UNCHANGED);
+  if (frame.depth.empty()) throw InputError(e.depth_path.string(), "cannot decode depth image (corrupt, or not PNG)");
+  if (frame.depth.type() != CV_16UC1)
+    throw InputError(e.depth_path.string(), "depth image must be 16-bit single-channel, got " + typeText(frame.depth));
+  if (frame.depth.cols != camera_.width || frame.depth.rows != camera_.height)
+    throw InputError(e.depth_path.string(), "depth image is " + sizeText(frame.depth) + " but the camera is " +
+                                                std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  return frame;
+}
+
+}  // namespace vdmap

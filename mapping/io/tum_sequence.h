@@ -1,0 +1,73 @@
+#pragma once
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "mapping/core/rgbd_frame.h"
+
+namespace vdmap {
+
+/// Which frames of a sequence to use: indices into the depth list (depth.txt, or
+/// associations.txt when present), half-open [first, last). last < 0 means to the end.
+struct FrameRange {
+  int first = 0;
+  int last = -1;
+};
+
+/// Parses "A:B", "A:", ":B" or "A" (one frame). Throws std::invalid_argument on bad text.
+FrameRange parseFrameRange(const std::string& text);
+
+struct SequenceOptions {
+  std::string camera_preset;      ///< empty: choose from the folder (chooseCamera)
+  FrameRange frames;              ///< which depth frames to keep
+  double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (SPEC section 1)
+  double max_pose_dt_s = 0.1;     ///< pose interpolation window
+};
+
+/// One usable frame: an rgb/depth pair with an interpolated pose. Paths are absolute.
+struct FrameEntry {
+  int index = 0;         ///< position in the depth list
+  double t_depth = 0.0;  ///< s
+  double t_rgb = 0.0;    ///< s
+  std::filesystem::path rgb_path;
+  std::filesystem::path depth_path;
+  Transform T_W_C = Transform::Identity();
+};
+
+/// How many listed depth frames were not kept, by reason.
+struct DropCounts {
+  int no_rgb = 0;           ///< no rgb frame within max_rgb_dt_s
+  int no_pose = 0;          ///< no ground-truth poses within max_pose_dt_s on both sides
+  int outside_range = 0;    ///< outside --frames
+};
+
+/// A TUM RGB-D layout sequence (SPEC section 1). Opening parses the lists, associates and
+/// interpolates poses and checks that every image file exists; images are decoded lazily by
+/// load(), which is const and safe to call from several threads.
+class TumSequence {
+ public:
+  /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input.
+  static TumSequence open(const std::filesystem::path& folder, const SequenceOptions& options = {});
+
+  const std::filesystem::path& folder() const { return folder_; }
+  const PinholeCamera& camera() const { return camera_; }
+  const std::string& cameraSource() const { return camera_source_; }
+  const std::vector<FrameEntry>& entries() const { return entries_; }
+  std::size_t size() const { return entries_.size(); }
+  int listedDepthFrames() const { return listed_; }
+  const DropCounts& dropped() const { return dropped_; }
+
+  /// Decodes frame i (0 <= i < size()). Throws InputError on a corrupt image, a depth image
+  /// that is not 16-bit single channel, or an image whose size differs from the camera's.
+  RgbdFrame load(std::size_t i) const;
+
+ private:
+  std::filesystem::path folder_;
+  PinholeCamera camera_;
+  std::string camera_source_;
+  std::vector<FrameEntry> entries_;
+  int listed_ = 0;
+  DropCounts dropped_;
+};
+
+}  // namespace vdmap

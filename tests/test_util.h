@@ -1,0 +1,52 @@
+#pragma once
+// Shared helpers for vdmap's tests: temporary folders, tiny generated sequences, running the
+// vdmap binary, and access to ../shared/data (tests skip when it is absent).
+#include <filesystem>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <opencv2/core.hpp>
+
+namespace vdmap::test {
+
+namespace fs = std::filesystem;
+
+/// A fresh, empty folder under the system temp dir, removed on destruction.
+class TempDir {
+ public:
+  TempDir();
+  ~TempDir();
+  const fs::path& path() const { return path_; }
+  fs::path operator/(const std::string& name) const { return path_ / name; }
+
+ private:
+  fs::path path_;
+};
+
+/// Writes `text` to `file` (creating parent folders).
+void writeText(const fs::path& file, const std::string& text);
+
+/// Writes a small valid TUM sequence: `frames` frames of `width`x`height` at 30 fps, a fronto-
+/// parallel plane at 1.5 m (depth scale 5000), textured colour, identity-ish poses moving along x,
+/// and a camera.yaml. Returns nothing; the folder is `dir`.
+void writeTinySequence(const fs::path& dir, int frames = 3, int width = 64, int height = 48);
+
+/// Folder of a shared data set (../shared/data/NAME), or empty when absent.
+fs::path sharedData(const std::string& name);
+
+/// Result of running the vdmap binary.
+struct RunResult {
+  int exit_code = -1;
+  std::string out;  ///< stdout
+  std::string err;  ///< stderr
+};
+/// Runs `vdmap ARGS` (args are passed through the shell: quote paths).
+RunResult runVdmap(const std::string& args);
+
+}  // namespace vdmap::test
+
+/// Skips the current test with a clear message when ../shared/data/NAME is absent.
+#define VDMAP_REQUIRE_SHARED_DATA(var, name)                                                  \
+  const std::filesystem::path var = ::vdmap::test::sharedData(name);                          \
+  if (var.empty()) GTEST_SKIP() << "shared data set '" << name << "' not found under "        \
+                                << VDMAP_SHARED_DATA << " (real-data test skipped)"
