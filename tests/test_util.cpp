@@ -9,6 +9,7 @@
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 namespace vdmap::test {
 
@@ -56,6 +57,75 @@ void writeTinySequence(const fs::path& dir, int frames, int width, int height) {
   cam << "fx: 50\nfy: 50\ncx: " << (width - 1) / 2.0 << "\ncy: " << (height - 1) / 2.0
       << "\ndepth_scale: 5000\nwidth: " << width << "\nheight: " << height << "\n";
   writeText(dir / "camera.yaml", cam.str());
+}
+
+namespace {
+
+const cv::Mat& faceTexture(int face) {
+  static const std::vector<cv::Mat> textures = [] {
+    std::vector<cv::Mat> t(6);
+    for (int f = 0; f < 6; ++f) {
+      cv::RNG rng(1000 + f);
+      cv::Mat noise(512, 512, CV_8UC3);
+      rng.fill(noise, cv::RNG::UNIFORM, 0, 255);
+      cv::GaussianBlur(noise, t[f], cv::Size(0, 0), 1.5);
+      cv::normalize(t[f], t[f], 0, 255, cv::NORM_MINMAX);
+    }
+    return t;
+  }();
+  return textures[face];
+}
+
+}  // namespace
+
+RgbdFrame renderBoxRoom(const PinholeCamera& camera, const Transform& T_W_C) {
+  const Eigen::Vector3d lo(-2.0, -1.5, -2.0), hi(2.0, 1.5, 2.0);
+  RgbdFrame frame;
+  frame.T_W_C = T_W_C;
+  frame.rgb = cv::Mat(camera.height, camera.width, CV_8UC3);
+  frame.depth = cv::Mat(camera.height, camera.width, CV_16UC1);
+  const Eigen::Vector3d o = T_W_C.translation();
+  for (int v = 0; v < camera.height; ++v)
+    for (int u = 0; u < camera.width; ++u) {
+      const Eigen::Vector3d ray_C = camera.backProject(u, v, 1.0);
+      const Eigen::Vector3d d = T_W_C.linear() * ray_C;
+      double t_hit = INFINITY;
+      int face = 0;
+      for (int axis = 0; axis < 3; ++axis) {
+        if (d[axis] == 0.0) continue;
+        const double bound = d[axis] > 0 ? hi[axis] : lo[axis];
+        const double t = (bound - o[axis]) / d[axis];
+        if (t > 0 && t < t_hit) {
+          t_hit = t;
+          face = 2 * axis + (d[axis] > 0);
+        }
+      }
+      const Eigen::Vector3d p = o + t_hit * d;
+      const int a = face / 2 == 0 ? 1 : 0, b = face / 2 == 2 ? 1 : 2;  // the face's in-plane axes
+      const double s = (p[a] - lo[a]) / (hi[a] - lo[a]), r = (p[b] - lo[b]) / (hi[b] - lo[b]);
+      const cv::Mat& tex = faceTexture(face);
+      const int tx = std::clamp(static_cast<int>(s * tex.cols), 0, tex.cols - 1);
+      const int ty = std::clamp(static_cast<int>(r * tex.rows), 0, tex.rows - 1);
+      frame.rgb.at<cv::Vec3b>(v, u) = tex.at<cv::Vec3b>(ty, tx);
+      const double z = t_hit * ray_C.z();  // ray_C has z = 1, so z = t
+      frame.depth.at<std::uint16_t>(v, u) =
+          static_cast<std::uint16_t>(std::min(65535.0, std::round(z * camera.depth_scale)));
+    }
+  return frame;
+}
+
+Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target) {
+  const Eigen::Vector3d z = (target - position).normalized();
+  Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z);  // image x right when world -y is up
+  if (x.norm() < 1e-6) x = Eigen::Vector3d::UnitX();
+  x.normalize();
+  const Eigen::Vector3d y = z.cross(x);
+  Transform T = Transform::Identity();
+  T.linear().col(0) = x;
+  T.linear().col(1) = y;
+  T.linear().col(2) = z;
+  T.translation() = position;
+  return T;
 }
 
 fs::path sharedData(const std::string& name) {

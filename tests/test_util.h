@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
+#include "mapping/core/rgbd_frame.h"
+
 namespace vdmap::test {
 
 namespace fs = std::filesystem;
@@ -30,6 +32,14 @@ void writeText(const fs::path& file, const std::string& text);
 /// parallel plane at 1.5 m (depth scale 5000), textured colour, identity-ish poses moving along x,
 /// and a camera.yaml. Returns nothing; the folder is `dir`.
 void writeTinySequence(const fs::path& dir, int frames = 3, int width = 64, int height = 48);
+
+/// An RGB-D frame of the inside of a textured box room [-2,2] x [-1.5,1.5] x [-2,2] m seen from
+/// T_W_C, ray-cast analytically (no GL). Each of the six faces has its own blurred-noise texture
+/// (deterministic), rich enough for ORB. Depth at camera.depth_scale, exact up to quantisation.
+RgbdFrame renderBoxRoom(const PinholeCamera& camera, const Transform& T_W_C);
+
+/// A camera pose at `position` looking at `target` (y of the image pointing down, world -y up).
+Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 
 /// Folder of a shared data set (../shared/data/NAME), or empty when absent.
 fs::path sharedData(const std::string& name);

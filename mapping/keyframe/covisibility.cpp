@@ -1,0 +1,72 @@
+#include "mapping/keyframe/covisibility.h"
+
+#include <cmath>
+
+namespace vdmap {
+namespace {
+
+// Keyframe keypoint i (which has depth) in F's camera frame.
+Eigen::Vector3d predictInFrame(const FrameFeatures& K, std::size_t i, const Transform& T_F_K,
+                               const PinholeCamera& camera) {
+  const cv::Point2f& pt = K.keypoints[i].pt;
+  return T_F_K * camera.backProject(pt.x, pt.y, K.depth_m[i]);
+}
+
+}  // namespace
+
+bool PosePrefilter::accepts(const Transform& T_W_K, const Transform& T_W_F) const {
+  if (!enabled) return true;
+  if ((T_W_K.translation() - T_W_F.translation()).norm() > max_distance_m) return false;
+  const double cos_angle = T_W_K.linear().col(2).dot(T_W_F.linear().col(2));
+  return cos_angle >= std::cos(max_angle_deg * M_PI / 180.0) - 1e-12;
+}
+
+double covisibilityBound(const FrameFeatures& K, const Transform& T_W_K, const Transform& T_W_F,
+                         const PinholeCamera& camera, const CovisibilityParams& params) {
+  if (K.size() == 0) return 0.0;
+  const Transform T_F_K = T_W_F.inverse() * T_W_K;
+  const double m = params.max_reprojection_px;
+  std::size_t possible = 0;
+  for (std::size_t i = 0; i < K.size(); ++i) {
+    if (K.depth_m[i] <= 0.0f) {
+      ++possible;
+      continue;
+    }
+    const Eigen::Vector3d p_F = predictInFrame(K, i, T_F_K, camera);
+    if (p_F.z() <= 0.0) continue;
+    const Eigen::Vector2d uv = camera.project(p_F);
+    if (uv.x() >= -0.5 - m && uv.y() >= -0.5 - m && uv.x() < camera.width - 0.5 + m &&
+        uv.y() < camera.height - 0.5 + m)
+      ++possible;
+  }
+  return static_cast<double>(possible) / static_cast<double>(K.size());
+}
+
+double covisibility(const FrameFeatures& K, const Transform& T_W_K, const FrameFeatures& F, const Transform& T_W_F,
+                    const PinholeCamera& camera, const CovisibilityParams& params) {
+  if (K.size() == 0 || F.size() < 2) return 0.0;
+  static thread_local cv::BFMatcher matcher(cv::NORM_HAMMING, false);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(K.descriptors, F.descriptors, knn, 2);
+  const Transform T_F_K = T_W_F.inverse() * T_W_K;
+  const double max_sq = params.max_reprojection_px * params.max_reprojection_px;
+  std::size_t reobserved = 0;
+  for (const std::vector<cv::DMatch>& pair : knn) {
+    if (pair.empty()) continue;
+    const cv::DMatch& best = pair[0];
+    if (best.distance > params.max_hamming) continue;
+    if (pair.size() > 1 && !(best.distance < params.lowe_ratio * pair[1].distance)) continue;
+    const std::size_t i = static_cast<std::size_t>(best.queryIdx);
+    if (K.depth_m[i] > 0.0f) {
+      const Eigen::Vector3d p_F = predictInFrame(K, i, T_F_K, camera);
+      if (p_F.z() <= 0.0) continue;
+      const Eigen::Vector2d uv = camera.project(p_F);
+      const cv::Point2f& q = F.keypoints[best.trainIdx].pt;
+      if ((uv - Eigen::Vector2d(q.x, q.y)).squaredNorm() > max_sq) continue;
+    }
+    ++reobserved;
+  }
+  return static_cast<double>(reobserved) / static_cast<double>(K.size());
+}
+
+}  // namespace vdmap

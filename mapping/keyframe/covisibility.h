@@ -1,0 +1,33 @@
+#pragma once
+#include "mapping/core/camera.h"
+#include "mapping/keyframe/frame_features.h"
+
+namespace vdmap {
+
+/// SPEC section 5: when a keyframe's feature counts as re-observed in a frame.
+struct CovisibilityParams {
+  int max_hamming = 64;             ///< descriptor distance limit
+  double lowe_ratio = 0.8;          ///< best / second-best distance must be below this
+  double max_reprojection_px = 8.0; ///< pose-consistency check for keypoints with depth
+};
+
+/// Pose pre-filter of the loop-closure and edge search (SPEC section 5).
+struct PosePrefilter {
+  bool enabled = true;
+  double max_distance_m = 3.0;
+  double max_angle_deg = 90.0;
+  /// True when keyframe pose T_W_K is close enough to frame pose T_W_F to be worth matching.
+  bool accepts(const Transform& T_W_K, const Transform& T_W_F) const;
+};
+
+/// delta(F, K): the fraction of K's features re-observed in F (0 when K has none).
+double covisibility(const FrameFeatures& keyframe, const Transform& T_W_K, const FrameFeatures& frame,
+                    const Transform& T_W_F, const PinholeCamera& camera, const CovisibilityParams& params = {});
+
+/// An upper bound of covisibility() computed without matching: the fraction of K's features
+/// that could be re-observed at all (without depth, or projecting in front of F's camera within
+/// max_reprojection_px of its image). Exact pruning: covisibility() <= this.
+double covisibilityBound(const FrameFeatures& keyframe, const Transform& T_W_K, const Transform& T_W_F,
+                         const PinholeCamera& camera, const CovisibilityParams& params = {});
+
+}  // namespace vdmap
