@@ -3,9 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
-#include <fstream>
 #include <optional>
-#include <sstream>
 #include <stdexcept>
 
 #include <opencv2/imgcodecs.hpp>
@@ -13,58 +11,13 @@
 
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/io/text_list.h"
+#include "mapping/io/trajectory_io.h"
 
 namespace fs = std::filesystem;
 
 namespace vdmap {
 namespace {
-
-struct Line {
-  int number = 0;
-  std::vector<std::string> tokens;
-};
-
-// Non-comment, non-blank lines of a list file, each with `columns` whitespace-separated tokens.
-std::vector<Line> readList(const fs::path& file, int columns, const char* expected) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot open (the sequence needs this file)");
-  std::vector<Line> lines;
-  std::string text;
-  for (int number = 1; std::getline(in, text); ++number) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const auto first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;
-    std::istringstream words(text);
-    Line line{number, {}};
-    for (std::string w; words >> w;) line.tokens.push_back(w);
-    if (static_cast<int>(line.tokens.size()) != columns)
-      throw InputError(file.string(), number,
-                       "expected '" + std::string(expected) + "', got " +
-                           std::to_string(line.tokens.size()) + " fields");
-    lines.push_back(std::move(line));
-  }
-  return lines;
-}
-
-double parseNumber(const std::string& token, const fs::path& file, int line, const char* what) {
-  double value = 0.0;
-  const char* end = token.data() + token.size();
-  const auto [ptr, ec] = std::from_chars(token.data(), end, value);
-  if (ec != std::errc() || ptr != end)
-    throw InputError(file.string(), line, std::string("expected a number for ") + what + ", got '" + token + "'");
-  if (!std::isfinite(value))
-    throw InputError(file.string(), line, std::string(what) + " is not finite ('" + token + "')");
-  return value;
-}
-
-// Checks timestamps strictly increase down the file.
-void checkMonotonic(double t, double* previous, const fs::path& file, int line) {
-  if (t <= *previous)
-    throw InputError(file.string(), line,
-                     "timestamp " + std::to_string(t) + " is not after the previous one (" +
-                         std::to_string(*previous) + "): timestamps must increase");
-  *previous = t;
-}
 
 struct Stamped {
   double t;
@@ -77,37 +30,12 @@ std::vector<Stamped> readImageList(const fs::path& folder, const char* name) {
   const fs::path file = folder / name;
   std::vector<Stamped> list;
   double previous = -INFINITY;
-  for (const Line& line : readList(file, 2, "timestamp path")) {
-    const double t = parseNumber(line.tokens[0], file, line.number, "the timestamp");
-    checkMonotonic(t, &previous, file, line.number);
+  for (const ListLine& line : readListFile(file, 2, "timestamp path")) {
+    const double t = parseListNumber(line.tokens[0], file, line.number, "the timestamp");
+    checkIncreasing(t, &previous, file, line.number);
     list.push_back({t, folder / line.tokens[1], file, line.number});
   }
   return list;
-}
-
-struct StampedPose {
-  double t;
-  Eigen::Vector3d translation;
-  Eigen::Quaterniond rotation;
-};
-
-std::vector<StampedPose> readGroundTruth(const fs::path& file) {
-  std::vector<StampedPose> poses;
-  double previous = -INFINITY;
-  for (const Line& line : readList(file, 8, "timestamp tx ty tz qx qy qz qw")) {
-    double v[8];
-    const char* names[8] = {"the timestamp", "tx", "ty", "tz", "qx", "qy", "qz", "qw"};
-    for (int i = 0; i < 8; ++i) {
-      // NaN and inf are parsed by from_chars, so they reach the finiteness check.
-      v[i] = parseNumber(line.tokens[i], file, line.number, names[i]);
-    }
-    checkMonotonic(v[0], &previous, file, line.number);
-    Eigen::Quaterniond q(v[7], v[4], v[5], v[6]);
-    if (q.norm() < 1e-6)
-      throw InputError(file.string(), line.number, "quaternion (qx qy qz qw) has zero norm");
-    poses.push_back({v[0], {v[1], v[2], v[3]}, q.normalized()});
-  }
-  return poses;
 }
 
 // Pose at time t: interpolated between the ground-truth poses around t (linear translation,
@@ -115,22 +43,18 @@ std::vector<StampedPose> readGroundTruth(const fs::path& file) {
 std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t, double max_dt) {
   auto next = std::lower_bound(poses.begin(), poses.end(), t,
                                [](const StampedPose& p, double time) { return p.t < time; });
-  auto make = [](const Eigen::Vector3d& p, const Eigen::Quaterniond& q) {
-    Transform T = Transform::Identity();
-    T.linear() = q.toRotationMatrix();
-    T.translation() = p;
-    return T;
-  };
   constexpr double kSameTime = 1e-6;
-  if (next != poses.end() && next->t - t < kSameTime) return make(next->translation, next->rotation);
-  if (next != poses.begin() && t - std::prev(next)->t < kSameTime)
-    return make(std::prev(next)->translation, std::prev(next)->rotation);
+  if (next != poses.end() && next->t - t < kSameTime) return next->T_W_C;
+  if (next != poses.begin() && t - std::prev(next)->t < kSameTime) return std::prev(next)->T_W_C;
   if (next == poses.end() || next == poses.begin()) return std::nullopt;
   const StampedPose& a = *std::prev(next);
   const StampedPose& b = *next;
   if (t - a.t > max_dt || b.t - t > max_dt) return std::nullopt;
   const double s = (t - a.t) / (b.t - a.t);
-  return make((1.0 - s) * a.translation + s * b.translation, a.rotation.slerp(s, b.rotation));
+  Transform T = Transform::Identity();
+  T.translation() = (1.0 - s) * a.T_W_C.translation() + s * b.T_W_C.translation();
+  T.linear() = Eigen::Quaterniond(a.T_W_C.linear()).slerp(s, Eigen::Quaterniond(b.T_W_C.linear())).toRotationMatrix();
+  return T;
 }
 
 std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
@@ -188,10 +112,10 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   const fs::path assoc_file = folder / "associations.txt";
   if (fs::exists(assoc_file)) {
     double previous = -INFINITY;
-    for (const Line& line : readList(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
-      const double t_rgb = parseNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
-      const double t_depth = parseNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
-      checkMonotonic(t_depth, &previous, assoc_file, line.number);
+    for (const ListLine& line : readListFile(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
+      const double t_rgb = parseListNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
+      const double t_depth = parseListNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
+      checkIncreasing(t_depth, &previous, assoc_file, line.number);
       pairs.push_back({{t_depth, folder / line.tokens[3], assoc_file, line.number},
                        Stamped{t_rgb, folder / line.tokens[1], assoc_file, line.number}});
     }
@@ -209,7 +133,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     }
   }
   const fs::path gt_file = folder / "groundtruth.txt";
-  const std::vector<StampedPose> poses = readGroundTruth(gt_file);
+  const std::vector<StampedPose> poses = readTumTrajectory(gt_file);
 
   seq.listed_ = static_cast<int>(pairs.size());
   if (pairs.empty())
