@@ -1,0 +1,16 @@
+# Turns shaders/*.glsl into one C++ file of raw string literals (run at build time by
+# render/CMakeLists.txt; no external tools). Inputs: OUTPUT (the .cpp), SHADER_DIR (shaders/*.vert, *.frag, *.glsl).
+file(GLOB SHADERS ${SHADER_DIR}/*.glsl ${SHADER_DIR}/*.vert ${SHADER_DIR}/*.frag)
+list(SORT SHADERS)
+set(body "// Generated from shaders/*.glsl by cmake/embed_shaders.cmake. Do not edit.\n")
+string(APPEND body "#include \"render/shader_sources.h\"\n#include <stdexcept>\n#include <string>\n\n")
+string(APPEND body "namespace vdmap::render {\n\nstd::string_view shaderSource(std::string_view name) {\n")
+foreach(file IN LISTS SHADERS)
+  get_filename_component(name "${file}" NAME)
+  file(READ "${file}" text)
+  string(APPEND body "  if (name == \"${name}\") return R\"vdmap_glsl(${text})vdmap_glsl\";\n")
+endforeach()
+string(APPEND body "  throw std::invalid_argument(\"no embedded shader named \" + std::string(name));\n}\n\n}  // namespace vdmap::render\n")
+file(WRITE "${OUTPUT}.tmp" "${body}")
+file(COPY_FILE "${OUTPUT}.tmp" "${OUTPUT}" ONLY_IF_DIFFERENT)
+file(REMOVE "${OUTPUT}.tmp")

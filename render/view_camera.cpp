@@ -1,0 +1,118 @@
+#include "render/view_camera.h"
+
+#include <algorithm>
+#include <cmath>
+
+namespace vdmap::render {
+
+glm::mat4 ViewCamera::projection() const {
+  // clip = P * p_C with w = z; x_ndc = 2 (u + 0.5) / W - 1 and y_ndc = 1 - 2 (v + 0.5) / H, so
+  // pixel centres land on GL fragment centres and the read-back flip puts row v = 0 on top.
+  glm::mat4 P(0.f);  // column-major: P[col][row]
+  const float w = static_cast<float>(width), h = static_cast<float>(height);
+  P[0][0] = 2.f * fx / w;
+  P[2][0] = 2.f * (cx + 0.5f) / w - 1.f;
+  P[1][1] = -2.f * fy / h;
+  P[2][1] = 1.f - 2.f * (cy + 0.5f) / h;
+  P[2][2] = (far_m + near_m) / (far_m - near_m);
+  P[3][2] = -2.f * far_m * near_m / (far_m - near_m);
+  P[2][3] = 1.f;
+  return P;
+}
+
+glm::vec3 ViewCamera::eye() const { return glm::vec3(glm::inverse(T_C_W)[3]); }
+
+ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
+                              float fov_y_deg, int width, int height) {
+  ViewCamera v;
+  v.width = width;
+  v.height = height;
+  v.fy = v.fx = 0.5f * height / std::tan(glm::radians(fov_y_deg) * 0.5f);
+  v.cx = 0.5f * (width - 1);
+  v.cy = 0.5f * (height - 1);
+  const glm::vec3 z = glm::normalize(target - eye);
+  glm::vec3 x = glm::cross(z, up);
+  if (glm::length(x) < 1e-6f) x = glm::cross(z, glm::vec3(1.f, 0.f, 0.f));
+  x = glm::normalize(x);
+  const glm::vec3 y = glm::cross(z, x);  // down in the image
+  glm::mat4 T_W_C(1.f);
+  T_W_C[0] = glm::vec4(x, 0.f);
+  T_W_C[1] = glm::vec4(y, 0.f);
+  T_W_C[2] = glm::vec4(z, 0.f);
+  T_W_C[3] = glm::vec4(eye, 1.f);
+  v.T_C_W = glm::inverse(T_W_C);
+  const float dist = glm::length(target - eye);
+  v.near_m = std::max(0.01f, dist * 0.01f);
+  v.far_m = std::max(100.f, dist * 10.f);
+  return v;
+}
+
+ViewCamera ViewCamera::fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width,
+                                   int height) {
+  ViewCamera v;
+  v.width = width;
+  v.height = height;
+  const double sx = static_cast<double>(width) / camera.width;
+  const double sy = static_cast<double>(height) / camera.height;
+  v.fx = static_cast<float>(camera.fx * sx);
+  v.fy = static_cast<float>(camera.fy * sy);
+  v.cx = static_cast<float>((camera.cx + 0.5) * sx - 0.5);
+  v.cy = static_cast<float>((camera.cy + 0.5) * sy - 0.5);
+  v.T_C_W = toGlm(T_W_C.inverse());
+  return v;
+}
+
+glm::mat4 toGlm(const Transform& T) {
+  glm::mat4 m(1.f);
+  for (int c = 0; c < 4; ++c)
+    for (int r = 0; r < 3; ++r) m[c][r] = static_cast<float>(T.matrix()(r, c));
+  return m;
+}
+
+void OrbitCamera::orbit(float d_yaw, float d_pitch) {
+  yaw += d_yaw;
+  const float limit = glm::radians(89.f);
+  pitch = std::clamp(pitch + d_pitch, -limit, limit);
+}
+
+void OrbitCamera::pan(float right_m, float up_m) {
+  const ViewCamera v = view(2, 2);
+  const glm::mat4 T_W_C = glm::inverse(v.T_C_W);
+  target += glm::vec3(T_W_C[0]) * right_m - glm::vec3(T_W_C[1]) * up_m;
+}
+
+void OrbitCamera::dolly(float factor) { distance_m = std::max(1e-3f, distance_m * factor); }
+
+void OrbitCamera::fly(float forward_m, float right_m, float up_m) {
+  const glm::vec3 forward = glm::normalize(target - eye());
+  const glm::vec3 right = glm::normalize(glm::cross(forward, up));
+  target += forward * forward_m + right * right_m + glm::normalize(up) * up_m;
+}
+
+glm::vec3 OrbitCamera::eye() const {
+  // A frame with `up` as z: any perpendicular pair spans the horizon.
+  const glm::vec3 u = glm::normalize(up);
+  glm::vec3 a = glm::cross(u, std::abs(u.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+  a = glm::normalize(a);
+  const glm::vec3 b = glm::cross(u, a);
+  const glm::vec3 dir = std::cos(pitch) * (std::cos(yaw) * a + std::sin(yaw) * b) + std::sin(pitch) * u;
+  return target + distance_m * dir;
+}
+
+ViewCamera OrbitCamera::view(int width, int height) const {
+  return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height);
+}
+
+OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_max,
+                                 const glm::vec3& up) {
+  OrbitCamera cam;
+  cam.up = up;
+  cam.target = 0.5f * (box_min + box_max);
+  const float radius = std::max(0.05f, 0.5f * glm::length(box_max - box_min));
+  cam.distance_m = radius / std::sin(glm::radians(cam.fov_y_deg) * 0.5f);
+  cam.yaw = glm::radians(-60.f);
+  cam.pitch = glm::radians(35.f);
+  return cam;
+}
+
+}  // namespace vdmap::render

@@ -1,0 +1,63 @@
+#pragma once
+// Cameras for drawing. Every view uses the pinhole convention of SPEC section 1 (camera x right,
+// y down, z forward; pixel (u, v) with the origin at the centre of the top-left pixel), so "view
+// from keyframe K" with the keyframe's intrinsics reproduces its image pixel for pixel.
+#include <glm/glm.hpp>
+
+#include "mapping/core/camera.h"
+#include "mapping/core/types.h"
+
+namespace vdmap::render {
+
+/// A fully specified view: intrinsics, image size, clip planes and the world-to-camera pose.
+struct ViewCamera {
+  int width = 640, height = 480;
+  float fx = 525.f, fy = 525.f, cx = 319.5f, cy = 239.5f;
+  float near_m = 0.05f, far_m = 100.f;
+  glm::mat4 T_C_W{1.f};  ///< world -> camera (the view matrix)
+
+  /// Clip-space projection for this pinhole (z in [near, far] -> NDC [-1, 1]; rows are read
+  /// back flipped so that image row 0 is the top).
+  glm::mat4 projection() const;
+  glm::mat4 viewProjection() const { return projection() * T_C_W; }
+  /// The camera centre in the world frame.
+  glm::vec3 eye() const;
+
+  /// Looks from `eye` at `target` with `up` pointing up in the image; vertical field of view
+  /// in degrees, square pixels, principal point at the image centre.
+  static ViewCamera lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
+                           float fov_y_deg, int width, int height);
+  /// The view of a real camera at pose T_W_C ("view from keyframe K"), rescaled to
+  /// width x height (aspect kept by scaling the intrinsics per axis).
+  static ViewCamera fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width,
+                                int height);
+};
+
+/// The interactive camera model of the workbench: orbit around a target or fly through the
+/// scene. Angles in radians; `up` is the world's up axis.
+struct OrbitCamera {
+  glm::vec3 target{0.f};
+  glm::vec3 up{0.f, 0.f, 1.f};
+  float distance_m = 5.f;
+  float yaw = 0.f;     ///< around `up`
+  float pitch = 0.4f;  ///< above the horizon, clamped to +-89 degrees
+  float fov_y_deg = 60.f;
+
+  void orbit(float d_yaw, float d_pitch);
+  /// Moves target and eye together, in the view's right/up plane, by metres.
+  void pan(float right_m, float up_m);
+  /// Scales the distance (factor < 1 moves closer).
+  void dolly(float factor);
+  /// Fly mode: moves the eye and target along the viewing direction / right / up by metres.
+  void fly(float forward_m, float right_m, float up_m);
+  glm::vec3 eye() const;
+  ViewCamera view(int width, int height) const;
+  /// Frames a bounding box: target at its centre, distance so that it fits the field of view.
+  static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
+                             const glm::vec3& up = {0.f, 0.f, 1.f});
+};
+
+/// Eigen -> GLM.
+glm::mat4 toGlm(const Transform& T);
+
+}  // namespace vdmap::render

@@ -1,0 +1,31 @@
+#pragma once
+// Small fixed scenes for the renderer's tests (golden images and projection checks).
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "mapping/core/camera.h"
+#include "render/scene_lines.h"
+#include "render/scene_types.h"
+
+namespace vdmap::test {
+
+/// 20 ellipsoids on a 5x4 grid in the plane z = 0 (x in [-1, 1], y in [-0.75, 0.75]) with
+/// varying orientation, size, colour, keyframe and count.
+std::vector<render::EllipsoidInstance> gridEllipsoids();
+
+/// A 160x120 camera (fx = fy = 150) for container views.
+PinholeCamera smallCamera();
+/// A 160x120 RGB test card: colour ramps with a checkerboard.
+cv::Mat testCard();
+
+/// A covariance with principal standard deviations (sx, sy, sz) rotated by `yaw` about z.
+glm::mat3 covariance(float sx, float sy, float sz, float yaw);
+
+/// A coloured unit cube standing on a 3 x 3 m floor (vertex colours, flat faces).
+render::ColoredMesh cubeOnFloor();
+
+/// Six keyframes on a circle of radius 1.5 m at height 1 m looking at the origin.
+std::vector<Transform> ringOfKeyframes(int n = 6);
+
+}  // namespace vdmap::test
