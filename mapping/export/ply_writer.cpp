@@ -1,0 +1,78 @@
+#include "mapping/export/ply_writer.h"
+
+#include <unistd.h>
+
+#include <algorithm>
+#include <bit>
+#include <cmath>
+#include <cstdint>
+#include <cstring>
+#include <fstream>
+#include <stdexcept>
+#include <string>
+
+namespace vdmap {
+namespace {
+
+static_assert(std::endian::native == std::endian::little,
+              "the PLY writer emits the host's bytes and declares binary_little_endian");
+
+template <typename T>
+void put(std::string& buffer, T value) {
+  char bytes[sizeof(T)];
+  std::memcpy(bytes, &value, sizeof(T));
+  buffer.append(bytes, sizeof(T));
+}
+
+std::uint8_t toByte(float c) {
+  return static_cast<std::uint8_t>(std::clamp(std::lround(c), 0L, 255L));
+}
+
+// Writes `bytes` to file.tmp-PID and renames it over `file` (atomic on POSIX within a folder).
+void writeAtomically(const std::filesystem::path& file, const std::string& bytes) {
+  const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
+  {
+    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
+    if (!out) throw std::runtime_error(tmp.string() + ": cannot open for writing");
+    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
+    out.flush();
+    if (!out) {
+      out.close();
+      std::error_code ignored;
+      std::filesystem::remove(tmp, ignored);
+      throw std::runtime_error(tmp.string() + ": write failed (disk full?)");
+    }
+  }
+  std::error_code ec;
+  std::filesystem::rename(tmp, file, ec);
+  if (ec) {
+    std::filesystem::remove(tmp, ec);
+    throw std::runtime_error(file.string() + ": cannot rename the finished export into place");
+  }
+}
+
+}  // namespace
+
+void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
+  std::string bytes =
+      "ply\nformat binary_little_endian 1.0\ncomment vdmap local-map ellipsoids (SPEC 7)\n"
+      "element vertex " + std::to_string(ellipsoids.size()) +
+      "\nproperty float x\nproperty float y\nproperty float z\n"
+      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
+      "property float cxx\nproperty float cxy\nproperty float cxz\n"
+      "property float cyy\nproperty float cyz\nproperty float czz\n"
+      "property uint count\nproperty int keyframe\nend_header\n";
+  bytes.reserve(bytes.size() + ellipsoids.size() * (12 + 3 + 24 + 8));
+  for (const Ellipsoid& e : ellipsoids) {
+    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
+    for (int k = 0; k < 3; ++k) put(bytes, toByte(e.color(k)));
+    const Eigen::Matrix3d& c = e.cov;
+    for (double v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)})
+      put(bytes, static_cast<float>(v));
+    put(bytes, static_cast<std::uint32_t>(e.count));
+    put(bytes, static_cast<std::int32_t>(e.keyframe));
+  }
+  writeAtomically(file, bytes);
+}
+
+}  // namespace vdmap

@@ -1,0 +1,69 @@
+#include "mapping/local_map/keyframe_container.h"
+
+#include <cmath>
+#include <stdexcept>
+#include <string>
+
+namespace vdmap {
+
+CellStats StoredCell::toStats() const {
+  CellStats s;
+  s.n = n;
+  s.mean = mean.cast<double>();
+  s.scatter << scatter[0], scatter[1], scatter[2],  //
+      scatter[1], scatter[3], scatter[4],           //
+      scatter[2], scatter[4], scatter[5];
+  s.color = color.cast<double>();
+  return s;
+}
+
+void StoredCell::fromStats(const CellStats& s) {
+  n = static_cast<std::uint32_t>(s.n);
+  mean = s.mean.cast<float>();
+  scatter = {float(s.scatter(0, 0)), float(s.scatter(0, 1)), float(s.scatter(0, 2)),
+             float(s.scatter(1, 1)), float(s.scatter(1, 2)), float(s.scatter(2, 2))};
+  color = s.color.cast<float>();
+}
+
+KeyframeContainer::KeyframeContainer(const PinholeCamera& camera, int cell_size_px)
+    : camera_(camera), cell_size_px_(cell_size_px) {
+  camera_.validate();
+  if (cell_size_px < 1 || cell_size_px > std::min(camera.width, camera.height))
+    throw std::invalid_argument("cell size " + std::to_string(cell_size_px) +
+                                " px must be within 1.." +
+                                std::to_string(std::min(camera.width, camera.height)) +
+                                " (the image's smaller side)");
+  cols_ = (2 * camera.width + cell_size_px - 1) / cell_size_px;
+  rows_ = (2 * camera.height + cell_size_px - 1) / cell_size_px;
+  slot_.assign(static_cast<std::size_t>(cols_) * rows_, -1);
+}
+
+int KeyframeContainer::gridIndexOfPixel(double u, double v) const {
+  const double up = u + offsetU() + 0.5, vp = v + offsetV() + 0.5;
+  if (!(up >= 0.0 && vp >= 0.0 && up < 2.0 * camera_.width && vp < 2.0 * camera_.height))
+    return -1;
+  const int col = static_cast<int>(up) / cell_size_px_, row = static_cast<int>(vp) / cell_size_px_;
+  return row * cols_ + col;
+}
+
+Eigen::Vector2d KeyframeContainer::cellCentrePixel(int grid_index) const {
+  const int row = grid_index / cols_, col = grid_index % cols_;
+  // Cell col covers container pixels [col*s, (col+1)*s) whose centres average (col+0.5)*s-0.5.
+  return {(col + 0.5) * cell_size_px_ - 0.5 - offsetU(), (row + 0.5) * cell_size_px_ - 0.5 - offsetV()};
+}
+
+StoredCell& KeyframeContainer::findOrCreate(int grid_index) {
+  std::int32_t& s = slot_[grid_index];
+  if (s < 0) {
+    s = static_cast<std::int32_t>(cells_.size());
+    cells_.emplace_back();
+    cells_.back().grid_index = grid_index;
+  }
+  return cells_[s];
+}
+
+std::size_t KeyframeContainer::memoryBytes() const {
+  return slot_.capacity() * sizeof(std::int32_t) + cells_.capacity() * sizeof(StoredCell);
+}
+
+}  // namespace vdmap

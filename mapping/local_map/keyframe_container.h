@@ -1,0 +1,80 @@
+#pragma once
+// The view-dependent container of one keyframe (SPEC section 2): a grid of cells over a
+// 2W x 2H image plane with the keyframe image in its centre, at most one NDT ellipsoid per cell.
+
+#include <array>
+#include <cstdint>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mapping/core/camera.h"
+#include "mapping/local_map/cell_stats.h"
+
+namespace vdmap {
+
+/// One stored ellipsoid. Statistics are accumulated in double (the integrator's scratch and
+/// mergeBatch) and stored in float: float keeps a mean at 8 m to ~0.5 um and the scatter to 1e-7
+/// relative, far below sensor noise, and halves the memory (SPEC: "store in float where memory
+/// matters"). Keyframe frame K, metres.
+struct StoredCell {
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  std::array<float, 6> scatter{};  ///< S: xx xy xz yy yz zz
+  Eigen::Vector3f color = Eigen::Vector3f::Zero();  ///< mean RGB, 0..255
+  std::uint32_t n = 0;
+  std::int32_t grid_index = -1;  ///< row * cols + col of the cell in its container
+
+  CellStats toStats() const;
+  void fromStats(const CellStats& stats);
+};
+static_assert(sizeof(StoredCell) <= 64, "an ellipsoid must take at most 64 bytes (issue #3)");
+
+/// Storage: sparse. An int32 slot per grid cell (-1 = empty) points into a vector of the cells
+/// that hold an ellipsoid. A 640x480 keyframe has 49152 cells of which a typical 7-Scenes
+/// keyframe of 10 frames fills ~45%; dense storage would cost 56 B per grid cell (2.7 MB per
+/// keyframe), sparse costs 4 B per grid cell plus 56 B per ellipsoid (~1.4 MB), and the extra
+/// indirection happens once per run of pixels, not per pixel (see README "Performance").
+/// Not thread-safe for writing; concurrent const access is fine.
+class KeyframeContainer {
+ public:
+  /// `camera` is the keyframe's camera. Throws std::invalid_argument when the camera is invalid
+  /// or cell_size_px is not in 1..min(width, height).
+  KeyframeContainer(const PinholeCamera& camera, int cell_size_px);
+
+  const PinholeCamera& camera() const { return camera_; }
+  int cellSizePx() const { return cell_size_px_; }
+  int cols() const { return cols_; }  ///< ceil(2W / s)
+  int rows() const { return rows_; }  ///< ceil(2H / s)
+  /// Container pixel = keyframe pixel + offset: offset = (W/2, H/2), integer division.
+  int offsetU() const { return camera_.width / 2; }
+  int offsetV() const { return camera_.height / 2; }
+
+  /// The grid index of the cell holding keyframe pixel (u, v), or -1 when it is outside the
+  /// container. A container pixel covers [u' - 0.5, u' + 0.5).
+  int gridIndexOfPixel(double u, double v) const;
+  /// Keyframe pixel of the centre of a cell (for the expected covariance of its footprint).
+  Eigen::Vector2d cellCentrePixel(int grid_index) const;
+
+  /// The stored cell at a grid index, or nullptr.
+  const StoredCell* find(int grid_index) const {
+    const std::int32_t s = slot_[grid_index];
+    return s < 0 ? nullptr : &cells_[s];
+  }
+  /// The stored cell at a grid index, created empty (n = 0) when absent.
+  StoredCell& findOrCreate(int grid_index);
+
+  /// All stored cells (those with n >= 1), in order of creation.
+  const std::vector<StoredCell>& cells() const { return cells_; }
+  std::size_t size() const { return cells_.size(); }
+  /// Heap bytes held: the slot grid plus the cells.
+  std::size_t memoryBytes() const;
+
+ private:
+  PinholeCamera camera_;
+  int cell_size_px_;
+  int cols_, rows_;
+  std::vector<std::int32_t> slot_;
+  std::vector<StoredCell> cells_;
+};
+
+}  // namespace vdmap
