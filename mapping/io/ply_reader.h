@@ -1,0 +1,39 @@
+#pragma once
+// PLY input: triangle meshes with vertex colours (ascii or binary, either endianness) and the
+// ellipsoid layout of SPEC section 7.
+#include <array>
+#include <cstdint>
+#include <filesystem>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace vdmap {
+
+/// A triangle mesh with one colour per vertex (world frame, metres).
+struct ColoredTriangleMesh {
+  std::vector<Eigen::Vector3f> positions;
+  std::vector<std::array<std::uint8_t, 3>> colors;
+  std::vector<std::array<std::uint32_t, 3>> triangles;
+};
+
+/// One ellipsoid as exported (SPEC section 7): mean, colour, covariance, point count, keyframe.
+struct EllipsoidRecord {
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  std::array<std::uint8_t, 3> rgb{};
+  Eigen::Matrix3f cov = Eigen::Matrix3f::Zero();
+  std::uint32_t count = 0;
+  std::int32_t keyframe = 0;
+};
+
+/// Reads a mesh: `vertex` with x y z and red green blue (uchar, or float in [0, 1]; alpha is
+/// ignored) and `face` with a vertex_indices list (polygons are fan-triangulated). Throws
+/// InputError naming the file when the header is malformed, the file is truncated, the mesh
+/// has no faces or no vertex colours, or a face indexes a missing vertex.
+ColoredTriangleMesh readPlyMesh(const std::filesystem::path& file);
+
+/// Reads ellipsoids: `vertex` with x y z, red green blue, cxx cxy cxz cyy cyz czz, and
+/// optionally count and keyframe. Throws InputError as readPlyMesh.
+std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file);
+
+}  // namespace vdmap

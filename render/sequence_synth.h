@@ -1,0 +1,63 @@
+#pragma once
+// Synthetic RGB-D sequences: a coloured mesh rendered along a trajectory (OSMesa), depth passed
+// through the sensor model of mapping/synth/depth_noise.h, written in the TUM layout.
+#include <filesystem>
+#include <functional>
+#include <memory>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "mapping/core/camera.h"
+#include "mapping/io/ply_reader.h"
+#include "mapping/io/trajectory_io.h"
+#include "mapping/synth/depth_noise.h"
+#include "render/context.h"
+
+namespace vdmap::render {
+
+/// One rendered view: rgb (CV_8UC3, RGB order, unshaded vertex colours), and CV_32FC2 with
+/// camera z in metres (0 where no surface) and |cos| of the incidence angle.
+struct SyntheticView {
+  cv::Mat rgb;
+  cv::Mat z_cos;
+};
+
+/// Renders a mesh from camera poses at the camera's resolution and intrinsics. Needs the given
+/// context current; owns its GPU resources.
+class MeshViewRenderer {
+ public:
+  MeshViewRenderer(Context& context, const ColoredTriangleMesh& mesh, const PinholeCamera& camera);
+  ~MeshViewRenderer();
+  SyntheticView render(const Transform& T_W_C);
+
+ private:
+  struct Impl;
+  std::unique_ptr<Impl> impl_;
+};
+
+struct SynthOptions {
+  PinholeCamera camera;
+  DepthNoiseParams noise;
+  int first_frame = 0;   ///< of the trajectory, half-open [first, last)
+  int last_frame = -1;   ///< -1: to the end
+  /// Written into the folder as camera.yaml so the sequence opens with the right intrinsics.
+  bool write_camera_file = true;
+  /// Called after each frame with (done, total).
+  std::function<void(std::size_t, std::size_t)> progress;
+};
+
+/// Renders `trajectory` (T_W_C with timestamps) into the TUM folder `out_dir`: rgb/NNNNNN.png,
+/// depth/NNNNNN.png (16-bit), rgb.txt, depth.txt, groundtruth.txt, camera.yaml. Everything is
+/// written into a sibling temporary folder first and renamed at the end, so a failure leaves
+/// nothing behind. Throws std::invalid_argument when `out_dir` exists and is not empty or the
+/// frame range selects nothing, std::runtime_error on rendering/IO failures.
+void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<StampedPose>& trajectory,
+                        const SynthOptions& options, const std::filesystem::path& out_dir);
+
+/// Writes the built-in scene (mapping/synth/builtin_scene.h) as a sequence into `out_dir`
+/// with the nguyen2012 sensor model. `frames` < 0 keeps the scene's default walk.
+void writeBuiltinSequence(const std::filesystem::path& out_dir, int frames = -1,
+                          std::function<void(std::size_t, std::size_t)> progress = {});
+
+}  // namespace vdmap::render
