@@ -24,8 +24,8 @@ int main(int argc, char** argv) {
   app.require_subcommand(0, 1);
   addInfoCommand(app);
   addPlannedCommand(app, "map", "Map a sequence into local maps and a global map", "#3");
-  addPlannedCommand(app, "render", "Render a map or sequence headless to PNG", "#4");
-  addPlannedCommand(app, "synth", "Render a mesh along a trajectory into a TUM sequence", "#4");
+  addRenderCommand(app);
+  addSynthCommand(app);
   addPlannedCommand(app, "bench", "Time vdmap against OctoMap on the same frames", "#3");
   addPlannedCommand(app, "eval", "Reconstruction accuracy against a reference mesh", "#8");
   addPlannedCommand(app, "gui", "Open the workbench on a sequence", "#7");

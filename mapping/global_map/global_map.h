@@ -1,0 +1,62 @@
+#pragma once
+// The global map (SPEC section 6): a pure function of the local maps, their poses and the
+// parameters, rebuilt whenever a threshold or a keyframe pose changes.
+#include <cstddef>
+#include <vector>
+
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/local_map/ellipsoid_filter.h"
+
+namespace vdmap {
+
+/// The live parameters of the global map (SPEC section 9).
+struct GlobalMapParams {
+  FilterParams filter;                 ///< which local-map ellipsoids are kept
+  double tau_group = 0.1;              ///< edge weight that puts a neighbour in a merge group
+  double merge_distance_m = 0.25;      ///< mean-shift kernel radius h
+  bool occlusion_removal = true;
+  double occlusion_distance_m = 0.5;
+  double occlusion_angle_deg = 30.0;
+  int threads = 0;                     ///< 0: all cores. The result does not depend on it.
+  /// Throws std::invalid_argument naming the first parameter out of range.
+  void validate() const;
+};
+
+/// A merge group: a centre keyframe and the neighbours re-projected into it.
+struct MergeGroup {
+  int centre = -1;
+  std::vector<int> members;  ///< includes the centre, ascending ids
+};
+
+struct GlobalMap {
+  std::vector<Ellipsoid> ellipsoids;  ///< world frame; keyframe = the group centre it merged in
+  std::vector<MergeGroup> groups;
+  std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
+  std::size_t merged = 0;             ///< after merging, before occlusion removal
+  std::size_t sigma_e_prime = 0;      ///< after merging and occlusion removal
+  double t_g_s = 0;                   ///< wall time of grouping, merging and occlusion removal
+  double groups_ms = 0, merge_ms = 0, occlusion_ms = 0;
+};
+
+/// Greedy merge groups of SPEC section 6 step 1 (deterministic: ties go to the lower id).
+std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group);
+
+/// Mean-shift with a flat kernel of radius h on count-weighted means (SPEC section 6 step 2):
+/// returns, for each input, the index of its cluster (0..clusters-1, in order of first member).
+std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights,
+                                   double h);
+
+/// Moment matching of a cluster: n = sum n_i, mean = sum n_i mean_i / n, colour count-weighted,
+/// and the covariance of the union of the clusters' points (scatters combined, see the .cpp).
+Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster);
+
+/// Builds the global map. Deterministic: bit for bit the same for any thread count.
+/// Throws std::invalid_argument for parameters out of range; an empty graph gives an empty map.
+GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params);
+
+/// Occlusion removal (SPEC section 6 step 3) over ellipsoids in the world frame; returns, for each,
+/// whether it is removed. Exposed for tests.
+std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
+                                      const GlobalMapParams& params);
+
+}  // namespace vdmap

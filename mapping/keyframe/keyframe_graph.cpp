@@ -1,0 +1,56 @@
+#include "mapping/keyframe/keyframe_graph.h"
+
+#include <algorithm>
+#include <stdexcept>
+#include <string>
+
+#include "mapping/core/error.h"
+#include "mapping/io/trajectory_io.h"
+
+namespace vdmap {
+
+Keyframe& KeyframeGraph::add(Keyframe keyframe) {
+  keyframe.id = static_cast<int>(keyframes_.size());
+  keyframes_.push_back(std::move(keyframe));
+  return keyframes_.back();
+}
+
+std::vector<KeyframeView> KeyframeGraph::views() const {
+  std::vector<KeyframeView> out;
+  out.reserve(keyframes_.size());
+  for (const Keyframe& k : keyframes_) out.push_back({k.id, &k.T_W_K, &k.features});
+  return out;
+}
+
+void KeyframeGraph::setKeyframePose(int id, const Transform& T_W_K) {
+  if (id < 0 || id >= static_cast<int>(keyframes_.size()))
+    throw std::invalid_argument("no keyframe " + std::to_string(id) + " (the map has " +
+                                std::to_string(keyframes_.size()) + ")");
+  if (!isValidTransform(T_W_K)) throw std::invalid_argument("keyframe pose must be a finite rigid transform");
+  keyframes_[static_cast<std::size_t>(id)].T_W_K = T_W_K;
+}
+
+TrajectoryMatch KeyframeGraph::applyTrajectory(const std::filesystem::path& file, double tolerance_s) {
+  const std::vector<StampedPose> poses = readTumTrajectory(file);
+  TrajectoryMatch match;
+  std::vector<bool> seen(keyframes_.size(), false);
+  for (const StampedPose& p : poses) {
+    // Keyframe timestamps increase with id (keyframes are created in sequence order).
+    auto it = std::lower_bound(keyframes_.begin(), keyframes_.end(), p.t - tolerance_s,
+                               [](const Keyframe& k, double t) { return k.timestamp < t; });
+    if (it == keyframes_.end() || std::abs(it->timestamp - p.t) > tolerance_s) {
+      ++match.unknown;
+      continue;
+    }
+    it->T_W_K = p.T_W_C;
+    if (!seen[static_cast<std::size_t>(it->id)]) ++match.matched;
+    seen[static_cast<std::size_t>(it->id)] = true;
+  }
+  match.untouched = static_cast<int>(std::count(seen.begin(), seen.end(), false));
+  if (match.matched == 0)
+    throw InputError(file.string(), "no pose matches a keyframe timestamp (" + std::to_string(poses.size()) +
+                                        " poses, " + std::to_string(keyframes_.size()) + " keyframes)");
+  return match;
+}
+
+}  // namespace vdmap

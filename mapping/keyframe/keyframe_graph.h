@@ -1,0 +1,65 @@
+#pragma once
+#include <deque>
+#include <filesystem>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "mapping/keyframe/covisibility_graph.h"
+#include "mapping/keyframe/frame_features.h"
+#include "mapping/keyframe/keyframe_selector.h"
+#include "mapping/local_map/keyframe_container.h"
+
+namespace vdmap {
+
+/// A keyframe (SPEC section 2): its pose, its own images and features, and its local map.
+struct Keyframe {
+  int id = 0;
+  int frame_index = 0;    ///< the sequence frame that created it
+  double timestamp = 0;   ///< s, that frame's depth timestamp
+  Transform T_W_K = Transform::Identity();
+  cv::Mat rgb;            ///< CV_8UC3 RGB, for the container view
+  cv::Mat depth;          ///< CV_16UC1 raw units
+  FrameFeatures features;
+  KeyframeContainer container;
+  int frames_integrated = 0;
+};
+
+/// What applyTrajectory() matched.
+struct TrajectoryMatch {
+  int matched = 0;          ///< keyframes whose pose was replaced
+  int unknown = 0;          ///< file poses whose timestamp is no keyframe's (ignored)
+  int untouched = 0;        ///< keyframes the file does not mention (pose kept)
+};
+
+/// The keyframes (ids 0..size-1, in creation order) and their covisibility edges. Keyframe
+/// addresses are stable. Not thread-safe for writes.
+class KeyframeGraph {
+ public:
+  Keyframe& add(Keyframe keyframe);
+  std::size_t size() const { return keyframes_.size(); }
+  const Keyframe& keyframe(int id) const { return keyframes_.at(static_cast<std::size_t>(id)); }
+  Keyframe& keyframe(int id) { return keyframes_.at(static_cast<std::size_t>(id)); }
+  const std::deque<Keyframe>& keyframes() const { return keyframes_; }
+  const CovisibilityGraph& edges() const { return edges_; }
+  CovisibilityGraph& edges() { return edges_; }
+  /// Non-owning views for the keyframe decision.
+  std::vector<KeyframeView> views() const;
+
+  /// Replaces a keyframe's pose (loop-closure correction). The local map is untouched: it
+  /// lives in the keyframe frame. Throws std::invalid_argument for an unknown id or a pose that
+  /// is not a finite rigid transform.
+  void setKeyframePose(int id, const Transform& T_W_K);
+
+  /// Replaces the poses of the keyframes whose timestamps appear in a TUM trajectory file
+  /// (matched within `tolerance_s`). Poses at unknown timestamps are ignored and counted;
+  /// keyframes the file does not name keep their pose. Throws InputError for a malformed file,
+  /// or when it matches no keyframe at all (almost surely the wrong file).
+  TrajectoryMatch applyTrajectory(const std::filesystem::path& file, double tolerance_s = 1e-3);
+
+ private:
+  std::deque<Keyframe> keyframes_;
+  CovisibilityGraph edges_;
+};
+
+}  // namespace vdmap

@@ -1,0 +1,82 @@
+#include "mapping/keyframe/mapper.h"
+
+#include <chrono>
+#include <stdexcept>
+#include <string>
+
+namespace vdmap {
+namespace {
+
+double msSince(std::chrono::steady_clock::time_point start) {
+  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+}
+
+}  // namespace
+
+Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
+    : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map) {
+  camera_.validate();
+  // Fail on a bad cell size now rather than at the first keyframe.
+  KeyframeContainer(camera_, params_.local_map.cell_size_px);
+}
+
+int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, frame.rgb.clone(), frame.depth.clone(),
+             std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
+  return graph_.add(std::move(k)).id;
+}
+
+FrameReport Mapper::addFrame(const RgbdFrame& frame) {
+  if (!isValidTransform(frame.T_W_C))
+    throw std::invalid_argument("frame " + std::to_string(frame.index) + ": pose is not a finite rigid transform");
+  const auto start = std::chrono::steady_clock::now();
+  FrameReport report;
+  report.frame_index = frame.index;
+
+  FrameFeatures features = extractor_.extract(frame, camera_, params_.local_map.depth_range);
+  report.features = features.size();
+  report.ms.features_ms = msSince(start);
+
+  const auto decide_start = std::chrono::steady_clock::now();
+  const std::vector<KeyframeView> views = graph_.views();
+  if (params_.keyframe_every > 0) {
+    const bool start_new = current_ < 0 || frames_ % params_.keyframe_every == 0;
+    report.decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
+    report.decision.keyframe = start_new ? -1 : current_;
+  } else {
+    report.decision = decideKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+  }
+  switch (report.decision.kind) {
+    case FrameDecision::Kind::kUpdate:
+      report.keyframe = report.decision.keyframe;
+      break;
+    case FrameDecision::Kind::kRevisit:
+      ++revisits_;
+      report.keyframe = report.decision.keyframe;
+      // The frame links the place it left to the place it recognised.
+      if (current_ >= 0) graph_.edges().strengthen(current_, report.keyframe, report.decision.delta_current);
+      break;
+    case FrameDecision::Kind::kNewKeyframe: {
+      const auto edges = params_.keyframe_every > 0
+                             ? std::vector<std::pair<int, double>>{}
+                             : edgesOfNewKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+      report.keyframe = newKeyframe(frame, std::move(features));
+      for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
+      if (params_.keyframe_every > 0 && current_ >= 0) graph_.edges().strengthen(report.keyframe, current_, 0.0);
+      break;
+    }
+  }
+  current_ = report.keyframe;
+  report.ms.decision_ms = msSince(decide_start);
+
+  const auto update_start = std::chrono::steady_clock::now();
+  Keyframe& keyframe = graph_.keyframe(current_);
+  integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
+  ++keyframe.frames_integrated;
+  report.ms.update_ms = msSince(update_start);
+  report.ms.total_ms = msSince(start);
+  ++frames_;
+  return report;
+}
+
+}  // namespace vdmap

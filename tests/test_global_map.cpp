@@ -1,0 +1,163 @@
+// The global map (SPEC section 6): grouping, mean-shift merging, moment matching, occlusion
+// removal, determinism across thread counts, parameter checks.
+#include <random>
+
+#include <gtest/gtest.h>
+
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/camera_config.h"
+#include "mapping/local_map/local_map_integrator.h"
+#include "tests/test_util.h"
+
+namespace vdmap {
+namespace {
+
+const PinholeCamera kCamera = cameraPreset("tum-default");
+
+// Adds a keyframe at `T_W_K` whose local map holds `frames` ray-cast frames of the box room from
+// the same pose, and whose map is then placed at `T_W_placed` (a pose error, to shift surfaces).
+int addKeyframe(KeyframeGraph* graph, const Transform& T_W_K, const Transform& T_W_placed) {
+  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
+  LocalMapIntegrator integrator;
+  const RgbdFrame frame = test::renderBoxRoom(kCamera, T_W_K);
+  integrator.integrateFrame(frame, kCamera, T_W_K, &k.container, nullptr);
+  k.T_W_K = T_W_placed;
+  return graph->add(std::move(k)).id;
+}
+
+Transform facingWall(double z) { return test::lookAt({0, 0, z}, {0, 0, 2}); }
+
+TEST(GlobalMap, TwoKeyframesOnOnePlaneMergeToAboutHalf) {
+  KeyframeGraph graph;
+  addKeyframe(&graph, facingWall(0.0), facingWall(0.0));
+  addKeyframe(&graph, test::lookAt({0.01, 0, 0.01}, {0.01, 0, 2}), test::lookAt({0.01, 0, 0.01}, {0.01, 0, 2}));
+  graph.edges().strengthen(0, 1, 0.8);
+  GlobalMapParams params;
+  params.occlusion_removal = false;
+  const GlobalMap map = buildGlobalMap(graph, params);
+  ASSERT_EQ(map.groups.size(), 1u);
+  const double ratio = static_cast<double>(map.sigma_e_prime) / static_cast<double>(map.sigma_e);
+  EXPECT_GT(ratio, 0.45);
+  EXPECT_LT(ratio, 0.6);
+  // Noise-free ray-cast depth quantised to 1/5000 m: means lie on the wall z = 2 within that.
+  for (const Ellipsoid& e : map.ellipsoids) ASSERT_NEAR(e.mean.z(), 2.0, 2e-4);
+}
+
+TEST(GlobalMap, MeansFartherApartThanTheMergeDistanceNeverMerge) {
+  KeyframeGraph graph;
+  addKeyframe(&graph, facingWall(0.0), facingWall(0.0));
+  addKeyframe(&graph, facingWall(0.0), facingWall(-0.3));  // its wall appears 0.3 m farther
+  graph.edges().strengthen(0, 1, 0.8);
+  GlobalMapParams params;
+  params.occlusion_removal = false;
+  const GlobalMap map = buildGlobalMap(graph, params);  // h = 0.25 m < 0.3 m
+  EXPECT_EQ(map.sigma_e_prime, map.sigma_e);
+  params.merge_distance_m = 0.35;
+  EXPECT_LT(buildGlobalMap(graph, params).sigma_e_prime, map.sigma_e_prime) << "a wider kernel merges";
+}
+
+TEST(GlobalMap, MeanShiftSeparatesClustersFartherThanH) {
+  const std::vector<Eigen::Vector3d> means = {{0, 0, 1}, {0.05, 0, 1}, {0, 0, 1.6}, {0.02, 0, 1.62}};
+  const std::vector<int> label = meanShiftClusters(means, {10, 30, 5, 5}, 0.25);
+  EXPECT_EQ(label, (std::vector<int>{0, 0, 1, 1}));
+  EXPECT_EQ(meanShiftClusters(means, {1, 1, 1, 1}, 1.0), (std::vector<int>{0, 0, 0, 0}));
+}
+
+TEST(GlobalMap, MomentMatchingEqualsTheStatisticsOfTheUnion) {
+  std::mt19937 rng(11);
+  std::normal_distribution<double> g(0.0, 1.0);
+  std::vector<Eigen::Vector3d> all;
+  std::vector<Ellipsoid> parts;
+  for (int part = 0; part < 3; ++part) {
+    std::vector<Eigen::Vector3d> pts;
+    for (int i = 0; i < 20 + 7 * part; ++i) pts.push_back(Eigen::Vector3d(g(rng), 2 * g(rng), 0.1 * g(rng)) + Eigen::Vector3d(part, 0, 3));
+    Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+    for (const auto& p : pts) mean += p;
+    mean /= pts.size();
+    Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+    for (const auto& p : pts) S += (p - mean) * (p - mean).transpose();
+    Ellipsoid e;
+    e.mean = mean;
+    e.cov = S / (pts.size() - 1.0);
+    e.count = static_cast<std::uint32_t>(pts.size());
+    e.color = Eigen::Vector3f(10.0f * part, 0, 0);
+    parts.push_back(e);
+    all.insert(all.end(), pts.begin(), pts.end());
+  }
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  for (const auto& p : all) mean += p;
+  mean /= all.size();
+  Eigen::Matrix3d S = Eigen::Matrix3d::Zero();
+  for (const auto& p : all) S += (p - mean) * (p - mean).transpose();
+  const Ellipsoid m = momentMatch({&parts[0], &parts[1], &parts[2]});
+  EXPECT_EQ(m.count, all.size());
+  EXPECT_LT((m.mean - mean).norm(), 1e-12);
+  EXPECT_LT((m.cov - S / (all.size() - 1.0)).norm() / S.norm(), 1e-12);
+  EXPECT_NEAR(m.color.x(), (0 * 20 + 10 * 27 + 20 * 34) / 81.0, 1e-4);
+}
+
+TEST(GlobalMap, OcclusionRemovalKeepsTheCloseViewAndDropsCoarseEllipsoidsInFront) {
+  KeyframeGraph graph;
+  // Keyframe 0 sees the wall from 2 m (coarse cells) and is placed 1 cm too near: its surface
+  // floats just in front of the wall. Keyframe 1 sees it from 0.3 m (fine cells), correctly.
+  Transform placed = facingWall(0.0);
+  placed.translation().z() -= 0.01;
+  addKeyframe(&graph, facingWall(0.0), placed);
+  addKeyframe(&graph, facingWall(1.7), facingWall(1.7));
+  graph.edges().strengthen(0, 1, 0.05);  // neighbours, but below tau_group: no merging
+  GlobalMapParams params;
+  const GlobalMap on = buildGlobalMap(graph, params);
+  params.occlusion_removal = false;
+  const GlobalMap off = buildGlobalMap(graph, params);
+  EXPECT_EQ(off.sigma_e_prime, off.sigma_e);
+  // Count, per keyframe, the ellipsoids inside keyframe 1's view (|x|, |y| within its footprint).
+  auto count = [](const GlobalMap& m, int keyframe) {
+    int n = 0;
+    for (const Ellipsoid& e : m.ellipsoids)
+      if (e.keyframe == keyframe && std::abs(e.mean.x()) < 0.1 && std::abs(e.mean.y()) < 0.07) ++n;
+    return n;
+  };
+  ASSERT_GT(count(off, 0), 20);
+  EXPECT_LT(count(on, 0), count(off, 0) / 5) << "coarse ellipsoids in front of the precise ones go";
+  EXPECT_GT(count(on, 1), count(off, 1) * 95 / 100) << "the precise view stays";
+}
+
+TEST(GlobalMap, SameResultWithOneAndTwoThreads) {
+  KeyframeGraph graph;
+  for (int i = 0; i < 4; ++i) {
+    const double a = i * 0.4;
+    addKeyframe(&graph, test::lookAt({0, 0, 0}, {2 * std::sin(a), 0, 2 * std::cos(a)}),
+                test::lookAt({0, 0, 0}, {2 * std::sin(a), 0, 2 * std::cos(a)}));
+  }
+  graph.edges().strengthen(0, 1, 0.5);
+  graph.edges().strengthen(1, 2, 0.4);
+  graph.edges().strengthen(2, 3, 0.3);
+  GlobalMapParams params;
+  params.threads = 1;
+  const GlobalMap a = buildGlobalMap(graph, params);
+  params.threads = 2;
+  const GlobalMap b = buildGlobalMap(graph, params);
+  ASSERT_EQ(a.ellipsoids.size(), b.ellipsoids.size());
+  for (std::size_t i = 0; i < a.ellipsoids.size(); ++i) {
+    ASSERT_EQ(a.ellipsoids[i].mean, b.ellipsoids[i].mean);
+    ASSERT_EQ(a.ellipsoids[i].cov, b.ellipsoids[i].cov);
+  }
+}
+
+TEST(GlobalMap, EmptyGraphAndBadParameters) {
+  KeyframeGraph graph;
+  const GlobalMap map = buildGlobalMap(graph, {});
+  EXPECT_EQ(map.sigma_e_prime, 0u);
+  Keyframe empty{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
+  graph.add(std::move(empty));  // a keyframe with no kept ellipsoids
+  EXPECT_EQ(buildGlobalMap(graph, {}).sigma_e_prime, 0u);
+  GlobalMapParams p;
+  p.merge_distance_m = -1;
+  EXPECT_THROW(buildGlobalMap(graph, p), std::invalid_argument);
+  p = {};
+  p.occlusion_angle_deg = 181;
+  EXPECT_THROW(buildGlobalMap(graph, p), std::invalid_argument);
+}
+
+}  // namespace
+}  // namespace vdmap
