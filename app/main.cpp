@@ -23,10 +23,10 @@ int main(int argc, char** argv) {
                "With no verb, opens the workbench on the built-in scene."};
   app.require_subcommand(0, 1);
   addInfoCommand(app);
-  addPlannedCommand(app, "map", "Map a sequence into local maps and a global map", "#3");
+  addMapCommand(app);
   addRenderCommand(app);
   addSynthCommand(app);
-  addPlannedCommand(app, "bench", "Time vdmap against OctoMap on the same frames", "#3");
+  addBenchCommand(app);
   addPlannedCommand(app, "eval", "Reconstruction accuracy against a reference mesh", "#8");
   addPlannedCommand(app, "gui", "Open the workbench on a sequence", "#7");
   try {

@@ -1,6 +1,7 @@
 #include "mapping/local_map/local_map_integrator.h"
 
 #include <cassert>
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 
@@ -26,6 +27,52 @@ void checkInputs(const RgbdFrame& frame, const PinholeCamera& camera, const Tran
                                 " is not 8-bit RGB of the depth image's size");
 }
 
+// What pass 1 needs for one row: per-column ray parts ((u - cx) / fx) R.col(0), the row's part
+// b = ((v - cy) / fy) R.col(1) + R.col(2), translation t of T_K_C, the keyframe projection
+// shifted by +0.5 px into container pixels (so that [0, 2W) x [0, 2H) is the container).
+struct RowGeometry {
+  const double* ray_x;
+  const double* ray_y;
+  const double* ray_z;
+  double b[3], t[3], f[2], c[2], end[2];
+  double inv_scale, inv_cell;
+  unsigned raw_min, raw_max;
+  int cols, rows;
+};
+
+// Pass 1 of a row, branch-free so that it vectorises; built for AVX2 and for the baseline ISA
+// with runtime dispatch, so the binary stays portable. The cell is floor(container px / s),
+// computed as a product with 1/s: it may differ from integer division only for points within
+// 1e-13 px of a cell border (a measure-zero set; the cell is clamped to the grid).
+__attribute__((target_clones("avx2", "default")))
+void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int width,
+                double* __restrict px, double* __restrict py, double* __restrict pz,
+                int* __restrict cell) {
+  const double* __restrict ray_x = g.ray_x;
+  const double* __restrict ray_y = g.ray_y;
+  const double* __restrict ray_z = g.ray_z;
+  const double bx = g.b[0], by = g.b[1], bz = g.b[2], tx = g.t[0], ty = g.t[1], tz = g.t[2];
+  const double fx = g.f[0], fy = g.f[1], cx = g.c[0], cy = g.c[1], u_end = g.end[0], v_end = g.end[1];
+  const double inv_scale = g.inv_scale, inv_cell = g.inv_cell;
+  const int raw_min = static_cast<int>(g.raw_min), raw_max = static_cast<int>(g.raw_max);
+  const int cols = g.cols, last_col = g.cols - 1, last_row = g.rows - 1;
+  for (int u = 0; u < width; ++u) {
+    const int raw = depth[u];
+    const double d = raw * inv_scale;
+    const double x = d * (ray_x[u] + bx) + tx;
+    const double y = d * (ray_y[u] + by) + ty;
+    const double z = d * (ray_z[u] + bz) + tz;
+    const double iz = 1.0 / z;
+    const double up = fx * x * iz + cx, vp = fy * y * iz + cy;
+    const bool ok = (raw >= raw_min) & (raw <= raw_max) & (z > 0.0) & (up >= 0.0) & (vp >= 0.0) &
+                    (up < u_end) & (vp < v_end);
+    const int col = std::min(static_cast<int>((ok ? up : 0.0) * inv_cell), last_col);
+    const int row = std::min(static_cast<int>((ok ? vp : 0.0) * inv_cell), last_row);
+    px[u] = x, py[u] = y, pz[u] = z;
+    cell[u] = ok ? row * cols + col : -1;
+  }
+}
+
 }  // namespace
 
 void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCamera& camera,
@@ -44,10 +91,6 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
     sums_slot_.assign(grid_size, -1);
     sums_.resize(grid_size);
   }
-  col_of_.resize(2 * kcam.width);
-  row_of_.resize(2 * kcam.height);
-  for (int i = 0; i < 2 * kcam.width; ++i) col_of_[i] = i / s;
-  for (int i = 0; i < 2 * kcam.height; ++i) row_of_[i] = (i / s) * container->cols();
   used_cells_.clear();
 
   const Transform T_K_C = T_W_K.inverse(Eigen::Isometry) * frame.T_W_C;
@@ -71,89 +114,90 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
   const unsigned raw_min = static_cast<unsigned>(raw_min_d);
   const unsigned raw_max = static_cast<unsigned>(std::min(raw_max_d, 65535.0));
 
-  // Projection into container pixel coordinates shifted by +0.5, so that the integer part is
-  // the container pixel and [0, 2W) x [0, 2H) is the container.
-  const double kfx = kcam.fx, kfy = kcam.fy;
-  const double kcx = kcam.cx + container->offsetU() + 0.5, kcy = kcam.cy + container->offsetV() + 0.5;
-  const double u_end = 2.0 * kcam.width, v_end = 2.0 * kcam.height;
-  const bool has_rgb = !frame.rgb.empty();
-  const double tx = t.x(), ty = t.y(), tz = t.z();
 
-  FrameSums* acc = nullptr;
-  // Runs of neighbouring pixels of a row that fall into the same cell are summed in registers
-  // and added to the cell's frame sums once per run (a 5 px cell gives runs of ~5 pixels).
-  auto flush = [&](double n, const double* q, const double* Q, const double* c) {
-    acc->n += n;
-    for (int k = 0; k < 3; ++k) acc->q[k] += q[k];
-    for (int k = 0; k < 6; ++k) acc->Q[k] += Q[k];
-    for (int k = 0; k < 3; ++k) acc->c[k] += c[k];
-  };
+  // Two passes per row. Pass 1 is branch-free arithmetic the compiler vectorises: each pixel's
+  // p_K and its cell (-1 when the pixel is invalid, behind the keyframe or outside its
+  // container). Pass 2 walks the row: runs of neighbouring pixels in the same cell are summed
+  // in registers and added to the cell's frame sums once per run (~5 pixels for 5 px cells).
+  RowGeometry g;
+  g.ray_x = ray_x_.data(), g.ray_y = ray_y_.data(), g.ray_z = ray_z_.data();
+  g.t[0] = t.x(), g.t[1] = t.y(), g.t[2] = t.z();
+  g.f[0] = kcam.fx, g.f[1] = kcam.fy;
+  g.c[0] = kcam.cx + container->offsetU() + 0.5, g.c[1] = kcam.cy + container->offsetV() + 0.5;
+  g.end[0] = 2.0 * kcam.width, g.end[1] = 2.0 * kcam.height;
+  g.inv_scale = inv_scale, g.inv_cell = 1.0 / s;
+  g.raw_min = raw_min, g.raw_max = raw_max;
+  g.cols = container->cols(), g.rows = container->rows();
+  row_x_.resize(width), row_y_.resize(width), row_z_.resize(width), row_cell_.resize(width + 1);
+  double* const px = row_x_.data(), * const py = row_y_.data(), * const pz = row_z_.data();
+  int* const pcell = row_cell_.data();
+  std::int32_t* const slots = sums_slot_.data();
+  FrameSums* const sums = sums_.data();
+  static const std::uint8_t kWhite[3] = {255, 255, 255};
+  const bool has_rgb = !frame.rgb.empty();
 
   for (int v = 0; v < height; ++v) {
-    const auto* drow = frame.depth.ptr<std::uint16_t>(v);
-    const auto* crow = has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : nullptr;
     const double yf = (v - camera.cy) / camera.fy;
-    const double bx = yf * R(0, 1) + R(0, 2), by = yf * R(1, 1) + R(1, 2), bz = yf * R(2, 1) + R(2, 2);
-    int current = -1;
-    double ox = 0, oy = 0, oz = 0;
-    double rn = 0, q[3] = {0, 0, 0}, Q[6] = {0, 0, 0, 0, 0, 0}, c[3] = {0, 0, 0};
-    for (int u = 0; u < width; ++u) {
-      const unsigned raw = drow[u];
-      if (raw < raw_min || raw > raw_max) continue;
-      const double d = raw * inv_scale;
-      const double x = d * (ray_x_[u] + bx) + tx;
-      const double y = d * (ray_y_[u] + by) + ty;
-      const double z = d * (ray_z_[u] + bz) + tz;
-      if (!(z > 0.0)) continue;
-      const double iz = 1.0 / z;
-      const double up = kfx * x * iz + kcx, vp = kfy * y * iz + kcy;
-      if (!(up >= 0.0 && vp >= 0.0 && up < u_end && vp < v_end)) continue;
-      const int cell = row_of_[static_cast<int>(vp)] + col_of_[static_cast<int>(up)];
-      if (cell != current) {
-        if (current >= 0) flush(rn, q, Q, c);
-        current = cell;
-        std::int32_t& slot = sums_slot_[cell];
-        if (slot < 0) {
-          slot = static_cast<std::int32_t>(used_cells_.size());
-          used_cells_.push_back(cell);
-          sums_[slot] = FrameSums{{x, y, z}, 0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
-        }
-        acc = &sums_[slot];
-        ox = acc->origin[0], oy = acc->origin[1], oz = acc->origin[2];
-        rn = 0;
-        q[0] = q[1] = q[2] = 0;
-        Q[0] = Q[1] = Q[2] = Q[3] = Q[4] = Q[5] = 0;
-        c[0] = c[1] = c[2] = 0;
+    g.b[0] = yf * R(0, 1) + R(0, 2), g.b[1] = yf * R(1, 1) + R(1, 2), g.b[2] = yf * R(2, 1) + R(2, 2);
+    computeRow(g, frame.depth.ptr<std::uint16_t>(v), width, px, py, pz, pcell);
+    pcell[width] = -1;  // sentinel: ends the last run without a bounds test
+    const std::uint8_t* crow = has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : kWhite;
+    const int cstep = has_rgb ? 3 : 0;
+
+    int u = 0;
+    while (u < width) {
+      const int cell = pcell[u];
+      if (cell < 0) {
+        ++u;
+        continue;
       }
-      const double dx = x - ox, dy = y - oy, dz = z - oz;
-      rn += 1.0;
-      q[0] += dx, q[1] += dy, q[2] += dz;
-      Q[0] += dx * dx, Q[1] += dx * dy, Q[2] += dx * dz;
-      Q[3] += dy * dy, Q[4] += dy * dz, Q[5] += dz * dz;
-      if (crow) {
-        c[0] += crow[3 * u], c[1] += crow[3 * u + 1], c[2] += crow[3 * u + 2];
-      } else {
-        c[0] += 255.0, c[1] += 255.0, c[2] += 255.0;
+      std::int32_t& slot = slots[cell];
+      if (slot < 0) {
+        slot = static_cast<std::int32_t>(used_cells_.size());
+        used_cells_.push_back(cell);
+        sums[slot] = FrameSums{{px[u], py[u], pz[u]}, 0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
       }
+      FrameSums& acc = sums[slot];
+      const double ox = acc.origin[0], oy = acc.origin[1], oz = acc.origin[2];
+      double qx = 0, qy = 0, qz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
+      int n = 0, r = 0, gr = 0, b = 0;
+      for (; pcell[u] == cell; ++u, ++n) {
+        const double dx = px[u] - ox, dy = py[u] - oy, dz = pz[u] - oz;
+        qx += dx, qy += dy, qz += dz;
+        xx += dx * dx, xy += dx * dy, xz += dx * dz;
+        yy += dy * dy, yz += dy * dz, zz += dz * dz;
+        const std::uint8_t* c = crow + cstep * u;
+        r += c[0], gr += c[1], b += c[2];
+      }
+      acc.n += n;
+      acc.q[0] += qx, acc.q[1] += qy, acc.q[2] += qz;
+      acc.Q[0] += xx, acc.Q[1] += xy, acc.Q[2] += xz, acc.Q[3] += yy, acc.Q[4] += yz, acc.Q[5] += zz;
+      acc.c[0] += r, acc.c[1] += gr, acc.c[2] += b;
     }
-    if (current >= 0) flush(rn, q, Q, c);
   }
 
-  // Merge each cell's batch into the container (SPEC section 2 step 4) and reset the scratch.
+  // Merge each cell's batch into the container (SPEC section 2 step 4, the arithmetic of
+  // mergeBatch written out on the float storage: this loop runs for every touched cell).
   for (std::size_t i = 0; i < used_cells_.size(); ++i) {
     const int cell = used_cells_[i];
     const FrameSums& f = sums_[i];
-    PointBatch batch;
-    batch.n = f.n;
-    const Eigen::Vector3d o(f.origin[0], f.origin[1], f.origin[2]), qv(f.q[0], f.q[1], f.q[2]);
-    batch.sum = f.n * o + qv;
-    batch.scatter << f.Q[0], f.Q[1], f.Q[2], f.Q[1], f.Q[3], f.Q[4], f.Q[2], f.Q[4], f.Q[5];
-    batch.scatter -= qv * qv.transpose() / f.n;
-    batch.color_sum = Eigen::Vector3d(f.c[0], f.c[1], f.c[2]);
-    StoredCell& stored = container->findOrCreate(cell);
-    CellStats stats = stored.toStats();
-    mergeBatch(batch, &stats);
-    stored.fromStats(stats);
+    StoredCell& c = container->findOrCreate(cell);
+    const double N = f.n, M = c.n, total = M + N;
+    // Batch mean relative to the origin, and the batch scatter S_N = Q - q q^T / N.
+    const double mx = f.q[0] / N, my = f.q[1] / N, mz = f.q[2] / N;
+    const double SN[6] = {f.Q[0] - f.q[0] * mx, f.Q[1] - f.q[0] * my, f.Q[2] - f.q[0] * mz,
+                          f.Q[3] - f.q[1] * my, f.Q[4] - f.q[1] * mz, f.Q[5] - f.q[2] * mz};
+    // delta = batch mean - stored mean (zero weight when the cell is new).
+    const double dx = f.origin[0] + mx - c.mean[0], dy = f.origin[1] + my - c.mean[1],
+                 dz = f.origin[2] + mz - c.mean[2];
+    const double w = N / total, k = M * N / total;
+    c.mean[0] = static_cast<float>(c.mean[0] + dx * w);
+    c.mean[1] = static_cast<float>(c.mean[1] + dy * w);
+    c.mean[2] = static_cast<float>(c.mean[2] + dz * w);
+    const double dd[6] = {dx * dx, dx * dy, dx * dz, dy * dy, dy * dz, dz * dz};
+    for (int j = 0; j < 6; ++j) c.scatter[j] = static_cast<float>(c.scatter[j] + SN[j] + dd[j] * k);
+    for (int j = 0; j < 3; ++j) c.color[j] = static_cast<float>((M * c.color[j] + f.c[j]) / total);
+    c.n += static_cast<std::uint32_t>(N);
     sums_slot_[cell] = -1;
   }
   if (touched_cells) touched_cells->assign(used_cells_.begin(), used_cells_.end());

@@ -53,7 +53,8 @@ class LocalMapIntegrator {
   std::vector<FrameSums> sums_;          // sized to the grid once; the first used_ are live
   std::vector<int> used_cells_;          // grid index of sums_[i]
   std::vector<double> ray_x_, ray_y_, ray_z_;  // per column: ((u - cx) / fx) * R.col(0)
-  std::vector<int> col_of_, row_of_;     // container pixel -> cell column, row * cols
+  std::vector<double> row_x_, row_y_, row_z_;  // one row's p_K
+  std::vector<int> row_cell_;                  // one row's cells (-1: no point)
 };
 
 }  // namespace vdmap
