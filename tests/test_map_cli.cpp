@@ -1,0 +1,54 @@
+// vdmap map / vdmap bench end to end on a tiny generated sequence.
+#include <fstream>
+#include <string>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/test_util.h"
+
+namespace vdmap::test {
+namespace {
+
+TEST(MapCli, WritesEllipsoidPlyAndCounts) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 4);
+  const fs::path out = tmp / "out" / "nested";
+  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --out '" +
+                               out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("2 keyframes"), std::string::npos) << r.out;
+  std::ifstream ply(out / "local_maps.ply", std::ios::binary);
+  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
+  EXPECT_NE(header.find("property uint count\nproperty int keyframe\nend_header\n"), std::string::npos);
+  for (const auto& entry : fs::directory_iterator(out))  // no temporary left behind
+    EXPECT_EQ(entry.path().filename(), "local_maps.ply");
+}
+
+TEST(MapCli, BadCellSizeFailsWithoutOutput) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 2);
+  for (const char* s : {"0", "49"}) {  // the tiny sequence is 64x48
+    const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --cell-size " + s +
+                                 " --out '" + (tmp / "out").string() + "'");
+    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_NE(r.err.find("cell size"), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(tmp / "out"));
+  }
+}
+
+TEST(BenchCli, JsonHasTheContractKeys) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --frames 2 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  for (const char* key : {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms",
+                          "octomap_002_ms", "ratio_octomap_010"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["frames"], 2);  // a plain N means 0:N
+}
+
+}  // namespace
+}  // namespace vdmap::test
