@@ -14,6 +14,7 @@
 
 #include "app/commands.h"
 #include "app/progress.h"
+#include "app/timing.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 
@@ -27,20 +28,6 @@ struct BenchArgs {
   bool json = false;
   bool no_octomap = false;
 };
-
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-template <typename F>
-double timeMs(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
-}
 
 // The points the integrator uses (every pixel with depth in range), in world coordinates.
 octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam, const DepthRange& range) {

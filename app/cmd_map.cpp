@@ -1,39 +1,56 @@
-// vdmap map SEQ --keyframe-every N --out DIR: the first end-to-end path (issue #3). Every N-th
-// frame starts a new keyframe; every frame updates the current keyframe's local map; the kept
-// ellipsoids of all keyframes go to DIR/local_maps.ply in world coordinates.
+// vdmap map SEQ --out DIR: the whole mapping path. Frames go through the Mapper (features,
+// keyframe decision, local-map update; or a fixed keyframe schedule with --keyframe-every), then
+// the global map is built from the local maps. Writes local_maps.ply, keyframes.txt, graph.txt,
+// global_points.ply, global_ellipsoids.ply and stats.json; each file atomically.
+#include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <fstream>
+#include <iostream>
 #include <memory>
+
+#include <nlohmann/json.hpp>
 
 #include "app/commands.h"
 #include "app/progress.h"
+#include "app/timing.h"
 #include "mapping/export/ply_writer.h"
+#include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/local_map/ellipsoid_filter.h"
-#include "mapping/local_map/local_map_integrator.h"
+#include "mapping/io/trajectory_io.h"
+#include "mapping/keyframe/mapper.h"
 
 namespace vdmap::app {
 namespace {
 
 struct MapArgs {
   SequenceArgs sequence;
-  int keyframe_every = 10;
   std::string out;
-  LocalMapParams local_map;
+  bool json = false;
+  MapperParams mapper;
+  GlobalMapParams global;
   std::string sensor_model = "nguyen2012";
-  FilterParams filter;
+  bool no_prefilter = false;
+  bool no_occlusion_removal = false;
 };
 
-struct FixedKeyframe {
-  int frame_index;
-  Transform T_W_K;
-  KeyframeContainer container;
-};
+void writeJson(const std::filesystem::path& file, const nlohmann::json& j) {
+  const std::filesystem::path tmp = file.string() + ".tmp";
+  {
+    std::ofstream out(tmp);
+    out << j.dump(2) << "\n";
+    if (!out) throw std::runtime_error(file.string() + ": cannot write");
+  }
+  std::filesystem::rename(tmp, file);
+}
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
-  if (args.keyframe_every < 1) throw std::invalid_argument("--keyframe-every must be at least 1");
-  args.filter.model = parseSensorModel(args.sensor_model);
+  if (args.mapper.keyframe_every < 0) throw std::invalid_argument("--keyframe-every must be >= 0");
+  args.global.filter.model = parseSensorModel(args.sensor_model);
+  args.mapper.keyframes.prefilter.enabled = !args.no_prefilter;
+  args.global.occlusion_removal = !args.no_occlusion_removal;
+  args.global.validate();
   const fs::path out_dir = args.out;
   // Fail before any work when DIR cannot be a folder; it is created only when there is a map
   // to write, so a failed run leaves nothing behind.
@@ -41,63 +58,108 @@ void runMap(MapArgs args) {
     throw std::runtime_error(out_dir.string() + ": exists and is not a folder");
 
   const TumSequence seq = openSequence(args.sequence);
-  const PinholeCamera& cam = seq.camera();
-  KeyframeContainer(cam, args.local_map.cell_size_px);  // validates the cell size up front
-  LocalMapIntegrator integrator(args.local_map);
-  std::vector<FixedKeyframe> keyframes;
-  FramePrefetcher frames(seq);
-  ProgressBar progress("mapping", seq.size());
-  std::vector<int> touched;
-  std::size_t done = 0;
-  while (std::optional<RgbdFrame> frame = frames.next()) {
-    if (done % args.keyframe_every == 0)
-      keyframes.push_back({frame->index, frame->T_W_C, KeyframeContainer(cam, args.local_map.cell_size_px)});
-    FixedKeyframe& kf = keyframes.back();
-    integrator.integrateFrame(*frame, cam, kf.T_W_K, &kf.container, &touched);
-    progress.update(++done);
+  Mapper mapper(seq.camera(), args.mapper);
+  std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms;
+  {
+    FramePrefetcher frames(seq);
+    ProgressBar progress("mapping", seq.size());
+    while (std::optional<RgbdFrame> frame = frames.next()) {
+      const FrameReport r = mapper.addFrame(*frame);
+      update_ms.push_back(r.ms.update_ms);
+      pipeline_ms.push_back(r.ms.total_ms);
+      features_ms.push_back(r.ms.features_ms);
+      decision_ms.push_back(r.ms.decision_ms);
+      progress.update(static_cast<std::size_t>(mapper.framesMapped()));
+    }
+  }
+  const KeyframeGraph& graph = mapper.graph();
+  const GlobalMap global = buildGlobalMap(graph, args.global);
+
+  std::vector<Ellipsoid> local;
+  std::vector<StampedPose> poses;
+  if (!args.json) std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
+  for (const Keyframe& k : graph.keyframes()) {
+    const std::size_t before = local.size();
+    forEachKeptEllipsoid(k.container, args.global.filter, k.T_W_K, k.id,
+                         [&local](const Ellipsoid& e) { local.push_back(e); });
+    poses.push_back({k.timestamp, k.T_W_K});
+    if (!args.json)
+      std::printf("%8d  %5d  %6d  %10zu  %6zu  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
+                  k.container.size(), local.size() - before, k.container.memoryBytes() / 1e6);
   }
 
-  std::vector<Ellipsoid> all;
-  std::printf("keyframe  frame  ellipsoids  kept    memory\n");
-  for (std::size_t k = 0; k < keyframes.size(); ++k) {
-    const FixedKeyframe& kf = keyframes[k];
-    const std::size_t before = all.size();
-    forEachKeptEllipsoid(kf.container, args.filter, kf.T_W_K, static_cast<int>(k),
-                         [&all](const Ellipsoid& e) { all.push_back(e); });
-    std::printf("%8zu  %5d  %10zu  %6zu  %5.2f MB\n", k, kf.frame_index, kf.container.size(),
-                all.size() - before, kf.container.memoryBytes() / 1e6);
-  }
+  const nlohmann::json stats = {
+      {"frames", mapper.framesMapped()},
+      {"keyframes", graph.size()},
+      {"edges", graph.edges().size()},
+      {"revisits", mapper.revisits()},
+      {"sigma_e", global.sigma_e},
+      {"sigma_e_prime", global.sigma_e_prime},
+      {"merged", global.merged},
+      {"update_ms", median(update_ms)},
+      {"pipeline_ms", median(pipeline_ms)},
+      {"features_ms", median(features_ms)},
+      {"decision_ms", median(decision_ms)},
+      {"t_g_s", global.t_g_s},
+      {"groups", global.groups.size()},
+      {"global_stage_ms", {{"groups", global.groups_ms}, {"merge", global.merge_ms}, {"occlusion", global.occlusion_ms}}},
+      {"camera", seq.cameraSource()},
+  };
   fs::create_directories(out_dir);
-  const fs::path ply = out_dir / "local_maps.ply";
-  writeEllipsoidPly(ply, all);
-  std::printf("%zu frames, %zu keyframes, %zu kept ellipsoids (%s, k = %g, min %d points) -> %s\n",
-              done, keyframes.size(), all.size(), sensorModelName(args.filter.model),
-              args.filter.filter_sigma_factor, args.filter.min_points, ply.c_str());
+  writeEllipsoidPly(out_dir / "local_maps.ply", local);
+  writeTumTrajectory(out_dir / "keyframes.txt", poses,
+                     "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
+  graph.edges().writeEdgeList(out_dir / "graph.txt");
+  writePointPly(out_dir / "global_points.ply", global.ellipsoids);
+  writeEllipsoidPly(out_dir / "global_ellipsoids.ply", global.ellipsoids);
+  writeJson(out_dir / "stats.json", stats);
+  if (args.json) {
+    std::cout << stats.dump(2) << "\n";
+    return;
+  }
+  std::printf("%d frames, %zu keyframes, %zu edges, %d revisits; %zu kept ellipsoids -> %zu in the global map "
+              "(t_g %.3f s)\nmedian per frame: pipeline %.2f ms (features %.2f, decision %.2f, update %.2f) -> %s\n",
+              mapper.framesMapped(), graph.size(), graph.edges().size(), mapper.revisits(), global.sigma_e,
+              global.sigma_e_prime, global.t_g_s, median(pipeline_ms), median(features_ms), median(decision_ms),
+              median(update_ms), out_dir.c_str());
 }
 
 }  // namespace
 
 void addMapCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand(
-      "map", "Map a sequence into view-dependent local maps (fixed keyframe spacing for now)");
+  auto* verb = app.add_subcommand("map", "Map a sequence: keyframes with local maps, covisibility graph, global map");
   auto args = std::make_shared<MapArgs>();
   addSequenceArgs(*verb, args->sequence);
-  verb->add_option("--out", args->out, "output folder (created if missing): local_maps.ply")->required();
-  verb->add_option("--keyframe-every", args->keyframe_every,
-                   "every N-th frame starts a new keyframe (until the covisibility graph decides)")
+  verb->add_option("--out", args->out,
+                   "output folder (created if missing): local_maps.ply, keyframes.txt, graph.txt, "
+                   "global_points.ply, global_ellipsoids.ply, stats.json")
+      ->required();
+  verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
+  MapperParams& m = args->mapper;
+  verb->add_option("--keyframe-every", m.keyframe_every,
+                   "0: keyframes by covisibility (SPEC 5); N > 0: every N-th frame starts a keyframe")
       ->capture_default_str();
-  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")
-      ->capture_default_str();
-  verb->add_option("--min-depth", args->local_map.depth_range.min_m, "nearest valid depth, m")
-      ->capture_default_str();
-  verb->add_option("--max-depth", args->local_map.depth_range.max_m, "farthest valid depth, m")
-      ->capture_default_str();
-  verb->add_option("--sensor-model", args->sensor_model, "nguyen2012 or belter2018")
-      ->capture_default_str();
-  verb->add_option("--filter-sigma-factor", args->filter.filter_sigma_factor,
+  verb->add_option("--cell-size", m.local_map.cell_size_px, "container cell size, px")->capture_default_str();
+  verb->add_option("--min-depth", m.local_map.depth_range.min_m, "nearest valid depth, m")->capture_default_str();
+  verb->add_option("--max-depth", m.local_map.depth_range.max_m, "farthest valid depth, m")->capture_default_str();
+  verb->add_option("--orb-features", m.features.orb_features, "ORB features per frame")->capture_default_str();
+  verb->add_option("--tau", m.keyframes.tau, "covisibility to stay in a keyframe")->capture_default_str();
+  verb->add_option("--tau-edge", m.keyframes.tau_edge, "covisibility for a graph edge")->capture_default_str();
+  verb->add_flag("--no-prefilter", args->no_prefilter, "match every keyframe in the loop-closure search");
+  GlobalMapParams& g = args->global;
+  verb->add_option("--sensor-model", args->sensor_model, "nguyen2012 or belter2018")->capture_default_str();
+  verb->add_option("--filter-sigma-factor", g.filter.filter_sigma_factor,
                    "reject ellipsoids longer than k x the sensor model's expectation")
       ->capture_default_str();
-  verb->add_option("--min-points", args->filter.min_points, "reject ellipsoids of fewer points")
+  verb->add_option("--min-points", g.filter.min_points, "reject ellipsoids of fewer points")->capture_default_str();
+  verb->add_option("--tau-group", g.tau_group, "edge weight that joins a merge group")->capture_default_str();
+  verb->add_option("--merge-distance", g.merge_distance_m, "mean-shift radius, m")->capture_default_str();
+  verb->add_option("--occlusion-distance", g.occlusion_distance_m, "occlusion group distance, m")
+      ->capture_default_str();
+  verb->add_option("--occlusion-angle", g.occlusion_angle_deg, "occlusion group angle, degrees")
+      ->capture_default_str();
+  verb->add_flag("--no-occlusion-removal", args->no_occlusion_removal, "keep ellipsoids that occlude finer ones");
+  verb->add_option("--threads", g.threads, "global-map threads (0: all); the map does not depend on it")
       ->capture_default_str();
   verb->callback([args] { runMap(*args); });
 }

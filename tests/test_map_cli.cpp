@@ -22,8 +22,16 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
   std::string header((std::istreambuf_iterator<char>(ply)), {});
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
   EXPECT_NE(header.find("property uint count\nproperty int keyframe\nend_header\n"), std::string::npos);
+  for (const char* file : {"keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply", "stats.json"})
+    EXPECT_TRUE(fs::exists(out / file)) << file;
   for (const auto& entry : fs::directory_iterator(out))  // no temporary left behind
-    EXPECT_EQ(entry.path().filename(), "local_maps.ply");
+    EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
+  std::ifstream stats_file(out / "stats.json");
+  const auto stats = nlohmann::json::parse(stats_file);
+  for (const char* key : {"frames", "keyframes", "edges", "revisits", "sigma_e", "update_ms", "pipeline_ms",
+                          "sigma_e_prime", "t_g_s"})
+    EXPECT_TRUE(stats.contains(key)) << key;
+  EXPECT_EQ(stats["keyframes"], 2);
 }
 
 TEST(MapCli, BadCellSizeFailsWithoutOutput) {

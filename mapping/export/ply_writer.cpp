@@ -51,21 +51,37 @@ void writeAtomically(const std::filesystem::path& file, const std::string& bytes
   }
 }
 
+// The header of a binary PLY of `count` vertices with x y z float, red green blue uchar and then
+// the `extra` property lines.
+std::string vertexHeader(const char* comment, std::size_t count, const char* extra) {
+  return std::string("ply\nformat binary_little_endian 1.0\ncomment ") + comment + "\nelement vertex " +
+         std::to_string(count) +
+         "\nproperty float x\nproperty float y\nproperty float z\n"
+         "property uchar red\nproperty uchar green\nproperty uchar blue\n" + extra + "end_header\n";
+}
+
+void putPointAndColor(std::string& bytes, const Ellipsoid& e) {
+  for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
+  for (int k = 0; k < 3; ++k) put(bytes, toByte(e.color(k)));
+}
+
 }  // namespace
 
+void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
+  std::string bytes = vertexHeader("vdmap ellipsoid means (SPEC 7)", ellipsoids.size(), "");
+  bytes.reserve(bytes.size() + ellipsoids.size() * 15);
+  for (const Ellipsoid& e : ellipsoids) putPointAndColor(bytes, e);
+  writeAtomically(file, bytes);
+}
+
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
-  std::string bytes =
-      "ply\nformat binary_little_endian 1.0\ncomment vdmap local-map ellipsoids (SPEC 7)\n"
-      "element vertex " + std::to_string(ellipsoids.size()) +
-      "\nproperty float x\nproperty float y\nproperty float z\n"
-      "property uchar red\nproperty uchar green\nproperty uchar blue\n"
-      "property float cxx\nproperty float cxy\nproperty float cxz\n"
-      "property float cyy\nproperty float cyz\nproperty float czz\n"
-      "property uint count\nproperty int keyframe\nend_header\n";
+  std::string bytes = vertexHeader("vdmap ellipsoids (SPEC 7)", ellipsoids.size(),
+                                   "property float cxx\nproperty float cxy\nproperty float cxz\n"
+                                   "property float cyy\nproperty float cyz\nproperty float czz\n"
+                                   "property uint count\nproperty int keyframe\n");
   bytes.reserve(bytes.size() + ellipsoids.size() * (12 + 3 + 24 + 8));
   for (const Ellipsoid& e : ellipsoids) {
-    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
-    for (int k = 0; k < 3; ++k) put(bytes, toByte(e.color(k)));
+    putPointAndColor(bytes, e);
     const Eigen::Matrix3d& c = e.cov;
     for (double v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)})
       put(bytes, static_cast<float>(v));

@@ -14,4 +14,8 @@ namespace vdmap {
 /// half-written file. Throws std::runtime_error naming the file on an I/O failure.
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
 
+/// Writes the ellipsoid means as a coloured point cloud: binary little-endian PLY, x y z float,
+/// red green blue uchar (SPEC section 7). Atomic like writeEllipsoidPly.
+void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
+
 }  // namespace vdmap
