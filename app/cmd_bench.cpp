@@ -16,6 +16,8 @@
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/io/frame_prefetcher.h"
+#include "mapping/global_map/global_map.h"
+#include "mapping/keyframe/mapper.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap::app {
@@ -83,6 +85,20 @@ void runBench(BenchArgs args) {
     if (container) cells += container->size(), bytes += container->memoryBytes();
   }
 
+  // The whole per-frame path (features, keyframe decision, update) on the same frames, then
+  // the global map of the keyframes it made.
+  std::vector<double> pipeline_ms, features_ms, decision_ms, update_ms;
+  Mapper mapper(cam);
+  for (const RgbdFrame& frame : decoded) {
+    const FrameReport r = mapper.addFrame(frame);
+    pipeline_ms.push_back(r.ms.total_ms);
+    features_ms.push_back(r.ms.features_ms);
+    decision_ms.push_back(r.ms.decision_ms);
+    update_ms.push_back(r.ms.update_ms);
+  }
+  const GlobalMap global = buildGlobalMap(mapper.graph(), {});
+  const double t_g_us = global.sigma_e ? 1e6 * global.t_g_s / static_cast<double>(global.sigma_e) : 0.0;
+
   const double resolutions[3] = {0.10, 0.05, 0.02};
   double octo_ms[3] = {0, 0, 0};
   if (!args.no_octomap) {
@@ -119,6 +135,16 @@ void runBench(BenchArgs args) {
         {"ellipsoids", cells},
         {"bytes_per_ellipsoid", sizeof(StoredCell)},
         {"container_bytes", bytes},
+        {"vd_pipeline_ms", median(pipeline_ms)},
+        {"pipeline_stage_ms", {{"features", median(features_ms)}, {"decision", median(decision_ms)},
+                               {"update", median(update_ms)}}},
+        {"ratio_octomap_010_pipeline", median(pipeline_ms) > 0 ? octo_ms[0] / median(pipeline_ms) : 0.0},
+        {"keyframes", mapper.graph().size()},
+        {"revisits", mapper.revisits()},
+        {"sigma_e", global.sigma_e},
+        {"sigma_e_prime", global.sigma_e_prime},
+        {"t_g_s", global.t_g_s},
+        {"t_g_us_per_ellipsoid", t_g_us},
     };
     std::cout << out.dump(2) << "\n";
     return;
@@ -126,6 +152,10 @@ void runBench(BenchArgs args) {
   std::printf("frames          %zu (%dx%d), keyframe every %d, cell %d px\n", decoded.size(),
               cam.width, cam.height, args.keyframe_every, args.local_map.cell_size_px);
   std::printf("vdmap update    %8.3f ms/frame (median)\n", vd);
+  std::printf("vdmap pipeline  %8.3f ms/frame (median): features %.2f, decision %.2f, update %.2f\n",
+              median(pipeline_ms), median(features_ms), median(decision_ms), median(update_ms));
+  std::printf("global map      %zu keyframes, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid)\n",
+              mapper.graph().size(), global.sigma_e, global.sigma_e_prime, global.t_g_s, t_g_us);
   if (!args.no_octomap)
     for (int r = 0; r < 3; ++r)
       std::printf("OctoMap %.2f m  %8.2f ms/frame (median)  = %6.1fx vdmap\n", resolutions[r],

@@ -53,7 +53,8 @@ TEST(BenchCli, JsonHasTheContractKeys) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   for (const char* key : {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms",
-                          "octomap_002_ms", "ratio_octomap_010"})
+                          "octomap_002_ms", "ratio_octomap_010", "vd_pipeline_ms", "sigma_e", "sigma_e_prime",
+                          "t_g_s", "t_g_us_per_ellipsoid"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);  // a plain N means 0:N
 }
