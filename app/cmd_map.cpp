@@ -5,7 +5,6 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
-#include <fstream>
 #include <iostream>
 #include <memory>
 
@@ -14,6 +13,7 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "app/timing.h"
+#include "mapping/core/atomic_file.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
@@ -33,16 +33,6 @@ struct MapArgs {
   bool no_prefilter = false;
   bool no_occlusion_removal = false;
 };
-
-void writeJson(const std::filesystem::path& file, const nlohmann::json& j) {
-  const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << j.dump(2) << "\n";
-    if (!out) throw std::runtime_error(file.string() + ": cannot write");
-  }
-  std::filesystem::rename(tmp, file);
-}
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
@@ -112,7 +102,7 @@ void runMap(MapArgs args) {
   graph.edges().writeEdgeList(out_dir / "graph.txt");
   writePointPly(out_dir / "global_points.ply", global.ellipsoids);
   writeEllipsoidPly(out_dir / "global_ellipsoids.ply", global.ellipsoids);
-  writeJson(out_dir / "stats.json", stats);
+  writeFileAtomically(out_dir / "stats.json", stats.dump(2) + "\n");
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;

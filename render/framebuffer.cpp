@@ -2,9 +2,12 @@
 
 #include <stdexcept>
 #include <string>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+
+#include "mapping/core/atomic_file.h"
 
 namespace vdmap::render {
 
@@ -84,19 +87,9 @@ cv::Mat Framebuffer::readFloat() const {
 void writePng(const std::filesystem::path& file, const cv::Mat& rgb) {
   cv::Mat bgr;
   cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  const std::filesystem::path tmp = file.string() + ".tmp.png";
-  bool ok = false;
-  try {
-    ok = cv::imwrite(tmp.string(), bgr);
-  } catch (const cv::Exception&) {
-    ok = false;
-  }
-  std::error_code ec;
-  if (ok) std::filesystem::rename(tmp, file, ec);
-  if (!ok || ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(file.string() + ": cannot write the PNG (is the folder there and writable?)");
-  }
+  std::vector<unsigned char> png;
+  if (!cv::imencode(".png", bgr, png)) throw std::runtime_error(file.string() + ": cannot encode the PNG");
+  writeFileAtomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
 }
 
 }  // namespace vdmap::render

@@ -15,6 +15,7 @@
 #include "mapping/core/rgbd_frame.h"
 #include "mapping/local_map/cell_stats.h"
 #include "mapping/local_map/keyframe_container.h"
+#include "tests/test_util.h"
 
 namespace vdmap::test {
 
@@ -61,19 +62,6 @@ inline RayCaster boxScene(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi) 
     }
     return (t0 <= t1 && t0 > 0) ? std::optional<double>(t0) : std::nullopt;
   };
-}
-
-/// Camera pose at `eye` looking at `target` (y of the camera roughly along world +y, down).
-inline Transform lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
-  const Eigen::Vector3d z = (target - eye).normalized();
-  const Eigen::Vector3d x = Eigen::Vector3d::UnitY().cross(z).normalized();
-  const Eigen::Vector3d y = z.cross(x);
-  Transform T = Transform::Identity();
-  T.linear().col(0) = x;
-  T.linear().col(1) = y;
-  T.linear().col(2) = z;
-  T.translation() = eye;
-  return T;
 }
 
 /// Renders the depth of `scene` seen from T_W_C. noise_sd(depth) gives the standard deviation

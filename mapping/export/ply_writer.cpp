@@ -1,15 +1,13 @@
 #include "mapping/export/ply_writer.h"
 
-#include <unistd.h>
-
 #include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdint>
 #include <cstring>
-#include <fstream>
-#include <stdexcept>
 #include <string>
+
+#include "mapping/core/atomic_file.h"
 
 namespace vdmap {
 namespace {
@@ -26,29 +24,6 @@ void put(std::string& buffer, T value) {
 
 std::uint8_t toByte(float c) {
   return static_cast<std::uint8_t>(std::clamp(std::lround(c), 0L, 255L));
-}
-
-// Writes `bytes` to file.tmp-PID and renames it over `file` (atomic on POSIX within a folder).
-void writeAtomically(const std::filesystem::path& file, const std::string& bytes) {
-  const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (!out) throw std::runtime_error(tmp.string() + ": cannot open for writing");
-    out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    out.flush();
-    if (!out) {
-      out.close();
-      std::error_code ignored;
-      std::filesystem::remove(tmp, ignored);
-      throw std::runtime_error(tmp.string() + ": write failed (disk full?)");
-    }
-  }
-  std::error_code ec;
-  std::filesystem::rename(tmp, file, ec);
-  if (ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(file.string() + ": cannot rename the finished export into place");
-  }
 }
 
 // The header of a binary PLY of `count` vertices with x y z float, red green blue uchar and then
@@ -71,7 +46,7 @@ void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoi
   std::string bytes = vertexHeader("vdmap ellipsoid means (SPEC 7)", ellipsoids.size(), "");
   bytes.reserve(bytes.size() + ellipsoids.size() * 15);
   for (const Ellipsoid& e : ellipsoids) putPointAndColor(bytes, e);
-  writeAtomically(file, bytes);
+  writeFileAtomically(file, bytes);
 }
 
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
@@ -88,7 +63,7 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
     put(bytes, static_cast<std::uint32_t>(e.count));
     put(bytes, static_cast<std::int32_t>(e.keyframe));
   }
-  writeAtomically(file, bytes);
+  writeFileAtomically(file, bytes);
 }
 
 }  // namespace vdmap

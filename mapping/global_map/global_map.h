@@ -29,7 +29,8 @@ struct MergeGroup {
 };
 
 struct GlobalMap {
-  std::vector<Ellipsoid> ellipsoids;  ///< world frame; keyframe = the group centre it merged in
+  /// World frame. keyframe: the group centre for merged clusters, else the ellipsoid's own.
+  std::vector<Ellipsoid> ellipsoids;
   std::vector<MergeGroup> groups;
   std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
   std::size_t merged = 0;             ///< after merging, before occlusion removal

@@ -11,7 +11,7 @@ namespace vdmap {
 
 std::vector<ListLine> readListFile(const std::filesystem::path& file, int columns, const char* expected) {
   std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot open (the sequence needs this file)");
+  if (!in) throw InputError(file.string(), "cannot open (missing or unreadable)");
   std::vector<ListLine> lines;
   std::string text;
   for (int number = 1; std::getline(in, text); ++number) {

@@ -1,8 +1,8 @@
 #include "mapping/io/trajectory_io.h"
 
 #include <cstdio>
-#include <fstream>
 
+#include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/text_list.h"
 
@@ -28,21 +28,16 @@ std::vector<StampedPose> readTumTrajectory(const std::filesystem::path& file) {
 
 void writeTumTrajectory(const std::filesystem::path& file, const std::vector<StampedPose>& poses,
                         const std::string& header) {
-  const std::filesystem::path tmp = file.string() + ".tmp";
-  {
-    std::ofstream out(tmp);
-    out << "# " << header << "\n# timestamp tx ty tz qx qy qz qw\n";
-    char line[256];
-    for (const StampedPose& p : poses) {
-      const Eigen::Quaterniond q(p.T_W_C.linear());
-      const Eigen::Vector3d t = p.T_W_C.translation();
-      std::snprintf(line, sizeof line, "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.t, t.x(), t.y(), t.z(), q.x(),
-                    q.y(), q.z(), q.w());
-      out << line;
-    }
-    if (!out) throw std::runtime_error(file.string() + ": cannot write");
+  std::string text = "# " + header + "\n# timestamp tx ty tz qx qy qz qw\n";
+  char line[256];
+  for (const StampedPose& p : poses) {
+    const Eigen::Quaterniond q(p.T_W_C.linear());
+    const Eigen::Vector3d t = p.T_W_C.translation();
+    std::snprintf(line, sizeof line, "%.6f %.9g %.9g %.9g %.9g %.9g %.9g %.9g\n", p.t, t.x(), t.y(), t.z(), q.x(),
+                  q.y(), q.z(), q.w());
+    text += line;
   }
-  std::filesystem::rename(tmp, file);
+  writeFileAtomically(file, text);
 }
 
 }  // namespace vdmap

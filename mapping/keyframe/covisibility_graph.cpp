@@ -1,8 +1,9 @@
 #include "mapping/keyframe/covisibility_graph.h"
 
 #include <cassert>
-#include <fstream>
-#include <stdexcept>
+#include <sstream>
+
+#include "mapping/core/atomic_file.h"
 
 namespace vdmap {
 
@@ -35,10 +36,10 @@ std::vector<CovisibilityEdge> CovisibilityGraph::edges() const {
 }
 
 void CovisibilityGraph::writeEdgeList(const std::filesystem::path& file) const {
-  std::ofstream out(file);
+  std::ostringstream out;
   out << "# covisibility edges: keyframe_a keyframe_b weight (fraction of re-observed ORB features)\n";
   for (const CovisibilityEdge& e : edges()) out << e.a << " " << e.b << " " << e.weight << "\n";
-  if (!out) throw std::runtime_error(file.string() + ": cannot write");
+  writeFileAtomically(file, out.str());
 }
 
 }  // namespace vdmap

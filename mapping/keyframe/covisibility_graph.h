@@ -26,7 +26,7 @@ class CovisibilityGraph {
   std::vector<std::pair<int, double>> neighbours(int id) const;
   std::vector<CovisibilityEdge> edges() const;
   std::size_t size() const { return edges_.size(); }
-  /// Plain edge list "a b weight", one per line, with a comment header.
+  /// Plain edge list "a b weight", one per line, with a comment header; written atomically.
   void writeEdgeList(const std::filesystem::path& file) const;
 
  private:
