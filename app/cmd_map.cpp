@@ -1,7 +1,6 @@
 // vdmap map SEQ --out DIR: the whole mapping path. Frames go through the Mapper (features,
 // keyframe decision, local-map update; or a fixed keyframe schedule with --keyframe-every), then
-// the global map is built from the local maps. Writes local_maps.ply, keyframes.txt, graph.txt,
-// global_points.ply, global_ellipsoids.ply and stats.json; each file atomically.
+// the global map is built from the local maps and exported with exportMap (map_export.h).
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -13,11 +12,9 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "app/timing.h"
-#include "mapping/core/atomic_file.h"
-#include "mapping/export/ply_writer.h"
+#include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/mapper.h"
 
 namespace vdmap::app {
@@ -42,10 +39,9 @@ void runMap(MapArgs args) {
   args.global.occlusion_removal = !args.no_occlusion_removal;
   args.global.validate();
   const fs::path out_dir = args.out;
-  // Fail before any work when DIR cannot be a folder; it is created only when there is a map
-  // to write, so a failed run leaves nothing behind.
-  if (fs::exists(out_dir) && !fs::is_directory(out_dir))
-    throw std::runtime_error(out_dir.string() + ": exists and is not a folder");
+  // Fail before any work when DIR cannot be written; it is created only when there is a map to
+  // write, so a failed run leaves nothing behind.
+  checkExportFolder(out_dir);
 
   const TumSequence seq = openSequence(args.sequence);
   Mapper mapper(seq.camera(), args.mapper);
@@ -65,44 +61,24 @@ void runMap(MapArgs args) {
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.global);
 
-  std::vector<Ellipsoid> local;
-  std::vector<StampedPose> poses;
-  if (!args.json) std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
-  for (const Keyframe& k : graph.keyframes()) {
-    const std::size_t before = local.size();
-    forEachKeptEllipsoid(k.container, args.global.filter, k.T_W_K, k.id,
-                         [&local](const Ellipsoid& e) { local.push_back(e); });
-    poses.push_back({k.timestamp, k.T_W_K});
-    if (!args.json)
+  if (!args.json) {
+    std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
+    for (const Keyframe& k : graph.keyframes())
       std::printf("%8d  %5d  %6d  %10zu  %6zu  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
-                  k.container.size(), local.size() - before, k.container.memoryBytes() / 1e6);
+                  k.container.size(), keptEllipsoids(k.container, args.global.filter, k.T_W_K, k.id).size(),
+                  k.container.memoryBytes() / 1e6);
   }
-
-  const nlohmann::json stats = {
+  MapExportOptions options;
+  options.run_stats = {
       {"frames", mapper.framesMapped()},
-      {"keyframes", graph.size()},
-      {"edges", graph.edges().size()},
       {"revisits", mapper.revisits()},
-      {"sigma_e", global.sigma_e},
-      {"sigma_e_prime", global.sigma_e_prime},
-      {"merged", global.merged},
       {"update_ms", median(update_ms)},
       {"pipeline_ms", median(pipeline_ms)},
       {"features_ms", median(features_ms)},
       {"decision_ms", median(decision_ms)},
-      {"t_g_s", global.t_g_s},
-      {"groups", global.groups.size()},
-      {"global_stage_ms", {{"groups", global.groups_ms}, {"merge", global.merge_ms}, {"occlusion", global.occlusion_ms}}},
       {"camera", seq.cameraSource()},
   };
-  fs::create_directories(out_dir);
-  writeEllipsoidPly(out_dir / "local_maps.ply", local);
-  writeTumTrajectory(out_dir / "keyframes.txt", poses,
-                     "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
-  graph.edges().writeEdgeList(out_dir / "graph.txt");
-  writePointPly(out_dir / "global_points.ply", global.ellipsoids);
-  writeEllipsoidPly(out_dir / "global_ellipsoids.ply", global.ellipsoids);
-  writeFileAtomically(out_dir / "stats.json", stats.dump(2) + "\n");
+  const nlohmann::json stats = exportMap(out_dir, graph, global, args.global.filter, options);
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;

@@ -6,23 +6,15 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/local_map/local_map_integrator.h"
-#include "tests/test_util.h"
+#include "tests/box_room_keyframes.h"
 
 namespace vdmap {
 namespace {
 
 const PinholeCamera kCamera = cameraPreset("tum-default");
 
-// Adds a keyframe at `T_W_K` whose local map holds `frames` ray-cast frames of the box room from
-// the same pose, and whose map is then placed at `T_W_placed` (a pose error, to shift surfaces).
 int addKeyframe(KeyframeGraph* graph, const Transform& T_W_K, const Transform& T_W_placed) {
-  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
-  LocalMapIntegrator integrator;
-  const RgbdFrame frame = test::renderBoxRoom(kCamera, T_W_K);
-  integrator.integrateFrame(frame, kCamera, T_W_K, &k.container, nullptr);
-  k.T_W_K = T_W_placed;
-  return graph->add(std::move(k)).id;
+  return test::addBoxRoomKeyframe(graph, kCamera, T_W_K, T_W_placed);
 }
 
 Transform facingWall(double z) { return test::lookAt({0, 0, z}, {0, 0, 2}); }

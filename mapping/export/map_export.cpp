@@ -1,0 +1,114 @@
+#include "mapping/export/map_export.h"
+
+#include <unistd.h>
+
+#include <stdexcept>
+#include <system_error>
+
+#include "mapping/core/atomic_file.h"
+#include "mapping/export/ply_writer.h"
+#include "mapping/io/trajectory_io.h"
+
+namespace vdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// A folder inside the export folder that receives every file first; commit() renames them into
+// the export folder (same file system, so each rename is atomic), and the destructor removes
+// whatever is left, so a failed export leaves nothing of itself behind.
+class StagingFolder {
+ public:
+  explicit StagingFolder(const fs::path& dir) : dir_(dir), path_(dir / (".vdmap-export-" + std::to_string(::getpid()))) {
+    checkExportFolder(dir);
+    std::error_code ec;
+    fs::create_directories(dir, ec);
+    if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder (" + ec.message() + ")");
+    fs::remove_all(path_, ec);
+    if (!fs::create_directory(path_, ec) || ec)
+      throw std::runtime_error(dir.string() + ": cannot write into the output folder (" +
+                               (ec ? ec.message() : std::string("exists")) + ")");
+  }
+  ~StagingFolder() {
+    std::error_code ec;
+    fs::remove_all(path_, ec);
+  }
+  StagingFolder(const StagingFolder&) = delete;
+  StagingFolder& operator=(const StagingFolder&) = delete;
+
+  /// Where to write `name` now.
+  fs::path operator/(const std::string& name) {
+    names_.push_back(name);
+    return path_ / name;
+  }
+  /// Moves every staged file into the export folder.
+  void commit() {
+    for (const std::string& name : names_)  // a rename would fail half-way through the set
+      if (fs::is_directory(dir_ / name))
+        throw std::runtime_error((dir_ / name).string() + ": cannot write (a folder of that name is in the way)");
+    for (const std::string& name : names_) {
+      std::error_code ec;
+      fs::rename(path_ / name, dir_ / name, ec);
+      if (ec) throw std::runtime_error((dir_ / name).string() + ": cannot write (" + ec.message() + ")");
+    }
+  }
+
+ private:
+  fs::path dir_, path_;
+  std::vector<std::string> names_;
+};
+
+}  // namespace
+
+void checkExportFolder(const fs::path& dir) {
+  std::error_code ec;
+  if (fs::exists(dir, ec) && !fs::is_directory(dir, ec))
+    throw std::runtime_error(dir.string() + ": exists and is not a folder");
+  fs::path existing = fs::absolute(dir, ec);
+  while (!fs::exists(existing, ec) && existing.has_parent_path() && existing.parent_path() != existing)
+    existing = existing.parent_path();
+  if (!fs::is_directory(existing, ec))
+    throw std::runtime_error(dir.string() + ": cannot create the output folder (" + existing.string() +
+                             " is not a folder)");
+  if (::access(existing.c_str(), W_OK | X_OK) != 0)
+    throw std::runtime_error(dir.string() + ": cannot write into " + existing.string() + " (permission denied)");
+}
+
+nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map) {
+  return {
+      {"keyframes", graph.size()},
+      {"edges", graph.edges().size()},
+      {"groups", map.groups.size()},
+      {"sigma_e", map.sigma_e},
+      {"merged", map.merged},
+      {"sigma_e_prime", map.sigma_e_prime},
+      {"t_g_s", map.t_g_s},
+      {"t_g_us_per_ellipsoid", map.sigma_e > 0 ? map.t_g_s * 1e6 / static_cast<double>(map.sigma_e) : 0.0},
+      {"global_stage_ms", {{"groups", map.groups_ms}, {"merge", map.merge_ms}, {"occlusion", map.occlusion_ms}}},
+  };
+}
+
+nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
+                         const FilterParams& filter, const MapExportOptions& options) {
+  StagingFolder stage(dir);
+  std::vector<Ellipsoid> local;
+  std::vector<StampedPose> poses;
+  for (const Keyframe& k : graph.keyframes()) {
+    forEachKeptEllipsoid(k.container, filter, k.T_W_K, k.id, [&local](const Ellipsoid& e) { local.push_back(e); });
+    poses.push_back({k.timestamp, k.T_W_K});
+  }
+  writeEllipsoidPly(stage / "local_maps.ply", local);
+  writeTumTrajectory(stage / "keyframes.txt", poses,
+                     "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
+  graph.edges().writeEdgeList(stage / "graph.txt");
+  writePointPly(stage / "global_points.ply", map.ellipsoids);
+  writeEllipsoidPly(stage / "global_ellipsoids.ply", map.ellipsoids);
+
+  nlohmann::json stats = options.run_stats.is_object() ? options.run_stats : nlohmann::json::object();
+  stats.update(globalMapStats(graph, map));
+  writeFileAtomically(stage / "stats.json", stats.dump(2) + "\n");
+  stage.commit();
+  return stats;
+}
+
+}  // namespace vdmap

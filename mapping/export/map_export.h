@@ -1,0 +1,47 @@
+#pragma once
+// Everything a mapping run exports (SPEC section 7), written into one folder: the same code for
+// `vdmap map --out DIR` and the workbench's Export button.
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "mapping/global_map/global_map.h"
+#include "mapping/keyframe/keyframe_graph.h"
+
+namespace vdmap {
+
+/// What to export besides the files that are always written.
+struct MapExportOptions {
+  /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
+  /// stats.json; the global-map and export figures are added by exportMap.
+  nlohmann::json run_stats = nlohmann::json::object();
+};
+
+/// Writes into `dir` (created if missing):
+///   local_maps.ply        kept ellipsoids of every keyframe, world frame (SPEC 7 ellipsoid PLY)
+///   keyframes.txt         keyframe poses T_W_K, TUM format, line i = keyframe i
+///   graph.txt             covisibility edges `a b weight`
+///   global_points.ply     global-map ellipsoid means with colour
+///   global_ellipsoids.ply global-map ellipsoids (SPEC 7)
+///   stats.json            options.run_stats + the global-map and export figures
+/// `filter` must be the one `map` was built with (it selects the local maps' kept ellipsoids).
+/// All files are first written into a staging folder inside `dir` and then renamed into place,
+/// so a failure (unwritable folder, full disk) leaves no file of this export behind and earlier
+/// files of the same names untouched. Throws std::runtime_error naming the folder or file.
+/// Reads `graph` and `map` only; the caller keeps them unchanged for the duration of the call.
+/// Returns the stats that were written to stats.json.
+nlohmann::json exportMap(const std::filesystem::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
+                         const FilterParams& filter, const MapExportOptions& options = {});
+
+/// Throws std::runtime_error when `dir` cannot become an export folder (it exists and is not a
+/// folder, or the nearest existing folder on its path is not writable), so a caller can fail
+/// before long work. Creates nothing.
+void checkExportFolder(const std::filesystem::path& dir);
+
+/// The global-map figures of stats.json: keyframes, edges, groups, sigma_e, merged,
+/// sigma_e_prime, t_g_s, t_g_us_per_ellipsoid and the stage times in ms.
+nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map);
+
+}  // namespace vdmap

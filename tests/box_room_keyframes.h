@@ -1,0 +1,22 @@
+#pragma once
+// Keyframes of the analytic box room (tests/test_util.h) for global-map and export tests.
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/local_map/local_map_integrator.h"
+#include "tests/test_util.h"
+
+namespace vdmap::test {
+
+/// Adds a keyframe at `T_W_K` whose local map holds one ray-cast frame of the box room from that
+/// pose, and whose map is then placed at `T_W_placed` (a pose error, to shift surfaces).
+/// Returns its id.
+inline int addBoxRoomKeyframe(KeyframeGraph* graph, const PinholeCamera& camera, const Transform& T_W_K,
+                              const Transform& T_W_placed, int cell_size_px = 5) {
+  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(camera, cell_size_px), 0};
+  k.timestamp = static_cast<double>(graph->size());
+  LocalMapIntegrator integrator;
+  integrator.integrateFrame(renderBoxRoom(camera, T_W_K), camera, T_W_K, &k.container, nullptr);
+  k.T_W_K = T_W_placed;
+  return graph->add(std::move(k)).id;
+}
+
+}  // namespace vdmap::test
