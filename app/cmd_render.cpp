@@ -1,5 +1,5 @@
-// vdmap render: draws a map (and/or a mesh) headless with OSMesa into a PNG, or times the
-// ellipsoid renderer (--bench-ellipsoids).
+// vdmap render: maps a sequence (or reads a map and/or a mesh) and draws one view headless
+// with OSMesa into a PNG, or times the ellipsoid renderer (--bench-ellipsoids).
 #include <algorithm>
 #include <chrono>
 #include <cstdio>
@@ -9,20 +9,28 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/commands.h"
+#include "app/progress.h"
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/ply_reader.h"
+#include "mapping/keyframe/mapper.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/context.h"
 #include "render/ellipsoid_renderer.h"
 #include "render/framebuffer.h"
+#include "render/map_scene.h"
 #include "render/mesh_renderer.h"
+#include "render/primitive_renderer.h"
 
 namespace vdmap::app {
 namespace {
 
 struct RenderArgs {
-  std::string sequence, map, mesh, view = "global", out, size = "1280x720", color = "rgb";
+  SequenceArgs sequence;
+  std::string map, mesh, view = "global", out, size, color = "rgb";
   float sigma = 2.f;
+  bool grid = false;
   int bench_ellipsoids = 0;
   int sphere_subdivisions = 1;
 };
@@ -36,28 +44,6 @@ std::pair<int, int> parseSize(const std::string& text) {
   if (w < 1 || h < 1 || w > render::kMaxImageSide || h > render::kMaxImageSide)
     throw std::invalid_argument("--size '" + text + "': each side must be in 1.." + std::to_string(render::kMaxImageSide));
   return {w, h};
-}
-
-std::vector<render::EllipsoidInstance> toInstances(const std::vector<EllipsoidRecord>& records) {
-  std::vector<render::EllipsoidInstance> out(records.size());
-  for (std::size_t i = 0; i < records.size(); ++i) {
-    const EllipsoidRecord& r = records[i];
-    out[i].mean = {r.mean.x(), r.mean.y(), r.mean.z()};
-    for (int c = 0; c < 3; ++c)
-      for (int k = 0; k < 3; ++k) out[i].cov[c][k] = r.cov(k, c);
-    out[i].rgb = {r.rgb[0], r.rgb[1], r.rgb[2]};
-    out[i].keyframe = r.keyframe;
-    out[i].count = r.count;
-  }
-  return out;
-}
-
-render::ColoredMesh toMesh(const ColoredTriangleMesh& m) {
-  render::ColoredMesh out;
-  for (const auto& p : m.positions) out.positions.emplace_back(p.x(), p.y(), p.z());
-  for (const auto& c : m.colors) out.colors.emplace_back(c[0], c[1], c[2]);
-  for (const auto& t : m.triangles) out.triangles.emplace_back(t[0], t[1], t[2]);
-  return out;
 }
 
 // Bounds of the central 96% of the points, so a few stray ellipsoids do not shrink the view.
@@ -76,7 +62,7 @@ std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& point
 }
 
 void runBench(const RenderArgs& args) {
-  const auto [w, h] = parseSize(args.size);
+  const auto [w, h] = parseSize(args.size.empty() ? "1280x720" : args.size);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> pos(-5.f, 5.f), size(0.005f, 0.04f), angle(0.f, 6.2832f);
   std::vector<render::EllipsoidInstance> set(static_cast<std::size_t>(args.bench_ellipsoids));
@@ -112,65 +98,173 @@ void runBench(const RenderArgs& args) {
   if (!args.out.empty()) render::writePng(args.out, fb.readRgb());
 }
 
+// --view: global, keyframe:K or container:K.
+struct ViewChoice {
+  enum class Kind { kGlobal, kKeyframe, kContainer } kind = Kind::kGlobal;
+  int keyframe = -1;
+};
+
+ViewChoice parseView(const std::string& text) {
+  std::smatch m;
+  static const std::regex pattern(R"((global)|(keyframe|container):(\d{1,9}))");
+  if (!std::regex_match(text, m, pattern))
+    throw std::invalid_argument("--view '" + text + "': expected global, keyframe:K or container:K");
+  if (m[1].matched) return {};
+  return {m[2] == "keyframe" ? ViewChoice::Kind::kKeyframe : ViewChoice::Kind::kContainer, std::stoi(m[3])};
+}
+
+// Maps the whole sequence (features, keyframe decision, local maps) with default parameters.
+void mapSequence(const TumSequence& seq, Mapper& mapper) {
+  FramePrefetcher frames(seq);
+  ProgressBar progress("mapping", seq.size());
+  while (std::optional<RgbdFrame> frame = frames.next()) {
+    mapper.addFrame(*frame);
+    progress.update(static_cast<std::size_t>(mapper.framesMapped()));
+  }
+}
+
+// What one `vdmap render` draws: ellipsoids (a map file or the global map of a sequence), an
+// optional mesh, the keyframe graph's lines, and for keyframe/container views the keyframe.
+struct RenderScene {
+  std::vector<render::EllipsoidInstance> ellipsoids;
+  ColoredTriangleMesh mesh;
+  render::ColoredLines lines;
+  const Keyframe* keyframe = nullptr;
+  PinholeCamera camera;
+  std::vector<render::EllipsoidInstance> container_ellipsoids;  // K's own kept ellipsoids
+  int cell_size_px = 5;
+};
+
+render::ViewCamera globalView(const RenderScene& scene, int w, int h) {
+  std::vector<glm::vec3> points;
+  for (const auto& e : scene.ellipsoids) points.push_back(e.mean);
+  for (const auto& p : scene.mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
+  for (const auto& p : scene.lines.positions) points.push_back(p);
+  const auto [lo, hi] = robustBounds(points);
+  return render::OrbitCamera::framing(lo, hi).view(w, h);
+}
+
+cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& choice, int w, int h,
+             const RenderArgs& args, render::ColorMode color) {
+  render::Framebuffer fb(gl, w, h);
+  if (choice.kind == ViewChoice::Kind::kContainer) {
+    render::ContainerRenderer container(gl);
+    container.setKeyframe(scene.keyframe->rgb, scene.camera, scene.keyframe->T_W_K);
+    container.setEllipsoids(scene.container_ellipsoids, {.sigma = args.sigma, .color = color,
+                                                         .cell_size_px = scene.cell_size_px, .show_grid = args.grid});
+    fb.bindAndClear(0.f, 0.f, 0.f);
+    container.draw(w, h);
+    return fb.readRgb();
+  }
+  const render::ViewCamera view = choice.kind == ViewChoice::Kind::kKeyframe
+                                      ? render::ViewCamera::fromPinhole(scene.camera, scene.keyframe->T_W_K, w, h)
+                                      : globalView(scene, w, h);
+  fb.bindAndClear(1.f, 1.f, 1.f);
+  if (!scene.mesh.triangles.empty()) {
+    render::MeshRenderer mesh_renderer(gl);
+    mesh_renderer.set(render::toColoredMesh(scene.mesh));
+    mesh_renderer.draw(view);
+  }
+  if (!scene.ellipsoids.empty()) {
+    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color});
+    renderer.set(scene.ellipsoids);
+    renderer.draw(view);
+  }
+  if (!scene.lines.positions.empty() && choice.kind == ViewChoice::Kind::kGlobal) {
+    render::LineRenderer lines(gl);
+    lines.set(scene.lines);
+    lines.setWidth(2.f);
+    lines.draw(view);
+  }
+  return fb.readRgb();
+}
+
 void runRender(const RenderArgs& args) {
   if (args.bench_ellipsoids > 0) return runBench(args);
   if (args.out.empty()) throw std::invalid_argument("--out PNG is required");
-  if (!args.sequence.empty() && args.map.empty())
-    throw NotBuiltYet("'vdmap render SEQ' maps the sequence first and needs the mapper (issue #3); "
-                      "render an exported map with --map FILE");
-  if (args.map.empty() && args.mesh.empty()) throw std::invalid_argument("give --map FILE (ellipsoid PLY), --mesh PLY, or both");
-  const auto [w, h] = parseSize(args.size);
+  const bool from_sequence = !args.sequence.folder.empty();
+  const ViewChoice choice = parseView(args.view);
+  if (from_sequence && !args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
+  if (!from_sequence && choice.kind != ViewChoice::Kind::kGlobal)
+    throw std::invalid_argument("--view " + args.view + " needs a sequence (SEQ): a --map file has no keyframes");
+  if (!from_sequence && args.map.empty() && args.mesh.empty())
+    throw std::invalid_argument("give SEQ, --map FILE (ellipsoid PLY), --mesh PLY, or --map and --mesh");
+  const std::pair<int, int> size = args.size.empty() ? std::pair{0, 0} : parseSize(args.size);  // 0: default
   const render::ColorMode color = render::parseColorMode(args.color);
-  std::vector<render::EllipsoidInstance> ellipsoids;
-  if (!args.map.empty()) ellipsoids = toInstances(readPlyEllipsoids(args.map));
-  ColoredTriangleMesh mesh;
-  if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);
 
-  std::smatch m;
-  static const std::regex view_pattern(R"((global)|(keyframe|container):(\d+))");
-  if (!std::regex_match(args.view, m, view_pattern))
-    throw std::invalid_argument("--view '" + args.view + "': expected global, keyframe:K or container:K");
-  if (m[2].matched) {
-    // Keyframe poses and images come from a mapped sequence; until the mapper lands there is
-    // no keyframe list to name K in.
-    throw NotBuiltYet("--view " + args.view + " needs keyframes from the mapper (issue #3); use --view global");
-  }
+  RenderScene scene;
+  if (!args.map.empty()) scene.ellipsoids = render::toInstances(readPlyEllipsoids(args.map));
+  if (!args.mesh.empty()) scene.mesh = readPlyMesh(args.mesh);
+  // The context comes before the mapping: a missing OSMesa should not cost a mapping run.
   auto context = render::createOffscreenContext();
-  const render::Gl& gl = context->gl();
-  render::Framebuffer fb(gl, w, h);
-  std::vector<glm::vec3> points;
-  for (const auto& e : ellipsoids) points.push_back(e.mean);
-  for (const auto& p : mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
-  const auto [lo, hi] = robustBounds(points);
-  const render::ViewCamera view = render::OrbitCamera::framing(lo, hi).view(w, h);
-  fb.bindAndClear(1.f, 1.f, 1.f);
-  if (!mesh.triangles.empty()) {
-    render::MeshRenderer mesh_renderer(gl);
-    mesh_renderer.set(toMesh(mesh));
-    mesh_renderer.draw(view);
+  std::unique_ptr<Mapper> mapper;
+  std::optional<TumSequence> seq;
+  if (from_sequence) {
+    seq.emplace(openSequence(args.sequence));
+    mapper = std::make_unique<Mapper>(seq->camera());
+    mapSequence(*seq, *mapper);
+    const KeyframeGraph& graph = mapper->graph();
+    scene.camera = seq->camera();
+    scene.cell_size_px = mapper->params().local_map.cell_size_px;
+    const GlobalMapParams global_params;
+    if (choice.kind == ViewChoice::Kind::kContainer || choice.kind == ViewChoice::Kind::kKeyframe) {
+      if (choice.keyframe >= static_cast<int>(graph.size()))
+        throw std::invalid_argument(
+            "--view " + args.view + ": " + seq->folder().string() +
+            (graph.size() == 0 ? std::string(" made no keyframe")
+                               : " has keyframes 0.." + std::to_string(graph.size() - 1)));
+      scene.keyframe = &graph.keyframe(choice.keyframe);
+    }
+    if (choice.kind == ViewChoice::Kind::kContainer) {
+      scene.container_ellipsoids = render::toInstances(
+          keptEllipsoids(scene.keyframe->container, global_params.filter, scene.keyframe->T_W_K, scene.keyframe->id));
+    } else {
+      scene.ellipsoids = render::toInstances(buildGlobalMap(graph, global_params).ellipsoids);
+      // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well
+      // for rooms (the data vdmap is made for).
+      scene.lines = render::keyframeGraphLines(graph, scene.camera, 0.15f);
+    }
   }
-  if (!ellipsoids.empty()) {
-    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color});
-    renderer.set(ellipsoids);
-    renderer.draw(view);
+
+  // Default sizes: the keyframe's own image for keyframe:K, the whole 2W x 2H container for
+  // container:K, 1280x720 for the global view.
+  auto [w, h] = size;
+  if (w == 0) {
+    const int scale = choice.kind == ViewChoice::Kind::kContainer ? 2 : 1;
+    std::tie(w, h) = choice.kind == ViewChoice::Kind::kGlobal
+                         ? std::pair{1280, 720}
+                         : std::pair{scale * scene.camera.width, scale * scene.camera.height};
   }
-  render::writePng(args.out, fb.readRgb());
-  std::printf("wrote %s (%dx%d, %zu ellipsoids, %zu triangles)\n", args.out.c_str(), w, h, ellipsoids.size(),
-              mesh.triangles.size());
+  render::writePng(args.out, draw(context->gl(), scene, choice, w, h, args, color));
+  const std::size_t drawn =
+      choice.kind == ViewChoice::Kind::kContainer ? scene.container_ellipsoids.size() : scene.ellipsoids.size();
+  std::printf("wrote %s (%dx%d, view %s, %zu ellipsoids, %zu triangles", args.out.c_str(), w, h, args.view.c_str(),
+              drawn, scene.mesh.triangles.size());
+  if (mapper)
+    std::printf(", %d frames, %zu keyframes, %zu edges", mapper->framesMapped(), mapper->graph().size(),
+                mapper->graph().edges().size());
+  std::printf(")\n");
 }
 
 }  // namespace
 
 void addRenderCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("render", "Render a map (ellipsoid PLY) and/or a mesh headless to PNG with OSMesa");
+  auto* verb = app.add_subcommand("render", "Map a sequence (or read a map / mesh) and render a view headless to PNG with OSMesa");
   auto args = std::make_shared<RenderArgs>();
-  verb->add_option("SEQ", args->sequence, "sequence to map and render (needs the mapper, not built yet)");
-  verb->add_option("--map", args->map, "ellipsoid PLY (SPEC section 7 layout)");
+  addSequenceArgs(*verb, args->sequence);
+  verb->get_option("SEQ")->required(false)->description("sequence to map (default parameters) and render");
+  verb->add_option("--map", args->map, "ellipsoid PLY (SPEC section 7 layout) instead of SEQ; global view only");
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
-  verb->add_option("--view", args->view, "global | keyframe:K | container:K")->capture_default_str();
+  verb->add_option("--view", args->view,
+                   "global (map, frustums, covisibility edges coloured by weight) | keyframe:K (the map from "
+                   "keyframe K with its intrinsics) | container:K (K's image with its ellipses)")
+      ->capture_default_str();
   verb->add_option("--out", args->out, "PNG to write");
-  verb->add_option("--size", args->size, "image size WIDTHxHEIGHT")->capture_default_str();
+  verb->add_option("--size", args->size,
+                   "image size WIDTHxHEIGHT (default: 1280x720 global, the camera's for keyframe:K, the "
+                   "container's 2W x 2H for container:K)");
   verb->add_option("--color", args->color, "rgb | keyframe | uncertainty | count")->capture_default_str();
+  verb->add_flag("--grid", args->grid, "container view: draw the cell grid");
   verb->add_option("--sigma", args->sigma, "ellipsoid surface at this many standard deviations")->capture_default_str();
   verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,
                    "time N random instanced ellipsoids at --size instead of rendering a map");

@@ -10,6 +10,7 @@
 
 #include "mapping/synth/builtin_scene.h"
 #include "render/framebuffer.h"
+#include "render/map_scene.h"
 #include "render/mesh_renderer.h"
 
 namespace vdmap::render {
@@ -28,12 +29,7 @@ struct MeshViewRenderer::Impl {
 MeshViewRenderer::MeshViewRenderer(Context& context, const ColoredTriangleMesh& mesh, const PinholeCamera& camera) {
   context.makeCurrent();
   impl_ = std::make_unique<Impl>(context, camera);
-  ColoredMesh gpu;
-  gpu.positions.reserve(mesh.positions.size());
-  for (const auto& p : mesh.positions) gpu.positions.emplace_back(p.x(), p.y(), p.z());
-  for (const auto& c : mesh.colors) gpu.colors.emplace_back(c[0], c[1], c[2]);
-  for (const auto& t : mesh.triangles) gpu.triangles.emplace_back(t[0], t[1], t[2]);
-  impl_->mesh.set(gpu);
+  impl_->mesh.set(toColoredMesh(mesh));
   impl_->mesh.setShaded(false);
 }
 

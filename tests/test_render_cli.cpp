@@ -3,8 +3,11 @@
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "mapping/io/tum_sequence.h"
+#include "mapping/synth/builtin_scene.h"
+#include "render/sequence_synth.h"
 #include "tests/test_util.h"
 
 namespace vdmap {
@@ -82,6 +85,10 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
       {"render --mesh '" + (tmp / "nocolor.ply").string() + "'" + out, "no property 'red'"},
       {"render --mesh '" + (tmp / "truncated.ply").string() + "'" + out, "truncated"},
       {"render --map '" + (tmp / "missing.ply").string() + "'" + out, "cannot open"},
+      {"render" + map + out + " --view keyframe:0", "needs a sequence (SEQ)"},
+      {"render" + map + out + " --view side", "expected global, keyframe:K or container:K"},
+      {"render '" + tmp.path().string() + "'" + map + out, "give SEQ or --map FILE, not both"},
+      {"render '" + (tmp / "no_such_sequence").string() + "'" + out, "no_such_sequence"},
   };
   for (const Case& c : cases) {
     const auto r = runVdmap(c.args);
@@ -101,6 +108,90 @@ TEST(RenderCli, MissingOsmesaIsAClearError) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("needs OSMesa, which is not available"), std::string::npos) << r.err;
   EXPECT_FALSE(std::filesystem::exists(tmp / "p.png"));
+}
+
+// `vdmap render SEQ`: the first 10 poses of a 40-pose walk around the built-in room (big steps,
+// so a few keyframes), mapped by the binary and drawn in each view.
+class RenderSequenceCli : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    const BuiltinScene scene = makeBuiltinScene({.frames = 40});
+    render::SynthOptions options;
+    options.camera = scene.camera;
+    options.last_frame = 10;
+    render::synthesizeSequence(scene.mesh, scene.trajectory, options, *dir_ / "room");
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string seq() { return "'" + (*dir_ / "room").string() + "'"; }
+  static std::string out(const std::string& name) { return (*dir_ / name).string(); }
+  static TempDir* dir_;
+};
+TempDir* RenderSequenceCli::dir_ = nullptr;
+
+// Pearson correlation of two images' grey values (equal sizes), after a blur that removes the
+// texture finer than a container cell (5 px): ellipsoids carry a cell's mean colour.
+double greyCorrelation(const cv::Mat& a_bgr, const cv::Mat& b_bgr) {
+  cv::Mat a, b;
+  cv::cvtColor(a_bgr, a, cv::COLOR_BGR2GRAY);
+  cv::cvtColor(b_bgr, b, cv::COLOR_BGR2GRAY);
+  a.convertTo(a, CV_32F);
+  b.convertTo(b, CV_32F);
+  cv::GaussianBlur(a, a, {0, 0}, 4.0);
+  cv::GaussianBlur(b, b, {0, 0}, 4.0);
+  cv::Mat r;
+  cv::matchTemplate(a, b, r, cv::TM_CCOEFF_NORMED);
+  return r.at<float>(0, 0);
+}
+
+TEST_F(RenderSequenceCli, GlobalViewShowsTheMapAndTheKeyframeGraph) {
+  const auto r = runVdmap("render " + seq() + " --view global --size 320x240 --out '" + out("global.png") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("keyframes"), std::string::npos) << r.out;
+  const cv::Mat img = cv::imread(out("global.png"));
+  ASSERT_EQ(img.size(), cv::Size(320, 240));
+  EXPECT_GT(cv::countNonZero(img.reshape(1) < 250), 3000) << "nothing was drawn";
+}
+
+TEST_F(RenderSequenceCli, KeyframeViewReproducesTheKeyframesImage) {
+  // Keyframe 0 is frame 0; seen from its own pose with its intrinsics, the map (ellipsoids in
+  // their mean colour, shaded) must look like the frame: the same image up to cell-sized blur
+  // and shading. Seen from the wrong pose (or with the y axis flipped) the correlation drops
+  // near 0.
+  const auto r = runVdmap("render " + seq() + " --view keyframe:0 --out '" + out("kf0.png") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat img = cv::imread(out("kf0.png"));
+  const cv::Mat frame = cv::imread((*dir_ / "room" / "rgb" / "000000.png").string());
+  ASSERT_EQ(img.size(), frame.size()) << "the default size of keyframe:K is the camera's";
+  const double own = greyCorrelation(img, frame);
+  cv::Mat flipped;
+  cv::flip(frame, flipped, 0);
+  const double upside_down = greyCorrelation(img, flipped);
+  std::printf("keyframe:0 view vs frame 0: correlation %.3f (flipped frame: %.3f)\n", own, upside_down);
+  // Measured 0.59 (llvmpipe, 10 frames): shading and the gaps between cells keep it well below 1.
+  EXPECT_GT(own, 0.4);
+  EXPECT_LT(upside_down, own - 0.3);
+}
+
+TEST_F(RenderSequenceCli, ContainerViewIsTheKeyframeImageWithItsEllipses) {
+  const auto r = runVdmap("render " + seq() + " --view container:0 --size 640x480 --grid --out '" +
+                          out("container0.png") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const cv::Mat img = cv::imread(out("container0.png"));
+  ASSERT_EQ(img.size(), cv::Size(640, 480));
+  // The image occupies the middle half of the 2W x 2H container (here scaled by 1/2).
+  const cv::Mat frame = cv::imread((*dir_ / "room" / "rgb" / "000000.png").string());
+  cv::Mat small;
+  cv::resize(frame, small, {320, 240}, 0, 0, cv::INTER_AREA);
+  EXPECT_GT(greyCorrelation(img(cv::Rect(160, 120, 320, 240)), small), 0.8);
+}
+
+TEST_F(RenderSequenceCli, AnUnknownKeyframeNamesTheValidRange) {
+  const auto r = runVdmap("render " + seq() + " --view container:999 --out '" + out("none.png") + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("has keyframes 0.."), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(out("none.png")));
 }
 
 TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {

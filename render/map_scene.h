@@ -1,0 +1,28 @@
+#pragma once
+// Render inputs from mapping results: the one place where mapping's ellipsoids and keyframe
+// graph become the plain render-side types of scene_types.h (shared by `vdmap render` and the
+// workbench).
+#include <span>
+#include <vector>
+
+#include "mapping/io/ply_reader.h"
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/local_map/ellipsoid_filter.h"
+#include "render/scene_lines.h"
+
+namespace vdmap::render {
+
+/// One mapping ellipsoid as a render instance (same frame; colour rounded and clamped to 0..255).
+EllipsoidInstance toInstance(const Ellipsoid& e);
+std::vector<EllipsoidInstance> toInstances(std::span<const Ellipsoid> ellipsoids);
+/// Ellipsoids read from a map PLY (SPEC section 7) as render instances.
+std::vector<EllipsoidInstance> toInstances(std::span<const EllipsoidRecord> records);
+/// A mesh read from a PLY as the mesh renderer's input.
+ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
+
+/// The keyframe graph as lines in the world frame: every keyframe's frustum (image corners at
+/// `frustum_depth_m`, keyframe colour), every covisibility edge coloured by its weight, and the
+/// trajectory through the keyframe centres in creation order (grey).
+ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m);
+
+}  // namespace vdmap::render
