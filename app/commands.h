@@ -19,6 +19,7 @@ void addRenderCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);
 void addMapCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
+void addEvalCommand(CLI::App& app);
 
 /// Registers a verb that says clearly it is not built yet and which issue will bring it.
 void addPlannedCommand(CLI::App& app, const std::string& name, const std::string& what,

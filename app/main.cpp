@@ -27,7 +27,7 @@ int main(int argc, char** argv) {
   addRenderCommand(app);
   addSynthCommand(app);
   addBenchCommand(app);
-  addPlannedCommand(app, "eval", "Reconstruction accuracy against a reference mesh", "#8");
+  addEvalCommand(app);
   addPlannedCommand(app, "gui", "Open the workbench on a sequence", "#7");
   try {
     app.parse(argc, argv);

@@ -247,6 +247,11 @@ ColoredTriangleMesh readPlyMesh(const std::filesystem::path& file) {
   return mesh;
 }
 
+std::vector<Eigen::Vector3f> readPlyPoints(const std::filesystem::path& file) {
+  const std::vector<Element> elements = Reader(file).read();
+  return readPositions(file, vertexElement(file, elements));
+}
+
 std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file) {
   const std::vector<Element> elements = Reader(file).read();
   const Element& v = vertexElement(file, elements);

@@ -32,6 +32,10 @@ struct EllipsoidRecord {
 /// has no faces or no vertex colours, or a face indexes a missing vertex.
 ColoredTriangleMesh readPlyMesh(const std::filesystem::path& file);
 
+/// Reads the vertex positions of any PLY with a `vertex` element holding x y z: a point cloud,
+/// an ellipsoid export (its means) or a mesh (its vertices). Throws InputError as readPlyMesh.
+std::vector<Eigen::Vector3f> readPlyPoints(const std::filesystem::path& file);
+
 /// Reads ellipsoids: `vertex` with x y z, red green blue, cxx cxy cxz cyy cyz czz, and
 /// optionally count and keyframe. Throws InputError as readPlyMesh.
 std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file);
