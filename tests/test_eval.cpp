@@ -45,6 +45,12 @@ Eigen::Vector3f outwardNormal(const ColoredTriangleMesh& mesh, std::size_t t) {
   return (mesh.positions[tri[1]] - a).cross(mesh.positions[tri[2]] - a).normalized();
 }
 
+AccuracyParams withSamples(std::size_t n) {
+  AccuracyParams p;
+  p.completion_samples = n;
+  return p;
+}
+
 // Points on each triangle (interior barycentric grid), moved `offset_m` along its outer normal.
 std::vector<Eigen::Vector3f> pointsOnCube(const ColoredTriangleMesh& mesh, float offset_m) {
   std::vector<Eigen::Vector3f> out;
@@ -104,7 +110,7 @@ TEST(Eval, TreeDistancesEqualBruteForce) {
 
 TEST(Eval, ExactSamplesScoreZero) {
   const ColoredTriangleMesh mesh = unitCube();
-  const AccuracyReport r = evaluateAccuracy(sampleMeshSurface(mesh, 20000, 1), mesh, {.completion_samples = 20000});
+  const AccuracyReport r = evaluateAccuracy(sampleMeshSurface(mesh, 20000, 1), mesh, withSamples(20000));
   EXPECT_EQ(r.elements, 20000u);
   // Samples are stored as float: their distance to the surface is float rounding, < 1e-4 mm.
   EXPECT_LT(r.rmse_mm, 1e-3);
@@ -113,7 +119,7 @@ TEST(Eval, ExactSamplesScoreZero) {
 
 TEST(Eval, OneCentimetreAlongTheNormalsScoresTenMillimetres) {
   const ColoredTriangleMesh mesh = unitCube();
-  const AccuracyReport r = evaluateAccuracy(pointsOnCube(mesh, 0.01f), mesh, {.completion_samples = 5000});
+  const AccuracyReport r = evaluateAccuracy(pointsOnCube(mesh, 0.01f), mesh, withSamples(5000));
   // Outside a convex solid, a point moved d along the normal of a face is exactly d from it;
   // the tolerance is float rounding of 1 m coordinates.
   EXPECT_NEAR(r.rmse_mm, 10.0, 1e-3);
@@ -127,7 +133,7 @@ TEST(Eval, CompletionDropsWhenHalfTheMeshIsUncovered) {
   std::vector<Eigen::Vector3f> half;
   for (const auto& p : all)
     if (p.x() < 0.5f) half.push_back(p);
-  const AccuracyParams params{.completion_samples = 20000};
+  const AccuracyParams params = withSamples(20000);
   const AccuracyReport full = evaluateAccuracy(all, mesh, params), part = evaluateAccuracy(half, mesh, params);
   EXPECT_GT(full.completion_ratio, 0.99);
   // x >= 0.5 holds half of the area; only a 5 cm band beyond x = 0.5 is still within reach.
