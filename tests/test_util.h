@@ -8,6 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "mapping/core/rgbd_frame.h"
+#include "mapping/keyframe/mapper.h"
 
 namespace vdmap::test {
 
@@ -40,6 +41,10 @@ RgbdFrame renderBoxRoom(const PinholeCamera& camera, const Transform& T_W_C);
 
 /// A camera pose at `position` looking at `target` (y of the image pointing down, world -y up).
 Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
+
+/// A small whole session: a 160x120 camera at the centre of the box room turning 6 degrees a
+/// frame through `frames` frames (several keyframes, covisibility edges, a revisit past 60).
+Mapper mapTurningBoxRoom(int frames);
 
 /// Folder of a shared data set (../shared/data/NAME), or empty when absent.
 fs::path sharedData(const std::string& name);

@@ -1,30 +1,52 @@
 #include "mapping/core/atomic_file.h"
 
+#include <fcntl.h>
 #include <unistd.h>
 
-#include <fstream>
+#include <cerrno>
+#include <cstring>
 #include <stdexcept>
 #include <string>
 
 namespace vdmap {
+namespace {
+
+bool writeAll(int fd, std::string_view bytes) {
+  while (!bytes.empty()) {
+    const ssize_t n = ::write(fd, bytes.data(), bytes.size());
+    if (n < 0 && errno == EINTR) continue;
+    if (n <= 0) return false;
+    bytes.remove_prefix(static_cast<std::size_t>(n));
+  }
+  return true;
+}
+
+// Makes the rename itself durable; failure here does not undo a completed write.
+void syncFolder(const std::filesystem::path& folder) {
+  const int fd = ::open(folder.empty() ? "." : folder.c_str(), O_RDONLY | O_DIRECTORY | O_CLOEXEC);
+  if (fd < 0) return;
+  ::fsync(fd);
+  ::close(fd);
+}
+
+}  // namespace
 
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
   const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
-  bool written = false;
-  {
-    std::ofstream out(tmp, std::ios::binary | std::ios::trunc);
-    if (out) {
-      out.write(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-      out.flush();
-      written = static_cast<bool>(out);
-    }
-  }
+  // The data reaches the disk before the rename publishes it, so a crash or power loss at any
+  // moment leaves the old file or the complete new one.
+  const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
+  bool written = fd >= 0 && writeAll(fd, bytes) && ::fsync(fd) == 0;
+  if (fd >= 0 && ::close(fd) != 0) written = false;
+  const int error = errno;
   std::error_code ec;
   if (written) std::filesystem::rename(tmp, file, ec);
   if (!written || ec) {
     std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(file.string() + ": cannot write (is the folder there, writable, not full?)");
+    throw std::runtime_error(file.string() + ": cannot write (" + std::strerror(written ? ec.value() : error) +
+                             ")");
   }
+  syncFolder(file.parent_path());
 }
 
 }  // namespace vdmap

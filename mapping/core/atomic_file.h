@@ -4,9 +4,10 @@
 
 namespace vdmap {
 
-/// Writes `bytes` to a temporary file beside `file` and renames it into place (atomic on POSIX
-/// within a folder), so a reader, or an interrupted run, never sees a half-written file. Throws
-/// std::runtime_error naming `file` when it cannot be written; no temporary is left behind.
+/// Writes `bytes` to a temporary file beside `file`, fsyncs it and renames it into place (atomic
+/// on POSIX within a folder; the folder is fsynced after), so a reader, an interrupted run or a
+/// power cut never sees a half-written file. Throws std::runtime_error naming `file` and the
+/// reason when it cannot be written; no temporary is left behind (unless the process is killed).
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes);
 
 }  // namespace vdmap

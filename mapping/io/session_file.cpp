@@ -1,0 +1,526 @@
+#include "mapping/io/session_file.h"
+
+#include <array>
+#include <bit>
+#include <cmath>
+#include <cstring>
+#include <fstream>
+#include <iterator>
+#include <stdexcept>
+
+#include "mapping/core/atomic_file.h"
+#include "mapping/core/error.h"
+
+namespace vdmap {
+namespace {
+
+// A new field in these structs must be added to the file (and the version raised): these
+// sizes are a tripwire for that, not a layout promise.
+static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(GlobalMapParams) == 72, "GlobalMapParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
+
+constexpr char kMagic[8] = {'V', 'D', 'M', 'A', 'P', 'S', 'E', 'S'};
+constexpr std::uint32_t kEndianMark = 0x01020304;  // written little-endian: 04 03 02 01
+constexpr std::size_t kHeaderBytes = 24;           // magic, version, endianness, sections, crc
+constexpr std::size_t kSectionHeaderBytes = 16;    // tag, payload length (u64), crc
+constexpr std::array<char, 4> kParams = {'P', 'A', 'R', 'M'};
+constexpr std::array<char, 4> kKeyframe = {'K', 'F', 'R', 'M'};
+constexpr std::array<char, 4> kEdges = {'E', 'D', 'G', 'E'};
+constexpr int kMaxImageSide = 1 << 15;
+
+constexpr std::array<std::uint32_t, 256> makeCrcTable() {
+  std::array<std::uint32_t, 256> table{};
+  for (std::uint32_t i = 0; i < 256; ++i) {
+    std::uint32_t c = i;
+    for (int k = 0; k < 8; ++k) c = (c & 1u) ? 0xEDB88320u ^ (c >> 1) : c >> 1;
+    table[i] = c;
+  }
+  return table;
+}
+constexpr std::array<std::uint32_t, 256> kCrcTable = makeCrcTable();
+
+// Little-endian encoding of the file's fields, whatever the host's byte order.
+class Writer {
+ public:
+  void u8(std::uint8_t v) { out_.push_back(static_cast<char>(v)); }
+  void u16(std::uint16_t v) { little(v); }
+  void u32(std::uint32_t v) { little(v); }
+  void i32(std::int32_t v) { little(static_cast<std::uint32_t>(v)); }
+  void u64(std::uint64_t v) { little(v); }
+  void f32(float v) { little(std::bit_cast<std::uint32_t>(v)); }
+  void f64(double v) { little(std::bit_cast<std::uint64_t>(v)); }
+  void boolean(bool v) { u8(v ? 1 : 0); }
+  void bytes(std::string_view b) { out_.append(b); }
+  std::string& str() { return out_; }
+
+ private:
+  template <typename T>
+  void little(T v) {
+    for (std::size_t i = 0; i < sizeof(T); ++i) out_.push_back(static_cast<char>((v >> (8 * i)) & 0xFF));
+  }
+  std::string out_;
+};
+
+// Reads fields of one region of the file; every failure is an InputError naming the file and
+// `where` (the header or a section).
+class Reader {
+ public:
+  Reader(std::string_view data, const std::string& file, std::string where)
+      : data_(data), file_(file), where_(std::move(where)) {}
+
+  [[noreturn]] void fail(const std::string& what) const { throw InputError(file_, where_ + ": " + what); }
+  std::size_t left() const { return data_.size() - pos_; }
+  void setWhere(std::string where) { where_ = std::move(where); }
+  void need(std::uint64_t n, const char* what) const {
+    if (n > left())
+      fail(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
+           std::to_string(left()) + " left");
+  }
+  std::string_view bytes(std::uint64_t n, const char* what) {
+    need(n, what);
+    const std::string_view b = data_.substr(pos_, static_cast<std::size_t>(n));
+    pos_ += static_cast<std::size_t>(n);
+    return b;
+  }
+  std::uint8_t u8(const char* what) { return static_cast<std::uint8_t>(bytes(1, what)[0]); }
+  std::uint16_t u16(const char* what) { return little<std::uint16_t>(what); }
+  std::uint32_t u32(const char* what) { return little<std::uint32_t>(what); }
+  std::int32_t i32(const char* what) { return static_cast<std::int32_t>(little<std::uint32_t>(what)); }
+  std::uint64_t u64(const char* what) { return little<std::uint64_t>(what); }
+  float f32(const char* what) {
+    const float v = std::bit_cast<float>(little<std::uint32_t>(what));
+    if (!std::isfinite(v)) fail(std::string(what) + " is not a finite number");
+    return v;
+  }
+  double f64(const char* what) {
+    const double v = std::bit_cast<double>(little<std::uint64_t>(what));
+    if (!std::isfinite(v)) fail(std::string(what) + " is not a finite number");
+    return v;
+  }
+  bool boolean(const char* what) {
+    const std::uint8_t v = u8(what);
+    if (v > 1) fail(std::string(what) + " must be 0 or 1, not " + std::to_string(v));
+    return v == 1;
+  }
+  /// A count of records of `record_bytes` each that must fit in what is left.
+  std::uint32_t count(std::uint64_t record_bytes, const char* what) {
+    const std::uint32_t n = u32(what);
+    need(n * record_bytes, what);
+    return n;
+  }
+  void check(bool ok, const std::string& what) const {
+    if (!ok) fail(what);
+  }
+  /// Runs a validate() that throws std::invalid_argument, as an InputError.
+  template <typename Validate>
+  void checkValid(const char* what, Validate validate) const {
+    try {
+      validate();
+    } catch (const std::invalid_argument& e) {
+      fail(std::string(what) + ": " + e.what());
+    }
+  }
+  void expectEnd() const {
+    if (left() != 0) fail(std::to_string(left()) + " unexpected bytes at the end");
+  }
+
+ private:
+  template <typename T>
+  T little(const char* what) {
+    const std::string_view b = bytes(sizeof(T), what);
+    T v = 0;
+    for (std::size_t i = 0; i < sizeof(T); ++i) v |= static_cast<T>(static_cast<std::uint8_t>(b[i])) << (8 * i);
+    return v;
+  }
+
+  std::string_view data_;
+  std::size_t pos_ = 0;
+  const std::string& file_;
+  std::string where_;
+};
+
+// A section tag for a message; bytes of a corrupted tag that are not printable are escaped.
+std::string tagName(std::string_view tag) {
+  std::string out(1, '\'');
+  for (char ch : tag) {
+    if (ch >= 0x20 && ch < 0x7F) {
+      out += ch;
+    } else {
+      constexpr char kHex[] = "0123456789abcdef";
+      const auto b = static_cast<std::uint8_t>(ch);
+      out += {'\\', 'x', kHex[b >> 4], kHex[b & 15]};
+    }
+  }
+  out += '\'';
+  return out;
+}
+
+void appendSection(Writer* file, const std::array<char, 4>& tag, const std::string& payload) {
+  Writer head;
+  head.bytes({tag.data(), tag.size()});
+  head.u64(payload.size());
+  const std::uint32_t crc = crc32(payload, crc32(head.str()));
+  head.u32(crc);
+  file->bytes(head.str());
+  file->bytes(payload);
+}
+
+// --- parameters -------------------------------------------------------------------------------
+
+void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
+  const PinholeCamera& c = info.camera;
+  w->i32(c.width);
+  w->i32(c.height);
+  for (double v : {c.fx, c.fy, c.cx, c.cy, c.depth_scale}) w->f64(v);
+  const MapperParams& m = info.mapper;
+  w->i32(m.local_map.cell_size_px);
+  w->f64(m.local_map.depth_range.min_m);
+  w->f64(m.local_map.depth_range.max_m);
+  w->i32(m.features.orb_features);
+  const KeyframeParams& k = m.keyframes;
+  w->f64(k.tau);
+  w->f64(k.tau_edge);
+  w->boolean(k.prefilter.enabled);
+  w->f64(k.prefilter.max_distance_m);
+  w->f64(k.prefilter.max_angle_deg);
+  w->i32(k.min_frame_features);
+  w->i32(k.covisibility.max_hamming);
+  w->f64(k.covisibility.lowe_ratio);
+  w->f64(k.covisibility.max_reprojection_px);
+  w->i32(m.keyframe_every);
+  const GlobalMapParams& g = info.global;
+  w->u32(static_cast<std::uint32_t>(g.filter.model));
+  w->f64(g.filter.filter_sigma_factor);
+  w->i32(g.filter.min_points);
+  w->f64(g.tau_group);
+  w->f64(g.merge_distance_m);
+  w->boolean(g.occlusion_removal);
+  w->f64(g.occlusion_distance_m);
+  w->f64(g.occlusion_angle_deg);
+  w->i32(info.frames_mapped);
+  w->i32(info.revisits);
+  w->u32(static_cast<std::uint32_t>(keyframes));
+}
+
+std::uint32_t readParams(Reader* r, SessionInfo* info) {
+  PinholeCamera& c = info->camera;
+  c.width = r->i32("camera width");
+  c.height = r->i32("camera height");
+  c.fx = r->f64("fx");
+  c.fy = r->f64("fy");
+  c.cx = r->f64("cx");
+  c.cy = r->f64("cy");
+  c.depth_scale = r->f64("depth_scale");
+  r->checkValid("camera", [&c] { c.validate(); });
+  r->check(c.width <= kMaxImageSide && c.height <= kMaxImageSide, "camera is larger than 32768 px");
+  MapperParams& m = info->mapper;
+  m.local_map.cell_size_px = r->i32("cell_size_px");
+  r->check(m.local_map.cell_size_px >= 1 && m.local_map.cell_size_px <= std::min(c.width, c.height),
+           "cell_size_px must be within 1..min(width, height)");
+  m.local_map.depth_range.min_m = r->f64("min_depth");
+  m.local_map.depth_range.max_m = r->f64("max_depth");
+  r->check(m.local_map.depth_range.min_m >= 0 && m.local_map.depth_range.min_m < m.local_map.depth_range.max_m,
+           "depth range must satisfy 0 <= min < max");
+  m.features.orb_features = r->i32("orb_features");
+  r->check(m.features.orb_features >= 1, "orb_features must be >= 1");
+  KeyframeParams& k = m.keyframes;
+  k.tau = r->f64("tau");
+  k.tau_edge = r->f64("tau_edge");
+  r->check(k.tau >= 0 && k.tau <= 1 && k.tau_edge >= 0 && k.tau_edge <= 1, "tau and tau_edge must be within 0..1");
+  k.prefilter.enabled = r->boolean("prefilter enabled");
+  k.prefilter.max_distance_m = r->f64("prefilter max_distance");
+  k.prefilter.max_angle_deg = r->f64("prefilter max_angle");
+  r->check(k.prefilter.max_distance_m >= 0 && k.prefilter.max_angle_deg >= 0, "prefilter limits must be >= 0");
+  k.min_frame_features = r->i32("min_frame_features");
+  r->check(k.min_frame_features >= 0, "min_frame_features must be >= 0");
+  k.covisibility.max_hamming = r->i32("max_hamming");
+  k.covisibility.lowe_ratio = r->f64("lowe_ratio");
+  k.covisibility.max_reprojection_px = r->f64("max_reprojection");
+  r->check(k.covisibility.max_hamming >= 0 && k.covisibility.lowe_ratio > 0 && k.covisibility.lowe_ratio <= 1 &&
+               k.covisibility.max_reprojection_px >= 0,
+           "covisibility parameters out of range");
+  m.keyframe_every = r->i32("keyframe_every");
+  r->check(m.keyframe_every >= 0, "keyframe_every must be >= 0");
+  GlobalMapParams& g = info->global;
+  const std::uint32_t model = r->u32("sensor model");
+  r->check(model <= static_cast<std::uint32_t>(SensorModel::kBelter2018), "unknown sensor model " + std::to_string(model));
+  g.filter.model = static_cast<SensorModel>(model);
+  g.filter.filter_sigma_factor = r->f64("filter_sigma_factor");
+  g.filter.min_points = r->i32("min_points");
+  g.tau_group = r->f64("tau_group");
+  g.merge_distance_m = r->f64("merge_distance");
+  g.occlusion_removal = r->boolean("occlusion_removal");
+  g.occlusion_distance_m = r->f64("occlusion_distance");
+  g.occlusion_angle_deg = r->f64("occlusion_angle");
+  r->checkValid("global map", [&g] { g.validate(); });
+  info->frames_mapped = r->i32("frames_mapped");
+  info->revisits = r->i32("revisits");
+  r->check(info->frames_mapped >= 0 && info->revisits >= 0, "frame and revisit counts must be >= 0");
+  const std::uint32_t keyframes = r->u32("keyframe count");
+  r->expectEnd();
+  return keyframes;
+}
+
+// --- keyframes --------------------------------------------------------------------------------
+
+void writeMat(Writer* w, const cv::Mat& m) {
+  w->i32(m.rows);
+  w->i32(m.cols);
+  w->i32(m.type());
+  if (m.empty()) return;
+  const cv::Mat c = m.isContinuous() ? m : m.clone();
+  if (c.depth() == CV_8U) {
+    w->bytes({reinterpret_cast<const char*>(c.data), c.total() * c.elemSize()});
+  } else {  // CV_16U, the only other type a keyframe holds
+    const auto* p = reinterpret_cast<const std::uint16_t*>(c.data);
+    for (std::size_t i = 0; i < c.total() * c.channels(); ++i) w->u16(p[i]);
+  }
+}
+
+/// An image of `type` that is either empty or rows x cols (cols -1: any column count).
+cv::Mat readMat(Reader* r, int type, int rows, int cols, const char* what) {
+  const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
+  if (h == 0 && w == 0) {
+    r->check(t == type || t == CV_8UC1, std::string(what) + ": unexpected type of an empty image");
+    return cv::Mat(0, 0, t);
+  }
+  r->check(t == type, std::string(what) + ": type " + std::to_string(t) + ", expected " + std::to_string(type));
+  r->check(h == rows && (cols < 0 ? w >= 1 && w <= 1024 : w == cols),
+           std::string(what) + ": size " + std::to_string(w) + "x" + std::to_string(h) + " does not fit");
+  cv::Mat m(h, w, type);
+  const std::uint64_t bytes = static_cast<std::uint64_t>(m.total()) * m.elemSize();
+  const std::string_view b = r->bytes(bytes, what);
+  if (m.depth() == CV_8U) {
+    std::memcpy(m.data, b.data(), b.size());
+  } else {
+    auto* p = reinterpret_cast<std::uint16_t*>(m.data);
+    for (std::size_t i = 0; i < b.size() / 2; ++i)
+      p[i] = static_cast<std::uint16_t>(static_cast<std::uint8_t>(b[2 * i]) |
+                                        static_cast<std::uint8_t>(b[2 * i + 1]) << 8);
+  }
+  return m;
+}
+
+void writeKeyframe(Writer* w, const Keyframe& k) {
+  w->i32(k.id);
+  w->i32(k.frame_index);
+  w->f64(k.timestamp);
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) w->f64(k.T_W_K.matrix()(row, col));
+  w->i32(k.frames_integrated);
+  writeMat(w, k.rgb);
+  writeMat(w, k.depth);
+  const FrameFeatures& f = k.features;
+  w->u32(static_cast<std::uint32_t>(f.keypoints.size()));
+  for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
+    const cv::KeyPoint& p = f.keypoints[i];
+    for (float v : {p.pt.x, p.pt.y, p.size, p.angle, p.response}) w->f32(v);
+    w->i32(p.octave);
+    w->i32(p.class_id);
+    w->f32(f.depth_m[i]);
+  }
+  writeMat(w, f.descriptors);
+  w->u32(static_cast<std::uint32_t>(k.container.size()));
+  for (const StoredCell& c : k.container.cells()) {
+    for (float v : c.mean) w->f32(v);
+    for (float v : c.scatter) w->f32(v);
+    for (float v : c.color) w->f32(v);
+    w->u32(c.n);
+    w->i32(c.grid_index);
+  }
+}
+
+Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info) {
+  const PinholeCamera& camera = info.camera;
+  Keyframe k{id, 0, 0.0, Transform::Identity(), {}, {}, {},
+             KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
+  r->check(r->i32("keyframe id") == id, "keyframe ids must be 0, 1, 2, ... in order");
+  k.frame_index = r->i32("frame index");
+  r->check(k.frame_index >= 0, "frame index must be >= 0");
+  k.timestamp = r->f64("timestamp");
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) k.T_W_K.matrix()(row, col) = r->f64("pose");
+  r->check(isValidTransform(k.T_W_K), "pose is not a rigid transform");
+  k.frames_integrated = r->i32("frames integrated");
+  r->check(k.frames_integrated >= 0, "frames integrated must be >= 0");
+  k.rgb = readMat(r, CV_8UC3, camera.height, camera.width, "rgb image");
+  k.depth = readMat(r, CV_16UC1, camera.height, camera.width, "depth image");
+
+  FrameFeatures& f = k.features;
+  const std::uint32_t n = r->count(32, "keypoints");
+  f.keypoints.resize(n);
+  f.depth_m.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    cv::KeyPoint& p = f.keypoints[i];
+    p.pt.x = r->f32("keypoint x");
+    p.pt.y = r->f32("keypoint y");
+    p.size = r->f32("keypoint size");
+    p.angle = r->f32("keypoint angle");
+    p.response = r->f32("keypoint response");
+    p.octave = r->i32("keypoint octave");
+    p.class_id = r->i32("keypoint class");
+    f.depth_m[i] = r->f32("keypoint depth");
+    r->check(f.depth_m[i] >= 0, "keypoint depth must be >= 0");
+  }
+  f.descriptors = readMat(r, CV_8UC1, static_cast<int>(n), -1, "descriptors");
+  r->check(n == 0 || !f.descriptors.empty(), "keypoints without descriptors");
+
+  const std::uint32_t cells = r->count(56, "cells");
+  const int grid = k.container.cols() * k.container.rows();
+  for (std::uint32_t i = 0; i < cells; ++i) {
+    StoredCell c;
+    for (float& v : c.mean) v = r->f32("cell mean");
+    for (float& v : c.scatter) v = r->f32("cell scatter");
+    for (float& v : c.color) v = r->f32("cell colour");
+    c.n = r->u32("cell count");
+    c.grid_index = r->i32("cell index");
+    r->check(c.n >= 1, "a stored cell must hold at least one point");
+    r->check(c.grid_index >= 0 && c.grid_index < grid,
+             "cell index " + std::to_string(c.grid_index) + " outside the container's " + std::to_string(grid));
+    r->check(k.container.find(c.grid_index) == nullptr, "cell " + std::to_string(c.grid_index) + " stored twice");
+    k.container.findOrCreate(c.grid_index) = c;
+  }
+  r->expectEnd();
+  return k;
+}
+
+// --- covisibility edges -----------------------------------------------------------------------
+
+void writeEdges(Writer* w, const CovisibilityGraph& edges) {
+  const std::vector<CovisibilityEdge> list = edges.edges();
+  w->u32(static_cast<std::uint32_t>(list.size()));
+  for (const CovisibilityEdge& e : list) {
+    w->i32(e.a);
+    w->i32(e.b);
+    w->f64(e.weight);
+  }
+}
+
+void readEdges(Reader* r, KeyframeGraph* graph) {
+  const int keyframes = static_cast<int>(graph->size());
+  const std::uint32_t n = r->count(16, "edges");
+  std::pair<int, int> previous{-1, -1};
+  for (std::uint32_t i = 0; i < n; ++i) {
+    const int a = r->i32("edge"), b = r->i32("edge");
+    const double weight = r->f64("edge weight");
+    r->check(a >= 0 && a < b && b < keyframes, "edge " + std::to_string(a) + "-" + std::to_string(b) +
+                                                   " does not join two of the " + std::to_string(keyframes) +
+                                                   " keyframes");
+    r->check(std::pair{a, b} > previous, "edges must be sorted and unique");
+    r->check(weight >= 0, "edge weight must be >= 0");
+    previous = {a, b};
+    graph->edges().strengthen(a, b, weight);
+  }
+  r->expectEnd();
+}
+
+}  // namespace
+
+std::uint32_t crc32(std::string_view bytes, std::uint32_t crc) {
+  crc = ~crc;
+  for (char ch : bytes) crc = kCrcTable[(crc ^ static_cast<std::uint8_t>(ch)) & 0xFFu] ^ (crc >> 8);
+  return ~crc;
+}
+
+SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global) {
+  return {mapper.camera(), mapper.params(), global, mapper.framesMapped(), mapper.revisits()};
+}
+
+std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
+  Writer file;
+  file.bytes({kMagic, sizeof(kMagic)});
+  file.u32(kSessionFormatVersion);
+  file.u32(kEndianMark);
+  file.u32(static_cast<std::uint32_t>(graph.size() + 2));
+  file.u32(crc32(file.str()));
+
+  Writer params;
+  writeParams(&params, info, graph.size());
+  appendSection(&file, kParams, params.str());
+  for (const Keyframe& k : graph.keyframes()) {
+    const PinholeCamera& c = k.container.camera();
+    if (k.container.cellSizePx() != info.mapper.local_map.cell_size_px || c.width != info.camera.width ||
+        c.height != info.camera.height || c.fx != info.camera.fx || c.fy != info.camera.fy ||
+        c.cx != info.camera.cx || c.cy != info.camera.cy)
+      throw std::invalid_argument("keyframe " + std::to_string(k.id) +
+                                  ": its container does not use the session's camera and cell size");
+    Writer w;
+    writeKeyframe(&w, k);
+    appendSection(&file, kKeyframe, w.str());
+  }
+  Writer edges;
+  writeEdges(&edges, graph.edges());
+  appendSection(&file, kEdges, edges.str());
+  return std::move(file.str());
+}
+
+void saveSession(const std::filesystem::path& file, const KeyframeGraph& graph, const SessionInfo& info) {
+  writeFileAtomically(file, encodeSession(graph, info));
+}
+
+Session decodeSession(std::string_view bytes, const std::string& name, const SessionDecodeOptions& options) {
+  Reader header(bytes.substr(0, std::min(bytes.size(), kHeaderBytes)), name, "header");
+  const std::string_view magic = bytes.substr(0, std::min(bytes.size(), sizeof(kMagic)));
+  if (magic != std::string_view(kMagic, magic.size()) || bytes.empty())
+    throw InputError(name, "not a vdmap session file (wrong magic; expected it to start with 'VDMAPSES')");
+  header.need(kHeaderBytes, "the file header");
+  header.bytes(sizeof(kMagic), "magic");
+  const std::uint32_t version = header.u32("format version");
+  const std::uint32_t endian = header.u32("endianness mark");
+  const std::uint32_t sections = header.u32("section count");
+  const std::uint32_t header_crc = header.u32("header checksum");
+  if (options.verify_checksums && header_crc != crc32(bytes.substr(0, kHeaderBytes - 4)))
+    header.fail("checksum mismatch (the file is corrupted)");
+  if (endian != kEndianMark)
+    header.fail("byte order mark " + std::to_string(endian) + ": not a little-endian vdmap file");
+  if (version > kSessionFormatVersion)
+    header.fail("format version " + std::to_string(version) + " is newer than this vdmap reads (" +
+                std::to_string(kSessionFormatVersion) + "); update vdmap");
+  if (version == 0) header.fail("format version 0 does not exist");
+
+  // Sections: the checksum of each is verified before its payload is parsed.
+  if (sections < 2) header.fail("a session has at least 2 sections, the header says " + std::to_string(sections));
+  Reader body(bytes.substr(kHeaderBytes), name, "file");
+  Session session;
+  std::uint32_t keyframes = 0;
+  for (std::uint32_t s = 0; s < sections; ++s) {
+    const std::array<char, 4>& expected = s == 0 ? kParams : s + 1 == sections ? kEdges : kKeyframe;
+    const std::string where = "section " + std::to_string(s) + " " + tagName({expected.data(), 4});
+    body.setWhere(where);
+    const std::string_view head = body.bytes(kSectionHeaderBytes, "the section header");
+    Reader section_header(head, name, where);
+    const std::string_view tag = section_header.bytes(4, "tag");
+    const std::uint64_t length = section_header.u64("length");
+    const std::uint32_t crc = section_header.u32("checksum");
+    if (tag != std::string_view(expected.data(), 4))
+      body.fail("found tag " + tagName(tag) + " (the file is corrupted or the section count is wrong)");
+    const std::string_view payload = body.bytes(length, "the section");
+    if (options.verify_checksums && crc != crc32(payload, crc32(head.substr(0, 12))))
+      body.fail("checksum mismatch (the file is corrupted)");
+    Reader r(payload, name, where);
+    if (s == 0) {
+      keyframes = readParams(&r, &session.info);
+      if (sections != keyframes + std::uint64_t{2})
+        r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + 2ull) +
+               " sections, the header says " + std::to_string(sections));
+    } else if (s + 1 < sections) {
+      session.graph.add(readKeyframe(&r, static_cast<int>(s - 1), session.info));
+    } else {
+      readEdges(&r, &session.graph);
+    }
+  }
+  body.setWhere("file");
+  body.expectEnd();
+  return session;
+}
+
+Session loadSession(const std::filesystem::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), "cannot open the session file");
+  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+  if (in.bad()) throw InputError(file.string(), "cannot read the session file");
+  return decodeSession(bytes, file.string());
+}
+
+}  // namespace vdmap
