@@ -15,6 +15,7 @@
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
+#include "mapping/io/session_file.h"
 #include "mapping/keyframe/mapper.h"
 
 namespace vdmap::app {
@@ -23,6 +24,7 @@ namespace {
 struct MapArgs {
   SequenceArgs sequence;
   std::string out;
+  std::string save;
   bool json = false;
   MapperParams mapper;
   GlobalMapParams global;
@@ -79,6 +81,7 @@ void runMap(MapArgs args) {
       {"camera", seq.cameraSource()},
   };
   const nlohmann::json stats = exportMap(out_dir, graph, global, args.global.filter, options);
+  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;
@@ -100,6 +103,7 @@ void addMapCommand(CLI::App& app) {
                    "output folder (created if missing): local_maps.ply, keyframes.txt, graph.txt, "
                    "global_points.ply, global_ellipsoids.ply, stats.json")
       ->required();
+  verb->add_option("--save", args->save, "also save the whole session (a .vdmap file, docs/vdmap-format.md)");
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   MapperParams& m = args->mapper;
   verb->add_option("--keyframe-every", m.keyframe_every,

@@ -255,5 +255,20 @@ TEST(SessionFile, WriterKilledAtRandomMomentsLeavesALoadableFile) {
   RecordProperty("rounds_with_small_session", saw_small);
 }
 
+TEST(SessionFile, MapVerbSavesTheSessionItMapped) {
+  TempDir dir;
+  test::writeTinySequence(dir / "seq", 6);
+  const test::RunResult r =
+      test::runVdmap("map '" + (dir / "seq").string() + "' --out '" + (dir / "out").string() + "' --save '" +
+                     (dir / "s.vdmap").string() + "' --keyframe-every 2 --merge-distance 0.3");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const Session s = loadSession(dir / "s.vdmap");
+  EXPECT_EQ(s.graph.size(), 3u);
+  EXPECT_EQ(s.info.frames_mapped, 6);
+  EXPECT_EQ(s.info.mapper.keyframe_every, 2);
+  EXPECT_EQ(s.info.global.merge_distance_m, 0.3);
+  EXPECT_EQ(s.info.camera.width, 64);
+}
+
 }  // namespace
 }  // namespace vdmap
