@@ -1,22 +1,30 @@
-// vdmap bench SEQ --frames N: times the local-map update against OctoMap's insertPointCloud on
-// the same frames in the same process (SPEC section 8). Frames are decoded once, before any
-// timing; each method then runs over all frames in its own pass, so none of them pays for
-// another's cache pollution. Single-threaded throughout (liboctomap on Debian is built without
-// OpenMP, the integrator is sequential).
+// vdmap bench SEQ: the paper's comparison (SPEC section 8, issue #8) on the same frames in one
+// process: vdmap's local-map update and whole pipeline, OctoMap at 0.10/0.05/0.02 m, the NDT-OM
+// baseline at 0.10 m and Open3D's TSDF at 0.02/0.01 m (when its plugin is built). Frames are
+// decoded once, before any timing; each method runs over all frames in its own pass, so none
+// pays for another's cache pollution. Single-threaded throughout (liboctomap on Debian has no
+// OpenMP, the integrator is sequential, the Open3D plugin pins OpenMP to one thread).
+// With --mesh every method's map is also scored against the reference (SPEC section 8).
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 #include <octomap/OcTree.h>
 
 #include "app/commands.h"
+#include "app/eval_report.h"
 #include "app/progress.h"
 #include "app/timing.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "app/tsdf_peer.h"
+#include "mapping/baseline/ndt_om_baseline.h"
+#include "mapping/core/atomic_file.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/frame_prefetcher.h"
 #include "mapping/keyframe/mapper.h"
 #include "mapping/local_map/local_map_integrator.h"
 
@@ -27,9 +35,35 @@ struct BenchArgs {
   SequenceArgs sequence;
   int keyframe_every = 10;
   LocalMapParams local_map;
+  std::string mesh;
+  std::vector<int> accuracy_cell_sizes;
+  std::string out = ".";
   bool json = false;
   bool no_octomap = false;
+  bool no_open3d = false;
+  std::size_t completion_samples = AccuracyParams{}.completion_samples;
 };
+
+/// One row of the comparison.
+struct MethodResult {
+  std::string name;   ///< e.g. "OctoMap 0.05 m"
+  std::string key;    ///< JSON prefix, e.g. "octomap_005"
+  double ms = 0.0;    ///< median update time per frame
+  std::size_t elements = 0;
+  std::optional<AccuracyReport> accuracy;
+  std::string note;   ///< why a peer did not run
+
+  MethodResult(std::string n, std::string k, double t = 0.0, std::string why = "")
+      : name(std::move(n)), key(std::move(k)), ms(t), note(std::move(why)) {}
+};
+
+// "OctoMap 0.05 m" and "octomap_005" for prefix "OctoMap", key "octomap", 0.05.
+MethodResult peerRow(const std::string& name, const std::string& key, double res_m, const std::string& note = "") {
+  char n[64], k[64];
+  std::snprintf(n, sizeof n, "%s %.2f m", name.c_str(), res_m);
+  std::snprintf(k, sizeof k, "%s_%03d", key.c_str(), static_cast<int>(std::lround(res_m * 100)));
+  return MethodResult(n, k, 0.0, note);
+}
 
 // The points the integrator uses (every pixel with depth in range), in world coordinates.
 octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam, const DepthRange& range) {
@@ -44,14 +78,128 @@ octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam,
   return out;
 }
 
+std::vector<Eigen::Vector3f> means(const std::vector<Ellipsoid>& ellipsoids) {
+  std::vector<Eigen::Vector3f> out;
+  out.reserve(ellipsoids.size());
+  for (const Ellipsoid& e : ellipsoids) out.push_back(e.mean.cast<float>());
+  return out;
+}
+
+struct Comparison {
+  const std::vector<RgbdFrame>& frames;
+  const PinholeCamera& cam;
+  const BenchArgs& args;
+  const ColoredTriangleMesh* mesh;  // null: no accuracy
+
+  void score(MethodResult* r, const std::vector<Eigen::Vector3f>& points) const {
+    r->elements = points.size();
+    if (!mesh) return;
+    AccuracyParams p;
+    p.completion_samples = args.completion_samples;
+    r->accuracy = evaluateAccuracy(points, *mesh, p);
+  }
+
+  MethodResult octomap(double res) const {
+    MethodResult r = peerRow("OctoMap", "octomap", res);
+    octomap::OcTree tree(res);
+    std::vector<double> ms;
+    ProgressBar progress(r.name, frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      const octomap::Pointcloud cloud = worldCloud(frames[i], cam, args.local_map.depth_range);
+      const Eigen::Vector3d c = frames[i].T_W_C.translation();
+      ms.push_back(timeMs([&] { tree.insertPointCloud(cloud, octomap::point3d(c.x(), c.y(), c.z())); }));
+      progress.update(i + 1);
+    }
+    r.ms = median(ms);
+    // Elements: occupied voxels at the finest resolution (pruned blocks expanded), centres.
+    tree.expand();
+    std::vector<Eigen::Vector3f> centres;
+    for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it)
+      if (tree.isNodeOccupied(*it)) centres.emplace_back(it.getX(), it.getY(), it.getZ());
+    score(&r, centres);
+    return r;
+  }
+
+  MethodResult ndtOm(double res) const {
+    MethodResult r = peerRow("NDT-OM baseline", "ndt_om", res);
+    NdtOmParams p;
+    p.resolution_m = res;
+    p.depth_range = args.local_map.depth_range;
+    NdtOmBaseline map(p);
+    std::vector<double> ms;
+    for (const RgbdFrame& f : frames) ms.push_back(timeMs([&] { map.integrateFrame(f, cam); }));
+    r.ms = median(ms);
+    score(&r, map.means());
+    return r;
+  }
+
+  MethodResult tsdf(double voxel) const {
+    MethodResult r = peerRow("Open3D TSDF", "open3d_tsdf", voxel);
+    // Truncation of 4 voxels, Open3D's examples' ratio (0.04 m at ~0.01 m voxels).
+    std::unique_ptr<TsdfVolume> volume =
+        TsdfVolume::open(voxel, 4 * voxel, cam, args.local_map.depth_range.max_m, &r.note);
+    if (!volume) return r;
+    std::vector<double> ms;
+    ProgressBar progress(r.name, frames.size());
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+      ms.push_back(volume->integrate(frames[i]));
+      progress.update(i + 1);
+    }
+    r.ms = median(ms);
+    score(&r, volume->extractPoints());
+    return r;
+  }
+};
+
+nlohmann::json methodJson(const MethodResult& r) {
+  nlohmann::json j = {{"name", r.name}, {"ms_per_frame", r.ms}, {"elements", r.elements}};
+  if (r.accuracy) j["accuracy"] = toJson(*r.accuracy);
+  if (!r.note.empty()) j["note"] = r.note;
+  return j;
+}
+
+std::string markdownTable(const std::vector<MethodResult>& rows, double vd_ms, bool accuracy) {
+  std::ostringstream md;
+  md << "| method | t_u [ms/frame] | x vdmap update | elements |";
+  if (accuracy) md << " RMSE [mm] | mean [mm] | median [mm] | completion [mm] | within 5 cm |";
+  md << "\n|---|---:|---:|---:|" << (accuracy ? "---:|---:|---:|---:|---:|" : "") << "\n";
+  char buf[512];
+  for (const MethodResult& r : rows) {
+    if (!r.note.empty()) {
+      md << "| " << r.name << " | not run: " << r.note << " |\n";
+      continue;
+    }
+    std::snprintf(buf, sizeof buf, "| %s | %.2f | %.1f | %zu |", r.name.c_str(), r.ms, vd_ms > 0 ? r.ms / vd_ms : 0.0,
+                  r.elements);
+    md << buf;
+    if (accuracy && r.accuracy) {
+      const AccuracyReport& a = *r.accuracy;
+      std::snprintf(buf, sizeof buf, " %.2f | %.2f | %.2f | %.1f | %.1f%% |", a.rmse_mm, a.mean_mm, a.median_mm,
+                    a.completion_mean_mm, 100 * a.completion_ratio);
+      md << buf;
+    } else if (accuracy) {
+      md << " | | | | |";
+    }
+    md << "\n";
+  }
+  return md.str();
+}
+
 void runBench(BenchArgs args) {
   // A plain number N means the first N frames (0:N) here: "bench --frames 100" reads as a count.
   std::string& frames = args.sequence.frames;
   if (frames.empty()) frames = "0:30";
   else if (frames.find(':') == std::string::npos) frames = "0:" + frames;
   if (args.keyframe_every < 1) throw std::invalid_argument("--keyframe-every must be at least 1");
+  if (args.completion_samples == 0) throw std::invalid_argument("--samples must be at least 1");
+  const std::filesystem::path out_dir = args.out;
+  if (!std::filesystem::is_directory(out_dir)) throw std::runtime_error(out_dir.string() + ": no such folder (--out)");
+  std::optional<ColoredTriangleMesh> mesh;
+  if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
   const TumSequence seq = openSequence(args.sequence);
   const PinholeCamera& cam = seq.camera();
+  for (const int s : args.accuracy_cell_sizes)
+    if (s < 1 || s > std::min(cam.width, cam.height)) throw std::invalid_argument("--accuracy-cell-sizes: bad cell size " + std::to_string(s));
 
   std::vector<RgbdFrame> decoded;
   {
@@ -62,6 +210,7 @@ void runBench(BenchArgs args) {
       progress.update(decoded.size());
     }
   }
+  const Comparison cmp{decoded, cam, args, mesh ? &*mesh : nullptr};
 
   // vdmap: every frame into the current keyframe; a new keyframe every N frames (its empty
   // container is made outside the timed region, as a keyframe's creation is not an update).
@@ -86,98 +235,133 @@ void runBench(BenchArgs args) {
   }
 
   // The whole per-frame path (features, keyframe decision, update) on the same frames, then
-  // the global map of the keyframes it made.
+  // the global map of the keyframes it made: its ellipsoid means are vdmap's map elements.
   std::vector<double> pipeline_ms, features_ms, decision_ms, update_ms;
-  Mapper mapper(cam);
-  for (const RgbdFrame& frame : decoded) {
-    const FrameReport r = mapper.addFrame(frame);
-    pipeline_ms.push_back(r.ms.total_ms);
-    features_ms.push_back(r.ms.features_ms);
-    decision_ms.push_back(r.ms.decision_ms);
-    update_ms.push_back(r.ms.update_ms);
+  MapperParams mapper_params;
+  mapper_params.local_map = args.local_map;
+  Mapper mapper(cam, mapper_params);
+  {
+    ProgressBar progress("pipeline", decoded.size());
+    for (const RgbdFrame& frame : decoded) {
+      const FrameReport r = mapper.addFrame(frame);
+      pipeline_ms.push_back(r.ms.total_ms);
+      features_ms.push_back(r.ms.features_ms);
+      decision_ms.push_back(r.ms.decision_ms);
+      update_ms.push_back(r.ms.update_ms);
+      progress.update(pipeline_ms.size());
+    }
   }
   const GlobalMap global = buildGlobalMap(mapper.graph(), {});
   const double t_g_us = global.sigma_e ? 1e6 * global.t_g_s / static_cast<double>(global.sigma_e) : 0.0;
-
-  const double resolutions[3] = {0.10, 0.05, 0.02};
-  double octo_ms[3] = {0, 0, 0};
-  if (!args.no_octomap) {
-    ProgressBar progress("octomap", 3 * decoded.size());
-    for (int r = 0; r < 3; ++r) {
-      octomap::OcTree tree(resolutions[r]);
-      std::vector<double> ms;
-      for (std::size_t i = 0; i < decoded.size(); ++i) {
-        const octomap::Pointcloud cloud = worldCloud(decoded[i], cam, args.local_map.depth_range);
-        const Eigen::Vector3d c = decoded[i].T_W_C.translation();
-        const octomap::point3d origin(c.x(), c.y(), c.z());
-        ms.push_back(timeMs([&] { tree.insertPointCloud(cloud, origin); }));
-        progress.update(r * decoded.size() + i + 1);
-      }
-      octo_ms[r] = median(ms);
-    }
-  }
-
   const double vd = median(vd_ms);
+
+  std::vector<MethodResult> rows;
+  rows.emplace_back("vdmap update " + std::to_string(args.local_map.cell_size_px) + " px", "vd_update", vd);
+  cmp.score(&rows.back(), means(global.ellipsoids));
+  rows.emplace_back("vdmap pipeline", "vd_pipeline", median(pipeline_ms));
+  rows.back().elements = global.ellipsoids.size();
+  rows.back().accuracy = rows[rows.size() - 2].accuracy;
+  // Accuracy at other cell sizes: the whole pipeline again (untimed) with that cell size.
+  for (const int s : args.accuracy_cell_sizes) {
+    if (s == args.local_map.cell_size_px) continue;
+    MapperParams p = mapper_params;
+    p.local_map.cell_size_px = s;
+    Mapper m(cam, p);
+    for (const RgbdFrame& frame : decoded) m.addFrame(frame);
+    const GlobalMap g = buildGlobalMap(m.graph(), {});
+    rows.emplace_back("vdmap " + std::to_string(s) + " px (accuracy only)", "vd_" + std::to_string(s) + "px");
+    cmp.score(&rows.back(), means(g.ellipsoids));
+  }
+  const std::size_t first_peer = rows.size();
+  for (const double res : {0.10, 0.05, 0.02})
+    rows.push_back(args.no_octomap ? peerRow("OctoMap", "octomap", res, "--no-octomap") : cmp.octomap(res));
+  rows.push_back(cmp.ndtOm(0.10));
+  for (const double voxel : {0.02, 0.01})
+    rows.push_back(args.no_open3d ? peerRow("Open3D TSDF", "open3d_tsdf", voxel, "--no-open3d") : cmp.tsdf(voxel));
+
   const auto ratio = [vd](double o) { return vd > 0 ? o / vd : 0.0; };
+  nlohmann::json out = {
+      {"frames", decoded.size()},
+      {"vd_update_ms", vd},
+      {"vd_update_ms_max", vd_ms.empty() ? 0.0 : *std::max_element(vd_ms.begin(), vd_ms.end())},
+      {"cell_size_px", args.local_map.cell_size_px},
+      {"keyframe_every", args.keyframe_every},
+      {"ellipsoids", cells},
+      {"bytes_per_ellipsoid", sizeof(StoredCell)},
+      {"container_bytes", bytes},
+      {"vd_pipeline_ms", median(pipeline_ms)},
+      {"pipeline_stage_ms", {{"features", median(features_ms)}, {"decision", median(decision_ms)},
+                             {"update", median(update_ms)}}},
+      {"keyframes", mapper.graph().size()},
+      {"revisits", mapper.revisits()},
+      {"sigma_e", global.sigma_e},
+      {"sigma_e_prime", global.sigma_e_prime},
+      {"t_g_s", global.t_g_s},
+      {"t_g_us_per_ellipsoid", t_g_us},
+  };
+  for (std::size_t i = first_peer; i < rows.size(); ++i) {
+    const MethodResult& r = rows[i];
+    out[r.key + "_ms"] = r.note.empty() ? nlohmann::json(r.ms) : nlohmann::json(nullptr);
+    out["ratio_" + r.key] = r.note.empty() ? nlohmann::json(ratio(r.ms)) : nlohmann::json(nullptr);
+  }
+  out["ratio_octomap_010_pipeline"] =
+      median(pipeline_ms) > 0 && rows[first_peer].note.empty() ? rows[first_peer].ms / median(pipeline_ms) : 0.0;
+  out["methods"] = nlohmann::json::object();
+  for (const MethodResult& r : rows) out["methods"][r.key] = methodJson(r);
+  if (mesh) out["mesh"] = args.mesh;
+
+  std::ostringstream md;
+  md << "# vdmap bench\n\n" << decoded.size() << " frames of `" << args.sequence.folder << "` (" << cam.width << "x"
+     << cam.height << "), frames " << args.sequence.frames << ", keyframe every " << args.keyframe_every
+     << " (update) / covisibility (pipeline), one thread. Times are medians per frame.\n\n"
+     << markdownTable(rows, vd, mesh.has_value()) << "\nGlobal map: " << mapper.graph().size()
+     << " keyframes, Sigma_e " << global.sigma_e << " -> Sigma_e' " << global.sigma_e_prime << " in "
+     << global.t_g_s << " s (" << t_g_us << " us per ellipsoid).\n";
+  writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
+  writeFileAtomically(out_dir / "bench.md", md.str());
   if (args.json) {
-    nlohmann::json out = {
-        {"frames", decoded.size()},
-        {"vd_update_ms", vd},
-        {"octomap_010_ms", octo_ms[0]},
-        {"octomap_005_ms", octo_ms[1]},
-        {"octomap_002_ms", octo_ms[2]},
-        {"ratio_octomap_010", ratio(octo_ms[0])},
-        {"ratio_octomap_005", ratio(octo_ms[1])},
-        {"ratio_octomap_002", ratio(octo_ms[2])},
-        {"vd_update_ms_max", vd_ms.empty() ? 0.0 : *std::max_element(vd_ms.begin(), vd_ms.end())},
-        {"cell_size_px", args.local_map.cell_size_px},
-        {"keyframe_every", args.keyframe_every},
-        {"ellipsoids", cells},
-        {"bytes_per_ellipsoid", sizeof(StoredCell)},
-        {"container_bytes", bytes},
-        {"vd_pipeline_ms", median(pipeline_ms)},
-        {"pipeline_stage_ms", {{"features", median(features_ms)}, {"decision", median(decision_ms)},
-                               {"update", median(update_ms)}}},
-        {"ratio_octomap_010_pipeline", median(pipeline_ms) > 0 ? octo_ms[0] / median(pipeline_ms) : 0.0},
-        {"keyframes", mapper.graph().size()},
-        {"revisits", mapper.revisits()},
-        {"sigma_e", global.sigma_e},
-        {"sigma_e_prime", global.sigma_e_prime},
-        {"t_g_s", global.t_g_s},
-        {"t_g_us_per_ellipsoid", t_g_us},
-    };
     std::cout << out.dump(2) << "\n";
     return;
   }
-  std::printf("frames          %zu (%dx%d), keyframe every %d, cell %d px\n", decoded.size(),
-              cam.width, cam.height, args.keyframe_every, args.local_map.cell_size_px);
-  std::printf("vdmap update    %8.3f ms/frame (median)\n", vd);
+  std::printf("frames          %zu (%dx%d), keyframe every %d, cell %d px\n", decoded.size(), cam.width, cam.height,
+              args.keyframe_every, args.local_map.cell_size_px);
   std::printf("vdmap pipeline  %8.3f ms/frame (median): features %.2f, decision %.2f, update %.2f\n",
               median(pipeline_ms), median(features_ms), median(decision_ms), median(update_ms));
   std::printf("global map      %zu keyframes, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid)\n",
               mapper.graph().size(), global.sigma_e, global.sigma_e_prime, global.t_g_s, t_g_us);
-  if (!args.no_octomap)
-    for (int r = 0; r < 3; ++r)
-      std::printf("OctoMap %.2f m  %8.2f ms/frame (median)  = %6.1fx vdmap\n", resolutions[r],
-                  octo_ms[r], ratio(octo_ms[r]));
-  std::printf("ellipsoids      %zu in %.1f MB (%zu B per ellipsoid + 4 B per grid cell)\n", cells,
-              bytes / 1e6, sizeof(StoredCell));
+  std::printf("\n%-34s %12s %10s %10s\n", "method", "ms/frame", "x vdmap", "elements");
+  for (const MethodResult& r : rows) {
+    if (!r.note.empty()) {
+      std::printf("%-34s not run: %s\n", r.name.c_str(), r.note.c_str());
+      continue;
+    }
+    std::printf("%-34s %12.2f %10.1f %10zu\n", r.name.c_str(), r.ms, ratio(r.ms), r.elements);
+    if (r.accuracy) std::printf("    %s\n", toText(*r.accuracy).c_str());
+  }
+  std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }
 
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("bench", "Time the local-map update against OctoMap on the same frames");
+  auto* verb = app.add_subcommand("bench", "Compare vdmap with OctoMap, NDT-OM and Open3D's TSDF on the same frames");
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30). Frames are held decoded "
       "in memory, ~1.5 MB each at 640x480");
-  verb->add_option("--keyframe-every", args->keyframe_every, "every N-th frame starts a keyframe")
+  verb->add_option("--keyframe-every", args->keyframe_every, "every N-th frame starts a keyframe (update timing)")
       ->capture_default_str();
-  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")
-      ->capture_default_str();
-  verb->add_flag("--no-octomap", args->no_octomap, "time vdmap only (for profiling)");
+  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")->capture_default_str();
+  verb->add_option("--mesh", args->mesh, "reference mesh PLY (world frame of the poses): adds every method's accuracy")
+      ->check(CLI::ExistingFile);
+  verb->add_option("--accuracy-cell-sizes", args->accuracy_cell_sizes,
+                   "with --mesh, also score vdmap at these cell sizes, px (e.g. 3,5,9,15)")
+      ->delimiter(',');
+  verb->add_option("--samples", args->completion_samples, "mesh samples for completion")->capture_default_str();
+  verb->add_option("--out", args->out, "folder for bench.json and bench.md")->capture_default_str();
+  verb->add_flag("--no-octomap", args->no_octomap, "skip the OctoMap peers (for profiling)");
+  verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D TSDF peers");
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });
 }

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "mapping/eval/mesh_accuracy.h"
+#include "mapping/synth/builtin_scene.h"
 #include "tests/test_util.h"
 
 namespace vdmap {
@@ -176,6 +177,33 @@ TEST(Eval, CommandLine) {
                                        (dir / "points.ply").string() + "'");
   EXPECT_EQ(not_mesh.exit_code, 1);
   EXPECT_NE(not_mesh.err.find("no faces"), std::string::npos) << not_mesh.err;
+}
+
+// The whole comparison on two frames of the built-in scene: every contract key in bench.json,
+// and every method's map lands on the reference mesh (so frames, poses and units agree).
+TEST(Bench, BuiltinSceneWritesEveryKey) {
+  test::TempDir dir;
+  const auto synth = test::runVdmap("synth --builtin --builtin-frames 3 --out '" + (dir / "seq").string() + "'");
+  ASSERT_EQ(synth.exit_code, 0) << synth.err;
+  writeAsciiPly(dir / "mesh.ply", makeBuiltinScene().mesh, true);
+  const auto r = test::runVdmap("bench '" + (dir / "seq").string() + "' --frames 2 --mesh '" +
+                                (dir / "mesh.ply").string() + "' --samples 5000 --out '" + dir.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream in(dir / "bench.json");
+  const auto j = nlohmann::json::parse(in);
+  for (const char* key : {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms", "octomap_002_ms",
+                          "ratio_octomap_010", "vd_pipeline_ms", "t_g_s", "sigma_e", "sigma_e_prime",
+                          "t_g_us_per_ellipsoid", "ndt_om_010_ms", "open3d_tsdf_002_ms", "open3d_tsdf_001_ms"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["frames"], 2);
+  EXPECT_TRUE(std::filesystem::exists(dir / "bench.md"));
+  for (const auto& [key, m] : j["methods"].items()) {
+    if (m.contains("note")) continue;  // a peer that is not built (Open3D is optional)
+    ASSERT_TRUE(m.contains("accuracy")) << key;
+    // The coarsest map (OctoMap 0.10 m voxel centres) is within half a voxel diagonal, 87 mm.
+    EXPECT_LT(m["accuracy"]["median_mm"].get<double>(), 87.0) << key;
+    EXPECT_GT(m["accuracy"]["completion_ratio_5cm"].get<double>(), 0.0) << key;
+  }
 }
 
 }  // namespace
