@@ -1,0 +1,31 @@
+#!/usr/bin/env bash
+# Reproduces the README "Results": the speed comparison on 7-Scenes (3 runs; the README quotes
+# the median of the runs' per-frame medians) and the accuracy comparison on a noisy render of
+# the Replica office0 mesh (the paper's Table III, extended with Open3D's TSDF), then the plots.
+# Usage: scripts/results.sh [OUT_DIR]   (from the checkout, after building; ~30 min on 2 cores)
+set -euo pipefail
+VDMAP=${VDMAP:-build/bin/vdmap}
+PLOT=${PLOT:-build/bin/plot_bench}
+DATA=${DATA:-../shared/data}
+OUT=${1:-results}
+mkdir -p "$OUT"
+
+# Speed: the first 100 frames of 7-Scenes RedKitchen, every method on the same decoded frames.
+for run in 1 2 3; do
+  mkdir -p "$OUT/speed-$run"
+  "$VDMAP" bench "$DATA/7scenes-redkitchen" --frames 0:100 --out "$OUT/speed-$run"
+done
+
+# Accuracy: every 6th pose of the 2000-pose office0 trajectory (333 frames around the whole
+# room), rendered at 640x480 with the 7-Scenes camera and Kinect noise (nguyen2012).
+MESH="$DATA/replica-office0/reference/office0_mesh.ply"
+awk 'NR % 6 == 1' "$DATA/replica-office0/reference/groundtruth_full_2000.txt" > "$OUT/office0_every6.txt"
+rm -rf "$OUT/replica-seq"
+"$VDMAP" synth --mesh "$MESH" --trajectory "$OUT/office0_every6.txt" --camera 7scenes --noise nguyen2012 \
+  --out "$OUT/replica-seq"
+mkdir -p "$OUT/accuracy"
+"$VDMAP" bench "$OUT/replica-seq" --frames 0:333 --mesh "$MESH" --accuracy-cell-sizes 3,5,9,15 \
+  --out "$OUT/accuracy"
+
+# Tables (medians over the speed runs) and plots.
+"$PLOT" --speed "$OUT"/speed-*/bench.json --accuracy "$OUT/accuracy/bench.json" --png-dir "$OUT"

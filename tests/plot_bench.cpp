@@ -1,0 +1,163 @@
+// plot_bench: the README "Results" tables and plots from `vdmap bench` outputs (scripts/results.sh).
+// Speed: the median over runs of each method's per-frame median, as a markdown table and a
+// log-scale bar chart. Accuracy: a markdown table and RMSE against element count (log x).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <map>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
+
+namespace {
+
+using nlohmann::json;
+
+json load(const std::string& file) {
+  std::ifstream in(file);
+  if (!in) throw std::runtime_error(file + ": cannot open");
+  return json::parse(in);
+}
+
+double medianOf(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  const std::size_t n = v.size();
+  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+}
+
+const cv::Scalar kInk(40, 40, 40), kGrid(220, 220, 220), kVdmap(180, 110, 30), kPeer(60, 130, 230);
+
+void text(cv::Mat& img, const std::string& s, cv::Point at, double scale = 0.45, cv::Scalar c = kInk) {
+  cv::putText(img, s, at, cv::FONT_HERSHEY_SIMPLEX, scale, c, 1, cv::LINE_AA);
+}
+
+struct Bar {
+  std::string name;
+  double value;
+  bool vdmap;
+};
+
+// Horizontal bars on a log10 axis from 0.1 to 10^4 (ms).
+void barChart(const std::vector<Bar>& bars, const std::string& title, const std::string& file) {
+  const int left = 250, right = 40, top = 50, row = 34, w = 900;
+  const int h = top + row * static_cast<int>(bars.size()) + 50;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  const double lo = -1, hi = 4;
+  const auto x = [&](double v) { return left + static_cast<int>((std::log10(std::max(v, 0.1)) - lo) / (hi - lo) * (w - left - right)); };
+  for (int e = -1; e <= 4; ++e) {
+    cv::line(img, {x(std::pow(10, e)), top - 10}, {x(std::pow(10, e)), h - 40}, kGrid);
+    text(img, e < 0 ? "0.1" : std::to_string(static_cast<int>(std::pow(10, e))), {x(std::pow(10, e)) - 10, h - 20});
+  }
+  text(img, title, {10, 25}, 0.6);
+  for (std::size_t i = 0; i < bars.size(); ++i) {
+    const int y = top + row * static_cast<int>(i);
+    cv::rectangle(img, {left, y}, {x(bars[i].value), y + row - 10}, bars[i].vdmap ? kVdmap : kPeer, cv::FILLED);
+    text(img, bars[i].name, {10, y + row - 16});
+    char v[32];
+    std::snprintf(v, sizeof v, "%.2f", bars[i].value);
+    text(img, v, {x(bars[i].value) + 5, y + row - 16});
+  }
+  cv::imwrite(file, img);
+}
+
+// RMSE (mm, linear y) against element count (log x).
+void scatter(const std::vector<std::pair<std::string, std::pair<double, double>>>& points, const std::vector<bool>& vd,
+             const std::string& title, const std::string& file) {
+  const int w = 900, h = 560, left = 70, right = 40, top = 50, bottom = 60;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  double ymax = 1;
+  for (const auto& p : points) ymax = std::max(ymax, p.second.second);
+  ymax = std::ceil(ymax / 5) * 5;
+  const double lo = 3, hi = 7;  // 10^3 .. 10^7 elements
+  const auto px = [&](double n) { return left + static_cast<int>((std::log10(std::max(n, 1.0)) - lo) / (hi - lo) * (w - left - right)); };
+  const auto py = [&](double r) { return h - bottom - static_cast<int>(r / ymax * (h - top - bottom)); };
+  for (int e = 3; e <= 7; ++e) {
+    cv::line(img, {px(std::pow(10, e)), top}, {px(std::pow(10, e)), h - bottom}, kGrid);
+    text(img, "1e" + std::to_string(e), {px(std::pow(10, e)) - 12, h - bottom + 20});
+  }
+  for (int k = 0; k <= 5; ++k) {
+    const double r = ymax * k / 5;
+    cv::line(img, {left, py(r)}, {w - right, py(r)}, kGrid);
+    text(img, std::to_string(static_cast<int>(r)), {left - 35, py(r) + 5});
+  }
+  text(img, title, {10, 25}, 0.6);
+  text(img, "elements (log)", {w / 2 - 50, h - 15});
+  text(img, "RMSE mm", {5, top - 10});
+  for (std::size_t i = 0; i < points.size(); ++i) {
+    const cv::Point p(px(points[i].second.first), py(points[i].second.second));
+    cv::circle(img, p, 6, vd[i] ? kVdmap : kPeer, cv::FILLED, cv::LINE_AA);
+    text(img, points[i].first, p + cv::Point(9, (i % 2 ? 14 : -6)), 0.4);
+  }
+  cv::imwrite(file, img);
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  CLI::App app{"Tables and plots of vdmap bench outputs"};
+  std::vector<std::string> speed;
+  std::string accuracy, png_dir = ".";
+  app.add_option("--speed", speed, "bench.json of each speed run")->required();
+  app.add_option("--accuracy", accuracy, "bench.json of the run with --mesh");
+  app.add_option("--png-dir", png_dir, "where speed.png and accuracy.png go");
+  CLI11_PARSE(app, argc, argv);
+  try {
+    std::vector<json> runs;
+    for (const auto& f : speed) runs.push_back(load(f));
+    // Methods in the order of the first run; medians over the runs.
+    std::vector<Bar> bars;
+    std::printf("| method | t_u [ms/frame], median of %zu runs | runs (min-max) | x vdmap update | elements |\n|---|---:|---:|---:|---:|\n",
+                runs.size());
+    double vd = 0;
+    std::vector<std::string> order;
+    for (const char* k : {"vd_update", "vd_pipeline", "octomap_010", "octomap_005", "octomap_002", "ndt_om_010",
+                          "open3d_tsdf_002", "open3d_tsdf_001"})
+      if (runs[0]["methods"].contains(k) && !runs[0]["methods"][k].contains("note")) order.push_back(k);
+    for (const std::string& k : order) {
+      std::vector<double> ms;
+      for (const json& r : runs) ms.push_back(r["methods"][k]["ms_per_frame"].get<double>());
+      const double med = medianOf(ms);
+      if (k == "vd_update") vd = med;
+      const json& m = runs[0]["methods"][k];
+      std::printf("| %s | %.2f | %.2f-%.2f | %.1f | %zu |\n", m["name"].get<std::string>().c_str(), med,
+                  *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()), vd > 0 ? med / vd : 0.0,
+                  m["elements"].get<std::size_t>());
+      bars.push_back({m["name"].get<std::string>(), med, k.rfind("vd_", 0) == 0});
+    }
+    std::vector<double> tg;
+    for (const json& r : runs) tg.push_back(r["t_g_us_per_ellipsoid"].get<double>());
+    std::printf("\nt_g: median %.2f us per input ellipsoid (Sigma_e %zu -> Sigma_e' %zu in the first run)\n",
+                medianOf(tg), runs[0]["sigma_e"].get<std::size_t>(), runs[0]["sigma_e_prime"].get<std::size_t>());
+    barChart(bars, "update time per frame, ms (log scale), 7-Scenes RedKitchen, " +
+                       std::to_string(runs[0]["frames"].get<int>()) + " frames, one thread", png_dir + "/speed.png");
+    if (accuracy.empty()) return 0;
+    const json a = load(accuracy);
+    std::printf("\n| method | elements | RMSE [mm] | mean [mm] | median [mm] | completion [mm] | within 5 cm |\n"
+                "|---|---:|---:|---:|---:|---:|---:|\n");
+    std::vector<std::pair<std::string, std::pair<double, double>>> pts;
+    std::vector<bool> vdm;
+    for (const auto& [key, m] : a["methods"].items()) {
+      if (!m.contains("accuracy") || key == "vd_pipeline") continue;  // the pipeline's map is vd_update's
+      const json& r = m["accuracy"];
+      std::string name = m["name"].get<std::string>();
+      if (key == "vd_update") name = "vdmap " + std::to_string(a["cell_size_px"].get<int>()) + " px";
+      name = name.substr(0, name.find(" (accuracy only)"));
+      std::printf("| %s | %zu | %.2f | %.2f | %.2f | %.1f | %.1f%% |\n", name.c_str(), r["elements"].get<std::size_t>(),
+                  r["rmse_mm"].get<double>(), r["mean_mm"].get<double>(), r["median_mm"].get<double>(),
+                  r["completion_mean_mm"].get<double>(), 100 * r["completion_ratio_5cm"].get<double>());
+      pts.push_back({name, {r["elements"].get<double>(), r["rmse_mm"].get<double>()}});
+      vdm.push_back(key.rfind("vd_", 0) == 0);
+    }
+    scatter(pts, vdm, "RMSE vs elements, noisy Replica office0 render (" + std::to_string(a["frames"].get<int>()) + " frames)",
+            png_dir + "/accuracy.png");
+  } catch (const std::exception& e) {
+    std::fprintf(stderr, "plot_bench: %s\n", e.what());
+    return 1;
+  }
+  return 0;
+}
