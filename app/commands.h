@@ -2,6 +2,7 @@
 // Each verb of the vdmap command registers itself on the top-level CLI11 app. A verb's callback
 // throws std::exception on failure; main() turns that into a one-line error and exit code 1.
 
+#include <functional>
 #include <stdexcept>
 #include <string>
 
@@ -9,7 +10,7 @@
 
 namespace vdmap::app {
 
-/// Thrown by verbs that exist in the contract but are not implemented yet (exit code 2).
+/// Thrown by a feature that exists in the contract but is not implemented yet (exit code 2).
 struct NotBuiltYet : std::runtime_error {
   using std::runtime_error::runtime_error;
 };
@@ -20,10 +21,10 @@ void addSynthCommand(CLI::App& app);
 void addMapCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
-
-/// Registers a verb that says clearly it is not built yet and which issue will bring it.
-void addPlannedCommand(CLI::App& app, const std::string& name, const std::string& what,
-                       const std::string& issue);
+void addGuiCommand(CLI::App& app);
+/// The workbench options of `vdmap` without a verb; the returned function opens the workbench
+/// on the built-in scene (throws std::runtime_error when it ends on an error).
+std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);
 
 }  // namespace vdmap::app
 

@@ -4,19 +4,6 @@
 
 #include "app/commands.h"
 
-namespace vdmap::app {
-
-void addPlannedCommand(CLI::App& app, const std::string& name, const std::string& what,
-                       const std::string& issue) {
-  auto* verb = app.add_subcommand(name, what + " (not built yet)");
-  verb->allow_extras();
-  verb->callback([name, issue] {
-    throw NotBuiltYet("'vdmap " + name + "' is not built yet (planned in issue " + issue + ")");
-  });
-}
-
-}  // namespace vdmap::app
-
 int main(int argc, char** argv) {
   using namespace vdmap::app;
   CLI::App app{"vdmap: keyframe-based dense mapping with view-dependent local maps (RGB-D)\n"
@@ -28,11 +15,11 @@ int main(int argc, char** argv) {
   addSynthCommand(app);
   addBenchCommand(app);
   addEvalCommand(app);
-  addPlannedCommand(app, "gui", "Open the workbench on a sequence", "#7");
+  addGuiCommand(app);
+  const auto workbench = addBuiltinWorkbenchOptions(app);
   try {
     app.parse(argc, argv);
-    if (app.get_subcommands().empty())
-      throw NotBuiltYet("the workbench is not built yet (planned in issue #7); see 'vdmap --help'");
+    if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
   } catch (const NotBuiltYet& e) {

@@ -146,9 +146,9 @@ fs::path sharedData(const std::string& name) {
   return fs::is_directory(path) ? path : fs::path();
 }
 
-RunResult runVdmap(const std::string& args) {
+RunResult runVdmap(const std::string& args, const std::string& prefix) {
   TempDir tmp;
-  const std::string cmd = std::string("'") + VDMAP_BINARY + "' " + args + " >'" +
+  const std::string cmd = prefix + " '" + VDMAP_BINARY + "' " + args + " >'" +
                           (tmp / "out").string() + "' 2>'" + (tmp / "err").string() + "'";
   const int status = std::system(cmd.c_str());
   RunResult result;

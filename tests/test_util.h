@@ -55,8 +55,9 @@ struct RunResult {
   std::string out;  ///< stdout
   std::string err;  ///< stderr
 };
-/// Runs `vdmap ARGS` (args are passed through the shell: quote paths).
-RunResult runVdmap(const std::string& args);
+/// Runs `PREFIX vdmap ARGS` (both passed through the shell: quote paths); PREFIX may set
+/// variables or name a wrapper such as xvfb-run.
+RunResult runVdmap(const std::string& args, const std::string& prefix = "");
 
 }  // namespace vdmap::test
 

@@ -1,0 +1,120 @@
+// `vdmap` (no verb: the built-in scene) and `vdmap gui SEQ`: the workbench window, with a
+// scripted path for tests (--play-to-end --set KEY=VALUE --screenshot PNG --stats-json FILE --exit).
+#include <cstdlib>
+#include <iostream>
+#include <thread>
+
+#include "app/commands.h"
+#include "app/gui/settings.h"
+#include "app/gui/workbench.h"
+#include "app/gui/workbench_window.h"
+#include "app/progress.h"
+#include "mapping/synth/builtin_scene.h"
+#include "render/sequence_synth.h"
+
+namespace vdmap::app {
+namespace {
+namespace fs = std::filesystem;
+
+struct GuiArgs {
+  SequenceArgs sequence;
+  gui::ScriptOptions script;
+  std::vector<std::string> set;
+};
+
+// A stable fingerprint of the built-in scene, so a cached copy is regenerated when the scene
+// or its walk changes.
+std::uint64_t sceneFingerprint(const BuiltinScene& scene) {
+  std::uint64_t h = 1469598103934665603ull;
+  auto mix = [&h](double v) {
+    const auto bits = static_cast<std::uint64_t>(static_cast<std::int64_t>(std::llround(v * 1e6)));
+    h = (h ^ bits) * 1099511628211ull;
+  };
+  for (const StampedPose& p : scene.trajectory) {
+    mix(p.t);
+    for (int i = 0; i < 3; ++i) mix(p.T_W_C.translation()[i]);
+  }
+  mix(static_cast<double>(scene.mesh.positions.size()));
+  mix(static_cast<double>(scene.mesh.triangles.size()));
+  return h;
+}
+
+// The built-in scene as a sequence in $XDG_CACHE_HOME/vdmap (generated on first use). With
+// --frames A:B only the first B frames of the walk are rendered.
+fs::path builtinSequence(const std::string& frames) {
+  const int last = frames.empty() ? -1 : parseFrameRange(frames).last;
+  const BuiltinScene scene = makeBuiltinScene();
+  const int count = last < 0 ? static_cast<int>(scene.trajectory.size())
+                             : std::min(last, static_cast<int>(scene.trajectory.size()));
+  const char* xdg = std::getenv("XDG_CACHE_HOME");
+  const char* home = std::getenv("HOME");
+  const fs::path cache = xdg && *xdg ? fs::path(xdg) : home && *home ? fs::path(home) / ".cache" : fs::temp_directory_path();
+  char name[64];
+  std::snprintf(name, sizeof name, "builtin-%016llx-%d", static_cast<unsigned long long>(sceneFingerprint(scene)), count);
+  const fs::path dir = cache / "vdmap" / name;
+  if (fs::exists(dir / "rgb.txt")) return dir;
+  fs::create_directories(dir.parent_path());
+  render::SynthOptions options;
+  options.camera = scene.camera;
+  options.last_frame = count;
+  ProgressBar progress("rendering the built-in scene", static_cast<std::size_t>(count));
+  options.progress = [&progress](std::size_t done, std::size_t) { progress.update(done); };
+  // Rendered on its own thread: the OSMesa context is current there only, never on the thread
+  // that later owns the window's context.
+  std::exception_ptr error;
+  std::thread([&] {
+    try {
+      render::synthesizeSequence(scene.mesh, scene.trajectory, options, dir);
+    } catch (...) {
+      error = std::current_exception();
+    }
+  }).join();
+  // Another vdmap may have written the same folder meanwhile; then use that one.
+  if (error && !fs::exists(dir / "rgb.txt")) std::rethrow_exception(error);
+  return dir;
+}
+
+void runGui(GuiArgs args, bool builtin) {
+  std::string warning;
+  const bool scripted = args.script.exit;
+  // A scripted run neither reads nor writes the user's settings, so tests are reproducible.
+  const fs::path settings_file = scripted ? fs::path() : gui::settingsPath();
+  gui::Settings settings = scripted ? gui::Settings{} : gui::loadSettings(settings_file, &warning);
+  if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
+  for (const std::string& kv : args.set) gui::applySetting(settings, kv);
+  if (builtin) args.sequence.folder = builtinSequence(args.sequence.frames).string();
+  gui::Workbench bench(settings, warning);
+  bench.open(args.sequence);  // a failure shows in the window, which stays open
+  if (gui::runWorkbenchWindow(bench, args.script, settings_file.string()) != 0)
+    throw std::runtime_error(bench.ui().error);
+}
+
+void addGuiOptions(CLI::App& app, GuiArgs& args) {
+  app.add_flag("--play-to-end", args.script.play_to_end, "start playing at once (scripted runs)");
+  app.add_option("--screenshot", args.script.screenshot, "write a PNG of the window once mapping is done");
+  app.add_option("--stats-json", args.script.stats_json,
+                 "write frames, keyframes, Sigma_e, Sigma_e', t_g and the UI frame time once mapping is done");
+  app.add_flag("--exit", args.script.exit, "close once the screenshot/stats are written (settings are not touched)");
+  app.add_option("--set", args.set,
+                 "KEY=VALUE before start: sensor_model, filter_sigma_factor, min_points, tau_group, merge_distance, "
+                 "occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features");
+}
+
+}  // namespace
+
+void addGuiCommand(CLI::App& app) {
+  auto* verb = app.add_subcommand("gui", "Open the workbench on a sequence");
+  auto args = std::make_shared<GuiArgs>();
+  addSequenceArgs(*verb, args->sequence);
+  addGuiOptions(*verb, *args);
+  verb->callback([args] { runGui(*args, false); });
+}
+
+std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app) {
+  auto args = std::make_shared<GuiArgs>();
+  app.add_option("--frames", args->sequence.frames, "built-in scene: frames A:B of the walk (B exclusive)");
+  addGuiOptions(app, *args);
+  return [args] { runGui(*args, true); };
+}
+
+}  // namespace vdmap::app

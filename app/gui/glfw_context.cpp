@@ -1,0 +1,41 @@
+#include "app/gui/glfw_context.h"
+
+#include <stdexcept>
+
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
+namespace vdmap::app::gui {
+namespace {
+std::string glfwMessage() {
+  const char* text = nullptr;
+  glfwGetError(&text);
+  return text ? text : "unknown GLFW error";
+}
+}  // namespace
+
+GlfwWindowContext::GlfwWindowContext(int width, int height, const std::string& title) {
+  if (!glfwInit()) throw std::runtime_error("cannot open a window (is there a display?): " + glfwMessage());
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
+  glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
+  glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+  window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
+  if (!window_) {
+    const std::string message = glfwMessage();
+    glfwTerminate();
+    throw std::runtime_error("cannot create an OpenGL 3.3 core window: " + message);
+  }
+  makeCurrent();
+  glfwSwapInterval(1);
+  gl_ = render::loadGl([](const char* name) { return reinterpret_cast<render::GlProc>(glfwGetProcAddress(name)); });
+}
+
+GlfwWindowContext::~GlfwWindowContext() {
+  glfwDestroyWindow(window_);
+  glfwTerminate();
+}
+
+void GlfwWindowContext::makeCurrent() { glfwMakeContextCurrent(window_); }
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,313 @@
+#include "app/gui/map_session.h"
+
+#include <algorithm>
+
+#include "mapping/local_map/ellipsoid_filter.h"
+
+namespace vdmap::app::gui {
+namespace {
+using Clock = std::chrono::steady_clock;
+double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
+}  // namespace
+
+MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
+    : sequence_(std::move(sequence)), mapper_params_(mapper), thresholds_(thresholds) {
+  thresholds_.validate();
+  mapper_ = std::make_unique<Mapper>(sequence_.camera(), mapper_params_);
+  auto empty = std::make_shared<MappingSnapshot>();
+  empty->camera = sequence_.camera();
+  empty->frames_total = static_cast<int>(sequence_.size());
+  mapping_ = empty;
+  worker_ = std::thread([this] { run(); });
+}
+
+MapSession::~MapSession() {
+  {
+    std::lock_guard lock(mutex_);
+    stop_ = true;
+  }
+  wake_.notify_all();
+  worker_.join();
+}
+
+bool MapSession::workLeft() const {
+  return working_ || !commands_.empty() || mapped_ < target_ || global_dirty_;
+}
+
+void MapSession::run() {
+  std::unique_lock lock(mutex_);
+  while (!stop_) {
+    if (!commands_.empty()) {
+      std::function<void()> command = std::move(commands_.front());
+      commands_.pop_front();
+      working_ = true;
+      lock.unlock();
+      try {
+        command();
+      } catch (const std::exception& e) {
+        std::lock_guard relock(mutex_);
+        error_ = e.what();
+      }
+      lock.lock();
+      working_ = false;
+      continue;
+    }
+    if (mapped_ < target_) {
+      if (playing_ && fps_ > 0.f && Clock::now() < next_frame_time_) {
+        wake_.wait_until(lock, next_frame_time_);
+        continue;
+      }
+      next_frame_time_ = std::max(next_frame_time_, Clock::now()) +
+                         std::chrono::microseconds(fps_ > 0.f ? static_cast<long>(1e6 / fps_) : 0);
+      // While mapping, rebuild the global map only now and then, so that map building takes at
+      // most ~1/5 of the worker's time and the map on screen still grows.
+      const bool rebuild = global_dirty_ && secondsSince(last_build_) > std::max(1.0, 4 * last_build_s_);
+      working_ = true;
+      lock.unlock();
+      rebuild ? rebuildGlobal() : mapOneFrame();
+      lock.lock();
+      working_ = false;
+      continue;
+    }
+    if (global_dirty_) {
+      working_ = true;
+      lock.unlock();
+      rebuildGlobal();
+      lock.lock();
+      working_ = false;
+      continue;
+    }
+    playing_ = false;
+    idle_.notify_all();
+    wake_.wait(lock);
+  }
+}
+
+void MapSession::publishMapping() {
+  auto snap = std::make_shared<MappingSnapshot>();
+  snap->camera = sequence_.camera();
+  snap->frames_total = static_cast<int>(sequence_.size());
+  snap->frames_mapped = mapper_->framesMapped();
+  snap->current_keyframe = mapper_->currentKeyframe();
+  snap->rgb = last_rgb_;
+  snap->depth = last_depth_;
+  snap->times = times_;
+  snap->trajectory = trajectory_;
+  for (const Keyframe& k : mapper_->graph().keyframes())
+    snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb, k.container.size(), k.frames_integrated});
+  snap->edges = mapper_->graph().edges().edges();
+  std::lock_guard lock(mutex_);
+  mapping_ = std::move(snap);
+}
+
+void MapSession::mapOneFrame() {
+  const int i = mapper_->framesMapped();
+  try {
+    const RgbdFrame frame = sequence_.load(static_cast<std::size_t>(i));
+    const FrameReport report = mapper_->addFrame(frame);
+    times_.push_back(report.ms);
+    trajectory_.push_back(frame.T_W_C);
+    last_rgb_ = frame.rgb;
+    last_depth_ = frame.depth;
+    publishMapping();
+    std::lock_guard lock(mutex_);
+    mapped_ = i + 1;
+    global_dirty_ = true;
+    if (stop_at_keyframe_ && report.decision.kind == FrameDecision::Kind::kNewKeyframe) {
+      stop_at_keyframe_ = false;
+      target_ = mapped_;
+    }
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    error_ = "frame " + std::to_string(i) + ": " + e.what();
+    target_ = mapped_;
+    playing_ = false;
+  }
+}
+
+void MapSession::rebuildGlobal() {
+  GlobalMapParams params;
+  {
+    std::lock_guard lock(mutex_);
+    params = thresholds_;
+    global_dirty_ = false;
+  }
+  const auto t0 = Clock::now();
+  auto snap = std::make_shared<GlobalSnapshot>();
+  try {
+    snap->map = buildGlobalMap(mapper_->graph(), params);
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    error_ = std::string("global map: ") + e.what();
+    return;
+  }
+  snap->params = params;
+  for (const Keyframe& k : mapper_->graph().keyframes())
+    forEachKeptEllipsoid(k.container, params.filter, k.T_W_K, k.id,
+                         [&snap](const Ellipsoid& e) { snap->local.push_back(e); });
+  snap->frames_mapped = mapper_->framesMapped();
+  std::lock_guard lock(mutex_);
+  snap->generation = ++generation_;
+  global_ = std::move(snap);
+  last_build_ = Clock::now();
+  last_build_s_ = std::chrono::duration<double>(last_build_ - t0).count();
+}
+
+void MapSession::restartMapper() {
+  mapper_ = std::make_unique<Mapper>(sequence_.camera(), mapper_params_);
+  times_.clear();
+  trajectory_.clear();
+  last_rgb_ = cv::Mat();
+  last_depth_ = cv::Mat();
+  publishMapping();
+  std::lock_guard lock(mutex_);
+  mapped_ = 0;
+  global_dirty_ = true;
+}
+
+void MapSession::post(std::function<void()> command) {
+  {
+    std::lock_guard lock(mutex_);
+    commands_.push_back(std::move(command));
+    error_.clear();
+  }
+  wake_.notify_all();
+}
+
+void MapSession::update(const std::function<void()>& change) {
+  {
+    std::lock_guard lock(mutex_);
+    error_.clear();
+    change();
+  }
+  wake_.notify_all();
+}
+
+void MapSession::play() {
+  update([this] {
+    playing_ = true;
+    target_ = static_cast<int>(sequence_.size());
+    next_frame_time_ = Clock::now();
+  });
+}
+
+void MapSession::pause() {
+  update([this] {
+    playing_ = false;
+    stop_at_keyframe_ = false;
+    target_ = mapped_;
+  });
+}
+
+void MapSession::setFps(float fps) {
+  update([this, fps] { fps_ = std::max(0.f, fps); });
+}
+
+void MapSession::step() {
+  update([this] {
+    playing_ = false;
+    target_ = std::min(mapped_ + 1, static_cast<int>(sequence_.size()));
+  });
+}
+
+void MapSession::stepToKeyframe() {
+  update([this] {
+    playing_ = false;
+    stop_at_keyframe_ = true;
+    target_ = static_cast<int>(sequence_.size());
+  });
+}
+
+void MapSession::seek(int frame) {
+  frame = std::clamp(frame, 0, static_cast<int>(sequence_.size()) - 1);
+  bool restart = false;
+  {
+    std::lock_guard lock(mutex_);
+    error_.clear();
+    playing_ = false;
+    stop_at_keyframe_ = false;
+    restart = frame + 1 < mapped_;
+    target_ = frame + 1;
+  }
+  if (restart) post([this] { restartMapper(); });
+  wake_.notify_all();
+}
+
+void MapSession::setThresholds(const GlobalMapParams& thresholds) {
+  thresholds.validate();
+  {
+    std::lock_guard lock(mutex_);
+    thresholds_ = thresholds;
+    global_dirty_ = true;
+  }
+  wake_.notify_all();
+}
+
+void MapSession::rerun(const MapperParams& mapper) {
+  {
+    std::lock_guard lock(mutex_);
+    target_ = playing_ ? static_cast<int>(sequence_.size()) : std::max(target_, mapped_);
+  }
+  post([this, mapper] {
+    mapper_params_ = mapper;
+    restartMapper();
+  });
+}
+
+void MapSession::setKeyframePose(int id, const Transform& T_W_K) {
+  post([this, id, T_W_K] {
+    mapper_->graph().setKeyframePose(id, T_W_K);
+    publishMapping();
+    std::lock_guard lock(mutex_);
+    global_dirty_ = true;
+  });
+}
+
+void MapSession::loadTrajectory(const std::string& file) {
+  post([this, file] {
+    const TrajectoryMatch m = mapper_->graph().applyTrajectory(file);
+    publishMapping();
+    std::lock_guard lock(mutex_);
+    global_dirty_ = true;
+    message_ = file + ": " + std::to_string(m.matched) + " keyframe poses replaced, " +
+               std::to_string(m.untouched) + " kept, " + std::to_string(m.unknown) + " unmatched poses ignored";
+  });
+}
+
+void MapSession::withGraph(std::function<std::string(const KeyframeGraph&, const GlobalSnapshot&)> f) {
+  post([this, f] {
+    bool dirty = false;
+    {
+      std::lock_guard lock(mutex_);
+      dirty = global_dirty_ || !global_;
+    }
+    if (dirty) rebuildGlobal();
+    const auto global_map = global();
+    if (!global_map) throw std::runtime_error("there is no global map to export yet");
+    const std::string message = f(mapper_->graph(), *global_map);
+    std::lock_guard lock(mutex_);
+    message_ = message;
+  });
+}
+
+std::shared_ptr<const MappingSnapshot> MapSession::mapping() const {
+  std::lock_guard lock(mutex_);
+  return mapping_;
+}
+
+std::shared_ptr<const GlobalSnapshot> MapSession::global() const {
+  std::lock_guard lock(mutex_);
+  return global_;
+}
+
+PlayerStatus MapSession::status() const {
+  std::lock_guard lock(mutex_);
+  return {playing_, workLeft(), target_, error_, message_};
+}
+
+void MapSession::waitIdle() {
+  std::unique_lock lock(mutex_);
+  idle_.wait(lock, [this] { return !workLeft() || stop_; });
+}
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,137 @@
+#pragma once
+// The workbench's model: one sequence, its Mapper and the global map, owned by a worker thread.
+// The UI thread sends commands through the thread-safe methods below and reads immutable
+// snapshots; it never touches the Mapper. One mutex guards the command state and the snapshot
+// pointers (no other lock, so no lock order to keep); mapping and map building run unlocked.
+#include <chrono>
+#include <condition_variable>
+#include <deque>
+#include <functional>
+#include <memory>
+#include <mutex>
+#include <string>
+#include <thread>
+
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/tum_sequence.h"
+#include "mapping/keyframe/mapper.h"
+
+namespace vdmap::app::gui {
+
+/// One keyframe as the UI sees it.
+struct KeyframeInfo {
+  int id = 0;
+  int frame = 0;               ///< position in the sequence of the frame that created it
+  Transform T_W_K = Transform::Identity();
+  cv::Mat rgb;                 ///< shared with the keyframe (never written after creation)
+  std::size_t ellipsoids = 0;  ///< stored in its container
+  int frames_integrated = 0;
+};
+
+/// The mapping state after the last mapped frame (replaced after every frame).
+struct MappingSnapshot {
+  PinholeCamera camera;
+  int frames_total = 0;
+  int frames_mapped = 0;       ///< frames [0, frames_mapped) of the sequence are in the map
+  int current_keyframe = -1;
+  cv::Mat rgb, depth;          ///< the last mapped frame (RGB order / raw 16-bit depth)
+  std::vector<StageTimes> times;       ///< per mapped frame
+  std::vector<KeyframeInfo> keyframes;
+  std::vector<CovisibilityEdge> edges;
+  std::vector<Transform> trajectory;   ///< T_W_C per mapped frame
+};
+
+/// One global map build (replaced after every rebuild).
+struct GlobalSnapshot {
+  GlobalMap map;
+  GlobalMapParams params;
+  std::vector<Ellipsoid> local;  ///< kept local-map ellipsoids in the world frame (Sigma_e)
+  int frames_mapped = 0;         ///< the mapping state it was built from
+  int generation = 0;            ///< 1, 2, ... per build
+};
+
+/// Playback state as the UI shows it.
+struct PlayerStatus {
+  bool playing = false;
+  bool busy = false;   ///< mapping, re-running or rebuilding the global map
+  int target = 0;      ///< frames the worker maps up to
+  std::string error;   ///< the last failure (a bad frame, a pose file), empty when none
+  std::string message; ///< the last command's outcome, e.g. "12 keyframe poses replaced"
+};
+
+class MapSession {
+ public:
+  /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
+  MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds);
+  ~MapSession();
+  MapSession(const MapSession&) = delete;
+  MapSession& operator=(const MapSession&) = delete;
+
+  const TumSequence& sequence() const { return sequence_; }
+
+  /// Maps to the end at up to `fps` frames per second (0: as fast as possible).
+  void play();
+  void pause();
+  void setFps(float fps);
+  /// Maps one more frame.
+  void step();
+  /// Maps until a frame starts a new keyframe (or the end).
+  void stepToKeyframe();
+  /// Moves to frame `frame` (0-based): forward maps up to it; backward re-maps from the start.
+  void seek(int frame);
+  /// Rebuilds the global map with new live thresholds (validated here, throws
+  /// std::invalid_argument). The old map stays visible until the new one is swapped in.
+  void setThresholds(const GlobalMapParams& thresholds);
+  /// Re-maps the sequence from the start up to the current frame with new parameters.
+  void rerun(const MapperParams& mapper);
+  /// Moves a keyframe (pose correction) and rebuilds the global map. Errors go to status().
+  void setKeyframePose(int id, const Transform& T_W_K);
+  /// Replaces keyframe poses from a TUM trajectory file (KeyframeGraph::applyTrajectory).
+  void loadTrajectory(const std::string& file);
+  /// Runs `f` on the worker with the graph and the current global map while nothing changes
+  /// them (exports); its exception text goes to status().error, its return to message.
+  void withGraph(std::function<std::string(const KeyframeGraph&, const GlobalSnapshot&)> f);
+
+  std::shared_ptr<const MappingSnapshot> mapping() const;
+  /// Null until the first build.
+  std::shared_ptr<const GlobalSnapshot> global() const;
+  PlayerStatus status() const;
+  /// Blocks until the worker has nothing left to do (tests and the scripted path).
+  void waitIdle();
+
+ private:
+  void run();
+  void mapOneFrame();
+  void rebuildGlobal();
+  void restartMapper();
+  void publishMapping();
+  void post(std::function<void()> command);
+  void update(const std::function<void()>& change);  // under the lock, then wakes the worker
+  bool workLeft() const;  // mutex_ held
+
+  TumSequence sequence_;
+  MapperParams mapper_params_;
+  std::unique_ptr<Mapper> mapper_;     // worker thread only
+  std::vector<StageTimes> times_;      // worker thread only
+  std::vector<Transform> trajectory_;  // worker thread only
+  cv::Mat last_rgb_, last_depth_;      // worker thread only
+
+  mutable std::mutex mutex_;
+  std::condition_variable wake_, idle_;
+  std::deque<std::function<void()>> commands_;
+  GlobalMapParams thresholds_;
+  int mapped_ = 0, target_ = 0;
+  bool playing_ = false, stop_at_keyframe_ = false, global_dirty_ = false, working_ = false;
+  bool stop_ = false;
+  float fps_ = 0.f;
+  std::chrono::steady_clock::time_point next_frame_time_{};
+  std::chrono::steady_clock::time_point last_build_{};
+  double last_build_s_ = 0;
+  std::string error_, message_;
+  std::shared_ptr<const MappingSnapshot> mapping_;
+  std::shared_ptr<const GlobalSnapshot> global_;
+  int generation_ = 0;
+  std::thread worker_;
+};
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,44 @@
+#pragma once
+// The workbench's persisted settings: thresholds, re-run parameters, view options, window size
+// and the last sequence, stored as JSON in $XDG_CONFIG_HOME/vdmap/settings.json. Parsing lives
+// here (app/), the parameter structs stay in mapping/.
+#include <filesystem>
+#include <string>
+
+#include "mapping/global_map/global_map.h"
+#include "mapping/keyframe/mapper.h"
+#include "render/scene_types.h"
+
+namespace vdmap::app::gui {
+
+/// Everything that persists between runs. Defaults are the library's defaults.
+struct Settings {
+  GlobalMapParams thresholds;           ///< live: changing one rebuilds the global map
+  MapperParams mapper;                  ///< re-run: changing one re-maps the sequence
+  render::ColorMode color = render::ColorMode::kRgb;
+  bool show_ellipsoids = true;          ///< false: ellipsoid centres as points
+  bool show_frustums = true, show_graph = true, show_trajectory = true;
+  float ellipsoid_sigma = 2.f;
+  float play_fps = 0.f;                 ///< playback limit, frames per second; 0: as fast as mapping goes
+  int window_width = 1600, window_height = 900;
+  std::string last_sequence;
+};
+
+/// $XDG_CONFIG_HOME/vdmap/settings.json (or ~/.config/vdmap/settings.json).
+std::filesystem::path settingsPath();
+
+/// Reads settings. A missing file gives the defaults silently; an unreadable or malformed file,
+/// or a value of the wrong type or out of range, gives the defaults and sets `warning` to a
+/// one-line message naming the file. Keys the file lacks keep their defaults.
+Settings loadSettings(const std::filesystem::path& file, std::string* warning);
+
+/// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
+void saveSettings(const std::filesystem::path& file, const Settings& settings);
+
+/// Applies "key=value" to the thresholds / re-run parameters (the scripted --set option).
+/// Keys: sensor_model, filter_sigma_factor, min_points, tau_group, merge_distance,
+/// occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features.
+/// Throws std::invalid_argument naming the key or value that is wrong.
+void applySetting(Settings& settings, const std::string& key_value);
+
+}  // namespace vdmap::app::gui

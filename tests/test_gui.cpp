@@ -1,0 +1,222 @@
+// The workbench without a window: settings persistence, the mapping session (play, step, seek,
+// live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
+#include <gtest/gtest.h>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "app/gui/settings.h"
+#include "app/gui/workbench.h"
+#include "tests/test_util.h"
+
+namespace vdmap::app::gui {
+namespace {
+
+// Ten frames of a textured plane, a keyframe every three frames (so the test does not depend on
+// ORB matching of random texture).
+struct TinyBench {
+  test::TempDir dir;
+  Workbench bench{settings()};
+  TinyBench() {
+    test::writeTinySequence(dir / "seq", 10);
+    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", ""})) << bench.ui().error;
+  }
+  static Settings settings() {
+    Settings s;
+    s.mapper.keyframe_every = 3;
+    return s;
+  }
+  MapSession& session() { return *bench.session(); }
+};
+
+TEST(GuiSettings, RoundTripAndDefaultsForMissingKeys) {
+  test::TempDir dir;
+  Settings s;
+  s.thresholds.merge_distance_m = 0.4;
+  s.thresholds.filter.model = SensorModel::kBelter2018;
+  s.color = render::ColorMode::kCount;
+  s.show_graph = false;
+  s.last_sequence = "/data/seq";
+  saveSettings(dir / "a" / "settings.json", s);
+  std::string warning;
+  const Settings r = loadSettings(dir / "a" / "settings.json", &warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  EXPECT_DOUBLE_EQ(r.thresholds.merge_distance_m, 0.4);
+  EXPECT_EQ(r.thresholds.filter.model, SensorModel::kBelter2018);
+  EXPECT_EQ(r.color, render::ColorMode::kCount);
+  EXPECT_FALSE(r.show_graph);
+  EXPECT_EQ(r.last_sequence, "/data/seq");
+
+  test::writeText(dir / "partial.json", R"({"thresholds": {"min_points": 9}})");
+  const Settings p = loadSettings(dir / "partial.json", &warning);
+  EXPECT_EQ(p.thresholds.filter.min_points, 9);
+  EXPECT_DOUBLE_EQ(p.thresholds.merge_distance_m, Settings{}.thresholds.merge_distance_m);
+  EXPECT_TRUE(loadSettings(dir / "missing.json", &warning).last_sequence.empty());
+  EXPECT_TRUE(warning.empty());
+}
+
+TEST(GuiSettings, CorruptFileGivesDefaultsWithAWarning) {
+  test::TempDir dir;
+  for (const char* text : {"{not json", R"({"thresholds": {"merge_distance": "far"}})",
+                           R"({"thresholds": {"merge_distance": -1}})", R"({"view": {"color": "pink"}})", "[1, 2]"}) {
+    test::writeText(dir / "settings.json", text);
+    std::string warning;
+    const Settings s = loadSettings(dir / "settings.json", &warning);
+    EXPECT_NE(warning.find("settings.json"), std::string::npos) << text;
+    EXPECT_NE(warning.find("default"), std::string::npos) << warning;
+    EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, Settings{}.thresholds.merge_distance_m);
+    EXPECT_EQ(s.color, render::ColorMode::kRgb);
+  }
+}
+
+TEST(GuiSettings, SetKeyValue) {
+  Settings s;
+  applySetting(s, "merge_distance=0.5");
+  applySetting(s, "occlusion_removal=false");
+  applySetting(s, "sensor_model=belter2018");
+  applySetting(s, "cell_size=8");
+  EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);
+  EXPECT_FALSE(s.thresholds.occlusion_removal);
+  EXPECT_EQ(s.thresholds.filter.model, SensorModel::kBelter2018);
+  EXPECT_EQ(s.mapper.local_map.cell_size_px, 8);
+  EXPECT_THROW(applySetting(s, "merge_distance"), std::invalid_argument);
+  EXPECT_THROW(applySetting(s, "colour=3"), std::invalid_argument);
+  EXPECT_THROW(applySetting(s, "min_points=lots"), std::invalid_argument);
+  EXPECT_THROW(applySetting(s, "tau_group=2"), std::invalid_argument);
+  EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);  // a failed --set changes nothing
+}
+
+TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_NE(bench.ui().error.find("nowhere"), std::string::npos) << bench.ui().error;
+  ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
+  EXPECT_EQ(bench.session()->sequence().folder(), t.dir / "seq");
+  Workbench empty{Settings{}};
+  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_EQ(empty.session(), nullptr);
+}
+
+TEST(GuiSession, StepStepToKeyframePlayAndSeekBack) {
+  TinyBench t;
+  MapSession& s = t.session();
+  s.step();
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 1);
+  EXPECT_EQ(s.mapping()->keyframes.size(), 1u);
+  ASSERT_NE(s.global(), nullptr);  // built once the worker is idle
+  s.stepToKeyframe();              // frame 3 starts keyframe 1
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 4);
+  EXPECT_EQ(s.mapping()->keyframes.size(), 2u);
+  EXPECT_EQ(s.mapping()->keyframes[1].frame, 3);
+  s.play();
+  s.waitIdle();
+  const auto end = s.mapping();
+  EXPECT_EQ(end->frames_mapped, 10);
+  EXPECT_EQ(end->times.size(), 10u);
+  EXPECT_EQ(end->trajectory.size(), 10u);
+  EXPECT_FALSE(end->rgb.empty());
+  EXPECT_EQ(s.global()->frames_mapped, 10);
+  const std::size_t sigma_e_prime = s.global()->map.sigma_e_prime;
+  EXPECT_GT(sigma_e_prime, 0u);
+  s.seek(4);  // backwards: re-mapped from the start up to frame 4
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 5);
+  EXPECT_EQ(s.mapping()->keyframes.size(), 2u);
+  s.seek(9);
+  s.waitIdle();
+  EXPECT_EQ(s.global()->map.sigma_e_prime, sigma_e_prime);  // same frames, same map
+  EXPECT_TRUE(s.status().error.empty());
+}
+
+TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  bench.ui().settings.thresholds.filter.min_points = 3;
+  bench.applyThresholds();
+  t.session().play();
+  t.session().waitIdle();
+  const auto before = t.session().global();
+  // Cells of a 5 px grid over 3 frames of a plane hold ~75 points; 60 keeps only those of
+  // keyframes that integrated three frames.
+  bench.ui().settings.thresholds.filter.min_points = 60;
+  bench.applyThresholds();
+  t.session().waitIdle();
+  const auto after = t.session().global();
+  EXPECT_GT(after->generation, before->generation);
+  EXPECT_EQ(after->params.filter.min_points, 60);
+  EXPECT_LT(after->map.sigma_e, before->map.sigma_e);
+  EXPECT_LT(after->map.sigma_e_prime, before->map.sigma_e_prime);
+  EXPECT_EQ(after->local.size(), after->map.sigma_e);
+
+  bench.ui().settings.thresholds.merge_distance_m = -1;  // refused, shown, map kept
+  bench.applyThresholds();
+  EXPECT_NE(bench.ui().error.find("merge"), std::string::npos) << bench.ui().error;
+  t.session().waitIdle();
+  EXPECT_EQ(t.session().global()->generation, after->generation);
+
+  bench.resetToDefaults();
+  t.session().waitIdle();
+  EXPECT_EQ(t.session().global()->params.filter.min_points, FilterParams{}.min_points);
+  EXPECT_TRUE(bench.ui().reset_layout);
+}
+
+TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.session().play();
+  t.session().waitIdle();
+  auto mean_of = [&](int keyframe) {
+    Eigen::Vector3d sum = Eigen::Vector3d::Zero();
+    int n = 0;
+    for (const Ellipsoid& e : t.session().global()->local)
+      if (e.keyframe == keyframe) sum += e.mean, ++n;
+    return Eigen::Vector3d(sum / std::max(n, 1));
+  };
+  const Eigen::Vector3d before0 = mean_of(0), before1 = mean_of(1);
+  bench.selectKeyframe(1);
+  EXPECT_NEAR(bench.ui().pose_translation_m.x, 0.03f, 1e-5f);  // frame 3 of the tiny walk
+  bench.ui().pose_translation_m.z += 0.2f;
+  bench.applyPoseEdit();
+  t.session().waitIdle();
+  EXPECT_NEAR(t.session().mapping()->keyframes[1].T_W_K.translation().z(), 0.2, 1e-6);
+  EXPECT_NEAR((mean_of(1) - before1).z(), 0.2, 1e-4);
+  EXPECT_NEAR((mean_of(0) - before0).norm(), 0.0, 1e-9);
+  // A trajectory file that names no keyframe: the error is reported, the poses stay.
+  test::writeText(t.dir / "wrong.txt", "5.0 0 0 0 0 0 0 1\n");
+  bench.ui().trajectory_text = (t.dir / "wrong.txt").string();
+  bench.loadTrajectory();
+  t.session().waitIdle();
+  EXPECT_NE(t.session().status().error.find("wrong.txt"), std::string::npos) << t.session().status().error;
+  // The sequence's own ground truth puts keyframe 1 back.
+  bench.ui().trajectory_text = (t.dir / "seq" / "groundtruth.txt").string();
+  bench.loadTrajectory();
+  t.session().waitIdle();
+  EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
+  EXPECT_NE(t.session().status().message.find("replaced"), std::string::npos);
+  EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
+}
+
+TEST(GuiWorkbench, PickingFindsTheNearestProjectedMean) {
+  std::vector<Ellipsoid> es(3);
+  es[0].mean = {0, 0, 2};   // straight ahead
+  es[1].mean = {0, 0, 4};   // behind it on the same ray
+  es[2].mean = {0.5, 0, 2}; // to the right
+  es[2].keyframe = 7;
+  render::ViewCamera view;  // identity pose, 640x480, f = 525
+  EXPECT_EQ(pickEllipsoid(es, view, view.cx, view.cy), 0);
+  EXPECT_EQ(pickEllipsoid(es, view, view.cx + 525.f * 0.25f, view.cy + 2.f), 2);
+  EXPECT_EQ(pickEllipsoid(es, view, 10.f, 10.f), -1);
+  view.T_C_W = glm::translate(glm::mat4(1.f), glm::vec3(0, 0, -10));  // everything behind
+  EXPECT_EQ(pickEllipsoid(es, view, view.cx, view.cy), -1);
+}
+
+TEST(GuiWorkbench, EulerAnglesRoundTrip) {
+  const glm::vec3 deg(10.f, -20.f, 135.f);
+  const glm::vec3 back = rotationToEulerDeg(eulerDegToRotation(deg));
+  EXPECT_TRUE(eulerDegToRotation(back).isApprox(eulerDegToRotation(deg), 1e-6));
+}
+
+}  // namespace
+}  // namespace vdmap::app::gui

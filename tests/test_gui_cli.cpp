@@ -1,0 +1,94 @@
+// The workbench end to end under Xvfb: `vdmap` on the built-in scene through the scripted path
+// (--play-to-end --screenshot --stats-json --exit), a second run with another merge_distance,
+// and the failure paths. Skips when xvfb-run is not installed.
+#include <cstdlib>
+#include <fstream>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
+
+#include "tests/test_util.h"
+
+namespace vdmap::test {
+namespace {
+
+bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
+
+#define REQUIRE_XVFB() \
+  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (workbench end-to-end test skipped)"
+
+// Runs vdmap in a virtual X server with its own config and cache folders.
+RunResult runInXvfb(const TempDir& home, const std::string& args) {
+  const std::string prefix = "XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
+                             (home / "cache").string() + "' xvfb-run -a -s '-screen 0 1920x1080x24'";
+  return runVdmap(args, prefix);
+}
+
+nlohmann::json readJson(const fs::path& file) {
+  std::ifstream in(file);
+  return nlohmann::json::parse(in);
+}
+
+// The share of pixels in the middle of the window (between the side panels) that differ from
+// the 3-D view's background colour.
+double mapCoverage(const fs::path& png) {
+  const cv::Mat bgr = cv::imread(png.string());
+  if (bgr.empty()) return -1;
+  const cv::Rect middle(bgr.cols * 3 / 10, bgr.rows / 10, bgr.cols * 4 / 10, bgr.rows * 8 / 10);
+  const cv::Vec3b background = bgr.at<cv::Vec3b>(bgr.rows - 2, bgr.cols / 2);  // bottom centre: empty floor of the view
+  int differing = 0;
+  for (int y = middle.y; y < middle.y + middle.height; ++y)
+    for (int x = middle.x; x < middle.x + middle.width; ++x)
+      differing += cv::norm(bgr.at<cv::Vec3b>(y, x), background, cv::NORM_L1) > 30;
+  return static_cast<double>(differing) / middle.area();
+}
+
+TEST(GuiCli, BuiltinScenePlayedToTheEndShowsAMapAndMergeDistanceChangesSigmaEPrime) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const std::string common = "--frames 0:30 --play-to-end --exit";
+  const RunResult a = runInXvfb(home, common + " --screenshot '" + (home / "a.png").string() + "' --stats-json '" +
+                                          (home / "a.json").string() + "'");
+  ASSERT_EQ(a.exit_code, 0) << a.err;
+  const nlohmann::json sa = readJson(home / "a.json");
+  EXPECT_EQ(sa["frames_mapped"], 30);
+  EXPECT_GE(sa["keyframes"].get<int>(), 2);  // merging needs a group of two keyframes
+  EXPECT_GT(sa["sigma_e_prime"].get<int>(), 1000);
+  EXPECT_DOUBLE_EQ(sa["merge_distance_m"].get<double>(), 0.25);
+  const double coverage = mapCoverage(home / "a.png");
+  EXPECT_GT(coverage, 0.05) << "the 3-D view looks empty";
+
+  const RunResult b = runInXvfb(home, common + " --set merge_distance=0.01 --stats-json '" +
+                                          (home / "b.json").string() + "'");
+  ASSERT_EQ(b.exit_code, 0) << b.err;
+  const nlohmann::json sb = readJson(home / "b.json");
+  EXPECT_DOUBLE_EQ(sb["merge_distance_m"].get<double>(), 0.01);
+  EXPECT_EQ(sb["sigma_e"], sa["sigma_e"]);  // same frames, same filter
+  // Merging happens among ellipsoids that fall into one container cell; a 1 cm kernel splits
+  // what 25 cm joins, so more ellipsoids stay.
+  EXPECT_GT(sb["sigma_e_prime"].get<int>(), sa["sigma_e_prime"].get<int>());
+  EXPECT_FALSE(fs::exists(home / "config" / "vdmap" / "settings.json"));  // scripted runs leave settings alone
+}
+
+TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const RunResult r = runInXvfb(home, "gui '" + (home / "nowhere").string() + "' --exit");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("nowhere"), std::string::npos) << r.err;
+}
+
+TEST(GuiCli, BadSetAndNoDisplayAreClearErrors) {
+  TempDir home;
+  writeTinySequence(home / "seq", 3);
+  const RunResult bad = runVdmap("gui '" + (home / "seq").string() + "' --set merge_distance=-2 --exit");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_NE(bad.err.find("merge_distance"), std::string::npos) << bad.err;
+  const RunResult no_display = runVdmap("gui '" + (home / "seq").string() + "' --exit", "DISPLAY= WAYLAND_DISPLAY=");
+  EXPECT_EQ(no_display.exit_code, 1);
+  EXPECT_NE(no_display.err.find("window"), std::string::npos) << no_display.err;
+}
+
+}  // namespace
+}  // namespace vdmap::test
