@@ -91,7 +91,7 @@ TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", ""}));
   EXPECT_NE(bench.ui().error.find("nowhere"), std::string::npos) << bench.ui().error;
   ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
-  EXPECT_EQ(bench.session()->sequence().folder(), t.dir / "seq");
+  EXPECT_EQ(bench.session()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
   EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", ""}));
   EXPECT_EQ(empty.session(), nullptr);
@@ -196,6 +196,38 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
   EXPECT_NE(t.session().status().message.find("replaced"), std::string::npos);
   EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
+}
+
+TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.session().play();
+  t.session().waitIdle();
+  const auto global = t.session().global();
+  bench.ui().export_text = (t.dir / "export").string();
+  bench.exportMap();
+  bench.ui().session_text = (t.dir / "map.vdmap").string();
+  bench.saveSession();
+  t.session().waitIdle();
+  EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
+  for (const char* file : {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",
+                           "stats.json"})
+    EXPECT_TRUE(std::filesystem::exists(t.dir / "export" / file)) << file;
+
+  Workbench reopened{Settings{}};
+  ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().error;
+  MapSession& s = *reopened.session();
+  EXPECT_EQ(s.sequence(), nullptr);
+  s.play();  // nothing to play: the map stays as saved
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 10);
+  EXPECT_EQ(s.mapping()->keyframes.size(), t.session().mapping()->keyframes.size());
+  EXPECT_EQ(s.global()->map.sigma_e_prime, global->map.sigma_e_prime);  // the same map, rebuilt
+
+  test::writeText(t.dir / "bad.vdmap", "not a session");
+  EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
+  EXPECT_NE(reopened.ui().error.find("bad.vdmap"), std::string::npos) << reopened.ui().error;
+  EXPECT_NE(reopened.session(), nullptr);  // the open session stays
 }
 
 TEST(GuiWorkbench, PickingFindsTheNearestProjectedMean) {

@@ -18,6 +18,7 @@ namespace fs = std::filesystem;
 
 struct GuiArgs {
   SequenceArgs sequence;
+  std::string map;  ///< a saved session instead of a sequence
   gui::ScriptOptions script;
   std::vector<std::string> set;
 };
@@ -84,13 +85,16 @@ void runGui(GuiArgs args, bool builtin) {
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
   if (builtin) args.sequence.folder = builtinSequence(args.sequence.frames).string();
   gui::Workbench bench(settings, warning);
-  bench.open(args.sequence);  // a failure shows in the window, which stays open
+  // A failure shows in the window, which stays open.
+  if (!args.map.empty()) bench.openSession(args.map);
+  else bench.open(args.sequence);
   if (gui::runWorkbenchWindow(bench, args.script, settings_file.string()) != 0)
     throw std::runtime_error(bench.ui().error);
 }
 
 void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_flag("--play-to-end", args.script.play_to_end, "start playing at once (scripted runs)");
+  app.add_option("--keyframe", args.script.keyframe, "select keyframe K in the inspector (scripted runs)");
   app.add_option("--screenshot", args.script.screenshot, "write a PNG of the window once mapping is done");
   app.add_option("--stats-json", args.script.stats_json,
                  "write frames, keyframes, Sigma_e, Sigma_e', t_g and the UI frame time once mapping is done");
@@ -106,8 +110,14 @@ void addGuiCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("gui", "Open the workbench on a sequence");
   auto args = std::make_shared<GuiArgs>();
   addSequenceArgs(*verb, args->sequence);
+  verb->get_option("SEQ")->required(false);
+  verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence");
   addGuiOptions(*verb, *args);
-  verb->callback([args] { runGui(*args, false); });
+  verb->callback([args] {
+    if (args->sequence.folder.empty() == args->map.empty())
+      throw std::invalid_argument("give a sequence folder SEQ or --map FILE.vdmap (one of them)");
+    runGui(*args, false);
+  });
 }
 
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app) {

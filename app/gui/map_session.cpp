@@ -13,11 +13,23 @@ double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(
 MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
     : sequence_(std::move(sequence)), mapper_params_(mapper), thresholds_(thresholds) {
   thresholds_.validate();
-  mapper_ = std::make_unique<Mapper>(sequence_.camera(), mapper_params_);
-  auto empty = std::make_shared<MappingSnapshot>();
-  empty->camera = sequence_.camera();
-  empty->frames_total = static_cast<int>(sequence_.size());
-  mapping_ = empty;
+  mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
+  start();
+}
+
+MapSession::MapSession(Session saved, const GlobalMapParams& thresholds)
+    : mapper_params_(saved.info.mapper), thresholds_(thresholds) {
+  thresholds_.validate();
+  mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_);
+  mapper_->graph() = std::move(saved.graph);
+  mapped_ = target_ = saved.info.frames_mapped;
+  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back(k.T_W_K);
+  global_dirty_ = true;
+  start();
+}
+
+void MapSession::start() {
+  publishMapping();
   worker_ = std::thread([this] { run(); });
 }
 
@@ -85,9 +97,12 @@ void MapSession::run() {
 
 void MapSession::publishMapping() {
   auto snap = std::make_shared<MappingSnapshot>();
-  snap->camera = sequence_.camera();
-  snap->frames_total = static_cast<int>(sequence_.size());
-  snap->frames_mapped = mapper_->framesMapped();
+  snap->camera = mapper_->camera();
+  {
+    std::lock_guard lock(mutex_);
+    snap->frames_total = framesTotal();
+  }
+  snap->frames_mapped = sequence_ ? mapper_->framesMapped() : snap->frames_total;
   snap->current_keyframe = mapper_->currentKeyframe();
   snap->rgb = last_rgb_;
   snap->depth = last_depth_;
@@ -103,7 +118,7 @@ void MapSession::publishMapping() {
 void MapSession::mapOneFrame() {
   const int i = mapper_->framesMapped();
   try {
-    const RgbdFrame frame = sequence_.load(static_cast<std::size_t>(i));
+    const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i));
     const FrameReport report = mapper_->addFrame(frame);
     times_.push_back(report.ms);
     trajectory_.push_back(frame.T_W_C);
@@ -145,8 +160,8 @@ void MapSession::rebuildGlobal() {
   for (const Keyframe& k : mapper_->graph().keyframes())
     forEachKeptEllipsoid(k.container, params.filter, k.T_W_K, k.id,
                          [&snap](const Ellipsoid& e) { snap->local.push_back(e); });
-  snap->frames_mapped = mapper_->framesMapped();
   std::lock_guard lock(mutex_);
+  snap->frames_mapped = mapped_;
   snap->generation = ++generation_;
   global_ = std::move(snap);
   last_build_ = Clock::now();
@@ -154,7 +169,7 @@ void MapSession::rebuildGlobal() {
 }
 
 void MapSession::restartMapper() {
-  mapper_ = std::make_unique<Mapper>(sequence_.camera(), mapper_params_);
+  mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   times_.clear();
   trajectory_.clear();
   last_rgb_ = cv::Mat();
@@ -186,7 +201,7 @@ void MapSession::update(const std::function<void()>& change) {
 void MapSession::play() {
   update([this] {
     playing_ = true;
-    target_ = static_cast<int>(sequence_.size());
+    target_ = framesTotal();
     next_frame_time_ = Clock::now();
   });
 }
@@ -206,7 +221,7 @@ void MapSession::setFps(float fps) {
 void MapSession::step() {
   update([this] {
     playing_ = false;
-    target_ = std::min(mapped_ + 1, static_cast<int>(sequence_.size()));
+    target_ = std::min(mapped_ + 1, framesTotal());
   });
 }
 
@@ -214,12 +229,13 @@ void MapSession::stepToKeyframe() {
   update([this] {
     playing_ = false;
     stop_at_keyframe_ = true;
-    target_ = static_cast<int>(sequence_.size());
+    target_ = framesTotal();
   });
 }
 
 void MapSession::seek(int frame) {
-  frame = std::clamp(frame, 0, static_cast<int>(sequence_.size()) - 1);
+  if (!sequence_) return;
+  frame = std::clamp(frame, 0, framesTotal() - 1);
   bool restart = false;
   {
     std::lock_guard lock(mutex_);
@@ -244,9 +260,10 @@ void MapSession::setThresholds(const GlobalMapParams& thresholds) {
 }
 
 void MapSession::rerun(const MapperParams& mapper) {
+  if (!sequence_) return;
   {
     std::lock_guard lock(mutex_);
-    target_ = playing_ ? static_cast<int>(sequence_.size()) : std::max(target_, mapped_);
+    target_ = playing_ ? framesTotal() : std::max(target_, mapped_);
   }
   post([this, mapper] {
     mapper_params_ = mapper;
@@ -274,7 +291,7 @@ void MapSession::loadTrajectory(const std::string& file) {
   });
 }
 
-void MapSession::withGraph(std::function<std::string(const KeyframeGraph&, const GlobalSnapshot&)> f) {
+void MapSession::withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f) {
   post([this, f] {
     bool dirty = false;
     {
@@ -284,7 +301,7 @@ void MapSession::withGraph(std::function<std::string(const KeyframeGraph&, const
     if (dirty) rebuildGlobal();
     const auto global_map = global();
     if (!global_map) throw std::runtime_error("there is no global map to export yet");
-    const std::string message = f(mapper_->graph(), *global_map);
+    const std::string message = f(*mapper_, *global_map);
     std::lock_guard lock(mutex_);
     message_ = message;
   });

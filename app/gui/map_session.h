@@ -9,10 +9,12 @@
 #include <functional>
 #include <memory>
 #include <mutex>
+#include <optional>
 #include <string>
 #include <thread>
 
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/keyframe/mapper.h"
 
@@ -63,11 +65,15 @@ class MapSession {
  public:
   /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
   MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds);
+  /// A saved session (.vdmap): its keyframes are there, there is no sequence to play, so the
+  /// player commands, seek and re-run do nothing; thresholds and poses are live as usual.
+  MapSession(Session saved, const GlobalMapParams& thresholds);
   ~MapSession();
   MapSession(const MapSession&) = delete;
   MapSession& operator=(const MapSession&) = delete;
 
-  const TumSequence& sequence() const { return sequence_; }
+  /// Null for a saved session.
+  const TumSequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
 
   /// Maps to the end at up to `fps` frames per second (0: as fast as possible).
   void play();
@@ -88,9 +94,9 @@ class MapSession {
   void setKeyframePose(int id, const Transform& T_W_K);
   /// Replaces keyframe poses from a TUM trajectory file (KeyframeGraph::applyTrajectory).
   void loadTrajectory(const std::string& file);
-  /// Runs `f` on the worker with the graph and the current global map while nothing changes
-  /// them (exports); its exception text goes to status().error, its return to message.
-  void withGraph(std::function<std::string(const KeyframeGraph&, const GlobalSnapshot&)> f);
+  /// Runs `f` on the worker with the mapper and the current global map while nothing changes
+  /// them (export, save); its exception text goes to status().error, its return to message.
+  void withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f);
 
   std::shared_ptr<const MappingSnapshot> mapping() const;
   /// Null until the first build.
@@ -109,7 +115,10 @@ class MapSession {
   void update(const std::function<void()>& change);  // under the lock, then wakes the worker
   bool workLeft() const;  // mutex_ held
 
-  TumSequence sequence_;
+  void start();
+  int framesTotal() const { return sequence_ ? static_cast<int>(sequence_->size()) : mapped_; }
+
+  std::optional<TumSequence> sequence_;
   MapperParams mapper_params_;
   std::unique_ptr<Mapper> mapper_;     // worker thread only
   std::vector<StageTimes> times_;      // worker thread only

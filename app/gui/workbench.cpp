@@ -5,6 +5,8 @@
 
 #include <Eigen/Geometry>
 
+#include "mapping/export/map_export.h"
+
 namespace vdmap::app::gui {
 
 int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px, float y_px,
@@ -75,13 +77,59 @@ bool Workbench::open(const SequenceArgs& args) {
     ui_.error = e.what();
     return false;
   }
-  ui_.settings.last_sequence = args.folder;
-  ui_.sequence_text = args.folder;
+  opened(args.folder);
+  return true;
+}
+
+bool Workbench::openSession(const std::string& file) {
+  try {
+    Session saved = loadSession(file);
+    const GlobalMapParams thresholds = saved.info.global;
+    session_ = std::make_unique<MapSession>(std::move(saved), thresholds);
+    ui_.settings.thresholds = thresholds;
+  } catch (const std::exception& e) {
+    ui_.error = e.what();
+    return false;
+  }
+  opened(file);
+  return true;
+}
+
+bool Workbench::openPath(const std::string& path) {
+  const std::filesystem::path p(path);
+  if (p.extension() == ".vdmap" && !std::filesystem::is_directory(p)) return openSession(path);
+  return open({path, "", ""});
+}
+
+void Workbench::opened(const std::string& path) {
+  ui_.settings.last_sequence = path;
+  ui_.sequence_text = path;
   ui_.error.clear();
   ui_.selected_keyframe = ui_.view_from_keyframe = -1;
   ui_.picked.reset();
   ui_.camera_framed = false;
-  return true;
+}
+
+void Workbench::exportMap() {
+  if (!session_) return;
+  const std::string dir = ui_.export_text;
+  session_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
+    MapExportOptions options;
+    options.run_stats = {{"frames", mapper.framesMapped()}, {"source", "vdmap workbench"}};
+    vdmap::exportMap(dir, mapper.graph(), global.map, global.params.filter, options);
+    return "exported the map into " + dir;
+  });
+}
+
+void Workbench::saveSession() {
+  if (!session_) return;
+  const std::string file = ui_.session_text;
+  session_->withMapper([file](const Mapper& mapper, const GlobalSnapshot& global) {
+    SessionInfo info = sessionInfo(mapper, global.params);
+    info.frames_mapped = std::max(info.frames_mapped, global.frames_mapped);  // a re-saved session
+    vdmap::saveSession(file, mapper.graph(), info);
+    return "saved the session to " + file;
+  });
 }
 
 void Workbench::applyThresholds() {

@@ -24,6 +24,8 @@ struct UiState {
   glm::vec3 pose_rotation_deg{0.f};   ///< roll (x), pitch (y), yaw (z): R = Rz Ry Rx
   std::string sequence_text;      ///< the "open sequence" field
   std::string trajectory_text;    ///< the "load corrected trajectory" field
+  std::string export_text = "vdmap_export";   ///< export folder
+  std::string session_text = "map.vdmap";     ///< "save session" file
   std::string error;              ///< shown in a red banner until dismissed
   std::string warning;            ///< e.g. a corrupt settings file
   bool reset_layout = false;      ///< windows go back to their default places next frame
@@ -53,6 +55,15 @@ class Workbench {
   /// Opens a sequence (replacing the current one). On failure the current one stays, the
   /// message goes to ui().error and false is returned: a bad folder never ends the app.
   bool open(const SequenceArgs& args);
+  /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
+  bool openSession(const std::string& file);
+  /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
+  bool openPath(const std::string& path);
+  /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
+  /// the session status).
+  void exportMap();
+  /// Saves the session (.vdmap) into ui().session_text (on the worker, like exportMap).
+  void saveSession();
   /// Sends the edited thresholds to the session (a bad value goes to ui().error).
   void applyThresholds();
   /// Re-maps the sequence with the edited re-run parameters.
@@ -73,6 +84,8 @@ class Workbench {
   void pick(float x_px, float y_px, int width, int height);
 
  private:
+  void opened(const std::string& path);
+
   UiState ui_;
   std::unique_ptr<MapSession> session_;
 };

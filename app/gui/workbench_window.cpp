@@ -96,6 +96,7 @@ class WorkbenchWindow {
         lines_(gl_), rgb_(gl_), depth_(gl_), container_(gl_) {
     lines_.setWidth(1.5f);
     if (script_.play_to_end && bench_.session()) bench_.session()->play();
+    if (script_.keyframe >= 0) bench_.ui().selected_keyframe = script_.keyframe;
   }
 
   // One UI frame; returns false when the window should close.
@@ -239,17 +240,21 @@ class WorkbenchWindow {
     ImGui::Begin("Sequence");
     ImGui::InputText("##folder", &ui().sequence_text);
     ImGui::SameLine();
-    if (ImGui::Button("Open")) bench_.open({ui().sequence_text, "", ""});
+    if (ImGui::Button("Open")) bench_.openPath(ui().sequence_text);
     MapSession* session = bench_.session();
     if (!session) {
-      ImGui::TextWrapped("No sequence open: type a TUM RGB-D folder above.");
+      ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
       ImGui::End();
       return;
     }
     const PlayerStatus status = session->status();
     const int total = mapping_->frames_total, mapped = mapping_->frames_mapped;
-    ImGui::TextWrapped("%s", session->sequence().folder().c_str());
-    ImGui::Text("camera %s, %d frames", session->sequence().cameraSource().c_str(), total);
+    if (const TumSequence* sequence = session->sequence()) {
+      ImGui::TextWrapped("%s", sequence->folder().c_str());
+      ImGui::Text("camera %s, %d frames", sequence->cameraSource().c_str(), total);
+    } else {
+      ImGui::TextWrapped("saved session of %d frames (no sequence to play)", total);
+    }
     if (ImGui::Button(status.playing ? "Pause" : "Play", {60, 0})) status.playing ? session->pause() : session->play();
     ImGui::SameLine();
     if (ImGui::Button("Step")) session->step();
@@ -417,6 +422,12 @@ class WorkbenchWindow {
         ImGui::InputText("TUM file", &ui().trajectory_text);
         if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
       }
+      if (ImGui::CollapsingHeader("Export and save")) {
+        ImGui::InputText("folder", &ui().export_text);
+        if (ImGui::Button("Export (as vdmap map)")) bench_.exportMap();
+        ImGui::InputText("session", &ui().session_text);
+        if (ImGui::Button("Save session (.vdmap)")) bench_.saveSession();
+      }
     }
     if (ImGui::CollapsingHeader("Settings")) {
       if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
@@ -453,6 +464,7 @@ class WorkbenchWindow {
       }
       if (!done) return;
       bench_.resetView();
+      if (script_.keyframe >= 0) bench_.selectKeyframe(script_.keyframe);
       countdown_ = 3;  // frames to draw the final map before the screenshot
       return;
     }

@@ -9,6 +9,7 @@ namespace vdmap::app::gui {
 /// The scripted path for tests and documentation screenshots.
 struct ScriptOptions {
   bool play_to_end = false;   ///< press Play at start
+  int keyframe = -1;          ///< select this keyframe in the inspector before the screenshot
   std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
   bool exit = false;          ///< close the window once the above are written
