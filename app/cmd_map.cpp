@@ -31,6 +31,7 @@ struct MapArgs {
   std::string sensor_model = "nguyen2012";
   bool no_prefilter = false;
   bool no_occlusion_removal = false;
+  double octomap_resolution_m = 0.0;
 };
 
 void runMap(MapArgs args) {
@@ -40,6 +41,7 @@ void runMap(MapArgs args) {
   args.mapper.keyframes.prefilter.enabled = !args.no_prefilter;
   args.global.occlusion_removal = !args.no_occlusion_removal;
   args.global.validate();
+  if (!(args.octomap_resolution_m >= 0.0)) throw std::invalid_argument("--octomap must be > 0 m");
   const fs::path out_dir = args.out;
   // Fail before any work when DIR cannot be written; it is created only when there is a map to
   // write, so a failed run leaves nothing behind.
@@ -71,6 +73,7 @@ void runMap(MapArgs args) {
                   k.container.memoryBytes() / 1e6);
   }
   MapExportOptions options;
+  options.octomap_resolution_m = args.octomap_resolution_m;
   options.run_stats = {
       {"frames", mapper.framesMapped()},
       {"revisits", mapper.revisits()},
@@ -101,9 +104,11 @@ void addMapCommand(CLI::App& app) {
   addSequenceArgs(*verb, args->sequence);
   verb->add_option("--out", args->out,
                    "output folder (created if missing): local_maps.ply, keyframes.txt, graph.txt, "
-                   "global_points.ply, global_ellipsoids.ply, stats.json")
+                   "global_points.ply, global_ellipsoids.ply, global_gaussians.ply, [global.bt], stats.json")
       ->required();
   verb->add_option("--save", args->save, "also save the whole session (a .vdmap file, docs/vdmap-format.md)");
+  verb->add_option("--octomap", args->octomap_resolution_m,
+                   "also write global.bt, an OctoMap of this resolution (m) sampled from the global map");
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   MapperParams& m = args->mapper;
   verb->add_option("--keyframe-every", m.keyframe_every,

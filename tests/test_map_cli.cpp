@@ -14,7 +14,7 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 4);
   const fs::path out = tmp / "out" / "nested";
-  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --out '" +
+  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --octomap 0.05 --out '" +
                                out.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 keyframes"), std::string::npos) << r.out;
@@ -22,14 +22,15 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
   std::string header((std::istreambuf_iterator<char>(ply)), {});
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
   EXPECT_NE(header.find("property uint count\nproperty int keyframe\nend_header\n"), std::string::npos);
-  for (const char* file : {"keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply", "stats.json"})
+  for (const char* file : {"keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",
+                           "global_gaussians.ply", "global.bt", "stats.json"})
     EXPECT_TRUE(fs::exists(out / file)) << file;
   for (const auto& entry : fs::directory_iterator(out))  // no temporary left behind
     EXPECT_EQ(entry.path().string().find(".tmp"), std::string::npos) << entry.path();
   std::ifstream stats_file(out / "stats.json");
   const auto stats = nlohmann::json::parse(stats_file);
   for (const char* key : {"frames", "keyframes", "edges", "revisits", "sigma_e", "update_ms", "pipeline_ms",
-                          "sigma_e_prime", "t_g_s"})
+                          "sigma_e_prime", "t_g_s", "t_g_us_per_ellipsoid", "global_stage_ms", "octomap"})
     EXPECT_TRUE(stats.contains(key)) << key;
   EXPECT_EQ(stats["keyframes"], 2);
 }

@@ -2,10 +2,12 @@
 
 #include <unistd.h>
 
+#include <cmath>
 #include <stdexcept>
 #include <system_error>
 
 #include "mapping/core/atomic_file.h"
+#include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/trajectory_io.h"
 
@@ -90,6 +92,8 @@ nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map) 
 
 nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
                          const FilterParams& filter, const MapExportOptions& options) {
+  if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
+    throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
   StagingFolder stage(dir);
   std::vector<Ellipsoid> local;
   std::vector<StampedPose> poses;
@@ -103,9 +107,18 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   graph.edges().writeEdgeList(stage / "graph.txt");
   writePointPly(stage / "global_points.ply", map.ellipsoids);
   writeEllipsoidPly(stage / "global_ellipsoids.ply", map.ellipsoids);
+  writeGaussianPly(stage / "global_gaussians.ply", map.ellipsoids);
 
   nlohmann::json stats = options.run_stats.is_object() ? options.run_stats : nlohmann::json::object();
   stats.update(globalMapStats(graph, map));
+  if (options.octomap_resolution_m > 0.0) {
+    const OctomapExportReport r = writeOctomapBt(stage / "global.bt", graph, map.ellipsoids, options.octomap_resolution_m);
+    stats["octomap"] = {{"resolution_m", options.octomap_resolution_m},
+                        {"points", r.points},
+                        {"occupied_leaves", r.occupied_leaves},
+                        {"means_occupied", r.means_occupied},
+                        {"seconds", r.seconds}};
+  }
   writeFileAtomically(stage / "stats.json", stats.dump(2) + "\n");
   stage.commit();
   return stats;

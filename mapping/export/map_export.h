@@ -14,6 +14,8 @@ namespace vdmap {
 
 /// What to export besides the files that are always written.
 struct MapExportOptions {
+  /// > 0: also write global.bt, an OctoMap of this resolution (m) sampled from the global map.
+  double octomap_resolution_m = 0.0;
   /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
   /// stats.json; the global-map and export figures are added by exportMap.
   nlohmann::json run_stats = nlohmann::json::object();
@@ -25,12 +27,15 @@ struct MapExportOptions {
 ///   graph.txt             covisibility edges `a b weight`
 ///   global_points.ply     global-map ellipsoid means with colour
 ///   global_ellipsoids.ply global-map ellipsoids (SPEC 7)
+///   global_gaussians.ply  global-map ellipsoids as 3-D Gaussian splats (SPEC 7)
+///   global.bt             only with options.octomap_resolution_m > 0 (octomap_export.h)
 ///   stats.json            options.run_stats + the global-map and export figures
 /// `filter` must be the one `map` was built with (it selects the local maps' kept ellipsoids).
 /// All files are first written into a staging folder inside `dir` and then renamed into place,
 /// so a failure (unwritable folder, full disk) leaves no file of this export behind and earlier
 /// files of the same names untouched. Throws std::runtime_error naming the folder or file.
 /// Reads `graph` and `map` only; the caller keeps them unchanged for the duration of the call.
+/// Throws std::invalid_argument for a negative or non-finite octomap resolution, before writing.
 /// Returns the stats that were written to stats.json.
 nlohmann::json exportMap(const std::filesystem::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
                          const FilterParams& filter, const MapExportOptions& options = {});

@@ -7,6 +7,9 @@
 #include <cstring>
 #include <string>
 
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
 #include "mapping/core/atomic_file.h"
 
 namespace vdmap {
@@ -62,6 +65,32 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
       put(bytes, static_cast<float>(v));
     put(bytes, static_cast<std::uint32_t>(e.count));
     put(bytes, static_cast<std::int32_t>(e.keyframe));
+  }
+  writeFileAtomically(file, bytes);
+}
+
+void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
+  constexpr double kSh0 = 0.28209479177387814;  // the degree-0 spherical harmonic, 1 / (2 sqrt(pi))
+  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians (SPEC 7)\nelement vertex " +
+                      std::to_string(ellipsoids.size()) + "\n";
+  for (const char* name : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0",
+                           "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    bytes += std::string("property float ") + name + "\n";
+  bytes += "end_header\n";
+  bytes.reserve(bytes.size() + ellipsoids.size() * 17 * 4);
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  for (const Ellipsoid& e : ellipsoids) {
+    eig.compute(e.cov);  // ascending eigenvalues, orthonormal eigenvectors
+    Eigen::Matrix3d R = eig.eigenvectors();
+    if (R.determinant() < 0) R.col(0) = -R.col(0);  // a proper rotation
+    const Eigen::Quaterniond q(R);
+    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
+    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(R(k, 0)));
+    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>((e.color(k) / 255.0 - 0.5) / kSh0));
+    put(bytes, kGaussianOpacityLogit);
+    for (int k = 0; k < 3; ++k)
+      put(bytes, static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));
+    for (double v : {q.w(), q.x(), q.y(), q.z()}) put(bytes, static_cast<float>(v));
   }
   writeFileAtomically(file, bytes);
 }

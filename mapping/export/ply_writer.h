@@ -18,4 +18,18 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
 /// red green blue uchar (SPEC section 7). Atomic like writeEllipsoidPly.
 void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
 
+/// Opacity written into the Gaussian PLY before the viewers' sigmoid: alpha = 0.9. SPEC 7 is
+/// silent; nearly opaque splats show the surface, 0.9 rather than 1 lets overlaps blend.
+inline constexpr float kGaussianOpacityLogit = 2.1972246f;  // log(0.9 / 0.1)
+/// Smallest principal standard deviation written (m): a perfectly flat cell would give log(0).
+inline constexpr double kGaussianMinSigma = 1e-5;
+
+/// Writes ellipsoids as 3-D Gaussian splats in the layout Gaussian-splatting viewers read
+/// (SPEC section 7): binary little-endian PLY, all float: x y z, nx ny nz (the axis of least
+/// spread, the surface normal up to sign), f_dc_0..2 = (rgb/255 - 0.5) / 0.28209479, opacity
+/// (kGaussianOpacityLogit), scale_0..2 = log(sigma) per principal axis (sigma clamped to
+/// kGaussianMinSigma), rot_0..3 = unit quaternion w x y z of the proper rotation R whose columns
+/// are the principal axes, so Sigma = R diag(exp(2 scale)) R^T. Atomic like writeEllipsoidPly.
+void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
+
 }  // namespace vdmap

@@ -274,4 +274,20 @@ std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file
   return out;
 }
 
+int PlyVertexTable::column(const std::string& name) const {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+}
+
+PlyVertexTable readPlyVertices(const std::filesystem::path& file) {
+  const std::vector<Element> elements = Reader(file).read();
+  const Element& v = vertexElement(file, elements);
+  PlyVertexTable table;
+  for (const Property& p : v.properties)
+    if (p.count_type.empty()) table.names.push_back(p.name);
+  table.count = v.count;
+  table.values = v.scalars;
+  return table;
+}
+
 }  // namespace vdmap

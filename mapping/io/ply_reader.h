@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <string>
 #include <vector>
 
 #include <Eigen/Core>
@@ -39,5 +40,19 @@ std::vector<Eigen::Vector3f> readPlyPoints(const std::filesystem::path& file);
 /// Reads ellipsoids: `vertex` with x y z, red green blue, cxx cxy cxz cyy cyz czz, and
 /// optionally count and keyframe. Throws InputError as readPlyMesh.
 std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file);
+
+/// The scalar properties of a PLY's `vertex` element, whatever they are, every value as double.
+struct PlyVertexTable {
+  std::vector<std::string> names;  ///< scalar property names, in file order
+  std::size_t count = 0;           ///< vertices
+  std::vector<double> values;      ///< count x names.size(), row-major
+  /// Column of `name`, or -1.
+  int column(const std::string& name) const;
+  double at(std::size_t row, int column) const { return values[row * names.size() + static_cast<std::size_t>(column)]; }
+};
+
+/// Reads the `vertex` element of any PLY (e.g. points or 3-D Gaussians). Throws InputError as
+/// readPlyMesh.
+PlyVertexTable readPlyVertices(const std::filesystem::path& file);
 
 }  // namespace vdmap

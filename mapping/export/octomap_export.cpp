@@ -1,0 +1,63 @@
+#include "mapping/export/octomap_export.h"
+
+#include <chrono>
+#include <sstream>
+#include <stdexcept>
+
+#include <Eigen/Eigenvalues>
+#include <octomap/OcTree.h>
+
+#include "mapping/core/atomic_file.h"
+
+namespace vdmap {
+
+std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e) {
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+  eig.computeDirect(e.cov);
+  std::vector<Eigen::Vector3d> points = {e.mean};
+  for (int k = 0; k < 3; ++k) {
+    const Eigen::Vector3d axis = std::sqrt(std::max(eig.eigenvalues()(k), 0.0)) * eig.eigenvectors().col(k);
+    points.push_back(e.mean + axis);
+    points.push_back(e.mean - axis);
+  }
+  return points;
+}
+
+OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
+                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
+    throw std::invalid_argument("octomap resolution must be > 0 m");
+  const auto start = std::chrono::steady_clock::now();
+  OctomapExportReport report;
+  std::vector<octomap::Pointcloud> scans(graph.size());
+  for (const Ellipsoid& e : ellipsoids)
+    for (const Eigen::Vector3d& p : ellipsoidSamplePoints(e)) {
+      scans.at(static_cast<std::size_t>(e.keyframe)).push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
+                                                              static_cast<float>(p.z()));
+      ++report.points;
+    }
+  octomap::OcTree tree(resolution_m);
+  for (std::size_t k = 0; k < scans.size(); ++k) {
+    if (scans[k].size() == 0) continue;
+    const Eigen::Vector3d o = graph.keyframe(static_cast<int>(k)).T_W_K.translation();
+    // discretize: one ray per end voxel, which is what the map resolves anyway.
+    tree.insertPointCloud(scans[k], octomap::point3d(o.x(), o.y(), o.z()), -1.0, false, true);
+  }
+  tree.toMaxLikelihood();
+  tree.prune();
+  std::size_t inside = 0;
+  for (const Ellipsoid& e : ellipsoids) {
+    const octomap::OcTreeNode* node = tree.search(e.mean.x(), e.mean.y(), e.mean.z());
+    if (node && tree.isNodeOccupied(node)) ++inside;
+  }
+  report.means_occupied = ellipsoids.empty() ? 1.0 : static_cast<double>(inside) / ellipsoids.size();
+  for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
+    if (tree.isNodeOccupied(*it)) ++report.occupied_leaves;
+  std::ostringstream bytes;
+  tree.writeBinaryConst(bytes);
+  writeFileAtomically(file, bytes.str());
+  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  return report;
+}
+
+}  // namespace vdmap

@@ -1,0 +1,33 @@
+#pragma once
+// OctoMap export of the global map (SPEC section 7), through liboctomap.
+#include <cstddef>
+#include <filesystem>
+#include <string>
+#include <vector>
+
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/local_map/ellipsoid_filter.h"
+
+namespace vdmap {
+
+/// What writeOctomapBt built.
+struct OctomapExportReport {
+  std::size_t points = 0;          ///< points sampled from the ellipsoids and inserted
+  std::size_t occupied_leaves = 0; ///< occupied leaves of the pruned tree
+  double means_occupied = 0;       ///< fraction of the ellipsoid means in an occupied voxel
+  double seconds = 0;              ///< wall time of building and serialising
+};
+
+/// The points an ellipsoid contributes to the OctoMap: its mean and the mean +- one standard
+/// deviation along each principal axis (7 points; the sigma points of the Gaussian), world frame.
+std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e);
+
+/// Builds an OctoMap (octomap::OcTree, default sensor model) of `resolution_m` from world-frame
+/// `ellipsoids`: their sample points are inserted as one scan per keyframe (Ellipsoid::keyframe)
+/// with that keyframe's centre as the sensor origin, so free space is carved along the rays
+/// (SPEC section 7). Writes the binary .bt atomically. Throws std::invalid_argument for a
+/// resolution that is not > 0, std::runtime_error naming `file` when it cannot be written.
+OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
+                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m);
+
+}  // namespace vdmap
