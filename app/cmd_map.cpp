@@ -83,8 +83,8 @@ void runMap(MapArgs args) {
       {"decision_ms", median(decision_ms)},
       {"camera", seq.cameraSource()},
   };
-  const nlohmann::json stats = exportMap(out_dir, graph, global, args.global.filter, options);
   if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
+  const nlohmann::json stats = exportMap(out_dir, graph, global, args.global.filter, options);
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;

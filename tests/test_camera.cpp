@@ -89,27 +89,7 @@ TEST(CameraFile, ReadsYamlJsonAndPresetOverrides) {
   EXPECT_EQ(c.depth_scale, 1000.0);
 }
 
-TEST(CameraFile, MissingKeyNamesFileAndKey) {
-  test::TempDir dir;
-  test::writeText(dir / "camera.yaml", "fx: 500\nfy: 501\ncx: 320\ndepth_scale: 1000\nwidth: 640\nheight: 480\n");
-  try {
-    readCameraFile(dir / "camera.yaml");
-    FAIL() << "expected an InputError";
-  } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("camera.yaml"), std::string::npos) << e.what();
-    EXPECT_NE(std::string(e.what()).find("missing key 'cy'"), std::string::npos) << e.what();
-  }
-}
-
-TEST(CameraFile, MalformedValuesAndSyntaxAreErrors) {
-  test::TempDir dir;
-  test::writeText(dir / "x.yaml", "fx: fast\nfy: 1\ncx: 1\ncy: 1\ndepth_scale: 1\nwidth: 1\nheight: 1\n");
-  EXPECT_THROW(readCameraFile(dir / "x.yaml"), InputError);
-  test::writeText(dir / "y.json", "{\"fx\": [1, 2");
-  EXPECT_THROW(readCameraFile(dir / "y.json"), InputError);
-  test::writeText(dir / "z.yaml", "preset: 7scenes\nfx: -3\n");
-  EXPECT_THROW(readCameraFile(dir / "z.yaml"), InputError);
-}
+// Bad camera files: tests/test_bad_input_matrix.cpp.
 
 }  // namespace
 }  // namespace vdmap

@@ -14,21 +14,6 @@ namespace {
 using test::TempDir;
 using test::writeText;
 
-// Expects TumSequence::open (or load of frame 0) to throw an InputError whose one-line message
-// contains every fragment (the file, the line, what was expected).
-void expectOpenError(const std::filesystem::path& dir, std::initializer_list<std::string> fragments,
-                     bool load_first = false) {
-  try {
-    const TumSequence seq = TumSequence::open(dir);
-    if (load_first) seq.load(0);
-    FAIL() << "expected an InputError";
-  } catch (const InputError& e) {
-    const std::string what = e.what();
-    EXPECT_EQ(what.find('\n'), std::string::npos) << "error must be one line: " << what;
-    for (const std::string& f : fragments) EXPECT_NE(what.find(f), std::string::npos) << what << " lacks " << f;
-  }
-}
-
 TEST(TumSequence, OpensTinySequence) {
   TempDir dir;
   test::writeTinySequence(dir.path(), 3);
@@ -109,93 +94,7 @@ TEST(TumSequence, PrefetcherRethrowsDecodeErrors) {
   EXPECT_THROW(prefetch.next(), InputError);
 }
 
-// ---- Bad input: each gets a one-line error naming the file (and line) and what was expected.
-
-TEST(TumSequenceBadInput, MissingFolder) {
-  expectOpenError("/nonexistent/vdmap-seq", {"/nonexistent/vdmap-seq", "no such sequence folder"});
-}
-
-TEST(TumSequenceBadInput, MissingListFiles) {
-  for (const char* file : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
-    TempDir dir;
-    test::writeTinySequence(dir.path());
-    std::filesystem::remove(dir / file);
-    expectOpenError(dir.path(), {file, "cannot open"});
-  }
-}
-
-TEST(TumSequenceBadInput, MalformedLine) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "depth.txt", "# header\n0.0 depth/000000.png\n0.0333 depth/000001.png extra\n");
-  expectOpenError(dir.path(), {"depth.txt:3", "expected 'timestamp path'"});
-  writeText(dir / "depth.txt", "0.0 depth/000000.png\nabc depth/000001.png\n");
-  expectOpenError(dir.path(), {"depth.txt:2", "expected a number", "'abc'"});
-}
-
-TEST(TumSequenceBadInput, NonMonotonicTimestamp) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "rgb.txt", "0.0 rgb/000000.png\n0.0667 rgb/000002.png\n0.0333 rgb/000001.png\n");
-  expectOpenError(dir.path(), {"rgb.txt:3", "timestamps must increase"});
-}
-
-TEST(TumSequenceBadInput, ImagePathDoesNotExist) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  std::filesystem::remove(dir / "rgb" / "000001.png");
-  expectOpenError(dir.path(), {"rgb.txt:3", "rgb/000001.png", "does not exist"});
-}
-
-TEST(TumSequenceBadInput, CorruptPng) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "depth" / "000000.png", "\x89PNG\r\n garbage");
-  expectOpenError(dir.path(), {"depth/000000.png", "cannot decode depth image"}, true);
-  test::writeTinySequence(dir.path());
-  writeText(dir / "rgb" / "000000.png", "garbage");
-  expectOpenError(dir.path(), {"rgb/000000.png", "cannot decode colour image"}, true);
-}
-
-TEST(TumSequenceBadInput, DepthOfWrongTypeOrSize) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  cv::imwrite((dir / "depth" / "000000.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
-  expectOpenError(dir.path(), {"depth/000000.png", "must be 16-bit single-channel", "8-bit 3-channel"}, true);
-  cv::imwrite((dir / "depth" / "000000.png").string(), cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)));
-  expectOpenError(dir.path(), {"depth/000000.png", "is 32x24 but the camera is 64x48"}, true);
-}
-
-TEST(TumSequenceBadInput, ZeroNormQuaternion) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "groundtruth.txt", "0.0 0 0 0 0 0 0 1\n0.0333 0 0 0 0 0 0 0\n");
-  expectOpenError(dir.path(), {"groundtruth.txt:2", "zero norm"});
-}
-
-TEST(TumSequenceBadInput, NanInPose) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "groundtruth.txt", "# c\n0.0 0 nan 0 0 0 0 1\n");
-  expectOpenError(dir.path(), {"groundtruth.txt:2", "ty is not finite"});
-}
-
-TEST(TumSequenceBadInput, EmptySequence) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "depth.txt", "# nothing here\n");
-  expectOpenError(dir.path(), {"depth.txt", "lists no frames"});
-  test::writeTinySequence(dir.path());
-  writeText(dir / "groundtruth.txt", "100.0 0 0 0 0 0 0 1\n");  // no frame has a pose
-  expectOpenError(dir.path(), {"no usable frames", "3 without a ground-truth pose"});
-}
-
-TEST(TumSequenceBadInput, CameraFileWithMissingKey) {
-  TempDir dir;
-  test::writeTinySequence(dir.path());
-  writeText(dir / "camera.yaml", "fx: 50\nfy: 50\ncx: 31.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n");
-  expectOpenError(dir.path(), {"camera.yaml", "missing key 'cy'"});
-}
+// Bad sequences, lists, poses, images and camera files: tests/test_bad_input_matrix.cpp.
 
 // ---- Real data (skipped when ../shared/data is absent).
 

@@ -1,6 +1,7 @@
 #include "mapping/io/camera_config.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cctype>
 #include <fstream>
 #include <stdexcept>
@@ -108,8 +109,13 @@ PinholeCamera readCameraFile(const std::filesystem::path& file) {
   field({"cx"}, [&](double v) { camera.cx = v; });
   field({"cy"}, [&](double v) { camera.cy = v; });
   field({"depth_scale", "scale"}, [&](double v) { camera.depth_scale = v; });
-  field({"width", "w"}, [&](double v) { camera.width = static_cast<int>(v); });
-  field({"height", "h"}, [&](double v) { camera.height = static_cast<int>(v); });
+  auto pixels = [&name](const char* key, double v) {
+    if (!(v >= 1 && v <= 65535 && v == std::floor(v)))
+      throw InputError(name, std::string("key '") + key + "' must be a whole number of pixels within 1..65535");
+    return static_cast<int>(v);
+  };
+  field({"width", "w"}, [&](double v) { camera.width = pixels("width", v); });
+  field({"height", "h"}, [&](double v) { camera.height = pixels("height", v); });
   try {
     camera.validate();
   } catch (const std::invalid_argument& e) {

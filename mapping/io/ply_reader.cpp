@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
 #include <fstream>
 #include <map>
@@ -65,6 +66,7 @@ class Reader {
 
   std::vector<Element> read() {
     readHeader();
+    checkElementSizes();
     for (Element& e : elements_) readElement(e);
     return std::move(elements_);
   }
@@ -124,6 +126,25 @@ class Reader {
     fail("header does not end with 'end_header'");
   }
 
+  // A header may claim any number of records: reject counts the rest of the file cannot hold
+  // before anything is allocated or looped over.
+  void checkElementSizes() {
+    const std::streampos data = in_.tellg();
+    in_.seekg(0, std::ios::end);
+    const auto bytes = static_cast<std::uint64_t>(in_.tellg() - data);
+    in_.seekg(data);
+    for (const Element& e : elements_) {
+      if (e.count == 0) continue;
+      if (e.properties.empty()) fail("element '" + e.name + "' has no properties");
+      std::uint64_t record = 0;  // the fewest bytes one record takes
+      for (const Property& p : e.properties)
+        record += format_ != Format::kAscii ? typeSize(p.count_type.empty() ? p.type : p.count_type) : 1;
+      if (e.count > bytes / record)
+        fail("element '" + e.name + "' has " + std::to_string(e.count) + " records but only " + std::to_string(bytes) +
+             " bytes follow the header (truncated?)");
+    }
+  }
+
   double readScalar(const std::string& type) {
     if (format_ == Format::kAscii) {
       double v;
@@ -146,8 +167,9 @@ class Reader {
     if (type == "ushort" || type == "uint16") return as(std::uint16_t{});
     if (type == "int" || type == "int32") return as(std::int32_t{});
     if (type == "uint" || type == "uint32") return as(std::uint32_t{});
-    if (type == "float" || type == "float32") return as(float{});
-    return as(double{});
+    const double v = type == "float" || type == "float32" ? as(float{}) : as(double{});
+    if (!std::isfinite(v)) fail("element data has a value that is not finite (NaN or infinity)");
+    return v;
   }
 
   void readElement(Element& e) {
@@ -163,7 +185,11 @@ class Reader {
         const double n = readScalar(p.count_type);
         if (n < 0 || n > 1e6) fail("element '" + e.name + "' has a list of " + std::to_string(n) + " items");
         std::vector<std::int64_t> items(static_cast<std::size_t>(n));
-        for (auto& item : items) item = static_cast<std::int64_t>(readScalar(p.type));
+        for (auto& item : items) {
+          const double v = readScalar(p.type);
+          if (!(std::abs(v) < 9e18)) fail("element '" + e.name + "' has a list item out of range (" + std::to_string(v) + ")");
+          item = static_cast<std::int64_t>(v);
+        }
         if (!list_taken) e.lists.push_back(std::move(items));
         list_taken = true;
       }
@@ -268,6 +294,10 @@ std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file
     e.mean = means[i];
     e.rgb = colors[i];
     e.cov << row[c[0]], row[c[1]], row[c[2]], row[c[1]], row[c[3]], row[c[4]], row[c[2]], row[c[4]], row[c[5]];
+    if (count_col >= 0 && !(row[count_col] >= 0 && row[count_col] <= 4294967295.0))
+      throw InputError(file.string(), "vertex " + std::to_string(i) + ": count must be within 0..2^32-1");
+    if (kf_col >= 0 && !(row[kf_col] >= -2147483648.0 && row[kf_col] <= 2147483647.0))
+      throw InputError(file.string(), "vertex " + std::to_string(i) + ": keyframe must be a 32-bit integer");
     e.count = count_col >= 0 ? static_cast<std::uint32_t>(row[count_col]) : 1u;
     e.keyframe = kf_col >= 0 ? static_cast<std::int32_t>(row[kf_col]) : 0;
   }

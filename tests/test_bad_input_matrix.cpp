@@ -1,0 +1,409 @@
+// The bad-input matrix (issue #9): every input vdmap reads, each way it can be bad, and the exact
+// error class expected. One row is one test. Library readers must throw exactly the class named
+// (InputError for files, std::invalid_argument for values); the command line must exit 1 with a
+// one-line "vdmap VERB: error: ..." (or CLI11's usage error for unparsable options) and leave no
+// output behind. The good input of every reader is checked too, so no row passes by accident.
+//
+// Side effect: each file-reading row's bad file and the good file are copied into the fuzzers'
+// seed corpus (VDMAP_FUZZ_SEEDS/<target>/), so the fuzzers start from every known bad case.
+#include <fstream>
+#include <functional>
+
+#include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+
+#include "mapping/core/error.h"
+#include "mapping/export/ply_writer.h"
+#include "mapping/io/camera_config.h"
+#include "mapping/io/ply_reader.h"
+#include "mapping/io/session_file.h"
+#include "mapping/io/trajectory_io.h"
+#include "mapping/io/tum_sequence.h"
+#include "tests/test_util.h"
+
+namespace vdmap {
+namespace {
+
+namespace fs = std::filesystem;
+using test::writeText;
+
+enum class Expect {
+  kInputError,       ///< vdmap::InputError, message "FILE[:LINE]: ..."
+  kInvalidArgument,  ///< std::invalid_argument (a bad value, not a file)
+  kCliError,         ///< `vdmap ...` exits 1 with one line "vdmap VERB: error: ..."
+  kCliUsage,         ///< `vdmap ...` exits non-zero with CLI11's usage message
+};
+
+/// One input vdmap reads: how to make a good one in a folder, and how vdmap reads it. For the
+/// command line, `path` holds the arguments (with {dir} for the folder).
+struct Input {
+  const char* name;
+  const char* path;        ///< the file read, relative to the folder ("" for the command line)
+  const char* fuzz_target; ///< seed corpus folder, or nullptr
+  std::function<void(const fs::path& dir)> make_good;
+  std::function<void(const fs::path& file)> read;
+};
+
+void writeBytes(const fs::path& file, const std::string& bytes) {
+  fs::create_directories(file.parent_path());
+  std::ofstream(file, std::ios::binary) << bytes;
+}
+
+std::string readBytes(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
+}
+
+const std::string kMeshPly =
+    "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+    "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
+    "property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n";
+
+// A binary little-endian mesh header for 3 vertices of float x y z, uchar r g b and one face.
+std::string binaryMesh(const std::string& body) {
+  return "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
+         "property float z\nproperty float red\nproperty float green\nproperty float blue\nelement face 1\n"
+         "property list uchar int vertex_indices\nend_header\n" +
+         body;
+}
+
+std::string goodSession() {
+  static const std::string bytes = [] {
+    const Mapper mapper = test::mapTurningBoxRoom(2);
+    return encodeSession(mapper.graph(), sessionInfo(mapper, {}));
+  }();
+  return bytes;
+}
+
+void setU32(std::string* bytes, std::size_t at, std::uint32_t v) {
+  for (int i = 0; i < 4; ++i) (*bytes)[at + i] = static_cast<char>(v >> (8 * i));
+}
+
+const std::vector<Input>& inputs() {
+  static const std::vector<Input> all = {
+      {"sequence", "seq", "tum_list", [](const fs::path& d) { test::writeTinySequence(d / "seq"); },
+       [](const fs::path& f) { TumSequence::open(f).load(0); }},
+      {"trajectory", "poses.txt", "pose",
+       [](const fs::path& d) { writeText(d / "poses.txt", "# t tx ty tz qx qy qz qw\n0.5 1 2 3 0 0 0 1\n"); },
+       [](const fs::path& f) { readTumTrajectory(f); }},
+      {"corrected_trajectory", "poses.txt", "pose",
+       [](const fs::path& d) { writeText(d / "poses.txt", "0.0 1 2 3 0 0 0 1\n"); },
+       [](const fs::path& f) {
+         const Mapper mapper = test::mapTurningBoxRoom(1);  // one keyframe at t = 0
+         KeyframeGraph graph = mapper.graph();
+         graph.applyTrajectory(f);
+       }},
+      {"camera_yaml", "camera.yaml", "camera",
+       [](const fs::path& d) {
+         writeText(d / "camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640\nheight: 480\n");
+       },
+       [](const fs::path& f) { readCameraFile(f); }},
+      {"camera_json", "camera.json", "camera",
+       [](const fs::path& d) { writeText(d / "camera.json", "{\"preset\": \"tum-fr1\", \"fx\": 517.3}"); },
+       [](const fs::path& f) { readCameraFile(f); }},
+      {"ply_mesh", "m.ply", "ply", [](const fs::path& d) { writeText(d / "m.ply", kMeshPly); },
+       [](const fs::path& f) { readPlyMesh(f); }},
+      {"ply_ellipsoids", "e.ply", "ply",
+       [](const fs::path& d) {
+         Ellipsoid e;
+         e.mean = {1, 2, 3};
+         e.cov = Eigen::Matrix3d::Identity() * 1e-4;
+         e.count = 12;
+         e.keyframe = 3;
+         writeEllipsoidPly(d / "e.ply", {e, e});
+       },
+       [](const fs::path& f) { readPlyEllipsoids(f); }},
+      {"session", "s.vdmap", "session", [](const fs::path& d) { writeBytes(d / "s.vdmap", goodSession()); },
+       [](const fs::path& f) { loadSession(f); }},
+      {"command_line", "", nullptr, [](const fs::path& d) { test::writeTinySequence(d / "seq"); }, nullptr},
+  };
+  return all;
+}
+
+/// One bad case. `damage` changes the good input in the folder (for the command line it returns
+/// the arguments); `fragment` must appear in the message.
+struct BadCase {
+  const char* input;
+  const char* name;
+  Expect expect;
+  const char* fragment;
+  std::function<std::string(const fs::path& dir)> damage;
+};
+
+std::string replaceAll(std::string s, const std::string& from, const std::string& to) {
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  return s;
+}
+
+// Damages one file by replacing its text.
+std::function<std::string(const fs::path&)> write(const char* file, std::string text) {
+  return [file, text](const fs::path& d) {
+    writeBytes(d / file, text);
+    return std::string();
+  };
+}
+std::function<std::string(const fs::path&)> removeFile(const char* file) {
+  return [file](const fs::path& d) {
+    fs::remove_all(d / file);
+    return std::string();
+  };
+}
+std::function<std::string(const fs::path&)> session(std::function<void(std::string*)> edit) {
+  return [edit](const fs::path& d) {
+    std::string bytes = goodSession();
+    edit(&bytes);
+    writeBytes(d / "s.vdmap", bytes);
+    return std::string();
+  };
+}
+std::function<std::string(const fs::path&)> args(std::string a) {
+  return [a](const fs::path&) { return a; };
+}
+
+const std::vector<BadCase>& badCases() {
+  using E = Expect;
+  static const std::vector<BadCase> all = {
+      // Sequence folders and their lists (TUM layout).
+      {"sequence", "missing_folder", E::kInputError, "no such sequence folder", removeFile("seq")},
+      {"sequence", "folder_is_a_file", E::kInputError, "is not a folder",
+       [](const fs::path& d) {
+         fs::remove_all(d / "seq");
+         return write("seq", "x")(d);
+       }},
+      {"sequence", "missing_rgb_list", E::kInputError, "cannot open", removeFile("seq/rgb.txt")},
+      {"sequence", "missing_depth_list", E::kInputError, "depth.txt: cannot open", removeFile("seq/depth.txt")},
+      {"sequence", "missing_groundtruth", E::kInputError, "cannot open", removeFile("seq/groundtruth.txt")},
+      {"sequence", "extra_column", E::kInputError, "depth.txt:2: expected 'timestamp path', got 3",
+       write("seq/depth.txt", "0.0 depth/000000.png\n0.0333 depth/000001.png extra\n")},
+      {"sequence", "timestamp_not_a_number", E::kInputError, "rgb.txt:1: expected a number",
+       write("seq/rgb.txt", "abc rgb/000000.png\n")},
+      {"sequence", "timestamps_decrease", E::kInputError, "depth.txt:2: timestamp 0.000000 is not after",
+       write("seq/depth.txt", "0.0333 depth/000001.png\n0.0 depth/000000.png\n")},
+      {"sequence", "binary_garbage_list", E::kInputError, "depth.txt:1",
+       write("seq/depth.txt", std::string("\x00\xff\x13 \x80\n", 6))},
+      {"sequence", "empty_depth_list", E::kInputError, "lists no frames", write("seq/depth.txt", "# none\n")},
+      {"sequence", "no_pose_near_any_frame", E::kInputError, "3 without a ground-truth pose",
+       write("seq/groundtruth.txt", "100.0 0 0 0 0 0 0 1\n")},
+      {"sequence", "bad_associations", E::kInputError, "associations.txt:1",
+       write("seq/associations.txt", "0.0 rgb/000000.png 0.0\n")},
+      {"sequence", "image_missing", E::kInputError, "rgb.txt:3: ", removeFile("seq/rgb/000001.png")},
+      // Images (decoded lazily: load(0)).
+      {"sequence", "corrupt_depth_png", E::kInputError, "cannot decode depth image",
+       write("seq/depth/000000.png", "\x89PNG\r\n garbage")},
+      {"sequence", "empty_rgb_png", E::kInputError, "cannot decode colour image", write("seq/rgb/000000.png", "")},
+      {"sequence", "depth_8bit_colour", E::kInputError, "must be 16-bit single-channel",
+       [](const fs::path& d) {
+         cv::imwrite((d / "seq/depth/000000.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
+         return std::string();
+       }},
+      {"sequence", "depth_wrong_size", E::kInputError, "is 32x24 but the camera is 64x48",
+       [](const fs::path& d) {
+         cv::imwrite((d / "seq/depth/000000.png").string(), cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)));
+         return std::string();
+       }},
+      {"sequence", "rgb_wrong_size", E::kInputError, "colour image is",
+       [](const fs::path& d) {
+         cv::imwrite((d / "seq/rgb/000000.png").string(), cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)));
+         return std::string();
+       }},
+      {"sequence", "camera_file_missing_key", E::kInputError, "missing key 'cy'",
+       write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 31.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
+      // Poses (TUM trajectories: ground truth, corrected trajectories).
+      {"trajectory", "missing_file", E::kInputError, "cannot open", removeFile("poses.txt")},
+      {"trajectory", "zero_quaternion", E::kInputError, "poses.txt:1: quaternion (qx qy qz qw) has zero norm",
+       write("poses.txt", "0.5 1 2 3 0 0 0 0\n")},
+      {"trajectory", "nan", E::kInputError, "poses.txt:1: ty is not finite", write("poses.txt", "0.5 1 nan 3 0 0 0 1\n")},
+      {"trajectory", "inf", E::kInputError, "is not finite", write("poses.txt", "0.5 1 2 inf 0 0 0 1\n")},
+      {"trajectory", "seven_columns", E::kInputError, "expected 'timestamp tx ty tz qx qy qz qw'",
+       write("poses.txt", "0.5 1 2 3 0 0 0\n")},
+      {"trajectory", "number_with_suffix", E::kInputError, "expected a number",
+       write("poses.txt", "0.5 1 2 3x 0 0 0 1\n")},
+      {"trajectory", "repeated_timestamp", E::kInputError, "timestamps must increase",
+       write("poses.txt", "0.5 1 2 3 0 0 0 1\n0.5 1 2 3 0 0 0 1\n")},
+      {"corrected_trajectory", "matches_no_keyframe", E::kInputError, "no pose matches a keyframe timestamp",
+       write("poses.txt", "50.0 1 2 3 0 0 0 1\n")},
+      // Camera files (the configuration files vdmap reads).
+      {"camera_yaml", "missing_file", E::kInputError, "cannot open camera file", removeFile("camera.yaml")},
+      {"camera_yaml", "missing_key", E::kInputError, "missing key 'cy'",
+       write("camera.yaml", "fx: 500\nfy: 501\ncx: 320\ndepth_scale: 1000\nwidth: 640\nheight: 480\n")},
+      {"camera_yaml", "value_not_a_number", E::kInputError, "camera.yaml:1: key 'fx' must be a number",
+       write("camera.yaml", "fx: fast\nfy: 1\ncx: 1\ncy: 1\ndepth_scale: 1\nwidth: 1\nheight: 1\n")},
+      {"camera_yaml", "negative_focal_length", E::kInputError, "fx", write("camera.yaml", "preset: 7scenes\nfx: -3\n")},
+      {"camera_yaml", "unknown_preset", E::kInputError, "unknown camera preset 'kinect9'",
+       write("camera.yaml", "preset: kinect9\n")},
+      {"camera_yaml", "not_a_map", E::kInputError, "expected a map of camera keys", write("camera.yaml", "- 1\n- 2\n")},
+      {"camera_yaml", "empty", E::kInputError, "camera.yaml", write("camera.yaml", "")},
+      {"camera_yaml", "fractional_width", E::kInputError, "width",
+       write("camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640.5\nheight: 480\n")},
+      {"camera_json", "syntax_error", E::kInputError, "not valid YAML/JSON", write("camera.json", "{\"fx\": [1, 2")},
+      // PLY meshes (vdmap synth --mesh, vdmap eval) and ellipsoid maps (vdmap render --map).
+      {"ply_mesh", "missing_file", E::kInputError, "cannot open the file", removeFile("m.ply")},
+      {"ply_mesh", "not_ply", E::kInputError, "m.ply:1: not a PLY file", write("m.ply", "solid cube\n")},
+      {"ply_mesh", "no_end_header", E::kInputError, "does not end with 'end_header'",
+       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 3\n")},
+      {"ply_mesh", "unknown_format", E::kInputError, "unknown format 'binary_middle_endian'",
+       write("m.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n")},
+      {"ply_mesh", "unknown_property_type", E::kInputError, "known type",
+       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty quad x\nend_header\n")},
+      {"ply_mesh", "ascii_non_number", E::kInputError, "non-number",
+       write("m.ply", replaceAll(kMeshPly, "1 0 0 0 255 0", "1 zero 0 0 255 0"))},
+      {"ply_mesh", "binary_truncated", E::kInputError, "truncated", write("m.ply", binaryMesh(std::string(30, '\0')))},
+      {"ply_mesh", "no_faces", E::kInputError, "the mesh has no faces",
+       write("m.ply", kMeshPly.substr(0, kMeshPly.find("element face")) + "end_header\n0 0 0 1 2 3\n0 0 0 1 2 3\n0 0 0 1 2 3\n")},
+      {"ply_mesh", "no_colours", E::kInputError, "no vertex colours",
+       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "element face 1\nproperty list uchar int vertex_indices\nend_header\n0 0 0\n1 0 0\n0 1 0\n3 0 1 2\n")},
+      {"ply_mesh", "face_index_out_of_range", E::kInputError, "a face indexes vertex 7 of 3",
+       write("m.ply", kMeshPly.substr(0, kMeshPly.rfind("3 0 1 2")) + "3 0 1 7\n")},
+      {"ply_mesh", "huge_vertex_count", E::kInputError, "element 'vertex' has 1000000000000 records",
+       write("m.ply", "ply\nformat binary_little_endian 1.0\nelement vertex 1000000000000\nproperty float x\n"
+                      "end_header\n")},
+      {"ply_mesh", "element_without_properties", E::kInputError, "element 'vertex' has no properties",
+       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 1000000000000\nend_header\n")},
+      {"ply_mesh", "nan_colour", E::kInputError, "is not finite",
+       write("m.ply", binaryMesh(std::string(12, '\0') + std::string("\x00\x00\xc0\x7f", 4) + std::string(8, '\0') +
+                                 std::string(24 * 2, '\0') + std::string("\x03\x00\x00\x00\x00\x01\x00\x00\x00\x02\x00\x00\x00", 13)))},
+      {"ply_mesh", "float_face_index_overflow", E::kInputError, "list item out of range",
+       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
+                      "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
+                      "property list uchar float vertex_indices\nend_header\n0 0 0 1 2 3\n1 0 0 1 2 3\n0 1 0 1 2 3\n"
+                      "3 0 1 1e30\n")},
+      {"ply_ellipsoids", "no_covariance", E::kInputError, "needs the covariance", write("e.ply", kMeshPly)},
+      {"ply_ellipsoids", "truncated", E::kInputError, "truncated",
+       [](const fs::path& d) {
+         const std::string bytes = readBytes(d / "e.ply");
+         writeBytes(d / "e.ply", bytes.substr(0, bytes.size() - 7));
+         return std::string();
+       }},
+      {"ply_ellipsoids", "negative_count", E::kInputError, "count",
+       write("e.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\nproperty float z\n"
+                      "property uchar red\nproperty uchar green\nproperty uchar blue\nproperty float cxx\n"
+                      "property float cxy\nproperty float cxz\nproperty float cyy\nproperty float cyz\n"
+                      "property float czz\nproperty int count\nproperty int keyframe\nend_header\n"
+                      "0 0 1 1 2 3 1 0 0 1 0 1 -5 0\n")},
+      // Session files (.vdmap).
+      {"session", "missing_file", E::kInputError, "cannot open the session file", removeFile("s.vdmap")},
+      {"session", "empty", E::kInputError, "wrong magic", write("s.vdmap", "")},
+      {"session", "wrong_magic", E::kInputError, "wrong magic", write("s.vdmap", "ply\nformat ascii 1.0\n")},
+      {"session", "truncated_header", E::kInputError, "header: truncated", session([](std::string* b) { b->resize(20); })},
+      {"session", "truncated_section", E::kInputError, "truncated", session([](std::string* b) { b->resize(b->size() - 9); })},
+      {"session", "flipped_byte", E::kInputError, "checksum mismatch", session([](std::string* b) { (*b)[b->size() / 2] ^= 4; })},
+      {"session", "newer_version", E::kInputError, "format version 7 is newer",
+       session([](std::string* b) {
+         setU32(b, 8, 7);
+         setU32(b, 20, crc32(std::string_view(*b).substr(0, 20)));
+       })},
+      {"session", "trailing_bytes", E::kInputError, "unexpected bytes at the end", session([](std::string* b) { *b += "x"; })},
+      // Command-line values.
+      {"command_line", "frames_reversed", E::kCliError, "--frames", args("map {dir}/seq --out {dir}/out --frames 5:2")},
+      {"command_line", "frames_past_the_end", E::kCliError, "--frames starts at 9", args("map {dir}/seq --out {dir}/out --frames 9:")},
+      {"command_line", "unknown_camera_preset", E::kCliError, "unknown camera preset 'nope'",
+       args("map {dir}/seq --out {dir}/out --camera nope")},
+      {"command_line", "cell_size_zero", E::kCliError, "cell size 0", args("map {dir}/seq --out {dir}/out --cell-size 0")},
+      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every must be >= 0",
+       args("map {dir}/seq --out {dir}/out --keyframe-every -1")},
+      {"command_line", "negative_merge_distance", E::kCliError, "merge_distance must be >= 0",
+       args("map {dir}/seq --out {dir}/out --merge-distance -1")},
+      {"command_line", "unknown_sensor_model", E::kCliError, "foo", args("map {dir}/seq --out {dir}/out --sensor-model foo")},
+      {"command_line", "out_is_a_file", E::kCliError, "is not a folder", args("map {dir}/seq --out {dir}/seq/rgb.txt")},
+      {"command_line", "save_into_missing_folder", E::kCliError, "cannot write",
+       args("map {dir}/seq --out {dir}/out --save {dir}/no/such/s.vdmap")},
+      {"command_line", "cell_size_not_a_number", E::kCliUsage, "--cell-size", args("map {dir}/seq --out {dir}/out --cell-size abc")},
+      {"command_line", "missing_out", E::kCliUsage, "--out", args("map {dir}/seq")},
+      {"command_line", "unknown_verb", E::kCliUsage, "frobnicate", args("frobnicate")},
+      {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
+  };
+  return all;
+}
+
+const Input& inputNamed(const std::string& name) {
+  for (const Input& i : inputs())
+    if (name == i.name) return i;
+  throw std::logic_error("no input " + name);
+}
+
+// Copies `file` into the seed corpus of `target` (when the build defines one).
+void addSeed(const char* target, const std::string& name, const fs::path& file) {
+#ifdef VDMAP_FUZZ_SEEDS
+  if (!target || !fs::is_regular_file(file)) return;
+  const fs::path dir = fs::path(VDMAP_FUZZ_SEEDS) / target;
+  fs::create_directories(dir);
+  writeBytes(dir / name, readBytes(file));
+#else
+  (void)target, (void)name, (void)file;
+#endif
+}
+
+void PrintTo(const BadCase& c, std::ostream* os) { *os << c.input << "/" << c.name; }
+
+class BadInputMatrix : public testing::TestWithParam<BadCase> {};
+
+TEST_P(BadInputMatrix, GivesTheExpectedErrorClass) {
+  const BadCase& c = GetParam();
+  const Input& input = inputNamed(c.input);
+  test::TempDir dir;
+  input.make_good(dir.path());
+  const std::string arguments = c.damage(dir.path());
+  const fs::path file = dir / input.path;
+  addSeed(input.fuzz_target, std::string(c.input) + "-" + c.name, file);
+  if (input.fuzz_target && std::string(input.fuzz_target) == "tum_list")
+    for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+      addSeed(input.fuzz_target, std::string(c.name) + "-" + list, file / list);
+
+  if (c.expect == Expect::kCliError || c.expect == Expect::kCliUsage) {
+    const test::RunResult r = test::runVdmap(replaceAll(arguments, "{dir}", dir.path().string()));
+    ASSERT_NE(r.exit_code, 0) << r.out;
+    EXPECT_NE(r.err.find(c.fragment), std::string::npos) << r.err;
+    EXPECT_FALSE(fs::exists(dir / "out")) << "a failed run leaves no output";
+    if (c.expect == Expect::kCliError) {
+      EXPECT_EQ(r.exit_code, 1);
+      EXPECT_EQ(r.err.rfind("vdmap ", 0), 0u) << r.err;
+      EXPECT_NE(r.err.find(": error: "), std::string::npos) << r.err;
+      EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+    }
+    return;
+  }
+  try {
+    input.read(file);
+    FAIL() << "read without an error";
+  } catch (const InputError& e) {
+    EXPECT_EQ(c.expect, Expect::kInputError) << "got InputError: " << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+    EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line: " << e.what();
+  } catch (const std::invalid_argument& e) {
+    EXPECT_EQ(c.expect, Expect::kInvalidArgument) << "got std::invalid_argument: " << e.what();
+    EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
+  } catch (const std::exception& e) {
+    FAIL() << "wrong error class (" << typeid(e).name() << "): " << e.what();
+  }
+}
+
+std::string caseName(const testing::TestParamInfo<BadCase>& info) {
+  return std::string(info.param.input) + "_" + info.param.name;
+}
+
+INSTANTIATE_TEST_SUITE_P(Inputs, BadInputMatrix, testing::ValuesIn(badCases()), caseName);
+
+// The good input of every reader is read without error (the baseline each bad case damages),
+// and is the first seed of its fuzzer.
+TEST(BadInputMatrixBaseline, GoodInputsRead) {
+  for (const Input& input : inputs()) {
+    if (!input.read) continue;
+    test::TempDir dir;
+    input.make_good(dir.path());
+    EXPECT_NO_THROW(input.read(dir / input.path)) << input.name;
+    addSeed(input.fuzz_target, std::string(input.name) + "-good", dir / input.path);
+    if (std::string(input.name) == "sequence") addSeed("tum_list", "depth-list", dir / "seq" / "depth.txt");
+  }
+}
+
+TEST(BadInputMatrixBaseline, EveryInputHasBadCases) {
+  for (const Input& input : inputs()) {
+    int n = 0;
+    for (const BadCase& c : badCases()) n += std::string(c.input) == input.name;
+    EXPECT_GE(n, 1) << input.name;
+  }
+}
+
+}  // namespace
+}  // namespace vdmap
