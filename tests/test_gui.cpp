@@ -74,6 +74,10 @@ TEST(GuiSettings, SetKeyValue) {
   applySetting(s, "occlusion_removal=false");
   applySetting(s, "sensor_model=belter2018");
   applySetting(s, "cell_size=8");
+  applySetting(s, "color=uncertainty");
+  applySetting(s, "show_ellipsoids=false");
+  EXPECT_EQ(s.color, render::ColorMode::kUncertainty);
+  EXPECT_FALSE(s.show_ellipsoids);
   EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);
   EXPECT_FALSE(s.thresholds.occlusion_removal);
   EXPECT_EQ(s.thresholds.filter.model, SensorModel::kBelter2018);

@@ -101,7 +101,8 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_flag("--exit", args.script.exit, "close once the screenshot/stats are written (settings are not touched)");
   app.add_option("--set", args.set,
                  "KEY=VALUE before start: sensor_model, filter_sigma_factor, min_points, tau_group, merge_distance, "
-                 "occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features");
+                 "occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features; view: color, "
+                 "show_ellipsoids, show_frustums, show_graph, show_trajectory, ellipsoid_sigma, play_fps");
 }
 
 }  // namespace

@@ -143,6 +143,7 @@ void applySetting(Settings& settings, const std::string& key_value) {
   const json v = parsed.is_discarded() ? json(value) : parsed;
   if (j["thresholds"].contains(key)) j["thresholds"][key] = v;
   else if (j["rerun"].contains(key)) j["rerun"][key] = v;
+  else if (j["view"].contains(key)) j["view"][key] = v;
   else throw std::invalid_argument("--set '" + key + "': unknown key (see vdmap gui --help)");
   try {
     settings = fromJson(j);
