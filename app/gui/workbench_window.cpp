@@ -139,6 +139,12 @@ class WorkbenchWindow {
   void syncScene() {
     MapSession* session = bench_.session();
     if (!session) return;
+    if (session != shown_session_) {  // a newly opened sequence: everything shown is stale
+      shown_session_ = session;
+      shown_mapping_ = nullptr;
+      shown_generation_ = container_generation_ = -1;
+      container_keyframe_ = -2;
+    }
     mapping_ = session->mapping();
     global_ = session->global();
     if (mapping_.get() != shown_mapping_) {
@@ -446,7 +452,9 @@ class WorkbenchWindow {
       ImGui::SetNextWindowPos({kLeftWidth + 10, error ? 10.f : 80.f}, ImGuiCond_Always);
       ImGui::SetNextWindowSize({ImGui::GetIO().DisplaySize.x - kLeftWidth - kRightWidth - 20, 0}, ImGuiCond_Always);
       ImGui::Begin(error ? "Error" : "Warning", nullptr, ImGuiWindowFlags_NoCollapse);
-      ImGui::TextColored(error ? ImVec4(1, 0.45f, 0.45f, 1) : ImVec4(1, 0.85f, 0.3f, 1), "%s", text->c_str());
+      ImGui::PushStyleColor(ImGuiCol_Text, error ? ImVec4(1, 0.45f, 0.45f, 1) : ImVec4(1, 0.85f, 0.3f, 1));
+      ImGui::TextWrapped("%s", text->c_str());
+      ImGui::PopStyleColor();
       if (ImGui::Button("Dismiss")) text->clear();
       ImGui::End();
     }
@@ -487,7 +495,7 @@ class WorkbenchWindow {
     cv::flip(image, image, 0);
     try {
       render::writePng(file, image);
-      bench_.ui().warning = "screenshot written to " + file;
+      if (bench_.ui().warning.empty()) bench_.ui().warning = "screenshot written to " + file;
     } catch (const std::exception& e) {
       bench_.ui().error = e.what();
     }
@@ -529,6 +537,7 @@ class WorkbenchWindow {
   std::unique_ptr<render::Framebuffer> container_fb_;
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
+  const MapSession* shown_session_ = nullptr;
   const MappingSnapshot* shown_mapping_ = nullptr;
   int shown_generation_ = -1, container_keyframe_ = -2, container_generation_ = -1;
   render::ColorMode shown_color_ = render::ColorMode::kRgb;
