@@ -30,6 +30,7 @@ struct RenderArgs {
   SequenceArgs sequence;
   std::string map, mesh, view = "global", out, size, color = "rgb";
   float sigma = 2.f;
+  float point_below_px = render::EllipsoidStyle{}.point_below_px;
   bool grid = false;
   int bench_ellipsoids = 0;
   int sphere_subdivisions = 1;
@@ -76,7 +77,8 @@ void runBench(const RenderArgs& args) {
   auto context = render::createOffscreenContext();
   const render::Gl& gl = context->gl();
   render::Framebuffer fb(gl, w, h);
-  render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .sphere_subdivisions = args.sphere_subdivisions});
+  render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .sphere_subdivisions = args.sphere_subdivisions,
+                                         .point_below_px = args.point_below_px});
   auto t0 = std::chrono::steady_clock::now();
   renderer.set(set);
   gl.Finish();
@@ -92,7 +94,8 @@ void runBench(const RenderArgs& args) {
   }
   std::sort(times.begin(), times.end());
   std::printf("renderer     %s\n", context->description().c_str());
-  std::printf("ellipsoids   %d instanced, icosphere level %d, %dx%d\n", args.bench_ellipsoids, args.sphere_subdivisions, w, h);
+  std::printf("ellipsoids   %d instanced, icosphere level %d, points below %.1f px, %dx%d\n", args.bench_ellipsoids,
+              args.sphere_subdivisions, args.point_below_px, w, h);
   std::printf("upload       %.1f ms (eigen-decomposition + buffer upload)\n", upload_ms);
   std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", times[times.size() / 2], times.size(), times[0]);
   if (!args.out.empty()) render::writePng(args.out, fb.readRgb());
@@ -166,7 +169,7 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
     mesh_renderer.draw(view);
   }
   if (!scene.ellipsoids.empty()) {
-    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color});
+    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color, .point_below_px = args.point_below_px});
     renderer.set(scene.ellipsoids);
     renderer.draw(view);
   }
@@ -270,6 +273,9 @@ void addRenderCommand(CLI::App& app) {
                    "time N random instanced ellipsoids at --size instead of rendering a map");
   verb->add_option("--sphere-level", args->sphere_subdivisions, "icosphere subdivisions of one ellipsoid (0..3)")
       ->check(CLI::Range(0, 3))->capture_default_str();
+  verb->add_option("--points-below", args->point_below_px,
+                   "draw ellipsoids projecting to a radius below this many pixels as points (0: never)")
+      ->check(CLI::Range(0.f, 64.f))->capture_default_str();
   verb->callback([args] { runRender(*args); });
 }
 

@@ -44,19 +44,30 @@ std::array<float, 12> ellipsoidAxes(const EllipsoidInstance& e, float sigma) {
 EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
     : gl_(&gl), style_(style),
       program_(std::make_unique<ShaderProgram>(gl, "ellipsoid.vert", "shaded.frag")),
-      vao_(gl), sphere_vertices_(gl), sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER), geometry_(gl),
-      colors_(gl) {
+      point_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_point.vert", "ellipsoid_point.frag")),
+      vao_(gl), near_vao_(gl), point_vao_(gl), sphere_vertices_(gl), sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER),
+      geometry_(gl), colors_(gl), near_geometry_(gl), near_colors_(gl) {
   const Icosphere sphere = makeIcosphere(style.sphere_subdivisions);
-  vao_.bind();
-  sphere_vertices_.upload(sphere.vertices.data(), sphere.vertices.size() * sizeof(glm::vec3));
-  sphere_vertices_.attribute(0, 3, GL_FLOAT, false, sizeof(glm::vec3), 0);
-  sphere_indices_.upload(sphere.triangles.data(), sphere.triangles.size() * sizeof(glm::uvec3));
   index_count_ = static_cast<GLsizei>(sphere.triangles.size() * 3);
-  geometry_.upload(nullptr, 0);
-  for (GLuint k = 0; k < 4; ++k)
-    geometry_.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k, 1);
-  colors_.upload(nullptr, 0);
-  colors_.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0, 1);
+  sphere_vertices_.upload(sphere.vertices.data(), sphere.vertices.size() * sizeof(glm::vec3));
+  sphere_indices_.upload(sphere.triangles.data(), sphere.triangles.size() * sizeof(glm::uvec3));
+  // Mesh passes: the sphere per vertex, geometry and colour per instance; vao_ reads every
+  // instance, near_vao_ the selection draw() makes per frame.
+  auto mesh_vao = [this](const VertexArray& vao, GpuBuffer& geometry, GpuBuffer& colors) {
+    vao.bind();
+    sphere_vertices_.attribute(0, 3, GL_FLOAT, false, sizeof(glm::vec3), 0);
+    sphere_indices_.bind();
+    geometry.upload(nullptr, 0);
+    for (GLuint k = 0; k < 4; ++k) geometry.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k, 1);
+    colors.upload(nullptr, 0);
+    colors.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0, 1);
+  };
+  mesh_vao(vao_, geometry_, colors_);
+  mesh_vao(near_vao_, near_geometry_, near_colors_);
+  // The point pass reads the full instance buffers, one vertex per ellipsoid.
+  point_vao_.bind();
+  for (GLuint k = 0; k < 4; ++k) geometry_.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k);
+  colors_.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0);
   gl.BindVertexArray(0);
 }
 
@@ -65,10 +76,10 @@ EllipsoidRenderer::~EllipsoidRenderer() = default;
 void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
   instances_.assign(ellipsoids.begin(), ellipsoids.end());
   count_ = instances_.size();
-  const std::vector<float> geometry = geometryOf(instances_, style_.sigma);
-  geometry_.upload(geometry.data(), geometry.size() * sizeof(float));
-  const std::vector<glm::u8vec4> colors = ellipsoidColors(instances_, style_.color);
-  colors_.upload(colors.data(), colors.size() * sizeof(glm::u8vec4));
+  geometry_cpu_ = geometryOf(instances_, style_.sigma);
+  geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
+  colors_cpu_ = ellipsoidColors(instances_, style_.color);
+  colors_.upload(colors_cpu_.data(), colors_cpu_.size() * sizeof(glm::u8vec4));
 }
 
 void EllipsoidRenderer::update(std::size_t first, std::span<const EllipsoidInstance> changed) {
@@ -81,14 +92,15 @@ void EllipsoidRenderer::update(std::size_t first, std::span<const EllipsoidInsta
   }
   std::copy(changed.begin(), changed.end(), instances_.begin() + first);
   const std::vector<float> geometry = geometryOf(changed, style_.sigma);
+  std::copy(geometry.begin(), geometry.end(), geometry_cpu_.begin() + 12 * first);
   geometry_.update(first * kGeometryStride, geometry.data(), geometry.size() * sizeof(float));
-  std::vector<glm::u8vec4> colors;
   if (style_.color == ColorMode::kRgb || style_.color == ColorMode::kKeyframe) {
-    colors = ellipsoidColors(changed, style_.color);
+    const std::vector<glm::u8vec4> colors = ellipsoidColors(changed, style_.color);
+    std::copy(colors.begin(), colors.end(), colors_cpu_.begin() + first);
     colors_.update(first * 4, colors.data(), colors.size() * 4);
   } else {
-    colors = ellipsoidColors(instances_, style_.color);  // a ramp depends on the whole set
-    colors_.upload(colors.data(), colors.size() * 4);
+    colors_cpu_ = ellipsoidColors(instances_, style_.color);  // a ramp depends on the whole set
+    colors_.upload(colors_cpu_.data(), colors_cpu_.size() * 4);
   }
 }
 
@@ -97,23 +109,62 @@ void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
   const bool colors_changed = style.color != style_.color;
   style_.sigma = style.sigma;
   style_.color = style.color;  // the sphere level is fixed at construction
+  style_.point_below_px = style.point_below_px;
   if (geometry_changed) {
-    const std::vector<float> geometry = geometryOf(instances_, style_.sigma);
-    geometry_.upload(geometry.data(), geometry.size() * sizeof(float));
+    geometry_cpu_ = geometryOf(instances_, style_.sigma);
+    geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
   }
   if (colors_changed) {
-    const std::vector<glm::u8vec4> colors = ellipsoidColors(instances_, style_.color);
-    colors_.upload(colors.data(), colors.size() * 4);
+    colors_cpu_ = ellipsoidColors(instances_, style_.color);
+    colors_.upload(colors_cpu_.data(), colors_cpu_.size() * 4);
   }
+}
+
+std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const {
+  // The shaders decide exactly which pass draws an instance; this selection only has to keep
+  // every instance the mesh pass may draw, so it uses 90% of the threshold. Instances wholly
+  // in front of the near plane (or behind the camera) are drawn by neither pass.
+  const glm::mat4& V = view.T_C_W;
+  const glm::vec4 row_z(V[0][2], V[1][2], V[2][2], V[3][2]);
+  const float focal_px = std::max(view.fx, view.fy), threshold = 0.9f * style_.point_below_px;
+  near_geometry_cpu_.clear();
+  near_colors_cpu_.clear();
+  for (std::size_t i = 0; i < count_; ++i) {
+    const float* g = &geometry_cpu_[12 * i];
+    const float z = row_z.x * g[0] + row_z.y * g[1] + row_z.z * g[2] + row_z.w;
+    float r2 = 0.f;
+    for (int k = 0; k < 3; ++k) r2 = std::max(r2, g[3 + 3 * k] * g[3 + 3 * k] + g[4 + 3 * k] * g[4 + 3 * k] + g[5 + 3 * k] * g[5 + 3 * k]);
+    const float r = std::sqrt(r2);
+    if (z + r < view.near_m || (z > 0.f && focal_px * r < threshold * z)) continue;
+    near_geometry_cpu_.insert(near_geometry_cpu_.end(), g, g + 12);
+    near_colors_cpu_.push_back(colors_cpu_[i]);
+  }
+  near_geometry_.upload(near_geometry_cpu_.data(), near_geometry_cpu_.size() * sizeof(float));
+  near_colors_.upload(near_colors_cpu_.data(), near_colors_cpu_.size() * 4);
+  return near_colors_cpu_.size();
 }
 
 void EllipsoidRenderer::draw(const ViewCamera& view) const {
   if (count_ == 0) return;
   const Gl& gl = *gl_;
+  const float focal_px = std::max(view.fx, view.fy);
+  const bool lod = style_.point_below_px > 0.f;
+  const std::size_t mesh_count = lod ? selectMeshInstances(view) : count_;
   program_->useWithView(view);
-  vao_.bind();
-  gl.DrawElementsInstanced(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr,
-                           static_cast<GLsizei>(count_));
+  program_->set("u_focal_px", focal_px);
+  program_->set("u_point_below_px", style_.point_below_px);
+  (lod ? near_vao_ : vao_).bind();
+  if (mesh_count > 0)
+    gl.DrawElementsInstanced(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr, static_cast<GLsizei>(mesh_count));
+  if (lod) {
+    gl.Enable(GL_PROGRAM_POINT_SIZE);
+    point_program_->useWithView(view);
+    point_program_->set("u_focal_px", focal_px);
+    point_program_->set("u_point_below_px", style_.point_below_px);
+    point_program_->set("u_f_px", glm::vec2(view.fx, view.fy));
+    point_vao_.bind();
+    gl.DrawArrays(GL_POINTS, 0, static_cast<GLsizei>(count_));
+  }
   gl.BindVertexArray(0);
 }
 

@@ -9,10 +9,24 @@ layout(location = 4) in vec3 i_axis2;
 layout(location = 5) in vec4 i_color;
 uniform mat4 u_view;  // T_C_W
 uniform mat4 u_proj;
+uniform float u_focal_px;  // max(fx, fy) of the view
+uniform float u_point_below_px;  // instances projecting smaller than this radius: ellipsoid_point.vert
 out vec3 v_color;
 out vec3 v_normal_C;
 out vec3 v_pos_C;
 void main() {
+  // Level of detail: an instance whose bounding sphere projects to a radius below
+  // u_point_below_px is drawn as one point by the other pass; here its triangles are put beyond
+  // the far plane, so the rasteriser rejects them before any setup.
+  float radius = sqrt(max(max(dot(i_axis0, i_axis0), dot(i_axis1, i_axis1)), dot(i_axis2, i_axis2)));
+  vec4 center_C = u_view * vec4(i_center, 1.0);
+  if (center_C.z > 0.0 && u_focal_px * radius < u_point_below_px * center_C.z) {
+    gl_Position = vec4(0.0, 0.0, 2.0, 1.0);
+    v_color = vec3(0.0);
+    v_normal_C = vec3(0.0, 0.0, 1.0);
+    v_pos_C = vec3(0.0, 0.0, 1.0);
+    return;
+  }
   mat3 M = mat3(i_axis0, i_axis1, i_axis2);
   vec3 p_W = i_center + M * a_unit;
   // The normal maps by M^-T = M diag(1 / |a_k|^2) because the axes are orthogonal.
