@@ -169,7 +169,9 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
     mesh_renderer.draw(view);
   }
   if (!scene.ellipsoids.empty()) {
-    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color, .point_below_px = args.point_below_px});
+    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color,
+                                             .sphere_subdivisions = args.sphere_subdivisions,
+                                             .point_below_px = args.point_below_px});
     renderer.set(scene.ellipsoids);
     renderer.draw(view);
   }
@@ -274,7 +276,7 @@ void addRenderCommand(CLI::App& app) {
   verb->add_option("--sphere-level", args->sphere_subdivisions, "icosphere subdivisions of one ellipsoid (0..3)")
       ->check(CLI::Range(0, 3))->capture_default_str();
   verb->add_option("--points-below", args->point_below_px,
-                   "draw ellipsoids projecting to a radius below this many pixels as points (0: never)")
+                   "draw ellipsoids projecting to a radius below this many pixels as flat splats (0: never)")
       ->check(CLI::Range(0.f, 64.f))->capture_default_str();
   verb->callback([args] { runRender(*args); });
 }
