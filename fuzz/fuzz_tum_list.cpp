@@ -1,0 +1,24 @@
+// The TUM list parser: the input is a sequence's depth.txt (its rgb.txt and groundtruth.txt are
+// valid), then the same bytes as an associations.txt, through TumSequence::open.
+#include "fuzz/fuzz_input.h"
+#include "mapping/core/error.h"
+#include "mapping/io/text_list.h"
+#include "mapping/io/tum_sequence.h"
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+  using namespace vdmap;
+  const std::filesystem::path list = fuzz::writeInput(data, size, "seq/depth.txt");
+  const std::filesystem::path folder = list.parent_path();
+  static const bool once = [&folder] {
+    std::ofstream(folder / "rgb.txt") << "0.0 rgb/0.png\n0.5 rgb/1.png\n";
+    std::ofstream(folder / "groundtruth.txt") << "0.0 0 0 0 0 0 0 1\n1.0 1 0 0 0 0 0 1\n";
+    std::ofstream(folder / "camera.yaml") << "preset: tum-fr1\n";
+    return true;
+  }();
+  (void)once;
+  VDMAP_FUZZ_EXPECTED_ERRORS(TumSequence::open(folder));
+  std::filesystem::copy_file(list, folder / "associations.txt", std::filesystem::copy_options::overwrite_existing);
+  VDMAP_FUZZ_EXPECTED_ERRORS(TumSequence::open(folder));
+  std::filesystem::remove(folder / "associations.txt");
+  return 0;
+}
