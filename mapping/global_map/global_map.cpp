@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <chrono>
 #include <cmath>
+#include <limits>
 #include <numeric>
 #include <stdexcept>
 #include <string>
@@ -205,9 +206,21 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
                                       const GlobalMapParams& params) {
   const std::size_t keyframes = graph.size();
-  std::vector<std::vector<int>> by_keyframe(keyframes);
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i)
-    by_keyframe[static_cast<std::size_t>(ellipsoids[i].keyframe)].push_back(static_cast<int>(i));
+  // Ellipsoid indices and means grouped by keyframe, contiguous, so that each viewpoint streams
+  // through its group's ellipsoids instead of gathering them from the big records.
+  std::vector<int> first(keyframes + 1, 0);
+  for (const Ellipsoid& e : ellipsoids) ++first[static_cast<std::size_t>(e.keyframe) + 1];
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<int> index_by_keyframe(ellipsoids.size());
+  std::vector<Eigen::Vector3d> mean_by_keyframe(ellipsoids.size());
+  {
+    std::vector<int> fill(first.begin(), first.end() - 1);
+    for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+      const std::size_t slot = static_cast<std::size_t>(fill[static_cast<std::size_t>(ellipsoids[i].keyframe)]++);
+      index_by_keyframe[slot] = static_cast<int>(i);
+      mean_by_keyframe[slot] = ellipsoids[i].mean;
+    }
+  }
   // Per ellipsoid, once: the inverse covariance (slightly regularised so that a flat surface
   // cell stays invertible) and the largest eigenvalue.
   std::vector<Eigen::Matrix3d> information(ellipsoids.size());
@@ -235,39 +248,60 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
     std::sort(group.begin(), group.end());
     group.erase(std::unique(group.begin(), group.end()), group.end());
 
+    // Bucket the group's ellipsoids by K's cell (counting sort), then each cell by depth.
     const Transform T_K_W = K.T_W_K.inverse();
+    const Eigen::Vector3d c = K.T_W_K.translation();
     struct Item {
-      int cell;
       double z;
+      double lambda_max;
+      Eigen::Vector3d ray;  // mean - c, world frame
       int index;
     };
-    std::vector<Item> items;
+    std::vector<int> cell_of;
+    std::vector<Item> projected;
     for (int g : group)
-      for (int i : by_keyframe[static_cast<std::size_t>(g)]) {
-        const Eigen::Vector3d p = T_K_W * ellipsoids[static_cast<std::size_t>(i)].mean;
+      for (int j = first[static_cast<std::size_t>(g)]; j < first[static_cast<std::size_t>(g) + 1]; ++j) {
+        const Eigen::Vector3d& mean = mean_by_keyframe[static_cast<std::size_t>(j)];
+        const Eigen::Vector3d p = T_K_W * mean;
         if (p.z() <= 0.0) continue;
         const Eigen::Vector2d uv = K.container.camera().project(p);
         const int cell = K.container.gridIndexOfPixel(uv.x(), uv.y());
-        if (cell >= 0) items.push_back({cell, p.z(), i});
+        if (cell < 0) continue;
+        cell_of.push_back(cell);
+        const int i = index_by_keyframe[static_cast<std::size_t>(j)];
+        projected.push_back({p.z(), lambda_max[static_cast<std::size_t>(i)], mean - c, i});
       }
-    std::sort(items.begin(), items.end(), [](const Item& a, const Item& b) {
-      return a.cell != b.cell ? a.cell < b.cell : (a.z != b.z ? a.z < b.z : a.index < b.index);
-    });
-    const Eigen::Vector3d c = K.T_W_K.translation();
-    for (std::size_t b0 = 0; b0 < items.size();) {
-      std::size_t b1 = b0;
-      while (b1 < items.size() && items[b1].cell == items[b0].cell) ++b1;
-      for (std::size_t a = b0; a < b1; ++a) {  // A nearer than B: A before B in the cell
+    const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
+    std::vector<int> start(cells + 1, 0);
+    for (int cell : cell_of) ++start[static_cast<std::size_t>(cell) + 1];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    std::vector<Item> items(projected.size());
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (std::size_t j = 0; j < projected.size(); ++j)
+        items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[j])]++)] = projected[j];
+    }
+    std::vector<double> suffix_min;  // smallest lambda_max among the items from here to the cell's end
+    for (std::size_t cell = 0; cell < cells; ++cell) {
+      const std::size_t b0 = static_cast<std::size_t>(start[cell]), b1 = static_cast<std::size_t>(start[cell + 1]);
+      if (b1 - b0 < 2) continue;
+      std::sort(items.begin() + static_cast<std::ptrdiff_t>(b0), items.begin() + static_cast<std::ptrdiff_t>(b1),
+                [](const Item& a, const Item& b) { return a.z != b.z ? a.z < b.z : a.index < b.index; });
+      suffix_min.resize(b1 - b0 + 1);
+      suffix_min[b1 - b0] = std::numeric_limits<double>::infinity();
+      for (std::size_t j = b1; j-- > b0;)
+        suffix_min[j - b0] = std::min(suffix_min[j - b0 + 1], items[j].lambda_max);
+      for (std::size_t a = b0; a + 1 < b1; ++a) {  // A nearer than B: A before B in the cell
         const std::size_t ia = static_cast<std::size_t>(items[a].index);
-        const Eigen::Vector3d mu = ellipsoids[ia].mean - c;
+        if (!(suffix_min[a + 1 - b0] < items[a].lambda_max)) continue;  // no finer B behind A
+        const Eigen::Vector3d& mu = items[a].ray;
         const Eigen::Matrix3d& P = information[ia];
         const Eigen::Vector3d P_mu = P * mu;
         const double mu_P_mu = mu.dot(P_mu);
         for (std::size_t b = a + 1; b < b1; ++b) {
-          const std::size_t ib = static_cast<std::size_t>(items[b].index);
-          if (!(items[b].z > items[a].z) || !(lambda_max[ib] < lambda_max[ia])) continue;
+          if (!(items[b].z > items[a].z) || !(items[b].lambda_max < items[a].lambda_max)) continue;
           // Squared Mahalanobis distance from A's mean to the ray c + t d: minimised over t.
-          const Eigen::Vector3d d = (ellipsoids[ib].mean - c).normalized();
+          const Eigen::Vector3d d = items[b].ray.normalized();
           const double dPd = d.dot(P * d), dPmu = d.dot(P_mu);
           if (mu_P_mu - dPmu * dPmu / dPd <= 4.0) {
             removed_by[v].push_back(static_cast<int>(ia));
@@ -275,7 +309,6 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
           }
         }
       }
-      b0 = b1;
     }
   });
   std::vector<bool> removed(ellipsoids.size(), false);

@@ -1,0 +1,73 @@
+// bench_global_map SESSION.vdmap [RUNS]: builds the global map of a saved session RUNS times
+// (default 5) with 1 and with 2 threads and prints the medians of t_g and of each stage, the
+// time per input ellipsoid, the process CPU time (a loaded machine stretches wall time), and whether both thread counts gave the same map bit for bit.
+#include <time.h>
+
+#include <algorithm>
+#include <cstdio>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/session_file.h"
+
+namespace {
+
+double cpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
+}
+
+double median(std::vector<double> v) {
+  std::sort(v.begin(), v.end());
+  return v[v.size() / 2];
+}
+
+bool sameMap(const vdmap::GlobalMap& a, const vdmap::GlobalMap& b) {
+  if (a.ellipsoids.size() != b.ellipsoids.size()) return false;
+  for (std::size_t i = 0; i < a.ellipsoids.size(); ++i) {
+    const vdmap::Ellipsoid &x = a.ellipsoids[i], &y = b.ellipsoids[i];
+    if (std::memcmp(x.mean.data(), y.mean.data(), sizeof(double) * 3) != 0 ||
+        std::memcmp(x.cov.data(), y.cov.data(), sizeof(double) * 9) != 0 || x.count != y.count ||
+        x.keyframe != y.keyframe)
+      return false;
+  }
+  return true;
+}
+
+}  // namespace
+
+int main(int argc, char** argv) {
+  if (argc < 2) {
+    std::fprintf(stderr, "usage: bench_global_map SESSION.vdmap [RUNS]\n");
+    return 2;
+  }
+  const int runs = argc > 2 ? std::max(1, std::atoi(argv[2])) : 5;
+  const vdmap::Session session = vdmap::loadSession(argv[1]);
+  vdmap::GlobalMapParams params = session.info.global;
+  std::vector<vdmap::GlobalMap> first;
+  for (int threads : {1, 2}) {
+    params.threads = threads;
+    std::vector<double> t_g, cpu, groups, merge, occlusion;
+    vdmap::GlobalMap map;
+    for (int r = 0; r < runs; ++r) {
+      const double cpu_start = cpuSeconds();
+      map = vdmap::buildGlobalMap(session.graph, params);
+      cpu.push_back(cpuSeconds() - cpu_start);
+      t_g.push_back(map.t_g_s);
+      groups.push_back(map.groups_ms);
+      merge.push_back(map.merge_ms);
+      occlusion.push_back(map.occlusion_ms);
+    }
+    std::printf("threads %d: %zu keyframes, sigma_e %zu -> merged %zu -> sigma_e' %zu; t_g median %.3f s "
+                "(%.3f us/ellipsoid; CPU %.3f s; groups %.1f, merge %.1f, occlusion %.1f ms; %d runs)\n",
+                threads, session.graph.size(), map.sigma_e, map.merged, map.sigma_e_prime, median(t_g),
+                median(t_g) * 1e6 / static_cast<double>(std::max<std::size_t>(map.sigma_e, 1)), median(cpu), median(groups),
+                median(merge), median(occlusion), runs);
+    first.push_back(std::move(map));
+  }
+  std::printf("1 and 2 threads give the same map: %s\n", sameMap(first[0], first[1]) ? "yes" : "NO");
+  return sameMap(first[0], first[1]) ? 0 : 1;
+}
