@@ -1,6 +1,6 @@
 // The Open3D peer of `vdmap bench` (issue #8): Open3D 0.16's ScalableTSDFVolume, built as a
 // plugin only when Open3D is installed (see peers/tsdf_peer_abi.h for why it is a plugin).
-#include <chrono>
+#include <ctime>
 #include <cstring>
 
 #include <omp.h>
@@ -48,11 +48,13 @@ double vdmap_tsdf_integrate(void* volume, const std::uint8_t* rgb, const std::ui
   std::memcpy(color.data_.data(), rgb, 3 * w * h);
   std::memcpy(depth_image.data_.data(), depth, sizeof(std::uint16_t) * w * h);
   const Eigen::Matrix4d T_C_W = Eigen::Map<const Eigen::Matrix4d>(T_W_C).inverse();
-  const auto t0 = std::chrono::steady_clock::now();
+  timespec t0{}, t1{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
   const auto rgbd = open3d::geometry::RGBDImage::CreateFromColorAndDepth(color, depth_image, v->depth_scale,
                                                                          v->depth_max_m, false);
   v->tsdf.Integrate(*rgbd, v->intrinsic, T_C_W);
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
+  return 1e3 * static_cast<double>(t1.tv_sec - t0.tv_sec) + 1e-6 * static_cast<double>(t1.tv_nsec - t0.tv_nsec);
 }
 
 std::size_t vdmap_tsdf_extract(void* volume, void (*sink)(void*, const double*, std::size_t), void* ctx) {

@@ -13,8 +13,8 @@ extern "C" {
 typedef void* (*VdmapTsdfCreateFn)(double voxel_m, double sdf_trunc_m, int width, int height, double fx,
                                    double fy, double cx, double cy, double depth_scale, double depth_max_m);
 /// Integrates one frame (rgb: 8-bit RGB rows, depth: 16-bit rows, both width x height packed;
-/// T_W_C: column-major 4x4 camera-to-world). Returns the wall time of Open3D's own work in
-/// milliseconds (the RGBD image conversion and the integration), measured on one thread.
+/// T_W_C: column-major 4x4 camera-to-world). Returns the process CPU time of Open3D's own work
+/// in milliseconds (the RGBD image conversion and the integration), OpenMP pinned to one thread.
 typedef double (*VdmapTsdfIntegrateFn)(void* volume, const std::uint8_t* rgb, const std::uint16_t* depth,
                                        const double* T_W_C);
 /// Extracts the volume's surface points (world frame, metres): calls sink once with n points
