@@ -15,6 +15,7 @@ struct SynthArgs {
   std::string mesh, trajectory, camera, noise = "nguyen2012", frames, out;
   bool builtin = false;
   int builtin_frames = 0;
+  int builtin_laps = 1;
 };
 
 void runSynth(const SynthArgs& args) {
@@ -33,6 +34,7 @@ void runSynth(const SynthArgs& args) {
       throw std::invalid_argument("--builtin replaces --mesh and --trajectory; give one or the other");
     BuiltinSceneParams params;
     if (args.builtin_frames > 0) params.frames = args.builtin_frames;
+    params.laps = args.builtin_laps;
     BuiltinScene scene = makeBuiltinScene(params);
     mesh = std::move(scene.mesh);
     trajectory = std::move(scene.trajectory);
@@ -68,7 +70,10 @@ void addSynthCommand(CLI::App& app) {
   verb->add_option("--noise", args->noise, "depth sensor model: none | nguyen2012")->capture_default_str();
   verb->add_option("--frames", args->frames, "poses A:B of the trajectory (B exclusive; A: or :B)");
   verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk)");
-  verb->add_option("--builtin-frames", args->builtin_frames, "length of the built-in walk (default 300)");
+  verb->add_option("--builtin-frames", args->builtin_frames, "poses per lap of the built-in walk (default 300)");
+  verb->add_option("--builtin-laps", args->builtin_laps,
+                   "laps of the built-in walk; each further lap takes new viewpoints (6 laps: ~100 keyframes)")
+      ->capture_default_str();
   verb->add_option("--out", args->out, "output folder (must not exist or be empty)")->required();
   verb->callback([args] { runSynth(*args); });
 }

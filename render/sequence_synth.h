@@ -11,6 +11,7 @@
 #include "mapping/core/camera.h"
 #include "mapping/io/ply_reader.h"
 #include "mapping/io/trajectory_io.h"
+#include "mapping/synth/builtin_scene.h"
 #include "mapping/synth/depth_noise.h"
 #include "render/context.h"
 
@@ -58,6 +59,9 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
 /// Writes the built-in scene (mapping/synth/builtin_scene.h) as a sequence into `out_dir`
 /// with the nguyen2012 sensor model. `frames` < 0 keeps the scene's default walk.
 void writeBuiltinSequence(const std::filesystem::path& out_dir, int frames = -1,
+                          std::function<void(std::size_t, std::size_t)> progress = {});
+/// The same for any walk of the built-in scene (e.g. `.laps = 6` for a run of ~100 keyframes).
+void writeBuiltinSequence(const std::filesystem::path& out_dir, const BuiltinSceneParams& params,
                           std::function<void(std::size_t, std::size_t)> progress = {});
 
 }  // namespace vdmap::render

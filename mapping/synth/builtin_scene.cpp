@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <Eigen/Geometry>
 
@@ -161,13 +162,28 @@ BuiltinScene makeBuiltinScene(const BuiltinSceneParams& params) {
 
   // The walk: an ellipse around the table at eye height, looking ahead and outwards at a point
   // on a larger ellipse, so the camera sweeps every wall and comes back to where it began.
-  const int n = std::max(2, params.frames);
-  for (int i = 0; i < n; ++i) {
-    const double a = 2.0 * M_PI * i / n;
-    const Eigen::Vector3d eye(1.2 * std::cos(a), 0.95 * std::sin(a), 1.35 + 0.08 * std::sin(3 * a));
-    const double b2 = a + 0.9;
-    const Eigen::Vector3d target(2.4 * std::cos(b2), 1.9 * std::sin(b2), 0.75 + 0.15 * std::sin(2 * a));
-    scene.trajectory.push_back({i / params.fps, lookAt(eye, target)});
+  // Further laps vary the ellipse's size, the eye height, the gaze (ahead, sideways, back,
+  // down at the floor, up) and the direction of travel.
+  if (params.frames < 2 || params.laps < 1)
+    throw std::invalid_argument("the built-in walk needs at least 2 frames per lap and 1 lap");
+  struct Lap {
+    double radius, eye_dz, gaze_rad, target_z, direction;
+  };
+  static const Lap kLaps[8] = {{1.0, 0.0, 0.9, 0.75, 1},   {0.65, 0.3, 2.4, 0.4, -1}, {1.35, -0.3, -0.9, 1.3, 1},
+                               {0.8, 0.5, 3.4, 0.1, -1},   {1.3, 0.25, 1.6, 2.3, 1},  {0.7, -0.15, -2.2, 0.9, -1},
+                               {1.15, 0.55, 0.2, 0.2, 1},  {0.9, -0.2, 4.4, 1.6, -1}};
+  const int n = params.frames;
+  for (int lap = 0; lap < params.laps; ++lap) {
+    const Lap& l = kLaps[lap % 8];
+    for (int i = 0; i < n; ++i) {
+      const double a = l.direction * 2.0 * M_PI * i / n;
+      const Eigen::Vector3d eye(l.radius * 1.2 * std::cos(a), l.radius * 0.95 * std::sin(a),
+                                1.35 + l.eye_dz + 0.08 * std::sin(3 * a));
+      const double b2 = a + l.direction * l.gaze_rad;
+      const Eigen::Vector3d target(2.4 * std::cos(b2), 1.9 * std::sin(b2), l.target_z + 0.15 * std::sin(2 * a));
+      const int k = lap * n + i;
+      scene.trajectory.push_back({k / params.fps, lookAt(eye, target)});
+    }
   }
   return scene;
 }

@@ -12,7 +12,12 @@
 namespace vdmap {
 
 struct BuiltinSceneParams {
-  int frames = 300;          ///< poses of the walk (10 s at 30 fps); the last is next to the first
+  int frames = 300;          ///< poses per lap (10 s at 30 fps); a lap's last is next to its first
+  /// Laps of the walk. Lap 0 is the default walk; every further lap circles the table at
+  /// another radius, height and gaze (a cycle of 8 variants), so that it sees the room from new
+  /// viewpoints: a long run that keeps making keyframes (about 100 from 6 laps, for the
+  /// loop-closure cost) while still revisiting earlier ones.
+  int laps = 1;
   double fps = 30.0;
   double texture_tile_m = 0.05;  ///< size of one flat-coloured texture tile
 };
@@ -26,6 +31,7 @@ struct BuiltinScene {
 /// Floor, walls and ceiling, a table, boxes, a shelf, a ball and a cylinder, each textured
 /// with deterministic multi-scale blocky patterns (rich in ORB corners); the camera walks an
 /// ellipse around the table looking outwards-forwards and ends where it began (a revisit).
+/// Throws std::invalid_argument when frames < 2 or laps < 1.
 BuiltinScene makeBuiltinScene(const BuiltinSceneParams& params = {});
 
 }  // namespace vdmap
