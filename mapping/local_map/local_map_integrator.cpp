@@ -8,6 +8,9 @@
 namespace vdmap {
 namespace {
 
+using detail::FrameSums;
+using detail::V4d;
+
 void checkInputs(const RgbdFrame& frame, const PinholeCamera& camera, const Transform& T_W_K) {
   if (!isValidTransform(T_W_K))
     throw std::invalid_argument("keyframe pose T_W_K is not a finite rigid transform");
@@ -40,14 +43,13 @@ struct RowGeometry {
   int cols, rows;
 };
 
-// Pass 1 of a row, branch-free so that it vectorises; built for AVX2 and for the baseline ISA
+// Pass 1 of a row, branch-free so that it vectorises; built for AVX-512, AVX2 and the baseline ISA
 // with runtime dispatch, so the binary stays portable. The cell is floor(container px / s),
 // computed as a product with 1/s: it may differ from integer division only for points within
 // 1e-13 px of a cell border (a measure-zero set; the cell is clamped to the grid).
-__attribute__((target_clones("avx2", "default")))
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
 void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int width,
-                double* __restrict px, double* __restrict py, double* __restrict pz,
-                int* __restrict cell) {
+                double* __restrict px, double* __restrict py, double* __restrict pz, int* __restrict cell) {
   const double* __restrict ray_x = g.ray_x;
   const double* __restrict ray_y = g.ray_y;
   const double* __restrict ray_z = g.ray_z;
@@ -59,17 +61,55 @@ void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int
   for (int u = 0; u < width; ++u) {
     const int raw = depth[u];
     const double d = raw * inv_scale;
-    const double x = d * (ray_x[u] + bx) + tx;
-    const double y = d * (ray_y[u] + by) + ty;
-    const double z = d * (ray_z[u] + bz) + tz;
+    const double rx = d * (ray_x[u] + bx), ry = d * (ray_y[u] + by), rz = d * (ray_z[u] + bz);
+    const double x = rx + tx, y = ry + ty, z = rz + tz;
     const double iz = 1.0 / z;
     const double up = fx * x * iz + cx, vp = fy * y * iz + cy;
     const bool ok = (raw >= raw_min) & (raw <= raw_max) & (z > 0.0) & (up >= 0.0) & (vp >= 0.0) &
                     (up < u_end) & (vp < v_end);
     const int col = std::min(static_cast<int>((ok ? up : 0.0) * inv_cell), last_col);
     const int row = std::min(static_cast<int>((ok ? vp : 0.0) * inv_cell), last_row);
-    px[u] = x, py[u] = y, pz[u] = z;
+    px[u] = rx, py[u] = ry, pz[u] = rz;
     cell[u] = ok ? row * cols + col : -1;
+  }
+}
+
+// Pass 2 of a row: runs of neighbouring pixels in the same cell are summed in registers and
+// added to the cell's frame sums once per run (~5 pixels for 5 px cells). With p = (x, y, z, 1)
+// the four-wide sums of p, x p and y p give n, s and five scatter entries in three vector
+// operations; zz is the sixth. `cell` ends with a -1 sentinel. A cell's first run of the frame
+// initialises its sums.
+__attribute__((target_clones("arch=x86-64-v3", "default")))
+void sumRuns(const double* __restrict px, const double* __restrict py, const double* __restrict pz,
+             const std::uint8_t* __restrict rgb, int rgb_step, const int* __restrict cell, int width,
+             std::int32_t* __restrict slots, FrameSums* __restrict sums, std::vector<int>* used_cells) {
+  int u = 0;
+  while (u < width) {
+    const int c = cell[u];
+    if (c < 0) {
+      ++u;
+      continue;
+    }
+    V4d q = {0, 0, 0, 0}, xp = q, yp = q;
+    double zz = 0;
+    std::uint32_t r = 0, g = 0, b = 0;
+    for (; cell[u] == c; ++u) {
+      const double x = px[u], y = py[u], z = pz[u];
+      const V4d p = {x, y, z, 1.0};
+      q += p, xp += p * x, yp += p * y, zz += z * z;
+      const std::uint8_t* col = rgb + rgb_step * u;
+      r += col[0], g += col[1], b += col[2];
+    }
+    std::int32_t& slot = slots[c];
+    if (slot < 0) {
+      slot = static_cast<std::int32_t>(used_cells->size());
+      used_cells->push_back(c);
+      sums[slot] = FrameSums{q, xp, yp, zz, {r, g, b}};
+      continue;
+    }
+    FrameSums& f = sums[slot];
+    f.q += q, f.xp += xp, f.yp += yp, f.zz += zz;
+    f.c[0] += r, f.c[1] += g, f.c[2] += b;
   }
 }
 
@@ -116,7 +156,7 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
 
 
   // Two passes per row. Pass 1 is branch-free arithmetic the compiler vectorises: each pixel's
-  // p_K and its cell (-1 when the pixel is invalid, behind the keyframe or outside its
+  // p_K - t and its cell (-1 when the pixel is invalid, behind the keyframe or outside its
   // container). Pass 2 walks the row: runs of neighbouring pixels in the same cell are summed
   // in registers and added to the cell's frame sums once per run (~5 pixels for 5 px cells).
   RowGeometry g;
@@ -141,39 +181,8 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
     g.b[0] = yf * R(0, 1) + R(0, 2), g.b[1] = yf * R(1, 1) + R(1, 2), g.b[2] = yf * R(2, 1) + R(2, 2);
     computeRow(g, frame.depth.ptr<std::uint16_t>(v), width, px, py, pz, pcell);
     pcell[width] = -1;  // sentinel: ends the last run without a bounds test
-    const std::uint8_t* crow = has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : kWhite;
-    const int cstep = has_rgb ? 3 : 0;
-
-    int u = 0;
-    while (u < width) {
-      const int cell = pcell[u];
-      if (cell < 0) {
-        ++u;
-        continue;
-      }
-      std::int32_t& slot = slots[cell];
-      if (slot < 0) {
-        slot = static_cast<std::int32_t>(used_cells_.size());
-        used_cells_.push_back(cell);
-        sums[slot] = FrameSums{{px[u], py[u], pz[u]}, 0, {0, 0, 0}, {0, 0, 0, 0, 0, 0}, {0, 0, 0}};
-      }
-      FrameSums& acc = sums[slot];
-      const double ox = acc.origin[0], oy = acc.origin[1], oz = acc.origin[2];
-      double qx = 0, qy = 0, qz = 0, xx = 0, xy = 0, xz = 0, yy = 0, yz = 0, zz = 0;
-      int n = 0, r = 0, gr = 0, b = 0;
-      for (; pcell[u] == cell; ++u, ++n) {
-        const double dx = px[u] - ox, dy = py[u] - oy, dz = pz[u] - oz;
-        qx += dx, qy += dy, qz += dz;
-        xx += dx * dx, xy += dx * dy, xz += dx * dz;
-        yy += dy * dy, yz += dy * dz, zz += dz * dz;
-        const std::uint8_t* c = crow + cstep * u;
-        r += c[0], gr += c[1], b += c[2];
-      }
-      acc.n += n;
-      acc.q[0] += qx, acc.q[1] += qy, acc.q[2] += qz;
-      acc.Q[0] += xx, acc.Q[1] += xy, acc.Q[2] += xz, acc.Q[3] += yy, acc.Q[4] += yz, acc.Q[5] += zz;
-      acc.c[0] += r, acc.c[1] += gr, acc.c[2] += b;
-    }
+    sumRuns(px, py, pz, has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : kWhite, has_rgb ? 3 : 0, pcell, width, slots,
+            sums, &used_cells_);
   }
 
   // Merge each cell's batch into the container (SPEC section 2 step 4, the arithmetic of
@@ -182,14 +191,13 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
     const int cell = used_cells_[i];
     const FrameSums& f = sums_[i];
     StoredCell& c = container->findOrCreate(cell);
-    const double N = f.n, M = c.n, total = M + N;
-    // Batch mean relative to the origin, and the batch scatter S_N = Q - q q^T / N.
+    const double N = f.q[3], M = c.n, total = M + N;
+    // Batch mean relative to the camera centre t, and the batch scatter S_N = Q - q q^T / N.
     const double mx = f.q[0] / N, my = f.q[1] / N, mz = f.q[2] / N;
-    const double SN[6] = {f.Q[0] - f.q[0] * mx, f.Q[1] - f.q[0] * my, f.Q[2] - f.q[0] * mz,
-                          f.Q[3] - f.q[1] * my, f.Q[4] - f.q[1] * mz, f.Q[5] - f.q[2] * mz};
+    const double SN[6] = {f.xp[0] - f.q[0] * mx, f.xp[1] - f.q[0] * my, f.xp[2] - f.q[0] * mz,
+                          f.yp[1] - f.q[1] * my, f.yp[2] - f.q[1] * mz, f.zz - f.q[2] * mz};
     // delta = batch mean - stored mean (zero weight when the cell is new).
-    const double dx = f.origin[0] + mx - c.mean[0], dy = f.origin[1] + my - c.mean[1],
-                 dz = f.origin[2] + mz - c.mean[2];
+    const double dx = t.x() + mx - c.mean[0], dy = t.y() + my - c.mean[1], dz = t.z() + mz - c.mean[2];
     const double w = N / total, k = M * N / total;
     c.mean[0] = static_cast<float>(c.mean[0] + dx * w);
     c.mean[1] = static_cast<float>(c.mean[1] + dy * w);

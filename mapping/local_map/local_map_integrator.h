@@ -15,6 +15,22 @@ struct LocalMapParams {
   DepthRange depth_range;
 };
 
+namespace detail {
+// GCC vector: AVX where the CPU has it. Its alignment depends on the ISA (16 without AVX), so
+// the structs holding it say alignas(32) explicitly.
+using V4d = double __attribute__((vector_size(32)));
+// Per-cell sums of one frame, of r = p_K - t (t: the frame's camera centre in K). Points lie
+// within the depth range of t, so in double the scatter S_N = Q - q q^T / N loses ~eps (z / w)^2
+// of an entry of width w at depth z: 1e-11 of the large entries (w = the cell's footprint), 1e-6
+// of the thinnest in the worst case (8 m, 0.1 mm spread; real sensor noise there is ~10 cm). q = sum (r, 1), xp = sum r.x (r, 1), yp = sum r.y
+// (r, 1), zz = sum r.z^2. Colour sums are exact integers (at most 255 * 640 * 480 < 2^32).
+struct alignas(32) FrameSums {
+  V4d q, xp, yp;
+  double zz;
+  std::uint32_t c[3];
+};
+}  // namespace detail
+
 /// Updates a container with every valid pixel of a frame (no subsampling). Holds scratch
 /// buffers so that no memory is allocated per frame once warm; one integrator per thread.
 /// Single-threaded and deterministic: the touched cells come out in the order of first touch
@@ -38,22 +54,12 @@ class LocalMapIntegrator {
   const LocalMapParams& params() const { return params_; }
 
  private:
-  // Per-cell sums of one frame, relative to `origin` (the cell's first point in this frame) so
-  // that the scatter S_N = Q - q q^T / N does not cancel catastrophically far from the camera.
-  struct FrameSums {
-    double origin[3];
-    double n;
-    double q[3];   // sum (p - origin)
-    double Q[6];   // sum (p - origin)(p - origin)^T: xx xy xz yy yz zz
-    double c[3];   // colour sums
-  };
-
   LocalMapParams params_;
   std::vector<std::int32_t> sums_slot_;  // per grid cell: index into sums_, or -1
-  std::vector<FrameSums> sums_;          // sized to the grid once; the first used_ are live
+  std::vector<detail::FrameSums> sums_;  // sized to the grid once; the first used_ are live
   std::vector<int> used_cells_;          // grid index of sums_[i]
   std::vector<double> ray_x_, ray_y_, ray_z_;  // per column: ((u - cx) / fx) * R.col(0)
-  std::vector<double> row_x_, row_y_, row_z_;  // one row's p_K
+  std::vector<double> row_x_, row_y_, row_z_;  // one row's p_K - t
   std::vector<int> row_cell_;                  // one row's cells (-1: no point)
 };
 
