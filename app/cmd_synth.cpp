@@ -72,7 +72,7 @@ void addSynthCommand(CLI::App& app) {
   verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk)");
   verb->add_option("--builtin-frames", args->builtin_frames, "poses per lap of the built-in walk (default 300)");
   verb->add_option("--builtin-laps", args->builtin_laps,
-                   "laps of the built-in walk; each further lap takes new viewpoints (6 laps: ~100 keyframes)")
+                   "laps of the built-in walk; each further lap takes new viewpoints (8 laps: 133 keyframes)")
       ->capture_default_str();
   verb->add_option("--out", args->out, "output folder (must not exist or be empty)")->required();
   verb->callback([args] { runSynth(*args); });

@@ -101,6 +101,42 @@ TEST(Mapper, RejectsABadPoseAndToleratesAFrameWithoutDepth) {
   EXPECT_EQ(mapper.graph().keyframe(0).container.size(), 0u);
 }
 
+// Issue #5 bad input: a textureless stretch (ORB finds nothing) cannot be judged by
+// covisibility; while the pose pre-filter accepts the current keyframe the frames update it,
+// so a blank wall never spawns a keyframe per frame, and its depth still reaches the map.
+TEST(Mapper, TexturelessFramesUpdateTheCurrentKeyframe) {
+  Mapper mapper(roomCamera());
+  for (int i = 0; i < 6; ++i) {
+    RgbdFrame f = turningFrame(i, 2.0);
+    f.rgb.setTo(cv::Scalar(90, 90, 90));
+    const FrameReport r = mapper.addFrame(f);
+    EXPECT_EQ(r.features, 0u);
+    EXPECT_EQ(r.keyframe, 0) << "frame " << i;
+    EXPECT_FALSE(r.touched_cells.empty());
+  }
+  EXPECT_EQ(mapper.graph().size(), 1u);
+  EXPECT_EQ(mapper.graph().keyframe(0).frames_integrated, 6);
+}
+
+// A frame without depth between textured ones: its features have no depth, so only the
+// descriptor test applies; it updates the current keyframe, changes no cell, and mapping goes
+// on normally after it.
+TEST(Mapper, FrameWithoutDepthMidSequenceChangesNothing) {
+  Mapper mapper(roomCamera());
+  mapper.addFrame(turningFrame(0, 2.0));
+  const std::size_t cells = mapper.graph().keyframe(0).container.size();
+  RgbdFrame blind = turningFrame(1, 2.0);
+  blind.depth.setTo(0);
+  const FrameReport r = mapper.addFrame(blind);
+  EXPECT_EQ(r.keyframe, 0);
+  EXPECT_EQ(r.decision.kind, FrameDecision::Kind::kUpdate);
+  EXPECT_TRUE(r.touched_cells.empty());
+  EXPECT_EQ(mapper.graph().keyframe(0).container.size(), cells);
+  const FrameReport next = mapper.addFrame(turningFrame(2, 2.0));
+  EXPECT_EQ(next.keyframe, 0);
+  EXPECT_FALSE(next.touched_cells.empty());
+}
+
 TEST(Mapper, SameFramesGiveTheSameMap) {
   auto run = [] {
     Mapper mapper(roomCamera());
