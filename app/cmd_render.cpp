@@ -47,21 +47,6 @@ std::pair<int, int> parseSize(const std::string& text) {
   return {w, h};
 }
 
-// Bounds of the central 96% of the points, so a few stray ellipsoids do not shrink the view.
-std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points) {
-  if (points.empty()) return {glm::vec3(-1.f), glm::vec3(1.f)};
-  glm::vec3 lo, hi;
-  for (int k = 0; k < 3; ++k) {
-    std::vector<float> v;
-    v.reserve(points.size());
-    for (const auto& p : points) v.push_back(p[k]);
-    std::sort(v.begin(), v.end());
-    lo[k] = v[v.size() * 2 / 100];
-    hi[k] = v[std::min(v.size() - 1, v.size() * 98 / 100)];
-  }
-  return {lo, hi};
-}
-
 void runBench(const RenderArgs& args) {
   const auto [w, h] = parseSize(args.size.empty() ? "1280x720" : args.size);
   std::mt19937 rng(7);
@@ -143,7 +128,7 @@ render::ViewCamera globalView(const RenderScene& scene, int w, int h) {
   for (const auto& e : scene.ellipsoids) points.push_back(e.mean);
   for (const auto& p : scene.mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
   for (const auto& p : scene.lines.positions) points.push_back(p);
-  const auto [lo, hi] = robustBounds(points);
+  const auto [lo, hi] = render::robustBounds(points);
   return render::OrbitCamera::framing(lo, hi).view(w, h);
 }
 

@@ -115,4 +115,19 @@ OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_
   return cam;
 }
 
+std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points) {
+  if (points.empty()) return {glm::vec3(-1.f), glm::vec3(1.f)};
+  glm::vec3 lo, hi;
+  std::vector<float> v(points.size());
+  for (int k = 0; k < 3; ++k) {
+    for (std::size_t i = 0; i < points.size(); ++i) v[i] = points[i][k];
+    const std::size_t a = v.size() * 2 / 100, b = std::min(v.size() - 1, v.size() * 98 / 100);
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(a), v.end());
+    lo[k] = v[a];
+    std::nth_element(v.begin(), v.begin() + static_cast<long>(b), v.end());
+    hi[k] = v[b];
+  }
+  return {lo, hi};
+}
+
 }  // namespace vdmap::render

@@ -2,6 +2,9 @@
 // Cameras for drawing. Every view uses the pinhole convention of SPEC section 1 (camera x right,
 // y down, z forward; pixel (u, v) with the origin at the centre of the top-left pixel), so "view
 // from keyframe K" with the keyframe's intrinsics reproduces its image pixel for pixel.
+#include <utility>
+#include <vector>
+
 #include <glm/glm.hpp>
 
 #include "mapping/core/camera.h"
@@ -56,6 +59,10 @@ struct OrbitCamera {
   static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
                              const glm::vec3& up = {0.f, 0.f, 1.f});
 };
+
+/// The box of the central 96% of a point set per axis (2nd to 98th percentile), so a few stray
+/// points do not shrink a framed view; (-1, 1) for no points.
+std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points);
 
 /// Eigen -> GLM.
 glm::mat4 toGlm(const Transform& T);

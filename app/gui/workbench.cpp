@@ -32,21 +32,6 @@ int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCa
   return best;
 }
 
-std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points) {
-  if (points.empty()) return {glm::vec3(-1.f), glm::vec3(1.f)};
-  glm::vec3 lo, hi;
-  std::vector<float> v(points.size());
-  for (int k = 0; k < 3; ++k) {
-    for (std::size_t i = 0; i < points.size(); ++i) v[i] = points[i][k];
-    const std::size_t a = v.size() * 2 / 100, b = std::min(v.size() - 1, v.size() * 98 / 100);
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(a), v.end());
-    lo[k] = v[a];
-    std::nth_element(v.begin(), v.begin() + static_cast<long>(b), v.end());
-    hi[k] = v[b];
-  }
-  return {lo, hi};
-}
-
 glm::vec3 rotationToEulerDeg(const Eigen::Matrix3d& R) {
   const Eigen::Vector3d zyx = R.eulerAngles(2, 1, 0) * (180.0 / M_PI);
   return {static_cast<float>(zyx[2]), static_cast<float>(zyx[1]), static_cast<float>(zyx[0])};
@@ -196,7 +181,7 @@ void Workbench::resetView() {
     for (const Transform& T : session_->mapping()->trajectory)
       points.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
   }
-  const auto [lo, hi] = robustBounds(points);
+  const auto [lo, hi] = render::robustBounds(points);
   ui_.camera = render::OrbitCamera::framing(lo, hi);
   ui_.camera_framed = !points.empty();
 }

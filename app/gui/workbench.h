@@ -36,9 +36,6 @@ struct UiState {
 int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px,
                   float y_px, float radius_px = 8.f);
 
-/// The central 96% box of a point set (a few stray points do not shrink the view).
-std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points);
-
 /// Euler angles (deg, R = Rz Ry Rx) <-> rotation.
 glm::vec3 rotationToEulerDeg(const Eigen::Matrix3d& R);
 Eigen::Matrix3d eulerDegToRotation(const glm::vec3& deg);
