@@ -57,31 +57,28 @@ void Framebuffer::bindAndClear(float r, float g, float b) {
   gl.ClearBufferfv(GL_DEPTH, 0, &one);
 }
 
-cv::Mat Framebuffer::readRgb() const {
+cv::Mat Framebuffer::read(GLenum attachment, int cv_type, GLenum format, GLenum type, const char* what) const {
   const Gl& gl = *gl_;
   gl.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
-  gl.ReadBuffer(GL_COLOR_ATTACHMENT0);
+  gl.ReadBuffer(attachment);
   gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
-  cv::Mat rgba(height_, width_, CV_8UC4);
-  gl.ReadPixels(0, 0, width_, height_, GL_RGBA, GL_UNSIGNED_BYTE, rgba.data);
-  checkGl(gl, "reading the colour buffer");
+  cv::Mat image(height_, width_, cv_type);
+  gl.ReadPixels(0, 0, width_, height_, format, type, image.data);
+  checkGl(gl, what);
+  cv::flip(image, image, 0);  // GL row 0 is the bottom of the image
+  return image;
+}
+
+cv::Mat Framebuffer::readRgb() const {
   cv::Mat rgb;
-  cv::cvtColor(rgba, rgb, cv::COLOR_RGBA2RGB);  // alpha is dropped: screenshots are opaque
-  cv::flip(rgb, rgb, 0);  // GL row 0 is the bottom of the image
+  cv::cvtColor(read(GL_COLOR_ATTACHMENT0, CV_8UC4, GL_RGBA, GL_UNSIGNED_BYTE, "reading the colour buffer"), rgb,
+               cv::COLOR_RGBA2RGB);  // alpha is dropped: screenshots are opaque
   return rgb;
 }
 
 cv::Mat Framebuffer::readFloat() const {
   if (!with_float_) throw std::logic_error("Framebuffer::readFloat without a float target");
-  const Gl& gl = *gl_;
-  gl.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
-  gl.ReadBuffer(GL_COLOR_ATTACHMENT1);
-  gl.PixelStorei(GL_PACK_ALIGNMENT, 4);
-  cv::Mat values(height_, width_, CV_32FC2);
-  gl.ReadPixels(0, 0, width_, height_, GL_RG, GL_FLOAT, values.data);
-  checkGl(gl, "reading the float buffer");
-  cv::flip(values, values, 0);
-  return values;
+  return read(GL_COLOR_ATTACHMENT1, CV_32FC2, GL_RG, GL_FLOAT, "reading the float buffer");
 }
 
 void writePng(const std::filesystem::path& file, const cv::Mat& rgb) {

@@ -24,7 +24,7 @@ class Framebuffer {
 
   int width() const { return width_; }
   int height() const { return height_; }
-  /// Binds for drawing, sets the viewport and clears colour (to `clear_rgb`), depth and the
+  /// Binds for drawing, sets the viewport and clears colour (to r, g, b), depth and the
   /// float target (to 0, "no surface").
   void bindAndClear(float r, float g, float b);
   /// Colour as CV_8UC3 in RGB order, rows flipped so that row 0 is the top of the image.
@@ -33,6 +33,8 @@ class Framebuffer {
   cv::Mat readFloat() const;
 
  private:
+  // One attachment read back as a cv::Mat of `cv_type`, rows flipped (row 0 on top).
+  cv::Mat read(GLenum attachment, int cv_type, GLenum format, GLenum type, const char* what) const;
   const Gl* gl_;
   int width_, height_;
   bool with_float_;
