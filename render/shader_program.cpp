@@ -57,10 +57,6 @@ void ShaderProgram::set(const char* name, const glm::mat4& m) const {
   gl_->UniformMatrix4fv(loc(name), 1, GL_FALSE, glm::value_ptr(m));
 }
 
-}  // namespace vdmap::render
-
-namespace vdmap::render {
-
 void ShaderProgram::useWithView(const ViewCamera& view) const {
   gl_->Enable(GL_DEPTH_TEST);
   gl_->DepthFunc(GL_LESS);
