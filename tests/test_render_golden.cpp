@@ -90,24 +90,27 @@ TEST_F(RenderGolden, FrustumsEdgesTrajectory) {
   EXPECT_TRUE(matchesGolden(fb.readRgb(), "frustums_edges"));
 }
 
+// A mesh on a `background` grey, seen from `eye` towards `target` (320x240, z up).
+cv::Mat drawMesh(const Gl& gl, const ColoredMesh& mesh, float background, const glm::vec3& eye,
+                 const glm::vec3& target, float fov_y_deg) {
+  MeshRenderer renderer(gl);
+  renderer.set(mesh);
+  Framebuffer fb(gl, 320, 240);
+  fb.bindAndClear(background, background, background);
+  renderer.draw(ViewCamera::lookAt(eye, target, {0, 0, 1}, fov_y_deg, 320, 240));
+  return fb.readRgb();
+}
+
 TEST_F(RenderGolden, Mesh) {
-  MeshRenderer mesh(gl());
-  mesh.set(test::cubeOnFloor());
-  Framebuffer fb(gl(), 320, 240);
-  fb.bindAndClear(1.f, 1.f, 1.f);
-  mesh.draw(ViewCamera::lookAt({2.2f, -2.8f, 2.2f}, {0, 0, 0.3f}, {0, 0, 1}, 50.f, 320, 240));
-  EXPECT_TRUE(matchesGolden(fb.readRgb(), "mesh"));
+  EXPECT_TRUE(matchesGolden(drawMesh(gl(), test::cubeOnFloor(), 1.f, {2.2f, -2.8f, 2.2f}, {0, 0, 0.3f}, 50.f), "mesh"));
 }
 
 TEST_F(RenderGolden, BuiltinRoomMesh) {
   // The built-in room (the scene `vdmap` opens with) from a corner under the ceiling; its
   // texture tiles are 5 cm, so the golden also pins the texture generator.
-  MeshRenderer mesh(gl());
-  mesh.set(toColoredMesh(makeBuiltinScene({.frames = 2}).mesh));
-  Framebuffer fb(gl(), 320, 240);
-  fb.bindAndClear(0.f, 0.f, 0.f);
-  mesh.draw(ViewCamera::lookAt({2.3f, -1.8f, 2.3f}, {-0.8f, 0.6f, 0.7f}, {0, 0, 1}, 70.f, 320, 240));
-  EXPECT_TRUE(matchesGolden(fb.readRgb(), "builtin_room_mesh"));
+  const ColoredMesh room = toColoredMesh(makeBuiltinScene({.frames = 2}).mesh);
+  EXPECT_TRUE(matchesGolden(drawMesh(gl(), room, 0.f, {2.3f, -1.8f, 2.3f}, {-0.8f, 0.6f, 0.7f}, 70.f),
+                            "builtin_room_mesh"));
 }
 
 TEST_F(RenderGolden, ContextIsCoreProfile33OrNewer) {
