@@ -23,6 +23,32 @@ namespace {
 // README). So the synthetic depth should agree to within that: median |dz| under 6 mm.
 constexpr double kReplicaMedianDzTolerance_m = 0.006;
 
+// |dz| in metres where both depth images (16-bit at `depth_scale`) have a value, and the pixels
+// only one of them has.
+struct DepthComparison {
+  std::vector<double> dz;
+  int only_ref = 0, only_synth = 0;
+};
+
+DepthComparison compareDepth(const cv::Mat& ref, const cv::Mat& synth, double depth_scale) {
+  DepthComparison c;
+  for (int v = 0; v < synth.rows; ++v)
+    for (int u = 0; u < synth.cols; ++u) {
+      const int a = ref.at<std::uint16_t>(v, u), b = synth.at<std::uint16_t>(v, u);
+      if (a && b) c.dz.push_back(std::abs(a - b) / depth_scale);
+      c.only_ref += a && !b;
+      c.only_synth += b && !a;
+    }
+  return c;
+}
+
+// The `q`-quantile (0..1) of `values` (reorders them).
+double quantile(std::vector<double>& values, double q) {
+  const auto nth = values.begin() + static_cast<long>(std::min(values.size() - 1, static_cast<std::size_t>(q * values.size())));
+  std::nth_element(values.begin(), nth, values.end());
+  return *nth;
+}
+
 TEST(Synth, ReplicaMeshReproducesReferenceDepth) {
   VDMAP_REQUIRE_SHARED_DATA(data, "replica-office0");
   const ColoredTriangleMesh mesh = readPlyMesh(data / "reference" / "office0_mesh.ply");
@@ -30,42 +56,27 @@ TEST(Synth, ReplicaMeshReproducesReferenceDepth) {
   const PinholeCamera camera = cameraPreset("replica");
   std::unique_ptr<render::Context> context = render::createOffscreenContext();
   render::MeshViewRenderer renderer(*context, mesh, seq.camera());
+  auto synthDepth = [&](const Transform& T_W_C) {
+    return simulateDepth(renderer.render(T_W_C).z_cos, camera.depth_scale,
+                         {.model = DepthNoiseModel::kNone, .max_range_m = 10.0}, 0);
+  };
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const RgbdFrame frame = seq.load(i);
-    const render::SyntheticView view = renderer.render(frame.T_W_C);
-    const cv::Mat synth = simulateDepth(view.z_cos, camera.depth_scale, {.model = DepthNoiseModel::kNone, .max_range_m = 10.0}, 0);
-    std::vector<double> dz;
-    int only_ref = 0, only_synth = 0;
-    for (int v = 0; v < synth.rows; ++v)
-      for (int u = 0; u < synth.cols; ++u) {
-        const int a = frame.depth.at<std::uint16_t>(v, u), b = synth.at<std::uint16_t>(v, u);
-        if (a && b) dz.push_back(std::abs(a - b) / camera.depth_scale);
-        only_ref += a && !b;
-        only_synth += b && !a;
-      }
-    ASSERT_GT(dz.size(), synth.total() / 2) << "frame " << i;
-    std::nth_element(dz.begin(), dz.begin() + dz.size() / 2, dz.end());
-    const double median = dz[dz.size() / 2];
-    std::nth_element(dz.begin(), dz.begin() + dz.size() * 9 / 10, dz.end());
+    const cv::Mat synth = synthDepth(frame.T_W_C);
+    DepthComparison c = compareDepth(frame.depth, synth, camera.depth_scale);
+    ASSERT_GT(c.dz.size(), synth.total() / 2) << "frame " << i;
+    const double median = quantile(c.dz, 0.5);
     std::printf("replica frame %zu: median |dz| %.2f mm, 90th pct %.2f mm, %zu px compared, %d only in the "
-                "reference, %d only synthetic\n", i, 1000 * median, 1000 * dz[dz.size() * 9 / 10], dz.size(),
-                only_ref, only_synth);
+                "reference, %d only synthetic\n", i, 1000 * median, 1000 * quantile(c.dz, 0.9), c.dz.size(),
+                c.only_ref, c.only_synth);
     EXPECT_LT(median, kReplicaMedianDzTolerance_m) << "frame " << i;
   }
   // Control: the same comparison from a pose 3 cm to the side must fail it clearly.
   const RgbdFrame frame = seq.load(0);
   Transform shifted = frame.T_W_C;
   shifted.translation() += frame.T_W_C.linear().col(0) * 0.03;
-  const cv::Mat synth = simulateDepth(renderer.render(shifted).z_cos, camera.depth_scale,
-                                      {.model = DepthNoiseModel::kNone, .max_range_m = 10.0}, 0);
-  std::vector<double> dz;
-  for (int v = 0; v < synth.rows; ++v)
-    for (int u = 0; u < synth.cols; ++u) {
-      const int a = frame.depth.at<std::uint16_t>(v, u), b = synth.at<std::uint16_t>(v, u);
-      if (a && b) dz.push_back(std::abs(a - b) / camera.depth_scale);
-    }
-  std::nth_element(dz.begin(), dz.begin() + dz.size() / 2, dz.end());
-  EXPECT_GT(dz[dz.size() / 2], 2 * kReplicaMedianDzTolerance_m);
+  DepthComparison control = compareDepth(frame.depth, synthDepth(shifted), camera.depth_scale);
+  EXPECT_GT(quantile(control.dz, 0.5), 2 * kReplicaMedianDzTolerance_m);
 }
 
 TEST(Synth, NguyenNoiseHasTheModelsAxialSpreadAndCuts) {
