@@ -142,6 +142,13 @@ std::function<std::string(const fs::path&)> write(const char* file, std::string 
     return std::string();
   };
 }
+// Damages one image by writing `pixels` in its place.
+std::function<std::string(const fs::path&)> image(const char* file, cv::Mat pixels) {
+  return [file, pixels](const fs::path& d) {
+    cv::imwrite((d / file).string(), pixels);
+    return std::string();
+  };
+}
 std::function<std::string(const fs::path&)> removeFile(const char* file) {
   return [file](const fs::path& d) {
     fs::remove_all(d / file);
@@ -192,20 +199,11 @@ const std::vector<BadCase>& badCases() {
        write("seq/depth/000000.png", "\x89PNG\r\n garbage")},
       {"sequence", "empty_rgb_png", E::kInputError, "cannot decode colour image", write("seq/rgb/000000.png", "")},
       {"sequence", "depth_8bit_colour", E::kInputError, "must be 16-bit single-channel",
-       [](const fs::path& d) {
-         cv::imwrite((d / "seq/depth/000000.png").string(), cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)));
-         return std::string();
-       }},
+       image("seq/depth/000000.png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)))},
       {"sequence", "depth_wrong_size", E::kInputError, "is 32x24 but the camera is 64x48",
-       [](const fs::path& d) {
-         cv::imwrite((d / "seq/depth/000000.png").string(), cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)));
-         return std::string();
-       }},
+       image("seq/depth/000000.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)))},
       {"sequence", "rgb_wrong_size", E::kInputError, "colour image is",
-       [](const fs::path& d) {
-         cv::imwrite((d / "seq/rgb/000000.png").string(), cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)));
-         return std::string();
-       }},
+       image("seq/rgb/000000.png", cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)))},
       {"sequence", "camera_file_missing_key", E::kInputError, "missing key 'cy'",
        write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 31.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
       // Poses (TUM trajectories: ground truth, corrected trajectories).
