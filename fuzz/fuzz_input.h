@@ -27,8 +27,8 @@ inline std::filesystem::path writeInput(const std::uint8_t* data, std::size_t si
 
 }  // namespace vdmap::fuzz
 
-/// Runs `call`; the readers' documented errors (InputError, std::invalid_argument) are expected
-/// outcomes, anything else escapes and libFuzzer reports it as a crash.
+/// Runs `call`; the readers' documented error for a bad file (InputError) is an expected outcome,
+/// anything else escapes and libFuzzer reports it as a crash.
 #define VDMAP_FUZZ_EXPECTED_ERRORS(call) \
   try {                                  \
     call;                                \

@@ -2,7 +2,6 @@
 // valid), then the same bytes as an associations.txt, through TumSequence::open.
 #include "fuzz/fuzz_input.h"
 #include "mapping/core/error.h"
-#include "mapping/io/text_list.h"
 #include "mapping/io/tum_sequence.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
