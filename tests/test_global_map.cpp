@@ -1,7 +1,9 @@
 // The global map (SPEC section 6): grouping, mean-shift merging, moment matching, occlusion
 // removal, determinism across thread counts, parameter checks.
+#include <map>
 #include <random>
 
+#include <Eigen/Eigenvalues>
 #include <gtest/gtest.h>
 
 #include "mapping/global_map/global_map.h"
@@ -90,15 +92,20 @@ TEST(GlobalMap, MomentMatchingEqualsTheStatisticsOfTheUnion) {
   EXPECT_NEAR(m.color.x(), (0 * 20 + 10 * 27 + 20 * 34) / 81.0, 1e-4);
 }
 
-TEST(GlobalMap, OcclusionRemovalKeepsTheCloseViewAndDropsCoarseEllipsoidsInFront) {
+// Keyframe 0 sees the wall from 2 m (coarse cells) and is placed 1 cm too near: its surface
+// floats just in front of the wall. Keyframe 1 sees it from 0.3 m (fine cells), correctly.
+KeyframeGraph coarseViewInFrontOfCloseView() {
   KeyframeGraph graph;
-  // Keyframe 0 sees the wall from 2 m (coarse cells) and is placed 1 cm too near: its surface
-  // floats just in front of the wall. Keyframe 1 sees it from 0.3 m (fine cells), correctly.
   Transform placed = facingWall(0.0);
   placed.translation().z() -= 0.01;
   addKeyframe(&graph, facingWall(0.0), placed);
   addKeyframe(&graph, facingWall(1.7), facingWall(1.7));
   graph.edges().strengthen(0, 1, 0.05);  // neighbours, but below tau_group: no merging
+  return graph;
+}
+
+TEST(GlobalMap, OcclusionRemovalKeepsTheCloseViewAndDropsCoarseEllipsoidsInFront) {
+  const KeyframeGraph graph = coarseViewInFrontOfCloseView();
   GlobalMapParams params;
   const GlobalMap on = buildGlobalMap(graph, params);
   params.occlusion_removal = false;
@@ -114,6 +121,81 @@ TEST(GlobalMap, OcclusionRemovalKeepsTheCloseViewAndDropsCoarseEllipsoidsInFront
   ASSERT_GT(count(off, 0), 20);
   EXPECT_LT(count(on, 0), count(off, 0) / 5) << "coarse ellipsoids in front of the precise ones go";
   EXPECT_GT(count(on, 1), count(off, 1) * 95 / 100) << "the precise view stays";
+}
+
+// The obviously-correct occlusion removal (SPEC 6 step 3), the oracle of occludingEllipsoids:
+// for every viewpoint K, every pair of its group's ellipsoids in one of K's cells, with no
+// sorting and no skipping. The numerics are the fast path's (same regularised covariance, same
+// expressions), so the two agree exactly.
+std::vector<bool> occludingEllipsoidsReference(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
+                                               const GlobalMapParams& params) {
+  const double cos_angle = std::cos(params.occlusion_angle_deg * M_PI / 180.0);
+  std::vector<Eigen::Matrix3d> information;
+  std::vector<double> lambda_max;
+  for (const Ellipsoid& e : ellipsoids) {
+    const Eigen::Matrix3d cov = e.cov + 1e-10 * Eigen::Matrix3d::Identity();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(cov);
+    lambda_max.push_back(eig.eigenvalues()(2));
+    information.push_back(cov.inverse());
+  }
+  std::vector<bool> removed(ellipsoids.size(), false);
+  for (const Keyframe& K : graph.keyframes()) {
+    auto inGroup = [&](int id) {
+      const Keyframe& o = graph.keyframe(id);
+      return id == K.id || graph.edges().hasEdge(K.id, id) ||
+             ((o.T_W_K.translation() - K.T_W_K.translation()).norm() <= params.occlusion_distance_m &&
+              o.T_W_K.linear().col(2).dot(K.T_W_K.linear().col(2)) >= cos_angle - 1e-12);
+    };
+    const Transform T_K_W = K.T_W_K.inverse();
+    const Eigen::Vector3d c = K.T_W_K.translation();
+    std::map<int, std::vector<std::size_t>> cells;
+    std::vector<double> z(ellipsoids.size());
+    for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+      if (!inGroup(ellipsoids[i].keyframe)) continue;
+      const Eigen::Vector3d p = T_K_W * ellipsoids[i].mean;
+      z[i] = p.z();
+      if (p.z() <= 0.0) continue;
+      const Eigen::Vector2d uv = K.container.camera().project(p);
+      const int cell = K.container.gridIndexOfPixel(uv.x(), uv.y());
+      if (cell >= 0) cells[cell].push_back(i);
+    }
+    for (const auto& [cell, members] : cells)
+      for (std::size_t a : members)
+        for (std::size_t b : members) {
+          if (!(z[a] < z[b]) || !(lambda_max[b] < lambda_max[a])) continue;
+          const Eigen::Vector3d mu = ellipsoids[a].mean - c;
+          const Eigen::Vector3d d = (ellipsoids[b].mean - c).normalized();
+          const Eigen::Matrix3d& P = information[a];
+          const Eigen::Vector3d P_mu = P * mu;
+          const double dPmu = d.dot(P_mu);
+          if (mu.dot(P_mu) - dPmu * dPmu / d.dot(P * d) <= 4.0) removed[a] = true;
+        }
+  }
+  return removed;
+}
+
+// Occlusion removal checked against the reference on two scenes: the coarse view in front, and
+// four keyframes turning in the box room (neighbours and near keyframes both form the groups).
+TEST(GlobalMap, OcclusionRemovalEqualsTheReference) {
+  KeyframeGraph wall = coarseViewInFrontOfCloseView();
+  KeyframeGraph turning;
+  for (int i = 0; i < 4; ++i) {
+    const Transform T = test::lookAt({0.1 * i, 0, 0}, {2 * std::sin(0.3 * i), 0.3, 2 * std::cos(0.3 * i)});
+    addKeyframe(&turning, T, T);
+  }
+  turning.edges().strengthen(0, 2, 0.05);
+  for (const KeyframeGraph* graph : {&wall, &turning}) {
+    GlobalMapParams params;
+    params.occlusion_removal = false;
+    const std::vector<Ellipsoid> merged = buildGlobalMap(*graph, params).ellipsoids;
+    const std::vector<bool> removed = occludingEllipsoids(*graph, merged, params);
+    const std::vector<bool> expected = occludingEllipsoidsReference(*graph, merged, params);
+    ASSERT_EQ(removed.size(), expected.size());
+    for (std::size_t i = 0; i < removed.size(); ++i) ASSERT_EQ(removed[i], expected[i]) << "ellipsoid " << i;
+    EXPECT_GT(std::count(removed.begin(), removed.end(), true), 10) << "the scene occludes something";
+    EXPECT_LT(std::count(removed.begin(), removed.end(), true), static_cast<long>(merged.size()));
+  }
 }
 
 TEST(GlobalMap, SameResultWithOneAndTwoThreads) {
