@@ -74,6 +74,7 @@ EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
 EllipsoidRenderer::~EllipsoidRenderer() = default;
 
 void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
+  near_key_.reset();
   instances_.assign(ellipsoids.begin(), ellipsoids.end());
   count_ = instances_.size();
   geometry_cpu_ = geometryOf(instances_, style_.sigma);
@@ -90,6 +91,7 @@ void EllipsoidRenderer::update(std::size_t first, std::span<const EllipsoidInsta
     set(all);
     return;
   }
+  near_key_.reset();
   std::copy(changed.begin(), changed.end(), instances_.begin() + first);
   const std::vector<float> geometry = geometryOf(changed, style_.sigma);
   std::copy(geometry.begin(), geometry.end(), geometry_cpu_.begin() + 12 * first);
@@ -110,6 +112,7 @@ void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
   style_.sigma = style.sigma;
   style_.color = style.color;  // the sphere level is fixed at construction
   style_.point_below_px = style.point_below_px;
+  if (geometry_changed || colors_changed) near_key_.reset();
   if (geometry_changed) {
     geometry_cpu_ = geometryOf(instances_, style_.sigma);
     geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
@@ -125,8 +128,12 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
   // every instance the mesh pass may draw, so it uses 90% of the threshold. Instances wholly
   // in front of the near plane (or behind the camera) are drawn by neither pass.
   const glm::mat4& V = view.T_C_W;
-  const glm::vec4 row_z(V[0][2], V[1][2], V[2][2], V[3][2]);
-  const float focal_px = std::max(view.fx, view.fy), threshold = 0.9f * style_.point_below_px;
+  const MeshSelectionKey key{glm::vec4(V[0][2], V[1][2], V[2][2], V[3][2]), std::max(view.fx, view.fy), view.near_m,
+                             0.9f * style_.point_below_px};
+  if (near_key_ == key) return near_colors_cpu_.size();
+  near_key_ = key;
+  const glm::vec4& row_z = key.row_z;
+  const float focal_px = key.focal_px, threshold = key.threshold_px;
   near_geometry_cpu_.clear();
   near_colors_cpu_.clear();
   for (std::size_t i = 0; i < count_; ++i) {

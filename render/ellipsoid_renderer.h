@@ -1,6 +1,7 @@
 #pragma once
 #include <array>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -27,9 +28,10 @@ struct EllipsoidStyle {
 /// and those that project smaller than EllipsoidStyle::point_below_px as splats (one point
 /// sprite covering the projected ellipse). Geometry (centre + three scaled axes, 48 bytes) and
 /// colour (4 bytes) live in separate GPU buffers: a colour-mode change re-sends colours only,
-/// update() re-sends one range. With the splat level on, each draw() also sends the instances
-/// that may need the mesh (near or large ones), so far ones cost no vertex work per triangle;
-/// for that the geometry and colours are mirrored on the CPU (52 bytes per ellipsoid).
+/// update() re-sends one range. With the splat level on, draw() also sends the instances that
+/// may need the mesh (near or large ones), so far ones cost no vertex work per triangle; it
+/// re-selects them only when the view or the instances changed. For that the geometry and
+/// colours are mirrored on the CPU (52 bytes per ellipsoid).
 class EllipsoidRenderer {
  public:
   EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style = {});
@@ -45,7 +47,15 @@ class EllipsoidRenderer {
   std::size_t size() const { return count_; }
 
  private:
-  // Instances that may need the mesh pass in this view, sent to near_geometry_/near_colors_.
+  // What decides the mesh-pass selection: the view's camera-z row, focal length, near plane and
+  // the splat threshold.
+  struct MeshSelectionKey {
+    glm::vec4 row_z;
+    float focal_px, near_m, threshold_px;
+    bool operator==(const MeshSelectionKey&) const = default;
+  };
+  // Instances that may need the mesh pass in this view, sent to near_geometry_/near_colors_
+  // unless they were already selected for the same key.
   std::size_t selectMeshInstances(const ViewCamera& view) const;
 
   const Gl* gl_;
@@ -59,6 +69,7 @@ class EllipsoidRenderer {
   mutable GpuBuffer near_geometry_, near_colors_;
   mutable std::vector<float> near_geometry_cpu_;
   mutable std::vector<glm::u8vec4> near_colors_cpu_;
+  mutable std::optional<MeshSelectionKey> near_key_;  // empty: geometry or colours changed since
   GLsizei index_count_ = 0;
   std::size_t count_ = 0;
 };

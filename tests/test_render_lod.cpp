@@ -88,5 +88,45 @@ TEST_F(EllipsoidLod, LargeEllipsoidsAreUnchanged) {
   EXPECT_EQ(cv::countNonZero(draw(set, 0.f) != draw(set, EllipsoidStyle{}.point_below_px)), 0);
 }
 
+TEST_F(EllipsoidLod, AReusedRendererDrawsLikeAFreshOne) {
+  // draw() keeps its selection of mesh-pass instances while the view and the instances stay
+  // the same; after a colour change, a new view and an update it must draw exactly what a new
+  // renderer given the same state draws.
+  const Gl& gl = context_->gl();
+  Framebuffer fb(gl, view_.width, view_.height);
+  auto shot = [&](const EllipsoidRenderer& renderer, const ViewCamera& view) {
+    fb.bindAndClear(0.f, 0.f, 0.f);
+    renderer.draw(view);
+    return fb.readRgb();
+  };
+  auto fresh = [&](const std::vector<EllipsoidInstance>& set, const EllipsoidStyle& style, const ViewCamera& view) {
+    EllipsoidRenderer renderer(gl, style);
+    renderer.set(set);
+    return shot(renderer, view);
+  };
+  auto same = [](const cv::Mat& a, const cv::Mat& b) { return cv::norm(a, b, cv::NORM_INF) == 0; };
+  std::vector<EllipsoidInstance> set = grid(view_, 2.f, 10.f);  // mesh-pass sized
+  EllipsoidRenderer reused(gl);
+  reused.set(set);
+  const cv::Mat before = shot(reused, view_);
+  EXPECT_TRUE(same(before, shot(reused, view_)));
+
+  const EllipsoidStyle by_keyframe{.color = ColorMode::kKeyframe};
+  reused.setStyle(by_keyframe);
+  const cv::Mat recoloured = shot(reused, view_);
+  EXPECT_FALSE(same(recoloured, before)) << "the colour change shows";
+  EXPECT_TRUE(same(recoloured, fresh(set, by_keyframe, view_)));
+
+  ViewCamera closer = view_;
+  closer.T_C_W[3][2] -= 1.f;  // 1 m closer: some ellipsoids leave the view, the rest grow
+  EXPECT_TRUE(same(shot(reused, closer), fresh(set, by_keyframe, closer)));
+
+  for (auto& e : set) e.keyframe = 3;
+  reused.update(0, std::span(set).first(100));
+  std::vector<EllipsoidInstance> expected = grid(view_, 2.f, 10.f);
+  std::copy(set.begin(), set.begin() + 100, expected.begin());
+  EXPECT_TRUE(same(shot(reused, closer), fresh(expected, by_keyframe, closer)));
+}
+
 }  // namespace
 }  // namespace vdmap::render
