@@ -10,11 +10,6 @@
 
 namespace vdmap::app {
 
-/// Thrown by a feature that exists in the contract but is not implemented yet (exit code 2).
-struct NotBuiltYet : std::runtime_error {
-  using std::runtime_error::runtime_error;
-};
-
 void addInfoCommand(CLI::App& app);
 void addRenderCommand(CLI::App& app);
 void addSynthCommand(CLI::App& app);

@@ -22,9 +22,6 @@ int main(int argc, char** argv) {
     if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {
     return app.exit(e);
-  } catch (const NotBuiltYet& e) {
-    std::cerr << "vdmap: " << e.what() << "\n";
-    return 2;
   } catch (const std::exception& e) {
     const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();
     std::cerr << "vdmap" << verb << ": error: " << e.what() << "\n";
