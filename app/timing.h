@@ -1,7 +1,6 @@
 #pragma once
 // Timing helpers shared by the verbs that report speed.
 #include <algorithm>
-#include <chrono>
 #include <ctime>
 #include <vector>
 
@@ -13,14 +12,6 @@ inline double median(std::vector<double> v) {
   std::sort(v.begin(), v.end());
   const std::size_t n = v.size();
   return n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-}
-
-/// Wall time of f(), milliseconds.
-template <typename F>
-double timeMs(F&& f) {
-  const auto t0 = std::chrono::steady_clock::now();
-  f();
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
 }
 
 /// CPU time of the whole process spent in f(), milliseconds. For single-threaded work on a
