@@ -50,7 +50,8 @@ TEST(MapCli, BadCellSizeFailsWithoutOutput) {
 TEST(BenchCli, JsonHasTheContractKeys) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 3);
-  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --frames 2 --json");
+  const RunResult r =
+      runVdmap("bench '" + (tmp / "seq").string() + "' --frames 2 --json --out '" + tmp.path().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   for (const char* key : {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms",
@@ -58,6 +59,8 @@ TEST(BenchCli, JsonHasTheContractKeys) {
                           "t_g_s", "t_g_us_per_ellipsoid"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);  // a plain N means 0:N
+  EXPECT_TRUE(fs::exists(tmp / "bench.json"));
+  EXPECT_TRUE(fs::exists(tmp / "bench.md"));
 }
 
 }  // namespace
