@@ -4,6 +4,7 @@
 #include <cstdint>
 #include <cstdio>
 #include <iostream>
+#include <tuple>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -142,6 +143,7 @@ class WorkbenchWindow {
     if (session != shown_session_) {  // a newly opened sequence: everything shown is stale
       shown_session_ = session;
       shown_mapping_ = nullptr;
+      shown_lines_ = {};
       shown_generation_ = container_generation_ = -1;
       container_keyframe_ = -2;
     }
@@ -153,18 +155,20 @@ class WorkbenchWindow {
       if (!mapping_->depth.empty()) depth_.set(depthToRgb(mapping_->depth, mapping_->camera.depth_scale));
     }
     const Settings& s = ui().settings;
+    ellipsoids_.setStyle({.sigma = s.ellipsoid_sigma, .color = s.color});
     const int generation = global_ ? global_->generation : 0;
     if (generation != shown_generation_ || s.color != shown_color_) {
       const auto instances = global_ ? render::toInstances(global_->map.ellipsoids) : std::vector<render::EllipsoidInstance>{};
-      ellipsoids_.setStyle({.sigma = s.ellipsoid_sigma, .color = s.color});
       ellipsoids_.set(instances);
       points_.set(instances, s.color);
       shown_generation_ = generation;
       shown_color_ = s.color;
       if (global_ && !global_->map.ellipsoids.empty() && !ui().camera_framed) bench_.resetView();
     }
-    ellipsoids_.setStyle({.sigma = s.ellipsoid_sigma, .color = s.color});
     if (ui().selected_keyframe != container_keyframe_ || generation != container_generation_) updateContainerView();
+    const LinesKey lines_key{mapping_.get(), ui().selected_keyframe, s.show_frustums, s.show_graph, s.show_trajectory};
+    if (lines_key == shown_lines_) return;
+    shown_lines_ = lines_key;
     render::ColoredLines lines;
     std::vector<Transform> poses;
     for (const KeyframeInfo& k : mapping_->keyframes) {
@@ -539,6 +543,9 @@ class WorkbenchWindow {
   std::shared_ptr<const GlobalSnapshot> global_;
   const MapSession* shown_session_ = nullptr;
   const MappingSnapshot* shown_mapping_ = nullptr;
+  // What the lines were built from: the snapshot, the selection and the line toggles.
+  using LinesKey = std::tuple<const MappingSnapshot*, int, bool, bool, bool>;
+  LinesKey shown_lines_{};
   int shown_generation_ = -1, container_keyframe_ = -2, container_generation_ = -1;
   render::ColorMode shown_color_ = render::ColorMode::kRgb;
   int fb_width_ = 0, fb_height_ = 0;
