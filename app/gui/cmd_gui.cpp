@@ -41,18 +41,25 @@ std::uint64_t sceneFingerprint(const BuiltinScene& scene) {
 }
 
 // The built-in scene as a sequence in $XDG_CACHE_HOME/vdmap (generated on first use). With
-// --frames A:B only the first B frames of the walk are rendered.
+// --frames A:B only the first B frames of the walk are rendered, unless the whole walk is
+// cached already: each frame is rendered (and its noise drawn) on its own, so the first B
+// frames of the whole walk are those B frames.
 fs::path builtinSequence(const std::string& frames) {
   const int last = frames.empty() ? -1 : parseFrameRange(frames).last;
   const BuiltinScene scene = makeBuiltinScene();
-  const int count = last < 0 ? static_cast<int>(scene.trajectory.size())
-                             : std::min(last, static_cast<int>(scene.trajectory.size()));
+  const int total = static_cast<int>(scene.trajectory.size());
+  const int count = last < 0 ? total : std::min(last, total);
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   const char* home = std::getenv("HOME");
   const fs::path cache = xdg && *xdg ? fs::path(xdg) : home && *home ? fs::path(home) / ".cache" : fs::temp_directory_path();
-  char name[64];
-  std::snprintf(name, sizeof name, "builtin-%016llx-%d", static_cast<unsigned long long>(sceneFingerprint(scene)), count);
-  const fs::path dir = cache / "vdmap" / name;
+  const auto fingerprint = static_cast<unsigned long long>(sceneFingerprint(scene));
+  const auto folder = [&](int n) {
+    char name[64];
+    std::snprintf(name, sizeof name, "builtin-%016llx-%d", fingerprint, n);
+    return cache / "vdmap" / name;
+  };
+  const fs::path whole = folder(total), dir = folder(count);
+  if (fs::exists(whole / "rgb.txt")) return whole;
   if (fs::exists(dir / "rgb.txt")) return dir;
   fs::create_directories(dir.parent_path());
   render::SynthOptions options;
