@@ -252,6 +252,10 @@ TEST(GuiWorkbench, EulerAnglesRoundTrip) {
   const glm::vec3 deg(10.f, -20.f, 135.f);
   const glm::vec3 back = rotationToEulerDeg(eulerDegToRotation(deg));
   EXPECT_TRUE(eulerDegToRotation(back).isApprox(eulerDegToRotation(deg), 1e-6));
+  // The round trip alone holds for any eulerDegToRotation (even one returning identity); pin
+  // the convention: yaw about z turns x into y, roll about x turns y into z.
+  EXPECT_TRUE((eulerDegToRotation({0.f, 0.f, 90.f}) * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-6));
+  EXPECT_TRUE((eulerDegToRotation({90.f, 0.f, 0.f}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-6));
 }
 
 }  // namespace
