@@ -26,7 +26,12 @@ TempDir::~TempDir() {
 
 void writeText(const fs::path& file, const std::string& text) {
   fs::create_directories(file.parent_path());
-  std::ofstream(file) << text;
+  std::ofstream(file, std::ios::binary) << text;
+}
+
+std::string readFile(const fs::path& file) {
+  std::ifstream in(file, std::ios::binary);
+  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 void writeTinySequence(const fs::path& dir, int frames, int width, int height) {
@@ -153,12 +158,8 @@ RunResult runVdmap(const std::string& args, const std::string& prefix) {
   const int status = std::system(cmd.c_str());
   RunResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-  auto slurp = [](const fs::path& p) {
-    std::ifstream in(p);
-    return std::string(std::istreambuf_iterator<char>(in), {});
-  };
-  result.out = slurp(tmp / "out");
-  result.err = slurp(tmp / "err");
+  result.out = readFile(tmp / "out");
+  result.err = readFile(tmp / "err");
   return result;
 }
 

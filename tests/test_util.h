@@ -26,8 +26,11 @@ class TempDir {
   fs::path path_;
 };
 
-/// Writes `text` to `file` (creating parent folders).
+/// Writes `text` (any bytes) to `file` (creating parent folders).
 void writeText(const fs::path& file, const std::string& text);
+
+/// The bytes of `file` ("" when it cannot be read).
+std::string readFile(const fs::path& file);
 
 /// Writes a small valid TUM sequence: `frames` frames of `width`x`height` at 30 fps, a fronto-
 /// parallel plane at 1.5 m (depth scale 5000), textured colour, identity-ish poses moving along x,
