@@ -5,7 +5,6 @@
 
 #include <cstdio>
 #include <fstream>
-#include <random>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
@@ -41,11 +40,11 @@ void writeTinySequence(const fs::path& dir, int frames, int width, int height) {
   rgb_list << "# timestamp filename\n";
   depth_list << "# timestamp filename\n";
   gt << "# timestamp tx ty tz qx qy qz qw\n";
-  std::mt19937 rng(7);
+  cv::RNG rng(7);
   for (int i = 0; i < frames; ++i) {
     const double t = i / 30.0;
     cv::Mat rgb(height, width, CV_8UC3);
-    cv::randu(rgb, 0, 255);
+    rng.fill(rgb, cv::RNG::UNIFORM, 0, 255);
     cv::Mat depth(height, width, CV_16UC1, cv::Scalar(7500));  // 1.5 m at scale 5000
     char name[32];
     std::snprintf(name, sizeof name, "%06d.png", i);
