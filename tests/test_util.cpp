@@ -132,16 +132,18 @@ Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target)
   return T;
 }
 
+RgbdFrame turningBoxRoomFrame(const PinholeCamera& camera, int i, double degrees_per_frame) {
+  const double a = i * degrees_per_frame * M_PI / 180.0;
+  RgbdFrame f = renderBoxRoom(camera, lookAt({0, 0.2, 0}, {std::sin(a), 0.3, std::cos(a)}));
+  f.index = i;
+  f.timestamp = i / 30.0;
+  return f;
+}
+
 Mapper mapTurningBoxRoom(int frames) {
   const PinholeCamera camera{160, 120, 131.25, 131.25, 79.5, 59.5, 5000.0};
   Mapper mapper(camera);
-  for (int i = 0; i < frames; ++i) {
-    const double a = i * 6.0 * M_PI / 180.0;
-    RgbdFrame f = renderBoxRoom(camera, lookAt({0, 0.2, 0}, {std::sin(a), 0.3, std::cos(a)}));
-    f.index = i;
-    f.timestamp = i / 30.0;
-    mapper.addFrame(f);
-  }
+  for (int i = 0; i < frames; ++i) mapper.addFrame(turningBoxRoomFrame(camera, i, 6.0));
   return mapper;
 }
 

@@ -45,6 +45,10 @@ RgbdFrame renderBoxRoom(const PinholeCamera& camera, const Transform& T_W_C);
 /// A camera pose at `position` looking at `target` (y of the image pointing down, world -y up).
 Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target);
 
+/// Frame `i` of a camera at the centre of the box room turning on the spot by
+/// `degrees_per_frame` (index i, 30 fps timestamp).
+RgbdFrame turningBoxRoomFrame(const PinholeCamera& camera, int i, double degrees_per_frame);
+
 /// A small whole session: a 160x120 camera at the centre of the box room turning 6 degrees a
 /// frame through `frames` frames (several keyframes, covisibility edges, a revisit past 60).
 Mapper mapTurningBoxRoom(int frames);
