@@ -5,7 +5,6 @@
 #include <cmath>
 #include <cstdio>
 #include <fstream>
-#include <map>
 #include <string>
 #include <vector>
 
@@ -42,6 +41,12 @@ struct Bar {
   bool vdmap;
 };
 
+struct Point {
+  std::string name;
+  double elements, rmse_mm;
+  bool vdmap;
+};
+
 // Horizontal bars on a log10 axis from 0.1 to 10^4 (ms).
 void barChart(const std::vector<Bar>& bars, const std::string& title, const std::string& file) {
   const int left = 250, right = 40, top = 50, row = 34, w = 900;
@@ -66,12 +71,11 @@ void barChart(const std::vector<Bar>& bars, const std::string& title, const std:
 }
 
 // RMSE (mm, linear y) against element count (log x).
-void scatter(const std::vector<std::pair<std::string, std::pair<double, double>>>& points, const std::vector<bool>& vd,
-             const std::string& title, const std::string& file) {
+void scatter(const std::vector<Point>& points, const std::string& title, const std::string& file) {
   const int w = 900, h = 560, left = 70, right = 40, top = 50, bottom = 60;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   double ymax = 1;
-  for (const auto& p : points) ymax = std::max(ymax, p.second.second);
+  for (const Point& p : points) ymax = std::max(ymax, p.rmse_mm);
   ymax = std::ceil(ymax / 5) * 5;
   const double lo = 3, hi = 7;  // 10^3 .. 10^7 elements
   const auto px = [&](double n) { return left + static_cast<int>((std::log10(std::max(n, 1.0)) - lo) / (hi - lo) * (w - left - right)); };
@@ -89,9 +93,9 @@ void scatter(const std::vector<std::pair<std::string, std::pair<double, double>>
   text(img, "elements (log)", {w / 2 - 50, h - 15});
   text(img, "RMSE mm", {5, top - 10});
   for (std::size_t i = 0; i < points.size(); ++i) {
-    const cv::Point p(px(points[i].second.first), py(points[i].second.second));
-    cv::circle(img, p, 6, vd[i] ? kVdmap : kPeer, cv::FILLED, cv::LINE_AA);
-    text(img, points[i].first, p + cv::Point(9, (i % 2 ? 14 : -6)), 0.4);
+    const cv::Point p(px(points[i].elements), py(points[i].rmse_mm));
+    cv::circle(img, p, 6, points[i].vdmap ? kVdmap : kPeer, cv::FILLED, cv::LINE_AA);
+    text(img, points[i].name, p + cv::Point(9, (i % 2 ? 14 : -6)), 0.4);
   }
   cv::imwrite(file, img);
 }
@@ -139,8 +143,7 @@ int main(int argc, char** argv) {
     const json a = load(accuracy);
     std::printf("\n| method | elements | RMSE [mm] | mean [mm] | median [mm] | completion [mm] | within 5 cm |\n"
                 "|---|---:|---:|---:|---:|---:|---:|\n");
-    std::vector<std::pair<std::string, std::pair<double, double>>> pts;
-    std::vector<bool> vdm;
+    std::vector<Point> pts;
     for (const auto& [key, m] : a["methods"].items()) {
       if (!m.contains("accuracy") || key == "vd_pipeline") continue;  // the pipeline's map is vd_update's
       const json& r = m["accuracy"];
@@ -150,10 +153,9 @@ int main(int argc, char** argv) {
       std::printf("| %s | %zu | %.2f | %.2f | %.2f | %.1f | %.1f%% |\n", name.c_str(), r["elements"].get<std::size_t>(),
                   r["rmse_mm"].get<double>(), r["mean_mm"].get<double>(), r["median_mm"].get<double>(),
                   r["completion_mean_mm"].get<double>(), 100 * r["completion_ratio_5cm"].get<double>());
-      pts.push_back({name, {r["elements"].get<double>(), r["rmse_mm"].get<double>()}});
-      vdm.push_back(key.rfind("vd_", 0) == 0);
+      pts.push_back({name, r["elements"].get<double>(), r["rmse_mm"].get<double>(), key.rfind("vd_", 0) == 0});
     }
-    scatter(pts, vdm, "RMSE vs elements, noisy Replica office0 render (" + std::to_string(a["frames"].get<int>()) + " frames)",
+    scatter(pts, "RMSE vs elements, noisy Replica office0 render (" + std::to_string(a["frames"].get<int>()) + " frames)",
             png_dir + "/accuracy.png");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plot_bench: %s\n", e.what());
