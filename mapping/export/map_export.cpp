@@ -4,7 +4,9 @@
 
 #include <cmath>
 #include <stdexcept>
+#include <string>
 #include <system_error>
+#include <vector>
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/export/octomap_export.h"

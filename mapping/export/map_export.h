@@ -2,8 +2,6 @@
 // Everything a mapping run exports (SPEC section 7), written into one folder: the same code for
 // `vdmap map --out DIR` and the workbench's Export button.
 #include <filesystem>
-#include <string>
-#include <vector>
 
 #include <nlohmann/json.hpp>
 

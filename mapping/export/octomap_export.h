@@ -2,7 +2,6 @@
 // OctoMap export of the global map (SPEC section 7), through liboctomap.
 #include <cstddef>
 #include <filesystem>
-#include <string>
 #include <vector>
 
 #include "mapping/keyframe/keyframe_graph.h"
