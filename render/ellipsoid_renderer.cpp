@@ -14,17 +14,8 @@ namespace {
 
 constexpr std::size_t kGeometryStride = 12 * sizeof(float);
 
-std::vector<float> geometryOf(std::span<const EllipsoidInstance> ellipsoids, float sigma) {
-  std::vector<float> out(ellipsoids.size() * 12);
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
-    const auto axes = ellipsoidAxes(ellipsoids[i], sigma);
-    std::copy(axes.begin(), axes.end(), out.begin() + 12 * i);
-  }
-  return out;
-}
-
-}  // namespace
-
+// The instance geometry of one ellipsoid: centre and the three principal axes scaled by
+// sigma * sqrt(eigenvalue) (12 floats).
 std::array<float, 12> ellipsoidAxes(const EllipsoidInstance& e, float sigma) {
   Eigen::Matrix3f m;
   for (int c = 0; c < 3; ++c)
@@ -40,6 +31,17 @@ std::array<float, 12> ellipsoidAxes(const EllipsoidInstance& e, float sigma) {
   }
   return out;
 }
+
+std::vector<float> geometryOf(std::span<const EllipsoidInstance> ellipsoids, float sigma) {
+  std::vector<float> out(ellipsoids.size() * 12);
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+    const auto axes = ellipsoidAxes(ellipsoids[i], sigma);
+    std::copy(axes.begin(), axes.end(), out.begin() + 12 * i);
+  }
+  return out;
+}
+
+}  // namespace
 
 EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
     : gl_(&gl), style_(style),

@@ -1,5 +1,4 @@
 #pragma once
-#include <array>
 #include <memory>
 #include <optional>
 #include <span>
@@ -73,9 +72,5 @@ class EllipsoidRenderer {
   GLsizei index_count_ = 0;
   std::size_t count_ = 0;
 };
-
-/// The instance geometry of one ellipsoid: centre and the three principal axes scaled by
-/// sigma * sqrt(eigenvalue) (12 floats). Exposed for tests.
-std::array<float, 12> ellipsoidAxes(const EllipsoidInstance& e, float sigma);
 
 }  // namespace vdmap::render
