@@ -163,7 +163,7 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
     renderer.set(scene.ellipsoids);
     renderer.draw(view);
   }
-  if (!scene.lines.positions.empty() && choice.kind == ViewChoice::Kind::kGlobal) {
+  if (!scene.lines.positions.empty()) {
     render::LineRenderer lines(gl);
     lines.set(scene.lines);
     lines.setWidth(2.f);
@@ -213,10 +213,11 @@ void runRender(const RenderArgs& args) {
           keptEllipsoids(scene.keyframe->container, global_params.filter, scene.keyframe->T_W_K, scene.keyframe->id));
     } else {
       scene.ellipsoids = render::toInstances(buildGlobalMap(graph, global_params).ellipsoids);
-      // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well
-      // for rooms (the data vdmap is made for).
-      scene.lines = render::keyframeGraphLines(graph, scene.camera, 0.15f);
     }
+    // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well for
+    // rooms (the data vdmap is made for). Only the global view draws the graph.
+    if (choice.kind == ViewChoice::Kind::kGlobal)
+      scene.lines = render::keyframeGraphLines(graph, scene.camera, 0.15f);
   }
 
   // Default sizes: the keyframe's own image for keyframe:K, the whole 2W x 2H container for
