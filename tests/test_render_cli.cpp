@@ -107,6 +107,7 @@ TEST(RenderCli, MissingOsmesaIsAClearError) {
                           "' render --map '" + (tmp / "map.ply").string() + "' --out '" + (tmp / "p.png").string() + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("needs OSMesa, which is not available"), std::string::npos) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "o.png")) << "the control, with OSMesa found, must render";
   EXPECT_FALSE(std::filesystem::exists(tmp / "p.png"));
 }
 
