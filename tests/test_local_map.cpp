@@ -195,16 +195,15 @@ double medianSqrtLambdaMax(const KeyframeContainer& c) {
 // ellipsoids about 3x larger (and more, where depth noise dominates) than one at 1 m.
 TEST(LocalMap, FarPlaneGetsLargerEllipsoidsAsTheModelPredicts) {
   const PinholeCamera cam = sceneCamera();
-  auto nguyen = [](double d) { return 0.0012 + 0.0019 * (d - 0.4) * (d - 0.4); };
   auto measured = [&](double depth) {
     return medianSqrtLambdaMax(buildMap(test::planeScene({0, 0, depth}, {0, 0, 1}),
-                                        {Transform::Identity()}, nguyen).container);
+                                        {Transform::Identity()}, nguyenAxialSd).container);
   };
   // Prediction for a fronto-parallel cell at the image centre: pixel positions uniform over
   // 5 px give (s^2 - 1) / 12 px^2 per axis, times (d / f)^2; depth noise gives sd(d)^2.
   auto predicted = [&](double depth) {
     const double lateral = (25.0 - 1.0) / 12.0 * std::pow(depth / cam.fx, 2);
-    return std::sqrt(std::max(lateral, std::pow(nguyen(depth), 2)));
+    return std::sqrt(std::max(lateral, std::pow(nguyenAxialSd(depth), 2)));
   };
   const double near = measured(1.0), far = measured(3.0);
   EXPECT_GT(far, 2.5 * near);

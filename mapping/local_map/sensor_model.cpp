@@ -19,7 +19,7 @@ const char* sensorModelName(SensorModel model) {
 PixelVariance pixelVariance(SensorModel model, double d) {
   PixelVariance var;
   if (model == SensorModel::kNguyen2012) {
-    const double sd = 0.0012 + 0.0019 * (d - 0.4) * (d - 0.4);
+    const double sd = nguyenAxialSd(d);
     var = {0.8 * 0.8, 0.8 * 0.8, sd * sd};
   } else {
     // The cubic fit goes slightly negative below ~0.03 m; clamp so the covariance stays

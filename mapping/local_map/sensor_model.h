@@ -26,6 +26,9 @@ struct PixelVariance {
 };
 PixelVariance pixelVariance(SensorModel model, double depth_m);
 
+/// Axial (depth) standard deviation of Nguyen et al. 2012 (SPEC section 3), metres.
+inline double nguyenAxialSd(double depth_m) { return 0.0012 + 0.0019 * (depth_m - 0.4) * (depth_m - 0.4); }
+
 /// Covariance (camera frame, m^2) of the point back-projected from pixel (u, v) at depth d:
 /// J diag(su2 + extra_px2, sv2 + extra_px2, sd2(d)) J^T with J = camera.backProjectJacobian.
 Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, double u, double v,

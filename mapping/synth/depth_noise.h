@@ -6,6 +6,8 @@
 
 #include <opencv2/core.hpp>
 
+#include "mapping/local_map/sensor_model.h"  // nguyenAxialSd
+
 namespace vdmap {
 
 enum class DepthNoiseModel {
@@ -31,9 +33,6 @@ struct DepthNoiseParams {
   /// Base of the per-frame seed: frame i uses seed ^ hash(i), so frames are reproducible.
   std::uint64_t seed = 0x76646d6170ull;
 };
-
-/// Axial standard deviation of Nguyen et al. 2012 (SPEC section 3), metres.
-inline double nguyenAxialSd(double depth_m) { return 0.0012 + 0.0019 * (depth_m - 0.4) * (depth_m - 0.4); }
 
 /// Simulates a depth image. `z_cos` is CV_32FC2: camera z in metres (0 = no surface) and the
 /// |cosine| of the incidence angle. Returns CV_16UC1 with metres * depth_scale, rounded; 0 where
