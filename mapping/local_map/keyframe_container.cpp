@@ -46,12 +46,6 @@ int KeyframeContainer::gridIndexOfPixel(double u, double v) const {
   return row * cols_ + col;
 }
 
-Eigen::Vector2d KeyframeContainer::cellCentrePixel(int grid_index) const {
-  const int row = grid_index / cols_, col = grid_index % cols_;
-  // Cell col covers container pixels [col*s, (col+1)*s) whose centres average (col+0.5)*s-0.5.
-  return {(col + 0.5) * cell_size_px_ - 0.5 - offsetU(), (row + 0.5) * cell_size_px_ - 0.5 - offsetV()};
-}
-
 StoredCell& KeyframeContainer::findOrCreate(int grid_index) {
   std::int32_t& s = slot_[grid_index];
   if (s < 0) {

@@ -52,8 +52,6 @@ class KeyframeContainer {
   /// The grid index of the cell holding keyframe pixel (u, v), or -1 when it is outside the
   /// container. A container pixel covers [u' - 0.5, u' + 0.5).
   int gridIndexOfPixel(double u, double v) const;
-  /// Keyframe pixel of the centre of a cell (for the expected covariance of its footprint).
-  Eigen::Vector2d cellCentrePixel(int grid_index) const;
 
   /// The stored cell at a grid index, or nullptr.
   const StoredCell* find(int grid_index) const {
