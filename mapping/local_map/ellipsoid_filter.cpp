@@ -14,20 +14,27 @@ double largestEigenvalue(const Eigen::Matrix3d& m) {
   return solver.eigenvalues()(2);  // ascending
 }
 
-}  // namespace
-
-bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter) {
+// keepCell on the cell's statistics; *cov receives their covariance once the point count passes.
+bool keepStats(const CellStats& stats, const KeyframeContainer& container, const FilterParams& filter,
+               Eigen::Matrix3d* cov) {
   // Fewer than two points have no covariance at all; treat them as rejected whatever
   // min_points says.
-  if (cell.n < static_cast<std::uint32_t>(std::max(filter.min_points, 2))) return false;
-  const CellStats stats = cell.toStats();
+  if (stats.n < std::max(filter.min_points, 2)) return false;
   if (!(stats.mean.z() > 0.0)) return false;
+  *cov = stats.covariance();
   const Eigen::Vector2d uv = container.camera().project(stats.mean);
   const Eigen::Matrix3d expected = expectedCellCovariance(
       filter.model, container.camera(), uv.x(), uv.y(), stats.mean.z(), container.cellSizePx());
   // Compare variances: sqrt(a) <= k sqrt(b)  <=>  a <= k^2 b for a, b >= 0.
   const double k = filter.filter_sigma_factor;
-  return largestEigenvalue(stats.covariance()) <= k * k * largestEigenvalue(expected);
+  return largestEigenvalue(*cov) <= k * k * largestEigenvalue(expected);
+}
+
+}  // namespace
+
+bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter) {
+  Eigen::Matrix3d cov;
+  return keepStats(cell.toStats(), container, filter, &cov);
 }
 
 void forEachKeptEllipsoid(const KeyframeContainer& container, const FilterParams& filter,
@@ -35,11 +42,12 @@ void forEachKeptEllipsoid(const KeyframeContainer& container, const FilterParams
                           const std::function<void(const Ellipsoid&)>& visit) {
   const Eigen::Matrix3d R = T_X_K.linear();
   for (const StoredCell& cell : container.cells()) {
-    if (!keepCell(cell, container, filter)) continue;
     const CellStats stats = cell.toStats();
+    Eigen::Matrix3d cov;
+    if (!keepStats(stats, container, filter, &cov)) continue;
     Ellipsoid e;
     e.mean = T_X_K * stats.mean;
-    e.cov = R * stats.covariance() * R.transpose();
+    e.cov = R * cov * R.transpose();
     e.color = cell.color;
     e.count = cell.n;
     e.keyframe = keyframe_id;
