@@ -25,6 +25,7 @@ namespace vdmap {
 namespace {
 
 namespace fs = std::filesystem;
+using test::readFile;
 using test::writeText;
 
 enum class Expect {
@@ -43,16 +44,6 @@ struct Input {
   std::function<void(const fs::path& dir)> make_good;
   std::function<void(const fs::path& file)> read;
 };
-
-void writeBytes(const fs::path& file, const std::string& bytes) {
-  fs::create_directories(file.parent_path());
-  std::ofstream(file, std::ios::binary) << bytes;
-}
-
-std::string readBytes(const fs::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
 
 const std::string kMeshPly =
     "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
@@ -113,7 +104,7 @@ const std::vector<Input>& inputs() {
          writeEllipsoidPly(d / "e.ply", {e, e});
        },
        [](const fs::path& f) { readPlyEllipsoids(f); }},
-      {"session", "s.vdmap", "session", [](const fs::path& d) { writeBytes(d / "s.vdmap", goodSession()); },
+      {"session", "s.vdmap", "session", [](const fs::path& d) { writeText(d / "s.vdmap", goodSession()); },
        [](const fs::path& f) { loadSession(f); }},
       {"command_line", "", nullptr, [](const fs::path& d) { test::writeTinySequence(d / "seq"); }, nullptr},
   };
@@ -138,7 +129,7 @@ std::string replaceAll(std::string s, const std::string& from, const std::string
 // Damages one file by replacing its text.
 std::function<std::string(const fs::path&)> write(const char* file, std::string text) {
   return [file, text](const fs::path& d) {
-    writeBytes(d / file, text);
+    writeText(d / file, text);
     return std::string();
   };
 }
@@ -159,7 +150,7 @@ std::function<std::string(const fs::path&)> session(std::function<void(std::stri
   return [edit](const fs::path& d) {
     std::string bytes = goodSession();
     edit(&bytes);
-    writeBytes(d / "s.vdmap", bytes);
+    writeText(d / "s.vdmap", bytes);
     return std::string();
   };
 }
@@ -269,8 +260,8 @@ const std::vector<BadCase>& badCases() {
       {"ply_ellipsoids", "no_covariance", E::kInputError, "needs the covariance", write("e.ply", kMeshPly)},
       {"ply_ellipsoids", "truncated", E::kInputError, "truncated",
        [](const fs::path& d) {
-         const std::string bytes = readBytes(d / "e.ply");
-         writeBytes(d / "e.ply", bytes.substr(0, bytes.size() - 7));
+         const std::string bytes = readFile(d / "e.ply");
+         writeText(d / "e.ply", bytes.substr(0, bytes.size() - 7));
          return std::string();
        }},
       {"ply_ellipsoids", "negative_count", E::kInputError, "count",
@@ -326,7 +317,7 @@ void addSeed(const char* target, const std::string& name, const fs::path& file) 
   if (!target || !fs::is_regular_file(file)) return;
   const fs::path dir = fs::path(VDMAP_FUZZ_SEEDS) / target;
   fs::create_directories(dir);
-  writeBytes(dir / name, readBytes(file));
+  writeText(dir / name, readFile(file));
 #else
   (void)target, (void)name, (void)file;
 #endif

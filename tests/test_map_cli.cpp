@@ -18,8 +18,7 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
                                out.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 keyframes"), std::string::npos) << r.out;
-  std::ifstream ply(out / "local_maps.ply", std::ios::binary);
-  std::string header((std::istreambuf_iterator<char>(ply)), {});
+  const std::string header = readFile(out / "local_maps.ply");
   EXPECT_EQ(header.rfind("ply\nformat binary_little_endian 1.0\n", 0), 0u);
   EXPECT_NE(header.find("property uint count\nproperty int keyframe\nend_header\n"), std::string::npos);
   for (const char* file : {"keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",

@@ -47,8 +47,7 @@ const char* kSquarePly =
 
 TEST(RenderCli, RendersAMapThroughOsmesaWithLibGlLinked) {
   // The binary links libGL and glfw (for the workbench) and must still render via OSMesa.
-  std::ifstream binary(VDMAP_BINARY, std::ios::binary);
-  const std::string bytes((std::istreambuf_iterator<char>(binary)), {});
+  const std::string bytes = test::readFile(VDMAP_BINARY);
   EXPECT_NE(bytes.find("libGL.so"), std::string::npos) << "vdmap no longer links libGL: the test proves nothing";
   TempDir tmp;
   writeEllipsoidPly(tmp / "map.ply");

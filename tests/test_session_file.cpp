@@ -19,6 +19,7 @@
 namespace vdmap {
 namespace {
 
+using test::readFile;
 using test::TempDir;
 
 struct Saved {
@@ -46,11 +47,6 @@ const Saved& session() {
 const Saved& smallSession() {
   static const Saved saved = makeSession(10);
   return saved;
-}
-
-std::string readAll(const std::filesystem::path& file) {
-  std::ifstream in(file, std::ios::binary);
-  return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
 }
 
 // The InputError message of decoding `bytes`, or "" when it decodes.
@@ -81,7 +77,7 @@ TEST(SessionFile, ReloadedSessionIsEqualReSavesByteIdenticalAndMergesIdentically
   ASSERT_GT(graph.edges().size(), 0u);
   TempDir dir;
   saveSession(dir / "a.vdmap", graph, s.info);
-  EXPECT_EQ(readAll(dir / "a.vdmap"), s.bytes);
+  EXPECT_EQ(readFile(dir / "a.vdmap"), s.bytes);
   const Session loaded = loadSession(dir / "a.vdmap");
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), s.bytes);
 
