@@ -1,29 +1,19 @@
 // bench_global_map SESSION.vdmap [RUNS]: builds the global map of a saved session RUNS times
 // (default 5) with 1 and with 2 threads and prints the medians of t_g and of each stage, the
 // time per input ellipsoid, the process CPU time (a loaded machine stretches wall time), and whether both thread counts gave the same map bit for bit.
-#include <time.h>
-
 #include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
 #include <vector>
 
+#include "app/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/session_file.h"
 
 namespace {
 
-double cpuSeconds() {
-  timespec t{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
-  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
-}
-
-double median(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using vdmap::app::median;
 
 bool sameMap(const vdmap::GlobalMap& a, const vdmap::GlobalMap& b) {
   if (a.ellipsoids.size() != b.ellipsoids.size()) return false;
@@ -53,9 +43,7 @@ int main(int argc, char** argv) {
     std::vector<double> t_g, cpu, groups, merge, occlusion;
     vdmap::GlobalMap map;
     for (int r = 0; r < runs; ++r) {
-      const double cpu_start = cpuSeconds();
-      map = vdmap::buildGlobalMap(session.graph, params);
-      cpu.push_back(cpuSeconds() - cpu_start);
+      cpu.push_back(1e-3 * vdmap::app::cpuTimeMs([&] { map = vdmap::buildGlobalMap(session.graph, params); }));
       t_g.push_back(map.t_g_s);
       groups.push_back(map.groups_ms);
       merge.push_back(map.merge_ms);

@@ -13,6 +13,8 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "app/timing.h"
+
 namespace {
 
 using nlohmann::json;
@@ -21,12 +23,6 @@ json load(const std::string& file) {
   std::ifstream in(file);
   if (!in) throw std::runtime_error(file + ": cannot open");
   return json::parse(in);
-}
-
-double medianOf(std::vector<double> v) {
-  std::sort(v.begin(), v.end());
-  const std::size_t n = v.size();
-  return n == 0 ? 0.0 : n % 2 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
 }
 
 const cv::Scalar kInk(40, 40, 40), kGrid(220, 220, 220), kVdmap(180, 110, 30), kPeer(60, 130, 230);
@@ -125,7 +121,7 @@ int main(int argc, char** argv) {
     for (const std::string& k : order) {
       std::vector<double> ms;
       for (const json& r : runs) ms.push_back(r["methods"][k]["ms_per_frame"].get<double>());
-      const double med = medianOf(ms);
+      const double med = vdmap::app::median(ms);
       if (k == "vd_update") vd = med;
       const json& m = runs[0]["methods"][k];
       std::printf("| %s | %.2f | %.2f-%.2f | %.1f | %zu |\n", m["name"].get<std::string>().c_str(), med,
@@ -136,7 +132,7 @@ int main(int argc, char** argv) {
     std::vector<double> tg;
     for (const json& r : runs) tg.push_back(r["t_g_us_per_ellipsoid"].get<double>());
     std::printf("\nt_g: median %.2f us per input ellipsoid (Sigma_e %zu -> Sigma_e' %zu in the first run)\n",
-                medianOf(tg), runs[0]["sigma_e"].get<std::size_t>(), runs[0]["sigma_e_prime"].get<std::size_t>());
+                vdmap::app::median(tg), runs[0]["sigma_e"].get<std::size_t>(), runs[0]["sigma_e_prime"].get<std::size_t>());
     barChart(bars, "update time per frame, ms (log scale), 7-Scenes RedKitchen, " +
                        std::to_string(runs[0]["frames"].get<int>()) + " frames, one thread", png_dir + "/speed.png");
     if (accuracy.empty()) return 0;
