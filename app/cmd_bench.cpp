@@ -25,6 +25,7 @@
 #include "app/tsdf_peer.h"
 #include "mapping/baseline/ndt_om_baseline.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/keyframe/mapper.h"
@@ -254,7 +255,6 @@ void runBench(BenchArgs args) {
     }
   }
   const GlobalMap global = buildGlobalMap(mapper.graph(), {});
-  const double t_g_us = global.sigma_e ? 1e6 * global.t_g_s / static_cast<double>(global.sigma_e) : 0.0;
   const double vd = median(vd_ms);
 
   std::vector<MethodResult> rows;
@@ -294,13 +294,10 @@ void runBench(BenchArgs args) {
       {"vd_pipeline_ms", median(pipeline_ms)},
       {"pipeline_stage_ms", {{"features", median(features_ms)}, {"decision", median(decision_ms)},
                              {"update", median(update_ms)}}},
-      {"keyframes", mapper.graph().size()},
       {"revisits", mapper.revisits()},
-      {"sigma_e", global.sigma_e},
-      {"sigma_e_prime", global.sigma_e_prime},
-      {"t_g_s", global.t_g_s},
-      {"t_g_us_per_ellipsoid", t_g_us},
   };
+  out.update(globalMapStats(mapper.graph(), global));  // keyframes, sigma_e, sigma_e', t_g, ...
+  const double t_g_us = out["t_g_us_per_ellipsoid"];
   for (std::size_t i = first_peer; i < rows.size(); ++i) {
     const MethodResult& r = rows[i];
     out[r.key + "_ms"] = r.note.empty() ? nlohmann::json(r.ms) : nlohmann::json(nullptr);
