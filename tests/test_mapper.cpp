@@ -14,13 +14,9 @@ namespace {
 
 PinholeCamera roomCamera() { return cameraPreset("tum-default"); }
 
-// A camera at the room centre turning on the spot through `degrees` in `steps` frames.
+// A camera at the room centre turning on the spot, `degrees_per_frame` each frame.
 RgbdFrame turningFrame(int i, double degrees_per_frame) {
-  const double a = i * degrees_per_frame * M_PI / 180.0;
-  RgbdFrame f = test::renderBoxRoom(roomCamera(), test::lookAt({0, 0.2, 0}, {std::sin(a), 0.3, std::cos(a)}));
-  f.index = i;
-  f.timestamp = i / 30.0;
-  return f;
+  return test::turningBoxRoomFrame(roomCamera(), i, degrees_per_frame);
 }
 
 std::vector<Ellipsoid> worldEllipsoids(const Mapper& mapper, int keyframe) {
@@ -40,7 +36,7 @@ TEST(Mapper, PathBackToItsStartRevisitsTheFirstKeyframe) {
   // The last frame looks 24 degrees past the start: it must go into a keyframe made in the first
   // 60 degrees of the turn (frames 0..9), not a new one.
   EXPECT_LT(mapper.graph().keyframe(reports.back().keyframe).frame_index, 10);
-  EXPECT_EQ(reports.back().decision.kind == FrameDecision::Kind::kNewKeyframe, false);
+  EXPECT_NE(reports.back().decision.kind, FrameDecision::Kind::kNewKeyframe);
   EXPECT_TRUE(mapper.graph().edges().hasEdge(0, 1));
 }
 
