@@ -5,6 +5,7 @@
 // section 2, cell_stats.h), so the comparison is of the map layout, not of the arithmetic.
 // Only the NDT statistics are kept: no occupancy and no ray casting of free space, so this is
 // a lower bound on NDT-OM's update time and the timing comparison favours the baseline.
+#include <array>
 #include <cstdint>
 #include <unordered_map>
 #include <vector>
