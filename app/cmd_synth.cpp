@@ -62,11 +62,9 @@ void runSynth(const SynthArgs& args) {
 void addSynthCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("synth", "Render a coloured mesh along a trajectory into a TUM RGB-D sequence");
   auto args = std::make_shared<SynthArgs>();
-  std::string presets;
-  for (const std::string& n : cameraPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours");
   verb->add_option("--trajectory", args->trajectory, "TUM trajectory (timestamp tx ty tz qx qy qz qw, T_W_C)");
-  verb->add_option("--camera", args->camera, "camera preset: " + presets);
+  verb->add_option("--camera", args->camera, "camera preset: " + cameraPresetList());
   verb->add_option("--noise", args->noise, "depth sensor model: none | nguyen2012")->capture_default_str();
   verb->add_option("--frames", args->frames, "poses A:B of the trajectory (B exclusive; A: or :B)");
   verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk)");

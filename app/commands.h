@@ -34,6 +34,8 @@ struct SequenceArgs {
   std::string frames;
 };
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args);
+/// The camera preset names, comma-separated, for --camera help texts.
+std::string cameraPresetList();
 /// Opens the sequence the arguments name (throws InputError / std::invalid_argument).
 TumSequence openSequence(const SequenceArgs& args);
 

@@ -3,11 +3,15 @@
 
 namespace vdmap::app {
 
-void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
-  verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
+std::string cameraPresetList() {
   std::string presets;
   for (const std::string& n : cameraPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
-  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + presets);
+  return presets;
+}
+
+void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
+  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList());
   verb.add_option("--frames", args.frames, "frames A:B of the depth list (B exclusive; A: or :B)");
 }
 
