@@ -157,13 +157,16 @@ class WorkbenchWindow {
     const Settings& s = ui().settings;
     ellipsoids_.setStyle({.sigma = s.ellipsoid_sigma, .color = s.color});
     const int generation = global_ ? global_->generation : 0;
-    if (generation != shown_generation_ || s.color != shown_color_) {
-      const auto instances = global_ ? render::toInstances(global_->map.ellipsoids) : std::vector<render::EllipsoidInstance>{};
-      ellipsoids_.set(instances);
-      points_.set(instances, s.color);
+    if (generation != shown_generation_) {  // a new global map: new geometry
+      instances_ = global_ ? render::toInstances(global_->map.ellipsoids) : std::vector<render::EllipsoidInstance>{};
+      ellipsoids_.set(instances_);
+      points_.set(instances_, s.color);
       shown_generation_ = generation;
       shown_color_ = s.color;
       if (global_ && !global_->map.ellipsoids.empty() && !ui().camera_framed) bench_.resetView();
+    } else if (s.color != shown_color_) {  // only the colours: setStyle above re-colours the ellipsoids
+      points_.set(instances_, s.color);
+      shown_color_ = s.color;
     }
     if (ui().selected_keyframe != container_keyframe_ || generation != container_generation_) updateContainerView();
     const LinesKey lines_key{mapping_.get(), ui().selected_keyframe, s.show_frustums, s.show_graph, s.show_trajectory};
@@ -534,6 +537,7 @@ class WorkbenchWindow {
   const render::Gl& gl_;
   ScriptOptions script_;
   render::EllipsoidRenderer ellipsoids_;
+  std::vector<render::EllipsoidInstance> instances_;  // of the global map shown
   render::PointRenderer points_;
   render::LineRenderer lines_;
   ImageTexture rgb_, depth_, container_image_{gl_};
