@@ -13,6 +13,8 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "mapping/local_map/cell_stats.h"
+
 namespace vdmap {
 namespace {
 
@@ -182,24 +184,23 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
   // SPEC writes Sigma = sum n_i (Sigma_i + d_i d_i^T) / n with population covariances. Ellipsoids
   // carry sample covariances S_i / (n_i - 1), so the scatters are combined instead:
   // S = sum (S_i + n_i d_i d_i^T), Sigma = S / (n - 1): exactly the statistics of the union.
+  CellStats u;  // the statistics of the union
+  for (const Ellipsoid* e : cluster) {
+    u.n += e->count;
+    u.mean += e->count * e->mean;
+    u.color += e->count * e->color.cast<double>();
+  }
+  u.mean /= u.n;
+  u.color /= u.n;
+  for (const Ellipsoid* e : cluster) {
+    const Eigen::Vector3d d = e->mean - u.mean;
+    u.scatter += (e->count > 1 ? e->count - 1.0 : 0.0) * e->cov + e->count * d * d.transpose();
+  }
   Ellipsoid out = *cluster.front();
-  double n = 0.0;
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero(), color = Eigen::Vector3d::Zero();
-  for (const Ellipsoid* e : cluster) {
-    n += e->count;
-    mean += e->count * e->mean;
-    color += e->count * e->color.cast<double>();
-  }
-  mean /= n;
-  Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
-  for (const Ellipsoid* e : cluster) {
-    const Eigen::Vector3d d = e->mean - mean;
-    scatter += (e->count > 1 ? e->count - 1.0 : 0.0) * e->cov + e->count * d * d.transpose();
-  }
-  out.mean = mean;
-  out.cov = n > 1.0 ? Eigen::Matrix3d(scatter / (n - 1.0)) : Eigen::Matrix3d::Zero();
-  out.color = (color / n).cast<float>();
-  out.count = static_cast<std::uint32_t>(n);
+  out.mean = u.mean;
+  out.cov = u.covariance();
+  out.color = u.color.cast<float>();
+  out.count = static_cast<std::uint32_t>(u.n);
   return out;
 }
 
