@@ -89,6 +89,24 @@ TEST(GuiSettings, SetKeyValue) {
   EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);  // a failed --set changes nothing
 }
 
+TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
+  AppendLog<int> log;
+  std::vector<int> reference;  // the obviously-correct copy
+  std::vector<std::pair<SharedSpan<int>, std::vector<int>>> views;
+  for (int i = 0; i < 1000; ++i) {  // several buffer growths
+    log.push_back(i * 7);
+    reference.push_back(i * 7);
+    if (i % 97 == 0) views.emplace_back(log.view(), reference);
+  }
+  log.clear();
+  log.push_back(-1);
+  for (const auto& [view, expected] : views)
+    EXPECT_EQ(std::vector<int>(view.begin(), view.end()), expected);
+  EXPECT_EQ(log.size(), 1u);
+  EXPECT_EQ(log.view().back(), -1);
+  EXPECT_TRUE(AppendLog<int>().view().empty());
+}
+
 TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;

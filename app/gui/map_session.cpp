@@ -106,8 +106,8 @@ void MapSession::publishMapping() {
   snap->current_keyframe = mapper_->currentKeyframe();
   snap->rgb = last_rgb_;
   snap->depth = last_depth_;
-  snap->times = times_;
-  snap->trajectory = trajectory_;
+  snap->times = times_.view();
+  snap->trajectory = trajectory_.view();
   for (const Keyframe& k : mapper_->graph().keyframes())
     snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();

@@ -13,6 +13,7 @@
 #include <string>
 #include <thread>
 
+#include "app/gui/append_log.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/session_file.h"
 #include "mapping/io/tum_sequence.h"
@@ -37,10 +38,10 @@ struct MappingSnapshot {
   int frames_mapped = 0;       ///< frames [0, frames_mapped) of the sequence are in the map
   int current_keyframe = -1;
   cv::Mat rgb, depth;          ///< the last mapped frame (RGB order / raw 16-bit depth)
-  std::vector<StageTimes> times;       ///< per mapped frame
+  SharedSpan<StageTimes> times;        ///< per mapped frame
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
-  std::vector<Transform> trajectory;   ///< T_W_C per mapped frame
+  SharedSpan<Transform> trajectory;    ///< T_W_C per mapped frame
 };
 
 /// One global map build (replaced after every rebuild).
@@ -121,8 +122,8 @@ class MapSession {
   std::optional<TumSequence> sequence_;
   MapperParams mapper_params_;
   std::unique_ptr<Mapper> mapper_;     // worker thread only
-  std::vector<StageTimes> times_;      // worker thread only
-  std::vector<Transform> trajectory_;  // worker thread only
+  AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
+  AppendLog<Transform> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
 
   mutable std::mutex mutex_;

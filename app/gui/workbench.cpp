@@ -178,7 +178,8 @@ void Workbench::resetView() {
   if (session_) {
     if (const auto global = session_->global())
       for (const Ellipsoid& e : global->map.ellipsoids) points.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-    for (const Transform& T : session_->mapping()->trajectory)
+    const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
+    for (const Transform& T : mapping->trajectory)
       points.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
   }
   const auto [lo, hi] = render::robustBounds(points);
