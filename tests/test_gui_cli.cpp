@@ -1,6 +1,7 @@
 // The workbench end to end under Xvfb: `vdmap` on the built-in scene through the scripted path
 // (--play-to-end --screenshot --stats-json --exit), a second run with another merge_distance,
 // and the failure paths. Skips when xvfb-run is not installed.
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 
@@ -88,6 +89,17 @@ TEST(GuiCli, BadSetAndNoDisplayAreClearErrors) {
   const RunResult no_display = runVdmap("gui '" + (home / "seq").string() + "' --exit", "DISPLAY= WAYLAND_DISPLAY=");
   EXPECT_EQ(no_display.exit_code, 1);
   EXPECT_NE(no_display.err.find("window"), std::string::npos) << no_display.err;
+}
+
+TEST(GuiCli, NoDisplayFailsBeforeRenderingTheBuiltinScene) {
+  TempDir home;
+  fs::create_directories(home / "cache");
+  const RunResult r = runVdmap("", "DISPLAY= WAYLAND_DISPLAY= XDG_CONFIG_HOME='" + (home / "config").string() +
+                                       "' XDG_CACHE_HOME='" + (home / "cache").string() + "'");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("window"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;  // one line
+  EXPECT_TRUE(fs::is_empty(home / "cache")) << "the built-in scene was rendered before the display was checked";
 }
 
 }  // namespace

@@ -5,6 +5,7 @@
 #include <thread>
 
 #include "app/commands.h"
+#include "app/gui/glfw_context.h"
 #include "app/gui/settings.h"
 #include "app/gui/workbench.h"
 #include "app/gui/workbench_window.h"
@@ -90,6 +91,8 @@ void runGui(GuiArgs args, bool builtin) {
   gui::Settings settings = scripted ? gui::Settings{} : gui::loadSettings(settings_file, &warning);
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
+  // Without a display, say so now rather than after rendering the built-in scene (a minute).
+  gui::requireDisplay();
   if (builtin) args.sequence.folder = builtinSequence(args.sequence.frames).string();
   gui::Workbench bench(settings, warning);
   // A failure shows in the window, which stays open.

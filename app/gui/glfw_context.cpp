@@ -12,10 +12,19 @@ std::string glfwMessage() {
   glfwGetError(&text);
   return text ? text : "unknown GLFW error";
 }
+
+void initGlfw() {
+  if (!glfwInit()) throw std::runtime_error("cannot open a window (is there a display?): " + glfwMessage());
+}
 }  // namespace
 
+void requireDisplay() {
+  initGlfw();
+  glfwTerminate();
+}
+
 GlfwWindowContext::GlfwWindowContext(int width, int height, const std::string& title) {
-  if (!glfwInit()) throw std::runtime_error("cannot open a window (is there a display?): " + glfwMessage());
+  initGlfw();
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);

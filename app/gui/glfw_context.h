@@ -9,6 +9,11 @@ struct GLFWwindow;
 
 namespace vdmap::app::gui {
 
+/// Throws the error GlfwWindowContext throws when there is no display, without opening a window
+/// or creating a context (GLFW is initialised and terminated again): a caller checks this before
+/// long work that is only of use in a window.
+void requireDisplay();
+
 class GlfwWindowContext final : public render::Context {
  public:
   /// Opens a window of width x height and makes its context current. Throws std::runtime_error
