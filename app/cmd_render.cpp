@@ -257,7 +257,9 @@ void addRenderCommand(CLI::App& app) {
   verb->add_option("--size", args->size,
                    "image size WIDTHxHEIGHT (default: 1280x720 global, the camera's for keyframe:K, the "
                    "container's 2W x 2H for container:K)");
-  verb->add_option("--color", args->color, "rgb | keyframe | uncertainty | count")->capture_default_str();
+  std::string color_modes;  // "rgb | keyframe | ..."
+  for (const char* name : render::kColorModeNames) color_modes += (color_modes.empty() ? "" : " | ") + std::string(name);
+  verb->add_option("--color", args->color, color_modes)->capture_default_str();
   verb->add_flag("--grid", args->grid, "container view: draw the cell grid");
   verb->add_option("--sigma", args->sigma, "ellipsoid surface at this many standard deviations")->capture_default_str();
   verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,

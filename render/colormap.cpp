@@ -82,12 +82,15 @@ std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> elli
   return colors;
 }
 
+const char* colorModeName(ColorMode mode) { return kColorModeNames.at(static_cast<std::size_t>(mode)); }
+
 ColorMode parseColorMode(const std::string& name) {
-  if (name == "rgb") return ColorMode::kRgb;
-  if (name == "keyframe") return ColorMode::kKeyframe;
-  if (name == "uncertainty") return ColorMode::kUncertainty;
-  if (name == "count") return ColorMode::kCount;
-  throw std::invalid_argument("unknown colour mode '" + name + "' (expected rgb, keyframe, uncertainty or count)");
+  std::string expected;  // "rgb, keyframe, uncertainty or count"
+  for (std::size_t i = 0; i < kColorModeNames.size(); ++i) {
+    if (name == kColorModeNames[i]) return static_cast<ColorMode>(i);
+    expected += std::string(i == 0 ? "" : i + 1 == kColorModeNames.size() ? " or " : ", ") + kColorModeNames[i];
+  }
+  throw std::invalid_argument("unknown colour mode '" + name + "' (expected " + expected + ")");
 }
 
 }  // namespace vdmap::render

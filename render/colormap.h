@@ -1,4 +1,5 @@
 #pragma once
+#include <array>
 #include <span>
 #include <string>
 #include <vector>
@@ -14,7 +15,13 @@ glm::u8vec3 keyframeColor(int keyframe);
 /// The colour of every ellipsoid under `mode`. Uncertainty uses log10(lambda_max) and count
 /// uses log(count), both normalised to the set's own range so every map uses the whole ramp.
 std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
-/// Parses "rgb", "keyframe", "uncertainty", "count" (throws std::invalid_argument otherwise).
+/// The colour modes' names, indexed by ColorMode: the one list that the settings file, the
+/// workbench and `vdmap render --color` use.
+inline constexpr std::array<const char*, 4> kColorModeNames = {"rgb", "keyframe", "uncertainty", "count"};
+static_assert(kColorModeNames.size() == static_cast<std::size_t>(ColorMode::kCount) + 1);
+/// The name of `mode` in kColorModeNames.
+const char* colorModeName(ColorMode mode);
+/// Parses a name of kColorModeNames (throws std::invalid_argument naming them otherwise).
 ColorMode parseColorMode(const std::string& name);
 
 }  // namespace vdmap::render

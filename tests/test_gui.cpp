@@ -6,6 +6,7 @@
 
 #include "app/gui/settings.h"
 #include "app/gui/workbench.h"
+#include "render/colormap.h"
 #include "tests/test_util.h"
 
 namespace vdmap::app::gui {
@@ -87,6 +88,15 @@ TEST(GuiSettings, SetKeyValue) {
   EXPECT_THROW(applySetting(s, "min_points=lots"), std::invalid_argument);
   EXPECT_THROW(applySetting(s, "tau_group=2"), std::invalid_argument);
   EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);  // a failed --set changes nothing
+}
+
+TEST(GuiSettings, EveryColourModeNameSelectsItsMode) {
+  for (std::size_t i = 0; i < render::kColorModeNames.size(); ++i) {
+    Settings s;
+    applySetting(s, std::string("color=") + render::kColorModeNames[i]);
+    EXPECT_EQ(s.color, static_cast<render::ColorMode>(i));
+    EXPECT_STREQ(render::colorModeName(s.color), render::kColorModeNames[i]);
+  }
 }
 
 TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {

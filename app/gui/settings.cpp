@@ -14,15 +14,6 @@ using nlohmann::json;
 
 namespace {
 
-const char* colorModeName(render::ColorMode mode) {
-  switch (mode) {
-    case render::ColorMode::kKeyframe: return "keyframe";
-    case render::ColorMode::kUncertainty: return "uncertainty";
-    case render::ColorMode::kCount: return "count";
-    default: return "rgb";
-  }
-}
-
 json toJson(const Settings& s) {
   const GlobalMapParams& g = s.thresholds;
   return {
@@ -40,7 +31,7 @@ json toJson(const Settings& s) {
         {"tau", s.mapper.keyframes.tau},
         {"orb_features", s.mapper.features.orb_features}}},
       {"view",
-       {{"color", colorModeName(s.color)},
+       {{"color", render::colorModeName(s.color)},
         {"show_ellipsoids", s.show_ellipsoids},
         {"show_frustums", s.show_frustums},
         {"show_graph", s.show_graph},

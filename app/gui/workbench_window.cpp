@@ -34,7 +34,6 @@ namespace {
 using Clock = std::chrono::steady_clock;
 constexpr float kLeftWidth = 370.f, kRightWidth = 410.f;
 constexpr float kBackground[3] = {0.13f, 0.13f, 0.15f};
-constexpr const char* kColorModes[] = {"rgb", "keyframe", "uncertainty", "count"};
 // Icosahedra (20 triangles) rather than level-1 spheres (80): at 2 sigma an ellipsoid covers a
 // few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
 constexpr render::EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
@@ -360,7 +359,8 @@ class WorkbenchWindow {
   void drawView() {
     Settings& s = ui().settings;
     int color = static_cast<int>(s.color);
-    if (ImGui::Combo("colour", &color, kColorModes, IM_ARRAYSIZE(kColorModes))) s.color = static_cast<render::ColorMode>(color);
+    if (ImGui::Combo("colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
+      s.color = static_cast<render::ColorMode>(color);
     ImGui::Checkbox("ellipsoids (off: points)", &s.show_ellipsoids);
     ImGui::SliderFloat("sigma", &s.ellipsoid_sigma, 0.5f, 4.f, "%.1f");
     ImGui::Checkbox("frustums", &s.show_frustums);
