@@ -1,5 +1,7 @@
 // The workbench without a window: settings persistence, the mapping session (play, step, seek,
 // live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
+#include <regex>
+
 #include <gtest/gtest.h>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -88,6 +90,24 @@ TEST(GuiSettings, SetKeyValue) {
   EXPECT_THROW(applySetting(s, "min_points=lots"), std::invalid_argument);
   EXPECT_THROW(applySetting(s, "tau_group=2"), std::invalid_argument);
   EXPECT_DOUBLE_EQ(s.thresholds.merge_distance_m, 0.5);  // a failed --set changes nothing
+}
+
+TEST(GuiSettings, EveryKeyInTheSetHelpIsAKeySetTakes) {
+  const std::string list = settingKeyList();
+  // Keys are the words followed by ',', ';' or the end ("view:" is a section name).
+  static const std::regex key_pattern(R"((\w+)(?=,|;|$))");
+  std::vector<std::string> keys;
+  for (std::sregex_iterator it(list.begin(), list.end(), key_pattern), end; it != end; ++it) keys.push_back((*it)[1]);
+  EXPECT_GE(keys.size(), 18u) << list;
+  for (const std::string& key : keys) {
+    Settings s;
+    try {
+      applySetting(s, key + "=[]");  // a known key rejects the value, an unknown one the key
+      ADD_FAILURE() << key << "=[] was taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(std::string(e.what()).find("unknown key"), std::string::npos) << e.what();
+    }
+  }
 }
 
 TEST(GuiSettings, EveryColourModeNameSelectsItsMode) {

@@ -109,10 +109,7 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option("--stats-json", args.script.stats_json,
                  "write frames, keyframes, Sigma_e, Sigma_e', t_g and the UI frame time once mapping is done");
   app.add_flag("--exit", args.script.exit, "close once the screenshot/stats are written (settings are not touched)");
-  app.add_option("--set", args.set,
-                 "KEY=VALUE before start: sensor_model, filter_sigma_factor, min_points, tau_group, merge_distance, "
-                 "occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features; view: color, "
-                 "show_ellipsoids, show_frustums, show_graph, show_trajectory, ellipsoid_sigma, play_fps");
+  app.add_option("--set", args.set, "KEY=VALUE before start (as in settings.json): " + gui::settingKeyList());
 }
 
 }  // namespace

@@ -1,5 +1,6 @@
 #include "app/gui/settings.h"
 
+#include <algorithm>
 #include <cstdlib>
 #include <fstream>
 
@@ -13,6 +14,9 @@ namespace fs = std::filesystem;
 using nlohmann::json;
 
 namespace {
+
+// The settings file's sections whose keys --set takes.
+constexpr const char* kSetSections[] = {"thresholds", "rerun", "view"};
 
 json toJson(const Settings& s) {
   const GlobalMapParams& g = s.thresholds;
@@ -124,6 +128,17 @@ void saveSettings(const fs::path& file, const Settings& settings) {
   writeFileAtomically(file, toJson(settings).dump(2) + "\n");
 }
 
+std::string settingKeyList() {
+  const json defaults = toJson(Settings{});
+  std::string list;
+  for (const char* section : kSetSections) {
+    list += std::string(list.empty() ? "" : "; ") + section + ":";
+    for (const auto& [key, value] : defaults.at(section).items())
+      list += (list.back() == ':' ? " " : ", ") + key;
+  }
+  return list;
+}
+
 void applySetting(Settings& settings, const std::string& key_value) {
   const auto eq = key_value.find('=');
   if (eq == std::string::npos) throw std::invalid_argument("--set '" + key_value + "': expected KEY=VALUE");
@@ -132,10 +147,10 @@ void applySetting(Settings& settings, const std::string& key_value) {
   json j = toJson(settings);
   const json parsed = json::parse(value, nullptr, false);
   const json v = parsed.is_discarded() ? json(value) : parsed;
-  if (j["thresholds"].contains(key)) j["thresholds"][key] = v;
-  else if (j["rerun"].contains(key)) j["rerun"][key] = v;
-  else if (j["view"].contains(key)) j["view"][key] = v;
-  else throw std::invalid_argument("--set '" + key + "': unknown key (see vdmap gui --help)");
+  const auto section = std::find_if(std::begin(kSetSections), std::end(kSetSections),
+                                    [&](const char* name) { return j[name].contains(key); });
+  if (section == std::end(kSetSections)) throw std::invalid_argument("--set '" + key + "': unknown key (see vdmap gui --help)");
+  j[*section][key] = v;
   try {
     settings = fromJson(j);
   } catch (const std::exception& e) {

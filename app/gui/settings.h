@@ -35,11 +35,12 @@ Settings loadSettings(const std::filesystem::path& file, std::string* warning);
 /// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
 void saveSettings(const std::filesystem::path& file, const Settings& settings);
 
-/// Applies "key=value" to the thresholds / re-run parameters (the scripted --set option).
-/// Keys: sensor_model, filter_sigma_factor, min_points, tau_group, merge_distance,
-/// occlusion_distance, occlusion_angle, occlusion_removal, cell_size, tau, orb_features, and the
-/// view's color, show_ellipsoids, show_frustums, show_graph, show_trajectory, ellipsoid_sigma,
-/// play_fps.
+/// The keys applySetting takes, for help texts: "thresholds: KEY, ...; rerun: ...; view: ...",
+/// the keys of those sections of the settings file.
+std::string settingKeyList();
+
+/// Applies "key=value" to the thresholds, re-run parameters or view (the --set option); the
+/// value is checked as in the settings file. Keys: settingKeyList().
 /// Throws std::invalid_argument naming the key or value that is wrong.
 void applySetting(Settings& settings, const std::string& key_value);
 
