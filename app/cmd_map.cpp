@@ -10,13 +10,11 @@
 #include <nlohmann/json.hpp>
 
 #include "app/commands.h"
-#include "app/progress.h"
+#include "app/map_sequence.h"
 #include "app/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/session_file.h"
-#include "mapping/keyframe/mapper.h"
 
 namespace vdmap::app {
 namespace {
@@ -50,18 +48,12 @@ void runMap(MapArgs args) {
   const TumSequence seq = openSequence(args.sequence);
   Mapper mapper(seq.camera(), args.mapper);
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms;
-  {
-    FramePrefetcher frames(seq);
-    ProgressBar progress("mapping", seq.size());
-    while (std::optional<RgbdFrame> frame = frames.next()) {
-      const FrameReport r = mapper.addFrame(*frame);
-      update_ms.push_back(r.ms.update_ms);
-      pipeline_ms.push_back(r.ms.total_ms);
-      features_ms.push_back(r.ms.features_ms);
-      decision_ms.push_back(r.ms.decision_ms);
-      progress.update(static_cast<std::size_t>(mapper.framesMapped()));
-    }
-  }
+  mapSequence(seq, mapper, [&](const FrameReport& r) {
+    update_ms.push_back(r.ms.update_ms);
+    pipeline_ms.push_back(r.ms.total_ms);
+    features_ms.push_back(r.ms.features_ms);
+    decision_ms.push_back(r.ms.decision_ms);
+  });
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.global);
 

@@ -9,11 +9,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/commands.h"
-#include "app/progress.h"
+#include "app/map_sequence.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/ply_reader.h"
-#include "mapping/keyframe/mapper.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/context.h"
@@ -102,16 +100,6 @@ ViewChoice parseView(const std::string& text) {
     throw std::invalid_argument("--view '" + text + "': expected global, keyframe:K or container:K");
   if (m[1].matched) return {};
   return {m[2] == "keyframe" ? ViewChoice::Kind::kKeyframe : ViewChoice::Kind::kContainer, std::stoi(m[3])};
-}
-
-// Maps the whole sequence (features, keyframe decision, local maps) with default parameters.
-void mapSequence(const TumSequence& seq, Mapper& mapper) {
-  FramePrefetcher frames(seq);
-  ProgressBar progress("mapping", seq.size());
-  while (std::optional<RgbdFrame> frame = frames.next()) {
-    mapper.addFrame(*frame);
-    progress.update(static_cast<std::size_t>(mapper.framesMapped()));
-  }
 }
 
 // What one `vdmap render` draws: ellipsoids (a map file or the global map of a sequence), an

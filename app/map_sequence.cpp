@@ -1,0 +1,18 @@
+#include "app/map_sequence.h"
+
+#include "app/progress.h"
+#include "mapping/io/frame_prefetcher.h"
+
+namespace vdmap::app {
+
+void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<void(const FrameReport&)>& on_frame) {
+  FramePrefetcher frames(seq);
+  ProgressBar progress("mapping", seq.size());
+  while (std::optional<RgbdFrame> frame = frames.next()) {
+    const FrameReport report = mapper.addFrame(*frame);
+    if (on_frame) on_frame(report);
+    progress.update(static_cast<std::size_t>(mapper.framesMapped()));
+  }
+}
+
+}  // namespace vdmap::app

@@ -1,0 +1,15 @@
+#pragma once
+// The mapping loop of the verbs that map a whole sequence (vdmap map, vdmap render SEQ).
+#include <functional>
+
+#include "mapping/io/tum_sequence.h"
+#include "mapping/keyframe/mapper.h"
+
+namespace vdmap::app {
+
+/// Feeds every frame of `seq` to `mapper` in order, decoding the next frame while one is mapped,
+/// with a progress bar on stderr; `on_frame`, when given, sees each frame's report.
+void mapSequence(const TumSequence& seq, Mapper& mapper,
+                 const std::function<void(const FrameReport&)>& on_frame = {});
+
+}  // namespace vdmap::app
