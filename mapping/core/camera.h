@@ -25,9 +25,10 @@ struct PinholeCamera {
   }
   /// d backProject / d(u, v, d) (SPEC section 3).
   Eigen::Matrix3d backProjectJacobian(double u, double v, double depth_m) const;
-  /// True when (u, v) rounds to a pixel inside the image.
-  bool inImage(double u, double v) const {
-    return u >= -0.5 && v >= -0.5 && u < width - 0.5 && v < height - 0.5;
+  /// True when (u, v) rounds to a pixel inside the image grown by margin_px on every side.
+  bool inImage(double u, double v, double margin_px = 0.0) const {
+    const double lo = -0.5 - margin_px;
+    return u >= lo && v >= lo && u < width - 0.5 + margin_px && v < height - 0.5 + margin_px;
   }
   /// Throws std::invalid_argument naming the first bad field (non-positive size/focal, ...).
   void validate() const;

@@ -25,7 +25,6 @@ double covisibilityBound(const FrameFeatures& K, const Transform& T_W_K, const T
                          const PinholeCamera& camera, const CovisibilityParams& params) {
   if (K.size() == 0) return 0.0;
   const Transform T_F_K = T_W_F.inverse() * T_W_K;
-  const double m = params.max_reprojection_px;
   std::size_t possible = 0;
   for (std::size_t i = 0; i < K.size(); ++i) {
     if (K.depth_m[i] <= 0.0f) {
@@ -35,9 +34,7 @@ double covisibilityBound(const FrameFeatures& K, const Transform& T_W_K, const T
     const Eigen::Vector3d p_F = predictInFrame(K, i, T_F_K, camera);
     if (p_F.z() <= 0.0) continue;
     const Eigen::Vector2d uv = camera.project(p_F);
-    if (uv.x() >= -0.5 - m && uv.y() >= -0.5 - m && uv.x() < camera.width - 0.5 + m &&
-        uv.y() < camera.height - 0.5 + m)
-      ++possible;
+    if (camera.inImage(uv.x(), uv.y(), params.max_reprojection_px)) ++possible;
   }
   return static_cast<double>(possible) / static_cast<double>(K.size());
 }
