@@ -123,7 +123,7 @@ class RenderSequenceCli : public ::testing::Test {
     render::synthesizeSequence(scene.mesh, scene.trajectory, options, *dir_ / "room");
   }
   static void TearDownTestSuite() { delete dir_; }
-  static std::string seq() { return "'" + (*dir_ / "room").string() + "'"; }
+  static std::string seq() { return std::string("'").append((*dir_ / "room").string()).append("'"); }
   static std::string out(const std::string& name) { return (*dir_ / name).string(); }
   static TempDir* dir_;
 };
