@@ -59,10 +59,11 @@ void runMap(MapArgs args) {
 
   if (!args.json) {
     std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
-    for (const Keyframe& k : graph.keyframes())
-      std::printf("%8d  %5d  %6d  %10zu  %6zu  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
-                  k.container.size(), keptEllipsoids(k.container, args.global.filter, k.T_W_K, k.id).size(),
-                  k.container.memoryBytes() / 1e6);
+    for (const Keyframe& k : graph.keyframes()) {
+      const std::vector<bool>& kept = global.kept[static_cast<std::size_t>(k.id)];
+      std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
+                  k.container.size(), std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
+    }
   }
   MapExportOptions options;
   options.octomap_resolution_m = args.octomap_resolution_m;
@@ -76,7 +77,7 @@ void runMap(MapArgs args) {
       {"camera", seq.cameraSource()},
   };
   if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
-  const nlohmann::json stats = exportMap(out_dir, graph, global, args.global.filter, options);
+  const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;

@@ -47,7 +47,7 @@ TEST(Export, WritesEveryFileAndTheEllipsoidPlyReadsBack) {
   test::TempDir tmp;
   MapExportOptions options;
   options.run_stats = {{"frames", 2}};
-  const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, scene.params.filter, options);
+  const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, options);
   EXPECT_EQ(filesIn(tmp / "out"), (std::vector<std::string>{"global_ellipsoids.ply", "global_gaussians.ply",
                                                              "global_points.ply", "graph.txt", "keyframes.txt",
                                                              "local_maps.ply", "stats.json"}));
@@ -64,6 +64,18 @@ TEST(Export, WritesEveryFileAndTheEllipsoidPlyReadsBack) {
     ASSERT_EQ(back[i].count, e.count);
     ASSERT_EQ(back[i].keyframe, e.keyframe);
     for (int k = 0; k < 3; ++k) ASSERT_EQ(back[i].rgb[k], static_cast<int>(std::lround(e.color(k))));
+  }
+
+  // local_maps.ply: every keyframe's ellipsoids as the filter selects them, in the world frame.
+  std::vector<Ellipsoid> local;
+  for (const Keyframe& k : scene.graph.keyframes())
+    for (const Ellipsoid& e : keptEllipsoids(k.container, scene.params.filter, k.T_W_K, k.id)) local.push_back(e);
+  EXPECT_EQ(local.size(), scene.map.sigma_e);
+  const std::vector<EllipsoidRecord> local_back = readPlyEllipsoids(tmp / "out" / "local_maps.ply");
+  ASSERT_EQ(local_back.size(), local.size());
+  for (std::size_t i = 0; i < local.size(); ++i) {
+    ASSERT_EQ(local_back[i].mean, local[i].mean.cast<float>());
+    ASSERT_EQ(local_back[i].keyframe, local[i].keyframe);
   }
 }
 
@@ -128,7 +140,7 @@ TEST(Export, OctomapOpensWithLiboctomapAndItsOccupiedVoxelsContainTheMeans) {
   test::TempDir tmp;
   MapExportOptions options;
   options.octomap_resolution_m = 0.05;
-  const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, scene.params.filter, options);
+  const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, options);
   EXPECT_EQ(stats["octomap"]["points"], 7 * scene.map.ellipsoids.size());
   EXPECT_EQ(stats["octomap"]["means_occupied"], 1.0);
   octomap::OcTree tree((tmp / "out" / "global.bt").string());
@@ -147,7 +159,7 @@ TEST(Export, OctomapOpensWithLiboctomapAndItsOccupiedVoxelsContainTheMeans) {
     const octomap::OcTreeNode* node = tree.search(c.x(), c.y(), c.z());
     ASSERT_TRUE(node && !tree.isNodeOccupied(node));
   }
-  EXPECT_THROW(exportMap(tmp / "bad", scene.graph, scene.map, scene.params.filter, {-1.0}), std::invalid_argument);
+  EXPECT_THROW(exportMap(tmp / "bad", scene.graph, scene.map, {-1.0}), std::invalid_argument);
   EXPECT_FALSE(fs::exists(tmp / "bad"));
 }
 
@@ -171,7 +183,7 @@ TEST(Export, AFolderThatCannotBeWrittenFailsClearlyAndWritesNothing) {
   test::writeText(tmp / "file", "not a folder\n");
   for (const fs::path& dir : {tmp / "file", tmp / "file" / "sub"}) {
     try {
-      exportMap(dir, scene.graph, scene.map, scene.params.filter);
+      exportMap(dir, scene.graph, scene.map);
       ADD_FAILURE() << "no error for " << dir;
     } catch (const std::runtime_error& e) {
       EXPECT_NE(std::string(e.what()).find(dir.string()), std::string::npos) << e.what();
@@ -182,7 +194,7 @@ TEST(Export, AFolderThatCannotBeWrittenFailsClearlyAndWritesNothing) {
   // appears, earlier files stay as they were.
   fs::create_directories(tmp / "out" / "stats.json" / "x");
   test::writeText(tmp / "out" / "graph.txt", "old\n");
-  EXPECT_THROW(exportMap(tmp / "out", scene.graph, scene.map, scene.params.filter), std::runtime_error);
+  EXPECT_THROW(exportMap(tmp / "out", scene.graph, scene.map), std::runtime_error);
   EXPECT_EQ(filesIn(tmp / "out"), (std::vector<std::string>{"graph.txt", "stats.json"}));
   std::ifstream old(tmp / "out" / "graph.txt");
   std::string line;

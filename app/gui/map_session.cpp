@@ -158,7 +158,7 @@ void MapSession::rebuildGlobal() {
   }
   snap->params = params;
   for (const Keyframe& k : mapper_->graph().keyframes())
-    forEachKeptEllipsoid(k.container, params.filter, k.T_W_K, k.id,
+    forEachKeptEllipsoid(k.container, snap->map.kept[static_cast<std::size_t>(k.id)], k.T_W_K, k.id,
                          [&snap](const Ellipsoid& e) { snap->local.push_back(e); });
   std::lock_guard lock(mutex_);
   snap->frames_mapped = mapped_;

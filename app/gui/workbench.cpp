@@ -101,7 +101,7 @@ void Workbench::exportMap() {
   session_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
     MapExportOptions options;
     options.run_stats = {{"frames", mapper.framesMapped()}, {"source", "vdmap workbench"}};
-    vdmap::exportMap(dir, mapper.graph(), global.map, global.params.filter, options);
+    vdmap::exportMap(dir, mapper.graph(), global.map, options);
     return "exported the map into " + dir;
   });
 }

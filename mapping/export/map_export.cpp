@@ -93,14 +93,15 @@ nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map) 
 }
 
 nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
-                         const FilterParams& filter, const MapExportOptions& options) {
+                         const MapExportOptions& options) {
   if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
   StagingFolder stage(dir);
   std::vector<Ellipsoid> local;
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) {
-    forEachKeptEllipsoid(k.container, filter, k.T_W_K, k.id, [&local](const Ellipsoid& e) { local.push_back(e); });
+    forEachKeptEllipsoid(k.container, map.kept.at(static_cast<std::size_t>(k.id)), k.T_W_K, k.id,
+                         [&local](const Ellipsoid& e) { local.push_back(e); });
     poses.push_back({k.timestamp, k.T_W_K});
   }
   writeEllipsoidPly(stage / "local_maps.ply", local);

@@ -20,7 +20,7 @@ struct MapExportOptions {
 };
 
 /// Writes into `dir` (created if missing):
-///   local_maps.ply        kept ellipsoids of every keyframe, world frame (SPEC 7 ellipsoid PLY)
+///   local_maps.ply        kept ellipsoids of every keyframe (map.kept), world frame (SPEC 7 ellipsoid PLY)
 ///   keyframes.txt         keyframe poses T_W_K, TUM format, line i = keyframe i
 ///   graph.txt             covisibility edges `a b weight`
 ///   global_points.ply     global-map ellipsoid means with colour
@@ -28,7 +28,6 @@ struct MapExportOptions {
 ///   global_gaussians.ply  global-map ellipsoids as 3-D Gaussian splats (SPEC 7)
 ///   global.bt             only with options.octomap_resolution_m > 0 (octomap_export.h)
 ///   stats.json            options.run_stats + the global-map and export figures
-/// `filter` must be the one `map` was built with (it selects the local maps' kept ellipsoids).
 /// All files are first written into a staging folder inside `dir` and then renamed into place,
 /// so a failure (unwritable folder, full disk) leaves no file of this export behind and earlier
 /// files of the same names untouched. Throws std::runtime_error naming the folder or file.
@@ -36,7 +35,7 @@ struct MapExportOptions {
 /// Throws std::invalid_argument for a negative or non-finite octomap resolution, before writing.
 /// Returns the stats that were written to stats.json.
 nlohmann::json exportMap(const std::filesystem::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
-                         const FilterParams& filter, const MapExportOptions& options = {});
+                         const MapExportOptions& options = {});
 
 /// Throws std::runtime_error when `dir` cannot become an export folder (it exists and is not a
 /// folder, or the nearest existing folder on its path is not writable), so a caller can fail

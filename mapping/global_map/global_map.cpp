@@ -34,7 +34,7 @@ Ellipsoid transformed(const Ellipsoid& e, const Transform& T_B_A) {
 // SPEC section 6 step 2 for one group: members' kept ellipsoids re-projected into the centre's
 // container and merged cell by cell. Output order: cells ascending, then the pass-throughs.
 std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& group, const GlobalMapParams& params,
-                                  std::size_t* kept) {
+                                  const std::vector<std::vector<bool>>& kept) {
   const Keyframe& centre = graph.keyframe(group.centre);
   const KeyframeContainer& box = centre.container;
   const Transform T_C_W = centre.T_W_K.inverse();
@@ -42,7 +42,7 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
   std::vector<int> cell_of;
   for (int id : group.members) {
     const Keyframe& k = graph.keyframe(id);
-    forEachKeptEllipsoid(k.container, params.filter, T_C_W * k.T_W_K, id, [&](const Ellipsoid& e) {
+    forEachKeptEllipsoid(k.container, kept[static_cast<std::size_t>(id)], T_C_W * k.T_W_K, id, [&](const Ellipsoid& e) {
       int cell = -1;
       if (e.mean.z() > 0.0) {
         const Eigen::Vector2d uv = box.camera().project(e.mean);
@@ -52,7 +52,6 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
       cell_of.push_back(cell);
     });
   }
-  *kept = in_centre.size();
 
   // Counting sort by cell (stable: members in id order, cells in container order).
   const std::size_t cells = static_cast<std::size_t>(box.cols()) * box.rows();
@@ -326,15 +325,15 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   map.groups_ms = msSince(start);
 
   const auto merge_start = Clock::now();
+  map.kept.resize(graph.size());
+  parallelFor(params.threads, graph.size(),
+              [&](std::size_t k) { map.kept[k] = keptCells(graph.keyframe(static_cast<int>(k)).container, params.filter); });
+  for (const std::vector<bool>& kept : map.kept) map.sigma_e += static_cast<std::size_t>(std::count(kept.begin(), kept.end(), true));
   std::vector<std::vector<Ellipsoid>> merged(map.groups.size());
-  std::vector<std::size_t> kept(map.groups.size(), 0);
   parallelFor(params.threads, map.groups.size(),
-              [&](std::size_t g) { merged[g] = mergeGroup(graph, map.groups[g], params, &kept[g]); });
+              [&](std::size_t g) { merged[g] = mergeGroup(graph, map.groups[g], params, map.kept); });
   std::vector<Ellipsoid> all;
-  for (std::size_t g = 0; g < merged.size(); ++g) {
-    map.sigma_e += kept[g];
-    all.insert(all.end(), merged[g].begin(), merged[g].end());
-  }
+  for (const std::vector<Ellipsoid>& group : merged) all.insert(all.end(), group.begin(), group.end());
   map.merged = all.size();
   map.merge_ms = msSince(merge_start);
 

@@ -32,6 +32,9 @@ struct GlobalMap {
   /// World frame. keyframe: the group centre for merged clusters, else the ellipsoid's own.
   std::vector<Ellipsoid> ellipsoids;
   std::vector<MergeGroup> groups;
+  /// Per keyframe id, which container cells passed the filter (keptCells): with
+  /// forEachKeptEllipsoid, the local maps this map was built from, without filtering again.
+  std::vector<std::vector<bool>> kept;
   std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
   std::size_t merged = 0;             ///< after merging, before occlusion removal
   std::size_t sigma_e_prime = 0;      ///< after merging and occlusion removal

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <stdexcept>
 
 #include <Eigen/Eigenvalues>
 
@@ -14,40 +15,41 @@ double largestEigenvalue(const Eigen::Matrix3d& m) {
   return solver.eigenvalues()(2);  // ascending
 }
 
-// keepCell on the cell's statistics; *cov receives their covariance once the point count passes.
-bool keepStats(const CellStats& stats, const KeyframeContainer& container, const FilterParams& filter,
-               Eigen::Matrix3d* cov) {
+}  // namespace
+
+bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter) {
   // Fewer than two points have no covariance at all; treat them as rejected whatever
   // min_points says.
+  const CellStats stats = cell.toStats();
   if (stats.n < std::max(filter.min_points, 2)) return false;
   if (!(stats.mean.z() > 0.0)) return false;
-  *cov = stats.covariance();
   const Eigen::Vector2d uv = container.camera().project(stats.mean);
   const Eigen::Matrix3d expected = expectedCellCovariance(
       filter.model, container.camera(), uv.x(), uv.y(), stats.mean.z(), container.cellSizePx());
   // Compare variances: sqrt(a) <= k sqrt(b)  <=>  a <= k^2 b for a, b >= 0.
   const double k = filter.filter_sigma_factor;
-  return largestEigenvalue(*cov) <= k * k * largestEigenvalue(expected);
+  return largestEigenvalue(stats.covariance()) <= k * k * largestEigenvalue(expected);
 }
 
-}  // namespace
-
-bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter) {
-  Eigen::Matrix3d cov;
-  return keepStats(cell.toStats(), container, filter, &cov);
+std::vector<bool> keptCells(const KeyframeContainer& container, const FilterParams& filter) {
+  std::vector<bool> kept;
+  kept.reserve(container.size());
+  for (const StoredCell& cell : container.cells()) kept.push_back(keepCell(cell, container, filter));
+  return kept;
 }
 
-void forEachKeptEllipsoid(const KeyframeContainer& container, const FilterParams& filter,
+void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept,
                           const Transform& T_X_K, int keyframe_id,
                           const std::function<void(const Ellipsoid&)>& visit) {
+  if (kept.size() != container.size()) throw std::invalid_argument("forEachKeptEllipsoid: kept does not fit the container");
   const Eigen::Matrix3d R = T_X_K.linear();
-  for (const StoredCell& cell : container.cells()) {
+  for (std::size_t i = 0; i < kept.size(); ++i) {
+    if (!kept[i]) continue;
+    const StoredCell& cell = container.cells()[i];
     const CellStats stats = cell.toStats();
-    Eigen::Matrix3d cov;
-    if (!keepStats(stats, container, filter, &cov)) continue;
     Ellipsoid e;
     e.mean = T_X_K * stats.mean;
-    e.cov = R * cov * R.transpose();
+    e.cov = R * stats.covariance() * R.transpose();
     e.color = cell.color;
     e.count = cell.n;
     e.keyframe = keyframe_id;
@@ -59,7 +61,7 @@ void forEachKeptEllipsoid(const KeyframeContainer& container, const FilterParams
 std::vector<Ellipsoid> keptEllipsoids(const KeyframeContainer& container, const FilterParams& filter,
                                       const Transform& T_X_K, int keyframe_id) {
   std::vector<Ellipsoid> out;
-  forEachKeptEllipsoid(container, filter, T_X_K, keyframe_id,
+  forEachKeptEllipsoid(container, keptCells(container, filter), T_X_K, keyframe_id,
                        [&out](const Ellipsoid& e) { out.push_back(e); });
   return out;
 }

@@ -37,13 +37,17 @@ struct Ellipsoid {
 /// footprint s^2/12 added (SPEC sections 3-4).
 bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter);
 
-/// Calls `visit` for every kept ellipsoid of `container`, with mean and covariance moved into
-/// the frame of T_X_K (Identity: keyframe frame; T_W_K: world), in container order.
-void forEachKeptEllipsoid(const KeyframeContainer& container, const FilterParams& filter,
+/// keepCell for every cell of `container`, in container order.
+std::vector<bool> keptCells(const KeyframeContainer& container, const FilterParams& filter);
+
+/// Calls `visit` for every cell of `container` whose `kept` entry is set (keptCells' answer), as an
+/// ellipsoid with mean and covariance moved into the frame of T_X_K (Identity: keyframe frame;
+/// T_W_K: world), in container order.
+void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept,
                           const Transform& T_X_K, int keyframe_id,
                           const std::function<void(const Ellipsoid&)>& visit);
 
-/// The kept ellipsoids of a container in the frame of T_X_K (see forEachKeptEllipsoid).
+/// The kept ellipsoids of a container in the frame of T_X_K (keptCells, then forEachKeptEllipsoid).
 std::vector<Ellipsoid> keptEllipsoids(const KeyframeContainer& container, const FilterParams& filter,
                                       const Transform& T_X_K, int keyframe_id);
 
