@@ -114,10 +114,13 @@ int main(int argc, char** argv) {
     std::printf("| method | t_u [ms/frame], median of %zu runs | runs (min-max) | x vdmap update | elements |\n|---|---:|---:|---:|---:|\n",
                 runs.size());
     double vd = 0;
-    std::vector<std::string> order;
-    for (const char* k : {"vd_update", "vd_pipeline", "octomap_010", "octomap_005", "octomap_002", "ndt_om_010",
-                          "open3d_tsdf_002", "open3d_tsdf_001"})
-      if (runs[0]["methods"].contains(k) && !runs[0]["methods"][k].contains("note")) order.push_back(k);
+    const char* const kPeers[] = {"octomap_010", "octomap_005", "octomap_002", "ndt_om_010", "open3d_tsdf_002",
+                                  "open3d_tsdf_001"};
+    std::vector<std::string> order = {"vd_update", "vd_pipeline"};
+    order.insert(order.end(), std::begin(kPeers), std::end(kPeers));
+    std::erase_if(order, [&](const std::string& k) {
+      return !runs[0]["methods"].contains(k) || runs[0]["methods"][k].contains("note");
+    });
     for (const std::string& k : order) {
       std::vector<double> ms;
       for (const json& r : runs) ms.push_back(r["methods"][k]["ms_per_frame"].get<double>());
@@ -139,9 +142,18 @@ int main(int argc, char** argv) {
     const json a = load(accuracy);
     std::printf("\n| method | elements | RMSE [mm] | mean [mm] | median [mm] | completion [mm] | within 5 cm |\n"
                 "|---|---:|---:|---:|---:|---:|---:|\n");
+    // Rows: vdmap from the finest cell to the coarsest (most elements first), then the peers in
+    // the speed table's order. The pipeline's map is vd_update's.
+    std::vector<std::pair<std::string, json>> rows;
+    for (const auto& [key, m] : a["methods"].items())
+      if (m.contains("accuracy") && key.rfind("vd_", 0) == 0 && key != "vd_pipeline") rows.emplace_back(key, m);
+    std::sort(rows.begin(), rows.end(), [](const auto& x, const auto& y) {
+      return x.second["elements"].template get<std::size_t>() > y.second["elements"].template get<std::size_t>();
+    });
+    for (const char* k : kPeers)
+      if (a["methods"].contains(k) && a["methods"][k].contains("accuracy")) rows.emplace_back(k, a["methods"][k]);
     std::vector<Point> pts;
-    for (const auto& [key, m] : a["methods"].items()) {
-      if (!m.contains("accuracy") || key == "vd_pipeline") continue;  // the pipeline's map is vd_update's
+    for (const auto& [key, m] : rows) {
       const json& r = m["accuracy"];
       std::string name = m["name"].get<std::string>();
       if (key == "vd_update") name = "vdmap " + std::to_string(a["cell_size_px"].get<int>()) + " px";
