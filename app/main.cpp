@@ -17,14 +17,20 @@ int main(int argc, char** argv) {
   addEvalCommand(app);
   addGuiCommand(app);
   const auto workbench = addBuiltinWorkbenchOptions(app);
+  const auto error = [&app](const std::string& what) {
+    const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();
+    std::cerr << "vdmap" << verb << ": error: " << what << "\n";
+  };
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {
-    return app.exit(e);
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    // One line like every other error (CLI11's own adds "Run with --help ...").
+    error(std::string(e.what()) + " (see --help)");
+    return e.get_exit_code();
   } catch (const std::exception& e) {
-    const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();
-    std::cerr << "vdmap" << verb << ": error: " << e.what() << "\n";
+    error(e.what());
     return 1;
   }
   return 0;

@@ -1,4 +1,6 @@
 // End-to-end tests of the vdmap command line: exit codes and one-line errors.
+#include <algorithm>
+
 #include <gtest/gtest.h>
 
 #include "tests/test_util.h"
@@ -35,6 +37,14 @@ TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
             std::string::npos);
   EXPECT_NE(runVdmap("info '" + dir.path().string() + "' --frames 5:2").exit_code, 0);
   EXPECT_NE(runVdmap("frobnicate").exit_code, 0);
+  // Command-line mistakes are one line too, naming the option or file.
+  const auto missing = runVdmap("eval --map x.ply");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_EQ(missing.err, "vdmap eval: error: --mesh is required (see --help)\n");
+  const auto no_file = runVdmap("eval --map x.ply --mesh /nonexistent/mesh.ply");
+  EXPECT_NE(no_file.exit_code, 0);
+  EXPECT_EQ(std::count(no_file.err.begin(), no_file.err.end(), '\n'), 1) << no_file.err;
+  EXPECT_NE(no_file.err.find("/nonexistent/mesh.ply"), std::string::npos) << no_file.err;
 }
 
 TEST(Cli, InfoOnSevenScenes) {
