@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
@@ -75,6 +76,11 @@ void runMap(MapArgs args) {
       {"features_ms", median(features_ms)},
       {"decision_ms", median(decision_ms)},
       {"camera", seq.cameraSource()},
+  };
+  std::unique_ptr<ProgressBar> octomap_bar;
+  options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
+    if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
+    octomap_bar->update(done);
   };
   if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);

@@ -140,7 +140,13 @@ TEST(Export, OctomapOpensWithLiboctomapAndItsOccupiedVoxelsContainTheMeans) {
   test::TempDir tmp;
   MapExportOptions options;
   options.octomap_resolution_m = 0.05;
+  std::vector<std::size_t> progress;  // one call per keyframe scan, counting up to the total
+  options.octomap_progress = [&](std::size_t done, std::size_t total) {
+    EXPECT_EQ(total, scene.graph.size());
+    progress.push_back(done);
+  };
   const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, options);
+  EXPECT_EQ(progress, (std::vector<std::size_t>{1, 2}));
   EXPECT_EQ(stats["octomap"]["points"], 7 * scene.map.ellipsoids.size());
   EXPECT_EQ(stats["octomap"]["means_occupied"], 1.0);
   octomap::OcTree tree((tmp / "out" / "global.bt").string());
@@ -159,7 +165,9 @@ TEST(Export, OctomapOpensWithLiboctomapAndItsOccupiedVoxelsContainTheMeans) {
     const octomap::OcTreeNode* node = tree.search(c.x(), c.y(), c.z());
     ASSERT_TRUE(node && !tree.isNodeOccupied(node));
   }
-  EXPECT_THROW(exportMap(tmp / "bad", scene.graph, scene.map, {-1.0}), std::invalid_argument);
+  MapExportOptions negative;
+  negative.octomap_resolution_m = -1.0;
+  EXPECT_THROW(exportMap(tmp / "bad", scene.graph, scene.map, negative), std::invalid_argument);
   EXPECT_FALSE(fs::exists(tmp / "bad"));
 }
 

@@ -115,7 +115,8 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   nlohmann::json stats = options.run_stats.is_object() ? options.run_stats : nlohmann::json::object();
   stats.update(globalMapStats(graph, map));
   if (options.octomap_resolution_m > 0.0) {
-    const OctomapExportReport r = writeOctomapBt(stage / "global.bt", graph, map.ellipsoids, options.octomap_resolution_m);
+    const OctomapExportReport r = writeOctomapBt(stage / "global.bt", graph, map.ellipsoids, options.octomap_resolution_m,
+                                                   options.octomap_progress);
     stats["octomap"] = {{"resolution_m", options.octomap_resolution_m},
                         {"points", r.points},
                         {"occupied_leaves", r.occupied_leaves},

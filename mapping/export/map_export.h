@@ -5,6 +5,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mapping/export/octomap_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/keyframe/keyframe_graph.h"
 
@@ -14,6 +15,8 @@ namespace vdmap {
 struct MapExportOptions {
   /// > 0: also write global.bt, an OctoMap of this resolution (m) sampled from the global map.
   double octomap_resolution_m = 0.0;
+  /// Progress of the OctoMap export, its slow part (~20 s at 0.02 m for 300k ellipsoids).
+  ExportProgress octomap_progress;
   /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
   /// stats.json; the global-map and export figures are added by exportMap.
   nlohmann::json run_stats = nlohmann::json::object();

@@ -24,7 +24,8 @@ std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e) {
 }
 
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
-                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m) {
+                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m,
+                                   const ExportProgress& progress) {
   if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m");
   const auto start = std::chrono::steady_clock::now();
@@ -38,10 +39,12 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
     }
   octomap::OcTree tree(resolution_m);
   for (std::size_t k = 0; k < scans.size(); ++k) {
-    if (scans[k].size() == 0) continue;
-    const Eigen::Vector3d o = graph.keyframe(static_cast<int>(k)).T_W_K.translation();
-    // discretize: one ray per end voxel, which is what the map resolves anyway.
-    tree.insertPointCloud(scans[k], octomap::point3d(o.x(), o.y(), o.z()), -1.0, false, true);
+    if (scans[k].size() > 0) {
+      const Eigen::Vector3d o = graph.keyframe(static_cast<int>(k)).T_W_K.translation();
+      // discretize: one ray per end voxel, which is what the map resolves anyway.
+      tree.insertPointCloud(scans[k], octomap::point3d(o.x(), o.y(), o.z()), -1.0, false, true);
+    }
+    if (progress) progress(k + 1, scans.size());
   }
   tree.toMaxLikelihood();
   tree.prune();

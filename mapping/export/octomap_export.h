@@ -2,12 +2,16 @@
 // OctoMap export of the global map (SPEC section 7), through liboctomap.
 #include <cstddef>
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap {
+
+/// Called with (done, total) steps of a long export, from the exporting thread.
+using ExportProgress = std::function<void(std::size_t done, std::size_t total)>;
 
 /// What writeOctomapBt built.
 struct OctomapExportReport {
@@ -26,7 +30,9 @@ std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e);
 /// with that keyframe's centre as the sensor origin, so free space is carved along the rays
 /// (SPEC section 7). Writes the binary .bt atomically. Throws std::invalid_argument for a
 /// resolution that is not > 0, std::runtime_error naming `file` when it cannot be written.
+/// `progress`, when given, is called after each keyframe's scan with (done, total) scans.
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
-                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m);
+                                   const std::vector<Ellipsoid>& ellipsoids, double resolution_m,
+                                   const ExportProgress& progress = {});
 
 }  // namespace vdmap
