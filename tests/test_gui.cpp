@@ -284,12 +284,11 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
 
 TEST(GuiWorkbench, PickingFindsTheNearestProjectedMean) {
   std::vector<Ellipsoid> es(3);
-  es[0].mean = {0, 0, 2};   // straight ahead
-  es[1].mean = {0, 0, 4};   // behind it on the same ray
+  es[0].mean = {0, 0, 4};   // straight ahead, listed first
+  es[1].mean = {0, 0, 2};   // in front of it on the same ray: the nearer one wins
   es[2].mean = {0.5, 0, 2}; // to the right
-  es[2].keyframe = 7;
   render::ViewCamera view;  // identity pose, 640x480, f = 525
-  EXPECT_EQ(pickEllipsoid(es, view, view.cx, view.cy), 0);
+  EXPECT_EQ(pickEllipsoid(es, view, view.cx, view.cy), 1);
   EXPECT_EQ(pickEllipsoid(es, view, view.cx + 525.f * 0.25f, view.cy + 2.f), 2);
   EXPECT_EQ(pickEllipsoid(es, view, 10.f, 10.f), -1);
   view.T_C_W = glm::translate(glm::mat4(1.f), glm::vec3(0, 0, -10));  // everything behind
