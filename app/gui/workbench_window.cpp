@@ -1,5 +1,6 @@
 #include "app/gui/workbench_window.h"
 
+#include <algorithm>
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
@@ -391,8 +392,10 @@ class WorkbenchWindow {
     if (id < 0 || id >= static_cast<int>(mapping_->keyframes.size())) return;
     const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
     std::size_t kept = 0;
-    if (global_)
-      for (const Ellipsoid& e : global_->local) kept += e.keyframe == id;
+    if (global_ && id < static_cast<int>(global_->map.kept.size())) {
+      const std::vector<bool>& cells = global_->map.kept[static_cast<std::size_t>(id)];
+      kept = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), true));
+    }
     ImGui::Text("K%d: %zu ellipsoids, %zu kept by the filter, %d frames", id, k.ellipsoids, kept, k.frames_integrated);
     container_image_.show(ImGui::GetContentRegionAvail().x);
     std::string neighbours;
