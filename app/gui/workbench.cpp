@@ -54,7 +54,6 @@ Workbench::Workbench(Settings settings, std::string warning) {
 bool Workbench::open(const SequenceArgs& args) {
   try {
     TumSequence sequence = openSequence(args);
-    if (sequence.size() == 0) throw std::invalid_argument(args.folder + ": no usable frames");
     auto session = std::make_unique<MapSession>(std::move(sequence), ui_.settings.mapper, ui_.settings.thresholds);
     session->setFps(ui_.settings.play_fps);
     session_ = std::move(session);  // the old session (if any) stops here
