@@ -1,6 +1,6 @@
 #pragma once
 // The workbench's UI state and the actions it triggers, without a window: ImGui code
-// (workbench_ui.cpp) only edits UiState and calls these actions, so tests drive the same paths.
+// (workbench_window.cpp) only edits UiState and calls these actions, so tests drive the same paths.
 #include <memory>
 #include <optional>
 #include <string>
