@@ -110,6 +110,19 @@ TEST(GuiSettings, EveryKeyInTheSetHelpIsAKeySetTakes) {
   }
 }
 
+TEST(GuiSettings, RerunParamsDifferOnlyInTheRerunKeys) {
+  EXPECT_FALSE(rerunParamsDiffer(Settings{}, Settings{}));
+  for (const char* key_value : {"cell_size=8", "tau=0.5", "orb_features=500"}) {
+    Settings s;
+    applySetting(s, key_value);
+    EXPECT_TRUE(rerunParamsDiffer(s, Settings{})) << key_value;
+  }
+  Settings live;
+  applySetting(live, "merge_distance=0.5");
+  applySetting(live, "color=count");
+  EXPECT_FALSE(rerunParamsDiffer(live, Settings{}));
+}
+
 TEST(GuiSettings, EveryColourModeNameSelectsItsMode) {
   for (std::size_t i = 0; i < render::kColorModeNames.size(); ++i) {
     Settings s;

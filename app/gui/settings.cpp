@@ -128,6 +128,8 @@ void saveSettings(const fs::path& file, const Settings& settings) {
   writeFileAtomically(file, toJson(settings).dump(2) + "\n");
 }
 
+bool rerunParamsDiffer(const Settings& a, const Settings& b) { return toJson(a).at("rerun") != toJson(b).at("rerun"); }
+
 std::string settingKeyList() {
   const json defaults = toJson(Settings{});
   std::string list;

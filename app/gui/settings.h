@@ -35,6 +35,10 @@ Settings loadSettings(const std::filesystem::path& file, std::string* warning);
 /// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
 void saveSettings(const std::filesystem::path& file, const Settings& settings);
 
+/// Whether a and b differ in a re-run parameter (a key of the settings file's "rerun" section),
+/// so that switching between them means re-mapping the sequence.
+bool rerunParamsDiffer(const Settings& a, const Settings& b);
+
 /// The keys applySetting takes, for help texts: "thresholds: KEY, ...; rerun: ...; view: ...",
 /// the keys of those sections of the settings file.
 std::string settingKeyList();

@@ -134,10 +134,7 @@ void Workbench::resetToDefaults() {
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
-  const bool rerun_needed = !session_ ? false
-                                      : ui_.settings.mapper.local_map.cell_size_px != defaults.mapper.local_map.cell_size_px ||
-                                            ui_.settings.mapper.keyframes.tau != defaults.mapper.keyframes.tau ||
-                                            ui_.settings.mapper.features.orb_features != defaults.mapper.features.orb_features;
+  const bool rerun_needed = session_ && rerunParamsDiffer(ui_.settings, defaults);
   ui_.settings = defaults;
   ui_.reset_layout = true;
   applyThresholds();
