@@ -326,9 +326,10 @@ class WorkbenchWindow {
     Settings& s = ui().settings;
     GlobalMapParams& g = s.thresholds;
     bool changed = false;
-    int model = g.filter.model == SensorModel::kNguyen2012 ? 0 : 1;
-    if (ImGui::Combo("sensor model", &model, "nguyen2012\0belter2018\0")) {
-      g.filter.model = model == 0 ? SensorModel::kNguyen2012 : SensorModel::kBelter2018;
+    const char* models[] = {sensorModelName(SensorModel::kNguyen2012), sensorModelName(SensorModel::kBelter2018)};
+    int model = static_cast<int>(g.filter.model);
+    if (ImGui::Combo("sensor model", &model, models, 2)) {
+      g.filter.model = static_cast<SensorModel>(model);
       changed = true;
     }
     changed |= editDouble("filter sigma factor", g.filter.filter_sigma_factor, 0.5, 10.0, "%.2f");
