@@ -3,7 +3,6 @@
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
 #include <cstdlib>
-#include <fstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -26,10 +25,7 @@ RunResult runInXvfb(const TempDir& home, const std::string& args) {
   return runVdmap(args, prefix);
 }
 
-nlohmann::json readJson(const fs::path& file) {
-  std::ifstream in(file);
-  return nlohmann::json::parse(in);
-}
+nlohmann::json readJson(const fs::path& file) { return nlohmann::json::parse(readFile(file)); }
 
 // The share of pixels in the middle of the window (between the side panels) that differ from
 // the 3-D view's background colour.
