@@ -49,22 +49,11 @@ bool MapSession::workLeft() const {
 void MapSession::run() {
   std::unique_lock lock(mutex_);
   while (!stop_) {
+    std::function<void()> job;
     if (!commands_.empty()) {
-      std::function<void()> command = std::move(commands_.front());
+      job = std::move(commands_.front());
       commands_.pop_front();
-      working_ = true;
-      lock.unlock();
-      try {
-        command();
-      } catch (const std::exception& e) {
-        std::lock_guard relock(mutex_);
-        error_ = e.what();
-      }
-      lock.lock();
-      working_ = false;
-      continue;
-    }
-    if (mapped_ < target_) {
+    } else if (mapped_ < target_) {
       if (playing_ && fps_ > 0.f && Clock::now() < next_frame_time_) {
         wake_.wait_until(lock, next_frame_time_);
         continue;
@@ -74,24 +63,25 @@ void MapSession::run() {
       // While mapping, rebuild the global map only now and then, so that map building takes at
       // most ~1/5 of the worker's time and the map on screen still grows.
       const bool rebuild = global_dirty_ && secondsSince(last_build_) > std::max(1.0, 4 * last_build_s_);
-      working_ = true;
-      lock.unlock();
-      rebuild ? rebuildGlobal() : mapOneFrame();
-      lock.lock();
-      working_ = false;
+      job = [this, rebuild] { rebuild ? rebuildGlobal() : mapOneFrame(); };
+    } else if (global_dirty_) {
+      job = [this] { rebuildGlobal(); };
+    } else {
+      playing_ = false;
+      idle_.notify_all();
+      wake_.wait(lock);
       continue;
     }
-    if (global_dirty_) {
-      working_ = true;
-      lock.unlock();
-      rebuildGlobal();
-      lock.lock();
-      working_ = false;
-      continue;
+    working_ = true;
+    lock.unlock();
+    try {
+      job();
+    } catch (const std::exception& e) {
+      std::lock_guard relock(mutex_);
+      error_ = e.what();
     }
-    playing_ = false;
-    idle_.notify_all();
-    wake_.wait(lock);
+    lock.lock();
+    working_ = false;
   }
 }
 
