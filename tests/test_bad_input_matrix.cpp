@@ -162,18 +162,19 @@ const std::vector<BadCase>& badCases() {
   using E = Expect;
   static const std::vector<BadCase> all = {
       // Sequence folders and their lists (TUM layout).
-      {"sequence", "missing_folder", E::kInputError, "no such sequence folder", removeFile("seq")},
+      {"sequence", "missing_folder", E::kInputError, "seq: no such sequence folder", removeFile("seq")},
       {"sequence", "folder_is_a_file", E::kInputError, "is not a folder",
        [](const fs::path& d) {
          fs::remove_all(d / "seq");
          return write("seq", "x")(d);
        }},
-      {"sequence", "missing_rgb_list", E::kInputError, "cannot open", removeFile("seq/rgb.txt")},
+      {"sequence", "missing_rgb_list", E::kInputError, "rgb.txt: cannot open", removeFile("seq/rgb.txt")},
       {"sequence", "missing_depth_list", E::kInputError, "depth.txt: cannot open", removeFile("seq/depth.txt")},
-      {"sequence", "missing_groundtruth", E::kInputError, "cannot open", removeFile("seq/groundtruth.txt")},
+      {"sequence", "missing_groundtruth", E::kInputError, "groundtruth.txt: cannot open",
+       removeFile("seq/groundtruth.txt")},
       {"sequence", "extra_column", E::kInputError, "depth.txt:2: expected 'timestamp path', got 3",
        write("seq/depth.txt", "0.0 depth/000000.png\n0.0333 depth/000001.png extra\n")},
-      {"sequence", "timestamp_not_a_number", E::kInputError, "rgb.txt:1: expected a number",
+      {"sequence", "timestamp_not_a_number", E::kInputError, "rgb.txt:1: expected a number for the timestamp, got 'abc'",
        write("seq/rgb.txt", "abc rgb/000000.png\n")},
       {"sequence", "timestamps_decrease", E::kInputError, "depth.txt:2: timestamp 0.000000 is not after",
        write("seq/depth.txt", "0.0333 depth/000001.png\n0.0 depth/000000.png\n")},
@@ -184,18 +185,21 @@ const std::vector<BadCase>& badCases() {
        write("seq/groundtruth.txt", "100.0 0 0 0 0 0 0 1\n")},
       {"sequence", "bad_associations", E::kInputError, "associations.txt:1",
        write("seq/associations.txt", "0.0 rgb/000000.png 0.0\n")},
-      {"sequence", "image_missing", E::kInputError, "rgb.txt:3: ", removeFile("seq/rgb/000001.png")},
+      {"sequence", "image_missing", E::kInputError, "rgb.txt:3: image 'rgb/000001.png' does not exist",
+       removeFile("seq/rgb/000001.png")},
       // Images (decoded lazily: load(0)).
-      {"sequence", "corrupt_depth_png", E::kInputError, "cannot decode depth image",
+      {"sequence", "corrupt_depth_png", E::kInputError, "depth/000000.png: cannot decode depth image",
        write("seq/depth/000000.png", "\x89PNG\r\n garbage")},
-      {"sequence", "empty_rgb_png", E::kInputError, "cannot decode colour image", write("seq/rgb/000000.png", "")},
-      {"sequence", "depth_8bit_colour", E::kInputError, "must be 16-bit single-channel",
+      {"sequence", "empty_rgb_png", E::kInputError, "rgb/000000.png: cannot decode colour image",
+       write("seq/rgb/000000.png", "")},
+      {"sequence", "depth_8bit_colour", E::kInputError,
+       "depth/000000.png: depth image must be 16-bit single-channel, got 8-bit 3-channel",
        image("seq/depth/000000.png", cv::Mat(48, 64, CV_8UC3, cv::Scalar(1, 2, 3)))},
-      {"sequence", "depth_wrong_size", E::kInputError, "is 32x24 but the camera is 64x48",
+      {"sequence", "depth_wrong_size", E::kInputError, "depth/000000.png: depth image is 32x24 but the camera is 64x48",
        image("seq/depth/000000.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)))},
       {"sequence", "rgb_wrong_size", E::kInputError, "colour image is",
        image("seq/rgb/000000.png", cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)))},
-      {"sequence", "camera_file_missing_key", E::kInputError, "missing key 'cy'",
+      {"sequence", "camera_file_missing_key", E::kInputError, "camera.yaml: missing key 'cy'",
        write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 31.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
       // Poses (TUM trajectories: ground truth, corrected trajectories).
       {"trajectory", "missing_file", E::kInputError, "cannot open", removeFile("poses.txt")},
@@ -213,7 +217,7 @@ const std::vector<BadCase>& badCases() {
        write("poses.txt", "50.0 1 2 3 0 0 0 1\n")},
       // Camera files (the configuration files vdmap reads).
       {"camera_yaml", "missing_file", E::kInputError, "cannot open camera file", removeFile("camera.yaml")},
-      {"camera_yaml", "missing_key", E::kInputError, "missing key 'cy'",
+      {"camera_yaml", "missing_key", E::kInputError, "camera.yaml: missing key 'cy'",
        write("camera.yaml", "fx: 500\nfy: 501\ncx: 320\ndepth_scale: 1000\nwidth: 640\nheight: 480\n")},
       {"camera_yaml", "value_not_a_number", E::kInputError, "camera.yaml:1: key 'fx' must be a number",
        write("camera.yaml", "fx: fast\nfy: 1\ncx: 1\ncy: 1\ndepth_scale: 1\nwidth: 1\nheight: 1\n")},
