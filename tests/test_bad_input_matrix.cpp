@@ -6,7 +6,6 @@
 //
 // Side effect: each file-reading row's bad file and the good file are copied into the fuzzers'
 // seed corpus (VDMAP_FUZZ_SEEDS/<target>/), so the fuzzers start from every known bad case.
-#include <fstream>
 #include <functional>
 
 #include <gtest/gtest.h>
@@ -34,8 +33,8 @@ enum class Expect {
   kCliUsage,    ///< `vdmap ...` exits non-zero with CLI11's usage message
 };
 
-/// One input vdmap reads: how to make a good one in a folder, and how vdmap reads it. For the
-/// command line, `path` holds the arguments (with {dir} for the folder).
+/// One input vdmap reads: how to make a good one in a folder, and how vdmap reads it. The command
+/// line has no `read`: its bad cases return the arguments (with {dir} for the folder).
 struct Input {
   const char* name;
   const char* path;        ///< the file read, relative to the folder ("" for the command line)
@@ -49,7 +48,7 @@ const std::string kMeshPly =
     "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
     "property list uchar int vertex_indices\nend_header\n0 0 0 255 0 0\n1 0 0 0 255 0\n0 1 0 0 0 255\n3 0 1 2\n";
 
-// A binary little-endian mesh header for 3 vertices of float x y z, uchar r g b and one face.
+// A binary little-endian mesh header for 3 vertices of float x y z, float r g b and one face.
 std::string binaryMesh(const std::string& body) {
   return "ply\nformat binary_little_endian 1.0\nelement vertex 3\nproperty float x\nproperty float y\n"
          "property float z\nproperty float red\nproperty float green\nproperty float blue\nelement face 1\n"
@@ -314,16 +313,16 @@ const Input& inputNamed(const std::string& name) {
   throw std::logic_error("no input " + name);
 }
 
-// Copies `file` into the seed corpus of `target` (when the build defines one).
-void addSeed(const char* target, const std::string& name, const fs::path& file) {
-#ifdef VDMAP_FUZZ_SEEDS
-  if (!target || !fs::is_regular_file(file)) return;
-  const fs::path dir = fs::path(VDMAP_FUZZ_SEEDS) / target;
-  fs::create_directories(dir);
-  writeText(dir / name, readFile(file));
-#else
-  (void)target, (void)name, (void)file;
-#endif
+// Copies the input's file in `dir` into its fuzzer's seed corpus as `name`; for a sequence folder,
+// its lists, which are what fuzz_tum_list reads.
+void addSeeds(const Input& input, const std::string& name, const fs::path& dir) {
+  if (!input.fuzz_target) return;
+  const fs::path corpus = fs::path(VDMAP_FUZZ_SEEDS) / input.fuzz_target;
+  fs::create_directories(corpus);
+  const fs::path file = dir / input.path;
+  if (fs::is_regular_file(file)) writeText(corpus / name, readFile(file));
+  for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
+    if (fs::is_regular_file(file / list)) writeText(corpus / (name + "-" + list), readFile(file / list));
 }
 
 void PrintTo(const BadCase& c, std::ostream* os) { *os << c.input << "/" << c.name; }
@@ -336,11 +335,7 @@ TEST_P(BadInputMatrix, GivesTheExpectedErrorClass) {
   test::TempDir dir;
   input.make_good(dir.path());
   const std::string arguments = c.damage(dir.path());
-  const fs::path file = dir / input.path;
-  addSeed(input.fuzz_target, std::string(c.input) + "-" + c.name, file);
-  if (input.fuzz_target && std::string(input.fuzz_target) == "tum_list")
-    for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt", "associations.txt"})
-      addSeed(input.fuzz_target, std::string(c.name) + "-" + list, file / list);
+  addSeeds(input, std::string(c.input) + "-" + c.name, dir.path());
 
   if (c.expect == Expect::kCliError || c.expect == Expect::kCliUsage) {
     const test::RunResult r = test::runVdmap(replaceAll(arguments, "{dir}", dir.path().string()));
@@ -356,7 +351,7 @@ TEST_P(BadInputMatrix, GivesTheExpectedErrorClass) {
     return;
   }
   try {
-    input.read(file);
+    input.read(dir / input.path);
     FAIL() << "read without an error";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find(c.fragment), std::string::npos) << e.what();
@@ -380,8 +375,7 @@ TEST(BadInputMatrixBaseline, GoodInputsRead) {
     test::TempDir dir;
     input.make_good(dir.path());
     EXPECT_NO_THROW(input.read(dir / input.path)) << input.name;
-    addSeed(input.fuzz_target, std::string(input.name) + "-good", dir / input.path);
-    if (std::string(input.name) == "sequence") addSeed("tum_list", "depth-list", dir / "seq" / "depth.txt");
+    addSeeds(input, std::string(input.name) + "-good", dir.path());
   }
 }
 
