@@ -255,10 +255,8 @@ const std::vector<BadCase>& badCases() {
        write("m.ply", binaryMesh(std::string(12, '\0') + std::string("\x00\x00\xc0\x7f", 4) + std::string(8, '\0') +
                                  std::string(24 * 2, '\0') + std::string("\x03\x00\x00\x00\x00\x01\x00\x00\x00\x02\x00\x00\x00", 13)))},
       {"ply_mesh", "float_face_index_overflow", E::kInputError, "list item out of range",
-       write("m.ply", "ply\nformat ascii 1.0\nelement vertex 3\nproperty float x\nproperty float y\nproperty float z\n"
-                      "property uchar red\nproperty uchar green\nproperty uchar blue\nelement face 1\n"
-                      "property list uchar float vertex_indices\nend_header\n0 0 0 1 2 3\n1 0 0 1 2 3\n0 1 0 1 2 3\n"
-                      "3 0 1 1e30\n")},
+       write("m.ply", replaceAll(replaceAll(kMeshPly, "uchar int vertex_indices", "uchar float vertex_indices"),
+                                 "3 0 1 2", "3 0 1 1e30"))},
       {"ply_ellipsoids", "no_covariance", E::kInputError, "needs the covariance", write("e.ply", kMeshPly)},
       {"ply_ellipsoids", "truncated", E::kInputError, "truncated",
        [](const fs::path& d) {
