@@ -1,7 +1,6 @@
 #include <gtest/gtest.h>
 
 #include "mapping/core/camera.h"
-#include "mapping/core/error.h"
 #include "mapping/core/rgbd_frame.h"
 #include "mapping/io/camera_config.h"
 #include "tests/test_util.h"

@@ -1,7 +1,4 @@
-#include <fstream>
-
 #include <gtest/gtest.h>
-#include <opencv2/imgcodecs.hpp>
 
 #include "mapping/core/error.h"
 #include "mapping/io/frame_prefetcher.h"
