@@ -34,7 +34,8 @@ accuracy() {
     --out "$OUT/accuracy" > "$OUT/accuracy/stdout.txt"
 }
 # Both at once (the accuracy run's times are not quoted); set SEQUENTIAL=1 on a quiet machine.
-if [ -n "${SEQUENTIAL:-}" ]; then speed; accuracy; else speed & accuracy; wait; fi
+# `wait PID` passes the speed runs' failure on (a bare `wait` returns 0).
+if [ -n "${SEQUENTIAL:-}" ]; then speed; accuracy; else speed & speed_pid=$!; accuracy; wait "$speed_pid"; fi
 
 # Tables (medians over the speed runs) and plots.
 "$PLOT" --speed "$OUT"/speed-*/bench.json --accuracy "$OUT/accuracy/bench.json" --png-dir "$OUT"
