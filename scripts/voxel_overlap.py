@@ -21,13 +21,13 @@ if end < len(b'end_header\n') or 'property int keyframe' not in header or 'forma
     sys.exit(f'{path}: not a vdmap ellipsoid PLY (SPEC 7)')
 n = int(header.split('element vertex ')[1].split()[0])
 record = struct.Struct('<3f3B6fIi')  # x y z, rgb, 6 covariance entries, count, keyframe
+means = [(x, y, z, keyframe) for x, y, z, *_, keyframe in record.iter_unpack(data[end:end + n * record.size])]
 for size in sizes:
     groups = collections.defaultdict(set)
     count = collections.Counter()
-    for i in range(n):
-        x, y, z, *rest = record.unpack_from(data, end + i * record.size)
+    for x, y, z, keyframe in means:
         key = (int(x // size), int(y // size), int(z // size))
-        groups[key].add(rest[-1])
+        groups[key].add(keyframe)
         count[key] += 1
     shared = sum(count[k] for k, g in groups.items() if len(g) > 1)
     print(f'{size * 100:g} cm voxels: {n} ellipsoids in {len(groups)} voxels ({n / len(groups):.2f} each); '
