@@ -1,9 +1,11 @@
 // The .vdmap loader. Checksums are not verified, so that mutated bytes reach every section
 // parser (with checksums on, almost every mutation stops at the checksum). A decoded session
 // must re-encode to the same bytes.
+#include <cstddef>
+#include <cstdint>
 #include <cstdlib>
+#include <string_view>
 
-#include "fuzz/fuzz_input.h"
 #include "mapping/core/error.h"
 #include "mapping/io/session_file.h"
 
