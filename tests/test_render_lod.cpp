@@ -113,6 +113,11 @@ TEST_F(EllipsoidLod, AReusedRendererDrawsLikeAFreshOne) {
 
   const EllipsoidStyle by_keyframe{.color = ColorMode::kKeyframe};
   reused.setStyle(by_keyframe);
+  // The first view after the change is 20 m away: every ellipsoid is a splat there and none is
+  // selected for the mesh pass, so a selection kept from it would leave the next views empty.
+  ViewCamera farther = view_;
+  farther.T_C_W[3][2] += 18.f;
+  EXPECT_TRUE(same(shot(reused, farther), fresh(set, by_keyframe, farther)));
   const cv::Mat recoloured = shot(reused, view_);
   EXPECT_FALSE(same(recoloured, before)) << "the colour change shows";
   EXPECT_TRUE(same(recoloured, fresh(set, by_keyframe, view_)));
