@@ -1,12 +1,13 @@
 // The Open3D peer of `vdmap bench` (issue #8): Open3D 0.16's ScalableTSDFVolume, built as a
 // plugin only when Open3D is installed (see peers/tsdf_peer_abi.h for why it is a plugin).
 #include <cstdlib>
-#include <ctime>
 #include <cstring>
+#include <memory>
 
 #include <omp.h>
 #include <open3d/Open3D.h>
 
+#include "app/timing.h"
 #include "peers/tsdf_peer_abi.h"
 
 namespace {
@@ -54,13 +55,12 @@ double vdmap_tsdf_integrate(void* volume, const std::uint8_t* rgb, const std::ui
   std::memcpy(color.data_.data(), rgb, 3 * w * h);
   std::memcpy(depth_image.data_.data(), depth, sizeof(std::uint16_t) * w * h);
   const Eigen::Matrix4d T_C_W = Eigen::Map<const Eigen::Matrix4d>(T_W_C).inverse();
-  timespec t0{}, t1{};
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t0);
-  const auto rgbd = open3d::geometry::RGBDImage::CreateFromColorAndDepth(color, depth_image, v->depth_scale,
-                                                                         v->depth_max_m, false);
-  v->tsdf.Integrate(*rgbd, v->intrinsic, T_C_W);
-  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t1);
-  return 1e3 * static_cast<double>(t1.tv_sec - t0.tv_sec) + 1e-6 * static_cast<double>(t1.tv_nsec - t0.tv_nsec);
+  std::shared_ptr<open3d::geometry::RGBDImage> rgbd;  // freed after the timed part
+  return vdmap::app::cpuTimeMs([&] {
+    rgbd = open3d::geometry::RGBDImage::CreateFromColorAndDepth(color, depth_image, v->depth_scale, v->depth_max_m,
+                                                                false);
+    v->tsdf.Integrate(*rgbd, v->intrinsic, T_C_W);
+  });
 }
 
 std::size_t vdmap_tsdf_extract(void* volume, void (*sink)(void*, const double*, std::size_t), void* ctx) {
