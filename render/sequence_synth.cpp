@@ -115,12 +115,6 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
   }
 }
 
-void writeBuiltinSequence(const fs::path& out_dir, int frames, std::function<void(std::size_t, std::size_t)> progress) {
-  BuiltinSceneParams params;
-  if (frames > 0) params.frames = frames;
-  writeBuiltinSequence(out_dir, params, std::move(progress));
-}
-
 void writeBuiltinSequence(const fs::path& out_dir, const BuiltinSceneParams& params,
                           std::function<void(std::size_t, std::size_t)> progress) {
   const BuiltinScene scene = makeBuiltinScene(params);

@@ -57,11 +57,9 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
                         const SynthOptions& options, const std::filesystem::path& out_dir);
 
 /// Writes the built-in scene (mapping/synth/builtin_scene.h) as a sequence into `out_dir`
-/// with the nguyen2012 sensor model. `frames` < 0 keeps the scene's default walk.
-void writeBuiltinSequence(const std::filesystem::path& out_dir, int frames = -1,
-                          std::function<void(std::size_t, std::size_t)> progress = {});
-/// The same for any walk of the built-in scene (e.g. `.laps = 8`: 2400 frames, 133 keyframes).
-void writeBuiltinSequence(const std::filesystem::path& out_dir, const BuiltinSceneParams& params,
+/// with the nguyen2012 sensor model; `params` choose the walk (default: one lap of 300 frames;
+/// e.g. `.laps = 8`: 2400 frames, 133 keyframes).
+void writeBuiltinSequence(const std::filesystem::path& out_dir, const BuiltinSceneParams& params = {},
                           std::function<void(std::size_t, std::size_t)> progress = {});
 
 }  // namespace vdmap::render

@@ -115,7 +115,7 @@ TEST(Synth, BuiltinSceneIsAReadableSequenceThatRevisitsItsStart) {
   EXPECT_LT((a.translation() - b.translation()).norm(), 0.05);
   EXPECT_GT(scene.mesh.triangles.size(), 10000u);
   test::TempDir tmp;
-  render::writeBuiltinSequence(tmp / "builtin", 12);
+  render::writeBuiltinSequence(tmp / "builtin", {.frames = 12});
   const TumSequence seq = TumSequence::open(tmp / "builtin");
   ASSERT_EQ(seq.size(), 12u);
   EXPECT_EQ(seq.camera().width, 640);
