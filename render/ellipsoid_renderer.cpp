@@ -78,7 +78,6 @@ EllipsoidRenderer::~EllipsoidRenderer() = default;
 void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
   near_key_.reset();
   instances_.assign(ellipsoids.begin(), ellipsoids.end());
-  count_ = instances_.size();
   geometry_cpu_ = geometryOf(instances_, style_.sigma);
   geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
   colors_cpu_ = ellipsoidColors(instances_, style_.color);
@@ -86,7 +85,7 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
 }
 
 void EllipsoidRenderer::update(std::size_t first, std::span<const EllipsoidInstance> changed) {
-  if (first + changed.size() > count_) {
+  if (first + changed.size() > instances_.size()) {
     std::vector<EllipsoidInstance> all = instances_;
     all.resize(first + changed.size());
     std::copy(changed.begin(), changed.end(), all.begin() + first);
@@ -138,7 +137,7 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
   const float focal_px = key.focal_px, threshold = key.threshold_px;
   near_geometry_cpu_.clear();
   near_colors_cpu_.clear();
-  for (std::size_t i = 0; i < count_; ++i) {
+  for (std::size_t i = 0; i < instances_.size(); ++i) {
     const float* g = &geometry_cpu_[12 * i];
     const float z = row_z.x * g[0] + row_z.y * g[1] + row_z.z * g[2] + row_z.w;
     float r2 = 0.f;
@@ -154,11 +153,11 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
 }
 
 void EllipsoidRenderer::draw(const ViewCamera& view) const {
-  if (count_ == 0) return;
+  if (instances_.empty()) return;
   const Gl& gl = *gl_;
   const float focal_px = std::max(view.fx, view.fy);
   const bool lod = style_.point_below_px > 0.f;
-  const std::size_t mesh_count = lod ? selectMeshInstances(view) : count_;
+  const std::size_t mesh_count = lod ? selectMeshInstances(view) : instances_.size();
   program_->useWithView(view);
   program_->set("u_focal_px", focal_px);
   program_->set("u_point_below_px", style_.point_below_px);
@@ -172,7 +171,7 @@ void EllipsoidRenderer::draw(const ViewCamera& view) const {
     point_program_->set("u_point_below_px", style_.point_below_px);
     point_program_->set("u_f_px", glm::vec2(view.fx, view.fy));
     point_vao_.bind();
-    gl.DrawArrays(GL_POINTS, 0, static_cast<GLsizei>(count_));
+    gl.DrawArrays(GL_POINTS, 0, static_cast<GLsizei>(instances_.size()));
   }
   gl.BindVertexArray(0);
 }

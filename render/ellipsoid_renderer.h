@@ -43,7 +43,7 @@ class EllipsoidRenderer {
   /// Changes sigma (re-sends geometry) or colour mode (re-sends colours) when they differ.
   void setStyle(const EllipsoidStyle& style);
   void draw(const ViewCamera& view) const;
-  std::size_t size() const { return count_; }
+  std::size_t size() const { return instances_.size(); }
 
  private:
   // What decides the mesh-pass selection: the view's camera-z row, focal length, near plane and
@@ -70,7 +70,6 @@ class EllipsoidRenderer {
   mutable std::vector<glm::u8vec4> near_colors_cpu_;
   mutable std::optional<MeshSelectionKey> near_key_;  // empty: geometry or colours changed since
   GLsizei index_count_ = 0;
-  std::size_t count_ = 0;
 };
 
 }  // namespace vdmap::render
