@@ -18,6 +18,18 @@ TEST(BuiltinScene, FirstLapIsTheDefaultWalk) {
     EXPECT_EQ(one.trajectory[i].t, three.trajectory[i].t);
     EXPECT_TRUE(one.trajectory[i].T_W_C.matrix() == three.trajectory[i].T_W_C.matrix()) << i;
   }
+  // The default walk itself, written out independently of the lap table: an ellipse at eye
+  // height looking at a point 0.9 rad ahead on a larger ellipse (the walk the goldens and the
+  // built-in tests were made with), so a change to lap 0 cannot pass by changing both sides.
+  for (std::size_t i = 0; i < one.trajectory.size(); ++i) {
+    const double a = 2.0 * M_PI * static_cast<double>(i) / 300.0, b = a + 0.9;
+    const Eigen::Vector3d eye(1.2 * std::cos(a), 0.95 * std::sin(a), 1.35 + 0.08 * std::sin(3 * a));
+    const Eigen::Vector3d target(2.4 * std::cos(b), 1.9 * std::sin(b), 0.75 + 0.15 * std::sin(2 * a));
+    const Transform& T = one.trajectory[i].T_W_C;
+    EXPECT_EQ(one.trajectory[i].t, static_cast<double>(i) / 30.0);
+    EXPECT_LT((T.translation() - eye).norm(), 1e-12) << i;
+    EXPECT_LT((T.linear().col(2) - (target - eye).normalized()).norm(), 1e-12) << i;
+  }
   // Timestamps keep increasing across laps (one sequence, 30 fps).
   for (std::size_t i = 1; i < three.trajectory.size(); ++i)
     EXPECT_GT(three.trajectory[i].t, three.trajectory[i - 1].t);
