@@ -15,6 +15,7 @@
 
 #include <benchmark/benchmark.h>
 
+#include "app/timing.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/keyframe/mapper.h"
 #include "render/sequence_synth.h"
@@ -36,11 +37,7 @@ struct Recording {
 };
 Recording* g_recording = nullptr;
 
-double median(std::vector<double> v) {
-  if (v.empty()) return 0.0;
-  std::sort(v.begin(), v.end());
-  return v[v.size() / 2];
-}
+using app::median;
 
 // Decision cost of the frames mapped while the graph held [lo, hi] keyframes.
 void printRunCost(const std::vector<FrameReport>& reports, std::size_t lo, std::size_t hi,
