@@ -1,7 +1,5 @@
 // Map exports (SPEC section 7) through exportMap: every file written into one folder, each PLY
 // reads back to the values written, and a folder that cannot be written fails cleanly.
-#include <fstream>
-
 #include <Eigen/Geometry>
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
@@ -204,10 +202,7 @@ TEST(Export, AFolderThatCannotBeWrittenFailsClearlyAndWritesNothing) {
   test::writeText(tmp / "out" / "graph.txt", "old\n");
   EXPECT_THROW(exportMap(tmp / "out", scene.graph, scene.map), std::runtime_error);
   EXPECT_EQ(filesIn(tmp / "out"), (std::vector<std::string>{"graph.txt", "stats.json"}));
-  std::ifstream old(tmp / "out" / "graph.txt");
-  std::string line;
-  std::getline(old, line);
-  EXPECT_EQ(line, "old");
+  EXPECT_EQ(test::readFile(tmp / "out" / "graph.txt"), "old\n");
 }
 
 }  // namespace
