@@ -19,11 +19,12 @@ namespace detail {
 // GCC vector: AVX where the CPU has it. Its alignment depends on the ISA (16 without AVX), so
 // the structs holding it say alignas(32) explicitly.
 using V4d = double __attribute__((vector_size(32)));
-// Per-cell sums of one frame, of r = p_K - t (t: the frame's camera centre in K). Points lie
-// within the depth range of t, so in double the scatter S_N = Q - q q^T / N loses ~eps (z / w)^2
-// of an entry of width w at depth z: 1e-11 of the large entries (w = the cell's footprint), 1e-6
-// of the thinnest in the worst case (8 m, 0.1 mm spread; real sensor noise there is ~10 cm). q = sum (r, 1), xp = sum r.x (r, 1), yp = sum r.y
-// (r, 1), zz = sum r.z^2. Colour sums are exact integers (at most 255 * 640 * 480 < 2^32).
+// Per-cell sums of one frame, of r = p_K - t (t: the frame's camera centre in K):
+// q = sum (r, 1), xp = sum r.x (r, 1), yp = sum r.y (r, 1), zz = sum r.z^2. Points lie within the
+// depth range of t, so in double the scatter S_N = Q - q q^T / N loses ~eps (z / w)^2 of an entry
+// of width w at depth z: 1e-11 of the large entries (w = the cell's footprint), 1e-6 of the
+// thinnest in the worst case (8 m, 0.1 mm spread; real sensor noise there is ~10 cm). Colour
+// sums are exact integers (at most 255 * 640 * 480 < 2^32).
 struct alignas(32) FrameSums {
   V4d q, xp, yp;
   double zz;
@@ -56,7 +57,7 @@ class LocalMapIntegrator {
  private:
   LocalMapParams params_;
   std::vector<std::int32_t> sums_slot_;  // per grid cell: index into sums_, or -1
-  std::vector<detail::FrameSums> sums_;  // sized to the grid once; the first used_ are live
+  std::vector<detail::FrameSums> sums_;  // sized to the grid once; the first used_cells_.size() are live
   std::vector<int> used_cells_;          // grid index of sums_[i]
   std::vector<double> ray_x_, ray_y_, ray_z_;  // per column: ((u - cx) / fx) * R.col(0)
   std::vector<double> row_x_, row_y_, row_z_;  // one row's p_K - t
