@@ -68,6 +68,7 @@ TEST_F(EllipsoidLod, SubPixelEllipsoidsAreAllDrawnAsSplats) {
   const int splat_px = cv::countNonZero(splats);
   EXPECT_GE(splat_px, static_cast<int>(set.size()));
   EXPECT_LE(splat_px, 5 * static_cast<int>(set.size()));
+  EXPECT_GT(cv::countNonZero(splats != mesh), 0) << "the splat image is the mesh image: no splat was drawn";
 }
 
 TEST_F(EllipsoidLod, SplatsCoverTheMeshSilhouette) {
