@@ -16,9 +16,9 @@ Eigen::Matrix3d PinholeCamera::backProjectJacobian(double u, double v, double de
 
 void PinholeCamera::validate() const {
   auto fail = [](const std::string& what) { throw std::invalid_argument("camera: " + what); };
-  if (width <= 0 || height <= 0 || width > 16384 || height > 16384)
-    fail("image size " + std::to_string(width) + "x" + std::to_string(height) +
-         " must be within 1..16384");
+  if (width <= 0 || height <= 0 || width > kMaxImageSide || height > kMaxImageSide)
+    fail("image size " + std::to_string(width) + "x" + std::to_string(height) + " must be within 1.." +
+         std::to_string(kMaxImageSide));
   if (!(std::isfinite(fx) && fx > 0) || !(std::isfinite(fy) && fy > 0))
     fail("focal lengths fx, fy must be positive and finite");
   if (!std::isfinite(cx) || !std::isfinite(cy)) fail("principal point cx, cy must be finite");

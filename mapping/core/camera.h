@@ -6,6 +6,8 @@ namespace vdmap {
 /// Pinhole camera without distortion. Pixel (u, v): u right, v down, origin at the centre of
 /// the top-left pixel. Points are in the camera frame (z forward), metres.
 struct PinholeCamera {
+  static constexpr int kMaxImageSide = 16384;  ///< px; validate() and camera files accept 1..this
+
   int width = 640;
   int height = 480;
   double fx = 525.0;

@@ -110,8 +110,9 @@ PinholeCamera readCameraFile(const std::filesystem::path& file) {
   field({"cy"}, [&](double v) { camera.cy = v; });
   field({"depth_scale", "scale"}, [&](double v) { camera.depth_scale = v; });
   auto pixels = [&name](const char* key, double v) {
-    if (!(v >= 1 && v <= 65535 && v == std::floor(v)))
-      throw InputError(name, std::string("key '") + key + "' must be a whole number of pixels within 1..65535");
+    if (!(v >= 1 && v <= PinholeCamera::kMaxImageSide && v == std::floor(v)))
+      throw InputError(name, std::string("key '") + key + "' must be a whole number of pixels within 1.." +
+                                 std::to_string(PinholeCamera::kMaxImageSide));
     return static_cast<int>(v);
   };
   field({"width", "w"}, [&](double v) { camera.width = pixels("width", v); });
