@@ -269,7 +269,8 @@ void runBench(BenchArgs args) {
     MapperParams p = mapper_params;
     p.local_map.cell_size_px = s;
     Mapper m(cam, p);
-    for (const RgbdFrame& frame : decoded) m.addFrame(frame);
+    ProgressBar progress("vdmap " + std::to_string(s) + " px", decoded.size());
+    for (const RgbdFrame& frame : decoded) progress.update(static_cast<std::size_t>(m.addFrame(frame).frame_index) + 1);
     const GlobalMap g = buildGlobalMap(m.graph(), {});
     rows.emplace_back("vdmap " + std::to_string(s) + " px (accuracy only)", "vd_" + std::to_string(s) + "px");
     cmp.score(&rows.back(), means(g.ellipsoids));
