@@ -147,9 +147,7 @@ void MapSession::rebuildGlobal() {
     return;
   }
   snap->params = params;
-  for (const Keyframe& k : mapper_->graph().keyframes())
-    forEachKeptEllipsoid(k.container, snap->map.kept[static_cast<std::size_t>(k.id)], k.T_W_K, k.id,
-                         [&snap](const Ellipsoid& e) { snap->local.push_back(e); });
+  snap->local = localEllipsoids(mapper_->graph(), snap->map);
   std::lock_guard lock(mutex_);
   snap->frames_mapped = mapped_;
   snap->generation = ++generation_;

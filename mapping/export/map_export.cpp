@@ -97,14 +97,9 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
   StagingFolder stage(dir);
-  std::vector<Ellipsoid> local;
   std::vector<StampedPose> poses;
-  for (const Keyframe& k : graph.keyframes()) {
-    forEachKeptEllipsoid(k.container, map.kept.at(static_cast<std::size_t>(k.id)), k.T_W_K, k.id,
-                         [&local](const Ellipsoid& e) { local.push_back(e); });
-    poses.push_back({k.timestamp, k.T_W_K});
-  }
-  writeEllipsoidPly(stage / "local_maps.ply", local);
+  for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
+  writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
   graph.edges().writeEdgeList(stage / "graph.txt");

@@ -23,7 +23,7 @@ struct MapExportOptions {
 };
 
 /// Writes into `dir` (created if missing):
-///   local_maps.ply        kept ellipsoids of every keyframe (map.kept), world frame (SPEC 7 ellipsoid PLY)
+///   local_maps.ply        localEllipsoids(graph, map): the local maps, world frame (SPEC 7 ellipsoid PLY)
 ///   keyframes.txt         keyframe poses T_W_K, TUM format, line i = keyframe i
 ///   graph.txt             covisibility edges `a b weight`
 ///   global_points.ply     global-map ellipsoid means with colour

@@ -317,6 +317,15 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
   return removed;
 }
 
+std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map) {
+  std::vector<Ellipsoid> local;
+  local.reserve(map.sigma_e);
+  for (const Keyframe& k : graph.keyframes())
+    forEachKeptEllipsoid(k.container, map.kept.at(static_cast<std::size_t>(k.id)), k.T_W_K, k.id,
+                         [&local](const Ellipsoid& e) { local.push_back(e); });
+  return local;
+}
+
 GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params) {
   params.validate();
   GlobalMap map;

@@ -58,6 +58,10 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster);
 /// Throws std::invalid_argument for parameters out of range; an empty graph gives an empty map.
 GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params);
 
+/// The local maps `map` was built from: every keyframe's kept ellipsoids (map.kept) in the world
+/// frame, keyframes in id order.
+std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map);
+
 /// Occlusion removal (SPEC section 6 step 3) over ellipsoids in the world frame; returns, for each,
 /// whether it is removed. Exposed for tests.
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
