@@ -18,10 +18,13 @@ bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0
 #define REQUIRE_XVFB() \
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (workbench end-to-end test skipped)"
 
-// Runs vdmap in a virtual X server with its own config and cache folders.
+// Runs vdmap in a virtual X server with its own config and cache folders. The X authority file
+// lives in `home` too: without -f, xvfb-run makes a temporary folder for it and exits 5 instead
+// of vdmap's code when removing that folder fails, which happened once in CI after a fast exit.
 RunResult runInXvfb(const TempDir& home, const std::string& args) {
   const std::string prefix = "XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
-                             (home / "cache").string() + "' xvfb-run -a -s '-screen 0 1920x1080x24'";
+                             (home / "cache").string() + "' xvfb-run -a -f '" + (home / "Xauthority").string() +
+                             "' -s '-screen 0 1920x1080x24'";
   return runVdmap(args, prefix);
 }
 
@@ -72,7 +75,7 @@ TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
   REQUIRE_XVFB();
   TempDir home;
   const RunResult r = runInXvfb(home, "gui '" + (home / "nowhere").string() + "' --exit");
-  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("nowhere"), std::string::npos) << r.err;
 }
 
@@ -80,10 +83,10 @@ TEST(GuiCli, BadSetAndNoDisplayAreClearErrors) {
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const RunResult bad = runVdmap("gui '" + (home / "seq").string() + "' --set merge_distance=-2 --exit");
-  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.exit_code, 1) << bad.err;
   EXPECT_NE(bad.err.find("merge_distance"), std::string::npos) << bad.err;
   const RunResult no_display = runVdmap("gui '" + (home / "seq").string() + "' --exit", "DISPLAY= WAYLAND_DISPLAY=");
-  EXPECT_EQ(no_display.exit_code, 1);
+  EXPECT_EQ(no_display.exit_code, 1) << no_display.err;
   EXPECT_NE(no_display.err.find("window"), std::string::npos) << no_display.err;
 }
 
@@ -92,7 +95,7 @@ TEST(GuiCli, NoDisplayFailsBeforeRenderingTheBuiltinScene) {
   fs::create_directories(home / "cache");
   const RunResult r = runVdmap("", "DISPLAY= WAYLAND_DISPLAY= XDG_CONFIG_HOME='" + (home / "config").string() +
                                        "' XDG_CACHE_HOME='" + (home / "cache").string() + "'");
-  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("window"), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;  // one line
   EXPECT_TRUE(fs::is_empty(home / "cache")) << "the built-in scene was rendered before the display was checked";
