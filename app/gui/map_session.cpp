@@ -2,12 +2,12 @@
 
 #include <algorithm>
 
+#include "mapping/core/timing.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap::app::gui {
 namespace {
 using Clock = std::chrono::steady_clock;
-double secondsSince(Clock::time_point t) { return std::chrono::duration<double>(Clock::now() - t).count(); }
 }  // namespace
 
 MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
@@ -153,7 +153,7 @@ void MapSession::rebuildGlobal() {
   snap->generation = ++generation_;
   global_ = std::move(snap);
   last_build_ = Clock::now();
-  last_build_s_ = std::chrono::duration<double>(last_build_ - t0).count();
+  last_build_s_ = secondsSince(t0);
 }
 
 void MapSession::restartMapper() {

@@ -21,6 +21,7 @@
 #include "app/gui/glfw_context.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/timing.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/ellipsoid_renderer.h"
@@ -125,7 +126,7 @@ class WorkbenchWindow {
       saveScreenshot(screenshot_request_);
       screenshot_request_.clear();
     }
-    const double ms = std::chrono::duration<double, std::milli>(Clock::now() - t0).count();
+    const double ms = msSince(t0);
     if (bench_.session() && bench_.session()->status().busy) busy_frame_ms_.push_back(ms);
     glfwSwapBuffers(context_.window());
     return !glfwWindowShouldClose(context_.window()) && !script_finished_;

@@ -8,6 +8,7 @@
 #include <octomap/OcTree.h>
 
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/timing.h"
 
 namespace vdmap {
 
@@ -59,7 +60,7 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
   std::ostringstream bytes;
   tree.writeBinaryConst(bytes);
   writeFileAtomically(file, bytes.str());
-  report.seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+  report.seconds = secondsSince(start);
   return report;
 }
 

@@ -13,16 +13,13 @@
 #include <tbb/parallel_for.h>
 #include <tbb/task_arena.h>
 
+#include "mapping/core/timing.h"
 #include "mapping/local_map/cell_stats.h"
 
 namespace vdmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-
-double msSince(Clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(Clock::now() - start).count();
-}
 
 Ellipsoid transformed(const Ellipsoid& e, const Transform& T_B_A) {
   Ellipsoid out = e;
@@ -356,7 +353,7 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   }
   map.occlusion_ms = msSince(occlusion_start);
   map.sigma_e_prime = map.ellipsoids.size();
-  map.t_g_s = std::chrono::duration<double>(Clock::now() - start).count();
+  map.t_g_s = secondsSince(start);
   return map;
 }
 

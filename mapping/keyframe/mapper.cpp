@@ -4,14 +4,9 @@
 #include <stdexcept>
 #include <string>
 
+#include "mapping/core/timing.h"
+
 namespace vdmap {
-namespace {
-
-double msSince(std::chrono::steady_clock::time_point start) {
-  return std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-}
-
-}  // namespace
 
 Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
     : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map) {
