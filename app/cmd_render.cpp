@@ -10,6 +10,8 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/timing.h"
+#include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/ply_reader.h"
 #include "render/colormap.h"
@@ -65,9 +67,9 @@ void runBench(const RenderArgs& args) {
   auto t0 = std::chrono::steady_clock::now();
   renderer.set(set);
   gl.Finish();
-  const double upload_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  const double upload_ms = msSince(t0);
   std::vector<double> times;
-  for (int i = 0; i < 4; ++i) {
+  for (int i = 0; i < 5; ++i) {
     // The eye moves 1 mm per frame, as in an interactive view: an unchanged view would let the
     // renderer reuse its mesh-pass selection and time less than a real frame.
     const render::ViewCamera view =
@@ -76,14 +78,14 @@ void runBench(const RenderArgs& args) {
     fb.bindAndClear(1.f, 1.f, 1.f);
     renderer.draw(view);
     gl.Finish();
-    times.push_back(std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count());
+    times.push_back(msSince(t0));
   }
-  std::sort(times.begin(), times.end());
   std::printf("renderer     %s\n", context->description().c_str());
   std::printf("ellipsoids   %d instanced, icosphere level %d, points below %.1f px, %dx%d\n", args.bench_ellipsoids,
               args.sphere_subdivisions, args.point_below_px, w, h);
   std::printf("upload       %.1f ms (eigen-decomposition + buffer upload)\n", upload_ms);
-  std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", times[times.size() / 2], times.size(), times[0]);
+  std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", median(times), times.size(),
+              *std::min_element(times.begin(), times.end()));
   if (!args.out.empty()) render::writePng(args.out, fb.readRgb());
 }
 
