@@ -306,8 +306,12 @@ void runBench(BenchArgs args) {
   }
   out["ratio_octomap_010_pipeline"] =
       median(pipeline_ms) > 0 && rows[first_peer].note.empty() ? rows[first_peer].ms / median(pipeline_ms) : 0.0;
-  out["methods"] = nlohmann::json::object();
-  for (const MethodResult& r : rows) out["methods"][r.key] = methodJson(r);
+  out["methods"] = nlohmann::json::object();  // sorted by key, so the table's order goes beside it
+  out["method_order"] = nlohmann::json::array();
+  for (const MethodResult& r : rows) {
+    out["methods"][r.key] = methodJson(r);
+    out["method_order"].push_back(r.key);
+  }
   if (mesh) out["mesh"] = args.mesh;
 
   std::ostringstream md;

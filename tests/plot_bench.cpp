@@ -114,12 +114,11 @@ int main(int argc, char** argv) {
     std::printf("| method | t_u [ms/frame], median of %zu runs | runs (min-max) | x vdmap update | elements |\n|---|---:|---:|---:|---:|\n",
                 runs.size());
     double vd = 0;
-    const char* const kPeers[] = {"octomap_010", "octomap_005", "octomap_002", "ndt_om_010", "open3d_tsdf_002",
-                                  "open3d_tsdf_001"};
-    std::vector<std::string> order = {"vd_update", "vd_pipeline"};
-    order.insert(order.end(), std::begin(kPeers), std::end(kPeers));
+    std::vector<std::string> order = runs[0]["method_order"];
+    // Not timed: a peer that did not run (note) and the accuracy-only cell sizes (0 ms).
     std::erase_if(order, [&](const std::string& k) {
-      return !runs[0]["methods"].contains(k) || runs[0]["methods"][k].contains("note");
+      const json& m = runs[0]["methods"][k];
+      return m.contains("note") || !(m["ms_per_frame"].get<double>() > 0);
     });
     for (const std::string& k : order) {
       std::vector<double> ms;
@@ -150,8 +149,8 @@ int main(int argc, char** argv) {
     std::sort(rows.begin(), rows.end(), [](const auto& x, const auto& y) {
       return x.second["elements"].template get<std::size_t>() > y.second["elements"].template get<std::size_t>();
     });
-    for (const char* k : kPeers)
-      if (a["methods"].contains(k) && a["methods"][k].contains("accuracy")) rows.emplace_back(k, a["methods"][k]);
+    for (const std::string& k : a["method_order"].get<std::vector<std::string>>())
+      if (k.rfind("vd_", 0) != 0 && a["methods"][k].contains("accuracy")) rows.emplace_back(k, a["methods"][k]);
     std::vector<Point> pts;
     for (const auto& [key, m] : rows) {
       const json& r = m["accuracy"];

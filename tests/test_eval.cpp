@@ -195,6 +195,8 @@ TEST(Bench, BuiltinSceneWritesEveryKey) {
                           "ratio_octomap_010", "vd_pipeline_ms", "t_g_s", "sigma_e", "sigma_e_prime",
                           "t_g_us_per_ellipsoid", "ndt_om_010_ms", "open3d_tsdf_002_ms", "open3d_tsdf_001_ms"})
     EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j["method_order"].size(), j["methods"].size());
+  for (const auto& key : j["method_order"]) EXPECT_TRUE(j["methods"].contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);
   EXPECT_TRUE(std::filesystem::exists(dir / "bench.md"));
   for (const auto& [key, m] : j["methods"].items()) {
