@@ -7,6 +7,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <tbb/parallel_for_each.h>
+#include <tbb/task_group.h>
 
 #include "mapping/synth/builtin_scene.h"
 #include "render/framebuffer.h"
@@ -50,6 +52,12 @@ void writeImage(const fs::path& file, const cv::Mat& image) {
   if (!cv::imwrite(file.string(), image)) throw std::runtime_error(file.string() + ": cannot write the image");
 }
 
+std::string frameName(int index) {
+  char name[32];
+  std::snprintf(name, sizeof name, "%06d.png", index);
+  return name;
+}
+
 void writeCameraYaml(const fs::path& file, const PinholeCamera& c) {
   std::ofstream out(file);
   out.precision(10);
@@ -86,20 +94,50 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     depth_list << "# depth images (vdmap synth), depth_scale " << options.camera.depth_scale << "\n# timestamp filename\n";
     rgb_list.precision(6);
     depth_list.precision(6);
-    std::vector<StampedPose> poses;
-    for (int i = first; i < last; ++i) {
-      const StampedPose& pose = trajectory[i];
-      const SyntheticView view = renderer.render(pose.T_W_C);
-      char name[32];
-      std::snprintf(name, sizeof name, "%06d.png", i);
+    // The main thread renders (the GL context is current only there) while the previous batch
+    // of frames gets its sensor noise and is written on the other threads. Each frame's noise
+    // has its own seed, so the images do not depend on the thread count.
+    constexpr int kBatch = 8;
+    struct Pending {
+      int index;
+      SyntheticView view;
+    };
+    std::vector<Pending> writing;
+    tbb::task_group writers;
+    auto writeFrame = [&](const Pending& f) {
+      const std::string name = frameName(f.index);
       cv::Mat bgr;
-      cv::cvtColor(view.rgb, bgr, cv::COLOR_RGB2BGR);
+      cv::cvtColor(f.view.rgb, bgr, cv::COLOR_RGB2BGR);
       writeImage(tmp / "rgb" / name, bgr);
-      writeImage(tmp / "depth" / name, simulateDepth(view.z_cos, options.camera.depth_scale, options.noise, i));
-      rgb_list << std::fixed << pose.t << " rgb/" << name << "\n";
-      depth_list << std::fixed << pose.t << " depth/" << name << "\n";
-      poses.push_back(pose);
-      if (options.progress) options.progress(i - first + 1, last - first);
+      writeImage(tmp / "depth" / name, simulateDepth(f.view.z_cos, options.camera.depth_scale, options.noise, f.index));
+    };
+    auto finishWriting = [&] {
+      writers.wait();  // rethrows a writer's exception
+      if (options.progress && !writing.empty()) options.progress(writing.back().index - first + 1, last - first);
+      writing.clear();
+    };
+    try {
+      for (int start = first; start < last; start += kBatch) {
+        std::vector<Pending> batch;
+        for (int i = start; i < std::min(last, start + kBatch); ++i) batch.push_back({i, renderer.render(trajectory[i].T_W_C)});
+        finishWriting();
+        writing = std::move(batch);
+        writers.run([&] { tbb::parallel_for_each(writing.begin(), writing.end(), writeFrame); });
+      }
+      finishWriting();
+    } catch (...) {
+      writers.cancel();
+      try {
+        writers.wait();  // nothing may still write into tmp when it is removed
+      } catch (...) {
+      }
+      throw;
+    }
+    std::vector<StampedPose> poses(trajectory.begin() + first, trajectory.begin() + last);
+    for (int i = first; i < last; ++i) {
+      const std::string name = frameName(i);
+      rgb_list << std::fixed << trajectory[i].t << " rgb/" << name << "\n";
+      depth_list << std::fixed << trajectory[i].t << " depth/" << name << "\n";
     }
     rgb_list.close();
     depth_list.close();

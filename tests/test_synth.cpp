@@ -6,6 +6,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
+#include <tbb/task_arena.h>
 
 #include "mapping/io/camera_config.h"
 #include "mapping/io/ply_reader.h"
@@ -131,6 +132,35 @@ TEST(Synth, BuiltinSceneIsAReadableSequenceThatRevisitsItsStart) {
   // Only the sequence is left: its DIR.tmp-XXXXXX staging folder was renamed, not copied.
   for (const auto& entry : std::filesystem::directory_iterator(tmp.path()))
     EXPECT_EQ(entry.path().filename(), "builtin");
+}
+
+// Frames are written by several threads while the next ones render; each frame's noise has its
+// own seed, so every file is the same on one thread as on all of them.
+TEST(Synth, SequenceFilesDoNotDependOnTheThreadCount) {
+  test::TempDir tmp;
+  const BuiltinSceneParams walk{.frames = 20};  // more than one batch of frames
+  tbb::task_arena(1).execute([&] { render::writeBuiltinSequence(tmp / "one", walk); });
+  render::writeBuiltinSequence(tmp / "all", walk);
+  int files = 0;
+  for (const auto& entry : std::filesystem::recursive_directory_iterator(tmp / "one")) {
+    if (!entry.is_regular_file()) continue;
+    const auto relative = std::filesystem::relative(entry.path(), tmp / "one");
+    ASSERT_TRUE(test::readFile(entry.path()) == test::readFile(tmp / "all" / relative)) << relative;
+    ++files;
+  }
+  EXPECT_EQ(files, 2 * 20 + 4);  // rgb and depth per frame, rgb.txt, depth.txt, groundtruth.txt, camera.yaml
+}
+
+TEST(Synth, AFailureMidwayLeavesNothingBehind) {
+  test::TempDir tmp;
+  std::size_t calls = 0;
+  auto failing = [&](std::size_t done, std::size_t) {
+    ++calls;
+    if (done > 8) throw std::runtime_error("stopped");
+  };
+  EXPECT_THROW(render::writeBuiltinSequence(tmp / "seq", {.frames = 30}, failing), std::runtime_error);
+  EXPECT_EQ(calls, 2u);  // frames 1-8, then 9-16 throws
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path()));
 }
 
 }  // namespace
