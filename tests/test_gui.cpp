@@ -31,6 +31,41 @@ struct TinyBench {
   MapSession& session() { return *bench.session(); }
 };
 
+// Selects keyframe `id` as the keyframe list does and returns the session's selection once the
+// worker has published it.
+std::shared_ptr<const SelectionSnapshot> selectAndWait(Workbench& bench, int id) {
+  bench.selectKeyframe(id);
+  bench.session()->waitIdle();
+  return bench.session()->selection();
+}
+
+// Keyframe `id`'s ellipsoids kept by the current global map's thresholds, filtered in its own
+// frame and moved to the world here (the reference for SelectionSnapshot::local).
+std::vector<Ellipsoid> keptInWorld(MapSession& session, int id) {
+  std::vector<Ellipsoid> out;
+  session.withMapper([&](const Mapper& mapper, const GlobalSnapshot& global) {
+    const Keyframe& k = mapper.graph().keyframe(id);
+    out = keptEllipsoids(k.container, global.params.filter, Transform::Identity(), id);
+    for (Ellipsoid& e : out) {
+      e.mean = k.T_W_K * e.mean;
+      e.cov = k.T_W_K.linear() * e.cov * k.T_W_K.linear().transpose();
+    }
+    return std::string();
+  });
+  session.waitIdle();
+  return out;
+}
+
+void expectSameEllipsoids(const std::vector<Ellipsoid>& actual, const std::vector<Ellipsoid>& expected) {
+  ASSERT_EQ(actual.size(), expected.size());
+  for (std::size_t i = 0; i < actual.size(); ++i) {
+    EXPECT_EQ(actual[i].keyframe, expected[i].keyframe) << i;
+    EXPECT_EQ(actual[i].grid_index, expected[i].grid_index) << i;
+    EXPECT_TRUE(actual[i].mean.isApprox(expected[i].mean, 1e-12)) << i;
+    EXPECT_TRUE(actual[i].cov.isApprox(expected[i].cov, 1e-12)) << i;
+  }
+}
+
 TEST(GuiSettings, RoundTripAndDefaultsForMissingKeys) {
   test::TempDir dir;
   Settings s;
@@ -213,7 +248,9 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   EXPECT_EQ(after->params.filter.min_points, 60);
   EXPECT_LT(after->map.sigma_e, before->map.sigma_e);
   EXPECT_LT(after->map.sigma_e_prime, before->map.sigma_e_prime);
-  EXPECT_EQ(after->local.size(), after->map.sigma_e);
+  std::size_t local = 0;  // the selection, keyframe by keyframe, covers Sigma_e
+  for (int id = 0; id < static_cast<int>(after->map.kept.size()); ++id) local += selectAndWait(bench, id)->local.size();
+  EXPECT_EQ(local, after->map.sigma_e);
 
   bench.ui().settings.thresholds.merge_distance_m = -1;  // refused, shown, map kept
   bench.applyThresholds();
@@ -232,12 +269,15 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   Workbench& bench = t.bench;
   t.session().play();
   t.session().waitIdle();
-  auto mean_of = [&](int keyframe) {
+  auto mean_of = [&](int keyframe) {  // selected without touching the edited pose in ui()
+    t.session().selectKeyframe(keyframe);
+    t.session().waitIdle();
+    const auto selection = t.session().selection();
+    EXPECT_EQ(selection->keyframe, keyframe);
+    EXPECT_EQ(selection->generation, t.session().global()->generation);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
-    int n = 0;
-    for (const Ellipsoid& e : t.session().global()->local)
-      if (e.keyframe == keyframe) sum += e.mean, ++n;
-    return Eigen::Vector3d(sum / std::max(n, 1));
+    for (const Ellipsoid& e : selection->local) sum += e.mean;
+    return Eigen::Vector3d(sum / std::max<std::size_t>(selection->local.size(), 1));
   };
   const Eigen::Vector3d before0 = mean_of(0), before1 = mean_of(1);
   bench.selectKeyframe(1);
@@ -261,6 +301,39 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
   EXPECT_NE(t.session().status().message.find("replaced"), std::string::npos);
   EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
+}
+
+TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  MapSession& s = t.session();
+  s.selectKeyframe(2);  // not mapped yet (as `vdmap gui --keyframe 2` does): filled once it is
+  s.waitIdle();
+  EXPECT_TRUE(s.selection()->local.empty());
+  s.play();
+  s.waitIdle();
+  EXPECT_EQ(s.selection()->keyframe, 2);
+  EXPECT_FALSE(s.selection()->local.empty());
+  expectSameEllipsoids(s.selection()->local, keptInWorld(s, 2));
+
+  const auto one = selectAndWait(bench, 1);
+  EXPECT_EQ(one->keyframe, 1);
+  EXPECT_EQ(one->generation, s.global()->generation);
+  EXPECT_FALSE(one->local.empty());
+  expectSameEllipsoids(one->local, keptInWorld(s, 1));
+
+  bench.ui().settings.thresholds.filter.min_points = 60;  // see LiveThresholdChangeSwapsInANewGlobalMap
+  bench.applyThresholds();
+  s.waitIdle();
+  const auto after = s.selection();
+  EXPECT_EQ(after->keyframe, 1);
+  EXPECT_EQ(after->generation, s.global()->generation);
+  EXPECT_GT(after->generation, one->generation);
+  EXPECT_LT(after->local.size(), one->local.size());
+  expectSameEllipsoids(after->local, keptInWorld(s, 1));
+
+  EXPECT_TRUE(selectAndWait(bench, -1)->local.empty());
+  EXPECT_EQ(s.selection()->keyframe, -1);
 }
 
 TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
@@ -288,6 +361,9 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   EXPECT_EQ(s.mapping()->frames_mapped, 10);
   EXPECT_EQ(s.mapping()->keyframes.size(), t.session().mapping()->keyframes.size());
   EXPECT_EQ(s.global()->map.sigma_e_prime, global->map.sigma_e_prime);  // the same map, rebuilt
+  const auto selection = selectAndWait(reopened, 1);
+  EXPECT_EQ(selection->keyframe, 1);
+  expectSameEllipsoids(selection->local, selectAndWait(bench, 1)->local);
 
   test::writeText(t.dir / "bad.vdmap", "not a session");
   EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));

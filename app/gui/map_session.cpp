@@ -43,7 +43,7 @@ MapSession::~MapSession() {
 }
 
 bool MapSession::workLeft() const {
-  return working_ || !commands_.empty() || mapped_ < target_ || global_dirty_;
+  return working_ || !commands_.empty() || selection_dirty_ || mapped_ < target_ || global_dirty_;
 }
 
 void MapSession::run() {
@@ -53,6 +53,8 @@ void MapSession::run() {
     if (!commands_.empty()) {
       job = std::move(commands_.front());
       commands_.pop_front();
+    } else if (selection_dirty_) {
+      job = [this] { publishSelection(); };
     } else if (mapped_ < target_) {
       if (playing_ && fps_ > 0.f && Clock::now() < next_frame_time_) {
         wake_.wait_until(lock, next_frame_time_);
@@ -147,13 +149,34 @@ void MapSession::rebuildGlobal() {
     return;
   }
   snap->params = params;
-  snap->local = localEllipsoids(mapper_->graph(), snap->map);
   std::lock_guard lock(mutex_);
   snap->frames_mapped = mapped_;
   snap->generation = ++generation_;
   global_ = std::move(snap);
+  selection_dirty_ = true;
   last_build_ = Clock::now();
   last_build_s_ = secondsSince(t0);
+}
+
+void MapSession::publishSelection() {
+  auto snap = std::make_shared<SelectionSnapshot>();
+  std::shared_ptr<const GlobalSnapshot> global;
+  {
+    std::lock_guard lock(mutex_);
+    snap->keyframe = selected_keyframe_;
+    selection_dirty_ = false;
+    global = global_;
+  }
+  snap->generation = global ? global->generation : 0;
+  const KeyframeGraph& graph = mapper_->graph();
+  if (global && snap->keyframe >= 0 && snap->keyframe < static_cast<int>(graph.size())) {
+    // Filtered again rather than read from global->map.kept: the container may have grown since
+    // the build, and one keyframe's filter costs little.
+    const Keyframe& k = graph.keyframe(snap->keyframe);
+    snap->local = keptEllipsoids(k.container, global->params.filter, k.T_W_K, k.id);
+  }
+  std::lock_guard lock(mutex_);
+  selection_ = std::move(snap);
 }
 
 void MapSession::restartMapper() {
@@ -303,6 +326,21 @@ std::shared_ptr<const MappingSnapshot> MapSession::mapping() const {
 std::shared_ptr<const GlobalSnapshot> MapSession::global() const {
   std::lock_guard lock(mutex_);
   return global_;
+}
+
+void MapSession::selectKeyframe(int id) {
+  {
+    std::lock_guard lock(mutex_);
+    if (id == selected_keyframe_) return;
+    selected_keyframe_ = id;
+    selection_dirty_ = true;
+  }
+  wake_.notify_all();
+}
+
+std::shared_ptr<const SelectionSnapshot> MapSession::selection() const {
+  std::lock_guard lock(mutex_);
+  return selection_;
 }
 
 PlayerStatus MapSession::status() const {

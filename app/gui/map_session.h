@@ -3,6 +3,8 @@
 // The UI thread sends commands through the thread-safe methods below and reads immutable
 // snapshots; it never touches the Mapper. One mutex guards the command state and the snapshot
 // pointers (no other lock, so no lock order to keep); mapping and map building run unlocked.
+// What only the inspector needs (one keyframe's local map) is computed by the worker for the
+// selected keyframe alone and published apart, so a selection change copies no global map.
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -48,9 +50,17 @@ struct MappingSnapshot {
 struct GlobalSnapshot {
   GlobalMap map;
   GlobalMapParams params;
-  std::vector<Ellipsoid> local;  ///< kept local-map ellipsoids in the world frame (Sigma_e)
   int frames_mapped = 0;         ///< the mapping state it was built from
   int generation = 0;            ///< 1, 2, ... per build
+};
+
+/// The selected keyframe's local map (replaced after a selection change and after every rebuild).
+struct SelectionSnapshot {
+  int keyframe = -1;    ///< -1: none selected
+  int generation = 0;   ///< the GlobalSnapshot whose thresholds filtered it (0: none built yet)
+  /// The keyframe's ellipsoids kept by those thresholds, world frame, container order; empty while
+  /// the keyframe does not exist (yet).
+  std::vector<Ellipsoid> local;
 };
 
 /// Playback state as the UI shows it.
@@ -98,10 +108,15 @@ class MapSession {
   /// Runs `f` on the worker with the mapper and the current global map while nothing changes
   /// them (export, save); its exception text goes to status().error, its return to message.
   void withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f);
+  /// The keyframe the inspector shows (-1: none; an id not mapped yet is kept and filled once it
+  /// is). A change makes the worker publish a new selection().
+  void selectKeyframe(int id);
 
   std::shared_ptr<const MappingSnapshot> mapping() const;
   /// Null until the first build.
   std::shared_ptr<const GlobalSnapshot> global() const;
+  /// Null until the first build or selection.
+  std::shared_ptr<const SelectionSnapshot> selection() const;
   PlayerStatus status() const;
   /// Blocks until the worker has nothing left to do (tests and the scripted path).
   void waitIdle();
@@ -112,6 +127,7 @@ class MapSession {
   void rebuildGlobal();
   void restartMapper();
   void publishMapping();
+  void publishSelection();
   void post(std::function<void()> command);
   void update(const std::function<void()>& change);  // under the lock, then wakes the worker
   bool workLeft() const;  // mutex_ held
@@ -133,6 +149,8 @@ class MapSession {
   int mapped_ = 0, target_ = 0;
   bool playing_ = false, stop_at_keyframe_ = false, global_dirty_ = false, working_ = false;
   bool stop_ = false;
+  int selected_keyframe_ = -1;
+  bool selection_dirty_ = false;
   float fps_ = 0.f;
   std::chrono::steady_clock::time_point next_frame_time_{};
   std::chrono::steady_clock::time_point last_build_{};
@@ -140,6 +158,7 @@ class MapSession {
   std::string error_, message_;
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
+  std::shared_ptr<const SelectionSnapshot> selection_;
   int generation_ = 0;
   std::thread worker_;
 };

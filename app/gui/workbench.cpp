@@ -89,7 +89,7 @@ void Workbench::opened(const std::string& path) {
   ui_.settings.last_sequence = path;
   ui_.sequence_text = path;
   ui_.error.clear();
-  ui_.selected_keyframe = ui_.view_from_keyframe = -1;
+  ui_.selected_keyframe = ui_.view_from_keyframe = -1;  // as the new session's selection
   ui_.picked.reset();
   ui_.camera_framed = false;
 }
@@ -146,10 +146,9 @@ void Workbench::selectKeyframe(int id) {
   ui_.selected_keyframe = id;
   if (!session_) return;
   const auto mapping = session_->mapping();
-  if (id < 0 || id >= static_cast<int>(mapping->keyframes.size())) {
-    ui_.selected_keyframe = -1;
-    return;
-  }
+  if (id < 0 || id >= static_cast<int>(mapping->keyframes.size())) ui_.selected_keyframe = -1;
+  session_->selectKeyframe(ui_.selected_keyframe);
+  if (ui_.selected_keyframe < 0) return;
   const Transform& T = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K;
   const Eigen::Vector3d t = T.translation();
   ui_.pose_translation_m = {t.x(), t.y(), t.z()};

@@ -68,6 +68,7 @@ class Workbench {
   /// Thresholds, re-run parameters and view options back to their defaults (window size and
   /// last sequence kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
+  /// Selects keyframe `id` for the inspector and tells the session (an id not mapped: none).
   void selectKeyframe(int id);
   /// Sends ui().pose_* as the selected keyframe's new pose.
   void applyPoseEdit();

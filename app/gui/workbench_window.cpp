@@ -40,13 +40,6 @@ constexpr float kBackground[3] = {0.13f, 0.13f, 0.15f};
 // few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
 constexpr render::EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
 
-std::vector<render::EllipsoidInstance> keyframeInstances(const std::vector<Ellipsoid>& ellipsoids, int keyframe) {
-  std::vector<render::EllipsoidInstance> out;
-  for (const Ellipsoid& e : ellipsoids)
-    if (e.keyframe == keyframe) out.push_back(render::toInstance(e));
-  return out;
-}
-
 // Raw depth as a colour image: viridis over 0..6 m, black where there is no measurement.
 cv::Mat depthToRgb(const cv::Mat& depth, double depth_scale) {
   cv::Mat d8, bgr, rgb;
@@ -101,7 +94,10 @@ class WorkbenchWindow {
         lines_(gl_), rgb_(gl_), depth_(gl_), container_(gl_) {
     lines_.setWidth(1.5f);
     if (script_.play_to_end && bench_.session()) bench_.session()->play();
-    if (script_.keyframe >= 0) bench_.ui().selected_keyframe = script_.keyframe;
+    if (script_.keyframe >= 0 && bench_.session()) {  // selected before it is mapped, unlike Workbench::selectKeyframe
+      bench_.ui().selected_keyframe = script_.keyframe;
+      bench_.session()->selectKeyframe(script_.keyframe);
+    }
   }
 
   // One UI frame; returns false when the window should close.
@@ -145,8 +141,8 @@ class WorkbenchWindow {
       shown_session_ = session;
       shown_mapping_ = nullptr;
       shown_lines_ = {};
-      shown_generation_ = container_generation_ = -1;
-      container_keyframe_ = -2;
+      shown_generation_ = -1;
+      shown_selection_ = nullptr;
     }
     mapping_ = session->mapping();
     global_ = session->global();
@@ -169,7 +165,8 @@ class WorkbenchWindow {
       points_.set(instances_, s.color);
       shown_color_ = s.color;
     }
-    if (ui().selected_keyframe != container_keyframe_ || generation != container_generation_) updateContainerView();
+    const auto selection = session->selection();
+    if (selection && selection != shown_selection_) updateContainerView(selection);
     const LinesKey lines_key{mapping_.get(), ui().selected_keyframe, s.show_frustums, s.show_graph, s.show_trajectory};
     if (lines_key == shown_lines_) return;
     shown_lines_ = lines_key;
@@ -194,15 +191,16 @@ class WorkbenchWindow {
     lines_.set(lines);
   }
 
-  void updateContainerView() {
-    container_keyframe_ = ui().selected_keyframe;
-    container_generation_ = global_ ? global_->generation : 0;
-    const int id = container_keyframe_;
-    if (!mapping_ || id < 0 || id >= static_cast<int>(mapping_->keyframes.size())) return;
+  // Draws the selected keyframe's image plane with its local map (the session's selection, which
+  // follows ui().selected_keyframe a moment later).
+  void updateContainerView(std::shared_ptr<const SelectionSnapshot> selection) {
+    const int id = selection->keyframe;
+    if (id >= static_cast<int>(mapping_->keyframes.size())) return;  // not in this mapping snapshot yet
+    shown_selection_ = std::move(selection);
+    if (id < 0) return;
     const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
     container_.setKeyframe(k.rgb, mapping_->camera, k.T_W_K);
-    const auto local = global_ ? keyframeInstances(global_->local, id) : std::vector<render::EllipsoidInstance>{};
-    container_.setEllipsoids(local, {.sigma = 2.f, .color = ui().settings.color});
+    container_.setEllipsoids(render::toInstances(shown_selection_->local), {.sigma = 2.f, .color = ui().settings.color});
     if (!container_fb_) container_fb_ = std::make_unique<render::Framebuffer>(gl_, container_.containerWidth(), container_.containerHeight());
     container_fb_->bindAndClear(0.f, 0.f, 0.f);
     container_.draw(container_fb_->width(), container_fb_->height());
@@ -555,7 +553,8 @@ class WorkbenchWindow {
   // What the lines were built from: the snapshot, the selection and the line toggles.
   using LinesKey = std::tuple<const MappingSnapshot*, int, bool, bool, bool>;
   LinesKey shown_lines_{};
-  int shown_generation_ = -1, container_keyframe_ = -2, container_generation_ = -1;
+  int shown_generation_ = -1;
+  std::shared_ptr<const SelectionSnapshot> shown_selection_;  // in the container view (held: compared by address)
   render::ColorMode shown_color_ = render::ColorMode::kRgb;
   int fb_width_ = 0, fb_height_ = 0;
   int scrub_ = 0;
