@@ -5,6 +5,7 @@
 #include "render/colormap.h"
 
 namespace vdmap::render {
+namespace {
 
 EllipsoidInstance toInstance(const Ellipsoid& e) {
   EllipsoidInstance out;
@@ -16,6 +17,8 @@ EllipsoidInstance toInstance(const Ellipsoid& e) {
   out.count = e.count;
   return out;
 }
+
+}  // namespace
 
 std::vector<EllipsoidInstance> toInstances(std::span<const Ellipsoid> ellipsoids) {
   std::vector<EllipsoidInstance> out;

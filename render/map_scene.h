@@ -12,8 +12,7 @@
 
 namespace vdmap::render {
 
-/// One mapping ellipsoid as a render instance (same frame; colour rounded and clamped to 0..255).
-EllipsoidInstance toInstance(const Ellipsoid& e);
+/// Mapping ellipsoids as render instances (same frame; colour rounded and clamped to 0..255).
 std::vector<EllipsoidInstance> toInstances(std::span<const Ellipsoid> ellipsoids);
 /// Ellipsoids read from a map PLY (SPEC section 7) as render instances.
 std::vector<EllipsoidInstance> toInstances(std::span<const EllipsoidRecord> records);
