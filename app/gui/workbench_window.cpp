@@ -166,7 +166,7 @@ class WorkbenchWindow {
       shown_color_ = s.color;
     }
     const auto selection = session->selection();
-    if (selection && selection != shown_selection_) updateContainerView(selection);
+    if (selection && (selection != shown_selection_ || s.color != container_color_)) updateContainerView(selection);
     const LinesKey lines_key{mapping_.get(), ui().selected_keyframe, s.show_frustums, s.show_graph, s.show_trajectory};
     if (lines_key == shown_lines_) return;
     shown_lines_ = lines_key;
@@ -197,6 +197,7 @@ class WorkbenchWindow {
     const int id = selection->keyframe;
     if (id >= static_cast<int>(mapping_->keyframes.size())) return;  // not in this mapping snapshot yet
     shown_selection_ = std::move(selection);
+    container_color_ = ui().settings.color;
     if (id < 0) return;
     const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
     container_.setKeyframe(k.rgb, mapping_->camera, k.T_W_K);
@@ -555,7 +556,7 @@ class WorkbenchWindow {
   LinesKey shown_lines_{};
   int shown_generation_ = -1;
   std::shared_ptr<const SelectionSnapshot> shown_selection_;  // in the container view (held: compared by address)
-  render::ColorMode shown_color_ = render::ColorMode::kRgb;
+  render::ColorMode shown_color_ = render::ColorMode::kRgb, container_color_ = render::ColorMode::kRgb;
   int fb_width_ = 0, fb_height_ = 0;
   int scrub_ = 0;
   bool scrubbing_ = false;
