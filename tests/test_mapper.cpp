@@ -1,5 +1,7 @@
 // The per-frame mapping path (SPEC section 5): keyframe decisions on a path that returns to its
 // start, pose correction, corrected trajectories, determinism, and the 7-Scenes run.
+#include <cmath>
+
 #include <gtest/gtest.h>
 
 #include "mapping/core/error.h"
@@ -100,6 +102,27 @@ TEST(Mapper, RejectsABadPoseAndToleratesAFrameWithoutDepth) {
 // Issue #5 bad input: a textureless stretch (ORB finds nothing) cannot be judged by
 // covisibility; while the pose pre-filter accepts the current keyframe the frames update it,
 // so a blank wall never spawns a keyframe per frame, and its depth still reaches the map.
+// Out-of-range parameters would map "successfully" into a wrong or empty map: they are refused.
+TEST(Mapper, RefusesParametersOutOfRange) {
+  const PinholeCamera camera = roomCamera();
+  const auto refuses = [&](void (*damage)(MapperParams&), const std::string& message) {
+    MapperParams p;
+    damage(p);
+    try {
+      Mapper mapper(camera, p);
+      ADD_FAILURE() << "accepted, expected: " << message;
+    } catch (const std::invalid_argument& e) {
+      EXPECT_EQ(e.what(), message);
+    }
+  };
+  refuses([](MapperParams& p) { p.local_map.depth_range = {5.0, 1.0}; }, "depth range must satisfy 0 <= min < max");
+  refuses([](MapperParams& p) { p.features.orb_features = 0; }, "orb_features must be >= 1");
+  refuses([](MapperParams& p) { p.keyframes.tau = 2; }, "tau and tau_edge must be within 0..1");
+  refuses([](MapperParams& p) { p.keyframes.tau_edge = std::nan(""); }, "tau and tau_edge must be within 0..1");
+  refuses([](MapperParams& p) { p.keyframe_every = -1; }, "keyframe_every must be >= 0");
+  EXPECT_NO_THROW(Mapper(camera, MapperParams{}));
+}
+
 TEST(Mapper, TexturelessFramesUpdateTheCurrentKeyframe) {
   Mapper mapper(roomCamera());
   for (int i = 0; i < 6; ++i) {

@@ -213,35 +213,27 @@ std::uint32_t readParams(Reader* r, SessionInfo* info) {
   c.cy = r->f64("cy");
   c.depth_scale = r->f64("depth_scale");
   r->checkValid("camera", [&c] { c.validate(); });
-  r->check(c.width <= kMaxImageSide && c.height <= kMaxImageSide, "camera is larger than 32768 px");
+  r->check(c.width <= kMaxImageSide && c.height <= kMaxImageSide,
+           "camera is larger than " + std::to_string(kMaxImageSide) + " px");
   MapperParams& m = info->mapper;
   m.local_map.cell_size_px = r->i32("cell_size_px");
   r->check(m.local_map.cell_size_px >= 1 && m.local_map.cell_size_px <= std::min(c.width, c.height),
            "cell_size_px must be within 1..min(width, height)");
   m.local_map.depth_range.min_m = r->f64("min_depth");
   m.local_map.depth_range.max_m = r->f64("max_depth");
-  r->check(m.local_map.depth_range.min_m >= 0 && m.local_map.depth_range.min_m < m.local_map.depth_range.max_m,
-           "depth range must satisfy 0 <= min < max");
   m.features.orb_features = r->i32("orb_features");
-  r->check(m.features.orb_features >= 1, "orb_features must be >= 1");
   KeyframeParams& k = m.keyframes;
   k.tau = r->f64("tau");
   k.tau_edge = r->f64("tau_edge");
-  r->check(k.tau >= 0 && k.tau <= 1 && k.tau_edge >= 0 && k.tau_edge <= 1, "tau and tau_edge must be within 0..1");
   k.prefilter.enabled = r->boolean("prefilter enabled");
   k.prefilter.max_distance_m = r->f64("prefilter max_distance");
   k.prefilter.max_angle_deg = r->f64("prefilter max_angle");
-  r->check(k.prefilter.max_distance_m >= 0 && k.prefilter.max_angle_deg >= 0, "prefilter limits must be >= 0");
   k.min_frame_features = r->i32("min_frame_features");
-  r->check(k.min_frame_features >= 0, "min_frame_features must be >= 0");
   k.covisibility.max_hamming = r->i32("max_hamming");
   k.covisibility.lowe_ratio = r->f64("lowe_ratio");
   k.covisibility.max_reprojection_px = r->f64("max_reprojection");
-  r->check(k.covisibility.max_hamming >= 0 && k.covisibility.lowe_ratio > 0 && k.covisibility.lowe_ratio <= 1 &&
-               k.covisibility.max_reprojection_px >= 0,
-           "covisibility parameters out of range");
   m.keyframe_every = r->i32("keyframe_every");
-  r->check(m.keyframe_every >= 0, "keyframe_every must be >= 0");
+  r->checkValid("mapper parameters", [&m] { m.validate(); });
   GlobalMapParams& g = info->global;
   const std::uint32_t model = r->u32("sensor model");
   r->check(model <= static_cast<std::uint32_t>(SensorModel::kBelter2018), "unknown sensor model " + std::to_string(model));

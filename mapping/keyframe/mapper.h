@@ -15,6 +15,10 @@ struct MapperParams {
   /// > 0: every N-th frame starts a keyframe and covisibility is not consulted (a fixed
   /// schedule, for comparisons); 0: the covisibility decision of SPEC section 5.
   int keyframe_every = 0;
+
+  /// Throws std::invalid_argument naming the first value out of range (the cell size is checked
+  /// against the camera by Mapper).
+  void validate() const;
 };
 
 /// Wall time of each stage of one frame, milliseconds.
