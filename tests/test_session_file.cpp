@@ -201,6 +201,16 @@ TEST(SessionFile, MissingFileAndUnwritableFolder) {
   const Saved& s = smallSession();
   EXPECT_THROW(saveSession(dir / "no" / "such" / "a.vdmap", s.mapper.graph(), s.info), std::runtime_error);
   EXPECT_TRUE(std::filesystem::is_empty(dir.path())) << "a failed save leaves nothing behind";
+  // Saving over a folder fails at the rename: the message gives that reason (it said "Success").
+  std::filesystem::create_directory(dir / "folder.vdmap");
+  try {
+    saveSession(dir / "folder.vdmap", s.mapper.graph(), s.info);
+    ADD_FAILURE() << "saved over a folder";
+  } catch (const std::runtime_error& e) {
+    const std::string message = e.what();
+    EXPECT_NE(message.find("folder.vdmap: cannot write (Is a directory)"), std::string::npos) << message;
+  }
+  EXPECT_EQ(std::distance(std::filesystem::directory_iterator(dir.path()), {}), 1) << "only the folder is left";
 }
 
 // A child process saves two different sessions in turn as fast as it can; the parent kills it

@@ -42,9 +42,9 @@ void writeFileAtomically(const std::filesystem::path& file, std::string_view byt
   std::error_code ec;
   if (written) std::filesystem::rename(tmp, file, ec);
   if (!written || ec) {
-    std::filesystem::remove(tmp, ec);
-    throw std::runtime_error(file.string() + ": cannot write (" + std::strerror(written ? ec.value() : error) +
-                             ")");
+    const std::string reason = written ? ec.message() : std::strerror(error);
+    std::filesystem::remove(tmp, ec);  // overwrites ec, hence the reason first
+    throw std::runtime_error(file.string() + ": cannot write (" + reason + ")");
   }
   syncFolder(file.parent_path());
 }
