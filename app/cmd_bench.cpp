@@ -194,7 +194,6 @@ void runBench(BenchArgs args) {
   if (frames.empty()) frames = "0:30";
   else if (frames.find(':') == std::string::npos) frames = "0:" + frames;
   if (args.keyframe_every < 1) throw std::invalid_argument("--keyframe-every must be at least 1");
-  if (args.completion_samples == 0) throw std::invalid_argument("--samples must be at least 1");
   const std::filesystem::path out_dir = args.out;
   if (!std::filesystem::is_directory(out_dir)) throw std::runtime_error(out_dir.string() + ": no such folder (--out)");
   std::optional<ColoredTriangleMesh> mesh;
@@ -270,7 +269,10 @@ void runBench(BenchArgs args) {
     p.local_map.cell_size_px = s;
     Mapper m(cam, p);
     ProgressBar progress("vdmap " + std::to_string(s) + " px", decoded.size());
-    for (const RgbdFrame& frame : decoded) progress.update(static_cast<std::size_t>(m.addFrame(frame).frame_index) + 1);
+    for (std::size_t i = 0; i < decoded.size(); ++i) {
+      m.addFrame(decoded[i]);
+      progress.update(i + 1);
+    }
     const GlobalMap g = buildGlobalMap(m.graph(), {});
     rows.emplace_back("vdmap " + std::to_string(s) + " px (accuracy only)", "vd_" + std::to_string(s) + "px");
     cmp.score(&rows.back(), means(g.ellipsoids));
@@ -362,7 +364,9 @@ void addBenchCommand(CLI::App& app) {
   verb->add_option("--accuracy-cell-sizes", args->accuracy_cell_sizes,
                    "with --mesh, also score vdmap at these cell sizes, px (e.g. 3,5,9,15)")
       ->delimiter(',');
-  verb->add_option("--samples", args->completion_samples, "mesh samples for completion")->capture_default_str();
+  verb->add_option("--samples", args->completion_samples, "mesh samples for completion")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
   verb->add_option("--out", args->out, "folder for bench.json and bench.md")->capture_default_str();
   verb->add_flag("--no-octomap", args->no_octomap, "skip the OctoMap peers (for profiling)");
   verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D TSDF peers");

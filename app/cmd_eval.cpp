@@ -25,7 +25,6 @@ void runEval(const EvalArgs& args) {
   // A `vdmap map` output folder is scored by its global map's ellipsoid means.
   if (fs::is_directory(map)) map /= "global_points.ply";
   if (!fs::exists(map)) throw InputError(map.string(), "no such file (expected a PLY or a `vdmap map` folder)");
-  if (args.accuracy.completion_samples == 0) throw std::invalid_argument("--samples must be at least 1");
   const std::vector<Eigen::Vector3f> points = readPlyPoints(map);
   const ColoredTriangleMesh mesh = readPlyMesh(args.mesh);
   const AccuracyReport report = evaluateAccuracy(points, mesh, args.accuracy);
@@ -53,7 +52,8 @@ void addEvalCommand(CLI::App& app) {
   verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)")
       ->required()->check(CLI::ExistingFile);
   verb->add_option("--samples", args->accuracy.completion_samples, "mesh samples for completion")
-      ->capture_default_str();
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runEval(*args); });
 }

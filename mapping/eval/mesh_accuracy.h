@@ -32,6 +32,7 @@ std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, 
 
 struct AccuracyParams {
   std::size_t completion_samples = 200000;  ///< mesh samples for completion (SPEC section 8)
+  static constexpr std::size_t kMaxCompletionSamples = 100'000'000;  ///< what --samples accepts
   std::uint32_t seed = 8;                   ///< fixed, so the same map always scores the same
   double completion_within_m = 0.05;        ///< "complete" when a map element is this close
 };
