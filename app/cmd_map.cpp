@@ -45,6 +45,11 @@ void runMap(MapArgs args) {
   // Fail before any work when DIR cannot be written; it is created only when there is a map to
   // write, so a failed run leaves nothing behind.
   checkExportFolder(out_dir);
+  if (!args.save.empty()) {  // likewise the session file's folder
+    const fs::path folder = fs::absolute(args.save).parent_path();
+    if (fs::is_directory(args.save)) throw std::invalid_argument(args.save + ": is a folder (--save wants a file)");
+    if (!fs::is_directory(folder)) throw std::invalid_argument(args.save + ": its folder does not exist (--save)");
+  }
 
   const TumSequence seq = openSequence(args.sequence);
   Mapper mapper(seq.camera(), args.mapper);
@@ -82,8 +87,10 @@ void runMap(MapArgs args) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
     octomap_bar->update(done);
   };
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
+  octomap_bar.reset();  // its last line before the summary, not after it
+  // After the export, so a failed export leaves no session file behind.
+  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;
