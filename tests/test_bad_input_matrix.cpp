@@ -305,6 +305,10 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "cell_size_not_a_number", E::kCliUsage, "--cell-size", args("map {dir}/seq --out {dir}/out --cell-size abc")},
       {"command_line", "missing_out", E::kCliUsage, "--out", args("map {dir}/seq")},
       {"command_line", "unknown_verb", E::kCliUsage, "frobnicate", args("frobnicate")},
+      {"command_line", "render_sigma_not_a_number", E::kCliError, "--sigma must be a positive number",
+       args("render --map {dir}/e.ply --out {dir}/o.png --sigma nan")},
+      {"command_line", "render_out_in_missing_folder", E::kCliError, "its folder does not exist (--out)",
+       args("render {dir}/seq --out {dir}/no/such/o.png")},
       {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
   };
   return all;
