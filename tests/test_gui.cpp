@@ -288,6 +288,14 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   EXPECT_NEAR(t.session().mapping()->keyframes[1].T_W_K.translation().z(), 0.2, 1e-6);
   EXPECT_NEAR((mean_of(1) - before1).z(), 0.2, 1e-4);
   EXPECT_NEAR((mean_of(0) - before0).norm(), 0.0, 1e-9);
+  // Pitch 100 degrees reads back from the rotation as another triple (roll and yaw 180); the fields
+  // keep what was typed while the snapshot holds the sent pose, so a drag does not jump.
+  bench.ui().pose_rotation_deg.y = 100.f;
+  bench.applyPoseEdit();
+  t.session().waitIdle();
+  const glm::vec3 typed = bench.ui().pose_rotation_deg;
+  bench.syncPoseFields();
+  EXPECT_EQ(bench.ui().pose_rotation_deg, typed);
   // A trajectory file that names no keyframe: the error is reported, the poses stay.
   test::writeText(t.dir / "wrong.txt", "5.0 0 0 0 0 0 0 1\n");
   bench.ui().trajectory_text = (t.dir / "wrong.txt").string();
@@ -301,6 +309,11 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
   EXPECT_NE(t.session().status().message.find("replaced"), std::string::npos);
   EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
+  // The pose fields follow the reloaded pose, so a further drag starts from it, not from the edit.
+  EXPECT_NEAR(bench.ui().pose_translation_m.z, 0.2f, 1e-5f);
+  bench.syncPoseFields();
+  EXPECT_NEAR(bench.ui().pose_translation_m.z, 0.f, 1e-5f);
+  EXPECT_NEAR(bench.ui().pose_translation_m.x, 0.03f, 1e-5f);
 }
 
 TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds) {

@@ -148,11 +148,23 @@ void Workbench::selectKeyframe(int id) {
   const auto mapping = session_->mapping();
   if (id < 0 || id >= static_cast<int>(mapping->keyframes.size())) ui_.selected_keyframe = -1;
   session_->selectKeyframe(ui_.selected_keyframe);
-  if (ui_.selected_keyframe < 0) return;
-  const Transform& T = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K;
-  const Eigen::Vector3d t = T.translation();
+  if (ui_.selected_keyframe >= 0) showPose(mapping->keyframes[static_cast<std::size_t>(id)].T_W_K);
+}
+
+void Workbench::showPose(const Transform& T_W_K) {
+  const Eigen::Vector3d t = T_W_K.translation();
   ui_.pose_translation_m = {t.x(), t.y(), t.z()};
-  ui_.pose_rotation_deg = rotationToEulerDeg(T.rotation());
+  ui_.pose_rotation_deg = rotationToEulerDeg(T_W_K.rotation());
+  pose_shown_ = T_W_K;
+}
+
+void Workbench::syncPoseFields() {
+  const int id = ui_.selected_keyframe;
+  if (!session_ || id < 0) return;
+  const auto mapping = session_->mapping();
+  if (id >= static_cast<int>(mapping->keyframes.size())) return;  // not (yet) mapped: no inspector
+  const Transform& T = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K;
+  if (!T.isApprox(pose_shown_, 1e-12)) showPose(T);
 }
 
 void Workbench::applyPoseEdit() {
@@ -161,6 +173,7 @@ void Workbench::applyPoseEdit() {
   T.linear() = eulerDegToRotation(ui_.pose_rotation_deg);
   T.translation() = Eigen::Vector3d(ui_.pose_translation_m.x, ui_.pose_translation_m.y, ui_.pose_translation_m.z);
   session_->setKeyframePose(ui_.selected_keyframe, T);
+  pose_shown_ = T;  // the snapshot will hold T: no refill while dragging
 }
 
 void Workbench::loadTrajectory() {

@@ -72,6 +72,10 @@ class Workbench {
   void selectKeyframe(int id);
   /// Sends ui().pose_* as the selected keyframe's new pose.
   void applyPoseEdit();
+  /// Once per UI frame: refills ui().pose_* when the selected keyframe's pose changed under them
+  /// (a re-run, a trajectory file, seeking back, or a keyframe selected before it was mapped), so
+  /// an edit starts from the pose shown.
+  void syncPoseFields();
   void loadTrajectory();
   /// Frames the current global map (or the trajectory) and leaves "view from keyframe".
   void resetView();
@@ -83,8 +87,10 @@ class Workbench {
 
  private:
   void opened(const std::string& path);
+  void showPose(const Transform& T_W_K);
 
   UiState ui_;
+  Transform pose_shown_ = Transform::Identity();  // what ui().pose_* were filled from or sent as
   std::unique_ptr<MapSession> session_;
 };
 

@@ -128,7 +128,8 @@ class WorkbenchWindow {
     return !glfwWindowShouldClose(context_.window()) && !script_finished_;
   }
 
-  int exitCode() const { return bench_.ui().error.empty() ? 0 : 1; }
+  // Scripted runs (--exit) fail on an error still shown; a user closing the window never does.
+  int exitCode() const { return script_.exit && !bench_.ui().error.empty() ? 1 : 0; }
 
  private:
   UiState& ui() { return bench_.ui(); }
@@ -137,6 +138,7 @@ class WorkbenchWindow {
   void syncScene() {
     MapSession* session = bench_.session();
     if (!session) return;
+    bench_.syncPoseFields();
     if (session != shown_session_) {  // a newly opened sequence: everything shown is stale
       shown_session_ = session;
       shown_mapping_ = nullptr;
@@ -575,6 +577,8 @@ int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std:
   ImGui::CreateContext();
   const std::string ini = settings_file.empty() ? "" : (std::filesystem::path(settings_file).parent_path() / "imgui.ini").string();
   ImGui::GetIO().IniFilename = ini.empty() ? nullptr : ini.c_str();
+  std::error_code ignored;  // ImGui writes imgui.ini at DestroyContext, before saveSettings makes the folder
+  if (!ini.empty()) std::filesystem::create_directories(std::filesystem::path(ini).parent_path(), ignored);
   ImGui::StyleColorsDark();
   if (!ImGui_ImplGlfw_InitForOpenGL(context.window(), true) || !ImGui_ImplOpenGL3_Init("#version 330"))
     throw std::runtime_error("Dear ImGui could not initialise its OpenGL 3 backend");
