@@ -119,9 +119,11 @@ void addGuiCommand(CLI::App& app) {
   auto args = std::make_shared<GuiArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("SEQ")->required(false);
-  verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence");
+  verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence (a .vdmap file as SEQ does too)");
   addGuiOptions(*verb, *args);
   verb->callback([args] {
+    // `vdmap gui S.vdmap` opens a saved session, as the workbench's Open field does.
+    if (args->map.empty() && fs::is_regular_file(args->sequence.folder)) std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
       throw std::invalid_argument("give a sequence folder SEQ or --map FILE.vdmap (one of them)");
     runGui(*args, false);
