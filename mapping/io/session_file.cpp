@@ -27,7 +27,6 @@ constexpr std::size_t kSectionHeaderBytes = 16;    // tag, payload length (u64),
 constexpr std::array<char, 4> kParams = {'P', 'A', 'R', 'M'};
 constexpr std::array<char, 4> kKeyframe = {'K', 'F', 'R', 'M'};
 constexpr std::array<char, 4> kEdges = {'E', 'D', 'G', 'E'};
-constexpr int kMaxImageSide = 1 << 15;
 
 constexpr std::array<std::uint32_t, 256> makeCrcTable() {
   std::array<std::uint32_t, 256> table{};
@@ -212,9 +211,7 @@ std::uint32_t readParams(Reader* r, SessionInfo* info) {
   c.cx = r->f64("cx");
   c.cy = r->f64("cy");
   c.depth_scale = r->f64("depth_scale");
-  r->checkValid("camera", [&c] { c.validate(); });
-  r->check(c.width <= kMaxImageSide && c.height <= kMaxImageSide,
-           "camera is larger than " + std::to_string(kMaxImageSide) + " px");
+  r->checkValid("camera", [&c] { c.validate(); });  // also bounds the image size
   MapperParams& m = info->mapper;
   m.local_map.cell_size_px = r->i32("cell_size_px");
   r->check(m.local_map.cell_size_px >= 1 && m.local_map.cell_size_px <= std::min(c.width, c.height),
