@@ -99,9 +99,6 @@ TEST(Mapper, RejectsABadPoseAndToleratesAFrameWithoutDepth) {
   EXPECT_EQ(mapper.graph().keyframe(0).container.size(), 0u);
 }
 
-// Issue #5 bad input: a textureless stretch (ORB finds nothing) cannot be judged by
-// covisibility; while the pose pre-filter accepts the current keyframe the frames update it,
-// so a blank wall never spawns a keyframe per frame, and its depth still reaches the map.
 // Out-of-range parameters would map "successfully" into a wrong or empty map: they are refused.
 TEST(Mapper, RefusesParametersOutOfRange) {
   const PinholeCamera camera = roomCamera();
@@ -123,6 +120,9 @@ TEST(Mapper, RefusesParametersOutOfRange) {
   EXPECT_NO_THROW(Mapper(camera, MapperParams{}));
 }
 
+// Issue #5 bad input: a textureless stretch (ORB finds nothing) cannot be judged by
+// covisibility; while the pose pre-filter accepts the current keyframe the frames update it,
+// so a blank wall never spawns a keyframe per frame, and its depth still reaches the map.
 TEST(Mapper, TexturelessFramesUpdateTheCurrentKeyframe) {
   Mapper mapper(roomCamera());
   for (int i = 0; i < 6; ++i) {
