@@ -45,11 +45,7 @@ void runMap(MapArgs args) {
   // Fail before any work when DIR cannot be written; it is created only when there is a map to
   // write, so a failed run leaves nothing behind.
   checkExportFolder(out_dir);
-  if (!args.save.empty()) {  // likewise the session file's folder
-    const fs::path folder = fs::absolute(args.save).parent_path();
-    if (fs::is_directory(args.save)) throw std::invalid_argument(args.save + ": is a folder (--save wants a file)");
-    if (!fs::is_directory(folder)) throw std::invalid_argument(args.save + ": its folder does not exist (--save)");
-  }
+  if (!args.save.empty()) checkOutputFile(args.save, "--save");
 
   const TumSequence seq = openSequence(args.sequence);
   Mapper mapper(seq.camera(), args.mapper);

@@ -4,7 +4,6 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
-#include <filesystem>
 #include <random>
 #include <regex>
 
@@ -168,8 +167,7 @@ void runRender(const RenderArgs& args) {
   if (!(args.sigma > 0.f && std::isfinite(args.sigma))) throw std::invalid_argument("--sigma must be a positive number");
   if (args.bench_ellipsoids > 0) return runBench(args);
   if (args.out.empty()) throw std::invalid_argument("--out PNG is required");
-  if (!std::filesystem::is_directory(std::filesystem::absolute(args.out).parent_path()))  // before any mapping
-    throw std::invalid_argument(args.out + ": its folder does not exist (--out)");
+  checkOutputFile(args.out, "--out");
   const bool from_sequence = !args.sequence.folder.empty();
   const ViewChoice choice = parseView(args.view);
   if (from_sequence && !args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");

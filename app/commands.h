@@ -2,6 +2,7 @@
 // Each verb of the vdmap command registers itself on the top-level CLI11 app. A verb's callback
 // throws std::exception on failure; main() turns that into a one-line error and exit code 1.
 
+#include <filesystem>
 #include <functional>
 #include <stdexcept>
 #include <string>
@@ -20,6 +21,15 @@ void addGuiCommand(CLI::App& app);
 /// The workbench options of `vdmap` without a verb; the returned function opens the workbench
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);
+
+/// Fails before any work when `file`, given as `option`, cannot become an output file: it is a
+/// folder, or its folder does not exist (throws std::invalid_argument).
+inline void checkOutputFile(const std::string& file, const std::string& option) {
+  namespace fs = std::filesystem;
+  if (fs::is_directory(file)) throw std::invalid_argument(file + ": is a folder (" + option + " wants a file)");
+  if (!fs::is_directory(fs::absolute(file).parent_path()))
+    throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
+}
 
 }  // namespace vdmap::app
 
