@@ -1,5 +1,6 @@
 // The workbench without a window: settings persistence, the mapping session (play, step, seek,
 // live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
+#include <future>
 #include <regex>
 
 #include <gtest/gtest.h>
@@ -296,6 +297,23 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   const glm::vec3 typed = bench.ui().pose_rotation_deg;
   bench.syncPoseFields();
   EXPECT_EQ(bench.ui().pose_rotation_deg, typed);
+  // While an edit waits behind other work, the snapshot still holds the pose before it: a drag
+  // must not be pulled back to that pose every frame.
+  std::promise<void> release;
+  const std::shared_future<void> released = release.get_future().share();
+  t.session().withMapper([released](const Mapper&, const GlobalSnapshot&) {
+    released.wait();  // holds the worker
+    return std::string();
+  });
+  bench.ui().pose_translation_m.x += 0.1f;
+  bench.applyPoseEdit();
+  const glm::vec3 dragged = bench.ui().pose_translation_m;
+  bench.syncPoseFields();
+  EXPECT_EQ(bench.ui().pose_translation_m, dragged);
+  release.set_value();
+  t.session().waitIdle();
+  bench.syncPoseFields();
+  EXPECT_EQ(bench.ui().pose_translation_m, dragged);
   // A trajectory file that names no keyframe: the error is reported, the poses stay.
   test::writeText(t.dir / "wrong.txt", "5.0 0 0 0 0 0 0 1\n");
   bench.ui().trajectory_text = (t.dir / "wrong.txt").string();

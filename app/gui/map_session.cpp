@@ -90,6 +90,7 @@ void MapSession::run() {
 void MapSession::publishMapping() {
   auto snap = std::make_shared<MappingSnapshot>();
   snap->camera = mapper_->camera();
+  snap->pose_edits = pose_edits_;
   {
     std::lock_guard lock(mutex_);
     snap->frames_total = framesTotal();
@@ -284,7 +285,13 @@ void MapSession::rerun(const MapperParams& mapper) {
 
 void MapSession::setKeyframePose(int id, const Transform& T_W_K) {
   post([this, id, T_W_K] {
-    mapper_->graph().setKeyframePose(id, T_W_K);
+    ++pose_edits_;  // counted even when refused, so the UI does not wait for it
+    try {
+      mapper_->graph().setKeyframePose(id, T_W_K);
+    } catch (...) {
+      publishMapping();
+      throw;
+    }
     publishMapping();
     std::lock_guard lock(mutex_);
     global_dirty_ = true;

@@ -44,6 +44,7 @@ struct MappingSnapshot {
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
   SharedSpan<Transform> trajectory;    ///< T_W_C per mapped frame
+  int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
 };
 
 /// One global map build (replaced after every rebuild).
@@ -141,6 +142,7 @@ class MapSession {
   AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
   AppendLog<Transform> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
+  int pose_edits_ = 0;                 // worker thread only
 
   mutable std::mutex mutex_;
   std::condition_variable wake_, idle_;

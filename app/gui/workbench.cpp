@@ -92,6 +92,7 @@ void Workbench::opened(const std::string& path) {
   ui_.selected_keyframe = ui_.view_from_keyframe = -1;  // as the new session's selection
   ui_.picked.reset();
   ui_.camera_framed = false;
+  pose_edits_sent_ = 0;  // a new session has handled none
 }
 
 void Workbench::exportMap() {
@@ -163,6 +164,7 @@ void Workbench::syncPoseFields() {
   if (!session_ || id < 0) return;
   const auto mapping = session_->mapping();
   if (id >= static_cast<int>(mapping->keyframes.size())) return;  // not (yet) mapped: no inspector
+  if (mapping->pose_edits < pose_edits_sent_) return;  // an edit is on its way: the snapshot is older than the fields
   const Transform& T = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K;
   if (!T.isApprox(pose_shown_, 1e-12)) showPose(T);
 }
@@ -173,7 +175,8 @@ void Workbench::applyPoseEdit() {
   T.linear() = eulerDegToRotation(ui_.pose_rotation_deg);
   T.translation() = Eigen::Vector3d(ui_.pose_translation_m.x, ui_.pose_translation_m.y, ui_.pose_translation_m.z);
   session_->setKeyframePose(ui_.selected_keyframe, T);
-  pose_shown_ = T;  // the snapshot will hold T: no refill while dragging
+  pose_shown_ = T;  // the snapshot will hold T: no refill once it does
+  ++pose_edits_sent_;
 }
 
 void Workbench::loadTrajectory() {

@@ -91,6 +91,7 @@ class Workbench {
 
   UiState ui_;
   Transform pose_shown_ = Transform::Identity();  // what ui().pose_* were filled from or sent as
+  int pose_edits_sent_ = 0;                        // to this session (MappingSnapshot::pose_edits)
   std::unique_ptr<MapSession> session_;
 };
 
