@@ -59,6 +59,9 @@ struct PoseGraphResult {
   int iterations = 0;
   double time_ms = 0.0;    ///< wall time of the solve
   bool converged = false;  ///< Ceres reported convergence (not a hit iteration limit or a failure)
+  /// r^T * information * r of every edge at the solution (before any robust loss), in the order
+  /// of `edges`. A robust edge far above robust_scale^2 was treated as an outlier.
+  std::vector<double> edge_chi2;
 };
 
 /// Optimises the node poses T_W_nodes (in place) so that they agree with the edges.
