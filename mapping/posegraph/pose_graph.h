@@ -46,7 +46,8 @@ struct PoseGraphOptions {
   /// down-weighted.
   double robust_scale = 3.5;
   /// Nodes held constant. Empty: the first node (fixes the gauge: the graph is otherwise free to
-  /// move rigidly).
+  /// move rigidly). A part of the graph joined to no fixed node has no gauge; Levenberg-Marquardt's
+  /// damping keeps it near its start.
   std::vector<int> fixed_nodes;
   int max_iterations = 100;
   /// Stop when the relative cost decrease of a step falls below this (Ceres function_tolerance).
