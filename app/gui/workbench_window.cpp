@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cstdint>
 #include <cstdio>
+#include <filesystem>
 #include <iostream>
 #include <tuple>
 
@@ -493,8 +494,17 @@ class WorkbenchWindow {
       return;
     }
     if (--countdown_ > 0) return;
-    if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
-    if (!script_.stats_json.empty()) writeStats(script_.stats_json);
+    // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file: a
+    // screenshot of the error dialog would pass for a result. One written before a later
+    // failure (the stats file's folder) is removed.
+    const bool failed_run = script_.exit && !ui().error.empty();
+    if (!failed_run && !script_.screenshot.empty()) saveScreenshot(script_.screenshot);
+    if (!failed_run && !script_.stats_json.empty()) writeStats(script_.stats_json);
+    if (!failed_run && script_.exit && !ui().error.empty()) {
+      std::error_code ignored;
+      for (const std::string& file : {script_.screenshot, script_.stats_json})
+        if (!file.empty()) std::filesystem::remove(file, ignored);
+    }
     script_finished_ = script_.exit;
     if (!script_.exit) countdown_ = 1 << 30;
   }
