@@ -13,6 +13,7 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/parameter_table.h"
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
@@ -30,22 +31,14 @@ struct MapArgs {
   std::string save;
   std::string load;
   bool json = false;
-  MapperParams mapper;
-  GlobalMapParams global;
-  std::string sensor_model = "nguyen2012";
-  bool no_prefilter = false;
-  bool no_occlusion_removal = false;
+  MappingParams params;  // every parameter of the table (app/parameter_table.h)
   double octomap_resolution_m = 0.0;
   bool octomap_given = false;
 };
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
-  if (args.mapper.keyframe_every < 0) throw std::invalid_argument("--keyframe-every must be >= 0");
-  args.global.filter.model = parseSensorModel(args.sensor_model);
-  args.mapper.keyframes.prefilter.enabled = !args.no_prefilter;
-  args.global.occlusion_removal = !args.no_occlusion_removal;
-  args.global.validate();
+  validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
   // 0 is refused like -1 (it used to mean "no OctoMap" silently); the map's extent is checked
   // against OctoMap's keys once the map exists (exportMap).
   if (args.octomap_given && !(args.octomap_resolution_m > 0.0 && std::isfinite(args.octomap_resolution_m)))
@@ -70,11 +63,11 @@ void runMap(MapArgs args) {
       throw InputError(args.load, "session format " + std::to_string(info.format_version) +
                                       " does not store the mapper's state, so mapping cannot continue from it (it "
                                       "can still be rendered or opened)");
-    if (!sameMapperParams(args.mapper, MapperParams{}) && !sameMapperParams(args.mapper, info.mapper))
+    if (!sameMapperParams(args.params.mapper, MapperParams{}) && !sameMapperParams(args.params.mapper, info.mapper))
       throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
                                   "them (cell size, depth range, ORB features, tau, tau-edge, keyframe-every, "
                                   "prefilter)");
-    args.mapper = info.mapper;
+    args.params.mapper = info.mapper;
     if (args.sequence.frames.empty()) args.sequence.frames = std::to_string(info.state.last_frame_index + 1) + ":";
   }
   const TumSequence seq = openSequence(args.sequence);
@@ -88,8 +81,8 @@ void runMap(MapArgs args) {
       throw InputError(seq.folder().string(), "its camera (" + seq.cameraSource() + ") is not the one of " + args.load +
                                                   " (give --camera to match it)");
   }
-  Mapper mapper = loaded ? Mapper(loaded->info.camera, args.mapper, std::move(loaded->graph), loaded->info.state)
-                         : Mapper(seq.camera(), args.mapper);
+  Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
+                         : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms;
   mapSequence(seq, mapper, [&](const FrameReport& r) {
@@ -99,7 +92,7 @@ void runMap(MapArgs args) {
     decision_ms.push_back(r.ms.decision_ms);
   });
   const KeyframeGraph& graph = mapper.graph();
-  const GlobalMap global = buildGlobalMap(graph, args.global);
+  const GlobalMap global = buildGlobalMap(graph, args.params.global);
 
   if (!args.json) {
     std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
@@ -130,7 +123,7 @@ void runMap(MapArgs args) {
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   octomap_bar.reset();  // its last line before the summary, not after it
   // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global, seq.folder()));
+  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;
@@ -161,33 +154,8 @@ void addMapCommand(CLI::App& app) {
                    "also write global.bt, an OctoMap of this resolution (m, > 0) sampled from the global map; "
                    "the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)");
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
-  MapperParams& m = args->mapper;
-  verb->add_option("--keyframe-every", m.keyframe_every,
-                   "0: keyframes by covisibility (SPEC 5); N > 0: every N-th frame starts a keyframe")
-      ->capture_default_str();
-  verb->add_option("--cell-size", m.local_map.cell_size_px, "container cell size, px")->capture_default_str();
-  verb->add_option("--min-depth", m.local_map.depth_range.min_m, "nearest valid depth, m")->capture_default_str();
-  verb->add_option("--max-depth", m.local_map.depth_range.max_m, "farthest valid depth, m")->capture_default_str();
-  verb->add_option("--orb-features", m.features.orb_features, "ORB features per frame")->capture_default_str();
-  verb->add_option("--tau", m.keyframes.tau, "covisibility to stay in a keyframe")->capture_default_str();
-  verb->add_option("--tau-edge", m.keyframes.tau_edge,
-                   "covisibility for a graph edge (the edge to the previous keyframe is always kept, SPEC 5)")
-      ->capture_default_str();
-  verb->add_flag("--no-prefilter", args->no_prefilter, "match every keyframe in the loop-closure search");
-  GlobalMapParams& g = args->global;
-  verb->add_option("--sensor-model", args->sensor_model, "nguyen2012 or belter2018")->capture_default_str();
-  verb->add_option("--filter-sigma-factor", g.filter.filter_sigma_factor,
-                   "reject ellipsoids longer than k x the sensor model's expectation")
-      ->capture_default_str();
-  verb->add_option("--min-points", g.filter.min_points, "reject ellipsoids of fewer points")->capture_default_str();
-  verb->add_option("--tau-group", g.tau_group, "edge weight that joins a merge group")->capture_default_str();
-  verb->add_option("--merge-distance", g.merge_distance_m, "mean-shift radius, m")->capture_default_str();
-  verb->add_option("--occlusion-distance", g.occlusion_distance_m, "occlusion group distance, m")
-      ->capture_default_str();
-  verb->add_option("--occlusion-angle", g.occlusion_angle_deg, "occlusion group angle, degrees")
-      ->capture_default_str();
-  verb->add_flag("--no-occlusion-removal", args->no_occlusion_removal, "keep ellipsoids that occlude finer ones");
-  verb->add_option("--threads", g.threads, "global-map threads (0: all); the map does not depend on it")
+  addParameterOptions(*verb, args->params);
+  verb->add_option("--threads", args->params.global.threads, "global-map threads (0: all); the map does not depend on it")
       ->capture_default_str();
   verb->callback([args, octomap] {
     args->octomap_given = octomap->count() > 0;

@@ -81,7 +81,7 @@ const std::vector<Input>& inputs() {
        [](const fs::path& f) {
          const Mapper mapper = test::mapTurningBoxRoom(1);  // one keyframe at t = 0
          KeyframeGraph graph = mapper.graph();
-         graph.applyTrajectory(f);
+         applyTrajectoryFile(graph, f);
        }},
       {"trajectory_pair", "est.txt", "pose",
        [](const fs::path& d) {
@@ -358,14 +358,14 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "frames_past_the_end", E::kCliError, "--frames starts at 9", args("map {dir}/seq --out {dir}/out --frames 9:")},
       {"command_line", "unknown_camera_preset", E::kCliError, "unknown camera preset 'nope'",
        args("map {dir}/seq --out {dir}/out --camera nope")},
-      {"command_line", "cell_size_zero", E::kCliError, "cell size 0", args("map {dir}/seq --out {dir}/out --cell-size 0")},
-      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every must be >= 0",
+      {"command_line", "cell_size_zero", E::kCliError, "cell_size must be >= 1 px", args("map {dir}/seq --out {dir}/out --cell-size 0")},
+      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every: keyframe_every must be >= 0",
        args("map {dir}/seq --out {dir}/out --keyframe-every -1")},
       {"command_line", "negative_merge_distance", E::kCliError, "merge_distance must be >= 0",
        args("map {dir}/seq --out {dir}/out --merge-distance -1")},
       {"command_line", "depth_range_reversed", E::kCliError, "depth range must satisfy 0 <= min < max",
        args("map {dir}/seq --out {dir}/out --min-depth 5 --max-depth 1")},
-      {"command_line", "tau_above_one", E::kCliError, "tau and tau_edge must be within 0..1",
+      {"command_line", "tau_above_one", E::kCliError, "--tau: tau must be within 0..1",
        args("map {dir}/seq --out {dir}/out --tau 2")},
       {"command_line", "samples_negative", E::kCliUsage, "--samples", args("bench {dir}/seq --samples -5")},
       {"command_line", "unknown_sensor_model", E::kCliError, "foo", args("map {dir}/seq --out {dir}/out --sensor-model foo")},
