@@ -505,8 +505,12 @@ class WorkbenchWindow {
     if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
     tip(saved ? why_saved : "Maps one more frame (Right).");
     ImGui::SameLine();
+    ImGui::BeginDisabled(status.target < 2);
     if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
-    tip(saved ? why_saved : "One frame back (Left): the map is rebuilt from the first frame.");
+    tip(saved ? why_saved
+        : status.target < 2 ? "Nothing to go back to: fewer than two frames mapped."
+                            : "One frame back (Left): the map is rebuilt from the first frame.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
     tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
@@ -883,7 +887,10 @@ class WorkbenchWindow {
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui().trajectory_text);
     tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
+    ImGui::BeginDisabled(ui().trajectory_text.empty());
     if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
+    tip(ui().trajectory_text.empty() ? "Type the trajectory file's path above first." : "Replaces the matching keyframes' poses; the map is rebuilt.");
+    ImGui::EndDisabled();
   }
 
   void drawExport() {
@@ -894,9 +901,15 @@ class WorkbenchWindow {
       ImGui::InputText("##session", &ui().session_text);
       ImGui::EndTable();
     }
+    ImGui::BeginDisabled(ui().export_text.empty());
     if (ImGui::Button("Export")) bench_.exportMap();
+    tip(ui().export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(ui().session_text.empty());
     if (ImGui::Button("Save session")) bench_.saveSession();
+    tip(ui().session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
+    ImGui::EndDisabled();
     checkFits();
   }
 
@@ -1127,10 +1140,15 @@ class WorkbenchWindow {
         return;
       case Phase::kOrbit:
         if (static_cast<int>(orbit_ms_.size()) < script_.orbit_frames) {
-          if (orbit_started_) orbit_ms_.push_back(msSince(orbit_frame_start_));
+          const double cpu = processCpuSeconds();
+          if (orbit_started_) {
+            orbit_ms_.push_back(msSince(orbit_frame_start_));
+            orbit_cpu_ms_.push_back(1e3 * (cpu - orbit_cpu_start_));
+          }
           orbit_started_ = true;
           bench_.orbit(0.03f, 0.f);
           orbit_frame_start_ = Clock::now();
+          orbit_cpu_start_ = cpu;
           return;
         }
         if ((session && session->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
@@ -1227,7 +1245,10 @@ class WorkbenchWindow {
     stats["show_help"] = ui().show_help;
     stats["view_from_keyframe"] = ui().view_from_keyframe;
     if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
-    if (!orbit_ms_.empty()) stats["orbit_frame_ms"] = orbit_ms_;
+    if (!orbit_ms_.empty()) {
+      stats["orbit_frame_ms"] = orbit_ms_;
+      stats["orbit_frame_cpu_ms"] = orbit_cpu_ms_;  // process CPU (all of llvmpipe's threads), per frame
+    }
     if (script_.idle_seconds > 0) {
       stats["idle_cpu_s"] = idle_cpu_s_;
       stats["idle_frames"] = idle_frames_;  // UI frames drawn meanwhile
@@ -1280,7 +1301,8 @@ class WorkbenchWindow {
   nlohmann::json layout_ = nlohmann::json::object();
   int latency_generation_ = -1;
   Clock::time_point latency_start_, orbit_frame_start_, idle_until_;
-  std::vector<double> latency_ms_, orbit_ms_;
+  std::vector<double> latency_ms_, orbit_ms_, orbit_cpu_ms_;
+  double orbit_cpu_start_ = 0;
   bool orbit_started_ = false;
   double idle_cpu_start_ = 0, idle_cpu_s_ = 0;
   int idle_frames_ = 0;
