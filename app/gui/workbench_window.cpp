@@ -319,8 +319,9 @@ class WorkbenchWindow {
     ui().view_height = std::max(1, static_cast<int>(view_.h * scale.y));
   }
 
-  // Opens a docked panel; returns its actual width (the user may have dragged its inner edge).
-  void beginPanel(const char* name, Rect& r, float& width, bool left) {
+  // Opens a docked panel at r; r becomes where it is, width its width (the user may drag its
+  // inner edge).
+  void beginPanel(const char* name, Rect& r, float& width) {
     const float font = ImGui::GetFontSize();
     ImGui::SetNextWindowPos({r.x, r.y}, ImGuiCond_Always);
     ImGui::SetNextWindowSize({r.w, r.h}, ImGuiCond_Always);
@@ -328,7 +329,6 @@ class WorkbenchWindow {
     ImGui::Begin(name, nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
     const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
     if (size.x != r.w) width = size.x;  // dragged: next frame re-docks with the new width
-    (void)left;
     r = {pos.x, pos.y, size.x, size.y};
   }
 
@@ -472,7 +472,7 @@ class WorkbenchWindow {
   // --- the left panel: sequence and player ------------------------------------------------------
 
   void drawSequencePanel() {
-    beginPanel("Sequence", left_, left_w_, true);
+    beginPanel("Sequence", left_, left_w_);
     const float open_w = ImGui::CalcTextSize("Open").x + 2 * ImGui::GetStyle().FramePadding.x;
     ImGui::SetNextItemWidth(-open_w - ImGui::GetStyle().ItemSpacing.x);
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
@@ -603,7 +603,7 @@ class WorkbenchWindow {
   // --- the right panel: map, parameters, keyframes ---------------------------------------------
 
   void drawMapPanel() {
-    beginPanel("Map", right_, right_w_, false);
+    beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
       if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
       if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
