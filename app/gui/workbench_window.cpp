@@ -321,8 +321,9 @@ class WorkbenchWindow {
     ui().view_height = std::max(1, static_cast<int>(view_.h * scale.y));
   }
 
-  // Opens a docked panel; returns its actual width (the user may have dragged its inner edge).
-  void beginPanel(const char* name, Rect& r, float& width, bool left) {
+  // Opens a docked panel at r; r becomes where it is, width its width (the user may drag its
+  // inner edge).
+  void beginPanel(const char* name, Rect& r, float& width) {
     const float font = ImGui::GetFontSize();
     ImGui::SetNextWindowPos({r.x, r.y}, ImGuiCond_Always);
     ImGui::SetNextWindowSize({r.w, r.h}, ImGuiCond_Always);
@@ -330,7 +331,6 @@ class WorkbenchWindow {
     ImGui::Begin(name, nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
     const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
     if (size.x != r.w) width = size.x;  // dragged: next frame re-docks with the new width
-    (void)left;
     r = {pos.x, pos.y, size.x, size.y};
   }
 
@@ -474,7 +474,7 @@ class WorkbenchWindow {
   // --- the left panel: sequence and player ------------------------------------------------------
 
   void drawSequencePanel() {
-    beginPanel("Sequence", left_, left_w_, true);
+    beginPanel("Sequence", left_, left_w_);
     const float open_w = ImGui::CalcTextSize("Open").x + 2 * ImGui::GetStyle().FramePadding.x;
     ImGui::SetNextItemWidth(-open_w - ImGui::GetStyle().ItemSpacing.x);
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
@@ -507,8 +507,12 @@ class WorkbenchWindow {
     if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
     tip(saved ? why_saved : "Maps one more frame (Right).");
     ImGui::SameLine();
+    ImGui::BeginDisabled(status.target < 2);
     if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
-    tip(saved ? why_saved : "One frame back (Left): the map is rebuilt from the first frame.");
+    tip(saved ? why_saved
+        : status.target < 2 ? "Nothing to go back to: fewer than two frames mapped."
+                            : "One frame back (Left): the map is rebuilt from the first frame.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
     tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
@@ -601,7 +605,7 @@ class WorkbenchWindow {
   // --- the right panel: map, parameters, keyframes ---------------------------------------------
 
   void drawMapPanel() {
-    beginPanel("Map", right_, right_w_, false);
+    beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
       if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
       if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
@@ -885,7 +889,10 @@ class WorkbenchWindow {
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui().trajectory_text);
     tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
+    ImGui::BeginDisabled(ui().trajectory_text.empty());
     if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
+    tip(ui().trajectory_text.empty() ? "Type the trajectory file's path above first." : "Replaces the matching keyframes' poses; the map is rebuilt.");
+    ImGui::EndDisabled();
   }
 
   void drawExport() {
@@ -896,9 +903,15 @@ class WorkbenchWindow {
       ImGui::InputText("##session", &ui().session_text);
       ImGui::EndTable();
     }
+    ImGui::BeginDisabled(ui().export_text.empty());
     if (ImGui::Button("Export")) bench_.exportMap();
+    tip(ui().export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(ui().session_text.empty());
     if (ImGui::Button("Save session")) bench_.saveSession();
+    tip(ui().session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
+    ImGui::EndDisabled();
     checkFits();
   }
 
@@ -1132,10 +1145,15 @@ class WorkbenchWindow {
         return;
       case Phase::kOrbit:
         if (static_cast<int>(orbit_ms_.size()) < script_.orbit_frames) {
-          if (orbit_started_) orbit_ms_.push_back(msSince(orbit_frame_start_));
+          const double cpu = processCpuSeconds();
+          if (orbit_started_) {
+            orbit_ms_.push_back(msSince(orbit_frame_start_));
+            orbit_cpu_ms_.push_back(1e3 * (cpu - orbit_cpu_start_));
+          }
           orbit_started_ = true;
           bench_.orbit(0.03f, 0.f);
           orbit_frame_start_ = Clock::now();
+          orbit_cpu_start_ = cpu;
           return;
         }
         if ((session && session->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
@@ -1239,7 +1257,10 @@ class WorkbenchWindow {
     stats["show_help"] = ui().show_help;
     stats["view_from_keyframe"] = ui().view_from_keyframe;
     if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
-    if (!orbit_ms_.empty()) stats["orbit_frame_ms"] = orbit_ms_;
+    if (!orbit_ms_.empty()) {
+      stats["orbit_frame_ms"] = orbit_ms_;
+      stats["orbit_frame_cpu_ms"] = orbit_cpu_ms_;  // process CPU (all of llvmpipe's threads), per frame
+    }
     if (script_.idle_seconds > 0) {
       stats["idle_cpu_s"] = idle_cpu_s_;
       stats["idle_frames"] = idle_frames_;  // UI frames drawn meanwhile
@@ -1293,7 +1314,8 @@ class WorkbenchWindow {
   nlohmann::json layout_ = nlohmann::json::object();
   int latency_generation_ = -1;
   Clock::time_point latency_start_, orbit_frame_start_, idle_until_;
-  std::vector<double> latency_ms_, orbit_ms_;
+  std::vector<double> latency_ms_, orbit_ms_, orbit_cpu_ms_;
+  double orbit_cpu_start_ = 0;
   bool orbit_started_ = false;
   double idle_cpu_start_ = 0, idle_cpu_s_ = 0;
   int idle_frames_ = 0;
