@@ -456,8 +456,10 @@ void runBench(BenchArgs args) {
       std::printf("%-44s not run: %s\n", r.run.name.c_str(), r.run.note.c_str());
       continue;
     }
-    std::printf("%-44s %12.2f %10.2f %10d %10s\n", r.run.name.c_str(), r.ms, r.error ? 100 * r.error->ate_m.rmse : NAN,
-                r.run.failures, r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
+    char ate[32] = "-";
+    if (r.error) std::snprintf(ate, sizeof ate, "%.2f", 100 * r.error->ate_m.rmse);
+    std::printf("%-44s %12.2f %10s %10d %10s\n", r.run.name.c_str(), r.ms, ate, r.run.failures,
+                r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
   }
   std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }

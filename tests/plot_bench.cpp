@@ -1,6 +1,7 @@
 // plot_bench: the README "Results" tables and plots from `vdmap bench` outputs (scripts/results.sh).
 // Speed: the median over runs of each method's per-frame median, as a markdown table and a
 // log-scale bar chart. Accuracy: a markdown table and RMSE against element count (log x).
+// Tracking (`vdmap bench --poses track`): the odometry peers' table, median time over the runs.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
@@ -96,17 +97,44 @@ void scatter(const std::vector<Point>& points, const std::string& title, const s
   cv::imwrite(file, img);
 }
 
+// The odometry table of `bench --poses track` runs: median over the runs of each peer's per-frame
+// median; ATE, failures and keyframes from the first run (the peers are deterministic).
+void trackingTable(const std::vector<json>& runs) {
+  std::printf("| method | t [ms/frame], median of %zu runs | runs (min-max) | ATE RMSE [cm] | frames not registered | "
+              "keyframes |\n|---|---:|---:|---:|---:|---:|\n", runs.size());
+  for (const std::string& k : runs[0]["odometry_order"].get<std::vector<std::string>>()) {
+    const json& m = runs[0]["odometry"][k];
+    if (m.contains("note")) {
+      std::printf("| %s | not run: %s |\n", m["name"].get<std::string>().c_str(), m["note"].get<std::string>().c_str());
+      continue;
+    }
+    std::vector<double> ms;
+    for (const json& r : runs) ms.push_back(r["odometry"][k]["ms_per_frame"].get<double>());
+    std::printf("| %s | %.2f | %.2f-%.2f | %.2f | %d | %s |\n", m["name"].get<std::string>().c_str(),
+                vdmap::app::median(ms), *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
+                m["ate_rmse_m"].is_number() ? 100 * m["ate_rmse_m"].get<double>() : NAN, m["failures"].get<int>(),
+                m.contains("keyframes") ? std::to_string(m["keyframes"].get<int>()).c_str() : "-");
+  }
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Tables and plots of vdmap bench outputs"};
-  std::vector<std::string> speed;
+  std::vector<std::string> speed, tracking;
   std::string accuracy, png_dir = ".";
-  app.add_option("--speed", speed, "bench.json of each speed run")->required();
+  app.add_option("--speed", speed, "bench.json of each speed run");
+  app.add_option("--tracking", tracking, "bench.json of each `bench --poses track` run: the odometry peers' table");
   app.add_option("--accuracy", accuracy, "bench.json of the run with --mesh");
   app.add_option("--png-dir", png_dir, "where speed.png and accuracy.png go");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (!tracking.empty()) {
+      std::vector<json> runs;
+      for (const auto& f : tracking) runs.push_back(load(f));
+      trackingTable(runs);
+    }
+    if (speed.empty()) return 0;
     std::vector<json> runs;
     for (const auto& f : speed) runs.push_back(load(f));
     // Methods in the order of the first run; medians over the runs.
