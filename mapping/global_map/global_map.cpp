@@ -5,6 +5,7 @@
 #include <cmath>
 #include <limits>
 #include <numeric>
+#include <span>
 #include <stdexcept>
 #include <string>
 
@@ -20,6 +21,35 @@ namespace vdmap {
 namespace {
 
 using Clock = std::chrono::steady_clock;
+
+// Occlusion test of SPEC 6.3: A occludes B when the ray to B passes within Mahalanobis distance 2
+// of A, i.e. a squared distance of at most 4.
+constexpr double kOcclusionGate2 = 4.0;
+// Added to every covariance before it is inverted (m^2, a 10 um standard deviation): a flat
+// surface cell has a near-zero axis and must stay invertible; real cells are far wider.
+constexpr double kCovFloor_m2 = 1e-10;
+
+Eigen::Matrix3d floored(const Eigen::Matrix3d& cov) { return cov + kCovFloor_m2 * Eigen::Matrix3d::Identity(); }
+
+// Indices 0..keys.size()-1 grouped by key (a stable counting sort); negative keys are left out.
+// Bucket b holds order[start[b] .. start[b + 1]).
+struct Buckets {
+  std::vector<int> start;
+  std::vector<int> order;
+};
+
+Buckets bucketByKey(const std::vector<int>& keys, std::size_t buckets) {
+  Buckets b;
+  b.start.assign(buckets + 1, 0);
+  for (int k : keys)
+    if (k >= 0) ++b.start[static_cast<std::size_t>(k) + 1];
+  std::partial_sum(b.start.begin(), b.start.end(), b.start.begin());
+  b.order.resize(static_cast<std::size_t>(b.start.back()));
+  std::vector<int> fill(b.start.begin(), b.start.end() - 1);
+  for (std::size_t i = 0; i < keys.size(); ++i)
+    if (keys[i] >= 0) b.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(keys[i])]++)] = static_cast<int>(i);
+  return b;
+}
 
 Ellipsoid transformed(const Ellipsoid& e, const Transform& T_B_A) {
   Ellipsoid out = e;
@@ -50,18 +80,11 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
     });
   }
 
-  // Counting sort by cell (stable: members in id order, cells in container order).
+  // By cell, stable: members in id order, cells in container order.
   const std::size_t cells = static_cast<std::size_t>(box.cols()) * box.rows();
-  std::vector<int> start(cells + 1, 0);
-  for (int c : cell_of)
-    if (c >= 0) ++start[static_cast<std::size_t>(c) + 1];
-  std::partial_sum(start.begin(), start.end(), start.begin());
-  std::vector<int> order(static_cast<std::size_t>(start.back()));
-  {
-    std::vector<int> fill(start.begin(), start.end() - 1);
-    for (std::size_t i = 0; i < cell_of.size(); ++i)
-      if (cell_of[i] >= 0) order[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[i])]++)] = static_cast<int>(i);
-  }
+  const Buckets by_cell = bucketByKey(cell_of, cells);
+  const std::vector<int>& start = by_cell.start;
+  const std::vector<int>& order = by_cell.order;
 
   std::vector<Ellipsoid> out;
   out.reserve(in_centre.size());
@@ -102,6 +125,63 @@ template <typename Body>
 void parallelFor(int threads, std::size_t n, const Body& body) {
   tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
   arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { body(i); }); });
+}
+
+// SPEC 6.3: the keyframes whose ellipsoids viewpoint K judges: K, its covisibility neighbours,
+// and every keyframe within occlusion_distance whose optical axis is within occlusion_angle of
+// K's. Ascending ids.
+std::vector<int> occlusionGroup(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapParams& params) {
+  // An angle of exactly occlusion_angle counts, whatever the rounding of the cosines.
+  constexpr double kCosTolerance = 1e-12;
+  const double cos_angle = std::cos(params.occlusion_angle_deg * M_PI / 180.0);
+  std::vector<int> group = {K.id};
+  for (const auto& [other, w] : graph.edges().neighbours(K.id)) group.push_back(other);
+  for (const Keyframe& other : graph.keyframes()) {
+    if (other.id == K.id) continue;
+    if ((other.T_W_K.translation() - K.T_W_K.translation()).norm() <= params.occlusion_distance_m &&
+        other.T_W_K.linear().col(2).dot(K.T_W_K.linear().col(2)) >= cos_angle - kCosTolerance)
+      group.push_back(other.id);
+  }
+  std::sort(group.begin(), group.end());
+  group.erase(std::unique(group.begin(), group.end()), group.end());
+  return group;
+}
+
+// An ellipsoid as one occlusion viewpoint sees it.
+struct ViewItem {
+  double z;             // depth in the viewpoint's camera
+  double lambda_max;    // largest eigenvalue of its covariance: smaller is more precise
+  Eigen::Vector3d ray;  // mean - viewpoint centre, world frame
+  int index;            // into the ellipsoids
+};
+
+// The ellipsoids of one viewpoint cell: appends to `removed` every A that occludes a more precise
+// B behind it (SPEC 6.3). `cell` is reordered near to far; `finest_behind` is scratch space.
+void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Matrix3d>& information,
+                           std::vector<double>* finest_behind, std::vector<int>* removed) {
+  std::sort(cell.begin(), cell.end(),
+            [](const ViewItem& a, const ViewItem& b) { return a.z != b.z ? a.z < b.z : a.index < b.index; });
+  // finest[a]: the smallest lambda_max from a to the end of the cell.
+  std::vector<double>& finest = *finest_behind;
+  finest.assign(cell.size() + 1, std::numeric_limits<double>::infinity());
+  for (std::size_t j = cell.size(); j-- > 0;) finest[j] = std::min(finest[j + 1], cell[j].lambda_max);
+  for (std::size_t a = 0; a + 1 < cell.size(); ++a) {
+    if (!(finest[a + 1] < cell[a].lambda_max)) continue;  // nothing more precise behind A
+    const Eigen::Matrix3d& P = information[static_cast<std::size_t>(cell[a].index)];
+    const Eigen::Vector3d& mu = cell[a].ray;
+    const Eigen::Vector3d P_mu = P * mu;
+    const double mu_P_mu = mu.dot(P_mu);
+    for (std::size_t b = a + 1; b < cell.size(); ++b) {
+      if (!(cell[b].z > cell[a].z) || !(cell[b].lambda_max < cell[a].lambda_max)) continue;
+      // Squared Mahalanobis distance from A's mean to the ray t d through B, minimised over t.
+      const Eigen::Vector3d d = cell[b].ray.normalized();
+      const double dPd = d.dot(P * d), dPmu = d.dot(P_mu);
+      if (mu_P_mu - dPmu * dPmu / dPd <= kOcclusionGate2) {
+        removed->push_back(cell[a].index);
+        break;
+      }
+    }
+  }
 }
 
 }  // namespace
@@ -202,110 +282,51 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
 
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
                                       const GlobalMapParams& params) {
-  const std::size_t keyframes = graph.size();
-  // Ellipsoid indices and means grouped by keyframe, contiguous, so that each viewpoint streams
-  // through its group's ellipsoids instead of gathering them from the big records.
-  std::vector<int> first(keyframes + 1, 0);
-  for (const Ellipsoid& e : ellipsoids) ++first[static_cast<std::size_t>(e.keyframe) + 1];
-  std::partial_sum(first.begin(), first.end(), first.begin());
-  std::vector<int> index_by_keyframe(ellipsoids.size());
+  // Ellipsoid indices and means by keyframe, contiguous, so that each viewpoint streams through
+  // its group's ellipsoids instead of gathering them from the big records.
+  std::vector<int> keyframe_of(ellipsoids.size());
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i) keyframe_of[i] = ellipsoids[i].keyframe;
+  const Buckets by_keyframe = bucketByKey(keyframe_of, graph.size());
   std::vector<Eigen::Vector3d> mean_by_keyframe(ellipsoids.size());
-  {
-    std::vector<int> fill(first.begin(), first.end() - 1);
-    for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
-      const std::size_t slot = static_cast<std::size_t>(fill[static_cast<std::size_t>(ellipsoids[i].keyframe)]++);
-      index_by_keyframe[slot] = static_cast<int>(i);
-      mean_by_keyframe[slot] = ellipsoids[i].mean;
-    }
-  }
-  // Per ellipsoid, once: the inverse covariance (slightly regularised so that a flat surface
-  // cell stays invertible) and the largest eigenvalue.
+  for (std::size_t j = 0; j < ellipsoids.size(); ++j)
+    mean_by_keyframe[j] = ellipsoids[static_cast<std::size_t>(by_keyframe.order[j])].mean;
+  // Per ellipsoid, once: the inverse covariance and the largest eigenvalue.
   std::vector<Eigen::Matrix3d> information(ellipsoids.size());
   std::vector<double> lambda_max(ellipsoids.size());
   parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) {
-    const Eigen::Matrix3d cov = ellipsoids[i].cov + 1e-10 * Eigen::Matrix3d::Identity();
+    const Eigen::Matrix3d cov = floored(ellipsoids[i].cov);
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
     eig.computeDirect(cov);
     lambda_max[i] = eig.eigenvalues()(2);
     information[i] = cov.inverse();
   });
 
-  const double cos_angle = std::cos(params.occlusion_angle_deg * M_PI / 180.0);
-  std::vector<std::vector<int>> removed_by(keyframes);
-  parallelFor(params.threads, keyframes, [&](std::size_t v) {
+  std::vector<std::vector<int>> removed_by(graph.size());
+  parallelFor(params.threads, graph.size(), [&](std::size_t v) {
     const Keyframe& K = graph.keyframe(static_cast<int>(v));
-    std::vector<int> group = {K.id};
-    for (const auto& [other, w] : graph.edges().neighbours(K.id)) group.push_back(other);
-    for (const Keyframe& other : graph.keyframes()) {
-      if (other.id == K.id) continue;
-      if ((other.T_W_K.translation() - K.T_W_K.translation()).norm() <= params.occlusion_distance_m &&
-          other.T_W_K.linear().col(2).dot(K.T_W_K.linear().col(2)) >= cos_angle - 1e-12)
-        group.push_back(other.id);
-    }
-    std::sort(group.begin(), group.end());
-    group.erase(std::unique(group.begin(), group.end()), group.end());
-
-    // Bucket the group's ellipsoids by K's cell (counting sort), then each cell by depth.
     const Transform T_K_W = K.T_W_K.inverse();
-    const Eigen::Vector3d c = K.T_W_K.translation();
-    struct Item {
-      double z;
-      double lambda_max;
-      Eigen::Vector3d ray;  // mean - c, world frame
-      int index;
-    };
+    const Eigen::Vector3d centre = K.T_W_K.translation();
+    std::vector<ViewItem> projected;
     std::vector<int> cell_of;
-    std::vector<Item> projected;
-    for (int g : group)
-      for (int j = first[static_cast<std::size_t>(g)]; j < first[static_cast<std::size_t>(g) + 1]; ++j) {
+    for (int g : occlusionGroup(graph, K, params))
+      for (int j = by_keyframe.start[static_cast<std::size_t>(g)]; j < by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
         const Eigen::Vector3d& mean = mean_by_keyframe[static_cast<std::size_t>(j)];
         const Eigen::Vector3d p = T_K_W * mean;
         if (p.z() <= 0.0) continue;
         const Eigen::Vector2d uv = K.container.camera().project(p);
         const int cell = K.container.gridIndexOfPixel(uv.x(), uv.y());
         if (cell < 0) continue;
+        const int i = by_keyframe.order[static_cast<std::size_t>(j)];
+        projected.push_back({p.z(), lambda_max[static_cast<std::size_t>(i)], mean - centre, i});
         cell_of.push_back(cell);
-        const int i = index_by_keyframe[static_cast<std::size_t>(j)];
-        projected.push_back({p.z(), lambda_max[static_cast<std::size_t>(i)], mean - c, i});
       }
-    const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
-    std::vector<int> start(cells + 1, 0);
-    for (int cell : cell_of) ++start[static_cast<std::size_t>(cell) + 1];
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    std::vector<Item> items(projected.size());
-    {
-      std::vector<int> fill(start.begin(), start.end() - 1);
-      for (std::size_t j = 0; j < projected.size(); ++j)
-        items[static_cast<std::size_t>(fill[static_cast<std::size_t>(cell_of[j])]++)] = projected[j];
-    }
-    std::vector<double> suffix_min;  // smallest lambda_max among the items from here to the cell's end
-    for (std::size_t cell = 0; cell < cells; ++cell) {
-      const std::size_t b0 = static_cast<std::size_t>(start[cell]), b1 = static_cast<std::size_t>(start[cell + 1]);
-      if (b1 - b0 < 2) continue;
-      std::sort(items.begin() + static_cast<std::ptrdiff_t>(b0), items.begin() + static_cast<std::ptrdiff_t>(b1),
-                [](const Item& a, const Item& b) { return a.z != b.z ? a.z < b.z : a.index < b.index; });
-      suffix_min.resize(b1 - b0 + 1);
-      suffix_min[b1 - b0] = std::numeric_limits<double>::infinity();
-      for (std::size_t j = b1; j-- > b0;)
-        suffix_min[j - b0] = std::min(suffix_min[j - b0 + 1], items[j].lambda_max);
-      for (std::size_t a = b0; a + 1 < b1; ++a) {  // A nearer than B: A before B in the cell
-        const std::size_t ia = static_cast<std::size_t>(items[a].index);
-        if (!(suffix_min[a + 1 - b0] < items[a].lambda_max)) continue;  // no finer B behind A
-        const Eigen::Vector3d& mu = items[a].ray;
-        const Eigen::Matrix3d& P = information[ia];
-        const Eigen::Vector3d P_mu = P * mu;
-        const double mu_P_mu = mu.dot(P_mu);
-        for (std::size_t b = a + 1; b < b1; ++b) {
-          if (!(items[b].z > items[a].z) || !(items[b].lambda_max < items[a].lambda_max)) continue;
-          // Squared Mahalanobis distance from A's mean to the ray c + t d: minimised over t.
-          const Eigen::Vector3d d = items[b].ray.normalized();
-          const double dPd = d.dot(P * d), dPmu = d.dot(P_mu);
-          if (mu_P_mu - dPmu * dPmu / dPd <= 4.0) {
-            removed_by[v].push_back(static_cast<int>(ia));
-            break;
-          }
-        }
-      }
+    const Buckets by_cell = bucketByKey(cell_of, static_cast<std::size_t>(K.container.cols()) * K.container.rows());
+    std::vector<ViewItem> items(projected.size());
+    for (std::size_t j = 0; j < items.size(); ++j) items[j] = projected[static_cast<std::size_t>(by_cell.order[j])];
+    std::vector<double> scratch;
+    for (std::size_t cell = 0; cell + 1 < by_cell.start.size(); ++cell) {
+      const auto begin = items.begin() + by_cell.start[cell], end = items.begin() + by_cell.start[cell + 1];
+      if (end - begin >= 2) removeOccludersInCell(std::span<ViewItem>(begin, end), information, &scratch, &removed_by[v]);
     }
   });
   std::vector<bool> removed(ellipsoids.size(), false);
