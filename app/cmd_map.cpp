@@ -30,6 +30,7 @@ struct MapArgs {
   std::string sensor_model = "nguyen2012";
   bool no_prefilter = false;
   bool no_occlusion_removal = false;
+  bool no_fusion = false;
   double octomap_resolution_m = 0.0;
 };
 
@@ -39,6 +40,7 @@ void runMap(MapArgs args) {
   args.global.filter.model = parseSensorModel(args.sensor_model);
   args.mapper.keyframes.prefilter.enabled = !args.no_prefilter;
   args.global.occlusion_removal = !args.no_occlusion_removal;
+  args.global.fuse_across_groups = !args.no_fusion;
   args.global.validate();
   if (!(args.octomap_resolution_m >= 0.0)) throw std::invalid_argument("--octomap must be > 0 m");
   const fs::path out_dir = args.out;
@@ -136,6 +138,11 @@ void addMapCommand(CLI::App& app) {
   verb->add_option("--occlusion-angle", g.occlusion_angle_deg, "occlusion group angle, degrees")
       ->capture_default_str();
   verb->add_flag("--no-occlusion-removal", args->no_occlusion_removal, "keep ellipsoids that occlude finer ones");
+  verb->add_flag("--no-fusion", args->no_fusion,
+                 "keep every merge group's copy of a surface (SPEC 6.5 off; the paper's global map)");
+  verb->add_option("--fusion-max-distance", g.fusion_max_distance,
+                   "Bhattacharyya distance within which ellipsoids of different merge groups fuse")
+      ->capture_default_str();
   verb->add_option("--threads", g.threads, "global-map threads (0: all); the map does not depend on it")
       ->capture_default_str();
   verb->callback([args] { runMap(*args); });

@@ -125,6 +125,35 @@ TEST(SessionFile, EmptySessionRoundTrips) {
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
 }
 
+// `bytes` as format version 1 wrote it: PARM without the two fusion fields (bool, f64) that
+// version 2 added before the frame counts (i32, i32, u32).
+std::string asVersionOne(const std::string& bytes) {
+  constexpr std::size_t kSection = 24, kPayload = kSection + 16, kFusionBytes = 9, kTailBytes = 12;
+  std::uint64_t length = 0;
+  for (int i = 0; i < 8; ++i) length |= std::uint64_t{static_cast<unsigned char>(bytes[kSection + 4 + i])} << (8 * i);
+  std::string old = bytes;
+  old.erase(kPayload + length - kTailBytes - kFusionBytes, kFusionBytes);
+  length -= kFusionBytes;
+  for (int i = 0; i < 8; ++i) old[kSection + 4 + i] = static_cast<char>(length >> (8 * i));
+  const std::string_view view(old);
+  putU32(&old, kSection + 12, crc32(view.substr(kPayload, length), crc32(view.substr(kSection, 12))));
+  putU32(&old, 8, 1);
+  resealHeader(&old);
+  return old;
+}
+
+TEST(SessionFile, VersionOneFilesLoadWithFusionOffAsTheyWereBuilt) {
+  const Saved& s = smallSession();
+  ASSERT_TRUE(s.info.global.fuse_across_groups);
+  const Session old = decodeSession(asVersionOne(s.bytes), "v1.vdmap");
+  EXPECT_FALSE(old.info.global.fuse_across_groups);
+  EXPECT_EQ(old.info.global.merge_distance_m, 0.2);
+  EXPECT_EQ(old.graph.size(), s.mapper.graph().size());
+  SessionInfo info = old.info;
+  info.global.fuse_across_groups = true;
+  EXPECT_EQ(encodeSession(old.graph, info), s.bytes) << "re-saved as version 2";
+}
+
 TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   const std::string& good = smallSession().bytes;
   EXPECT_NE(decodeError("").find("wrong magic"), std::string::npos);
@@ -134,8 +163,9 @@ TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   std::string newer = good;
   putU32(&newer, 8, kSessionFormatVersion + 1);
   resealHeader(&newer);
-  EXPECT_NE(decodeError(newer).find("format version 2 is newer than this vdmap reads (1)"), std::string::npos)
-      << decodeError(newer);
+  const std::string expected = "format version " + std::to_string(kSessionFormatVersion + 1) +
+                               " is newer than this vdmap reads (" + std::to_string(kSessionFormatVersion) + ")";
+  EXPECT_NE(decodeError(newer).find(expected), std::string::npos) << decodeError(newer);
 
   std::string big_endian = good;
   putU32(&big_endian, 12, 0x04030201);
