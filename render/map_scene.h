@@ -22,6 +22,14 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 /// The keyframe graph as lines in the world frame: every keyframe's frustum (image corners at
 /// `frustum_depth_m`, keyframe colour), every covisibility edge coloured by its weight, and the
 /// trajectory through the keyframe centres in creation order (grey).
+/// The world's up direction estimated from the data: the mean of the cameras' image-up
+/// directions (-y of each camera, which a hand-held or robot camera keeps roughly level),
+/// replaced by the normal of the map's largest plane within 40 degrees of it (floor, tables,
+/// ceiling: level surfaces, found by RANSAC over the ellipsoid means), which removes the bias of
+/// cameras that look down. Unit length, deterministic; +z when there are no cameras or they
+/// point every way.
+glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map);
+
 ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m);
 
 }  // namespace vdmap::render
