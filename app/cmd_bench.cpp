@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <octomap/OcTree.h>
 
+#include "app/bench_long.h"
 #include "app/commands.h"
 #include "app/eval_report.h"
 #include "app/odometry_peers.h"
@@ -48,6 +49,8 @@ struct BenchArgs {
   bool no_octomap = false;
   bool no_open3d = false;
   std::string poses = "gt";
+  bool long_run = false;
+  LongRunOptions long_options;
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
 };
 
@@ -263,6 +266,14 @@ std::string odometryTable(const std::vector<OdometryRow>& rows) {
 }
 
 void runBench(BenchArgs args) {
+  if (args.long_run) {  // every frame unless --frames says otherwise, never all decoded at once
+    const std::filesystem::path out_dir = args.out;
+    if (!std::filesystem::is_directory(out_dir)) throw std::runtime_error(out_dir.string() + ": no such folder (--out)");
+    MapperParams mapper;
+    mapper.local_map = args.local_map;
+    args.long_options.json = args.json;
+    return runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options);
+  }
   // A plain number N means the first N frames (0:N) here: "bench --frames 100" reads as a count.
   std::string& frames = args.sequence.frames;
   if (frames.empty()) frames = "0:30";
@@ -475,6 +486,11 @@ void addBenchCommand(CLI::App& app) {
                    "the same frames: ms per frame and ATE against the ground truth, and trajectory_<peer>.txt in --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
+  verb->add_flag("--long", args->long_run,
+                 "the long run instead (issue 16): the whole pipeline over every frame (or --frames), per-frame CPU "
+                 "time, resident memory, keyframes and the global map's size into long.csv and long.json");
+  verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
+      ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });
 }
