@@ -92,7 +92,7 @@ const Parameter kTable[] = {
      .kind = K::kReal, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1, ACCESS(mapper.keyframes.tau)},
     {.key = "tau_edge", .flag = "--tau-edge", .label = "edge tau", .unit = "",
      .help = "tau_edge (SPEC 5): a new keyframe gets a covisibility edge to each keyframe it re-observes at least "
-             "this share of.",
+             "this share of; the edge to the previous keyframe is always kept, whatever its weight.",
      .kind = K::kReal, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1, ACCESS(mapper.keyframes.tau_edge)},
     {.key = "keyframe_every", .flag = "--keyframe-every", .label = "keyframe every", .unit = "frames",
      .help = "0: keyframes by covisibility (SPEC 5); N > 0: every N-th frame starts a keyframe (a fixed schedule, "

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <ctime>
 #include <deque>
+#include <filesystem>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -170,7 +171,8 @@ class WorkbenchWindow {
   }
 
   // Scripted runs (--exit) fail on an error shown during the run; a user closing the window never does.
-  int exitCode() const { return script_.exit && !bench_.firstError().empty() ? 1 : 0; }
+  int exitCode() const { return failedRun() ? 1 : 0; }
+  bool failedRun() const { return script_.exit && !bench_.firstError().empty(); }
 
  private:
   UiState& ui() { return bench_.ui(); }
@@ -1126,7 +1128,10 @@ class WorkbenchWindow {
       case Phase::kSettle:
         if (--countdown_ > 0) return;
         recordLayout();
-        if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
+        if (!script_.screenshot.empty() && !failedRun()) {
+          saveScreenshot(script_.screenshot);
+          screenshot_taken_ = true;
+        }
         script_phase_ = Phase::kLatency;
         return;
       case Phase::kLatency:
@@ -1150,7 +1155,14 @@ class WorkbenchWindow {
         script_phase_ = Phase::kFinish;
         return;
       case Phase::kFinish:
-        if (!script_.stats_json.empty()) writeStats(script_.stats_json);
+        // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file:
+        // a screenshot of the error would pass for a result (issue #17). One taken before a
+        // later failure is removed.
+        if (!failedRun() && !script_.stats_json.empty()) writeStats(script_.stats_json);
+        if (failedRun() && screenshot_taken_) {
+          std::error_code ignored;
+          std::filesystem::remove(script_.screenshot, ignored);
+        }
         script_finished_ = script_.exit;
         script_phase_ = Phase::kDone;
         return;
@@ -1251,6 +1263,7 @@ class WorkbenchWindow {
   GlfwWindowContext& context_;
   const render::Gl& gl_;
   ScriptOptions script_;
+  bool screenshot_taken_ = false;  // by the script, so a failure removes it (and no older file)
   KeyQueue& keys_;
   render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
