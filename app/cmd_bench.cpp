@@ -20,6 +20,7 @@
 #include <nlohmann/json.hpp>
 #include <octomap/OcTree.h>
 
+#include "app/bench_long.h"
 #include "app/commands.h"
 #include "app/eval_report.h"
 #include "app/odometry_peers.h"
@@ -49,6 +50,8 @@ struct BenchArgs {
   bool no_octomap = false;
   bool no_open3d = false;
   std::string poses = "gt";
+  bool long_run = false;
+  LongRunOptions long_options;
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
 };
 
@@ -268,6 +271,14 @@ std::string odometryTable(const std::vector<OdometryRow>& rows) {
 }
 
 void runBench(BenchArgs args) {
+  if (args.long_run) {  // every frame unless --frames says otherwise, never all decoded at once
+    const std::filesystem::path out_dir = args.out;
+    checkExportFolder(out_dir);
+    MapperParams mapper;
+    mapper.local_map = args.local_map;
+    args.long_options.json = args.json;
+    return runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options);
+  }
   // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
   // it is shorter (a range typed past the end is an error, as everywhere).
   const bool default_range = args.sequence.frames.empty();
@@ -493,6 +504,11 @@ void addBenchCommand(CLI::App& app) {
                    "the same frames: ms per frame and ATE against the ground truth, and trajectory_<peer>.txt in --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
+  verb->add_flag("--long", args->long_run,
+                 "the long run instead (issue 16): the whole pipeline over every frame (or --frames), per-frame CPU "
+                 "time, resident memory, keyframes and the global map's size into long.csv and long.json");
+  verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
+      ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });
 }

@@ -1,5 +1,6 @@
 // vdmap map / vdmap bench end to end on a tiny generated sequence.
 #include <fstream>
+#include <sstream>
 #include <regex>
 #include <string>
 
@@ -62,6 +63,36 @@ TEST(BenchCli, JsonHasTheContractKeys) {
   EXPECT_EQ(j["frame_range"], "0:2");
   EXPECT_TRUE(fs::exists(tmp / "bench.json"));
   EXPECT_TRUE(fs::exists(tmp / "bench.md"));
+}
+
+// The long run: a row per frame, a global map every --global-every frames and after the last,
+// and the summary's windows (frames [N/6, N/3) and the last N/6).
+TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 12);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 5 --json --out '" +
+                               tmp.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["frames"], 12);
+  EXPECT_EQ(j["early_frames"], nlohmann::json({2, 4}));
+  EXPECT_EQ(j["late_frames"], nlohmann::json({10, 12}));
+  EXPECT_GT(j["rss_mb_end"].get<double>(), 0.0);
+  EXPECT_GT(j["global_ellipsoids_end"].get<long>(), 0);
+  std::istringstream csv(readFile(tmp / "long.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 12u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const bool global = i == 4 || i == 9 || i == 11;
+    EXPECT_EQ(rows[i].back() != ',', global) << "row " << i << ": " << rows[i];
+  }
+  EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
+                .exit_code,
+            1);
 }
 
 // Every number in a JSON text has at most `digits` significant digits (issue #17: figures such as

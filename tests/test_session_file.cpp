@@ -125,6 +125,36 @@ TEST(SessionFile, EmptySessionRoundTrips) {
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
 }
 
+// `bytes` as format 2 wrote it: PARM without the two fusion fields (bool, f64) that format 3
+// added before the frame counts (i32, i32, u32).
+std::string asFormat2(const std::string& bytes) {
+  constexpr std::size_t kSection = 24, kPayload = kSection + 16, kFusionBytes = 9, kTailBytes = 12;
+  std::uint64_t length = 0;
+  for (int i = 0; i < 8; ++i) length |= std::uint64_t{static_cast<unsigned char>(bytes[kSection + 4 + i])} << (8 * i);
+  std::string old = bytes;
+  old.erase(kPayload + length - kTailBytes - kFusionBytes, kFusionBytes);
+  length -= kFusionBytes;
+  for (int i = 0; i < 8; ++i) old[kSection + 4 + i] = static_cast<char>(length >> (8 * i));
+  const std::string_view view(old);
+  putU32(&old, kSection + 12, crc32(view.substr(kPayload, length), crc32(view.substr(kSection, 12))));
+  putU32(&old, 8, 2);
+  resealHeader(&old);
+  return old;
+}
+
+TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
+  const Saved& s = smallSession();
+  ASSERT_TRUE(s.info.global.fuse_across_groups);
+  const Session old = decodeSession(asFormat2(s.bytes), "v2.vdmap");
+  EXPECT_EQ(old.info.format_version, 2u);
+  EXPECT_FALSE(old.info.global.fuse_across_groups);
+  EXPECT_EQ(old.info.global.merge_distance_m, 0.2);
+  EXPECT_EQ(old.graph.size(), s.mapper.graph().size());
+  SessionInfo info = old.info;
+  info.global.fuse_across_groups = true;
+  EXPECT_EQ(encodeSession(old.graph, info), s.bytes) << "re-saved in the current format";
+}
+
 TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   const std::string& good = smallSession().bytes;
   EXPECT_NE(decodeError("").find("wrong magic"), std::string::npos);
@@ -134,8 +164,9 @@ TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   std::string newer = good;
   putU32(&newer, 8, kSessionFormatVersion + 1);
   resealHeader(&newer);
-  EXPECT_NE(decodeError(newer).find("format version 3 is newer than this vdmap reads (2)"), std::string::npos)
-      << decodeError(newer);
+  const std::string expected = "format version " + std::to_string(kSessionFormatVersion + 1) +
+                               " is newer than this vdmap reads (" + std::to_string(kSessionFormatVersion) + ")";
+  EXPECT_NE(decodeError(newer).find(expected), std::string::npos) << decodeError(newer);
 
   std::string big_endian = good;
   putU32(&big_endian, 12, 0x04030201);
@@ -277,9 +308,10 @@ TEST(SessionFile, MapVerbSavesTheSessionItMapped) {
   EXPECT_EQ(s.info.camera.width, 64);
 }
 
-// The same session in format 1 (before the mapper state): the MSTA section cut out, the version
-// and the section count set back, the header resealed. Format 1's layout is format 2's without it.
-std::string asFormat1(const std::string& v2) {
+// The same session in format 1 (before the mapper state): format 2's with the MSTA section cut
+// out, the version and the section count set back, the header resealed.
+std::string asFormat1(const std::string& current) {
+  const std::string v2 = asFormat2(current);
   const auto u64At = [&](std::size_t at) {
     std::uint64_t v = 0;
     for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(static_cast<std::uint8_t>(v2[at + 4 + i])) << (8 * i);

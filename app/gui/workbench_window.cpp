@@ -668,9 +668,14 @@ class WorkbenchWindow {
 
   void drawThresholds() {
     const bool occlusion_off = !ui().params.global.occlusion_removal;
+    const bool fusion_off = !ui().params.global.fuse_across_groups;
     if (beginRows("thresholds")) {
       for (const Parameter& p : parameterTable()) {
         if (!p.live) continue;
+        if (p.key == "fusion_max_distance") {
+          parameterRow(p, fusion_off, "Fusion across groups is off: this has no effect.");
+          continue;
+        }
         const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
         parameterRow(p, occlusion_param && occlusion_off, "Occlusion removal is off: this has no effect.");
       }
@@ -692,8 +697,11 @@ class WorkbenchWindow {
           "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
       row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
           m.merged);
-      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging and occlusion removal.", "%zu",
-          m.sigma_e_prime);
+      row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (SPEC 6.5).", "%zu",
+          m.merged_across_groups);
+      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+                      "fusion across groups.",
+          "%zu", m.sigma_e_prime);
       row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
           "%zu", m.groups.size());
       row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",

@@ -131,11 +131,15 @@ nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map) 
       {"groups", map.groups.size()},
       {"sigma_e", map.sigma_e},
       {"merged", map.merged},
+      {"merged_across_groups", map.merged_across_groups},
       {"sigma_e_prime", map.sigma_e_prime},
       {"t_g_s", rounded(map.t_g_s)},
       {"t_g_us_per_ellipsoid", rounded(map.sigma_e > 0 ? map.t_g_s * 1e6 / static_cast<double>(map.sigma_e) : 0.0)},
       {"global_stage_ms",
-       {{"groups", rounded(map.groups_ms)}, {"merge", rounded(map.merge_ms)}, {"occlusion", rounded(map.occlusion_ms)}}},
+       {{"groups", rounded(map.groups_ms)},
+        {"merge", rounded(map.merge_ms)},
+        {"occlusion", rounded(map.occlusion_ms)},
+        {"fusion", rounded(map.fusion_ms)}}},
   };
 }
 

@@ -18,7 +18,7 @@ namespace {
 // A new field in these structs must be added to the file (and the version raised): these
 // sizes are a tripwire for that, not a layout promise.
 static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
-static_assert(sizeof(GlobalMapParams) == 72, "GlobalMapParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(GlobalMapParams) == 88, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
 static_assert(sizeof(MapperState) == 24, "MapperState changed: store the new field in the .vdmap file");
 
@@ -188,12 +188,14 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->boolean(g.occlusion_removal);
   w->f64(g.occlusion_distance_m);
   w->f64(g.occlusion_angle_deg);
+  w->boolean(g.fuse_across_groups);
+  w->f64(g.fusion_max_distance);
   w->i32(info.state.frames_mapped);
   w->i32(info.state.revisits);
   w->u32(static_cast<std::uint32_t>(keyframes));
 }
 
-std::uint32_t readParams(Reader* r, SessionInfo* info) {
+std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
   PinholeCamera& c = info->camera;
   c.width = r->i32("camera width");
   c.height = r->i32("camera height");
@@ -233,6 +235,9 @@ std::uint32_t readParams(Reader* r, SessionInfo* info) {
   g.occlusion_removal = r->boolean("occlusion_removal");
   g.occlusion_distance_m = r->f64("occlusion_distance");
   g.occlusion_angle_deg = r->f64("occlusion_angle");
+  // Versions 1 and 2 predate fusion across groups: their maps were built without it.
+  g.fuse_across_groups = version >= 3 ? r->boolean("fuse_across_groups") : false;
+  if (version >= 3) g.fusion_max_distance = r->f64("fusion_max_distance");
   r->checkValid("global map", [&g] { g.validate(); });
   info->state.frames_mapped = r->i32("frames_mapped");
   info->state.revisits = r->i32("revisits");
@@ -526,7 +531,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
       body.fail("checksum mismatch (the file is corrupted)");
     Reader r(payload, name, where);
     if (s == 0) {
-      keyframes = readParams(&r, &session.info);
+      keyframes = readParams(&r, version, &session.info);
       if (sections != keyframes + std::uint64_t{fixed_sections})
         r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + std::uint64_t{fixed_sections}) +
                " sections, the header says " + std::to_string(sections));

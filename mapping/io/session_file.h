@@ -15,7 +15,8 @@ namespace vdmap {
 /// The format version this build writes and the newest it reads. 2 added the mapper's state
 /// (current keyframe, last frame) and the sequence folder, so a session can continue mapping;
 /// version 1 files still load (MapperState without a current keyframe: they cannot continue).
-inline constexpr std::uint32_t kSessionFormatVersion = 2;
+/// 3 added fusion across groups' parameters (versions 1 and 2 load with fusion off).
+inline constexpr std::uint32_t kSessionFormatVersion = 3;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {
