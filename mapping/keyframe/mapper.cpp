@@ -58,7 +58,17 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
     report.decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
     report.decision.keyframe = start_new ? -1 : current_;
   } else {
-    report.decision = decideKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+    // The current keyframe first; only a frame that lost it asks the index for candidates
+    // (the loop-closure search and, for a new keyframe, its edges).
+    const std::span<const KeyframeView> current_view =
+        current_ >= 0 ? std::span<const KeyframeView>(&views[current_], 1) : std::span<const KeyframeView>();
+    report.decision = decideKeyframe(features, frame.T_W_C, current_, current_view, camera_, params_.keyframes);
+    if (report.decision.kind != FrameDecision::Kind::kUpdate) {
+      index_.sync(views);
+      const std::vector<KeyframeView> candidates =
+          index_.candidates(features, frame.T_W_C, views, params_.keyframes.prefilter, {current_});
+      report.decision = decideKeyframe(features, frame.T_W_C, current_, candidates, camera_, params_.keyframes);
+    }
   }
   switch (report.decision.kind) {
     case FrameDecision::Kind::kUpdate:
@@ -73,7 +83,11 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
     case FrameDecision::Kind::kNewKeyframe: {
       const auto edges = params_.keyframe_every > 0
                              ? std::vector<std::pair<int, double>>{}
-                             : edgesOfNewKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+                             : edgesOfNewKeyframe(features, frame.T_W_C, current_,
+                                                  index_.candidates(features, frame.T_W_C, views,
+                                                                    params_.keyframes.prefilter, {current_},
+                                                                    index_.params().max_edge_candidates),
+                                                  camera_, params_.keyframes);
       report.keyframe = newKeyframe(frame, std::move(features));
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
       if (params_.keyframe_every > 0 && current_ >= 0) graph_.edges().strengthen(report.keyframe, current_, 0.0);

@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/keyframe/keyframe_index.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap {
@@ -66,6 +67,7 @@ class Mapper {
   FeatureExtractor extractor_;
   LocalMapIntegrator integrator_;
   KeyframeGraph graph_;
+  KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
   int current_ = -1;
   int revisits_ = 0;
   int frames_ = 0;
