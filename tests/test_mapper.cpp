@@ -207,6 +207,22 @@ TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
   ASSERT_EQ(ea.size(), eb.size());
   for (std::size_t i = 0; i < ea.size(); ++i) EXPECT_EQ(ea[i].weight, eb[i].weight);
   std::printf("7-Scenes 500 frames: %d keyframes, %d revisits, %zu edges\n", keyframes, a.revisits(), ea.size());
+
+  // Issue 16: at most 0.5 MB resident per keyframe beyond its local map's ellipsoids (the raw
+  // images alone were 1.5 MB). The slot grid is counted too: it is part of that 0.5 MB.
+  KeyframeMemory total;
+  for (const Keyframe& k : a.graph().keyframes()) {
+    const KeyframeMemory m = k.memory();
+    total.images += m.images, total.features += m.features, total.cell_slots += m.cell_slots;
+    total.ellipsoids += m.ellipsoids;
+    EXPECT_EQ(cv::norm(k.depth(), seq.load(static_cast<std::size_t>(k.frame_index)).depth, cv::NORM_INF), 0.0)
+        << "the compressed depth image must be lossless";
+  }
+  const double n = keyframes, mb = 1 << 20;
+  std::printf("resident per keyframe (mean): images %.3f MB, features %.3f MB, slot grid %.3f MB, ellipsoids "
+              "%.3f MB\n", total.images / n / mb, total.features / n / mb, total.cell_slots / n / mb,
+              total.ellipsoids / n / mb);
+  EXPECT_LE((total.images + total.features + total.cell_slots) / n, 0.5 * mb);
 }
 
 }  // namespace

@@ -202,7 +202,7 @@ class WorkbenchWindow {
     container_color_ = ui().settings.color;
     if (id < 0) return;
     const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
-    container_.setKeyframe(k.rgb, mapping_->camera, k.T_W_K);
+    container_.setKeyframe(k.rgb.decode(), mapping_->camera, k.T_W_K);
     container_.setEllipsoids(render::toInstances(shown_selection_->local), {.sigma = 2.f, .color = ui().settings.color});
     if (!container_fb_) container_fb_ = std::make_unique<render::Framebuffer>(gl_, container_.containerWidth(), container_.containerHeight());
     container_fb_->bindAndClear(0.f, 0.f, 0.f);

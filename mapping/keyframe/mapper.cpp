@@ -35,7 +35,7 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, frame.rgb.clone(), frame.depth.clone(),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
 }
