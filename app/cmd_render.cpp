@@ -141,7 +141,7 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
   render::Framebuffer fb(gl, w, h);
   if (choice.kind == ViewChoice::Kind::kContainer) {
     render::ContainerRenderer container(gl);
-    container.setKeyframe(scene.keyframe->rgb, scene.camera, scene.keyframe->T_W_K);
+    container.setKeyframe(scene.keyframe->rgb(), scene.camera, scene.keyframe->T_W_K);
     container.setEllipsoids(scene.container_ellipsoids, {.sigma = args.sigma, .color = color,
                                                          .cell_size_px = scene.cell_size_px, .show_grid = args.grid});
     fb.bindAndClear(0.f, 0.f, 0.f);

@@ -89,8 +89,8 @@ TEST(SessionFile, ReloadedSessionIsEqualReSavesByteIdenticalAndMergesIdentically
     const Keyframe &a = graph.keyframes()[i], &b = loaded.graph.keyframes()[i];
     EXPECT_EQ(a.T_W_K.matrix(), b.T_W_K.matrix());
     EXPECT_EQ(a.timestamp, b.timestamp);
-    EXPECT_EQ(cv::norm(a.rgb, b.rgb, cv::NORM_INF), 0.0);
-    EXPECT_EQ(cv::norm(a.depth, b.depth, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.rgb(), b.rgb(), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.depth(), b.depth(), cv::NORM_INF), 0.0);
     ASSERT_EQ(a.features.size(), b.features.size());
     EXPECT_EQ(cv::norm(a.features.descriptors, b.features.descriptors, cv::NORM_INF), 0.0);
     ASSERT_EQ(a.container.size(), b.container.size());

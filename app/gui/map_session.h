@@ -28,7 +28,7 @@ struct KeyframeInfo {
   int id = 0;
   int frame = 0;               ///< position in the sequence of the frame that created it
   Transform T_W_K = Transform::Identity();
-  cv::Mat rgb;                 ///< shared with the keyframe (never written after creation)
+  CompressedImage rgb;         ///< shared with the keyframe; decode() when shown
   std::size_t ellipsoids = 0;  ///< stored in its container
   int frames_integrated = 0;
 };

@@ -404,7 +404,10 @@ class WorkbenchWindow {
         const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
         // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
         // container, which lives in the keyframe frame, but the ellipsoids are in the world).
-        mirror_.setContainer(session_base_ + selection->serial, id, k.rgb, mapping->camera, k.T_W_K, selection->local, style);
+        // The keyframe image is held compressed: decode it once per selection, not per UI frame.
+        const int generation = session_base_ + selection->serial;
+        if (decoded_rgb_for_ != generation) decoded_rgb_ = k.rgb.decode(), decoded_rgb_for_ = generation;
+        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, k.T_W_K, selection->local, style);
       } else {
         mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
       }
@@ -1292,6 +1295,8 @@ class WorkbenchWindow {
   const MapSession* mirrored_session_ = nullptr;
   const MapSession* hooked_session_ = nullptr;
   int session_base_ = 0;
+  int decoded_rgb_for_ = -1;  // the container generation decoded_rgb_ was decoded for
+  cv::Mat decoded_rgb_;
   Seen last_seen_;
   int settle_frames_ = 2;
   // Preparation (the built-in scene) on its own thread.

@@ -317,8 +317,8 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   for (int row = 0; row < 3; ++row)
     for (int col = 0; col < 4; ++col) w->f64(k.T_W_K.matrix()(row, col));
   w->i32(k.frames_integrated);
-  writeMat(w, k.rgb);
-  writeMat(w, k.depth);
+  writeMat(w, k.rgb());
+  writeMat(w, k.depth());
   const FrameFeatures& f = k.features;
   w->u32(static_cast<std::uint32_t>(f.keypoints.size()));
   for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
@@ -352,8 +352,8 @@ Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info) {
   r->check(isValidTransform(k.T_W_K), "pose is not a rigid transform");
   k.frames_integrated = r->i32("frames integrated");
   r->check(k.frames_integrated >= 0, "frames integrated must be >= 0");
-  k.rgb = readMat(r, CV_8UC3, camera.height, camera.width, "rgb image");
-  k.depth = readMat(r, CV_16UC1, camera.height, camera.width, "depth image");
+  k.rgb_image = CompressedImage(readMat(r, CV_8UC3, camera.height, camera.width, "rgb image"));
+  k.depth_image = CompressedImage(readMat(r, CV_16UC1, camera.height, camera.width, "depth image"));
 
   FrameFeatures& f = k.features;
   const std::uint32_t n = r->count(32, "keypoints");

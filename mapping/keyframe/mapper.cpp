@@ -56,7 +56,7 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, Keyframe
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, frame.rgb.clone(), frame.depth.clone(),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
 }
@@ -83,7 +83,17 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
     report.decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
     report.decision.keyframe = start_new ? -1 : current;
   } else {
-    report.decision = decideKeyframe(features, frame.T_W_C, current, views, camera_, params_.keyframes);
+    // The current keyframe first; only a frame that lost it asks the index for candidates
+    // (the loop-closure search and, for a new keyframe, its edges).
+    const std::span<const KeyframeView> current_view =
+        current >= 0 ? std::span<const KeyframeView>(&views[current], 1) : std::span<const KeyframeView>();
+    report.decision = decideKeyframe(features, frame.T_W_C, current, current_view, camera_, params_.keyframes);
+    if (report.decision.kind != FrameDecision::Kind::kUpdate) {
+      index_.sync(views);
+      const std::vector<KeyframeView> candidates =
+          index_.candidates(features, frame.T_W_C, views, params_.keyframes.prefilter, {current});
+      report.decision = decideKeyframe(features, frame.T_W_C, current, candidates, camera_, params_.keyframes);
+    }
   }
   switch (report.decision.kind) {
     case FrameDecision::Kind::kUpdate:
@@ -98,7 +108,11 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
     case FrameDecision::Kind::kNewKeyframe: {
       const auto edges = params_.keyframe_every > 0
                              ? std::vector<std::pair<int, double>>{}
-                             : edgesOfNewKeyframe(features, frame.T_W_C, current, views, camera_, params_.keyframes);
+                             : edgesOfNewKeyframe(features, frame.T_W_C, current,
+                                                  index_.candidates(features, frame.T_W_C, views,
+                                                                    params_.keyframes.prefilter, {current},
+                                                                    index_.params().max_edge_candidates),
+                                                  camera_, params_.keyframes);
       report.keyframe = newKeyframe(frame, std::move(features));
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
       if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report.keyframe, current, 0.0);

@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/keyframe/keyframe_index.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap {
@@ -94,6 +95,7 @@ class Mapper {
   LocalMapIntegrator integrator_;
   KeyframeGraph graph_;
   MapperState state_;
+  KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
 };
 
 }  // namespace vdmap
