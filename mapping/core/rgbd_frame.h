@@ -1,4 +1,6 @@
 #pragma once
+#include <memory>
+#include <string>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -17,6 +19,9 @@ struct RgbdFrame {
   cv::Mat rgb;             ///< CV_8UC3, RGB channel order, camera size
   cv::Mat depth;           ///< CV_16UC1, raw units: metres = value / camera.depth_scale
   Transform T_W_C = Transform::Identity();
+  /// The encoded files rgb and depth were decoded from, when read from files (empty otherwise):
+  /// a new keyframe keeps these bytes instead of compressing the pixels again.
+  std::shared_ptr<const std::string> rgb_file, depth_file;
 };
 
 /// A coloured point cloud; points and colours are parallel arrays.

@@ -56,7 +56,8 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, Keyframe
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb, frame.rgb_file),
+             CompressedImage(frame.depth, frame.depth_file),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
 }
