@@ -62,6 +62,15 @@ int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
   return graph_.add(std::move(k)).id;
 }
 
+std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
+  auto extractor = std::make_shared<const FeatureExtractor>(params_.features);
+  return [this, extractor](RgbdFrame& frame) {
+    frame.features =
+        std::make_shared<const FrameFeatures>(extractor->extract(frame, camera_, params_.local_map.depth_range));
+    frame.features_for = this;
+  };
+}
+
 FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   if (!canContinue())
     throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
@@ -72,7 +81,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   FrameReport report;
   report.frame_index = frame.index;
 
-  FrameFeatures features = extractor_.extract(frame, camera_, params_.local_map.depth_range);
+  FrameFeatures features = frame.features && frame.features_for == this
+                               ? *frame.features
+                               : extractor_.extract(frame, camera_, params_.local_map.depth_range);
   report.features = features.size();
   report.ms.features_ms = msSince(start);
 
