@@ -12,12 +12,15 @@ std::string cameraPresetList() {
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
   verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList());
-  verb.add_option("--frames", args.frames, "frames A:B of the depth list (B exclusive; A: or :B)");
+  verb.add_option("--frames", args.frames,
+                  "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
+                  "a range past the end is an error");
 }
 
-TumSequence openSequence(const SequenceArgs& args) {
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end) {
   SequenceOptions options;
   options.camera_preset = args.camera;
+  options.cut_range_at_end = cut_range_at_end;
   if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
   return TumSequence::open(args.folder, options);
 }

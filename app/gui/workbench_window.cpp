@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <ctime>
 #include <deque>
+#include <filesystem>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -170,7 +171,8 @@ class WorkbenchWindow {
   }
 
   // Scripted runs (--exit) fail on an error shown during the run; a user closing the window never does.
-  int exitCode() const { return script_.exit && !bench_.firstError().empty() ? 1 : 0; }
+  int exitCode() const { return failedRun() ? 1 : 0; }
+  bool failedRun() const { return script_.exit && !bench_.firstError().empty(); }
 
  private:
   UiState& ui() { return bench_.ui(); }
@@ -402,7 +404,10 @@ class WorkbenchWindow {
         const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
         // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
         // container, which lives in the keyframe frame, but the ellipsoids are in the world).
-        mirror_.setContainer(session_base_ + selection->serial, id, k.rgb, mapping->camera, k.T_W_K, selection->local, style);
+        // The keyframe image is held compressed: decode it once per selection, not per UI frame.
+        const int generation = session_base_ + selection->serial;
+        if (decoded_rgb_for_ != generation) decoded_rgb_ = k.rgb.decode(), decoded_rgb_for_ = generation;
+        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, k.T_W_K, selection->local, style);
       } else {
         mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
       }
@@ -666,9 +671,14 @@ class WorkbenchWindow {
 
   void drawThresholds() {
     const bool occlusion_off = !ui().params.global.occlusion_removal;
+    const bool fusion_off = !ui().params.global.fuse_across_groups;
     if (beginRows("thresholds")) {
       for (const Parameter& p : parameterTable()) {
         if (!p.live) continue;
+        if (p.key == "fusion_max_distance") {
+          parameterRow(p, fusion_off, "Fusion across groups is off: this has no effect.");
+          continue;
+        }
         const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
         parameterRow(p, occlusion_param && occlusion_off, "Occlusion removal is off: this has no effect.");
       }
@@ -690,8 +700,11 @@ class WorkbenchWindow {
           "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
       row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
           m.merged);
-      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging and occlusion removal.", "%zu",
-          m.sigma_e_prime);
+      row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (SPEC 6.5).", "%zu",
+          m.merged_across_groups);
+      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+                      "fusion across groups.",
+          "%zu", m.sigma_e_prime);
       row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
           "%zu", m.groups.size());
       row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
@@ -1131,7 +1144,10 @@ class WorkbenchWindow {
       case Phase::kSettle:
         if (--countdown_ > 0) return;
         recordLayout();
-        if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
+        if (!script_.screenshot.empty() && !failedRun()) {
+          saveScreenshot(script_.screenshot);
+          screenshot_taken_ = true;
+        }
         script_phase_ = Phase::kLatency;
         return;
       case Phase::kLatency:
@@ -1160,7 +1176,14 @@ class WorkbenchWindow {
         script_phase_ = Phase::kFinish;
         return;
       case Phase::kFinish:
-        if (!script_.stats_json.empty()) writeStats(script_.stats_json);
+        // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file:
+        // a screenshot of the error would pass for a result (issue #17). One taken before a
+        // later failure is removed.
+        if (!failedRun() && !script_.stats_json.empty()) writeStats(script_.stats_json);
+        if (failedRun() && screenshot_taken_) {
+          std::error_code ignored;
+          std::filesystem::remove(script_.screenshot, ignored);
+        }
         script_finished_ = script_.exit;
         script_phase_ = Phase::kDone;
         return;
@@ -1264,6 +1287,7 @@ class WorkbenchWindow {
   GlfwWindowContext& context_;
   const render::Gl& gl_;
   ScriptOptions script_;
+  bool screenshot_taken_ = false;  // by the script, so a failure removes it (and no older file)
   KeyQueue& keys_;
   render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
@@ -1271,6 +1295,8 @@ class WorkbenchWindow {
   const MapSession* mirrored_session_ = nullptr;
   const MapSession* hooked_session_ = nullptr;
   int session_base_ = 0;
+  int decoded_rgb_for_ = -1;  // the container generation decoded_rgb_ was decoded for
+  cv::Mat decoded_rgb_;
   Seen last_seen_;
   int settle_frames_ = 2;
   // Preparation (the built-in scene) on its own thread.

@@ -2,6 +2,7 @@
 #include <vector>
 
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/keyframe/keyframe_index.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap {
@@ -39,24 +40,51 @@ struct FrameReport {
   StageTimes ms;
 };
 
+/// What a Mapper carries from one frame to the next besides its graph: with the graph and the
+/// parameters it is everything needed to go on mapping exactly as if the run had not stopped
+/// (a session file stores it, session_file.h). Per-frame state that a later stage adds (a
+/// tracker's velocity, the last pose) belongs here, with its field in the session file.
+struct MapperState {
+  /// The keyframe the last frame went into; -1 before the first frame (or unknown: a session of
+  /// format 1, which cannot be continued).
+  int current_keyframe = -1;
+  int frames_mapped = 0;
+  int revisits = 0;
+  int last_frame_index = -1;  ///< depth-list index of the last frame mapped (-1: none)
+  double last_timestamp = 0;  ///< s, its depth timestamp
+
+  /// Throws std::invalid_argument when a field is out of range for a graph of `keyframes` keyframes.
+  void validate(std::size_t keyframes) const;
+};
+
 /// The per-frame mapping path shared by the command line and the workbench: features,
 /// keyframe decision, local-map update. Deterministic. Not thread-safe: one thread feeds it;
 /// others may read the graph only while it is not inside addFrame().
 class Mapper {
  public:
   explicit Mapper(const PinholeCamera& camera, const MapperParams& params = {});
+  /// Continues a run that stopped with `graph` and `state` (a loaded session): the next frame is
+  /// mapped as it would have been in the run that made them (when canContinue()). Throws
+  /// std::invalid_argument when the state does not fit the graph, or a keyframe's container does
+  /// not use `camera` and the cell size.
+  Mapper(const PinholeCamera& camera, const MapperParams& params, KeyframeGraph graph, const MapperState& state);
 
   /// Maps one frame with its pose. Throws std::invalid_argument when the pose is not a finite
-  /// rigid transform or the images do not fit the camera (see LocalMapIntegrator).
+  /// rigid transform, the images do not fit the camera (see LocalMapIntegrator), or the mapper
+  /// cannot continue (canContinue()).
   FrameReport addFrame(const RgbdFrame& frame);
 
   const KeyframeGraph& graph() const { return graph_; }
   KeyframeGraph& graph() { return graph_; }
   const PinholeCamera& camera() const { return camera_; }
   const MapperParams& params() const { return params_; }
-  int currentKeyframe() const { return current_; }
-  int revisits() const { return revisits_; }
-  int framesMapped() const { return frames_; }
+  int currentKeyframe() const { return state_.current_keyframe; }
+  int revisits() const { return state_.revisits; }
+  int framesMapped() const { return state_.frames_mapped; }
+  const MapperState& state() const { return state_; }
+  /// False for keyframes restored without their current keyframe (a format-1 session): they
+  /// can be viewed and exported, not mapped further.
+  bool canContinue() const { return graph_.size() == 0 || state_.current_keyframe >= 0; }
 
  private:
   int newKeyframe(const RgbdFrame& frame, FrameFeatures features);
@@ -66,9 +94,8 @@ class Mapper {
   FeatureExtractor extractor_;
   LocalMapIntegrator integrator_;
   KeyframeGraph graph_;
-  int current_ = -1;
-  int revisits_ = 0;
-  int frames_ = 0;
+  MapperState state_;
+  KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
 };
 
 }  // namespace vdmap
