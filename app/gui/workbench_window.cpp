@@ -498,17 +498,28 @@ class WorkbenchWindow {
       ImGui::TextWrapped("%s", sequence->folder().c_str());
       ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping_->camera.width,
                          mapping_->camera.height, total);
+      tip("Where the intrinsics come from (--camera, camera.yaml or a preset named by the folder), the image size "
+          "in pixels, and the frames selected.");
     } else {
       ImGui::TextWrapped("%s", ui().settings.last_sequence.c_str());
       ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping_->keyframes.size());
+      tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
+          "they were mapped with (the Re-run parameters show them).");
     }
     const std::string why_saved = "A saved session has its keyframes but no sequence to play or re-map.";
+    // Play, Step and Next keyframe cannot act once every frame is asked for (Pause still can).
+    const bool at_end = status.target >= total;
+    const std::string why_end = "All " + std::to_string(total) + " frames are mapped: Back (Left) or the scrubber go back.";
     ImGui::BeginDisabled(saved);
+    ImGui::BeginDisabled(at_end && !status.playing);
     if (ImGui::Button(status.playing ? "Pause" : "Play")) bench_.key(KeyAction::kPlayPause);
-    tip(saved ? why_saved : "Maps the frames one after another up to the end (Space).");
+    tip(saved ? why_saved : at_end && !status.playing ? why_end : "Maps the frames one after another up to the end (Space).");
+    ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(at_end);
     if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
-    tip(saved ? why_saved : "Maps one more frame (Right).");
+    tip(saved ? why_saved : at_end ? why_end : "Maps one more frame (Right).");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     ImGui::BeginDisabled(status.target < 2);
     if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
@@ -517,8 +528,10 @@ class WorkbenchWindow {
                             : "One frame back (Left): the map is rebuilt from the first frame.");
     ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(at_end);
     if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
-    tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
+    tip(saved ? why_saved : at_end ? why_end : "Maps up to the next frame that starts a keyframe (K).");
+    ImGui::EndDisabled();
     checkFits();
     if (beginRows("player")) {
       label("fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
@@ -543,6 +556,8 @@ class WorkbenchWindow {
     ImGui::Text("%d / %d frames mapped, %zu keyframes%s", mapped, total, mapping_->keyframes.size(),
                 status.busy ? " (working)" : "");
     checkFits();
+    tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "
+        "keyframes they made (SPEC 5: a new one when a frame re-observes under tau of the current one's features).");
 
     const float image_width = ImGui::GetContentRegionAvail().x;
     if (!mirror_.rgbTexture().empty() && mapped > 0 && !saved) {
@@ -825,6 +840,8 @@ class WorkbenchWindow {
     }
     ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
                        k.frames_integrated);
+    tip("Its local map: one ellipsoid per touched container cell (SPEC 2); of those, the ones the filter keeps with "
+        "the live thresholds (min points, k; SPEC 4); and the frames whose depth went into it.");
     const render::Texture2D& container = mirror_.containerTexture();
     if (!mirror_.containerImage().empty()) {
       const float w = ImGui::GetContentRegionAvail().x;
