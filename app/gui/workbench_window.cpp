@@ -483,8 +483,11 @@ class WorkbenchWindow {
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
     tip("A TUM RGB-D folder (rgb.txt, depth.txt, groundtruth.txt) or a saved session (.vdmap).");
     ImGui::SameLine();
-    if (ImGui::Button("Open") || enter) bench_.openPath(ui().sequence_text);
-    tip("Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::BeginDisabled(ui().sequence_text.empty());
+    if (ImGui::Button("Open") || (enter && !ui().sequence_text.empty())) bench_.openPath(ui().sequence_text);
+    tip(ui().sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
+                                   : "Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::EndDisabled();
     MapSession* session = bench_.session();
     if (!session) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
@@ -806,8 +809,10 @@ class WorkbenchWindow {
     ImGui::SameLine();
     if (ImGui::Button("Help (H)")) bench_.key(KeyAction::kHelp);
     checkFits();
+    ImGui::BeginDisabled(screenshot_text_.empty());
     if (ImGui::Button("Screenshot")) screenshot_request_ = screenshot_text_;
-    tip("Writes the whole window as a PNG to the file named on the right.");
+    tip(screenshot_text_.empty() ? "Type a file name on the right first." : "Writes the whole window as a PNG to the file named on the right.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputText("##shot", &screenshot_text_);
