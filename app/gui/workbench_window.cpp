@@ -628,21 +628,27 @@ class WorkbenchWindow {
   void drawMapPanel() {
     beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
-      if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
-      if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
-      if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawView();
-      if (ImGui::CollapsingHeader("Keyframes", ImGuiTreeNodeFlags_DefaultOpen)) drawKeyframes();
-      if (ImGui::CollapsingHeader("Picked ellipsoid", ImGuiTreeNodeFlags_DefaultOpen)) drawPicked();
-      if (ImGui::CollapsingHeader("Pose correction")) drawPoseFile();
-      if (ImGui::CollapsingHeader("Export and save")) drawExport();
+      if (section("Thresholds (live)", true)) drawThresholds();
+      if (section("Re-run parameters")) drawRerun();
+      if (section("View", true)) drawView();
+      if (section("Keyframes", true)) drawKeyframes();
+      if (section("Picked ellipsoid", true)) drawPicked();
+      if (section("Pose correction")) drawPoseFile();
+      if (section("Export and save")) drawExport();
     }
-    if (ImGui::CollapsingHeader("Settings")) {
+    if (section("Settings")) {
       if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
       tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
       ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
                          settingsPath().c_str());
     }
     ImGui::End();
+  }
+
+  // A collapsible section of a panel; a scripted layout check (--expand-sections) opens them all.
+  bool section(const char* name, bool open_by_default = false) {
+    if (script_.expand_sections) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+    return ImGui::CollapsingHeader(name, open_by_default ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   }
 
   // One parameter of the table as a slider, combo or checkbox.
