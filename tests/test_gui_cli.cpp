@@ -103,8 +103,9 @@ TEST(GuiCli, PanelsDockAndTheMapFitsTheViewFrom1280x720To3840x2160) {
     const fs::path png = home / (size + ".png"), json = home / (size + ".json");
     // The largest window draws its many pixels with llvmpipe: fewer frames keep the test short.
     const std::string frames = w > 2000 ? "0:10" : "0:30";
-    const RunResult r = runInXvfb(home, "--frames " + frames + " --play-to-end --exit --window-size " + size +
-                                            " --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
+    // Every section open and a keyframe in the inspector: each label of the panels is drawn and checked.
+    const RunResult r = runInXvfb(home, "--frames " + frames + " --play-to-end --exit --expand-sections --keyframe 1 --window-size " +
+                                            size + " --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const cv::Mat image = cv::imread(png.string());
     EXPECT_EQ(image.cols, w);

@@ -28,19 +28,19 @@ std::string absolute(const std::string& path) {
 const std::vector<std::pair<const char*, const char*>>& keyHelp() {
   static const std::vector<std::pair<const char*, const char*>> keys = {
       {"Space", "play / pause"},
-      {"Right / Left", "one frame forward / back (back re-maps from the start)"},
+      {"Right / Left", "one frame forward / back (taps add up, none is lost; back re-maps from the start)"},
       {"K", "map to the next keyframe"},
-      {"F", "frame the map (keeps the direction; the view follows the map again)"},
+      {"F", "frame the map and the cameras (keeps the direction; the view follows the map again)"},
       {"R", "reset the view (default direction about the up axis)"},
-      {"V", "view from the selected keyframe (its own intrinsics)"},
-      {"C", "the selected keyframe's container view, large (zoom, grid)"},
-      {"H, F1", "this help"},
+      {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
+      {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
+      {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
       {"left drag", "orbit about the up axis"},
       {"right / middle drag, Shift + left drag", "pan"},
       {"wheel", "zoom"},
-      {"click", "pick an ellipsoid (its keyframe is selected)"},
+      {"click", "pick an ellipsoid (marked magenta; its keyframe is selected)"},
       {"container view: wheel, drag", "zoom, pan"},
   };
   return keys;

@@ -483,8 +483,11 @@ class WorkbenchWindow {
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
     tip("A TUM RGB-D folder (rgb.txt, depth.txt, groundtruth.txt) or a saved session (.vdmap).");
     ImGui::SameLine();
-    if (ImGui::Button("Open") || enter) bench_.openPath(ui().sequence_text);
-    tip("Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::BeginDisabled(ui().sequence_text.empty());
+    if (ImGui::Button("Open") || (enter && !ui().sequence_text.empty())) bench_.openPath(ui().sequence_text);
+    tip(ui().sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
+                                   : "Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::EndDisabled();
     MapSession* session = bench_.session();
     if (!session) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
@@ -625,21 +628,27 @@ class WorkbenchWindow {
   void drawMapPanel() {
     beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
-      if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
-      if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
-      if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawView();
-      if (ImGui::CollapsingHeader("Keyframes", ImGuiTreeNodeFlags_DefaultOpen)) drawKeyframes();
-      if (ImGui::CollapsingHeader("Picked ellipsoid", ImGuiTreeNodeFlags_DefaultOpen)) drawPicked();
-      if (ImGui::CollapsingHeader("Pose correction")) drawPoseFile();
-      if (ImGui::CollapsingHeader("Export and save")) drawExport();
+      if (section("Thresholds (live)", true)) drawThresholds();
+      if (section("Re-run parameters")) drawRerun();
+      if (section("View", true)) drawView();
+      if (section("Keyframes", true)) drawKeyframes();
+      if (section("Picked ellipsoid", true)) drawPicked();
+      if (section("Pose correction")) drawPoseFile();
+      if (section("Export and save")) drawExport();
     }
-    if (ImGui::CollapsingHeader("Settings")) {
+    if (section("Settings")) {
       if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
       tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
       ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
                          settingsPath().c_str());
     }
     ImGui::End();
+  }
+
+  // A collapsible section of a panel; a scripted layout check (--expand-sections) opens them all.
+  bool section(const char* name, bool open_by_default = false) {
+    if (script_.expand_sections) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+    return ImGui::CollapsingHeader(name, open_by_default ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   }
 
   // One parameter of the table as a slider, combo or checkbox.
@@ -806,8 +815,10 @@ class WorkbenchWindow {
     ImGui::SameLine();
     if (ImGui::Button("Help (H)")) bench_.key(KeyAction::kHelp);
     checkFits();
+    ImGui::BeginDisabled(screenshot_text_.empty());
     if (ImGui::Button("Screenshot")) screenshot_request_ = screenshot_text_;
-    tip("Writes the whole window as a PNG to the file named on the right.");
+    tip(screenshot_text_.empty() ? "Type a file name on the right first." : "Writes the whole window as a PNG to the file named on the right.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputText("##shot", &screenshot_text_);
