@@ -130,8 +130,8 @@ void runMap(MapArgs args) {
   }
   const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
                              counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
-  std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: pipeline %.2f ms "
-              "(features %.2f, decision %.2f, update %.2f) -> %s\n",
+  std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: mapping thread "
+              "%.2f ms (ORB %.2f on the prefetch thread, decision %.2f, update %.2f) -> %s\n",
               counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(pipeline_ms),
               median(features_ms), median(decision_ms), median(update_ms), out_dir.c_str());
 }

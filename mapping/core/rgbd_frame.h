@@ -29,6 +29,7 @@ struct RgbdFrame {
   /// addFrame() extracts them itself. Either way they are the same features.
   std::shared_ptr<const FrameFeatures> features;
   const void* features_for = nullptr;
+  double features_ms = 0;  ///< how long computing them took (wall, on the prefetch thread)
 };
 
 /// A coloured point cloud; points and colours are parallel arrays.

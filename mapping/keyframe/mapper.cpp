@@ -65,9 +65,11 @@ int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
 std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
   auto extractor = std::make_shared<const FeatureExtractor>(params_.features);
   return [this, extractor](RgbdFrame& frame) {
+    const auto start = std::chrono::steady_clock::now();
     frame.features =
         std::make_shared<const FrameFeatures>(extractor->extract(frame, camera_, params_.local_map.depth_range));
     frame.features_for = this;
+    frame.features_ms = msSince(start);
   };
 }
 
@@ -81,11 +83,12 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   FrameReport report;
   report.frame_index = frame.index;
 
-  FrameFeatures features = frame.features && frame.features_for == this
+  report.ms.features_ahead = frame.features && frame.features_for == this;
+  FrameFeatures features = report.ms.features_ahead
                                ? *frame.features
                                : extractor_.extract(frame, camera_, params_.local_map.depth_range);
   report.features = features.size();
-  report.ms.features_ms = msSince(start);
+  report.ms.features_ms = report.ms.features_ahead ? frame.features_ms : msSince(start);
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();

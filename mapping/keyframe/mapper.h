@@ -25,7 +25,8 @@ struct MapperParams {
 
 /// Wall time of each stage of one frame, milliseconds.
 struct StageTimes {
-  double features_ms = 0;
+  double features_ms = 0;  ///< ORB, on this thread or, when computed ahead, on the prefetch thread
+  bool features_ahead = false;  ///< the features came from featuresAhead() (not in total_ms)
   double decision_ms = 0;  ///< covisibility against the current keyframe, loop search, edges
   double update_ms = 0;    ///< local-map integration
   double total_ms = 0;
