@@ -56,9 +56,19 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, Keyframe
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb, frame.rgb_file),
+             CompressedImage(frame.depth, frame.depth_file),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
+}
+
+std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
+  auto extractor = std::make_shared<const FeatureExtractor>(params_.features);
+  return [this, extractor](RgbdFrame& frame) {
+    frame.features =
+        std::make_shared<const FrameFeatures>(extractor->extract(frame, camera_, params_.local_map.depth_range));
+    frame.features_for = this;
+  };
 }
 
 FrameReport Mapper::addFrame(const RgbdFrame& frame) {
@@ -71,7 +81,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   FrameReport report;
   report.frame_index = frame.index;
 
-  FrameFeatures features = extractor_.extract(frame, camera_, params_.local_map.depth_range);
+  FrameFeatures features = frame.features && frame.features_for == this
+                               ? *frame.features
+                               : extractor_.extract(frame, camera_, params_.local_map.depth_range);
   report.features = features.size();
   report.ms.features_ms = msSince(start);
 
