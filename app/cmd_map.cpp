@@ -48,13 +48,16 @@ void runMap(MapArgs args) {
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
 
   const TumSequence seq = openSequence(args.sequence);
+  args.mapper.poses = poseSource(args.sequence, seq);
+  const bool tracking = args.mapper.poses == PoseSource::kTrack;
   Mapper mapper(seq.camera(), args.mapper);
-  std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms;
+  std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
   mapSequence(seq, mapper, [&](const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
     pipeline_ms.push_back(r.ms.total_ms);
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
+    tracking_ms.push_back(r.ms.tracking_ms);
   });
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.global);
@@ -77,7 +80,13 @@ void runMap(MapArgs args) {
       {"features_ms", median(features_ms)},
       {"decision_ms", median(decision_ms)},
       {"camera", seq.cameraSource()},
+      {"poses", tracking ? "track" : "gt"},
   };
+  options.trajectory = mapper.trajectory();
+  if (tracking) {
+    options.run_stats["tracking_ms"] = median(tracking_ms);
+    options.run_stats["frames_lost"] = mapper.framesLost();
+  }
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
@@ -92,10 +101,12 @@ void runMap(MapArgs args) {
     return;
   }
   std::printf("%d frames, %zu keyframes, %zu edges, %d revisits; %zu kept ellipsoids -> %zu in the global map "
-              "(t_g %.3f s)\nmedian per frame: pipeline %.2f ms (features %.2f, decision %.2f, update %.2f) -> %s\n",
+              "(t_g %.3f s)\nmedian per frame: pipeline %.2f ms (features %.2f, tracking %.2f, decision %.2f, "
+              "update %.2f) -> %s\n",
               mapper.framesMapped(), graph.size(), graph.edges().size(), mapper.revisits(), global.sigma_e,
-              global.sigma_e_prime, global.t_g_s, median(pipeline_ms), median(features_ms), median(decision_ms),
-              median(update_ms), out_dir.c_str());
+              global.sigma_e_prime, global.t_g_s, median(pipeline_ms), median(features_ms), median(tracking_ms),
+              median(decision_ms), median(update_ms), out_dir.c_str());
+  if (tracking) std::printf("tracked poses: %d frames lost (skipped)\n", mapper.framesLost());
 }
 
 }  // namespace
@@ -104,8 +115,9 @@ void addMapCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("map", "Map a sequence: keyframes with local maps, covisibility graph, global map");
   auto args = std::make_shared<MapArgs>();
   addSequenceArgs(*verb, args->sequence);
+  addPoseSourceArg(*verb, args->sequence);
   verb->add_option("--out", args->out,
-                   "output folder (created if missing): local_maps.ply, keyframes.txt, graph.txt, "
+                   "output folder (created if missing): local_maps.ply, keyframes.txt, trajectory.txt, graph.txt, "
                    "global_points.ply, global_ellipsoids.ply, global_gaussians.ply, [global.bt], stats.json")
       ->required();
   verb->add_option("--save", args->save, "also save the whole session (a .vdmap file, docs/vdmap-format.md)");

@@ -82,7 +82,7 @@ bool Workbench::openSession(const std::string& file) {
 bool Workbench::openPath(const std::string& path) {
   const std::filesystem::path p(path);
   if (p.extension() == ".vdmap" && !std::filesystem::is_directory(p)) return openSession(path);
-  return open({path, "", ""});
+  return open({path, "", "", ""});
 }
 
 void Workbench::opened(const std::string& path) {

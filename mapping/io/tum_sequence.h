@@ -22,6 +22,10 @@ struct SequenceOptions {
   FrameRange frames;              ///< which depth frames to keep
   double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (SPEC section 1)
   double max_pose_dt_s = 0.1;     ///< pose interpolation window
+  /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
+  /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
+  /// ground-truth pose with has_pose = false and the identity.
+  bool require_poses = true;
 };
 
 /// One usable frame: an rgb/depth pair with an interpolated pose. Paths are absolute.
@@ -31,7 +35,8 @@ struct FrameEntry {
   double t_rgb = 0.0;    ///< s
   std::filesystem::path rgb_path;
   std::filesystem::path depth_path;
-  Transform T_W_C = Transform::Identity();
+  Transform T_W_C = Transform::Identity();  ///< ground truth; the identity when !has_pose
+  bool has_pose = true;
 };
 
 /// How many listed depth frames were not kept, by reason.
@@ -55,6 +60,8 @@ class TumSequence {
   const std::vector<FrameEntry>& entries() const { return entries_; }
   std::size_t size() const { return entries_.size(); }
   int listedDepthFrames() const { return listed_; }
+  /// True when the folder has groundtruth.txt (its poses are in the entries that have one).
+  bool hasGroundTruth() const { return has_ground_truth_; }
   const DropCounts& dropped() const { return dropped_; }
 
   /// Decodes frame i (0 <= i < size()). Throws InputError on a corrupt image, a depth image
@@ -68,6 +75,7 @@ class TumSequence {
   std::vector<FrameEntry> entries_;
   int listed_ = 0;
   DropCounts dropped_;
+  bool has_ground_truth_ = false;
 };
 
 }  // namespace vdmap

@@ -27,7 +27,8 @@ void MapperParams::validate() const {
 }
 
 Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
-    : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map) {
+    : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map),
+      tracker_(params.tracking) {
   camera_.validate();
   params_.validate();
   // Fail on a bad cell size now rather than at the first keyframe.
@@ -40,16 +41,57 @@ int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
   return graph_.add(std::move(k)).id;
 }
 
-FrameReport Mapper::addFrame(const RgbdFrame& frame) {
-  if (!isValidTransform(frame.T_W_C))
-    throw std::invalid_argument("frame " + std::to_string(frame.index) + ": pose is not a finite rigid transform");
+std::vector<StampedPose> Mapper::trajectory() const {
+  std::vector<StampedPose> out;
+  out.reserve(frame_poses_.size());
+  for (const FramePose& f : frame_poses_) out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
+  return out;
+}
+
+bool Mapper::trackFrame(const FrameFeatures& features, RgbdFrame* frame, FrameReport* report) {
+  // The first frame anchors the world frame at its given pose (the ground truth's when the
+  // sequence has one, so maps and trajectories overlay it; else the identity).
+  if (current_ < 0) return true;
+  const DensePoints points = sampleDensePoints(*frame, camera_, params_.local_map.depth_range,
+                                               params_.tracking.relative.dense.stride_px);
+  const TrackingOutcome outcome =
+      tracker_.track(graph_, current_, {&features, &points}, camera_, params_.keyframes.prefilter);
+  report->weak = outcome.weak;
+  report->relocalised = outcome.relocalised;
+  if (outcome.lost()) {
+    tracker_.lose();
+    ++frames_lost_;
+    report->lost = true;
+    return false;
+  }
+  frame->T_W_C = graph_.keyframe(outcome.keyframe).T_W_K * outcome.estimate.T_K_C;
+  return true;
+}
+
+FrameReport Mapper::addFrame(const RgbdFrame& input) {
+  const bool tracking = params_.poses == PoseSource::kTrack;
+  if (!isValidTransform(input.T_W_C))
+    throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
   const auto start = std::chrono::steady_clock::now();
   FrameReport report;
-  report.frame_index = frame.index;
+  report.frame_index = input.index;
 
-  FrameFeatures features = extractor_.extract(frame, camera_, params_.local_map.depth_range);
+  FrameFeatures features = extractor_.extract(input, camera_, params_.local_map.depth_range);
   report.features = features.size();
   report.ms.features_ms = msSince(start);
+
+  RgbdFrame frame = input;  // shares the images; only the pose may change
+  if (tracking) {
+    const auto track_start = std::chrono::steady_clock::now();
+    const bool placed = trackFrame(features, &frame, &report);
+    report.ms.tracking_ms = msSince(track_start);
+    if (!placed) {
+      ++frames_;
+      report.ms.total_ms = msSince(start);
+      return report;
+    }
+  }
+  report.T_W_C = frame.T_W_C;
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();
@@ -88,6 +130,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
   ++keyframe.frames_integrated;
   report.ms.update_ms = msSince(update_start);
+  const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
+  frame_poses_.push_back({frame.index, frame.timestamp, current_, T_K_C});
+  if (tracking) tracker_.accept(graph_, current_, T_K_C);
   report.ms.total_ms = msSince(start);
   ++frames_;
   return report;

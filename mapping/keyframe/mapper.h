@@ -1,10 +1,19 @@
 #pragma once
 #include <vector>
 
+#include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/local_map_integrator.h"
+#include "mapping/tracking/tracker.h"
 
 namespace vdmap {
+
+/// Where frame poses come from.
+enum class PoseSource {
+  kGroundTruth,  ///< each frame's T_W_C as given (the sequence's groundtruth.txt)
+  kTrack,        ///< estimated by the Tracker (SPEC section 11); the given T_W_C is ignored
+                 ///< except the first frame's, which anchors the world frame
+};
 
 /// Everything that shapes the local maps and the graph; changing any of it means re-running
 /// the sequence (SPEC section 9, "no" in the live column).
@@ -15,6 +24,8 @@ struct MapperParams {
   /// > 0: every N-th frame starts a keyframe and covisibility is not consulted (a fixed
   /// schedule, for comparisons); 0: the covisibility decision of SPEC section 5.
   int keyframe_every = 0;
+  PoseSource poses = PoseSource::kGroundTruth;
+  TrackerParams tracking;  ///< used with PoseSource::kTrack
 
   /// Throws std::invalid_argument naming the first value out of range (the cell size is checked
   /// against the camera by Mapper).
@@ -26,6 +37,7 @@ struct StageTimes {
   double features_ms = 0;
   double decision_ms = 0;  ///< covisibility against the current keyframe, loop search, edges
   double update_ms = 0;    ///< local-map integration
+  double tracking_ms = 0;  ///< pose estimate (PoseSource::kTrack): dense sampling, PnP, refinement
   double total_ms = 0;
 };
 
@@ -36,6 +48,12 @@ struct FrameReport {
   int keyframe = -1;        ///< the keyframe the frame went into (new or existing)
   std::size_t features = 0;
   std::vector<int> touched_cells;  ///< grid indices of `keyframe`'s container that changed
+  Transform T_W_C = Transform::Identity();  ///< the pose the frame was mapped at
+  /// PoseSource::kTrack: the current keyframe gave a weak estimate (few inliers, a large residual)
+  bool weak = false;
+  bool relocalised = false;  ///< placed against another keyframe than the current one
+  /// The frame could not be placed: nothing was integrated, `keyframe` is -1.
+  bool lost = false;
   StageTimes ms;
 };
 
@@ -46,8 +64,10 @@ class Mapper {
  public:
   explicit Mapper(const PinholeCamera& camera, const MapperParams& params = {});
 
-  /// Maps one frame with its pose. Throws std::invalid_argument when the pose is not a finite
-  /// rigid transform or the images do not fit the camera (see LocalMapIntegrator).
+  /// Maps one frame with its pose (PoseSource::kGroundTruth) or at the pose the tracker
+  /// estimates (kTrack; a frame it cannot place is skipped: FrameReport::lost). Throws
+  /// std::invalid_argument when a given pose is not a finite rigid transform or the images do not
+  /// fit the camera (see LocalMapIntegrator).
   FrameReport addFrame(const RgbdFrame& frame);
 
   const KeyframeGraph& graph() const { return graph_; }
@@ -56,10 +76,26 @@ class Mapper {
   const MapperParams& params() const { return params_; }
   int currentKeyframe() const { return current_; }
   int revisits() const { return revisits_; }
+  /// Frames fed to addFrame(), lost ones included.
   int framesMapped() const { return frames_; }
+  int framesLost() const { return frames_lost_; }
+  /// One pose per integrated frame, relative to the keyframe it went into, so the trajectory
+  /// follows every keyframe pose correction.
+  struct FramePose {
+    int frame_index = 0;
+    double timestamp = 0;
+    int keyframe = 0;
+    Transform T_K_C = Transform::Identity();
+  };
+  const std::vector<FramePose>& framePoses() const { return frame_poses_; }
+  /// The world poses of framePoses() with the keyframes' current poses, as a TUM trajectory.
+  std::vector<StampedPose> trajectory() const;
+  const Tracker& tracker() const { return tracker_; }
 
  private:
   int newKeyframe(const RgbdFrame& frame, FrameFeatures features);
+  /// PoseSource::kTrack: sets frame->T_W_C, or returns false when the frame cannot be placed.
+  bool trackFrame(const FrameFeatures& features, RgbdFrame* frame, FrameReport* report);
 
   PinholeCamera camera_;
   MapperParams params_;
@@ -69,6 +105,9 @@ class Mapper {
   int current_ = -1;
   int revisits_ = 0;
   int frames_ = 0;
+  int frames_lost_ = 0;
+  Tracker tracker_;
+  std::vector<FramePose> frame_poses_;
 };
 
 }  // namespace vdmap

@@ -1,0 +1,123 @@
+#include "mapping/tracking/relative_pose.h"
+
+#include <cmath>
+
+#include <opencv2/calib3d.hpp>
+#include <opencv2/core/eigen.hpp>
+
+namespace vdmap {
+namespace {
+
+// K's keypoints with depth (3-D, keyframe frame) and the frame keypoints they match.
+void matchWithDepth(const FrameFeatures& K, const FrameFeatures& F, const PnpParams& params,
+                    const PinholeCamera& camera, std::vector<cv::Point3f>* object, std::vector<cv::Point2f>* image) {
+  if (K.size() == 0 || F.size() < 2) return;
+  static thread_local cv::BFMatcher matcher(cv::NORM_HAMMING, false);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(K.descriptors, F.descriptors, knn, 2);
+  for (const std::vector<cv::DMatch>& pair : knn) {
+    if (pair.empty()) continue;
+    const cv::DMatch& best = pair[0];
+    if (best.distance > params.max_hamming) continue;
+    if (pair.size() > 1 && !(best.distance < params.lowe_ratio * pair[1].distance)) continue;
+    const std::size_t i = static_cast<std::size_t>(best.queryIdx);
+    if (K.depth_m[i] <= 0.0f) continue;
+    const cv::Point2f& pt = K.keypoints[i].pt;
+    const Eigen::Vector3d p = camera.backProject(pt.x, pt.y, K.depth_m[i]);
+    object->emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    image->push_back(F.keypoints[best.trainIdx].pt);
+  }
+}
+
+// T_K_C by PnP RANSAC (AP3P on 4-point samples, then Levenberg-Marquardt on the inliers).
+std::optional<Transform> solvePnp(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
+                                  const PinholeCamera& camera, const PnpParams& params, int* inlier_count,
+                                  std::vector<FeatureObservation>* inlier_observations) {
+  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
+  cv::Mat rvec, tvec;
+  std::vector<int> inliers;
+  // A fixed seed: cv::solvePnPRansac draws from cv::theRNG(), which is per thread and carries
+  // state from earlier calls; reseeding makes every estimate depend only on its input.
+  cv::theRNG().state = 0x12345678;
+  if (!cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, params.ransac_iterations,
+                          static_cast<float>(params.ransac_reprojection_px), 0.99, inliers, cv::SOLVEPNP_AP3P))
+    return std::nullopt;
+  *inlier_count = static_cast<int>(inliers.size());
+  if (inliers.size() < 4) return std::nullopt;
+  std::vector<cv::Point3f> o;
+  std::vector<cv::Point2f> i;
+  for (const int k : inliers) {
+    o.push_back(object[k]), i.push_back(image[k]);
+    inlier_observations->push_back({Eigen::Vector3d(object[k].x, object[k].y, object[k].z),
+                                    Eigen::Vector2d(image[k].x, image[k].y)});
+  }
+  cv::solvePnPRefineLM(o, i, K, cv::noArray(), rvec, tvec);
+  cv::Matx33d R;
+  cv::Rodrigues(rvec, R);
+  Eigen::Matrix3d R_F_K;
+  cv::cv2eigen(cv::Mat(R), R_F_K);
+  Transform T_F_K = Transform::Identity();
+  T_F_K.linear() = R_F_K;
+  T_F_K.translation() = Eigen::Vector3d(tvec.at<double>(0), tvec.at<double>(1), tvec.at<double>(2));
+  if (!T_F_K.matrix().allFinite()) return std::nullopt;
+  return T_F_K.inverse();
+}
+
+// The rotation made exactly orthonormal again after many composed steps.
+Transform orthonormalised(const Transform& T) {
+  Transform out = Transform::Identity();
+  out.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();
+  out.translation() = T.translation();
+  return out;
+}
+
+}  // namespace
+
+double translationBetween(const Transform& a, const Transform& b) {
+  return (a.translation() - b.translation()).norm();
+}
+
+double degreesBetween(const Transform& a, const Transform& b) {
+  return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
+}
+
+RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame, const PinholeCamera& camera,
+                                  const std::optional<Transform>& prior_T_K_C, const RelativePoseParams& params) {
+  RelativePose out;
+  const auto near = [&](const Transform& a, const Transform& b) {
+    return translationBetween(a, b) <= params.max_jump_m && degreesBetween(a, b) <= params.max_jump_deg;
+  };
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  matchWithDepth(K.features, *frame.features, params.pnp, camera, &object, &image);
+  out.matches = static_cast<int>(object.size());
+  std::optional<Transform> pnp;
+  std::vector<FeatureObservation> inliers;
+  if (out.matches >= params.pnp.min_matches) {
+    pnp = solvePnp(object, image, camera, params.pnp, &out.pnp_inliers, &inliers);
+    if (pnp && (out.pnp_inliers < params.pnp.min_inliers || (prior_T_K_C && !near(*pnp, *prior_T_K_C)))) {
+      pnp.reset();
+      inliers.clear();
+    }
+  }
+  out.pnp_used = pnp.has_value();
+  std::optional<Transform> seed = prior_T_K_C;
+  if (pnp && (!seed || !params.dense_refinement || translationBetween(*pnp, *seed) > params.seed_agreement_m ||
+              degreesBetween(*pnp, *seed) > params.seed_agreement_deg))
+    seed = pnp;
+  if (!seed) return out;
+  out.T_K_C = *seed;
+  if (params.dense_refinement && frame.points) {
+    Transform refined = *seed;
+    out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
+    out.dense_trusted = out.dense.inlierRatio() >= params.min_dense_inlier_ratio &&
+                        out.dense.inliers >= params.min_dense_inliers && near(refined, *seed);
+    if (out.dense_trusted) out.T_K_C = orthonormalised(refined);
+  }
+  const bool dense_ok = out.dense_trusted || !params.dense_refinement;
+  if (out.pnp_used && dense_ok) out.status = RelativePose::Status::kGood;
+  else if (out.pnp_used || out.dense_trusted) out.status = RelativePose::Status::kWeak;
+  return out;
+}
+
+}  // namespace vdmap
