@@ -1,6 +1,8 @@
 // vdmap eval --map DIR_or_PLY --mesh PLY: reconstruction accuracy against a reference mesh
 // (SPEC section 8). The map is any PLY with vertex positions: vdmap's ellipsoid or point
 // exports, OctoMap voxel centres, the NDT-OM baseline's cell means, a TSDF's point cloud.
+// vdmap eval --trajectory EST --groundtruth GT: trajectory error as the TUM benchmark's tools
+// (mapping/eval/trajectory_error.h).
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -15,11 +17,28 @@ namespace {
 struct EvalArgs {
   std::string map;
   std::string mesh;
+  std::string trajectory;
+  std::string groundtruth;
   bool json = false;
   AccuracyParams accuracy;
+  TrajectoryErrorParams trajectory_error;
 };
 
+void runTrajectoryEval(const EvalArgs& args) {
+  const TrajectoryError e = evaluateTrajectoryFiles(args.trajectory, args.groundtruth, args.trajectory_error);
+  if (args.json) {
+    nlohmann::json out = toJson(e, args.trajectory_error);
+    out["trajectory"] = args.trajectory;
+    out["groundtruth"] = args.groundtruth;
+    std::cout << out.dump(2) << "\n";
+    return;
+  }
+  std::cout << args.trajectory << " against " << args.groundtruth << ": " << toText(e, args.trajectory_error);
+}
+
 void runEval(const EvalArgs& args) {
+  if (!args.trajectory.empty()) return runTrajectoryEval(args);
+  if (args.map.empty()) throw std::invalid_argument("nothing to evaluate: give --map and --mesh, or --trajectory and --groundtruth");
   namespace fs = std::filesystem;
   fs::path map = args.map;
   // A `vdmap map` output folder is scored by its global map's ellipsoid means.
@@ -44,16 +63,34 @@ void runEval(const EvalArgs& args) {
 }  // namespace
 
 void addEvalCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("eval", "Reconstruction accuracy against a reference mesh (SPEC section 8)");
+  auto* verb = app.add_subcommand(
+      "eval", "Reconstruction accuracy against a reference mesh (SPEC section 8), or trajectory error against "
+              "ground truth (ATE after rigid alignment, RPE; TUM benchmark definitions)");
   auto args = std::make_shared<EvalArgs>();
-  verb->add_option("--map", args->map,
-                   "map to score: a PLY with vertex x y z (ellipsoids, points) or a `vdmap map` output folder")
-      ->required();
-  verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)")
-      ->required()->check(CLI::ExistingFile);
+  auto* map = verb->add_option("--map", args->map,
+                               "map to score: a PLY with vertex x y z (ellipsoids, points) or a `vdmap map` output folder");
+  auto* mesh = verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)")
+                   ->check(CLI::ExistingFile);
   verb->add_option("--samples", args->accuracy.completion_samples, "mesh samples for completion")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
+  map->needs(mesh);
+  mesh->needs(map);
+  auto* trajectory = verb->add_option("--trajectory", args->trajectory,
+                                      "estimated trajectory to score (TUM: timestamp tx ty tz qx qy qz qw)");
+  auto* groundtruth = verb->add_option("--groundtruth", args->groundtruth, "ground-truth trajectory (TUM)");
+  trajectory->needs(groundtruth);
+  groundtruth->needs(trajectory);
+  trajectory->excludes(map);
+  TrajectoryErrorParams& te = args->trajectory_error;
+  verb->add_option("--max-difference", te.max_difference_s,
+                   "seconds: poses match when their timestamps differ by less (associate.py)")
+      ->capture_default_str();
+  verb->add_option("--offset", te.offset_s, "seconds added to the trajectory's timestamps before matching")
+      ->capture_default_str();
+  verb->add_flag("--align-scale", te.align_scale, "align with a similarity (fit a scale, e.g. monocular) instead of rigidly");
+  verb->add_option("--delta", te.rpe_delta_s, "seconds between the poses of the per-second relative pose error")
+      ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runEval(*args); });
 }

@@ -11,6 +11,7 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/parameter_table.h"
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/export/map_export.h"
@@ -25,21 +26,13 @@ struct MapArgs {
   std::string out;
   std::string save;
   bool json = false;
-  MapperParams mapper;
-  GlobalMapParams global;
-  std::string sensor_model = "nguyen2012";
-  bool no_prefilter = false;
-  bool no_occlusion_removal = false;
+  MappingParams params;  // every parameter of the table (app/parameter_table.h)
   double octomap_resolution_m = 0.0;
 };
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
-  if (args.mapper.keyframe_every < 0) throw std::invalid_argument("--keyframe-every must be >= 0");
-  args.global.filter.model = parseSensorModel(args.sensor_model);
-  args.mapper.keyframes.prefilter.enabled = !args.no_prefilter;
-  args.global.occlusion_removal = !args.no_occlusion_removal;
-  args.global.validate();
+  validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
   if (!(args.octomap_resolution_m >= 0.0)) throw std::invalid_argument("--octomap must be > 0 m");
   const fs::path out_dir = args.out;
   // Fail before any work when DIR cannot be written; it is created only when there is a map to
@@ -48,9 +41,9 @@ void runMap(MapArgs args) {
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
 
   const TumSequence seq = openSequence(args.sequence);
-  args.mapper.poses = poseSource(args.sequence, seq);
-  const bool tracking = args.mapper.poses == PoseSource::kTrack;
-  Mapper mapper(seq.camera(), args.mapper);
+  args.params.mapper.poses = poseSource(args.sequence, seq);
+  const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
+  Mapper mapper(seq.camera(), args.params.mapper);
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
   mapSequence(seq, mapper, [&](const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
@@ -60,7 +53,7 @@ void runMap(MapArgs args) {
     tracking_ms.push_back(r.ms.tracking_ms);
   });
   const KeyframeGraph& graph = mapper.graph();
-  const GlobalMap global = buildGlobalMap(graph, args.global);
+  const GlobalMap global = buildGlobalMap(graph, args.params.global);
 
   if (!args.json) {
     std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
@@ -95,7 +88,7 @@ void runMap(MapArgs args) {
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   octomap_bar.reset();  // its last line before the summary, not after it
   // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.global));
+  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global));
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;
@@ -124,31 +117,8 @@ void addMapCommand(CLI::App& app) {
   verb->add_option("--octomap", args->octomap_resolution_m,
                    "also write global.bt, an OctoMap of this resolution (m) sampled from the global map");
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
-  MapperParams& m = args->mapper;
-  verb->add_option("--keyframe-every", m.keyframe_every,
-                   "0: keyframes by covisibility (SPEC 5); N > 0: every N-th frame starts a keyframe")
-      ->capture_default_str();
-  verb->add_option("--cell-size", m.local_map.cell_size_px, "container cell size, px")->capture_default_str();
-  verb->add_option("--min-depth", m.local_map.depth_range.min_m, "nearest valid depth, m")->capture_default_str();
-  verb->add_option("--max-depth", m.local_map.depth_range.max_m, "farthest valid depth, m")->capture_default_str();
-  verb->add_option("--orb-features", m.features.orb_features, "ORB features per frame")->capture_default_str();
-  verb->add_option("--tau", m.keyframes.tau, "covisibility to stay in a keyframe")->capture_default_str();
-  verb->add_option("--tau-edge", m.keyframes.tau_edge, "covisibility for a graph edge")->capture_default_str();
-  verb->add_flag("--no-prefilter", args->no_prefilter, "match every keyframe in the loop-closure search");
-  GlobalMapParams& g = args->global;
-  verb->add_option("--sensor-model", args->sensor_model, "nguyen2012 or belter2018")->capture_default_str();
-  verb->add_option("--filter-sigma-factor", g.filter.filter_sigma_factor,
-                   "reject ellipsoids longer than k x the sensor model's expectation")
-      ->capture_default_str();
-  verb->add_option("--min-points", g.filter.min_points, "reject ellipsoids of fewer points")->capture_default_str();
-  verb->add_option("--tau-group", g.tau_group, "edge weight that joins a merge group")->capture_default_str();
-  verb->add_option("--merge-distance", g.merge_distance_m, "mean-shift radius, m")->capture_default_str();
-  verb->add_option("--occlusion-distance", g.occlusion_distance_m, "occlusion group distance, m")
-      ->capture_default_str();
-  verb->add_option("--occlusion-angle", g.occlusion_angle_deg, "occlusion group angle, degrees")
-      ->capture_default_str();
-  verb->add_flag("--no-occlusion-removal", args->no_occlusion_removal, "keep ellipsoids that occlude finer ones");
-  verb->add_option("--threads", g.threads, "global-map threads (0: all); the map does not depend on it")
+  addParameterOptions(*verb, args->params);
+  verb->add_option("--threads", args->params.global.threads, "global-map threads (0: all); the map does not depend on it")
       ->capture_default_str();
   verb->callback([args] { runMap(*args); });
 }

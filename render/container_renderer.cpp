@@ -49,8 +49,7 @@ ContainerRenderer::ContainerRenderer(const Gl& gl)
     : gl_(&gl),
       background_(std::make_unique<ShaderProgram>(gl, "container_background.vert", "container_background.frag")),
       ellipses_(std::make_unique<ShaderProgram>(gl, "ellipse2d.vert", "ellipse2d.frag")),
-      background_vao_(gl), ellipse_vao_(gl), instances_(gl) {
-  gl.GenTextures(1, &texture_);
+      background_vao_(gl), ellipse_vao_(gl), instances_(gl), texture_(gl) {
   ellipse_vao_.bind();
   instances_.upload(nullptr, 0);
   const std::size_t stride = sizeof(EllipseGpu);
@@ -62,21 +61,14 @@ ContainerRenderer::ContainerRenderer(const Gl& gl)
   gl.BindVertexArray(0);
 }
 
-ContainerRenderer::~ContainerRenderer() { gl_->DeleteTextures(1, &texture_); }
+ContainerRenderer::~ContainerRenderer() = default;
 
 void ContainerRenderer::setKeyframe(const cv::Mat& rgb, const PinholeCamera& camera, const Transform& T_W_K) {
   if (rgb.type() != CV_8UC3 || rgb.cols != camera.width || rgb.rows != camera.height)
     throw std::invalid_argument("container view needs the keyframe's RGB image at the camera size");
   camera_ = camera;
   T_W_K_ = T_W_K;
-  const cv::Mat image = rgb.isContinuous() ? rgb : rgb.clone();
-  const Gl& gl = *gl_;
-  gl.BindTexture(GL_TEXTURE_2D, texture_);
-  gl.PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-  gl.TexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image.cols, image.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, image.data);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_NEAREST);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_NEAREST);
-  gl.TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAX_LEVEL, 0);
+  texture_.set(rgb, true);
 }
 
 void ContainerRenderer::setEllipsoids(std::span<const EllipsoidInstance> ellipsoids, const ContainerStyle& style) {
@@ -120,7 +112,7 @@ void ContainerRenderer::draw(int width, int height) const {
   background_->set("u_cell_size", style_.show_grid ? style_.cell_size_px : 0);
   background_->set("u_image", 0);
   gl.ActiveTexture(GL_TEXTURE0);
-  gl.BindTexture(GL_TEXTURE_2D, texture_);
+  gl.BindTexture(GL_TEXTURE_2D, texture_.id());
   background_vao_.bind();
   gl.DrawArrays(GL_TRIANGLE_STRIP, 0, 4);
   if (count_ > 0) {

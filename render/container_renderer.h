@@ -13,6 +13,7 @@
 #include "render/gpu_buffer.h"
 #include "render/scene_types.h"
 #include "render/shader_program.h"
+#include "render/texture.h"
 
 namespace vdmap::render {
 
@@ -35,6 +36,7 @@ struct ContainerStyle {
   ColorMode color = ColorMode::kRgb;
   int cell_size_px = 5;     ///< grid spacing (SPEC default s = 5)
   bool show_grid = false;
+  bool operator==(const ContainerStyle&) const = default;
 };
 
 /// Draws one keyframe's container into the bound framebuffer, scaled to its viewport.
@@ -57,7 +59,7 @@ class ContainerRenderer {
   std::unique_ptr<ShaderProgram> background_, ellipses_;
   VertexArray background_vao_, ellipse_vao_;
   GpuBuffer instances_;
-  GLuint texture_ = 0;
+  Texture2D texture_;
   PinholeCamera camera_;
   Transform T_W_K_ = Transform::Identity();
   ContainerStyle style_;

@@ -84,29 +84,6 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
   colors_.upload(colors_cpu_.data(), colors_cpu_.size() * sizeof(glm::u8vec4));
 }
 
-void EllipsoidRenderer::update(std::size_t first, std::span<const EllipsoidInstance> changed) {
-  if (first + changed.size() > instances_.size()) {
-    std::vector<EllipsoidInstance> all = instances_;
-    all.resize(first + changed.size());
-    std::copy(changed.begin(), changed.end(), all.begin() + first);
-    set(all);
-    return;
-  }
-  near_key_.reset();
-  std::copy(changed.begin(), changed.end(), instances_.begin() + first);
-  const std::vector<float> geometry = geometryOf(changed, style_.sigma);
-  std::copy(geometry.begin(), geometry.end(), geometry_cpu_.begin() + 12 * first);
-  geometry_.update(first * kGeometryStride, geometry.data(), geometry.size() * sizeof(float));
-  if (style_.color == ColorMode::kRgb || style_.color == ColorMode::kKeyframe) {
-    const std::vector<glm::u8vec4> colors = ellipsoidColors(changed, style_.color);
-    std::copy(colors.begin(), colors.end(), colors_cpu_.begin() + first);
-    colors_.update(first * 4, colors.data(), colors.size() * 4);
-  } else {
-    colors_cpu_ = ellipsoidColors(instances_, style_.color);  // a ramp depends on the whole set
-    colors_.upload(colors_cpu_.data(), colors_cpu_.size() * 4);
-  }
-}
-
 void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
   const bool geometry_changed = style.sigma != style_.sigma;
   const bool colors_changed = style.color != style_.color;

@@ -26,8 +26,8 @@ struct EllipsoidStyle {
 /// Draws ellipsoids as instanced, shaded icospheres scaled by the covariance's principal axes,
 /// and those that project smaller than EllipsoidStyle::point_below_px as splats (one point
 /// sprite covering the projected ellipse). Geometry (centre + three scaled axes, 48 bytes) and
-/// colour (4 bytes) live in separate GPU buffers: a colour-mode change re-sends colours only,
-/// update() re-sends one range. With the splat level on, draw() also sends the instances that
+/// colour (4 bytes) live in separate GPU buffers: a colour-mode change re-sends colours only.
+/// With the splat level on, draw() also sends the instances that
 /// may need the mesh (near or large ones), so far ones cost no vertex work per triangle; it
 /// re-selects them only when the view or the instances changed. For that the geometry and
 /// colours are mirrored on the CPU (52 bytes per ellipsoid).
@@ -37,9 +37,6 @@ class EllipsoidRenderer {
   ~EllipsoidRenderer();
   /// Replaces the whole set.
   void set(std::span<const EllipsoidInstance> ellipsoids);
-  /// Rewrites instances [first, first + changed.size()) (an integrator's touched cells).
-  /// In uncertainty/count modes the colour ramp keeps the range of the last set().
-  void update(std::size_t first, std::span<const EllipsoidInstance> changed);
   /// Changes sigma (re-sends geometry) or colour mode (re-sends colours) when they differ.
   void setStyle(const EllipsoidStyle& style);
   void draw(const ViewCamera& view) const;

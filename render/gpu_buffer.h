@@ -6,8 +6,7 @@
 namespace vdmap::render {
 
 /// One GL buffer object that grows as needed. upload() replaces the contents (re-allocating
-/// only when the data outgrows the buffer); update() rewrites a sub-range, so renderers send
-/// only what changed. Owns the buffer; use with its context current.
+/// only when the data outgrows the buffer). Owns the buffer; use with its context current.
 class GpuBuffer {
  public:
   explicit GpuBuffer(const Gl& gl, GLenum target = GL_ARRAY_BUFFER) : gl_(&gl), target_(target) {
@@ -26,10 +25,6 @@ class GpuBuffer {
     } else {
       gl_->BufferSubData(target_, 0, static_cast<GLsizeiptr>(bytes), data);
     }
-  }
-  void update(std::size_t offset, const void* data, std::size_t bytes) {
-    bind();
-    gl_->BufferSubData(target_, static_cast<GLintptr>(offset), static_cast<GLsizeiptr>(bytes), data);
   }
   /// Binds and describes float attribute `index` (components, stride and offset in bytes).
   void attribute(GLuint index, GLint components, GLenum type, bool normalized, std::size_t stride,

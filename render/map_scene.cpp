@@ -1,6 +1,9 @@
 #include "render/map_scene.h"
 
 #include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
 
 #include "render/colormap.h"
 
@@ -48,6 +51,32 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh) {
   for (const auto& c : mesh.colors) out.colors.emplace_back(c[0], c[1], c[2]);
   for (const auto& t : mesh.triangles) out.triangles.emplace_back(t[0], t[1], t[2]);
   return out;
+}
+
+glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map) {
+  Eigen::Vector3d up = Eigen::Vector3d::Zero();
+  for (const Transform& T : T_W_C) up -= T.linear().col(1);
+  // Cameras turned every way (or none) give no direction: keep the +z convention.
+  if (up.norm() < 0.3 * static_cast<double>(T_W_C.size()) || T_W_C.empty()) return {0.f, 0.f, 1.f};
+  up.normalize();
+  // At most ~4000 ellipsoids (evenly strided): enough for the mean normal, cheap on the UI thread.
+  const std::size_t stride = std::max<std::size_t>(1, map.size() / 4000);
+  const double cos_limit = std::cos(25.0 * M_PI / 180.0);
+  Eigen::Vector3d normals = Eigen::Vector3d::Zero();
+  double weight = 0.0;
+  for (std::size_t i = 0; i < map.size(); i += stride) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.compute(map[i].cov);
+    const Eigen::Vector3d lambda = eig.eigenvalues();  // ascending
+    if (!(lambda[0] < 0.1 * lambda[1])) continue;      // not flat: no normal
+    Eigen::Vector3d n = eig.eigenvectors().col(0);
+    if (n.dot(up) < 0) n = -n;
+    if (n.dot(up) < cos_limit) continue;
+    normals += map[i].count * n;
+    weight += map[i].count;
+  }
+  if (weight > 0 && normals.norm() > 0) up = normals.normalized();
+  return {static_cast<float>(up.x()), static_cast<float>(up.y()), static_cast<float>(up.z())};
 }
 
 ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m) {

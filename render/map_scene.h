@@ -22,6 +22,13 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 /// The keyframe graph as lines in the world frame: every keyframe's frustum (image corners at
 /// `frustum_depth_m`, keyframe colour), every covisibility edge coloured by its weight, and the
 /// trajectory through the keyframe centres in creation order (grey).
+/// The world's up direction estimated from the data: the mean of the cameras' image-up
+/// directions (-y of each camera, which a hand-held or robot camera keeps roughly level),
+/// refined by the normals of the map's horizontal surfaces (floor, tables: flat ellipsoids whose
+/// normal lies within 25 degrees of that mean; count-weighted), which removes the bias of cameras
+/// that look down. Unit length; +z when there are no cameras or they point every way.
+glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map);
+
 ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m);
 
 }  // namespace vdmap::render

@@ -30,7 +30,8 @@ void PrimitiveRenderer::set(std::span<const glm::vec3> positions, std::span<cons
 void PrimitiveRenderer::draw(const ViewCamera& view) const {
   if (count_ == 0) return;
   const Gl& gl = *gl_;
-  gl.Enable(GL_DEPTH_TEST);
+  if (on_top_) gl.Disable(GL_DEPTH_TEST);
+  else gl.Enable(GL_DEPTH_TEST);
   gl.Enable(GL_PROGRAM_POINT_SIZE);
   if (primitive_ == GL_LINES) {
     gl.LineWidth(size_px_);
@@ -42,6 +43,7 @@ void PrimitiveRenderer::draw(const ViewCamera& view) const {
   vao_.bind();
   gl.DrawArrays(primitive_, 0, static_cast<GLsizei>(count_));
   gl.BindVertexArray(0);
+  if (on_top_) gl.Enable(GL_DEPTH_TEST);
 }
 
 void PointRenderer::set(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {

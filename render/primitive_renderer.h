@@ -18,6 +18,8 @@ class PrimitiveRenderer {
   void set(std::span<const glm::vec3> positions, std::span<const glm::u8vec3> colors);
   /// Point size or line width in pixels (lines wider than 1 px where the driver allows).
   void setSize(float pixels) { size_px_ = pixels; }
+  /// true: drawn over everything (no depth test), e.g. a highlight.
+  void setOnTop(bool on_top) { on_top_ = on_top; }
   void draw(const ViewCamera& view) const;
   std::size_t size() const { return count_; }
 
@@ -29,6 +31,7 @@ class PrimitiveRenderer {
   GpuBuffer positions_, colors_;
   std::size_t count_ = 0;
   float size_px_ = 1.f;
+  bool on_top_ = false;
 };
 
 /// Ellipsoid centres as points, coloured like the ellipsoids.
@@ -49,6 +52,7 @@ class LineRenderer {
   explicit LineRenderer(const Gl& gl) : lines_(gl, GL_LINES) {}
   void set(const ColoredLines& lines) { lines_.set(lines.positions, lines.colors); }
   void setWidth(float pixels) { lines_.setSize(pixels); }
+  void setOnTop(bool on_top) { lines_.setOnTop(on_top); }
   void draw(const ViewCamera& view) const { lines_.draw(view); }
 
  private:

@@ -103,16 +103,37 @@ ViewCamera OrbitCamera::view(int width, int height) const {
   return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height);
 }
 
+void OrbitCamera::frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect) {
+  target = 0.5f * (box_min + box_max);
+  const float radius = std::max(0.05f, 0.5f * glm::length(box_max - box_min));
+  const float half_y = glm::radians(fov_y_deg) * 0.5f;
+  const float half_x = std::atan(std::tan(half_y) * std::max(aspect, 1e-3f));
+  distance_m = radius / std::sin(std::min(half_x, half_y));
+}
+
 OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                                 const glm::vec3& up) {
+                                 const glm::vec3& up, float aspect) {
   OrbitCamera cam;
   cam.up = up;
-  cam.target = 0.5f * (box_min + box_max);
-  const float radius = std::max(0.05f, 0.5f * glm::length(box_max - box_min));
-  cam.distance_m = radius / std::sin(glm::radians(cam.fov_y_deg) * 0.5f);
   cam.yaw = glm::radians(-60.f);
   cam.pitch = glm::radians(35.f);
+  cam.frame(box_min, box_max, aspect);
   return cam;
+}
+
+PixelRect letterbox(int width, int height, int image_width, int image_height) {
+  if (width <= 0 || height <= 0 || image_width <= 0 || image_height <= 0) return {0, 0, std::max(width, 0), std::max(height, 0)};
+  PixelRect r;
+  if (static_cast<long>(width) * image_height <= static_cast<long>(height) * image_width) {
+    r.width = width;
+    r.height = std::max(1, static_cast<int>(std::lround(static_cast<double>(width) * image_height / image_width)));
+  } else {
+    r.height = height;
+    r.width = std::max(1, static_cast<int>(std::lround(static_cast<double>(height) * image_width / image_height)));
+  }
+  r.x = (width - r.width) / 2;
+  r.y = (height - r.height) / 2;
+  return r;
 }
 
 std::pair<glm::vec3, glm::vec3> robustBounds(const std::vector<glm::vec3>& points) {

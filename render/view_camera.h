@@ -55,10 +55,22 @@ struct OrbitCamera {
   void fly(float forward_m, float right_m, float up_m);
   glm::vec3 eye() const;
   ViewCamera view(int width, int height) const;
-  /// Frames a bounding box: target at its centre, distance so that it fits the field of view.
+  /// Keeps the viewing direction and moves target and distance so that the box's bounding
+  /// sphere fits both the vertical and the horizontal field of view of a width/height `aspect`.
+  void frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f);
+  /// The default view of a bounding box: from 35 degrees above the horizon, framed as frame().
   static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                             const glm::vec3& up = {0.f, 0.f, 1.f});
+                             const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
 };
+
+/// A rectangle in pixels.
+struct PixelRect {
+  int x = 0, y = 0, width = 0, height = 0;
+  bool operator==(const PixelRect&) const = default;
+};
+/// The largest rectangle of aspect image_width : image_height centred in width x height (the
+/// letterbox of "view from keyframe": the keyframe's image is neither stretched nor cropped).
+PixelRect letterbox(int width, int height, int image_width, int image_height);
 
 /// The box of the central 96% of a point set per axis (2nd to 98th percentile), so a few stray
 /// points do not shrink a framed view; (-1, 1) for no points.

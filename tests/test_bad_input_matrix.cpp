@@ -12,6 +12,7 @@
 #include <opencv2/imgcodecs.hpp>
 
 #include "mapping/core/error.h"
+#include "mapping/eval/trajectory_error.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/ply_reader.h"
@@ -80,8 +81,14 @@ const std::vector<Input>& inputs() {
        [](const fs::path& f) {
          const Mapper mapper = test::mapTurningBoxRoom(1);  // one keyframe at t = 0
          KeyframeGraph graph = mapper.graph();
-         graph.applyTrajectory(f);
+         applyTrajectoryFile(graph, f);
        }},
+      {"trajectory_pair", "est.txt", "pose",
+       [](const fs::path& d) {
+         writeText(d / "est.txt", "0.0 1 2 3 0 0 0 1\n0.1 1 2 3.1 0 0 0 1\n0.2 1.1 2 3.2 0 0 0 1\n");
+         writeText(d / "gt.txt", "0.005 1 2 3 0 0 0 1\n0.105 1 2 3.1 0 0 0 1\n0.205 1.1 2 3.2 0 0 0 1\n");
+       },
+       [](const fs::path& f) { evaluateTrajectoryFiles(f, f.parent_path() / "gt.txt"); }},
       {"camera_yaml", "camera.yaml", "camera",
        [](const fs::path& d) {
          writeText(d / "camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640\nheight: 480\n");
@@ -213,6 +220,16 @@ const std::vector<BadCase>& badCases() {
        write("poses.txt", "0.5 1 2 3 0 0 0 1\n0.5 1 2 3 0 0 0 1\n")},
       {"corrected_trajectory", "matches_no_keyframe", E::kInputError, "no pose matches a keyframe timestamp",
        write("poses.txt", "50.0 1 2 3 0 0 0 1\n")},
+      // Trajectory pairs (vdmap eval --trajectory EST --groundtruth GT).
+      {"trajectory_pair", "no_common_timestamps", E::kInputError,
+       "est.txt: 0 of 3 poses match a ground-truth timestamp within 0.02 s; at least 3 are needed for the alignment "
+       "(ground truth: ",
+       write("est.txt", "10.0 1 2 3 0 0 0 1\n10.1 1 2 3.1 0 0 0 1\n10.2 1.1 2 3.2 0 0 0 1\n")},
+      {"trajectory_pair", "two_common_timestamps", E::kInputError, "est.txt: 2 of 3 poses match",
+       write("est.txt", "0.0 1 2 3 0 0 0 1\n0.1 1 2 3.1 0 0 0 1\n10.2 1.1 2 3.2 0 0 0 1\n")},
+      {"trajectory_pair", "groundtruth_missing", E::kInputError, "gt.txt: cannot open", removeFile("gt.txt")},
+      {"trajectory_pair", "groundtruth_malformed", E::kInputError, "gt.txt:2: expected 'timestamp tx ty tz qx qy qz qw'",
+       write("gt.txt", "0.005 1 2 3 0 0 0 1\n0.105 1 2 3.1\n")},
       // Camera files (the configuration files vdmap reads).
       {"camera_yaml", "missing_file", E::kInputError, "cannot open camera file", removeFile("camera.yaml")},
       {"camera_yaml", "missing_key", E::kInputError, "camera.yaml: missing key 'cy'",
@@ -288,14 +305,14 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "frames_past_the_end", E::kCliError, "--frames starts at 9", args("map {dir}/seq --out {dir}/out --frames 9:")},
       {"command_line", "unknown_camera_preset", E::kCliError, "unknown camera preset 'nope'",
        args("map {dir}/seq --out {dir}/out --camera nope")},
-      {"command_line", "cell_size_zero", E::kCliError, "cell size 0", args("map {dir}/seq --out {dir}/out --cell-size 0")},
-      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every must be >= 0",
+      {"command_line", "cell_size_zero", E::kCliError, "cell_size must be >= 1 px", args("map {dir}/seq --out {dir}/out --cell-size 0")},
+      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every: keyframe_every must be >= 0",
        args("map {dir}/seq --out {dir}/out --keyframe-every -1")},
       {"command_line", "negative_merge_distance", E::kCliError, "merge_distance must be >= 0",
        args("map {dir}/seq --out {dir}/out --merge-distance -1")},
       {"command_line", "depth_range_reversed", E::kCliError, "depth range must satisfy 0 <= min < max",
        args("map {dir}/seq --out {dir}/out --min-depth 5 --max-depth 1")},
-      {"command_line", "tau_above_one", E::kCliError, "tau and tau_edge must be within 0..1",
+      {"command_line", "tau_above_one", E::kCliError, "--tau: tau must be within 0..1",
        args("map {dir}/seq --out {dir}/out --tau 2")},
       {"command_line", "samples_negative", E::kCliUsage, "--samples", args("bench {dir}/seq --samples -5")},
       {"command_line", "unknown_sensor_model", E::kCliError, "foo", args("map {dir}/seq --out {dir}/out --sensor-model foo")},
@@ -309,6 +326,16 @@ const std::vector<BadCase>& badCases() {
        args("render --map {dir}/e.ply --out {dir}/o.png --sigma nan")},
       {"command_line", "render_out_in_missing_folder", E::kCliError, "its folder does not exist (--out)",
        args("render {dir}/seq --out {dir}/no/such/o.png")},
+      {"command_line", "eval_trajectory_without_groundtruth", E::kCliUsage, "--groundtruth",
+       args("eval --trajectory {dir}/seq/groundtruth.txt")},
+      {"command_line", "eval_trajectory_and_map", E::kCliUsage, "excludes",
+       args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --map {dir}/e.ply "
+            "--mesh {dir}/seq/groundtruth.txt")},
+      {"command_line", "eval_nothing", E::kCliError, "nothing to evaluate", args("eval")},
+      {"command_line", "eval_trajectory_offset_matches_nothing", E::kCliError, "groundtruth.txt: 0 of 3 poses match",
+       args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --offset 100")},
+      {"command_line", "eval_trajectory_zero_max_difference", E::kCliError, "maximum timestamp difference",
+       args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --max-difference 0")},
       {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
   };
   return all;

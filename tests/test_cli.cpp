@@ -40,7 +40,7 @@ TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
   // Command-line mistakes are one line too, naming the option or file.
   const auto missing = runVdmap("eval --map x.ply");
   EXPECT_NE(missing.exit_code, 0);
-  EXPECT_EQ(missing.err, "vdmap eval: error: --mesh is required (see --help)\n");
+  EXPECT_EQ(missing.err, "vdmap eval: error: --map requires --mesh (see --help)\n");
   const auto no_file = runVdmap("eval --map x.ply --mesh /nonexistent/mesh.ply");
   EXPECT_NE(no_file.exit_code, 0);
   EXPECT_EQ(std::count(no_file.err.begin(), no_file.err.end(), '\n'), 1) << no_file.err;

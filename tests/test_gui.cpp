@@ -22,7 +22,7 @@ struct TinyBench {
   Workbench bench{settings()};
   TinyBench() {
     test::writeTinySequence(dir / "seq", 10);
-    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", ""})) << bench.ui().error;
+    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", ""})) << bench.ui().status.text;
   }
   static Settings settings() {
     Settings s;
@@ -190,7 +190,7 @@ TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;
   EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", ""}));
-  EXPECT_NE(bench.ui().error.find("nowhere"), std::string::npos) << bench.ui().error;
+  EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
   ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
   EXPECT_EQ(bench.session()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
@@ -234,14 +234,14 @@ TEST(GuiSession, StepStepToKeyframePlayAndSeekBack) {
 TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   TinyBench t;
   Workbench& bench = t.bench;
-  bench.ui().settings.thresholds.filter.min_points = 3;
+  bench.ui().params.global.filter.min_points = 3;
   bench.applyThresholds();
   t.session().play();
   t.session().waitIdle();
   const auto before = t.session().global();
   // Cells of a 5 px grid over 3 frames of a plane hold ~75 points; 60 keeps only those of
   // keyframes that integrated three frames.
-  bench.ui().settings.thresholds.filter.min_points = 60;
+  bench.ui().params.global.filter.min_points = 60;
   bench.applyThresholds();
   t.session().waitIdle();
   const auto after = t.session().global();
@@ -253,9 +253,9 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   for (int id = 0; id < static_cast<int>(after->map.kept.size()); ++id) local += selectAndWait(bench, id)->local.size();
   EXPECT_EQ(local, after->map.sigma_e);
 
-  bench.ui().settings.thresholds.merge_distance_m = -1;  // refused, shown, map kept
+  bench.ui().params.global.merge_distance_m = -1;  // refused, shown, map kept
   bench.applyThresholds();
-  EXPECT_NE(bench.ui().error.find("merge"), std::string::npos) << bench.ui().error;
+  EXPECT_NE(bench.ui().status.text.find("merge"), std::string::npos) << bench.ui().status.text;
   t.session().waitIdle();
   EXPECT_EQ(t.session().global()->generation, after->generation);
 
@@ -353,7 +353,7 @@ TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds
   EXPECT_FALSE(one->local.empty());
   expectSameEllipsoids(one->local, keptInWorld(s, 1));
 
-  bench.ui().settings.thresholds.filter.min_points = 60;  // see LiveThresholdChangeSwapsInANewGlobalMap
+  bench.ui().params.global.filter.min_points = 60;  // see LiveThresholdChangeSwapsInANewGlobalMap
   bench.applyThresholds();
   s.waitIdle();
   const auto after = s.selection();
@@ -384,7 +384,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
     EXPECT_TRUE(std::filesystem::exists(t.dir / "export" / file)) << file;
 
   Workbench reopened{Settings{}};
-  ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().error;
+  ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().status.text;
   MapSession& s = *reopened.session();
   EXPECT_EQ(s.sequence(), nullptr);
   s.play();  // nothing to play: the map stays as saved
@@ -398,7 +398,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
 
   test::writeText(t.dir / "bad.vdmap", "not a session");
   EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
-  EXPECT_NE(reopened.ui().error.find("bad.vdmap"), std::string::npos) << reopened.ui().error;
+  EXPECT_NE(reopened.ui().status.text.find("bad.vdmap"), std::string::npos) << reopened.ui().status.text;
   EXPECT_NE(reopened.session(), nullptr);  // the open session stays
 }
 

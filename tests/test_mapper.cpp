@@ -76,13 +76,13 @@ TEST(Mapper, CorrectedTrajectoryReplacesMatchingKeyframesAndCountsUnknownTimesta
   test::TempDir dir;
   test::writeText(dir / "fixed.txt",
                   "# corrected\n0.000000 1 2 3 0 0 0 1\n0.033333 9 9 9 0 0 0 1\n5.0 0 0 0 0 0 0 1\n");
-  const TrajectoryMatch m = mapper.graph().applyTrajectory(dir / "fixed.txt");
+  const TrajectoryMatch m = applyTrajectoryFile(mapper.graph(), dir / "fixed.txt");
   EXPECT_EQ(m.matched, 1);
   EXPECT_EQ(m.unknown, 2);  // t = 1/30 is a frame but not a keyframe; 5 s is nothing
   EXPECT_EQ(m.untouched, 1);
   EXPECT_EQ(mapper.graph().keyframe(0).T_W_K.translation(), Eigen::Vector3d(1, 2, 3));
   test::writeText(dir / "none.txt", "7.0 0 0 0 0 0 0 1\n");
-  EXPECT_THROW(mapper.graph().applyTrajectory(dir / "none.txt"), InputError);
+  EXPECT_THROW(applyTrajectoryFile(mapper.graph(), dir / "none.txt"), InputError);
   EXPECT_EQ(mapper.graph().keyframe(0).T_W_K.translation(), Eigen::Vector3d(1, 2, 3)) << "nothing changed";
 }
 

@@ -22,6 +22,7 @@ struct GuiArgs {
   std::string map;  ///< a saved session instead of a sequence
   gui::ScriptOptions script;
   std::vector<std::string> set;
+  std::string window_size;
 };
 
 // A stable fingerprint of the built-in scene, so a cached copy is regenerated when the scene
@@ -41,46 +42,53 @@ std::uint64_t sceneFingerprint(const BuiltinScene& scene) {
   return h;
 }
 
-// The built-in scene as a sequence in $XDG_CACHE_HOME/vdmap (generated on first use). With
+// The built-in scene as a sequence in $XDG_CACHE_HOME/vdmap, rendered on first use. With
 // --frames A:B only the first B frames of the walk are rendered, unless the whole walk is
 // cached already: each frame is rendered (and its noise drawn) on its own, so the first B
 // frames of the whole walk are those B frames.
-fs::path builtinSequence(const std::string& frames) {
+struct BuiltinCache {
+  BuiltinScene scene;
+  fs::path folder;  ///< the cached sequence to open (may not exist yet)
+  int count = 0;    ///< frames it holds
+  bool cached() const { return fs::exists(folder / "rgb.txt"); }
+};
+
+BuiltinCache builtinCache(const std::string& frames) {
+  BuiltinCache c{makeBuiltinScene(), {}, 0};
   const int last = frames.empty() ? -1 : parseFrameRange(frames).last;
-  const BuiltinScene scene = makeBuiltinScene();
-  const int total = static_cast<int>(scene.trajectory.size());
-  const int count = last < 0 ? total : std::min(last, total);
+  const int total = static_cast<int>(c.scene.trajectory.size());
+  c.count = last < 0 ? total : std::min(last, total);
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   const char* home = std::getenv("HOME");
   const fs::path cache = xdg && *xdg ? fs::path(xdg) : home && *home ? fs::path(home) / ".cache" : fs::temp_directory_path();
-  const auto fingerprint = static_cast<unsigned long long>(sceneFingerprint(scene));
+  const auto fingerprint = static_cast<unsigned long long>(sceneFingerprint(c.scene));
   const auto folder = [&](int n) {
     char name[64];
     std::snprintf(name, sizeof name, "builtin-%016llx-%d", fingerprint, n);
     return cache / "vdmap" / name;
   };
-  const fs::path whole = folder(total), dir = folder(count);
-  if (fs::exists(whole / "rgb.txt")) return whole;
-  if (fs::exists(dir / "rgb.txt")) return dir;
-  fs::create_directories(dir.parent_path());
+  c.folder = fs::exists(folder(total) / "rgb.txt") ? folder(total) : folder(c.count);
+  return c;
+}
+
+// Renders the built-in scene into c.folder (OSMesa, on the calling thread, which must not own
+// the window's context), reporting progress to `progress` and the terminal.
+std::string renderBuiltin(const BuiltinCache& c, const std::function<void(std::size_t, std::size_t)>& progress) {
+  fs::create_directories(c.folder.parent_path());
   render::SynthOptions options;
-  options.camera = scene.camera;
-  options.last_frame = count;
-  ProgressBar progress("rendering the built-in scene", static_cast<std::size_t>(count));
-  options.progress = [&progress](std::size_t done, std::size_t) { progress.update(done); };
-  // Rendered on its own thread: the OSMesa context is current there only, never on the thread
-  // that later owns the window's context.
-  std::exception_ptr error;
-  std::thread([&] {
-    try {
-      render::synthesizeSequence(scene.mesh, scene.trajectory, options, dir);
-    } catch (...) {
-      error = std::current_exception();
-    }
-  }).join();
-  // Another vdmap may have written the same folder meanwhile; then use that one.
-  if (error && !fs::exists(dir / "rgb.txt")) std::rethrow_exception(error);
-  return dir;
+  options.camera = c.scene.camera;
+  options.last_frame = c.count;
+  ProgressBar bar("rendering the built-in scene", static_cast<std::size_t>(c.count));
+  options.progress = [&](std::size_t done, std::size_t total) {
+    bar.update(done);
+    progress(done, total);
+  };
+  try {
+    render::synthesizeSequence(c.scene.mesh, c.scene.trajectory, options, c.folder);
+  } catch (...) {
+    if (!c.cached()) throw;  // another vdmap may have written the same folder meanwhile; then use that one
+  }
+  return c.folder.string();
 }
 
 void runGui(GuiArgs args, bool builtin) {
@@ -88,18 +96,44 @@ void runGui(GuiArgs args, bool builtin) {
   const bool scripted = args.script.exit;
   // A scripted run neither reads nor writes the user's settings, so tests are reproducible.
   const fs::path settings_file = scripted ? fs::path() : gui::settingsPath();
-  gui::Settings settings = scripted ? gui::Settings{} : gui::loadSettings(settings_file, &warning);
+  const gui::Settings saved = scripted ? gui::Settings{} : gui::loadSettings(settings_file, &warning);
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
+  // --set and --window-size hold for this run only: they are not saved (saveChangedSettings).
+  gui::Settings settings = saved;
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
+  if (!args.window_size.empty()) {
+    int w = 0, h = 0;
+    char rest = 0;
+    if (std::sscanf(args.window_size.c_str(), "%dx%d%c", &w, &h, &rest) != 2 || w < 320 || h < 240 || w > 16384 || h > 16384)
+      throw std::invalid_argument("--window-size '" + args.window_size + "': expected WxH within 320x240..16384x16384");
+    settings.window_width = w;
+    settings.window_height = h;
+  }
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
-  if (builtin) args.sequence.folder = builtinSequence(args.sequence.frames).string();
   gui::Workbench bench(settings, warning);
+  gui::Preparation prepare;
+  if (builtin) {
+    const BuiltinCache cache = builtinCache(args.sequence.frames);
+    args.sequence.folder = cache.folder.string();
+    if (!cache.cached())  // rendered while the window shows its progress
+      prepare = {"rendering the built-in scene", args.sequence,
+                 [cache](const std::function<void(std::size_t, std::size_t)>& progress) { return renderBuiltin(cache, progress); }};
+  }
   // A failure shows in the window, which stays open.
-  if (!args.map.empty()) bench.openSession(args.map);
-  else bench.open(args.sequence);
-  if (gui::runWorkbenchWindow(bench, args.script, settings_file.string()) != 0)
-    throw std::runtime_error(bench.ui().error);
+  if (!prepare.run) {
+    if (!args.map.empty()) bench.openSession(args.map);
+    else bench.open(args.sequence);
+  }
+  const int code = gui::runWorkbenchWindow(bench, args.script, settings_file.string(), std::move(prepare));
+  if (!settings_file.empty()) {
+    try {
+      gui::saveChangedSettings(settings_file, settings, bench.ui().settings);
+    } catch (const std::exception& e) {
+      std::cerr << "vdmap: warning: settings not saved: " << e.what() << "\n";
+    }
+  }
+  if (code != 0) throw std::runtime_error(bench.firstError());
 }
 
 void addGuiOptions(CLI::App& app, GuiArgs& args) {
@@ -109,7 +143,16 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option("--stats-json", args.script.stats_json,
                  "write frames, keyframes, Sigma_e, Sigma_e', t_g and the UI frame time once mapping is done");
   app.add_flag("--exit", args.script.exit, "close once the screenshot/stats are written (settings are not touched)");
-  app.add_option("--set", args.set, "KEY=VALUE before start (as in settings.json): " + gui::settingKeyList());
+  app.add_option("--set", args.set,
+                 "KEY=VALUE for this run (as in settings.json; not saved): " + gui::settingKeyList());
+  app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
+  app.add_option("--measure-latency", args.script.latency_runs,
+                 "scripted: after the screenshot, N merge-distance edits, each timed until its map is drawn (stats: "
+                 "slider_to_map_ms)");
+  app.add_option("--measure-orbit", args.script.orbit_frames,
+                 "scripted: then N frames orbiting the view (stats: orbit_frame_ms)");
+  app.add_option("--measure-idle", args.script.idle_seconds,
+                 "scripted: then S seconds of nothing happening (stats: idle_cpu_s, process CPU seconds)");
 }
 
 }  // namespace

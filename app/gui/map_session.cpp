@@ -10,6 +10,18 @@ namespace {
 using Clock = std::chrono::steady_clock;
 }  // namespace
 
+Transform MappingSnapshot::framePose(std::size_t i) const {
+  const FramePose& f = trajectory[i];
+  return keyframes[static_cast<std::size_t>(f.keyframe)].T_W_K * f.T_K_C;
+}
+
+std::vector<Transform> MappingSnapshot::trajectoryWorld() const {
+  std::vector<Transform> out;
+  out.reserve(trajectory.size());
+  for (std::size_t i = 0; i < trajectory.size(); ++i) out.push_back(framePose(i));
+  return out;
+}
+
 MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
     : sequence_(std::move(sequence)), mapper_params_(mapper), thresholds_(thresholds) {
   thresholds_.validate();
@@ -23,7 +35,7 @@ MapSession::MapSession(Session saved, const GlobalMapParams& thresholds)
   mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_);
   mapper_->graph() = std::move(saved.graph);
   mapped_ = target_ = saved.info.frames_mapped;
-  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back(k.T_W_K);
+  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity()});
   global_dirty_ = true;
   start();
 }
@@ -71,6 +83,7 @@ void MapSession::run() {
     } else {
       playing_ = false;
       idle_.notify_all();
+      if (on_change_) on_change_();  // mutex_ held: read safely
       wake_.wait(lock);
       continue;
     }
@@ -89,7 +102,9 @@ void MapSession::run() {
 
 void MapSession::publishMapping() {
   auto snap = std::make_shared<MappingSnapshot>();
+  snap->generation = ++mapping_generation_;
   snap->camera = mapper_->camera();
+  snap->mapper = mapper_params_;
   snap->pose_edits = pose_edits_;
   {
     std::lock_guard lock(mutex_);
@@ -104,8 +119,11 @@ void MapSession::publishMapping() {
   for (const Keyframe& k : mapper_->graph().keyframes())
     snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
-  std::lock_guard lock(mutex_);
-  mapping_ = std::move(snap);
+  {
+    std::lock_guard lock(mutex_);
+    mapping_ = std::move(snap);
+  }
+  notifyChange();
 }
 
 void MapSession::mapOneFrame() {
@@ -114,7 +132,8 @@ void MapSession::mapOneFrame() {
     const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i));
     const FrameReport report = mapper_->addFrame(frame);
     times_.push_back(report.ms);
-    trajectory_.push_back(frame.T_W_C);
+    const Transform& T_W_K = mapper_->graph().keyframe(report.keyframe).T_W_K;
+    trajectory_.push_back({report.keyframe, T_W_K.inverse() * frame.T_W_C});
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;
     publishMapping();
@@ -150,17 +169,21 @@ void MapSession::rebuildGlobal() {
     return;
   }
   snap->params = params;
-  std::lock_guard lock(mutex_);
-  snap->frames_mapped = mapped_;
-  snap->generation = ++generation_;
-  global_ = std::move(snap);
-  selection_dirty_ = true;
-  last_build_ = Clock::now();
-  last_build_s_ = secondsSince(t0);
+  {
+    std::lock_guard lock(mutex_);
+    snap->frames_mapped = mapped_;
+    snap->generation = ++generation_;
+    global_ = std::move(snap);
+    selection_dirty_ = true;
+    last_build_ = Clock::now();
+    last_build_s_ = secondsSince(t0);
+  }
+  notifyChange();
 }
 
 void MapSession::publishSelection() {
   auto snap = std::make_shared<SelectionSnapshot>();
+  snap->serial = ++selection_serial_;
   std::shared_ptr<const GlobalSnapshot> global;
   {
     std::lock_guard lock(mutex_);
@@ -176,8 +199,11 @@ void MapSession::publishSelection() {
     const Keyframe& k = graph.keyframe(snap->keyframe);
     snap->local = keptEllipsoids(k.container, global->params.filter, k.T_W_K, k.id);
   }
-  std::lock_guard lock(mutex_);
-  selection_ = std::move(snap);
+  {
+    std::lock_guard lock(mutex_);
+    selection_ = std::move(snap);
+  }
+  notifyChange();
 }
 
 void MapSession::restartMapper() {
@@ -300,7 +326,7 @@ void MapSession::setKeyframePose(int id, const Transform& T_W_K) {
 
 void MapSession::loadTrajectory(const std::string& file) {
   post([this, file] {
-    const TrajectoryMatch m = mapper_->graph().applyTrajectory(file);
+    const TrajectoryMatch m = applyTrajectoryFile(mapper_->graph(), file);
     publishMapping();
     std::lock_guard lock(mutex_);
     global_dirty_ = true;
@@ -353,6 +379,20 @@ std::shared_ptr<const SelectionSnapshot> MapSession::selection() const {
 PlayerStatus MapSession::status() const {
   std::lock_guard lock(mutex_);
   return {playing_, workLeft(), target_, error_, message_};
+}
+
+void MapSession::notifyChange() const {
+  std::function<void()> on_change;
+  {
+    std::lock_guard lock(mutex_);
+    on_change = on_change_;
+  }
+  if (on_change) on_change();
+}
+
+void MapSession::setOnChange(std::function<void()> on_change) {
+  std::lock_guard lock(mutex_);  // the worker reads it after taking the lock once
+  on_change_ = std::move(on_change);
 }
 
 void MapSession::waitIdle() {

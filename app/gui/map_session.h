@@ -33,9 +33,18 @@ struct KeyframeInfo {
   int frames_integrated = 0;
 };
 
+/// Where one mapped frame was: relative to the keyframe it went into, so that the trajectory
+/// follows a keyframe's pose when it is corrected.
+struct FramePose {
+  int keyframe = 0;
+  Transform T_K_C = Transform::Identity();
+};
+
 /// The mapping state after the last mapped frame (replaced after every frame).
 struct MappingSnapshot {
+  int generation = 0;          ///< 1, 2, ... per snapshot published by this session
   PinholeCamera camera;
+  MapperParams mapper;         ///< the parameters the keyframes were mapped with
   int frames_total = 0;
   int frames_mapped = 0;       ///< frames [0, frames_mapped) of the sequence are in the map
   int current_keyframe = -1;
@@ -43,8 +52,13 @@ struct MappingSnapshot {
   SharedSpan<StageTimes> times;        ///< per mapped frame
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
-  SharedSpan<Transform> trajectory;    ///< T_W_C per mapped frame
+  SharedSpan<FramePose> trajectory;    ///< per mapped frame
   int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
+
+  /// T_W_C of mapped frame i under the keyframe poses of this snapshot.
+  Transform framePose(std::size_t i) const;
+  /// framePose of every mapped frame.
+  std::vector<Transform> trajectoryWorld() const;
 };
 
 /// One global map build (replaced after every rebuild).
@@ -57,6 +71,7 @@ struct GlobalSnapshot {
 
 /// The selected keyframe's local map (replaced after a selection change and after every rebuild).
 struct SelectionSnapshot {
+  int serial = 0;       ///< 1, 2, ... per selection published by this session
   int keyframe = -1;    ///< -1: none selected
   int generation = 0;   ///< the GlobalSnapshot whose thresholds filtered it (0: none built yet)
   /// The keyframe's ellipsoids kept by those thresholds, world frame, container order; empty while
@@ -121,6 +136,10 @@ class MapSession {
   PlayerStatus status() const;
   /// Blocks until the worker has nothing left to do (tests and the scripted path).
   void waitIdle();
+  /// Called on the worker thread after each snapshot it publishes and when it falls idle
+  /// (the window wakes its event loop with it). Set before the first command; must be cheap
+  /// and thread-safe.
+  void setOnChange(std::function<void()> on_change);
 
  private:
   void run();
@@ -129,6 +148,7 @@ class MapSession {
   void restartMapper();
   void publishMapping();
   void publishSelection();
+  void notifyChange() const;  // calls on_change_ (mutex_ not held)
   void post(std::function<void()> command);
   void update(const std::function<void()>& change);  // under the lock, then wakes the worker
   bool workLeft() const;  // mutex_ held
@@ -140,9 +160,10 @@ class MapSession {
   MapperParams mapper_params_;
   std::unique_ptr<Mapper> mapper_;     // worker thread only
   AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
-  AppendLog<Transform> trajectory_;    // worker thread only (snapshots share it)
+  AppendLog<FramePose> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
   int pose_edits_ = 0;                 // worker thread only
+  int mapping_generation_ = 0, selection_serial_ = 0;  // worker thread only
 
   mutable std::mutex mutex_;
   std::condition_variable wake_, idle_;
@@ -161,6 +182,7 @@ class MapSession {
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
   std::shared_ptr<const SelectionSnapshot> selection_;
+  std::function<void()> on_change_;
   int generation_ = 0;
   std::thread worker_;
 };

@@ -6,6 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/parameter_table.h"
 #include "mapping/core/atomic_file.h"
 #include "render/colormap.h"
 
@@ -17,23 +18,41 @@ namespace {
 
 // The settings file's sections whose keys --set takes.
 constexpr const char* kSetSections[] = {"thresholds", "rerun", "view"};
+using app::MappingParams;
+using app::Parameter;
+
+MappingParams paramsOf(const Settings& s) { return {s.mapper, s.thresholds}; }
+
+const char* sectionOf(const Parameter& p) { return p.live ? "thresholds" : "rerun"; }
+
+json valueJson(const Parameter& p, double v) {
+  switch (p.kind) {
+    case Parameter::Kind::kBool: return v != 0;
+    case Parameter::Kind::kChoice: return formatValue(p, v);
+    case Parameter::Kind::kInt: return static_cast<long long>(v);
+    case Parameter::Kind::kReal: return v;
+  }
+  return v;
+}
+
+// A settings-file value as the text parseValue reads (numbers, booleans and names as they are);
+// anything else (an array, an object, null) is refused naming the key.
+std::string valueText(const Parameter& p, const json& v) {
+  if (v.is_string()) {
+    if (p.kind == Parameter::Kind::kChoice) return v.get<std::string>();
+    throw std::invalid_argument(std::string(p.key) + ": expected " +
+                                (p.kind == Parameter::Kind::kBool ? "true or false" : "a number") + ", got '" +
+                                v.get<std::string>() + "'");
+  }
+  if (v.is_boolean() || v.is_number()) return v.dump();
+  throw std::invalid_argument(std::string(p.key) + ": expected " + validityText(p) + ", got " + v.dump());
+}
 
 json toJson(const Settings& s) {
-  const GlobalMapParams& g = s.thresholds;
-  return {
-      {"thresholds",
-       {{"sensor_model", sensorModelName(g.filter.model)},
-        {"filter_sigma_factor", g.filter.filter_sigma_factor},
-        {"min_points", g.filter.min_points},
-        {"tau_group", g.tau_group},
-        {"merge_distance", g.merge_distance_m},
-        {"occlusion_removal", g.occlusion_removal},
-        {"occlusion_distance", g.occlusion_distance_m},
-        {"occlusion_angle", g.occlusion_angle_deg}}},
-      {"rerun",
-       {{"cell_size", s.mapper.local_map.cell_size_px},
-        {"tau", s.mapper.keyframes.tau},
-        {"orb_features", s.mapper.features.orb_features}}},
+  const MappingParams params = paramsOf(s);
+  json j = {
+      {"thresholds", json::object()},
+      {"rerun", json::object()},
       {"view",
        {{"color", render::colorModeName(s.color)},
         {"show_ellipsoids", s.show_ellipsoids},
@@ -41,64 +60,75 @@ json toJson(const Settings& s) {
         {"show_graph", s.show_graph},
         {"show_trajectory", s.show_trajectory},
         {"ellipsoid_sigma", s.ellipsoid_sigma},
-        {"play_fps", s.play_fps}}},
+        {"play_fps", s.play_fps},
+        {"up_axis", kUpAxisNames[static_cast<int>(s.up_axis)]},
+        {"container_grid", s.container_grid},
+        {"container_bounds", s.container_bounds}}},
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
   };
+  for (const Parameter& p : parameterTable()) j[sectionOf(p)][std::string(p.key)] = valueJson(p, p.get(params));
+  return j;
 }
 
-// Copies the value at j[key] into `out` when present (json type errors propagate).
+// Copies section[key] into `out` when present; a value of the wrong type is refused naming it.
 template <typename T>
-void read(const json& j, const char* key, T& out) {
-  if (j.contains(key)) out = j.at(key).get<T>();
+void read(const json& section, const char* section_name, const char* key, T& out) {
+  if (!section.contains(key)) return;
+  try {
+    out = section.at(key).get<T>();
+  } catch (const json::exception&) {
+    const char* expected = std::is_same_v<T, bool> ? "true or false" : std::is_arithmetic_v<T> ? "a number" : "a string";
+    throw std::invalid_argument(std::string(section_name) + "." + key + ": expected " + expected + ", got " +
+                                section.at(key).dump());
+  }
 }
 
 Settings fromJson(const json& j) {
   Settings s;
   if (!j.is_object()) throw std::invalid_argument("expected a JSON object");
-  if (j.contains("thresholds")) {
-    const json& t = j.at("thresholds");
-    GlobalMapParams& g = s.thresholds;
-    if (t.contains("sensor_model")) g.filter.model = parseSensorModel(t.at("sensor_model").get<std::string>());
-    read(t, "filter_sigma_factor", g.filter.filter_sigma_factor);
-    read(t, "min_points", g.filter.min_points);
-    read(t, "tau_group", g.tau_group);
-    read(t, "merge_distance", g.merge_distance_m);
-    read(t, "occlusion_removal", g.occlusion_removal);
-    read(t, "occlusion_distance", g.occlusion_distance_m);
-    read(t, "occlusion_angle", g.occlusion_angle_deg);
-    g.validate();
+  // The mapping parameters, each read and checked by the parameter table (as --set and the
+  // command line do); keys the table does not know are left alone.
+  MappingParams params = paramsOf(s);
+  for (const Parameter& p : parameterTable()) {
+    const char* section = sectionOf(p);
+    if (!j.contains(section) || !j.at(section).contains(p.key)) continue;
+    try {
+      setFromText(p, params, valueText(p, j.at(section).at(std::string(p.key))));
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string(section) + "." + e.what());
+    }
   }
-  if (j.contains("rerun")) {
-    const json& r = j.at("rerun");
-    read(r, "cell_size", s.mapper.local_map.cell_size_px);
-    read(r, "tau", s.mapper.keyframes.tau);
-    read(r, "orb_features", s.mapper.features.orb_features);
-    if (s.mapper.local_map.cell_size_px < 1 || s.mapper.local_map.cell_size_px > 64)
-      throw std::invalid_argument("rerun.cell_size must be in 1..64");
-    if (!(s.mapper.keyframes.tau > 0 && s.mapper.keyframes.tau <= 1))
-      throw std::invalid_argument("rerun.tau must be in (0, 1]");
-    if (s.mapper.features.orb_features < 1) throw std::invalid_argument("rerun.orb_features must be >= 1");
-  }
+  validate(params);
+  s.mapper = params.mapper;
+  s.thresholds = params.global;
   if (j.contains("view")) {
     const json& v = j.at("view");
-    if (v.contains("color")) s.color = render::parseColorMode(v.at("color").get<std::string>());
-    read(v, "show_ellipsoids", s.show_ellipsoids);
-    read(v, "show_frustums", s.show_frustums);
-    read(v, "show_graph", s.show_graph);
-    read(v, "show_trajectory", s.show_trajectory);
-    read(v, "ellipsoid_sigma", s.ellipsoid_sigma);
-    read(v, "play_fps", s.play_fps);
+    std::string color = render::colorModeName(s.color), up = kUpAxisNames[static_cast<int>(s.up_axis)];
+    read(v, "view", "color", color);
+    s.color = render::parseColorMode(color);
+    read(v, "view", "show_ellipsoids", s.show_ellipsoids);
+    read(v, "view", "show_frustums", s.show_frustums);
+    read(v, "view", "show_graph", s.show_graph);
+    read(v, "view", "show_trajectory", s.show_trajectory);
+    read(v, "view", "ellipsoid_sigma", s.ellipsoid_sigma);
+    read(v, "view", "play_fps", s.play_fps);
+    read(v, "view", "up_axis", up);
+    const auto it = std::find(std::begin(kUpAxisNames), std::end(kUpAxisNames), up);
+    if (it == std::end(kUpAxisNames)) throw std::invalid_argument("view.up_axis must be data, +z, +y or -y, got '" + up + "'");
+    s.up_axis = static_cast<UpAxis>(it - std::begin(kUpAxisNames));
+    read(v, "view", "container_grid", s.container_grid);
+    read(v, "view", "container_bounds", s.container_bounds);
     if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10)) throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
     if (!(s.play_fps >= 0 && s.play_fps <= 1000)) throw std::invalid_argument("view.play_fps must be in [0, 1000]");
   }
   if (j.contains("window")) {
-    read(j.at("window"), "width", s.window_width);
-    read(j.at("window"), "height", s.window_height);
+    read(j.at("window"), "window", "width", s.window_width);
+    read(j.at("window"), "window", "height", s.window_height);
     if (s.window_width < 320 || s.window_height < 240 || s.window_width > 16384 || s.window_height > 16384)
       throw std::invalid_argument("window size must be in 320x240..16384x16384");
   }
-  read(j, "last_sequence", s.last_sequence);
+  read(j, "settings", "last_sequence", s.last_sequence);
   return s;
 }
 
@@ -128,6 +158,33 @@ void saveSettings(const fs::path& file, const Settings& settings) {
   writeFileAtomically(file, toJson(settings).dump(2) + "\n");
 }
 
+void saveChangedSettings(const fs::path& file, const Settings& at_start, const Settings& at_end) {
+  const json start = toJson(at_start), end = toJson(at_end);
+  if (start == end) return;
+  json saved = json::object();
+  if (fs::exists(file)) {
+    try {
+      std::ifstream in(file);
+      if (!in) throw std::runtime_error("cannot be read");
+      saved = json::parse(in);
+      fromJson(saved);  // the same checks as loading
+    } catch (const std::exception& e) {
+      throw std::runtime_error(file.string() + " is not valid settings (" + e.what() +
+                               "); left as it is, repair or delete it to save settings again");
+    }
+  }
+  for (const auto& [section, values] : end.items()) {
+    if (!values.is_object()) {
+      if (values != start.at(section)) saved[section] = values;
+      continue;
+    }
+    for (const auto& [key, value] : values.items())
+      if (value != start.at(section).at(key)) saved[section][key] = value;
+  }
+  fs::create_directories(file.parent_path());
+  writeFileAtomically(file, saved.dump(2) + "\n");
+}
+
 bool rerunParamsDiffer(const Settings& a, const Settings& b) { return toJson(a).at("rerun") != toJson(b).at("rerun"); }
 
 std::string settingKeyList() {
@@ -145,17 +202,22 @@ void applySetting(Settings& settings, const std::string& key_value) {
   const auto eq = key_value.find('=');
   if (eq == std::string::npos) throw std::invalid_argument("--set '" + key_value + "': expected KEY=VALUE");
   const std::string key = key_value.substr(0, eq), value = key_value.substr(eq + 1);
-  // Re-use the JSON reader so both paths accept and check the same keys and ranges.
-  json j = toJson(settings);
-  const json parsed = json::parse(value, nullptr, false);
-  const json v = parsed.is_discarded() ? json(value) : parsed;
-  const auto section = std::find_if(std::begin(kSetSections), std::end(kSetSections),
-                                    [&](const char* name) { return j[name].contains(key); });
-  if (section == std::end(kSetSections)) throw std::invalid_argument("--set '" + key + "': unknown key (see vdmap gui --help)");
-  j[*section][key] = v;
   try {
+    if (const Parameter* p = findParameter(key)) {  // a mapping parameter: the table's check
+      MappingParams params = paramsOf(settings);
+      setFromText(*p, params, value);
+      validate(params);
+      settings.mapper = params.mapper;
+      settings.thresholds = params.global;
+      return;
+    }
+    // A view key: through the settings file's reader, so both accept and check the same.
+    json j = toJson(settings);
+    if (!j["view"].contains(key)) throw std::invalid_argument("unknown key (see vdmap gui --help)");
+    const json parsed = json::parse(value, nullptr, false);
+    j["view"][key] = parsed.is_discarded() ? json(value) : parsed;
     settings = fromJson(j);
-  } catch (const std::exception& e) {
+  } catch (const std::invalid_argument& e) {
     throw std::invalid_argument("--set '" + key_value + "': " + e.what());
   }
 }

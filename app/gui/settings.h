@@ -11,6 +11,11 @@
 
 namespace vdmap::app::gui {
 
+/// Which world direction the 3-D view keeps up (and orbits about).
+enum class UpAxis { kData, kPlusZ, kPlusY, kMinusY };
+/// Names in the settings file and --set, indexed by UpAxis.
+inline constexpr const char* kUpAxisNames[] = {"data", "+z", "+y", "-y"};
+
 /// Everything that persists between runs. Defaults are the library's defaults.
 struct Settings {
   GlobalMapParams thresholds;           ///< live: changing one rebuilds the global map
@@ -20,6 +25,9 @@ struct Settings {
   bool show_frustums = true, show_graph = true, show_trajectory = true;
   float ellipsoid_sigma = 2.f;
   float play_fps = 0.f;                 ///< playback limit, frames per second; 0: as fast as mapping goes
+  UpAxis up_axis = UpAxis::kData;       ///< kData: estimated from the cameras and the map's floor
+  bool container_grid = false;          ///< the container view's cell grid
+  bool container_bounds = true;         ///< the container view's image outline
   int window_width = 1600, window_height = 900;
   std::string last_sequence;
 };
@@ -34,6 +42,13 @@ Settings loadSettings(const std::filesystem::path& file, std::string* warning);
 
 /// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
 void saveSettings(const std::filesystem::path& file, const Settings& settings);
+
+/// Writes into `file` the keys whose value differs between `at_start` and `at_end` (what the user
+/// changed during this run), keeping every other key of the file as it is: values given with
+/// --set and not changed since are not saved, nor do they undo what another run saved. Creates
+/// the file (and folder) when missing; writes nothing when nothing changed. A file that exists
+/// but is not valid settings is never replaced: throws std::runtime_error saying so, naming it.
+void saveChangedSettings(const std::filesystem::path& file, const Settings& at_start, const Settings& at_end);
 
 /// Whether a and b differ in a re-run parameter (a key of the settings file's "rerun" section),
 /// so that switching between them means re-mapping the sequence.

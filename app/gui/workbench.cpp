@@ -6,8 +6,39 @@
 #include <Eigen/Geometry>
 
 #include "mapping/export/map_export.h"
+#include "render/map_scene.h"
 
 namespace vdmap::app::gui {
+namespace fs = std::filesystem;
+namespace {
+
+std::string absolute(const std::string& path) {
+  if (path.empty()) return path;
+  std::error_code ignored;
+  const fs::path p = fs::absolute(path, ignored);
+  return (p.empty() ? fs::path(path) : p).lexically_normal().string();
+}
+
+}  // namespace
+
+const std::vector<std::pair<const char*, const char*>>& keyHelp() {
+  static const std::vector<std::pair<const char*, const char*>> keys = {
+      {"Space", "play / pause"},
+      {"Right / Left", "one frame forward / back (back re-maps from the start)"},
+      {"K", "map to the next keyframe"},
+      {"F", "frame the map (keeps the direction; the view follows the map again)"},
+      {"R", "reset the view (default direction about the up axis)"},
+      {"H, F1", "this help"},
+      {"Esc", "close the help, leave \"view from keyframe\""},
+      {"Ctrl+Z", "undo the last pose edit"},
+      {"left drag", "orbit about the up axis"},
+      {"right / middle drag, Shift + left drag", "pan"},
+      {"wheel", "zoom"},
+      {"click", "pick an ellipsoid (its keyframe is selected)"},
+      {"container view: wheel, drag", "zoom, pan"},
+  };
+  return keys;
+}
 
 int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px, float y_px,
                   float radius_px) {
@@ -33,8 +64,18 @@ int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCa
 }
 
 glm::vec3 rotationToEulerDeg(const Eigen::Matrix3d& R) {
-  const Eigen::Vector3d zyx = R.eulerAngles(2, 1, 0) * (180.0 / M_PI);
-  return {static_cast<float>(zyx[2]), static_cast<float>(zyx[1]), static_cast<float>(zyx[0])};
+  // R = Rz(yaw) Ry(pitch) Rx(roll): R(2,0) = -sin(pitch), so pitch = asin(-R(2,0)) lies within
+  // +-90 degrees; Eigen's eulerAngles would instead keep yaw in [0, 180] and let pitch pass 90.
+  constexpr double kDeg = 180.0 / M_PI;
+  const double pitch = std::asin(std::clamp(-R(2, 0), -1.0, 1.0));
+  double roll = 0.0, yaw = 0.0;
+  if (std::abs(R(2, 0)) < 1.0 - 1e-9) {
+    roll = std::atan2(R(2, 1), R(2, 2));
+    yaw = std::atan2(R(1, 0), R(0, 0));
+  } else {  // gimbal lock: only yaw - roll (or yaw + roll) is defined; roll 0
+    yaw = std::atan2(-R(0, 1), R(1, 1));
+  }
+  return {static_cast<float>(roll * kDeg), static_cast<float>(pitch * kDeg), static_cast<float>(yaw * kDeg)};
 }
 
 Eigen::Matrix3d eulerDegToRotation(const glm::vec3& deg) {
@@ -47,57 +88,71 @@ Eigen::Matrix3d eulerDegToRotation(const glm::vec3& deg) {
 
 Workbench::Workbench(Settings settings, std::string warning) {
   ui_.settings = std::move(settings);
-  ui_.warning = std::move(warning);
   ui_.sequence_text = ui_.settings.last_sequence;
+  if (!warning.empty()) report(StatusLine::Kind::kWarning, std::move(warning));
+}
+
+void Workbench::report(StatusLine::Kind kind, std::string text) {
+  if (kind == StatusLine::Kind::kError && first_error_.empty()) first_error_ = text;
+  ui_.status = {kind, std::move(text), ui_.status.serial + 1};
 }
 
 bool Workbench::open(const SequenceArgs& args) {
+  SequenceArgs absolute_args = args;
+  absolute_args.folder = absolute(args.folder);
   try {
-    TumSequence sequence = openSequence(args);
+    TumSequence sequence = openSequence(absolute_args);
     auto session = std::make_unique<MapSession>(std::move(sequence), ui_.settings.mapper, ui_.settings.thresholds);
     session->setFps(ui_.settings.play_fps);
     session_ = std::move(session);  // the old session (if any) stops here
+    ui_.params = {ui_.settings.mapper, ui_.settings.thresholds};
   } catch (const std::exception& e) {
-    ui_.error = e.what();
+    report(StatusLine::Kind::kError, e.what());
     return false;
   }
-  opened(args.folder);
+  opened(absolute_args.folder);
   return true;
 }
 
 bool Workbench::openSession(const std::string& file) {
+  const std::string path = absolute(file);
   try {
-    Session saved = loadSession(file);
-    const GlobalMapParams thresholds = saved.info.global;
-    session_ = std::make_unique<MapSession>(std::move(saved), thresholds);
-    ui_.settings.thresholds = thresholds;
+    Session saved = loadSession(path);
+    // The session's own parameters, shown and used; the user's settings stay as they are.
+    const MappingParams params{saved.info.mapper, saved.info.global};
+    session_ = std::make_unique<MapSession>(std::move(saved), params.global);
+    ui_.params = params;
   } catch (const std::exception& e) {
-    ui_.error = e.what();
+    report(StatusLine::Kind::kError, e.what());
     return false;
   }
-  opened(file);
+  opened(path);
   return true;
 }
 
 bool Workbench::openPath(const std::string& path) {
-  const std::filesystem::path p(path);
-  if (p.extension() == ".vdmap" && !std::filesystem::is_directory(p)) return openSession(path);
+  const fs::path p(path);
+  if (p.extension() == ".vdmap" && !fs::is_directory(p)) return openSession(path);
   return open({path, "", "", ""});
 }
 
 void Workbench::opened(const std::string& path) {
   ui_.settings.last_sequence = path;
   ui_.sequence_text = path;
-  ui_.error.clear();
+  report(StatusLine::Kind::kSuccess, "opened " + path);
   ui_.selected_keyframe = ui_.view_from_keyframe = -1;  // as the new session's selection
   ui_.picked.reset();
-  ui_.camera_framed = false;
+  ui_.follow_map = true;
+  framed_generation_ = -1;
   pose_edits_sent_ = 0;  // a new session has handled none
+  pose_undo_.clear();
+  shown_error_.clear();
+  shown_message_.clear();
 }
 
 void Workbench::exportMap() {
   if (!session_) return;
-  const std::string dir = ui_.export_text;
+  const std::string dir = absolute(ui_.export_text);
   session_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
     MapExportOptions options;
     options.run_stats = {{"frames", mapper.framesMapped()}, {"source", "vdmap workbench"}};
@@ -108,7 +163,7 @@ void Workbench::exportMap() {
 
 void Workbench::saveSession() {
   if (!session_) return;
-  const std::string file = ui_.session_text;
+  const std::string file = absolute(ui_.session_text);
   session_->withMapper([file](const Mapper& mapper, const GlobalSnapshot& global) {
     SessionInfo info = sessionInfo(mapper, global.params);
     info.frames_mapped = std::max(info.frames_mapped, global.frames_mapped);  // a re-saved session
@@ -120,23 +175,66 @@ void Workbench::saveSession() {
 void Workbench::applyThresholds() {
   if (!session_) return;
   try {
-    session_->setThresholds(ui_.settings.thresholds);
+    session_->setThresholds(ui_.params.global);
   } catch (const std::exception& e) {
-    ui_.error = e.what();
+    report(StatusLine::Kind::kError, e.what());
+    return;
   }
+  if (!savedSession()) ui_.settings.thresholds = ui_.params.global;
 }
 
 void Workbench::rerun() {
-  if (session_) session_->rerun(ui_.settings.mapper);
+  if (!session_ || savedSession()) return;
+  try {
+    ui_.params.mapper.validate();
+  } catch (const std::exception& e) {
+    report(StatusLine::Kind::kError, e.what());
+    return;
+  }
+  session_->rerun(ui_.params.mapper);
+  ui_.settings.mapper = ui_.params.mapper;
 }
+
+bool Workbench::editParameter(const Parameter& p, double value) {
+  MappingParams edited = ui_.params;
+  try {
+    checkValue(p, value);
+    p.set(edited, value);
+    validate(edited);
+  } catch (const std::exception& e) {
+    report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  ui_.params = edited;
+  if (p.live) applyThresholds();
+  return true;
+}
+
+double Workbench::inUse(const Parameter& p) const {
+  if (!session_) return p.get(ui_.params);
+  MappingParams used = ui_.params;
+  if (p.live) {
+    const auto global = session_->global();
+    if (!global) return p.get(ui_.params);
+    used.global = global->params;
+  } else {
+    used.mapper = session_->mapping()->mapper;
+  }
+  return p.get(used);
+}
+
+bool Workbench::pending(const Parameter& p) const { return p.get(ui_.params) != inUse(p); }
 
 void Workbench::resetToDefaults() {
   Settings defaults;
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
-  const bool rerun_needed = session_ && rerunParamsDiffer(ui_.settings, defaults);
+  const bool rerun_needed = session_ && !savedSession() && !(MappingParams{session_->mapping()->mapper, {}} ==
+                                                              MappingParams{defaults.mapper, {}});
   ui_.settings = defaults;
+  ui_.params.global = defaults.thresholds;
+  if (!savedSession()) ui_.params.mapper = defaults.mapper;  // a saved session keeps the parameters it was mapped with
   ui_.reset_layout = true;
   applyThresholds();
   if (session_) session_->setFps(ui_.settings.play_fps);
@@ -169,53 +267,177 @@ void Workbench::syncPoseFields() {
   if (!T.isApprox(pose_shown_, 1e-12)) showPose(T);
 }
 
+void Workbench::sendPose(int id, const Transform& T_W_K) {
+  session_->setKeyframePose(id, T_W_K);
+  ++pose_edits_sent_;
+}
+
 void Workbench::applyPoseEdit() {
   if (!session_ || ui_.selected_keyframe < 0) return;
   Transform T = Transform::Identity();
   T.linear() = eulerDegToRotation(ui_.pose_rotation_deg);
   T.translation() = Eigen::Vector3d(ui_.pose_translation_m.x, ui_.pose_translation_m.y, ui_.pose_translation_m.z);
-  session_->setKeyframePose(ui_.selected_keyframe, T);
+  sendPose(ui_.selected_keyframe, T);
   pose_shown_ = T;  // the snapshot will hold T: no refill once it does
-  ++pose_edits_sent_;
+}
+
+void Workbench::beginPoseEdit() {
+  if (!session_ || ui_.selected_keyframe < 0) return;
+  pose_undo_.emplace_back(ui_.selected_keyframe, pose_shown_);
+}
+
+bool Workbench::undoPoseEdit() {
+  if (!session_ || pose_undo_.empty()) return false;
+  const auto [id, T] = pose_undo_.back();
+  pose_undo_.pop_back();
+  sendPose(id, T);
+  if (id == ui_.selected_keyframe) showPose(T);
+  report(StatusLine::Kind::kInfo, "pose of K" + std::to_string(id) + " put back");
+  return true;
 }
 
 void Workbench::loadTrajectory() {
-  if (session_) session_->loadTrajectory(ui_.trajectory_text);
+  if (session_) session_->loadTrajectory(absolute(ui_.trajectory_text));
+}
+
+void Workbench::sync() {
+  if (!session_) return;
+  syncPoseFields();
+  const PlayerStatus st = session_->status();
+  if (st.error != shown_error_) {
+    shown_error_ = st.error;
+    if (!st.error.empty()) report(StatusLine::Kind::kError, st.error);
+  }
+  if (st.message != shown_message_) {
+    shown_message_ = st.message;
+    if (!st.message.empty()) report(StatusLine::Kind::kSuccess, st.message);
+  }
+  const auto global = session_->global();
+  const int generation = global ? global->generation : 0;
+  if (ui_.picked && ui_.picked_generation != generation) ui_.picked.reset();  // it may not exist in the new map
+  if (ui_.follow_map && ui_.view_from_keyframe < 0 && generation != framed_generation_ && global &&
+      !global->map.ellipsoids.empty()) {
+    if (framed_generation_ < 0) resetView();
+    else frameMap();
+  }
+}
+
+std::vector<glm::vec3> Workbench::framePoints() const {
+  std::vector<glm::vec3> points;
+  if (!session_) return points;
+  if (const auto global = session_->global())
+    for (const Ellipsoid& e : global->map.ellipsoids) points.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
+  for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
+    const Eigen::Vector3d t = mapping->framePose(i).translation();
+    points.emplace_back(t.x(), t.y(), t.z());
+  }
+  return points;
+}
+
+void Workbench::frameMap() {
+  const auto global = session_ ? session_->global() : nullptr;
+  framed_generation_ = global ? global->generation : 0;
+  const auto [lo, hi] = render::robustBounds(framePoints());
+  ui_.camera.up = upVector();
+  ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.follow_map = true;
+  ui_.view_from_keyframe = -1;
 }
 
 void Workbench::resetView() {
+  const auto global = session_ ? session_->global() : nullptr;
+  framed_generation_ = global ? global->generation : 0;
+  const auto [lo, hi] = render::robustBounds(framePoints());
+  ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
-  std::vector<glm::vec3> points;
-  if (session_) {
-    if (const auto global = session_->global())
-      for (const Ellipsoid& e : global->map.ellipsoids) points.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-    const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
-    for (const Transform& T : mapping->trajectory)
-      points.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
-  }
-  const auto [lo, hi] = render::robustBounds(points);
-  ui_.camera = render::OrbitCamera::framing(lo, hi);
-  ui_.camera_framed = !points.empty();
 }
 
-render::ViewCamera Workbench::view(int width, int height) const {
+void Workbench::orbit(float d_yaw, float d_pitch) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  ui_.camera.orbit(d_yaw, d_pitch);
+}
+
+void Workbench::pan(float dx_px, float dy_px) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  // Metres per pixel at the target's distance, so the point under the cursor follows it.
+  const float m_per_px = 2.f * ui_.camera.distance_m * std::tan(glm::radians(ui_.camera.fov_y_deg) * 0.5f) /
+                         static_cast<float>(std::max(1, ui_.view_height));
+  ui_.camera.pan(-dx_px * m_per_px, dy_px * m_per_px);
+}
+
+void Workbench::zoom(float wheel_steps) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  ui_.camera.dolly(std::pow(0.9f, wheel_steps));
+}
+
+glm::vec3 Workbench::upVector() const {
+  switch (ui_.settings.up_axis) {
+    case UpAxis::kPlusZ: return {0.f, 0.f, 1.f};
+    case UpAxis::kPlusY: return {0.f, 1.f, 0.f};
+    case UpAxis::kMinusY: return {0.f, -1.f, 0.f};
+    case UpAxis::kData: break;
+  }
+  if (!session_) return {0.f, 0.f, 1.f};
+  const auto mapping = session_->mapping();
+  const auto global = session_->global();
+  const std::vector<Transform> cameras = mapping->trajectoryWorld();
+  return render::estimateUp(cameras, global ? std::span<const Ellipsoid>(global->map.ellipsoids)
+                                            : std::span<const Ellipsoid>());
+}
+
+void Workbench::key(KeyAction action) {
+  MapSession* s = session_.get();
+  switch (action) {
+    case KeyAction::kPlayPause:
+      if (s) s->status().playing ? s->pause() : s->play();
+      break;
+    case KeyAction::kStepForward:
+      if (s) s->step();
+      break;
+    case KeyAction::kStepBack:
+      if (s && s->mapping()->frames_mapped >= 2) s->seek(s->mapping()->frames_mapped - 2);
+      break;
+    case KeyAction::kNextKeyframe:
+      if (s) s->stepToKeyframe();
+      break;
+    case KeyAction::kFrameMap: frameMap(); break;
+    case KeyAction::kResetView: resetView(); break;
+    case KeyAction::kHelp: ui_.show_help = !ui_.show_help; break;
+    case KeyAction::kEscape:
+      ui_.show_help = false;
+      ui_.view_from_keyframe = -1;
+      break;
+    case KeyAction::kUndo: undoPoseEdit(); break;
+  }
+}
+
+ViewportView Workbench::view(int width, int height) const {
   if (session_ && ui_.view_from_keyframe >= 0) {
     const auto mapping = session_->mapping();
-    if (ui_.view_from_keyframe < static_cast<int>(mapping->keyframes.size()))
-      return render::ViewCamera::fromPinhole(mapping->camera,
-                                             mapping->keyframes[static_cast<std::size_t>(ui_.view_from_keyframe)].T_W_K,
-                                             width, height);
+    if (ui_.view_from_keyframe < static_cast<int>(mapping->keyframes.size())) {
+      const PinholeCamera& c = mapping->camera;
+      const render::PixelRect r = render::letterbox(width, height, c.width, c.height);
+      const Transform& T_W_K = mapping->keyframes[static_cast<std::size_t>(ui_.view_from_keyframe)].T_W_K;
+      return {render::ViewCamera::fromPinhole(c, T_W_K, r.width, r.height), r};
+    }
   }
-  return ui_.camera.view(width, height);
+  return {ui_.camera.view(width, height), {0, 0, width, height}};
 }
 
 void Workbench::pick(float x_px, float y_px, int width, int height) {
   ui_.picked.reset();
   const auto global = session_ ? session_->global() : nullptr;
   if (!global) return;
-  const int i = pickEllipsoid(global->map.ellipsoids, view(width, height), x_px, y_px);
+  const ViewportView v = view(width, height);
+  const int i = pickEllipsoid(global->map.ellipsoids, v.camera, x_px - v.image.x, y_px - v.image.y);
   if (i < 0) return;
   ui_.picked = global->map.ellipsoids[static_cast<std::size_t>(i)];
+  ui_.picked_generation = global->generation;
   selectKeyframe(ui_.picked->keyframe);
 }
 

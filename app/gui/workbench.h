@@ -4,44 +4,78 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <vector>
 
 #include "app/commands.h"
 #include "app/gui/map_session.h"
 #include "app/gui/settings.h"
+#include "app/parameter_table.h"
 #include "render/view_camera.h"
 
 namespace vdmap::app::gui {
 
+/// The one status area: the last outcome of anything the user did (errors and successes).
+struct StatusLine {
+  enum class Kind { kInfo, kSuccess, kWarning, kError };
+  Kind kind = Kind::kInfo;
+  std::string text;  ///< empty: nothing to say
+  int serial = 0;    ///< increases with every report (the window notices news by it)
+};
+
 /// What only the UI edits (besides the persisted settings).
 struct UiState {
+  /// The user's settings: view options, and the parameters a newly opened sequence starts with.
+  /// Parameters applied while a sequence is open go into them too, a saved session's never.
   Settings settings;
+  /// The mapping parameters the sliders show: the open session's, as edited. A live one is sent
+  /// at once (editParameter); a re-run one waits for rerun().
+  MappingParams params;
   render::OrbitCamera camera;
-  bool camera_framed = false;     ///< the view was framed on a non-empty map once
+  /// The view frames the map whenever it grows, until the user orbits, pans or zooms;
+  /// F (frame) and R (reset) turn it back on.
+  bool follow_map = true;
   int view_from_keyframe = -1;    ///< >= 0: the 3-D view looks through this keyframe
   int selected_keyframe = -1;
   std::optional<Ellipsoid> picked;
+  int picked_generation = 0;      ///< the global map it was picked in (a new map clears it)
   glm::vec3 pose_translation_m{0.f};  ///< the selected keyframe's pose as edited
-  glm::vec3 pose_rotation_deg{0.f};   ///< roll (x), pitch (y), yaw (z): R = Rz Ry Rx
+  glm::vec3 pose_rotation_deg{0.f};   ///< roll (x), pitch (y, within +-90), yaw (z): R = Rz Ry Rx
   std::string sequence_text;      ///< the "open sequence" field
   std::string trajectory_text;    ///< the "load corrected trajectory" field
   std::string export_text = "vdmap_export";   ///< export folder
   std::string session_text = "map.vdmap";     ///< "save session" file
-  std::string error;              ///< shown in a red banner until dismissed
-  std::string warning;            ///< e.g. a corrupt settings file
-  bool reset_layout = false;      ///< windows go back to their default places next frame
+  StatusLine status;
+  bool show_help = false;         ///< the key and mouse overlay (H, F1)
+  bool reset_layout = false;      ///< panels go back to their default widths next frame
+  int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
+
+/// Keyboard actions (the window maps keys to them; the help overlay lists them).
+enum class KeyAction { kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kHelp, kEscape, kUndo };
+
+/// The keys and mouse actions, for the help overlay and the README: {keys, what they do}.
+const std::vector<std::pair<const char*, const char*>>& keyHelp();
 
 /// Picks the ellipsoid whose mean projects nearest to pixel (x, y) of `view` within
 /// `radius_px`, preferring the nearer one among those within a pixel of the best; -1 if none.
 int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px,
                   float y_px, float radius_px = 8.f);
 
-/// Euler angles (deg, R = Rz Ry Rx) <-> rotation.
+/// Euler angles (deg, R = Rz Ry Rx) <-> rotation. rotationToEulerDeg gives pitch (y) within
+/// [-90, 90] and roll, yaw within (-180, 180]; at +-90 pitch (gimbal lock) roll is 0.
 glm::vec3 rotationToEulerDeg(const Eigen::Matrix3d& R);
 Eigen::Matrix3d eulerDegToRotation(const glm::vec3& deg);
 
+/// The 3-D view's camera in a viewport, and where its image lies in the viewport (all of it,
+/// or the letterbox of "view from keyframe").
+struct ViewportView {
+  render::ViewCamera camera;
+  render::PixelRect image;  ///< top-left origin, viewport pixels
+};
+
 class Workbench {
  public:
+  /// `settings`: what the window starts with (the saved settings with any --set applied).
   explicit Workbench(Settings settings, std::string warning = {});
 
   UiState& ui() { return ui_; }
@@ -49,22 +83,40 @@ class Workbench {
   /// Null while no sequence is open.
   MapSession* session() { return session_.get(); }
 
+  /// Shows `text` in the status area (errors stay until the next report).
+  void report(StatusLine::Kind kind, std::string text);
+  /// The first error reported since construction ("" if none): a scripted run fails on it.
+  const std::string& firstError() const { return first_error_; }
+
   /// Opens a sequence (replacing the current one). On failure the current one stays, the
-  /// message goes to ui().error and false is returned: a bad folder never ends the app.
+  /// message goes to the status line and false is returned: a bad folder never ends the app.
   bool open(const SequenceArgs& args);
   /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
   bool openSession(const std::string& file);
   /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
   bool openPath(const std::string& path);
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
-  /// the session status).
+  /// the status line with the absolute path).
   void exportMap();
   /// Saves the session (.vdmap) into ui().session_text (on the worker, like exportMap).
   void saveSession();
-  /// Sends the edited thresholds to the session (a bad value goes to ui().error).
+  /// Sends the edited thresholds (ui().params.global) to the session (a bad value goes to the
+  /// status line); while a sequence is open they become the user's settings too.
   void applyThresholds();
-  /// Re-maps the sequence with the edited re-run parameters.
+  /// Re-maps the sequence with the edited re-run parameters (ui().params.mapper); while a
+  /// sequence is open they become the user's settings too.
   void rerun();
+  /// Sets parameter `p` as edited on a slider, checked as everywhere else (a refused value goes
+  /// to the status line and false is returned, the edit is dropped). Live ones are applied at
+  /// once; re-run ones stay pending until rerun().
+  bool editParameter(const Parameter& p, double value);
+  /// Whether `p` as edited is not (yet) what the shown map was made with: a re-run parameter not
+  /// re-run, or a threshold whose rebuild has not arrived.
+  bool pending(const Parameter& p) const;
+  /// The value of `p` the shown map was made with (the slider's value when nothing is pending).
+  double inUse(const Parameter& p) const;
+  /// True while a saved session (no sequence) is open: nothing to play or re-run.
+  bool savedSession() const { return session_ && !session_->sequence(); }
   /// Thresholds, re-run parameters and view options back to their defaults (window size and
   /// last sequence kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
@@ -72,15 +124,38 @@ class Workbench {
   void selectKeyframe(int id);
   /// Sends ui().pose_* as the selected keyframe's new pose.
   void applyPoseEdit();
-  /// Once per UI frame: refills ui().pose_* when the selected keyframe's pose changed under them
-  /// (a re-run, a trajectory file, seeking back, or a keyframe selected before it was mapped), so
-  /// an edit starts from the pose shown.
+  /// Remembers the selected keyframe's pose before an edit starts (a drag's first frame), so
+  /// undoPoseEdit can put it back.
+  void beginPoseEdit();
+  /// Puts back the pose from before the last edit (returns false when there is none).
+  bool undoPoseEdit();
+  bool canUndoPoseEdit() const { return !pose_undo_.empty(); }
+  /// Refills ui().pose_* when the selected keyframe's pose changed under them (a re-run, a
+  /// trajectory file, seeking back, or a keyframe selected before it was mapped), so an edit
+  /// starts from the pose shown.
   void syncPoseFields();
   void loadTrajectory();
-  /// Frames the current global map (or the trajectory) and leaves "view from keyframe".
+
+  /// Once per UI frame: pose fields, the session's news into the status line, the pick cleared
+  /// when the map changed, and the view re-framed while it follows the map.
+  void sync();
+  /// Frames the map (and the trajectory) in the 3-D viewport keeping the viewing direction, and
+  /// follows the map again (F).
+  void frameMap();
+  /// The default view of the whole map about the up axis, following the map again (R).
   void resetView();
-  /// The 3-D view's camera for a viewport of width x height.
-  render::ViewCamera view(int width, int height) const;
+  /// The user orbits, pans or zooms: the view stops following the map and leaves "view from
+  /// keyframe".
+  void orbit(float d_yaw, float d_pitch);
+  void pan(float dx_px, float dy_px);
+  void zoom(float wheel_steps);
+  /// The world's up direction for the view: the setting, or estimated from the data.
+  glm::vec3 upVector() const;
+  /// One keyboard action.
+  void key(KeyAction action);
+
+  /// The 3-D view in a viewport of width x height (framebuffer pixels).
+  ViewportView view(int width, int height) const;
   /// Click in the 3-D view at (x, y) of a width x height viewport: sets ui().picked and selects
   /// the ellipsoid's keyframe; a click on nothing clears the pick.
   void pick(float x_px, float y_px, int width, int height);
@@ -88,10 +163,17 @@ class Workbench {
  private:
   void opened(const std::string& path);
   void showPose(const Transform& T_W_K);
+  void sendPose(int id, const Transform& T_W_K);
+  // Points to frame: the global map's means and the camera positions.
+  std::vector<glm::vec3> framePoints() const;
 
   UiState ui_;
+  std::string first_error_;
   Transform pose_shown_ = Transform::Identity();  // what ui().pose_* were filled from or sent as
   int pose_edits_sent_ = 0;                        // to this session (MappingSnapshot::pose_edits)
+  std::vector<std::pair<int, Transform>> pose_undo_;  // (keyframe, pose before the edit)
+  std::string shown_error_, shown_message_;        // the session's, already reported
+  int framed_generation_ = -1;                     // the global map the view was last framed on
   std::unique_ptr<MapSession> session_;
 };
 

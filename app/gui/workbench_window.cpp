@@ -1,11 +1,16 @@
 #include "app/gui/workbench_window.h"
 
 #include <algorithm>
+#include <atomic>
 #include <chrono>
+#include <cmath>
 #include <cstdint>
 #include <cstdio>
+#include <ctime>
+#include <deque>
+#include <future>
 #include <iostream>
-#include <tuple>
+#include <thread>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -14,7 +19,6 @@
 #include <imgui.h>
 #include <imgui_stdlib.h>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include <Eigen/Eigenvalues>
 
@@ -23,242 +27,446 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "render/colormap.h"
-#include "render/container_renderer.h"
-#include "render/ellipsoid_renderer.h"
-#include "render/framebuffer.h"
-#include "render/map_scene.h"
-#include "render/primitive_renderer.h"
-#include "render/scene_lines.h"
+#include "render/map_mirror.h"
 
 namespace vdmap::app::gui {
 namespace {
 
 using Clock = std::chrono::steady_clock;
-constexpr float kLeftWidth = 370.f, kRightWidth = 410.f;
 constexpr float kBackground[3] = {0.13f, 0.13f, 0.15f};
-// Icosahedra (20 triangles) rather than level-1 spheres (80): at 2 sigma an ellipsoid covers a
-// few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
-constexpr render::EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
+constexpr float kLetterbox[3] = {0.05f, 0.05f, 0.06f};
+const ImVec4 kPendingColor(1.f, 0.7f, 0.25f, 1.f);
+const ImVec4 kKindColor[] = {{0.85f, 0.85f, 0.85f, 1}, {0.45f, 0.9f, 0.45f, 1}, {1.f, 0.8f, 0.3f, 1}, {1.f, 0.42f, 0.42f, 1}};
 
-// Raw depth as a colour image: viridis over 0..6 m, black where there is no measurement.
-cv::Mat depthToRgb(const cv::Mat& depth, double depth_scale) {
-  cv::Mat d8, bgr, rgb;
-  depth.convertTo(d8, CV_8U, 255.0 / (6.0 * depth_scale));
-  cv::applyColorMap(d8, bgr, cv::COLORMAP_VIRIDIS);
-  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
-  rgb.setTo(cv::Scalar::all(0), depth == 0);
-  return rgb;
+double processCpuSeconds() {
+  timespec t{};
+  clock_gettime(CLOCK_PROCESS_CPUTIME_ID, &t);
+  return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-// An RGB image (CV_8UC3) as a texture ImGui can show.
-class ImageTexture {
- public:
-  explicit ImageTexture(const render::Gl& gl) : gl_(&gl) { gl.GenTextures(1, &id_); }
-  ~ImageTexture() { gl_->DeleteTextures(1, &id_); }
-  ImageTexture(const ImageTexture&) = delete;
-  ImageTexture& operator=(const ImageTexture&) = delete;
+ImTextureID textureId(const render::Texture2D& t) {
+  return reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(t.id()));
+}
 
-  void set(const cv::Mat& rgb) {
-    if (rgb.empty()) return;
-    const cv::Mat image = rgb.isContinuous() ? rgb : rgb.clone();
-    gl_->BindTexture(GL_TEXTURE_2D, id_);
-    gl_->PixelStorei(GL_UNPACK_ALIGNMENT, 1);
-    gl_->TexImage2D(GL_TEXTURE_2D, 0, GL_RGB8, image.cols, image.rows, 0, GL_RGB, GL_UNSIGNED_BYTE, image.data);
-    gl_->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MIN_FILTER, GL_LINEAR);
-    gl_->TexParameteri(GL_TEXTURE_2D, GL_TEXTURE_MAG_FILTER, GL_LINEAR);
-    gl_->BindTexture(GL_TEXTURE_2D, 0);
-    width_ = image.cols;
-    height_ = image.rows;
-  }
-  void show(float width) const {
-    if (width_ == 0) return;
-    ImGui::Image(reinterpret_cast<ImTextureID>(static_cast<std::intptr_t>(id_)),
-                 ImVec2(width, width * static_cast<float>(height_) / static_cast<float>(width_)));
-  }
+ImU32 rgbColor(const glm::u8vec3& c) { return IM_COL32(c.r, c.g, c.b, 255); }
 
- private:
-  const render::Gl* gl_;
-  GLuint id_ = 0;
-  int width_ = 0, height_ = 0;
+// A tooltip for the last item, shown also when it is disabled (then it says why).
+void tip(const std::string& text) {
+  if (text.empty() || !ImGui::IsItemHovered(ImGuiHoveredFlags_AllowWhenDisabled)) return;
+  ImGui::BeginTooltip();
+  ImGui::PushTextWrapPos(ImGui::GetFontSize() * 32.f);
+  ImGui::TextUnformatted(text.c_str());
+  ImGui::PopTextWrapPos();
+  ImGui::EndTooltip();
+}
+
+// A horizontal colour ramp (viridis) from (x, y) of size w x h into `draw`.
+void drawRamp(ImDrawList* draw, ImVec2 at, float w, float h) {
+  constexpr int kSteps = 32;
+  for (int i = 0; i < kSteps; ++i) {
+    const float x0 = at.x + w * i / kSteps, x1 = at.x + w * (i + 1) / kSteps;
+    draw->AddRectFilled({x0, at.y}, {x1 + 0.5f, at.y + h}, rgbColor(render::colormap((i + 0.5f) / kSteps)));
+  }
+  draw->AddRect(at, {at.x + w, at.y + h}, IM_COL32(200, 200, 200, 160));
+}
+
+std::string metres(double m) {
+  char text[32];
+  if (m < 0.01) std::snprintf(text, sizeof text, "%.2f mm", m * 1e3);
+  else if (m < 1.0) std::snprintf(text, sizeof text, "%.1f mm", m * 1e3);
+  else std::snprintf(text, sizeof text, "%.2f m", m);
+  return text;
+}
+
+// Keys pressed since the last UI frame, kept by GLFW's key callback so that a tap shorter than
+// one frame is never lost (Dear ImGui 1.86 only keeps which keys are down at the frame's start).
+struct KeyQueue {
+  std::deque<std::pair<int, int>> presses;  // (GLFW key, modifiers)
+  int events = 0;                           // any input at all since the last frame
 };
 
-// Slider/drag over a double with a float-like format.
-bool editDouble(const char* label, double& value, double lo, double hi, const char* format = "%.3f") {
-  return ImGui::SliderScalar(label, ImGuiDataType_Double, &value, &lo, &hi, format);
+KeyQueue& keyQueue(GLFWwindow* window) { return *static_cast<KeyQueue*>(glfwGetWindowUserPointer(window)); }
+
+// Installed before Dear ImGui's, which chains to them.
+void installInputCallbacks(GLFWwindow* window) {
+  glfwSetKeyCallback(window, [](GLFWwindow* w, int key, int, int action, int mods) {
+    ++keyQueue(w).events;
+    if (action == GLFW_PRESS || (action == GLFW_REPEAT && (key == GLFW_KEY_LEFT || key == GLFW_KEY_RIGHT)))
+      keyQueue(w).presses.emplace_back(key, mods);
+  });
+  glfwSetCursorPosCallback(window, [](GLFWwindow* w, double, double) { ++keyQueue(w).events; });
+  glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int, int, int) { ++keyQueue(w).events; });
+  glfwSetScrollCallback(window, [](GLFWwindow* w, double, double) { ++keyQueue(w).events; });
+  glfwSetCharCallback(window, [](GLFWwindow* w, unsigned) { ++keyQueue(w).events; });
+  glfwSetWindowFocusCallback(window, [](GLFWwindow* w, int) { ++keyQueue(w).events; });
+  glfwSetCursorEnterCallback(window, [](GLFWwindow* w, int) { ++keyQueue(w).events; });
+  glfwSetFramebufferSizeCallback(window, [](GLFWwindow* w, int, int) { ++keyQueue(w).events; });
+  glfwSetWindowRefreshCallback(window, [](GLFWwindow* w) { ++keyQueue(w).events; });
 }
+
+std::optional<KeyAction> actionOf(int key, int mods) {
+  switch (key) {
+    case GLFW_KEY_SPACE: return KeyAction::kPlayPause;
+    case GLFW_KEY_RIGHT: return KeyAction::kStepForward;
+    case GLFW_KEY_LEFT: return KeyAction::kStepBack;
+    case GLFW_KEY_K: return KeyAction::kNextKeyframe;
+    case GLFW_KEY_F: return KeyAction::kFrameMap;
+    case GLFW_KEY_R: return KeyAction::kResetView;
+    case GLFW_KEY_H:
+    case GLFW_KEY_F1: return KeyAction::kHelp;
+    case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
+    case GLFW_KEY_Z:
+      if (mods & GLFW_MOD_CONTROL) return KeyAction::kUndo;
+      return std::nullopt;
+    default: return std::nullopt;
+  }
+}
+
+struct Rect {
+  float x = 0, y = 0, w = 0, h = 0;
+  bool contains(ImVec2 p) const { return p.x >= x && p.y >= y && p.x < x + w && p.y < y + h; }
+  nlohmann::json json() const { return {x, y, w, h}; }
+};
 
 class WorkbenchWindow {
  public:
-  WorkbenchWindow(Workbench& bench, GlfwWindowContext& context, const ScriptOptions& script)
-      : bench_(bench), context_(context), gl_(context.gl()), script_(script), ellipsoids_(gl_, kEllipsoidStyle), points_(gl_),
-        lines_(gl_), rgb_(gl_), depth_(gl_), container_(gl_) {
-    lines_.setWidth(1.5f);
+  WorkbenchWindow(Workbench& bench, GlfwWindowContext& context, const ScriptOptions& script, Preparation prepare,
+                  KeyQueue& keys)
+      : bench_(bench), context_(context), gl_(context.gl()), script_(script), keys_(keys), mirror_(gl_) {
+    if (prepare.run) {
+      prepare_what_ = prepare.what;
+      prepare_args_ = prepare.args;
+      auto progress = progress_;
+      preparing_ = std::async(std::launch::async, [run = std::move(prepare.run), progress] {
+        return run([progress](std::size_t done, std::size_t total) {
+          progress->first = done;
+          progress->second = total;
+          glfwPostEmptyEvent();
+        });
+      });
+    } else {
+      startScript();
+    }
+  }
+
+  ~WorkbenchWindow() {
+    if (preparing_.valid()) preparing_.wait();
+    if (bench_.session()) bench_.session()->setOnChange(nullptr);
+  }
+
+  // Waits for input, news from the worker or a deadline, and draws a frame only when something
+  // may have changed: an idle window costs (almost) nothing. Returns false when it should close.
+  bool step() {
+    if (!needsFrame()) {
+      glfwWaitEventsTimeout(waitSeconds());
+      if (!needsFrame()) return !glfwWindowShouldClose(context_.window()) && !script_finished_;
+    }
+    glfwPollEvents();
+    frame();
+    return !glfwWindowShouldClose(context_.window()) && !script_finished_;
+  }
+
+  // Scripted runs (--exit) fail on an error shown during the run; a user closing the window never does.
+  int exitCode() const { return script_.exit && !bench_.firstError().empty() ? 1 : 0; }
+
+ private:
+  UiState& ui() { return bench_.ui(); }
+  bool scripted() const { return !script_.screenshot.empty() || !script_.stats_json.empty() || script_.exit; }
+
+  void startScript() {
     if (script_.play_to_end && bench_.session()) bench_.session()->play();
     if (script_.keyframe >= 0 && bench_.session()) {  // selected before it is mapped, unlike Workbench::selectKeyframe
-      bench_.ui().selected_keyframe = script_.keyframe;
+      ui().selected_keyframe = script_.keyframe;
       bench_.session()->selectKeyframe(script_.keyframe);
     }
   }
 
-  // One UI frame; returns false when the window should close.
-  bool frame() {
-    glfwPollEvents();
+  // What the newest snapshots are, to notice news without drawing.
+  struct Seen {
+    const void *session = nullptr, *mapping = nullptr, *global = nullptr, *selection = nullptr;
+    int status = -1;
+    bool busy = false;
+    bool operator==(const Seen&) const = default;
+  };
+  Seen seen() {
+    Seen s;
+    s.status = ui().status.serial;
+    if (MapSession* session = bench_.session()) {
+      s.session = session;
+      s.mapping = session->mapping().get();
+      s.global = session->global().get();
+      s.selection = session->selection().get();
+      s.busy = session->status().busy;
+    }
+    return s;
+  }
+
+  bool needsFrame() {
+    if (keys_.events > 0 || !keys_.presses.empty() || settle_frames_ > 0) return true;
+    if (preparing_.valid()) return true;  // the progress bar (woken by the renderer's progress)
+    if (scripted()) {
+      if (script_phase_ == Phase::kSettle || script_phase_ == Phase::kOrbit || script_phase_ == Phase::kFinish) return true;
+      if (script_phase_ == Phase::kLatency && latency_generation_ < 0) return true;  // the next edit
+      if (script_phase_ == Phase::kIdle) return Clock::now() >= idle_until_;
+    }
+    const Seen now = seen();
+    return !(now == last_seen_) || (scripted() && script_phase_ == Phase::kWaitDone && now.busy);
+  }
+
+  double waitSeconds() const {
+    if (script_phase_ == Phase::kIdle) return std::max(0.0, std::chrono::duration<double>(idle_until_ - Clock::now()).count());
+    if (preparing_.valid()) return 0.2;
+    // The worker wakes the loop itself (MapSession::setOnChange); the timeout is a safety net.
+    return 2.0;
+  }
+
+  void frame() {
     const auto t0 = Clock::now();
+    // ImGui shows hover and active states a frame late: after input, draw two more frames.
+    settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
+    keys_.events = 0;
+    if (preparing_.valid() && preparing_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) finishPreparation();
+    if (MapSession* session = bench_.session(); session && session != hooked_session_) {
+      session->setOnChange([] { glfwPostEmptyEvent(); });
+      hooked_session_ = session;
+    }
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
     glfwGetFramebufferSize(context_.window(), &fb_width_, &fb_height_);
-    syncScene();
+    layout();
+    handleKeys();
+    bench_.sync();
+    mapping_ = bench_.session() ? bench_.session()->mapping() : nullptr;
+    global_ = bench_.session() ? bench_.session()->global() : nullptr;
+    syncMirror();
+    labels_cut_ = 0;
     drawSequencePanel();
     drawMapPanel();
-    drawBanners();
+    drawStatusBar();
+    drawViewOverlay();
+    drawContainerWindow();
+    drawHelp();
     handleMouse();
-    bench_.ui().reset_layout = false;
+    ui().reset_layout = false;
+    last_seen_ = seen();
     ImGui::Render();
     drawScene();
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
-    advanceScript();
     if (!screenshot_request_.empty()) {
       saveScreenshot(screenshot_request_);
       screenshot_request_.clear();
     }
-    const double ms = msSince(t0);
-    if (bench_.session() && bench_.session()->status().busy) busy_frame_ms_.push_back(ms);
+    advanceScript();
     glfwSwapBuffers(context_.window());
-    return !glfwWindowShouldClose(context_.window()) && !script_finished_;
+    frame_ms_ = msSince(t0);
+    frame_times_.push_back(frame_ms_);
+    if (frame_times_.size() > 30) frame_times_.pop_front();
+    if (bench_.session() && bench_.session()->status().busy) busy_frame_ms_.push_back(frame_ms_);
   }
 
-  // Scripted runs (--exit) fail on an error still shown; a user closing the window never does.
-  int exitCode() const { return script_.exit && !bench_.ui().error.empty() ? 1 : 0; }
+  void finishPreparation() {
+    try {
+      SequenceArgs args = prepare_args_;
+      args.folder = preparing_.get();
+      bench_.open(args);
+    } catch (const std::exception& e) {
+      bench_.report(StatusLine::Kind::kError, prepare_what_ + ": " + e.what());
+    }
+    startScript();
+  }
 
- private:
-  UiState& ui() { return bench_.ui(); }
+  // --- layout ---------------------------------------------------------------------------------
 
-  // Mirrors the session's newest snapshots into GPU buffers (only what changed).
-  void syncScene() {
+  // Panels docked to the left and right edges, the status bar along the bottom and the 3-D
+  // viewport between them; widths follow the window (the user may drag a panel's inner edge).
+  void layout() {
+    const ImVec2 size = ImGui::GetIO().DisplaySize;
+    const float font = ImGui::GetFontSize();
+    status_h_ = ImGui::GetFrameHeight() + 2.f * ImGui::GetStyle().WindowPadding.y;
+    const float body_h = std::max(1.f, size.y - status_h_);
+    const float default_left = std::clamp(0.25f * size.x, 24.f * font, 42.f * font);
+    const float default_right = std::clamp(0.28f * size.x, 27.f * font, 46.f * font);
+    if (ui().reset_layout || left_w_ <= 0 || size.x != last_size_.x) left_w_ = default_left;
+    if (ui().reset_layout || right_w_ <= 0 || size.x != last_size_.x) right_w_ = default_right;
+    // Keep at least a third of the width for the 3-D view.
+    const float max_panels = size.x * 2.f / 3.f;
+    if (left_w_ + right_w_ > max_panels) {
+      const float k = max_panels / (left_w_ + right_w_);
+      left_w_ *= k;
+      right_w_ *= k;
+    }
+    last_size_ = size;
+    left_ = {0, 0, left_w_, body_h};
+    right_ = {size.x - right_w_, 0, right_w_, body_h};
+    status_ = {0, body_h, size.x, status_h_};
+    view_ = {left_w_, 0, std::max(1.f, size.x - left_w_ - right_w_), body_h};
+    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    ui().view_width = std::max(1, static_cast<int>(view_.w * scale.x));
+    ui().view_height = std::max(1, static_cast<int>(view_.h * scale.y));
+  }
+
+  // Opens a docked panel; returns its actual width (the user may have dragged its inner edge).
+  void beginPanel(const char* name, Rect& r, float& width, bool left) {
+    const float font = ImGui::GetFontSize();
+    ImGui::SetNextWindowPos({r.x, r.y}, ImGuiCond_Always);
+    ImGui::SetNextWindowSize({r.w, r.h}, ImGuiCond_Always);
+    ImGui::SetNextWindowSizeConstraints({18.f * font, r.h}, {std::max(18.f * font, last_size_.x * 0.45f), r.h});
+    ImGui::Begin(name, nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
+    const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
+    if (size.x != r.w) width = size.x;  // dragged: next frame re-docks with the new width
+    (void)left;
+    r = {pos.x, pos.y, size.x, size.y};
+  }
+
+  // A row of a two-column table: the label (never cut: its column fits the widest) and a
+  // tooltip, then the widget fills the rest of the row.
+  void label(const char* text, const std::string& help, bool pending = false) {
+    ImGui::TableNextRow();
+    ImGui::TableSetColumnIndex(0);
+    ImGui::AlignTextToFramePadding();
+    if (pending) ImGui::PushStyleColor(ImGuiCol_Text, kPendingColor);
+    ImGui::TextUnformatted(text);
+    if (pending) ImGui::PopStyleColor();
+    checkFits();
+    tip(help);
+    ImGui::TableSetColumnIndex(1);
+    ImGui::SetNextItemWidth(-FLT_MIN);
+  }
+
+  bool beginRows(const char* id) {
+    if (!ImGui::BeginTable(id, 2, ImGuiTableFlags_SizingFixedFit)) return false;
+    ImGui::TableSetupColumn("label", ImGuiTableColumnFlags_WidthFixed);
+    ImGui::TableSetupColumn("value", ImGuiTableColumnFlags_WidthStretch);
+    return true;
+  }
+
+  // Counts an item that does not fit in its window or table cell (the scripted stats report
+  // it: every label and button must be readable at every window size).
+  void checkFits() {
+    if (ImGui::GetItemRectMax().x > ImGui::GetWindowPos().x + ImGui::GetWindowWidth() - 1.f) ++labels_cut_;
+    else if (ImGui::GetItemRectMax().x > ImGui::GetCursorScreenPos().x + ImGui::GetContentRegionAvail().x + 1.f &&
+             ImGui::GetContentRegionAvail().x > 0)
+      ++labels_cut_;
+  }
+
+  // --- GPU mirror -------------------------------------------------------------------------------
+
+  void syncMirror() {
+    const Settings& s = ui().settings;
+    mirror_.setStyle({.color = s.color,
+                      .sigma = s.ellipsoid_sigma,
+                      .ellipsoids = s.show_ellipsoids,
+                      .frustums = s.show_frustums,
+                      .graph = s.show_graph,
+                      .trajectory = s.show_trajectory});
     MapSession* session = bench_.session();
     if (!session) return;
-    bench_.syncPoseFields();
-    if (session != shown_session_) {  // a newly opened sequence: everything shown is stale
-      shown_session_ = session;
-      shown_mapping_ = nullptr;
-      shown_lines_ = {};
-      shown_generation_ = -1;
-      shown_selection_ = nullptr;
+    if (session != mirrored_session_) {  // generations restart with every session
+      mirrored_session_ = session;
+      session_base_ += 1 << 20;
     }
-    mapping_ = session->mapping();
-    global_ = session->global();
-    if (mapping_.get() != shown_mapping_) {
-      shown_mapping_ = mapping_.get();
-      rgb_.set(mapping_->rgb);
-      if (!mapping_->depth.empty()) depth_.set(depthToRgb(mapping_->depth, mapping_->camera.depth_scale));
-    }
-    const Settings& s = ui().settings;
-    ellipsoids_.setStyle({.sigma = s.ellipsoid_sigma, .color = s.color});
-    const int generation = global_ ? global_->generation : 0;
-    if (generation != shown_generation_) {  // a new global map: new geometry
-      instances_ = global_ ? render::toInstances(global_->map.ellipsoids) : std::vector<render::EllipsoidInstance>{};
-      ellipsoids_.set(instances_);
-      points_.set(instances_, s.color);
-      shown_generation_ = generation;
-      shown_color_ = s.color;
-      if (global_ && !global_->map.ellipsoids.empty() && !ui().camera_framed) bench_.resetView();
-    } else if (s.color != shown_color_) {  // only the colours: setStyle above re-colours the ellipsoids
-      points_.set(instances_, s.color);
-      shown_color_ = s.color;
-    }
+    if (global_) mirror_.setMap(session_base_ + global_->generation, global_->map.ellipsoids);
+    else mirror_.setMap(session_base_, {});
+    const auto mapping = mapping_;
+    mirror_.setFrame(session_base_ + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
+    mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, [&] {
+      render::GraphScene scene;
+      scene.camera = mapping->camera;
+      for (const KeyframeInfo& k : mapping->keyframes) scene.keyframes.push_back(k.T_W_K);
+      for (const CovisibilityEdge& e : mapping->edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+      scene.trajectory = mapping->trajectoryWorld();
+      scene.current_keyframe = mapping->current_keyframe;
+      scene.selected_keyframe = ui().selected_keyframe;
+      return scene;
+    });
+    mirror_.setHighlight(ui().picked);
     const auto selection = session->selection();
-    if (selection && (selection != shown_selection_ || s.color != container_color_)) updateContainerView(selection);
-    const LinesKey lines_key{mapping_.get(), ui().selected_keyframe, s.show_frustums, s.show_graph, s.show_trajectory};
-    if (lines_key == shown_lines_) return;
-    shown_lines_ = lines_key;
-    render::ColoredLines lines;
-    std::vector<Transform> poses;
-    for (const KeyframeInfo& k : mapping_->keyframes) {
-      poses.push_back(k.T_W_K);
-      if (!s.show_frustums) continue;
-      const glm::u8vec3 color = k.id == ui().selected_keyframe ? glm::u8vec3(255, 255, 255)
-                                : k.id == mapping_->current_keyframe ? glm::u8vec3(255, 220, 0)
-                                                                     : render::keyframeColor(k.id);
-      render::addFrustum(lines, mapping_->camera, k.T_W_K, 0.25f, color);
+    if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
+      const int id = selection->keyframe;
+      const render::ContainerStyle style{.sigma = 2.f, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
+      if (id >= 0) {
+        const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
+        // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
+        // container, which lives in the keyframe frame, but the ellipsoids are in the world).
+        mirror_.setContainer(session_base_ + selection->serial, id, k.rgb, mapping->camera, k.T_W_K, selection->local, style);
+      } else {
+        mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
+      }
     }
-    if (s.show_graph) {
-      std::vector<render::GraphEdge> edges;
-      for (const CovisibilityEdge& e : mapping_->edges) edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
-      render::addEdges(lines, poses, edges);
-    }
-    if (s.show_trajectory) render::addTrajectory(lines, mapping_->trajectory, {90, 200, 255});
-    if (!mapping_->trajectory.empty())
-      render::addFrustum(lines, mapping_->camera, mapping_->trajectory.back(), 0.15f, {255, 60, 60});
-    lines_.set(lines);
-  }
-
-  // Draws the selected keyframe's image plane with its local map (the session's selection, which
-  // follows ui().selected_keyframe a moment later).
-  void updateContainerView(std::shared_ptr<const SelectionSnapshot> selection) {
-    const int id = selection->keyframe;
-    if (id >= static_cast<int>(mapping_->keyframes.size())) return;  // not in this mapping snapshot yet
-    shown_selection_ = std::move(selection);
-    container_color_ = ui().settings.color;
-    if (id < 0) return;
-    const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
-    container_.setKeyframe(k.rgb, mapping_->camera, k.T_W_K);
-    container_.setEllipsoids(render::toInstances(shown_selection_->local), {.sigma = 2.f, .color = ui().settings.color});
-    if (!container_fb_) container_fb_ = std::make_unique<render::Framebuffer>(gl_, container_.containerWidth(), container_.containerHeight());
-    container_fb_->bindAndClear(0.f, 0.f, 0.f);
-    container_.draw(container_fb_->width(), container_fb_->height());
-    container_image_.set(container_fb_->readRgb());
-    gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
   }
 
   void drawScene() {
     gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl_.Disable(GL_SCISSOR_TEST);
     gl_.Viewport(0, 0, fb_width_, fb_height_);
     gl_.ClearColor(kBackground[0], kBackground[1], kBackground[2], 1.f);
     gl_.ClearDepth(1.0);
     gl_.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
     if (!bench_.session() || fb_width_ <= 0 || fb_height_ <= 0) return;
-    const render::ViewCamera view = bench_.view(fb_width_, fb_height_);
-    if (ui().settings.show_ellipsoids) ellipsoids_.draw(view);
-    else points_.draw(view);
-    lines_.draw(view);
+    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    const int vx = static_cast<int>(view_.x * scale.x), vw = ui().view_width, vh = ui().view_height;
+    const int vy = fb_height_ - static_cast<int>(view_.y * scale.y) - vh;  // GL counts rows from the bottom
+    const ViewportView v = bench_.view(vw, vh);
+    const bool from_keyframe = ui().view_from_keyframe >= 0;
+    if (from_keyframe) {  // the letterbox's bars
+      gl_.Enable(GL_SCISSOR_TEST);
+      gl_.Scissor(vx, vy, vw, vh);
+      gl_.ClearColor(kLetterbox[0], kLetterbox[1], kLetterbox[2], 1.f);
+      gl_.Clear(GL_COLOR_BUFFER_BIT);
+      gl_.Disable(GL_SCISSOR_TEST);
+    }
+    gl_.Viewport(vx + v.image.x, vy + (vh - v.image.y - v.image.height), v.image.width, v.image.height);
+    mirror_.draw(v.camera, !from_keyframe);
+    gl_.Viewport(0, 0, fb_width_, fb_height_);
+  }
+
+  // --- input ----------------------------------------------------------------------------------
+
+  void handleKeys() {
+    const bool typing = ImGui::GetIO().WantTextInput;
+    while (!keys_.presses.empty()) {
+      const auto [key, mods] = keys_.presses.front();
+      keys_.presses.pop_front();
+      if (typing && key != GLFW_KEY_F1) continue;  // the key belongs to a text field
+      if (const auto action = actionOf(key, mods)) bench_.key(*action);
+    }
   }
 
   void handleMouse() {
     const ImGuiIO& io = ImGui::GetIO();
-    if (io.WantCaptureMouse || !bench_.session()) return;
-    render::OrbitCamera& cam = ui().camera;
-    if (ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
-      ui().view_from_keyframe = -1;
-      cam.orbit(-io.MouseDelta.x * 0.006f, io.MouseDelta.y * 0.006f);
+    if (!bench_.session()) return;
+    const bool over_view = view_.contains(io.MousePos) && !io.WantCaptureMouse;
+    for (int b = 0; b < 3; ++b)
+      if (ImGui::IsMouseClicked(b)) drag_in_view_[b] = over_view;
+    const ImVec2 scale = io.DisplayFramebufferScale;
+    if (drag_in_view_[0] && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
+      if (io.KeyShift) bench_.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+      else if (io.MouseDelta.x != 0 || io.MouseDelta.y != 0) bench_.orbit(-io.MouseDelta.x * 0.006f, io.MouseDelta.y * 0.006f);
     }
-    if (ImGui::IsMouseDragging(ImGuiMouseButton_Right) || ImGui::IsMouseDragging(ImGuiMouseButton_Middle)) {
-      ui().view_from_keyframe = -1;
-      const float k = cam.distance_m * 0.0015f;
-      cam.pan(-io.MouseDelta.x * k, io.MouseDelta.y * k);
-    }
-    if (io.MouseWheel != 0.f) {
-      ui().view_from_keyframe = -1;
-      cam.dolly(std::pow(0.9f, io.MouseWheel));
-    }
-    if (ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
+    for (int b : {1, 2})
+      if (drag_in_view_[b] && ImGui::IsMouseDragging(b) && (io.MouseDelta.x != 0 || io.MouseDelta.y != 0))
+        bench_.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+    if (over_view && io.MouseWheel != 0.f) bench_.zoom(io.MouseWheel);
+    if (drag_in_view_[0] && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
       const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
-      if (drag.x * drag.x + drag.y * drag.y < 9.f)
-        bench_.pick(io.MousePos.x * io.DisplayFramebufferScale.x, io.MousePos.y * io.DisplayFramebufferScale.y,
-                    fb_width_, fb_height_);
+      if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view)
+        bench_.pick((io.MousePos.x - view_.x) * scale.x, (io.MousePos.y - view_.y) * scale.y, ui().view_width,
+                    ui().view_height);
     }
   }
 
-  ImGuiCond layoutCond() const { return bench_.ui().reset_layout ? ImGuiCond_Always : ImGuiCond_FirstUseEver; }
+  // --- the left panel: sequence and player ------------------------------------------------------
 
   void drawSequencePanel() {
-    const ImVec2 size = ImGui::GetIO().DisplaySize;
-    ImGui::SetNextWindowPos({0, 0}, layoutCond());
-    ImGui::SetNextWindowSize({kLeftWidth, size.y}, layoutCond());
-    ImGui::Begin("Sequence");
-    ImGui::InputText("##folder", &ui().sequence_text);
+    beginPanel("Sequence", left_, left_w_, true);
+    const float open_w = ImGui::CalcTextSize("Open").x + 2 * ImGui::GetStyle().FramePadding.x;
+    ImGui::SetNextItemWidth(-open_w - ImGui::GetStyle().ItemSpacing.x);
+    const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
+    tip("A TUM RGB-D folder (rgb.txt, depth.txt, groundtruth.txt) or a saved session (.vdmap).");
     ImGui::SameLine();
-    if (ImGui::Button("Open")) bench_.openPath(ui().sequence_text);
+    if (ImGui::Button("Open") || enter) bench_.openPath(ui().sequence_text);
+    tip("Opens the folder or session typed on the left; errors show in the status line below.");
     MapSession* session = bench_.session();
     if (!session) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
@@ -267,44 +475,84 @@ class WorkbenchWindow {
     }
     const PlayerStatus status = session->status();
     const int total = mapping_->frames_total, mapped = mapping_->frames_mapped;
+    const bool saved = bench_.savedSession();
     if (const TumSequence* sequence = session->sequence()) {
       ImGui::TextWrapped("%s", sequence->folder().c_str());
-      ImGui::Text("camera %s, %d frames", sequence->cameraSource().c_str(), total);
+      ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping_->camera.width,
+                         mapping_->camera.height, total);
     } else {
-      ImGui::TextWrapped("saved session of %d frames (no sequence to play)", total);
+      ImGui::TextWrapped("%s", ui().settings.last_sequence.c_str());
+      ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping_->keyframes.size());
     }
-    if (ImGui::Button(status.playing ? "Pause" : "Play", {60, 0})) status.playing ? session->pause() : session->play();
+    const std::string why_saved = "A saved session has its keyframes but no sequence to play or re-map.";
+    ImGui::BeginDisabled(saved);
+    if (ImGui::Button(status.playing ? "Pause" : "Play")) bench_.key(KeyAction::kPlayPause);
+    tip(saved ? why_saved : "Maps the frames one after another up to the end (Space).");
     ImGui::SameLine();
-    if (ImGui::Button("Step")) session->step();
+    if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
+    tip(saved ? why_saved : "Maps one more frame (Right).");
     ImGui::SameLine();
-    if (ImGui::Button("Next keyframe")) session->stepToKeyframe();
+    if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
+    tip(saved ? why_saved : "One frame back (Left): the map is rebuilt from the first frame.");
     ImGui::SameLine();
-    ImGui::TextUnformatted(status.busy ? "working" : "idle");
-    ImGui::SetNextItemWidth(-80);
-    if (ImGui::SliderFloat("fps limit", &ui().settings.play_fps, 0.f, 60.f, ui().settings.play_fps > 0 ? "%.0f" : "max"))
-      session->setFps(ui().settings.play_fps);
-
+    if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
+    tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
+    checkFits();
+    if (beginRows("player")) {
+      label("fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
+      if (ImGui::SliderFloat("##fps", &ui().settings.play_fps, 0.f, 60.f, ui().settings.play_fps > 0 ? "%.0f" : "max"))
+        session->setFps(ui().settings.play_fps);
+      ImGui::EndTable();
+    }
     // The scrubber, with a tick under it at every keyframe's first frame.
     if (!scrubbing_) scrub_ = std::max(0, mapped - 1);
-    ImGui::SetNextItemWidth(-1);
+    ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::SliderInt("##frame", &scrub_, 0, std::max(0, total - 1), "frame %d");
     scrubbing_ = ImGui::IsItemActive();
     if (ImGui::IsItemDeactivatedAfterEdit()) session->seek(scrub_);
+    tip(saved ? why_saved : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
     ImDrawList* draw = ImGui::GetWindowDrawList();
     for (const KeyframeInfo& k : mapping_->keyframes) {
       const float x = lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(k.frame) / std::max(1, total - 1);
       draw->AddLine({x, hi.y - 5}, {x, hi.y}, IM_COL32(255, 220, 0, 255), 2.f);
     }
-    ImGui::Text("%d / %d frames mapped, %zu keyframes", mapped, total, mapping_->keyframes.size());
-    if (!status.error.empty()) ImGui::TextColored({1, 0.4f, 0.4f, 1}, "%s", status.error.c_str());
-    if (!status.message.empty()) ImGui::TextWrapped("%s", status.message.c_str());
+    ImGui::EndDisabled();
+    ImGui::Text("%d / %d frames mapped, %zu keyframes%s", mapped, total, mapping_->keyframes.size(),
+                status.busy ? " (working)" : "");
+    checkFits();
 
     const float image_width = ImGui::GetContentRegionAvail().x;
-    rgb_.show(image_width);
-    depth_.show(image_width);
+    if (!mirror_.rgbTexture().empty() && mapped > 0 && !saved) {
+      const render::Texture2D& rgb = mirror_.rgbTexture();
+      ImGui::Image(textureId(rgb), {image_width, image_width * rgb.height() / std::max(1, rgb.width())});
+      tip("The last mapped frame's colour image.");
+      const render::Texture2D& depth = mirror_.depthTexture();
+      ImGui::Image(textureId(depth), {image_width, image_width * depth.height() / std::max(1, depth.width())});
+      tip("Its depth image: distance along the optical axis, black where the sensor measured nothing.");
+      drawDepthScale(image_width);
+    }
+    drawTimes(image_width);
+    ImGui::End();
+  }
 
-    // Stage timings of the last frames.
+  void drawDepthScale(float width) {
+    const float h = ImGui::GetFontSize() * 0.7f;
+    const ImVec2 at = ImGui::GetCursorScreenPos();
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    drawRamp(draw, at, width, h);
+    for (int m = 0; m <= 6; m += 2) {
+      char text[8];
+      std::snprintf(text, sizeof text, "%d m", m);
+      const float w = ImGui::CalcTextSize(text).x;
+      const float x = std::clamp(width * m / 6.f - w / 2, 0.f, width - w);
+      draw->AddText({at.x + x, at.y + h + 1}, IM_COL32(220, 220, 220, 255), text);
+    }
+    ImGui::Dummy({width, h + ImGui::GetFontSize() + 2});
+    tip("Depth colours: viridis from 0 m (dark) to 6 m (yellow) and beyond; black: no measurement.");
+  }
+
+  void drawTimes(float width) {
     std::vector<float> total_ms;
     std::vector<double> features, decision, update;
     const std::size_t n = mapping_->times.size(), first = n > 200 ? n - 200 : 0;
@@ -315,92 +563,246 @@ class WorkbenchWindow {
       decision.push_back(t.decision_ms);
       update.push_back(t.update_ms);
     }
-    char overlay[128];
+    if (total_ms.empty()) return;
+    char overlay[64];
     std::snprintf(overlay, sizeof overlay, "median %.1f ms", median({total_ms.begin(), total_ms.end()}));
     ImGui::PlotLines("##times", total_ms.data(), static_cast<int>(total_ms.size()), 0, overlay, 0.f, FLT_MAX,
-                     {image_width, 70});
-    ImGui::Text("per frame (median): features %.1f, decision %.1f, update %.1f ms", median(features),
-                median(decision), median(update));
+                     {width, ImGui::GetFontSize() * 4.5f});
+    tip("Mapping time of each of the last 200 frames (features, keyframe decision and local-map update), ms.");
+    if (beginRows("times")) {
+      const auto row = [&](const char* name, const char* help, double ms) {
+        label(name, help);
+        ImGui::Text("%.1f ms", ms);
+      };
+      row("features", "ORB detection and the depth under each keypoint, median per frame (SPEC 5).", median(features));
+      row("keyframe decision", "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
+          median(decision));
+      row("local-map update", "Integrating the frame's depth into the keyframe's container (SPEC 2), median per frame.",
+          median(update));
+      ImGui::EndTable();
+    }
+  }
+
+  // --- the right panel: map, parameters, keyframes ---------------------------------------------
+
+  void drawMapPanel() {
+    beginPanel("Map", right_, right_w_, false);
+    if (bench_.session()) {
+      if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
+      if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
+      if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawView();
+      if (ImGui::CollapsingHeader("Keyframes", ImGuiTreeNodeFlags_DefaultOpen)) drawKeyframes();
+      if (ImGui::CollapsingHeader("Picked ellipsoid", ImGuiTreeNodeFlags_DefaultOpen)) drawPicked();
+      if (ImGui::CollapsingHeader("Pose correction")) drawPoseFile();
+      if (ImGui::CollapsingHeader("Export and save")) drawExport();
+    }
+    if (ImGui::CollapsingHeader("Settings")) {
+      if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
+      tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
+      ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
+                         settingsPath().c_str());
+    }
     ImGui::End();
   }
 
-  void drawThresholds() {
-    Settings& s = ui().settings;
-    GlobalMapParams& g = s.thresholds;
+  // One parameter of the table as a slider, combo or checkbox.
+  void parameterRow(const Parameter& p, bool disabled, const std::string& why_disabled) {
+    const bool pending = bench_.pending(p);
+    std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
+                       "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
+    if (pending)
+      help += "\n\nPending: the map shown was made with " + formatValue(p, bench_.inUse(p)) +
+              (p.live ? " (rebuilding)." : "; Re-run applies the edited value.");
+    if (disabled) help = why_disabled + "\n\n" + help;
+    const std::string text = std::string(p.label) + (p.unit.empty() ? "" : " (" + std::string(p.unit) + ")") + (pending ? " *" : "");
+    label(text.c_str(), help, pending);
+    ImGui::BeginDisabled(disabled);
+    double v = p.get(ui().params);
     bool changed = false;
-    const char* models[] = {sensorModelName(SensorModel::kNguyen2012), sensorModelName(SensorModel::kBelter2018)};
-    int model = static_cast<int>(g.filter.model);
-    if (ImGui::Combo("sensor model", &model, models, 2)) {
-      g.filter.model = static_cast<SensorModel>(model);
-      changed = true;
+    const std::string id = "##" + std::string(p.key);
+    switch (p.kind) {
+      case Parameter::Kind::kBool: {
+        bool b = v != 0;
+        changed = ImGui::Checkbox(id.c_str(), &b);
+        v = b;
+        break;
+      }
+      case Parameter::Kind::kChoice: {
+        int i = static_cast<int>(v);
+        std::vector<const char*> names(p.choices.begin(), p.choices.end());
+        changed = ImGui::Combo(id.c_str(), &i, names.data(), static_cast<int>(names.size()));
+        v = i;
+        break;
+      }
+      case Parameter::Kind::kInt:
+      case Parameter::Kind::kReal: {
+        const char* format = p.kind == Parameter::Kind::kInt ? "%.0f" : "%.3g";
+        changed = ImGui::SliderScalar(id.c_str(), ImGuiDataType_Double, &v, &p.slider_lo, &p.slider_hi, format);
+        if (p.kind == Parameter::Kind::kInt) v = std::round(v);
+        break;
+      }
     }
-    changed |= editDouble("filter sigma factor", g.filter.filter_sigma_factor, 0.5, 10.0, "%.2f");
-    changed |= ImGui::SliderInt("min points", &g.filter.min_points, 3, 100);
-    changed |= editDouble("tau group", g.tau_group, 0.0, 1.0, "%.2f");
-    changed |= editDouble("merge distance (m)", g.merge_distance_m, 0.0, 1.0);
-    changed |= ImGui::Checkbox("occlusion removal", &g.occlusion_removal);
-    changed |= editDouble("occlusion distance (m)", g.occlusion_distance_m, 0.0, 2.0);
-    changed |= editDouble("occlusion angle (deg)", g.occlusion_angle_deg, 0.0, 90.0, "%.1f");
-    if (changed) bench_.applyThresholds();
-    if (global_) {
-      ImGui::Text("Sigma_e %zu -> merged %zu -> Sigma_e' %zu", global_->map.sigma_e, global_->map.merged,
-                  global_->map.sigma_e_prime);
-      ImGui::Text("t_g %.3f s (groups %.0f, merge %.0f, occlusion %.0f ms), %zu groups", global_->map.t_g_s,
-                  global_->map.groups_ms, global_->map.merge_ms, global_->map.occlusion_ms, global_->map.groups.size());
-      ImGui::Text("built from %d frames%s", global_->frames_mapped,
-                  bench_.session()->status().busy ? "; rebuilding..." : "");
+    tip(help);
+    ImGui::EndDisabled();
+    if (changed) bench_.editParameter(p, v);
+  }
+
+  void drawThresholds() {
+    const bool occlusion_off = !ui().params.global.occlusion_removal;
+    if (beginRows("thresholds")) {
+      for (const Parameter& p : parameterTable()) {
+        if (!p.live) continue;
+        const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
+        parameterRow(p, occlusion_param && occlusion_off, "Occlusion removal is off: this has no effect.");
+      }
+      ImGui::EndTable();
+    }
+    if (!global_) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
+    const GlobalMap& m = global_->map;
+    std::size_t stored = 0;
+    for (const KeyframeInfo& k : mapping_->keyframes) stored += k.ellipsoids;
+    if (beginRows("stats")) {
+      const auto row = [&](const char* name, const std::string& help, const char* format, auto... values) {
+        label(name, help);
+        ImGui::Text(format, values...);
+      };
+      row("local maps", "Ellipsoids stored in all keyframes' containers (one per touched cell), before filtering.", "%zu",
+          stored);
+      row("Sigma_e", "Sigma_e (SPEC 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
+                     "than k times the sensor model's expectation).",
+          "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
+      row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
+          m.merged);
+      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging and occlusion removal.", "%zu",
+          m.sigma_e_prime);
+      row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
+          "%zu", m.groups.size());
+      row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
+          "%.3f s", m.t_g_s);
+      row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
+          m.occlusion_ms);
+      row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
+          "%d frames%s", global_->frames_mapped, bench_.session()->status().busy ? ", rebuilding" : "");
+      ImGui::EndTable();
+    }
+    if (stored > 0 && m.sigma_e * 20 < stored) {
+      ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[2]);
+      ImGui::TextWrapped("The filter keeps only %.1f%% of the local maps' ellipsoids: raise the filter sigma factor k or "
+                         "lower min points to keep more.",
+                         100.0 * m.sigma_e / stored);
+      ImGui::PopStyleColor();
     }
   }
 
   void drawRerun() {
-    MapperParams& m = ui().settings.mapper;
-    ImGui::SliderInt("cell size (px)", &m.local_map.cell_size_px, 1, 32);
-    editDouble("tau", m.keyframes.tau, 0.01, 1.0, "%.2f");
-    ImGui::SliderInt("ORB features", &m.features.orb_features, 100, 4000);
-    if (ImGui::Button("Re-run sequence")) bench_.rerun();
+    const bool saved = bench_.savedSession();
+    const std::string why = "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
+    if (beginRows("rerun")) {
+      for (const Parameter& p : parameterTable())
+        if (!p.live) parameterRow(p, saved, why);
+      ImGui::EndTable();
+    }
+    bool any_pending = false;
+    for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench_.pending(p);
+    ImGui::BeginDisabled(saved || !any_pending);
+    if (ImGui::Button("Re-run")) bench_.rerun();
+    tip(saved ? why
+              : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
+                            : "Nothing to apply: the sliders show the parameters the map was made with.");
+    ImGui::SameLine();
+    if (ImGui::Button("Revert")) ui().params.mapper = mapping_->mapper;
+    tip("Puts the sliders back to the parameters the map was made with.");
+    ImGui::EndDisabled();
+    if (any_pending) {
+      ImGui::SameLine();
+      ImGui::TextColored(kPendingColor, "* pending");
+    }
   }
 
   void drawView() {
     Settings& s = ui().settings;
-    int color = static_cast<int>(s.color);
-    if (ImGui::Combo("colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
-      s.color = static_cast<render::ColorMode>(color);
-    ImGui::Checkbox("ellipsoids (off: points)", &s.show_ellipsoids);
-    ImGui::SliderFloat("sigma", &s.ellipsoid_sigma, 0.5f, 4.f, "%.1f");
-    ImGui::Checkbox("frustums", &s.show_frustums);
+    if (beginRows("view")) {
+      label("colour", "rgb: the surface colour; keyframe: the keyframe each ellipsoid came from (the key in the view); "
+                      "uncertainty: the largest standard deviation; count: points merged into it (colour bars in the view).");
+      int color = static_cast<int>(s.color);
+      if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
+        s.color = static_cast<render::ColorMode>(color);
+      label("draw", "Ellipsoids as surfaces at sigma standard deviations, or their centres as points (faster).");
+      int shape = s.show_ellipsoids ? 0 : 1;
+      const char* shapes[] = {"ellipsoids", "centres"};
+      if (ImGui::Combo("##shape", &shape, shapes, 2)) s.show_ellipsoids = shape == 0;
+      label("sigma", "Ellipsoid surfaces drawn at this many standard deviations.");
+      ImGui::BeginDisabled(!s.show_ellipsoids);
+      ImGui::SliderFloat("##sigma", &s.ellipsoid_sigma, 0.5f, 4.f, "%.1f");
+      tip(s.show_ellipsoids ? "" : "Only the centres are drawn.");
+      ImGui::EndDisabled();
+      label("up axis", "The world direction kept up on screen, the one the view orbits about. data: estimated from the "
+                       "cameras (their mean image-up direction) refined by the floor's normals.");
+      int up = static_cast<int>(s.up_axis);
+      if (ImGui::Combo("##up", &up, kUpAxisNames, 4)) {
+        s.up_axis = static_cast<UpAxis>(up);
+        bench_.resetView();
+      }
+      label("show", "Keyframe frustums (yellow: current, white: selected, red: the camera now), covisibility edges "
+                    "(viridis by weight) and the camera trajectory (blue).");
+      ImGui::Checkbox("frustums", &s.show_frustums);
+      ImGui::SameLine();
+      ImGui::Checkbox("graph", &s.show_graph);
+      ImGui::SameLine();
+      ImGui::Checkbox("trajectory", &s.show_trajectory);
+      checkFits();
+      ImGui::EndTable();
+    }
+    if (ImGui::Button("Frame map (F)")) bench_.frameMap();
+    tip("Fits the map in the view, keeping the direction; the view follows the map again as it grows.");
     ImGui::SameLine();
-    ImGui::Checkbox("graph", &s.show_graph);
+    if (ImGui::Button("Reset view (R)")) bench_.resetView();
+    tip("The default view of the whole map from above, about the up axis; follows the map again.");
     ImGui::SameLine();
-    ImGui::Checkbox("trajectory", &s.show_trajectory);
-    if (ImGui::Button("Reset view")) bench_.resetView();
-    ImGui::SameLine();
+    if (ImGui::Button("Help (H)")) bench_.key(KeyAction::kHelp);
+    checkFits();
     if (ImGui::Button("Screenshot")) screenshot_request_ = screenshot_text_;
+    tip("Writes the whole window as a PNG to the file named on the right.");
     ImGui::SameLine();
-    ImGui::SetNextItemWidth(-1);
+    ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputText("##shot", &screenshot_text_);
-    ImGui::TextDisabled("left drag: orbit, right drag: pan, wheel: zoom, click: pick");
   }
 
   void drawKeyframes() {
     if (mapping_->keyframes.empty()) return ImGui::TextUnformatted("no keyframes yet");
-    if (ImGui::BeginListBox("##keyframes", {-1, 110})) {
+    if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
       for (const KeyframeInfo& k : mapping_->keyframes) {
-        char label[64];
-        std::snprintf(label, sizeof label, "K%d  frame %d  %zu cells", k.id, k.frame, k.ellipsoids);
-        if (ImGui::Selectable(label, k.id == ui().selected_keyframe)) bench_.selectKeyframe(k.id);
+        char text[96];
+        std::snprintf(text, sizeof text, "   K%d  frame %d  %zu cells%s", k.id, k.frame, k.ellipsoids,
+                      k.id == mapping_->current_keyframe ? "  (current)" : "");
+        const ImVec2 at = ImGui::GetCursorScreenPos();
+        if (ImGui::Selectable(text, k.id == ui().selected_keyframe)) bench_.selectKeyframe(k.id);
+        const float h = ImGui::GetTextLineHeight();
+        ImGui::GetWindowDrawList()->AddRectFilled({at.x + 2, at.y + 2}, {at.x + h - 2, at.y + h - 2},
+                                                  rgbColor(render::keyframeColor(k.id)));
       }
       ImGui::EndListBox();
     }
+    tip("Keyframes with the frame that created them and their container cells; the square is the keyframe's colour "
+        "(colour mode \"keyframe\"). Click to inspect.");
     const int id = ui().selected_keyframe;
-    if (id < 0 || id >= static_cast<int>(mapping_->keyframes.size())) return;
+    if (id < 0 || id >= static_cast<int>(mapping_->keyframes.size())) return ImGui::TextWrapped("Select a keyframe to inspect it.");
     const KeyframeInfo& k = mapping_->keyframes[static_cast<std::size_t>(id)];
     std::size_t kept = 0;
     if (global_ && id < static_cast<int>(global_->map.kept.size())) {
       const std::vector<bool>& cells = global_->map.kept[static_cast<std::size_t>(id)];
       kept = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), true));
     }
-    ImGui::Text("K%d: %zu ellipsoids, %zu kept by the filter, %d frames", id, k.ellipsoids, kept, k.frames_integrated);
-    container_image_.show(ImGui::GetContentRegionAvail().x);
+    ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
+                       k.frames_integrated);
+    const render::Texture2D& container = mirror_.containerTexture();
+    if (!mirror_.containerImage().empty()) {
+      const float w = ImGui::GetContentRegionAvail().x;
+      ImGui::Image(textureId(container), {w, w * container.height() / std::max(1, container.width())});
+      tip("The container view (paper Fig. 1): the keyframe's image in the middle of its 2W x 2H container with its "
+          "kept ellipsoids projected as 2-sigma ellipses. Click to enlarge.");
+      if (ImGui::IsItemClicked()) container_open_ = true;
+    }
     std::string neighbours;
     for (const CovisibilityEdge& e : mapping_->edges)
       if (e.a == id || e.b == id) {
@@ -408,119 +810,396 @@ class WorkbenchWindow {
         std::snprintf(item, sizeof item, "K%d (%.2f) ", e.a == id ? e.b : e.a, e.weight);
         neighbours += item;
       }
-    ImGui::TextWrapped("neighbours (weight): %s", neighbours.empty() ? "none" : neighbours.c_str());
+    ImGui::TextWrapped("neighbours (edge weight): %s", neighbours.empty() ? "none" : neighbours.c_str());
+    tip("Covisibility edges: the share of features one keyframe re-observes of the other (SPEC 5).");
     if (ImGui::Button("View from keyframe")) ui().view_from_keyframe = id;
+    tip("Looks through the keyframe with its own intrinsics (its image's aspect kept; Esc or a drag leaves).");
+    ImGui::SameLine();
+    if (ImGui::Button("Container view")) container_open_ = true;
+    tip("A larger container view with zoom, cell grid and image bounds.");
+    checkFits();
     ImGui::TextUnformatted("pose T_W_K (drag to correct):");
-    bool moved = ImGui::DragFloat3("t (m)", &ui().pose_translation_m.x, 0.005f, -100.f, 100.f, "%.3f");
-    moved |= ImGui::DragFloat3("rpy (deg)", &ui().pose_rotation_deg.x, 0.2f, -180.f, 180.f, "%.1f");
+    bool moved = false;
+    if (beginRows("pose")) {
+      label("t (m)", "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt.");
+      moved |= ImGui::DragFloat3("##t", &ui().pose_translation_m.x, 0.005f, -1000.f, 1000.f, "%.3f");
+      poseEditStarted();
+      label("roll, pitch, yaw (deg)", "R = Rz(yaw) Ry(pitch) Rx(roll); pitch stays within +-90 degrees.");
+      glm::vec3& rpy = ui().pose_rotation_deg;
+      moved |= ImGui::DragFloat3("##rpy", &rpy.x, 0.2f, 0.f, 0.f, "%.1f");
+      poseEditStarted();
+      ImGui::EndTable();
+      // Roll and yaw wrap around; pitch stops at +-90 (beyond it the same rotation has other angles).
+      for (float* a : {&rpy.x, &rpy.z}) *a = *a - 360.f * std::round(*a / 360.f);
+      rpy.y = std::clamp(rpy.y, -90.f, 90.f);
+    }
     if (moved) bench_.applyPoseEdit();
+    ImGui::BeginDisabled(!bench_.canUndoPoseEdit());
+    if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench_.undoPoseEdit();
+    tip(bench_.canUndoPoseEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
+    ImGui::EndDisabled();
+  }
+
+  void poseEditStarted() {
+    if (ImGui::IsItemActivated()) bench_.beginPoseEdit();
   }
 
   void drawPicked() {
-    if (!ui().picked) return ImGui::TextUnformatted("click an ellipsoid in the view");
+    if (!ui().picked) return ImGui::TextWrapped("Click an ellipsoid in the view (it is marked magenta).");
     const Ellipsoid& e = *ui().picked;
     const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(e.cov);
     const Eigen::Vector3d axes = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() * 1000.0;
-    ImGui::Text("keyframe K%d, n = %u", e.keyframe, e.count);
-    ImGui::Text("mean (%.3f, %.3f, %.3f) m", e.mean.x(), e.mean.y(), e.mean.z());
-    ImGui::Text("sigma axes %.1f, %.1f, %.1f mm", axes.x(), axes.y(), axes.z());
-    ImGui::ColorButton("##colour", {e.color.x() / 255.f, e.color.y() / 255.f, e.color.z() / 255.f, 1.f});
-    ImGui::SameLine();
-    ImGui::Text("colour (%.0f, %.0f, %.0f)", e.color.x(), e.color.y(), e.color.z());
+    if (beginRows("picked")) {
+      label("keyframe", "The keyframe it came from (for a merged one, its merge group's centre).");
+      ImGui::Text("K%d", e.keyframe);
+      label("points n", "Depth points merged into it.");
+      ImGui::Text("%u", e.count);
+      label("mean (m)", "Its centre in the world frame.");
+      ImGui::Text("%.3f, %.3f, %.3f", e.mean.x(), e.mean.y(), e.mean.z());
+      label("sigma axes (mm)", "Standard deviations along its principal axes, largest last.");
+      ImGui::Text("%.1f, %.1f, %.1f", axes.x(), axes.y(), axes.z());
+      label("colour", "Mean RGB of its points.");
+      ImGui::ColorButton("##colour", {e.color.x() / 255.f, e.color.y() / 255.f, e.color.z() / 255.f, 1.f});
+      ImGui::SameLine();
+      ImGui::Text("%.0f, %.0f, %.0f", e.color.x(), e.color.y(), e.color.z());
+      ImGui::EndTable();
+    }
   }
 
-  void drawMapPanel() {
-    const ImVec2 size = ImGui::GetIO().DisplaySize;
-    ImGui::SetNextWindowPos({size.x - kRightWidth, 0}, layoutCond());
-    ImGui::SetNextWindowSize({kRightWidth, size.y}, layoutCond());
-    ImGui::Begin("Map");
-    if (bench_.session()) {
-      if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
-      if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
-      if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawView();
-      if (ImGui::CollapsingHeader("Keyframes", ImGuiTreeNodeFlags_DefaultOpen)) drawKeyframes();
-      if (ImGui::CollapsingHeader("Picked ellipsoid", ImGuiTreeNodeFlags_DefaultOpen)) drawPicked();
-      if (ImGui::CollapsingHeader("Pose correction")) {
-        ImGui::InputText("TUM file", &ui().trajectory_text);
-        if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
-      }
-      if (ImGui::CollapsingHeader("Export and save")) {
-        ImGui::InputText("folder", &ui().export_text);
-        if (ImGui::Button("Export (as vdmap map)")) bench_.exportMap();
-        ImGui::InputText("session", &ui().session_text);
-        if (ImGui::Button("Save session (.vdmap)")) bench_.saveSession();
-      }
+  void drawPoseFile() {
+    ImGui::SetNextItemWidth(-FLT_MIN);
+    ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui().trajectory_text);
+    tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
+    if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
+  }
+
+  void drawExport() {
+    if (beginRows("export")) {
+      label("folder", "Export writes what `vdmap map --out` writes into this folder (created if missing).");
+      ImGui::InputText("##export", &ui().export_text);
+      label("session", "Save session writes one .vdmap file with keyframes, local maps and graph (vdmap gui FILE opens it).");
+      ImGui::InputText("##session", &ui().session_text);
+      ImGui::EndTable();
     }
-    if (ImGui::CollapsingHeader("Settings")) {
-      if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
-      ImGui::TextDisabled("saved on exit to %s", settingsPath().c_str());
+    if (ImGui::Button("Export")) bench_.exportMap();
+    ImGui::SameLine();
+    if (ImGui::Button("Save session")) bench_.saveSession();
+    checkFits();
+  }
+
+  // --- status bar, overlays, container window, help ----------------------------------------------
+
+  void drawStatusBar() {
+    ImGui::SetNextWindowPos({status_.x, status_.y}, ImGuiCond_Always);
+    ImGui::SetNextWindowSize({status_.w, status_.h}, ImGuiCond_Always);
+    ImGui::Begin("##status", nullptr,
+                 ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                     ImGuiWindowFlags_NoBringToFrontOnFocus);
+    char right[160];
+    const std::size_t shown = global_ ? global_->map.ellipsoids.size() : 0;
+    std::snprintf(right, sizeof right, "%zu ellipsoids | frame %.0f ms | H: help", shown, median({frame_times_.begin(), frame_times_.end()}));
+    const float right_w = ImGui::CalcTextSize(right).x;
+    const StatusLine& st = ui().status;
+    ImGui::AlignTextToFramePadding();
+    if (!st.text.empty()) {
+      ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[static_cast<int>(st.kind)]);
+      const float avail = ImGui::GetContentRegionAvail().x - right_w - 3 * ImGui::GetFontSize();
+      ImGui::PushClipRect(ImGui::GetCursorScreenPos(), {ImGui::GetCursorScreenPos().x + avail, status_.y + status_.h}, true);
+      ImGui::TextUnformatted(st.text.c_str());
+      ImGui::PopClipRect();
+      ImGui::PopStyleColor();
+      tip(st.text);  // the whole message, wrapped, when it is longer than the bar
+      ImGui::SameLine(std::max(0.f, avail) + ImGui::GetStyle().WindowPadding.x);
+      if (ImGui::SmallButton("x")) ui().status = {StatusLine::Kind::kInfo, "", st.serial + 1};
+      tip("Clear the message.");
     }
+    ImGui::SameLine(status_.w - right_w - ImGui::GetStyle().WindowPadding.x);
+    ImGui::TextUnformatted(right);
+    tip("Ellipsoids in the global map shown; the median time of the last 30 UI frames (the window draws only when "
+        "something changes, so an idle window costs nothing).");
     ImGui::End();
   }
 
-  void drawBanners() {
-    for (std::string* text : {&ui().error, &ui().warning}) {
-      if (text->empty()) continue;
-      const bool error = text == &ui().error;
-      ImGui::SetNextWindowPos({kLeftWidth + 10, error ? 10.f : 80.f}, ImGuiCond_Always);
-      ImGui::SetNextWindowSize({ImGui::GetIO().DisplaySize.x - kLeftWidth - kRightWidth - 20, 0}, ImGuiCond_Always);
-      ImGui::Begin(error ? "Error" : "Warning", nullptr, ImGuiWindowFlags_NoCollapse);
-      ImGui::PushStyleColor(ImGuiCol_Text, error ? ImVec4(1, 0.45f, 0.45f, 1) : ImVec4(1, 0.85f, 0.3f, 1));
-      ImGui::TextWrapped("%s", text->c_str());
-      ImGui::PopStyleColor();
-      if (ImGui::Button("Dismiss")) text->clear();
-      ImGui::End();
+  // Legends and hints over the 3-D view (drawn in front of it, behind the panels).
+  void drawViewOverlay() {
+    ImDrawList* draw = ImGui::GetBackgroundDrawList();
+    const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+    const ImU32 text_color = IM_COL32(230, 230, 230, 255), dim = IM_COL32(170, 170, 170, 255);
+    if (preparing_.valid()) {
+      const auto [done, total] = std::pair<std::size_t, std::size_t>(progress_->first, progress_->second);
+      const float w = std::min(view_.w * 0.6f, 30.f * font), x = view_.x + (view_.w - w) / 2, y = view_.y + view_.h / 2;
+      const float share = total > 0 ? static_cast<float>(done) / static_cast<float>(total) : 0.f;
+      char text[128];
+      std::snprintf(text, sizeof text, "%s: %zu / %zu frames (first start only)", prepare_what_.c_str(), done, total);
+      draw->AddText({x, y - 1.6f * font}, text_color, text);
+      draw->AddRectFilled({x, y}, {x + w * share, y + font}, IM_COL32(90, 160, 230, 255));
+      draw->AddRect({x, y}, {x + w, y + font}, dim);
+      return;
+    }
+    if (!bench_.session()) {
+      draw->AddText({view_.x + pad, view_.y + pad}, dim, "Open a TUM RGB-D folder or a .vdmap session (left panel).");
+      return;
+    }
+    const char* mode = ui().view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
+                       : ui().follow_map            ? "following the map (a drag stops it, F resumes)"
+                                                    : "F: frame the map, R: reset, H: help";
+    draw->AddText({view_.x + pad, view_.y + pad}, dim, mode);
+    if (ui().view_from_keyframe >= 0) {
+      char text[64];
+      std::snprintf(text, sizeof text, "K%d, its own intrinsics", ui().view_from_keyframe);
+      draw->AddText({view_.x + pad, view_.y + pad + 1.3f * font}, dim, text);
+    }
+    // The colour legend, bottom left.
+    const float bar_w = std::min(16.f * font, view_.w - 2 * pad), bar_h = 0.8f * font;
+    float y = view_.y + view_.h - pad - bar_h - 1.4f * font;
+    const render::ColorMode color = ui().settings.color;
+    if (const auto range = mirror_.mapColorRange()) {
+      const bool uncertainty = color == render::ColorMode::kUncertainty;
+      draw->AddText({view_.x + pad, y - 1.4f * font}, text_color,
+                    uncertainty ? "largest std. deviation (log scale)" : "points per ellipsoid (log scale)");
+      drawRamp(draw, {view_.x + pad, y}, bar_w, bar_h);
+      char lo[32], hi[32];
+      if (uncertainty) {
+        std::snprintf(lo, sizeof lo, "%s", metres(range->lo).c_str());
+        std::snprintf(hi, sizeof hi, "%s", metres(range->hi).c_str());
+      } else {
+        std::snprintf(lo, sizeof lo, "%.0f", range->lo);
+        std::snprintf(hi, sizeof hi, "%.0f", range->hi);
+      }
+      draw->AddText({view_.x + pad, y + bar_h + 2}, text_color, lo);
+      draw->AddText({view_.x + pad + bar_w - ImGui::CalcTextSize(hi).x, y + bar_h + 2}, text_color, hi);
+    } else if (color == render::ColorMode::kKeyframe && !mapping_->keyframes.empty()) {
+      // A swatch per keyframe, as many as fit in two rows.
+      const float cell = 3.2f * font;
+      const int per_row = std::max(1, static_cast<int>((view_.w - 2 * pad) / cell));
+      const int n = static_cast<int>(mapping_->keyframes.size()), rows = std::min(2, (n + per_row - 1) / per_row);
+      float top = view_.y + view_.h - pad - rows * 1.3f * font;
+      draw->AddText({view_.x + pad, top - 1.4f * font}, text_color, "keyframe colours");
+      for (int i = 0; i < std::min(n, 2 * per_row); ++i) {
+        const float x = view_.x + pad + (i % per_row) * cell, yy = top + (i / per_row) * 1.3f * font;
+        draw->AddRectFilled({x, yy + 2}, {x + 0.9f * font, yy + font}, rgbColor(render::keyframeColor(i)));
+        char text[16];
+        std::snprintf(text, sizeof text, i + 1 == 2 * per_row && n > 2 * per_row ? "K%d.." : "K%d", i);
+        draw->AddText({x + 1.1f * font, yy}, text_color, text);
+      }
+    }
+    // The up axis, bottom right.
+    const glm::vec3 up = ui().camera.up;
+    char text[96];
+    std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui().settings.up_axis)], up.x,
+                  up.y, up.z);
+    const ImVec2 size = ImGui::CalcTextSize(text);
+    draw->AddText({view_.x + view_.w - pad - size.x, view_.y + view_.h - pad - size.y}, dim, text);
+  }
+
+  void drawContainerWindow() {
+    if (!container_open_ || mirror_.containerImage().empty() || !mapping_) return;
+    const ImVec2 display = ImGui::GetIO().DisplaySize;
+    ImGui::SetNextWindowSize({display.x * 0.55f, display.y * 0.6f}, ImGuiCond_FirstUseEver);
+    ImGui::SetNextWindowPos({display.x * 0.22f, display.y * 0.15f}, ImGuiCond_FirstUseEver);
+    char title[64];
+    std::snprintf(title, sizeof title, "Container view K%d###container", ui().selected_keyframe);
+    if (!ImGui::Begin(title, &container_open_)) return ImGui::End();
+    Settings& s = ui().settings;
+    ImGui::Checkbox("cell grid", &s.container_grid);
+    tip("The container's cells (s px of the keyframe image), drawn once they are 4 screen pixels apart.");
+    ImGui::SameLine();
+    ImGui::Checkbox("image bounds", &s.container_bounds);
+    tip("The keyframe's own W x H image inside the 2W x 2H container.");
+    ImGui::SameLine();
+    ImGui::SetNextItemWidth(8.f * ImGui::GetFontSize());
+    ImGui::SliderFloat("zoom", &container_zoom_, 1.f, 16.f, "%.1fx", ImGuiSliderFlags_Logarithmic);
+    ImGui::SameLine();
+    if (ImGui::Button("fit")) container_zoom_ = 1.f, container_center_ = {0.5f, 0.5f};
+    const render::Texture2D& t = mirror_.containerTexture();
+    const ImVec2 avail = ImGui::GetContentRegionAvail();
+    const float aspect = static_cast<float>(t.width()) / std::max(1, t.height());
+    const ImVec2 size = avail.x / aspect <= avail.y ? ImVec2(avail.x, avail.x / aspect) : ImVec2(avail.y * aspect, avail.y);
+    const ImVec2 at = ImGui::GetCursorScreenPos();
+    // The visible part of the container, in texture coordinates.
+    const float half = 0.5f / container_zoom_;
+    container_center_.x = std::clamp(container_center_.x, half, 1.f - half);
+    container_center_.y = std::clamp(container_center_.y, half, 1.f - half);
+    const ImVec2 uv0(container_center_.x - half, container_center_.y - half), uv1(container_center_.x + half, container_center_.y + half);
+    ImGui::Image(textureId(t), size, uv0, uv1);
+    const bool hovered = ImGui::IsItemHovered();
+    if (hovered && ImGui::GetIO().MouseWheel != 0.f) {
+      // Zoom about the pixel under the cursor.
+      const ImVec2 m = ImGui::GetIO().MousePos;
+      const ImVec2 uv(uv0.x + (m.x - at.x) / size.x * (uv1.x - uv0.x), uv0.y + (m.y - at.y) / size.y * (uv1.y - uv0.y));
+      const float old_zoom = container_zoom_;
+      container_zoom_ = std::clamp(container_zoom_ * std::pow(1.25f, ImGui::GetIO().MouseWheel), 1.f, 16.f);
+      const float k = old_zoom / container_zoom_;
+      container_center_ = {uv.x + (container_center_.x - uv.x) * k, uv.y + (container_center_.y - uv.y) * k};
+    }
+    if (hovered && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
+      const ImVec2 d = ImGui::GetIO().MouseDelta;
+      container_center_.x -= d.x / size.x / container_zoom_;
+      container_center_.y -= d.y / size.y / container_zoom_;
+    }
+    // Overlays in container pixels -> screen.
+    const float cw = static_cast<float>(t.width()), ch = static_cast<float>(t.height());
+    const auto screen = [&](float u, float v) {
+      return ImVec2(at.x + (u / cw - uv0.x) / (uv1.x - uv0.x) * size.x, at.y + (v / ch - uv0.y) / (uv1.y - uv0.y) * size.y);
+    };
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    draw->PushClipRect(at, {at.x + size.x, at.y + size.y}, true);
+    const int cell = mapping_->mapper.local_map.cell_size_px;
+    const float px = size.x / (cw * (uv1.x - uv0.x));  // screen pixels per container pixel
+    if (s.container_grid && cell * px >= 4.f) {
+      const int c0 = static_cast<int>(uv0.x * cw / cell), c1 = static_cast<int>(uv1.x * cw / cell) + 1;
+      const int r0 = static_cast<int>(uv0.y * ch / cell), r1 = static_cast<int>(uv1.y * ch / cell) + 1;
+      for (int c = c0; c <= c1; ++c) draw->AddLine(screen(c * cell, 0), screen(c * cell, ch), IM_COL32(255, 255, 255, 50));
+      for (int r = r0; r <= r1; ++r) draw->AddLine(screen(0, r * cell), screen(cw, r * cell), IM_COL32(255, 255, 255, 50));
+    }
+    if (s.container_bounds)
+      draw->AddRect(screen(cw / 4, ch / 4), screen(cw * 3 / 4, ch * 3 / 4), IM_COL32(255, 220, 0, 200), 0.f, 0, 1.5f);
+    draw->PopClipRect();
+    ImGui::End();
+  }
+
+  void drawHelp() {
+    if (!ui().show_help) return;
+    const ImVec2 display = ImGui::GetIO().DisplaySize;
+    ImGui::SetNextWindowPos({view_.x + view_.w / 2, view_.y + view_.h / 2}, ImGuiCond_Always, {0.5f, 0.5f});
+    ImGui::SetNextWindowSizeConstraints({0, 0}, {display.x * 0.9f, display.y * 0.9f});
+    ImGui::Begin("Keys and mouse (H, F1 or Esc closes)", &ui().show_help,
+                 ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings);
+    if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_RowBg)) {
+      for (const auto& [keys, what] : keyHelp()) {
+        ImGui::TableNextRow();
+        ImGui::TableSetColumnIndex(0);
+        ImGui::TextColored({1.f, 0.86f, 0.4f, 1.f}, "%s", keys);
+        ImGui::TableSetColumnIndex(1);
+        ImGui::TextUnformatted(what);
+      }
+      ImGui::EndTable();
+    }
+    ImGui::TextDisabled("Hover over any control or figure for what it means.");
+    ImGui::End();
+  }
+
+  // --- the scripted path --------------------------------------------------------------------------
+
+  // Once mapping and map building are done: reset the view, draw a few frames, take the
+  // screenshot, then the measurements asked for, then the figures.
+  enum class Phase { kWaitDone, kSettle, kLatency, kOrbit, kIdle, kFinish, kDone };
+
+  void advanceScript() {
+    if (!scripted() || script_phase_ == Phase::kDone || preparing_.valid()) return;
+    MapSession* session = bench_.session();
+    switch (script_phase_) {
+      case Phase::kWaitDone: {
+        if (session) {
+          const PlayerStatus st = session->status();
+          const bool done = !st.busy && (st.target >= mapping_->frames_total || !script_.play_to_end || !st.error.empty());
+          if (!done) return;
+        }
+        bench_.resetView();
+        if (script_.keyframe >= 0) bench_.selectKeyframe(script_.keyframe);
+        countdown_ = 3;  // frames to draw the final map before the screenshot
+        script_phase_ = Phase::kSettle;
+        return;
+      }
+      case Phase::kSettle:
+        if (--countdown_ > 0) return;
+        recordLayout();
+        if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
+        script_phase_ = Phase::kLatency;
+        return;
+      case Phase::kLatency:
+        if (measureLatency()) return;
+        script_phase_ = Phase::kOrbit;
+        return;
+      case Phase::kOrbit:
+        if (static_cast<int>(orbit_ms_.size()) < script_.orbit_frames) {
+          if (orbit_started_) orbit_ms_.push_back(msSince(orbit_frame_start_));
+          orbit_started_ = true;
+          bench_.orbit(0.03f, 0.f);
+          orbit_frame_start_ = Clock::now();
+          return;
+        }
+        script_phase_ = Phase::kIdle;
+        idle_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(script_.idle_seconds));
+        idle_cpu_start_ = processCpuSeconds();
+        return;
+      case Phase::kIdle:
+        if (Clock::now() < idle_until_) return;
+        if (script_.idle_seconds > 0) idle_cpu_s_ = processCpuSeconds() - idle_cpu_start_;
+        script_phase_ = Phase::kFinish;
+        return;
+      case Phase::kFinish:
+        if (!script_.stats_json.empty()) writeStats(script_.stats_json);
+        script_finished_ = script_.exit;
+        script_phase_ = Phase::kDone;
+        return;
+      case Phase::kDone: return;
     }
   }
 
-  // The scripted path: once mapping and map building are done, frame the map, render a few
-  // frames so the final map is on screen, then write the screenshot and the figures.
-  void advanceScript() {
-    const bool scripted = !script_.screenshot.empty() || !script_.stats_json.empty() || script_.exit;
-    if (!scripted || script_finished_) return;
-    if (countdown_ < 0) {
-      MapSession* session = bench_.session();
-      bool done = true;
-      if (session) {
-        const PlayerStatus st = session->status();
-        done = !st.busy && (st.target >= mapping_->frames_total || !script_.play_to_end || !st.error.empty());
-        if (done && !st.error.empty()) ui().error = st.error;
-      }
-      if (!done) return;
-      bench_.resetView();
-      if (script_.keyframe >= 0) bench_.selectKeyframe(script_.keyframe);
-      countdown_ = 3;  // frames to draw the final map before the screenshot
-      return;
+  // One slider change at a time (merge distance, alternating): from the edit until the frame
+  // that shows the map built with it. Returns true while runs remain.
+  bool measureLatency() {
+    MapSession* session = bench_.session();
+    if (!session || !global_) return false;
+    if (latency_generation_ >= 0) {
+      if (global_->generation <= latency_generation_ || session->status().busy) return true;
+      latency_ms_.push_back(msSince(latency_start_));  // this frame draws the new map
+      latency_generation_ = -1;
     }
-    if (--countdown_ > 0) return;
-    if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
-    if (!script_.stats_json.empty()) writeStats(script_.stats_json);
-    script_finished_ = script_.exit;
-    if (!script_.exit) countdown_ = 1 << 30;
+    if (static_cast<int>(latency_ms_.size()) >= script_.latency_runs) return false;
+    const Parameter& p = *findParameter("merge_distance");
+    latency_generation_ = global_->generation;
+    latency_start_ = Clock::now();
+    bench_.editParameter(p, latency_ms_.size() % 2 == 0 ? 0.2 : GlobalMapParams{}.merge_distance_m);
+    return true;
+  }
+
+  // Where the panels and the 3-D view are and where the map projects, for the stats file.
+  void recordLayout() {
+    layout_ = {{"window", {fb_width_, fb_height_}},
+               {"viewport", view_.json()},
+               {"panels", {{"Sequence", left_.json()}, {"Map", right_.json()}, {"Status", status_.json()}}},
+               {"labels_cut", labels_cut_},
+               {"up", {ui().camera.up.x, ui().camera.up.y, ui().camera.up.z}}};
+    if (!global_ || global_->map.ellipsoids.empty()) return;
+    std::vector<glm::vec3> means;
+    for (const Ellipsoid& e : global_->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+    const auto [lo, hi] = render::robustBounds(means);
+    const ViewportView v = bench_.view(ui().view_width, ui().view_height);
+    float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 p((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+      const glm::vec4 q = v.camera.T_C_W * glm::vec4(p, 1.f);
+      const float u = v.camera.fx * q.x / q.z + v.camera.cx + view_.x + v.image.x;
+      const float w = v.camera.fy * q.y / q.z + v.camera.cy + view_.y + v.image.y;
+      x0 = std::min(x0, u), y0 = std::min(y0, w), x1 = std::max(x1, u), y1 = std::max(y1, w);
+    }
+    layout_["map_bbox_px"] = {x0, y0, x1, y1};
   }
 
   void saveScreenshot(const std::string& file) {
-    cv::Mat image(fb_height_, fb_width_, CV_8UC3);
     gl_.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl_.ReadBuffer(GL_BACK);
-    gl_.PixelStorei(GL_PACK_ALIGNMENT, 1);
-    gl_.ReadPixels(0, 0, fb_width_, fb_height_, GL_RGB, GL_UNSIGNED_BYTE, image.data);
-    cv::flip(image, image, 0);
+    const cv::Mat image = render::readFramebufferRgb(gl_, 0, 0, fb_width_, fb_height_);
+    std::error_code ignored;
+    const std::string path = std::filesystem::absolute(file, ignored).lexically_normal().string();
     try {
-      render::writePng(file, image);
-      if (bench_.ui().warning.empty()) bench_.ui().warning = "screenshot written to " + file;
+      render::writePng(path, image);
+      bench_.report(StatusLine::Kind::kSuccess, "screenshot written to " + path);
     } catch (const std::exception& e) {
-      bench_.ui().error = e.what();
+      bench_.report(StatusLine::Kind::kError, e.what());
     }
   }
 
   void writeStats(const std::string& file) {
-    nlohmann::json stats = {{"error", ui().error}};
+    nlohmann::json stats = {{"error", bench_.firstError()}};
     if (mapping_) {
       stats["frames_mapped"] = mapping_->frames_mapped;
       stats["frames_total"] = mapping_->frames_total;
       stats["keyframes"] = mapping_->keyframes.size();
       stats["edges"] = mapping_->edges.size();
+      stats["cell_size_px"] = mapping_->mapper.local_map.cell_size_px;
     }
     if (global_) {
       stats["sigma_e"] = global_->map.sigma_e;
@@ -531,10 +1210,14 @@ class WorkbenchWindow {
     }
     stats["ui_frames_while_busy"] = busy_frame_ms_.size();
     stats["ui_frame_ms_median_while_busy"] = median(busy_frame_ms_);
+    stats["layout"] = layout_;
+    if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
+    if (!orbit_ms_.empty()) stats["orbit_frame_ms"] = orbit_ms_;
+    if (script_.idle_seconds > 0) stats["idle_cpu_s"] = idle_cpu_s_;
     try {
       writeFileAtomically(file, stats.dump(2) + "\n");
     } catch (const std::exception& e) {
-      ui().error = e.what();
+      bench_.report(StatusLine::Kind::kError, e.what());
     }
   }
 
@@ -542,50 +1225,80 @@ class WorkbenchWindow {
   GlfwWindowContext& context_;
   const render::Gl& gl_;
   ScriptOptions script_;
-  render::EllipsoidRenderer ellipsoids_;
-  std::vector<render::EllipsoidInstance> instances_;  // of the global map shown
-  render::PointRenderer points_;
-  render::LineRenderer lines_;
-  ImageTexture rgb_, depth_, container_image_{gl_};
-  render::ContainerRenderer container_;
-  std::unique_ptr<render::Framebuffer> container_fb_;
+  KeyQueue& keys_;
+  render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
-  const MapSession* shown_session_ = nullptr;
-  const MappingSnapshot* shown_mapping_ = nullptr;
-  // What the lines were built from: the snapshot, the selection and the line toggles.
-  using LinesKey = std::tuple<const MappingSnapshot*, int, bool, bool, bool>;
-  LinesKey shown_lines_{};
-  int shown_generation_ = -1;
-  std::shared_ptr<const SelectionSnapshot> shown_selection_;  // in the container view (held: compared by address)
-  render::ColorMode shown_color_ = render::ColorMode::kRgb, container_color_ = render::ColorMode::kRgb;
+  const MapSession* mirrored_session_ = nullptr;
+  const MapSession* hooked_session_ = nullptr;
+  int session_base_ = 0;
+  Seen last_seen_;
+  int settle_frames_ = 2;
+  // Preparation (the built-in scene) on its own thread.
+  std::future<std::string> preparing_;
+  std::string prepare_what_;
+  SequenceArgs prepare_args_;
+  std::shared_ptr<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>> progress_ =
+      std::make_shared<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>>(0, 0);
+  // Layout (ImGui coordinates).
+  Rect left_, right_, status_, view_;
+  float left_w_ = 0, right_w_ = 0, status_h_ = 0;
+  ImVec2 last_size_{0, 0};
   int fb_width_ = 0, fb_height_ = 0;
+  int labels_cut_ = 0;
+  bool drag_in_view_[3] = {false, false, false};
   int scrub_ = 0;
   bool scrubbing_ = false;
+  bool container_open_ = false;
+  float container_zoom_ = 1.f;
+  ImVec2 container_center_{0.5f, 0.5f};
   std::string screenshot_text_ = "vdmap_screenshot.png", screenshot_request_;
-  int countdown_ = -1;
-  bool script_finished_ = false;
+  double frame_ms_ = 0;
+  std::deque<double> frame_times_;
   std::vector<double> busy_frame_ms_;
+  // Script.
+  Phase script_phase_ = Phase::kWaitDone;
+  int countdown_ = 0;
+  bool script_finished_ = false;
+  nlohmann::json layout_ = nlohmann::json::object();
+  int latency_generation_ = -1;
+  Clock::time_point latency_start_, orbit_frame_start_, idle_until_;
+  std::vector<double> latency_ms_, orbit_ms_;
+  bool orbit_started_ = false;
+  double idle_cpu_start_ = 0, idle_cpu_s_ = 0;
 };
 
 }  // namespace
 
-int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file) {
+int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file, Preparation prepare) {
   Settings& s = bench.ui().settings;
   GlfwWindowContext context(s.window_width, s.window_height, "vdmap workbench");
+  KeyQueue keys;
+  glfwSetWindowUserPointer(context.window(), &keys);
+  installInputCallbacks(context.window());
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
   const std::string ini = settings_file.empty() ? "" : (std::filesystem::path(settings_file).parent_path() / "imgui.ini").string();
   ImGui::GetIO().IniFilename = ini.empty() ? nullptr : ini.c_str();
-  std::error_code ignored;  // ImGui writes imgui.ini at DestroyContext, before saveSettings makes the folder
+  ImGui::GetIO().ConfigInputTextCursorBlink = false;  // a blinking cursor would need frames while idle
+  std::error_code ignored;  // ImGui writes imgui.ini at DestroyContext, before the settings make the folder
   if (!ini.empty()) std::filesystem::create_directories(std::filesystem::path(ini).parent_path(), ignored);
   ImGui::StyleColorsDark();
+  // HiDPI screens: scale fonts and sizes by the window's content scale (1 on a plain X server).
+  float scale_x = 1.f, scale_y = 1.f;
+  glfwGetWindowContentScale(context.window(), &scale_x, &scale_y);
+  if (scale_y > 1.f) {
+    ImFontConfig font;
+    font.SizePixels = 13.f * scale_y;
+    ImGui::GetIO().Fonts->AddFontDefault(&font);
+    ImGui::GetStyle().ScaleAllSizes(scale_y);
+  }
   if (!ImGui_ImplGlfw_InitForOpenGL(context.window(), true) || !ImGui_ImplOpenGL3_Init("#version 330"))
     throw std::runtime_error("Dear ImGui could not initialise its OpenGL 3 backend");
   int code = 0;
   {
-    WorkbenchWindow window(bench, context, script);
-    while (window.frame()) {
+    WorkbenchWindow window(bench, context, script, std::move(prepare), keys);
+    while (window.step()) {
     }
     code = window.exitCode();
   }
@@ -593,13 +1306,6 @@ int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std:
   ImGui_ImplOpenGL3_Shutdown();
   ImGui_ImplGlfw_Shutdown();
   ImGui::DestroyContext();
-  if (!settings_file.empty()) {
-    try {
-      saveSettings(settings_file, s);
-    } catch (const std::exception& e) {
-      std::cerr << "vdmap: warning: settings not saved: " << e.what() << "\n";
-    }
-  }
   return code;
 }
 

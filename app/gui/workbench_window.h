@@ -1,5 +1,6 @@
 #pragma once
 // The workbench window: GLFW + Dear ImGui drawing of a Workbench (all logic lives there).
+#include <functional>
 #include <string>
 
 #include "app/gui/workbench.h"
@@ -13,11 +14,26 @@ struct ScriptOptions {
   std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
   bool exit = false;          ///< close the window once the above are written
+  /// Measurements, in this order after the screenshot, into the stats file:
+  int latency_runs = 0;       ///< slider-to-map latency: merge-distance edits until the new map is drawn, ms
+  int orbit_frames = 0;       ///< UI frame time while orbiting, ms per frame
+  double idle_seconds = 0;    ///< process CPU time over this many seconds of nothing happening
 };
 
-/// Opens the window, runs until it is closed (or the script is done with `exit`), saves the
-/// settings to `settings_file` unless empty. Returns the exit code. Throws std::runtime_error
-/// when no window can be opened.
-int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file);
+/// Work to do before the sequence can be opened (rendering the built-in scene on first start):
+/// run on its own thread while the window shows its progress. run() reports (done, total) and
+/// returns the folder to open with `args`.
+struct Preparation {
+  std::string what;
+  SequenceArgs args;
+  std::function<std::string(const std::function<void(std::size_t, std::size_t)>& progress)> run;
+};
+
+/// Opens the window (and runs `prepare` first when given), runs until it is closed (or the script
+/// is done with `exit`). `settings_file`'s folder keeps the window layout (imgui.ini) unless it is
+/// empty; the window size goes into bench.ui().settings. Returns the exit code. Throws
+/// std::runtime_error when no window can be opened.
+int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file,
+                       Preparation prepare = {});
 
 }  // namespace vdmap::app::gui

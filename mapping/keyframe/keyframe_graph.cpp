@@ -4,8 +4,6 @@
 #include <stdexcept>
 #include <string>
 
-#include "mapping/core/error.h"
-#include "mapping/io/trajectory_io.h"
 
 namespace vdmap {
 
@@ -30,8 +28,7 @@ void KeyframeGraph::setKeyframePose(int id, const Transform& T_W_K) {
   keyframes_[static_cast<std::size_t>(id)].T_W_K = T_W_K;
 }
 
-TrajectoryMatch KeyframeGraph::applyTrajectory(const std::filesystem::path& file, double tolerance_s) {
-  const std::vector<StampedPose> poses = readTumTrajectory(file);
+TrajectoryMatch KeyframeGraph::applyTrajectory(std::span<const StampedPose> poses, double tolerance_s) {
   TrajectoryMatch match;
   std::vector<bool> seen(keyframes_.size(), false);
   for (const StampedPose& p : poses) {
@@ -48,8 +45,8 @@ TrajectoryMatch KeyframeGraph::applyTrajectory(const std::filesystem::path& file
   }
   match.untouched = static_cast<int>(std::count(seen.begin(), seen.end(), false));
   if (match.matched == 0)
-    throw InputError(file.string(), "no pose matches a keyframe timestamp (" + std::to_string(poses.size()) +
-                                        " poses, " + std::to_string(keyframes_.size()) + " keyframes)");
+    throw std::invalid_argument("no pose matches a keyframe timestamp (" + std::to_string(poses.size()) + " poses, " +
+                                std::to_string(keyframes_.size()) + " keyframes)");
   return match;
 }
 

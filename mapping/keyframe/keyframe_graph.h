@@ -1,6 +1,6 @@
 #pragma once
 #include <deque>
-#include <filesystem>
+#include <span>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -8,6 +8,7 @@
 #include "mapping/keyframe/covisibility_graph.h"
 #include "mapping/keyframe/frame_features.h"
 #include "mapping/keyframe/keyframe_selector.h"
+#include "mapping/io/trajectory_io.h"
 #include "mapping/local_map/keyframe_container.h"
 
 namespace vdmap {
@@ -51,11 +52,12 @@ class KeyframeGraph {
   /// is not a finite rigid transform.
   void setKeyframePose(int id, const Transform& T_W_K);
 
-  /// Replaces the poses of the keyframes whose timestamps appear in a TUM trajectory file
-  /// (matched within `tolerance_s`). Poses at unknown timestamps are ignored and counted;
-  /// keyframes the file does not name keep their pose. Throws InputError for a malformed file,
-  /// or when it matches no keyframe at all (almost surely the wrong file).
-  TrajectoryMatch applyTrajectory(const std::filesystem::path& file, double tolerance_s = 1e-3);
+  /// Replaces the poses of the keyframes whose timestamps appear in `poses` (T_W_C, matched
+  /// within `tolerance_s`; timestamps increasing). Poses at unknown timestamps are ignored and
+  /// counted; keyframes not named keep their pose. Throws std::invalid_argument, changing
+  /// nothing, when no pose matches a keyframe (almost surely the wrong trajectory). Reading a
+  /// file is applyTrajectoryFile's job (mapping/io).
+  TrajectoryMatch applyTrajectory(std::span<const StampedPose> poses, double tolerance_s = 1e-3);
 
  private:
   std::deque<Keyframe> keyframes_;

@@ -13,6 +13,7 @@ void MapperParams::validate() const {
   auto check = [](bool ok, const char* what) {
     if (!ok) throw std::invalid_argument(what);
   };
+  check(local_map.cell_size_px >= 1, "cell_size must be >= 1 px");
   const DepthRange& d = local_map.depth_range;
   check(d.min_m >= 0 && d.min_m < d.max_m && std::isfinite(d.max_m), "depth range must satisfy 0 <= min < max");
   check(features.orb_features >= 1, "orb_features must be >= 1");

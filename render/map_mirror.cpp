@@ -1,0 +1,180 @@
+#include "render/map_mirror.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Eigenvalues>
+#include <opencv2/imgproc.hpp>
+
+#include "render/colormap.h"
+#include "render/map_scene.h"
+
+namespace vdmap::render {
+namespace {
+
+// Icosahedra (20 triangles) rather than level-1 spheres (80): at 2 sigma an ellipsoid covers a
+// few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
+constexpr EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
+constexpr glm::u8vec3 kSelected{255, 255, 255}, kCurrent{255, 220, 0}, kCamera{255, 60, 60};
+constexpr glm::u8vec3 kTrajectory{90, 200, 255}, kHighlight{255, 0, 255};
+
+glm::vec3 toVec(const Eigen::Vector3d& p) { return {float(p.x()), float(p.y()), float(p.z())}; }
+
+// A wire diamond around the ellipsoid: its principal axes out to 3 sigma (at least 2 cm, so a
+// tiny ellipsoid stays visible) and the octahedron through their tips.
+ColoredLines diamond(const Ellipsoid& e) {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(e.cov);
+  glm::vec3 tip[6];
+  for (int k = 0; k < 3; ++k) {
+    const double radius = std::max(0.02, 3.0 * std::sqrt(std::max(0.0, eig.eigenvalues()[k])));
+    const Eigen::Vector3d axis = eig.eigenvectors().col(k) * radius;
+    tip[2 * k] = toVec(e.mean + axis);
+    tip[2 * k + 1] = toVec(e.mean - axis);
+  }
+  ColoredLines lines;
+  for (int k = 0; k < 3; ++k) lines.add(tip[2 * k], tip[2 * k + 1], kHighlight);
+  for (int a = 0; a < 6; ++a)
+    for (int b = a + 1; b < 6; ++b)
+      if (a / 2 != b / 2) lines.add(tip[a], tip[b], kHighlight);
+  return lines;
+}
+
+}  // namespace
+
+std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {
+  if (ellipsoids.empty() || mode == ColorMode::kRgb || mode == ColorMode::kKeyframe) return std::nullopt;
+  ColorRange range{INFINITY, -INFINITY};
+  for (const EllipsoidInstance& e : ellipsoids) {
+    float v = static_cast<float>(std::max<std::uint32_t>(1, e.count));
+    if (mode == ColorMode::kUncertainty) {
+      Eigen::Matrix3f m;
+      for (int c = 0; c < 3; ++c)
+        for (int r = 0; r < 3; ++r) m(r, c) = e.cov[c][r];
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3f> solver;
+      solver.computeDirect(m, Eigen::EigenvaluesOnly);
+      v = std::sqrt(std::max(solver.eigenvalues()(2), 1e-12f));  // as ellipsoidColors' ramp
+    }
+    range.lo = std::min(range.lo, v);
+    range.hi = std::max(range.hi, v);
+  }
+  return range;
+}
+
+cv::Mat depthToRgb(const cv::Mat& depth, double depth_scale, double max_m) {
+  cv::Mat d8, bgr, rgb;
+  depth.convertTo(d8, CV_8U, 255.0 / (max_m * depth_scale));
+  cv::applyColorMap(d8, bgr, cv::COLORMAP_VIRIDIS);
+  cv::cvtColor(bgr, rgb, cv::COLOR_BGR2RGB);
+  rgb.setTo(cv::Scalar::all(0), depth == 0);
+  return rgb;
+}
+
+cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
+  cv::Mat image(height, width, CV_8UC3);
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadPixels(x, y, width, height, GL_RGB, GL_UNSIGNED_BYTE, image.data);
+  cv::flip(image, image, 0);
+  return image;
+}
+
+MapMirror::MapMirror(const Gl& gl)
+    : gl_(&gl), ellipsoids_(gl, kEllipsoidStyle), points_(gl), lines_(gl), highlight_(gl), container_(gl),
+      rgb_(gl), depth_(gl), container_image_(gl) {
+  lines_.setWidth(1.5f);
+  highlight_.setWidth(2.f);
+  highlight_.setOnTop(true);
+}
+
+MapMirror::~MapMirror() = default;
+
+void MapMirror::setStyle(const MirrorStyle& style) {
+  style_ = style;
+  ellipsoids_.setStyle({.sigma = style.sigma, .color = style.color});
+  if (style.color != points_style_.color) {
+    points_.set(instances_, style.color);
+    points_style_.color = style.color;
+  }
+}
+
+void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
+  if (generation == map_generation_) return;
+  map_generation_ = generation;
+  instances_ = toInstances(ellipsoids);
+  ellipsoids_.set(instances_);
+  points_.set(instances_, style_.color);
+  points_style_.color = style_.color;
+  ++uploads_.map;
+}
+
+void MapMirror::setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build) {
+  const bool toggles_same = style_.frustums == graph_style_.frustums && style_.graph == graph_style_.graph &&
+                            style_.trajectory == graph_style_.trajectory;
+  if (generation == graph_generation_ && selected_keyframe == graph_selected_ && toggles_same) return;
+  graph_generation_ = generation;
+  graph_selected_ = selected_keyframe;
+  graph_style_ = style_;
+  const GraphScene scene = build();
+  ColoredLines lines;
+  for (std::size_t i = 0; i < scene.keyframes.size() && style_.frustums; ++i) {
+    const int id = static_cast<int>(i);
+    const glm::u8vec3 color = id == scene.selected_keyframe  ? kSelected
+                              : id == scene.current_keyframe ? kCurrent
+                                                             : keyframeColor(id);
+    addFrustum(lines, scene.camera, scene.keyframes[i], 0.25f, color);
+  }
+  if (style_.graph) addEdges(lines, scene.keyframes, scene.edges);
+  if (style_.trajectory) addTrajectory(lines, scene.trajectory, kTrajectory);
+  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), 0.15f, kCamera);
+  lines_.set(lines);
+  ++uploads_.graph;
+}
+
+void MapMirror::setFrame(int generation, const cv::Mat& rgb, const cv::Mat& depth, double depth_scale) {
+  if (generation == frame_generation_) return;
+  frame_generation_ = generation;
+  rgb_.set(rgb);
+  if (!depth.empty()) depth_.set(depthToRgb(depth, depth_scale, kDepthRampMaxM));
+  ++uploads_.frame;
+}
+
+void MapMirror::setContainer(int generation, int keyframe, const cv::Mat& rgb, const PinholeCamera& camera,
+                             const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids, const ContainerStyle& style) {
+  if (generation == container_generation_ && style == container_style_) return;
+  container_generation_ = generation;
+  container_style_ = style;
+  ++uploads_.container;
+  if (keyframe < 0 || rgb.empty()) {
+    container_rgb_ = cv::Mat();
+    return;
+  }
+  container_.setKeyframe(rgb, camera, T_W_K);
+  container_.setEllipsoids(toInstances(ellipsoids), style);
+  if (!container_fb_ || container_fb_->width() != container_.containerWidth() ||
+      container_fb_->height() != container_.containerHeight())
+    container_fb_ = std::make_unique<Framebuffer>(*gl_, container_.containerWidth(), container_.containerHeight());
+  GLint bound = 0, viewport[4];
+  gl_->GetIntegerv(GL_DRAW_FRAMEBUFFER_BINDING, &bound);
+  gl_->GetIntegerv(GL_VIEWPORT, viewport);
+  container_fb_->bindAndClear(0.f, 0.f, 0.f);
+  container_.draw(container_fb_->width(), container_fb_->height());
+  container_rgb_ = container_fb_->readRgb();
+  container_image_.set(container_rgb_);
+  gl_->BindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(bound));
+  gl_->Viewport(viewport[0], viewport[1], viewport[2], viewport[3]);
+}
+
+void MapMirror::setHighlight(const std::optional<Ellipsoid>& ellipsoid) {
+  has_highlight_ = ellipsoid.has_value();
+  if (ellipsoid) highlight_.set(diamond(*ellipsoid));
+}
+
+void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
+  if (style_.ellipsoids) ellipsoids_.draw(view);
+  else points_.draw(view);
+  if (with_lines) lines_.draw(view);
+  if (has_highlight_) highlight_.draw(view);
+}
+
+std::optional<ColorRange> MapMirror::mapColorRange() const { return colorRange(instances_, style_.color); }
+
+}  // namespace vdmap::render

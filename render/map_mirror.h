@@ -1,0 +1,128 @@
+#pragma once
+// The workbench's GPU mirror (STYLE 11): what the window shows of the model, in GPU buffers and
+// textures, re-uploaded only when the model's snapshot generations say it changed. The window
+// hands it the newest snapshots every UI frame; a generation it has already uploaded costs
+// nothing. It owns the renderers, the container view's framebuffer and the image textures;
+// screenshots read back through readFramebufferRgb. Use on the thread whose context is current.
+#include <functional>
+#include <memory>
+#include <optional>
+#include <span>
+#include <vector>
+
+#include <opencv2/core.hpp>
+
+#include "mapping/core/camera.h"
+#include "mapping/local_map/ellipsoid_filter.h"
+#include "render/container_renderer.h"
+#include "render/ellipsoid_renderer.h"
+#include "render/framebuffer.h"
+#include "render/primitive_renderer.h"
+#include "render/scene_lines.h"
+#include "render/texture.h"
+
+namespace vdmap::render {
+
+/// The keyframe graph as the 3-D view draws it (world frame).
+struct GraphScene {
+  PinholeCamera camera;
+  std::vector<Transform> keyframes;   ///< T_W_K by keyframe id
+  std::vector<GraphEdge> edges;
+  std::vector<Transform> trajectory;  ///< T_W_C per mapped frame; the last one is the current camera
+  int current_keyframe = -1;          ///< drawn yellow
+  int selected_keyframe = -1;         ///< drawn white
+};
+
+/// How the 3-D view draws the mirror.
+struct MirrorStyle {
+  ColorMode color = ColorMode::kRgb;
+  float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
+  bool ellipsoids = true;             ///< false: the ellipsoid centres as points
+  bool frustums = true, graph = true, trajectory = true;
+  bool operator==(const MirrorStyle&) const = default;
+};
+
+/// The range of the colour ramp of a colour mode over a map, in the units a legend shows:
+/// uncertainty: the largest standard deviation sqrt(lambda_max), m; count: points per ellipsoid.
+/// Empty for rgb / keyframe colours or an empty map. The ramp is logarithmic in both.
+struct ColorRange {
+  float lo = 0.f, hi = 0.f;
+};
+std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
+
+/// Raw depth (CV_16U, `depth_scale` units per metre) as an RGB image: viridis over 0..max_m,
+/// black where there is no measurement.
+cv::Mat depthToRgb(const cv::Mat& depth, double depth_scale, double max_m);
+/// The depth colour ramp's upper end, m (the workbench's depth scale bar shows it).
+constexpr double kDepthRampMaxM = 6.0;
+
+/// Reads back the colour of the bound read framebuffer's rectangle (x, y from the bottom-left,
+/// GL convention) as CV_8UC3 RGB with row 0 on top (the window's screenshot).
+cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height);
+
+class MapMirror {
+ public:
+  explicit MapMirror(const Gl& gl);
+  ~MapMirror();
+  MapMirror(const MapMirror&) = delete;
+  MapMirror& operator=(const MapMirror&) = delete;
+
+  /// Restyles (re-sends colours or geometry only when the style asks for it).
+  void setStyle(const MirrorStyle& style);
+  /// The global map of `generation` (world frame). Uploaded only when the generation differs
+  /// from the one shown; generation 0 with an empty span clears the view.
+  void setMap(int generation, std::span<const Ellipsoid> ellipsoids);
+  /// The keyframe graph of mapping snapshot `generation`: build() is called, and the lines
+  /// re-sent, only when the generation or the selected keyframe changed (or the style's
+  /// frustum/graph/trajectory toggles).
+  void setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build);
+  /// The last mapped frame's images (RGB, raw depth) of mapping snapshot `generation`.
+  void setFrame(int generation, const cv::Mat& rgb, const cv::Mat& depth, double depth_scale);
+  /// The container view (paper Fig. 1) of keyframe `keyframe` (its RGB image, camera, pose and
+  /// kept ellipsoids, world frame) for selection `generation`; rendered into containerTexture()
+  /// when the generation or the style changed. keyframe < 0 clears it.
+  void setContainer(int generation, int keyframe, const cv::Mat& rgb, const PinholeCamera& camera,
+                    const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids, const ContainerStyle& style);
+  /// Marks one ellipsoid (the picked one) with a wire diamond drawn over everything; empty: none.
+  void setHighlight(const std::optional<Ellipsoid>& ellipsoid);
+
+  /// Draws map, lines and highlight into the bound framebuffer's current viewport (whose size
+  /// `view` must have). with_lines = false leaves the graph out ("view from keyframe").
+  void draw(const ViewCamera& view, bool with_lines = true) const;
+
+  const Texture2D& rgbTexture() const { return rgb_; }
+  const Texture2D& depthTexture() const { return depth_; }
+  /// The container view, 2W x 2H pixels; empty until a keyframe is set.
+  const Texture2D& containerTexture() const { return container_image_; }
+  /// The same image on the CPU (CV_8UC3 RGB); empty while no keyframe is shown.
+  const cv::Mat& containerImage() const { return container_rgb_; }
+  /// The shown map's colour ramp range (colorRange of the current colour mode).
+  std::optional<ColorRange> mapColorRange() const;
+  std::size_t mapSize() const { return instances_.size(); }
+
+  /// How often each part was re-uploaded (tests check that an unchanged generation costs nothing).
+  struct Uploads {
+    int map = 0, graph = 0, frame = 0, container = 0;
+  };
+  const Uploads& uploads() const { return uploads_; }
+
+ private:
+  const Gl* gl_;
+  MirrorStyle style_;
+  EllipsoidRenderer ellipsoids_;
+  PointRenderer points_;
+  LineRenderer lines_, highlight_;
+  ContainerRenderer container_;
+  std::unique_ptr<Framebuffer> container_fb_;
+  Texture2D rgb_, depth_, container_image_;
+  cv::Mat container_rgb_;
+  std::vector<EllipsoidInstance> instances_;
+  int map_generation_ = -1, frame_generation_ = -1, container_generation_ = -1;
+  int graph_generation_ = -1, graph_selected_ = -2;
+  MirrorStyle graph_style_, points_style_;
+  ContainerStyle container_style_;
+  bool has_highlight_ = false;
+  Uploads uploads_;
+};
+
+}  // namespace vdmap::render
