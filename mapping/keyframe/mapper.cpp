@@ -1,11 +1,14 @@
 #include "mapping/keyframe/mapper.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "mapping/core/timing.h"
+#include "mapping/tracking/ndt_refinement.h"
 
 namespace vdmap {
 
@@ -49,24 +52,120 @@ std::vector<StampedPose> Mapper::trajectory() const {
   return out;
 }
 
-bool Mapper::trackFrame(const FrameFeatures& features, RgbdFrame* frame, FrameReport* report) {
+std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed, RgbdFrame* frame,
+                                                 FrameReport* report) {
   // The first frame anchors the world frame at its given pose (the ground truth's when the
   // sequence has one, so maps and trajectories overlay it; else the identity).
-  if (current_ < 0) return true;
-  const DensePoints points = sampleDensePoints(*frame, camera_, params_.local_map.depth_range,
-                                               params_.tracking.relative.dense.stride_px);
-  const TrackingOutcome outcome =
-      tracker_.track(graph_, current_, {&features, &points}, camera_, params_.keyframes.prefilter);
+  if (current_ < 0) return TrackingOutcome{};
+  TrackingOutcome outcome = tracker_.track(graph_, current_, observed, camera_, params_.keyframes.prefilter);
+  if (getenv("TDEBUG")) { const RelativePose& e = outcome.estimate; std::fprintf(stderr, "frame %d kf %d status %d matches %d inl %d pnp_used %d dense assoc %d inl %d rms %.2f it %d trusted %d\n", frame->index, outcome.keyframe, int(e.status), e.matches, e.pnp_inliers, e.pnp_used, e.dense.associated, e.dense.inliers, e.dense.rms_mahalanobis, e.dense.iterations, e.dense_trusted); }
   report->weak = outcome.weak;
   report->relocalised = outcome.relocalised;
   if (outcome.lost()) {
     tracker_.lose();
     ++frames_lost_;
     report->lost = true;
-    return false;
+    return std::nullopt;
   }
   frame->T_W_C = graph_.keyframe(outcome.keyframe).T_W_K * outcome.estimate.T_K_C;
+  return outcome;
+}
+
+RelativePoseParams Mapper::loopEstimateParams() const {
+  RelativePoseParams p = params_.tracking.relative;
+  // The revisited keyframe sits where the drift put it: allow that much disagreement.
+  p.max_jump_m = params_.loops.max_drift_m;
+  p.max_jump_deg = params_.loops.max_drift_deg;
+  return p;
+}
+
+void Mapper::optimisePoseGraph(RgbdFrame* frame, int keyframe, const Transform& T_K_C, FrameReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  PoseGraphResult result;
+  const double moved = pose_graph_.optimise(&graph_, params_.loops.graph, &result);
+  report->ms.pose_graph_ms += msSince(start);
+  frame->T_W_C = graph_.keyframe(keyframe).T_W_K * T_K_C;
+  report->loop_closed = true;
+  report->loop_correction_m = std::max(report->loop_correction_m, moved);
+}
+
+bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report) {
+  const Keyframe& R = graph_.keyframe(revisited);
+  const RelativePose estimate =
+      estimateRelativePose(R, observed, camera_, R.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
+  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < params_.loops.min_inliers) return false;
+  // Edge R -> current from the frame: T_R_cur = T_R_C (measured) * T_C_cur (tracked). The
+  // information of T_R_C moves into the current keyframe's frame.
+  const Transform T_cur_C = graph_.keyframe(current_).T_W_K.inverse() * frame->T_W_C;
+  const Matrix6d info = informationInFrame(edgeInformation(estimate, params_.loops.edge_noise), T_cur_C.inverse());
+  pose_graph_.add({revisited, current_, estimate.T_K_C * T_cur_C.inverse(), info, true});
+  optimisePoseGraph(frame, revisited, estimate.T_K_C, report);
+  pose_graph_.recordLoop({frame->index, current_, revisited, estimate.pnp_inliers, report->loop_correction_m,
+                          report->ms.pose_graph_ms});
   return true;
+}
+
+void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
+                              std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
+                              RgbdFrame* frame, FrameReport* report) {
+  if (tracked.keyframe >= 0)
+    pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
+                     edgeInformation(tracked.estimate, params_.loops.edge_noise), false});
+  bool loop = false;
+  int loop_inliers = 0, loop_to = -1;
+  for (const auto& [other, weight] : covisible) {
+    if (other == tracked.keyframe) continue;
+    // A keyframe the previous one is not linked to is a place seen again: a loop edge.
+    const bool is_loop = other != previous && !graph_.edges().hasEdge(previous, other);
+    if (is_loop && !params_.loops.enabled) continue;
+    const Keyframe& K = graph_.keyframe(other);
+    const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C,
+                                                       is_loop ? loopEstimateParams() : params_.tracking.relative);
+    if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < params_.loops.min_inliers))
+      continue;
+    pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, params_.loops.edge_noise), is_loop});
+    if (is_loop && estimate.pnp_inliers > loop_inliers) loop_inliers = estimate.pnp_inliers, loop_to = other;
+    loop = loop || is_loop;
+  }
+  if (!loop && params_.loops.enabled) {
+    // Drift may have moved the place seen again beyond the covisibility test's 8 px: candidates
+    // are the keyframes the previous one is not linked to whose keypoints could project into
+    // this frame at all (covisibilityBound, with a drift-sized margin), most first; each is
+    // verified by a relative-pose estimate (descriptor matching, PnP, dense refinement).
+    CovisibilityParams margin = params_.keyframes.covisibility;
+    margin.max_reprojection_px = params_.loops.candidate_margin_px;
+    std::vector<std::pair<double, int>> candidates;
+    for (const Keyframe& K : graph_.keyframes()) {
+      if (K.id == created || K.id == previous || graph_.edges().hasEdge(previous, K.id) ||
+          graph_.edges().hasEdge(created, K.id) || !params_.keyframes.prefilter.accepts(K.T_W_K, frame->T_W_C))
+        continue;
+      const double bound = covisibilityBound(K.features, K.T_W_K, frame->T_W_C, camera_, margin);
+      if (bound >= params_.keyframes.tau) candidates.emplace_back(-bound, K.id);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    int tried = 0;
+    for (const auto& [negative_bound, other] : candidates) {
+      if (tried++ >= params_.loops.candidates) break;
+      const Keyframe& K = graph_.keyframe(other);
+      const RelativePose estimate =
+          estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
+      if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < params_.loops.min_inliers) continue;
+      pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, params_.loops.edge_noise), true});
+      loop = true;
+      loop_inliers = estimate.pnp_inliers;
+      loop_to = other;
+      break;
+    }
+  }
+  if (!loop) return;
+  optimisePoseGraph(frame, created, Transform::Identity(), report);
+  // The covisibility edge of the loop, weighted by delta at the corrected poses.
+  const Keyframe& N = graph_.keyframe(created);
+  const Keyframe& L = graph_.keyframe(loop_to);
+  graph_.edges().strengthen(created, loop_to,
+                            covisibility(L.features, L.T_W_K, N.features, N.T_W_K, camera_, params_.keyframes.covisibility));
+  pose_graph_.recordLoop({frame->index, previous, loop_to, loop_inliers, report->loop_correction_m,
+                          report->ms.pose_graph_ms});
 }
 
 FrameReport Mapper::addFrame(const RgbdFrame& input) {
@@ -82,17 +181,21 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   report.ms.features_ms = msSince(start);
 
   RgbdFrame frame = input;  // shares the images; only the pose may change
+  DensePoints points;
+  const TrackingFrame observed{&features, &points};
+  TrackingOutcome tracked;
   if (tracking) {
     const auto track_start = std::chrono::steady_clock::now();
-    const bool placed = trackFrame(features, &frame, &report);
+    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, params_.tracking.relative.dense.stride_px);
+    const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
     report.ms.tracking_ms = msSince(track_start);
-    if (!placed) {
+    if (!outcome) {
       ++frames_;
       report.ms.total_ms = msSince(start);
       return report;
     }
+    tracked = *outcome;
   }
-  report.T_W_C = frame.T_W_C;
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();
@@ -110,6 +213,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
     case FrameDecision::Kind::kRevisit:
       ++revisits_;
       report.keyframe = report.decision.keyframe;
+      // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
+      if (tracking && params_.loops.enabled && current_ >= 0 && !graph_.edges().hasEdge(current_, report.keyframe))
+        closeLoop(report.keyframe, observed, &frame, &report);
       // The frame links the place it left to the place it recognised.
       if (current_ >= 0) graph_.edges().strengthen(current_, report.keyframe, report.decision.delta_current);
       break;
@@ -117,12 +223,18 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
       const auto edges = params_.keyframe_every > 0
                              ? std::vector<std::pair<int, double>>{}
                              : edgesOfNewKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+      // The keyframe keeps the features (the estimates below only read them through `observed`).
+      const FrameFeatures* kept = nullptr;
       report.keyframe = newKeyframe(frame, std::move(features));
+      kept = &graph_.keyframe(report.keyframe).features;
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
       if (params_.keyframe_every > 0 && current_ >= 0) graph_.edges().strengthen(report.keyframe, current_, 0.0);
+      if (tracking && current_ >= 0)
+        addKeyframeEdges(report.keyframe, current_, tracked, edges, {kept, &points}, &frame, &report);
       break;
     }
   }
+  report.T_W_C = frame.T_W_C;
   current_ = report.keyframe;
   report.ms.decision_ms = msSince(decide_start);
 

@@ -1,9 +1,12 @@
 #pragma once
+#include <optional>
+#include <span>
 #include <vector>
 
 #include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/local_map_integrator.h"
+#include "mapping/tracking/keyframe_pose_graph.h"
 #include "mapping/tracking/tracker.h"
 
 namespace vdmap {
@@ -26,6 +29,7 @@ struct MapperParams {
   int keyframe_every = 0;
   PoseSource poses = PoseSource::kGroundTruth;
   TrackerParams tracking;  ///< used with PoseSource::kTrack
+  LoopClosureParams loops; ///< used with PoseSource::kTrack
 
   /// Throws std::invalid_argument naming the first value out of range (the cell size is checked
   /// against the camera by Mapper).
@@ -38,6 +42,7 @@ struct StageTimes {
   double decision_ms = 0;  ///< covisibility against the current keyframe, loop search, edges
   double update_ms = 0;    ///< local-map integration
   double tracking_ms = 0;  ///< pose estimate (PoseSource::kTrack): dense sampling, PnP, refinement
+  double pose_graph_ms = 0;  ///< pose-graph optimisation after a loop closure (part of decision_ms)
   double total_ms = 0;
 };
 
@@ -54,6 +59,9 @@ struct FrameReport {
   bool relocalised = false;  ///< placed against another keyframe than the current one
   /// The frame could not be placed: nothing was integrated, `keyframe` is -1.
   bool lost = false;
+  /// A loop was closed: the keyframe poses were optimised (the global map needs a rebuild).
+  bool loop_closed = false;
+  double loop_correction_m = 0;  ///< the largest keyframe move of that optimisation
   StageTimes ms;
 };
 
@@ -91,11 +99,25 @@ class Mapper {
   /// The world poses of framePoses() with the keyframes' current poses, as a TUM trajectory.
   std::vector<StampedPose> trajectory() const;
   const Tracker& tracker() const { return tracker_; }
+  /// PoseSource::kTrack: the keyframe pose graph, its loop closures and the poses before the
+  /// last optimisation.
+  const KeyframePoseGraph& poseGraph() const { return pose_graph_; }
 
  private:
   int newKeyframe(const RgbdFrame& frame, FrameFeatures features);
-  /// PoseSource::kTrack: sets frame->T_W_C, or returns false when the frame cannot be placed.
-  bool trackFrame(const FrameFeatures& features, RgbdFrame* frame, FrameReport* report);
+  // PoseSource::kTrack: sets frame->T_W_C (nullopt: the frame cannot be placed).
+  std::optional<TrackingOutcome> trackFrame(const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report);
+  RelativePoseParams loopEstimateParams() const;
+  // Optimises the pose graph and puts the frame at T_K_C in `keyframe`'s corrected pose.
+  void optimisePoseGraph(RgbdFrame* frame, int keyframe, const Transform& T_K_C, FrameReport* report);
+  // A revisit of a keyframe that is no neighbour of the current one: measure, verify, add the
+  // loop edge, optimise. False when the estimate is not good enough (the revisit stands).
+  bool closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report);
+  // The pose-graph edges of a new keyframe: from the keyframe it was tracked in, and measured
+  // ones to its covisible keyframes (loop edges for those the previous keyframe is not linked to).
+  void addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
+                        std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
+                        RgbdFrame* frame, FrameReport* report);
 
   PinholeCamera camera_;
   MapperParams params_;
@@ -107,6 +129,7 @@ class Mapper {
   int frames_ = 0;
   int frames_lost_ = 0;
   Tracker tracker_;
+  KeyframePoseGraph pose_graph_;
   std::vector<FramePose> frame_poses_;
 };
 

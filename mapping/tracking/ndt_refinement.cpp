@@ -79,6 +79,7 @@ struct Linearisation {
   int associated = 0;
   int inliers = 0;
   double inlier_m2 = 0.0;
+  double support = 0.0;  ///< sum over the points of 1 - rho / rho_max (Tukey): a soft inlier count
 };
 
 Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, const Transform& T_K_C,
@@ -90,7 +91,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
   const float inv_k2 = static_cast<float>(1.0 / (params.robust_k * params.robust_k));
   const StoredCell* base = map.cells().data();
   // Float sums of one point's terms are exact enough (1e-7 relative); the frame's sums are double.
-  double H[21] = {}, g[6] = {}, inlier_m2 = 0.0;
+  double H[21] = {}, g[6] = {}, inlier_m2 = 0.0, support = 0.0;
   int associated = 0, inliers = 0;
   for (std::size_t i = 0; i < frame.size(); ++i) {
     const Eigen::Vector3f q = R * frame.points_C[i] + t;
@@ -117,6 +118,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
     ++inliers;
     inlier_m2 += m2;
     const float w = (1.0f - u) * (1.0f - u);
+    support += w * (1.0f - u);  // 1 - rho/rho_max with rho = k^2/6 (1 - (1 - u)^3)
     // J = [I, -[q]x] (q(xi) = exp(xi) q). J^T Omega r = (a, q x a); J^T Omega J has the blocks
     // Omega, -Omega [q]x and [q]x^T Omega [q]x.
     const float qx = q.x(), qy = q.y(), qz = q.z();
@@ -145,6 +147,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
   lin.associated = associated;
   lin.inliers = inliers;
   lin.inlier_m2 = inlier_m2;
+  lin.support = support;
   return lin;
 }
 
@@ -215,6 +218,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
   result.associated = lin.associated;
   result.inliers = lin.inliers;
   result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
+  result.support = lin.support;
   result.information = lin.H;
   return result;
 }

@@ -101,18 +101,25 @@ RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame,
     }
   }
   out.pnp_used = pnp.has_value();
-  std::optional<Transform> seed = prior_T_K_C;
-  if (pnp && (!seed || !params.dense_refinement || translationBetween(*pnp, *seed) > params.seed_agreement_m ||
-              degreesBetween(*pnp, *seed) > params.seed_agreement_deg))
-    seed = pnp;
-  if (!seed) return out;
-  out.T_K_C = *seed;
+  std::vector<Transform> seeds;
+  if (prior_T_K_C) seeds.push_back(*prior_T_K_C);
+  if (pnp && (seeds.empty() || !params.dense_refinement || translationBetween(*pnp, seeds[0]) > params.seed_agreement_m ||
+              degreesBetween(*pnp, seeds[0]) > params.seed_agreement_deg))
+    seeds.insert(seeds.begin(), *pnp);  // PnP first: without refinement it is the estimate
+  if (seeds.empty()) return out;
+  out.T_K_C = seeds[0];
   if (params.dense_refinement && frame.points) {
-    Transform refined = *seed;
-    out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
-    out.dense_trusted = out.dense.inlierRatio() >= params.min_dense_inlier_ratio &&
-                        out.dense.inliers >= params.min_dense_inliers && near(refined, *seed);
-    if (out.dense_trusted) out.T_K_C = orthonormalised(refined);
+    bool first = true;
+    for (const Transform& seed : seeds) {
+      Transform refined = seed;
+      NdtRefinementResult dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
+      if (!first && dense.support <= out.dense.support) continue;
+      first = false;
+      out.dense = dense;
+      out.dense_trusted = dense.inlierRatio() >= params.min_dense_inlier_ratio &&
+                          dense.inliers >= params.min_dense_inliers && near(refined, seed);
+      out.T_K_C = out.dense_trusted ? orthonormalised(refined) : seeds[0];
+    }
   }
   const bool dense_ok = out.dense_trusted || !params.dense_refinement;
   if (out.pnp_used && dense_ok) out.status = RelativePose::Status::kGood;

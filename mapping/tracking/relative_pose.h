@@ -34,11 +34,13 @@ struct RelativePoseParams {
   /// not used (the anchors: one bad pose throws the whole trajectory off otherwise).
   double max_jump_m = 0.15;
   double max_jump_deg = 15.0;
-  /// The refinement starts from the prior (a constant-velocity prediction is usually within
-  /// millimetres at 30 fps, PnP on a few dozen inliers within a centimetre) unless PnP puts the
-  /// frame farther than this from it (the camera jerked): then it starts from PnP.
-  double seed_agreement_m = 0.02;
-  double seed_agreement_deg = 2.0;
+  /// The refinement's basin is about a centimetre: it starts from the prior (in steady motion a
+  /// constant-velocity prediction is smoother than PnP on a few hundred inliers) when PnP agrees
+  /// with it within this; otherwise it runs from both and keeps the one the local map supports
+  /// better (NdtRefinementResult::support): the prior wins in steady motion, PnP after a jerk or
+  /// when there is no velocity yet.
+  double seed_agreement_m = 0.005;
+  double seed_agreement_deg = 0.3;
   /// The dense estimate is trusted when at least this share of the associated points are inliers
   /// and at least min_dense_inliers of them ...
   double min_dense_inlier_ratio = 0.5;
