@@ -7,6 +7,8 @@
 // wall-clock report. Single-threaded throughout (liboctomap on Debian has no
 // OpenMP, the integrator is sequential, the Open3D plugin pins OpenMP to one thread).
 // With --mesh every method's map is also scored against the reference (SPEC section 8).
+// With --poses track the odometry peers (app/odometry_peers.h) estimate the poses of the same
+// frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
@@ -20,6 +22,7 @@
 
 #include "app/commands.h"
 #include "app/eval_report.h"
+#include "app/odometry_peers.h"
 #include "app/progress.h"
 #include "app/timing.h"
 #include "app/tsdf_peer.h"
@@ -44,6 +47,7 @@ struct BenchArgs {
   bool json = false;
   bool no_octomap = false;
   bool no_open3d = false;
+  std::string poses = "gt";
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
 };
 
@@ -188,6 +192,76 @@ std::string markdownTable(const std::vector<MethodResult>& rows, double vd_ms, b
   return md.str();
 }
 
+struct OdometryRow {
+  OdometryRun run;
+  double ms = 0.0;  ///< median CPU ms per registered frame
+  std::optional<TrajectoryError> error;
+};
+
+/// The odometry peers on the decoded frames (--poses track), scored against the frames' ground
+/// truth. Each peer's trajectory is written to trajectory_<key>.txt in `out_dir` (TUM).
+std::vector<OdometryRow> odometryPeers(const std::vector<RgbdFrame>& frames, const PinholeCamera& cam,
+                                       const BenchArgs& args, const std::filesystem::path& out_dir) {
+  std::vector<StampedPose> groundtruth;
+  for (const RgbdFrame& f : frames) groundtruth.push_back({f.timestamp, f.T_W_C});
+  std::vector<OdometryPeerParams> peers;
+  for (const OdometryMethod m : {OdometryMethod::kOpenCvRgbd, OdometryMethod::kOpenCvIcp})
+    for (const OdometryReference r : {OdometryReference::kPreviousFrame, OdometryReference::kKeyframe})
+      peers.push_back({m, r});
+  peers.push_back({OdometryMethod::kOpen3dHybrid, OdometryReference::kPreviousFrame});
+  std::vector<OdometryRow> rows;
+  for (const OdometryPeerParams& p : peers) {
+    OdometryRow row;
+    if (p.method == OdometryMethod::kOpen3dHybrid && args.no_open3d) {
+      row.run = describeOdometryPeer(p);
+      row.run.note = "--no-open3d";
+    } else {
+      ProgressBar progress(describeOdometryPeer(p).name, frames.size());
+      row.run = runOdometryPeer(p, frames, cam, [&](std::size_t n) { progress.update(n); });
+    }
+    if (row.run.note.empty()) {
+      row.ms = median(row.run.ms);
+      if (frames.size() >= 3) row.error = evaluateTrajectory(row.run.trajectory, groundtruth);
+      writeTumTrajectory(out_dir / ("trajectory_" + row.run.key + ".txt"), row.run.trajectory,
+                         "vdmap bench: " + row.run.name);
+    }
+    rows.push_back(std::move(row));
+  }
+  return rows;
+}
+
+nlohmann::json odometryJson(const OdometryRow& r, std::size_t frames) {
+  nlohmann::json j = {{"name", r.run.name}, {"frames", frames}};
+  if (!r.run.note.empty()) {
+    j["note"] = r.run.note;
+    return j;
+  }
+  j["ms_per_frame"] = r.ms;
+  j["failures"] = r.run.failures;
+  if (r.run.keyframes > 0) j["keyframes"] = r.run.keyframes;
+  j["ate_rmse_m"] = r.error ? nlohmann::json(r.error->ate_m.rmse) : nlohmann::json(nullptr);
+  if (r.error) j["rpe_per_frame"] = toJson(r.error->rpe_per_frame);
+  return j;
+}
+
+std::string odometryTable(const std::vector<OdometryRow>& rows) {
+  std::ostringstream md;
+  md << "| method | t [ms/frame] | ATE RMSE [cm] | frames not registered | keyframes |\n|---|---:|---:|---:|---:|\n";
+  char buf[256], ate[32] = "-", keyframes[32] = "-";
+  for (const OdometryRow& r : rows) {
+    if (!r.run.note.empty()) {
+      md << "| " << r.run.name << " | not run: " << r.run.note << " |\n";
+      continue;
+    }
+    if (r.error) std::snprintf(ate, sizeof ate, "%.2f", 100 * r.error->ate_m.rmse);
+    if (r.run.keyframes > 0) std::snprintf(keyframes, sizeof keyframes, "%d", r.run.keyframes);
+    std::snprintf(buf, sizeof buf, "| %s | %.2f | %s | %d | %s |\n", r.run.name.c_str(), r.ms, ate, r.run.failures,
+                  keyframes);
+    md << buf;
+  }
+  return md.str();
+}
+
 void runBench(BenchArgs args) {
   // A plain number N means the first N frames (0:N) here: "bench --frames 100" reads as a count.
   std::string& frames = args.sequence.frames;
@@ -284,6 +358,9 @@ void runBench(BenchArgs args) {
   for (const double voxel : {0.02, 0.01})
     rows.push_back(args.no_open3d ? peerRow("Open3D TSDF", "open3d_tsdf", voxel, "--no-open3d") : cmp.tsdf(voxel));
 
+  std::vector<OdometryRow> odometry;
+  if (args.poses == "track") odometry = odometryPeers(decoded, cam, args, out_dir);
+
   const auto ratio = [vd](double o) { return vd > 0 ? o / vd : 0.0; };
   nlohmann::json out = {
       {"frames", decoded.size()},
@@ -315,6 +392,15 @@ void runBench(BenchArgs args) {
     out["method_order"].push_back(r.key);
   }
   if (mesh) out["mesh"] = args.mesh;
+  out["poses"] = args.poses;
+  if (!odometry.empty()) {
+    out["odometry"] = nlohmann::json::object();
+    out["odometry_order"] = nlohmann::json::array();
+    for (const OdometryRow& r : odometry) {
+      out["odometry"][r.run.key] = odometryJson(r, decoded.size());
+      out["odometry_order"].push_back(r.run.key);
+    }
+  }
 
   std::ostringstream md;
   md << "# vdmap bench\n\n" << decoded.size() << " frames of `" << args.sequence.folder << "` (" << cam.width << "x"
@@ -323,6 +409,10 @@ void runBench(BenchArgs args) {
      << markdownTable(rows, vd, mesh.has_value()) << "\nGlobal map: " << mapper.graph().size()
      << " keyframes, Sigma_e " << global.sigma_e << " -> Sigma_e' " << global.sigma_e_prime << " in "
      << global.t_g_s << " s (" << t_g_us << " us per ellipsoid).\n";
+  if (!odometry.empty())
+    md << "\nOdometry peers (--poses track) on the same frames, one thread: median CPU time per frame, ATE after "
+          "the rigid alignment against the sequence's ground truth.\n\n"
+       << odometryTable(odometry);
   writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
   writeFileAtomically(out_dir / "bench.md", md.str());
   if (args.json) {
@@ -343,6 +433,15 @@ void runBench(BenchArgs args) {
     }
     std::printf("%-34s %12.2f %10.1f %10zu\n", r.name.c_str(), r.ms, ratio(r.ms), r.elements);
     if (r.accuracy) std::printf("    %s\n", toText(*r.accuracy).c_str());
+  }
+  if (!odometry.empty()) std::printf("\n%-44s %12s %10s %10s %10s\n", "odometry", "ms/frame", "ATE [cm]", "lost", "keyframes");
+  for (const OdometryRow& r : odometry) {
+    if (!r.run.note.empty()) {
+      std::printf("%-44s not run: %s\n", r.run.name.c_str(), r.run.note.c_str());
+      continue;
+    }
+    std::printf("%-44s %12.2f %10.2f %10d %10s\n", r.run.name.c_str(), r.ms, r.error ? 100 * r.error->ate_m.rmse : NAN,
+                r.run.failures, r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
   }
   std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }
@@ -369,7 +468,13 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
   verb->add_option("--out", args->out, "folder for bench.json and bench.md")->capture_default_str();
   verb->add_flag("--no-octomap", args->no_octomap, "skip the OctoMap peers (for profiling)");
-  verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D TSDF peers");
+  verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D peers (TSDF, and odometry with --poses track)");
+  verb->add_option("--poses", args->poses,
+                   "gt: map with the sequence's ground-truth poses; track: also run the odometry peers (OpenCV "
+                   "RgbdOdometry and ICPOdometry frame to frame and against keyframes, Open3D's hybrid odometry) on "
+                   "the same frames: ms per frame and ATE against the ground truth, and trajectory_<peer>.txt in --out")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gt", "track"}));
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });
 }

@@ -1,55 +1,27 @@
 #include "app/tsdf_peer.h"
 
-#include <dlfcn.h>
-
-#include <filesystem>
-
+#include "app/peer_plugin.h"
 #include "peers/tsdf_peer_abi.h"
 
 namespace vdmap::app {
 
 struct TsdfPeerApi {
-  void* handle = nullptr;
   VdmapTsdfCreateFn create = nullptr;
   VdmapTsdfIntegrateFn integrate = nullptr;
   VdmapTsdfExtractFn extract = nullptr;
   VdmapTsdfDestroyFn destroy = nullptr;
-  // The library stays loaded for the life of the process: Open3D registers atexit handlers and
-  // static destructors that must not outlive their code.
 };
 
 namespace {
 
 std::shared_ptr<const TsdfPeerApi> loadApi(std::string* why) {
-  static std::shared_ptr<const TsdfPeerApi> api;
-  static std::string error;
-  if (api || !error.empty()) {
-    *why = error;
-    return api;
-  }
-  const std::filesystem::path plugin =
-      std::filesystem::read_symlink("/proc/self/exe").parent_path() / "libvdmap_open3d_peer.so";
   auto a = std::make_shared<TsdfPeerApi>();
-  // RTLD_LOCAL: Open3D's symbols (and the GL libraries it pulls in) do not join the global
-  // namespace the renderer resolves through.
-  a->handle = dlopen(plugin.c_str(), RTLD_NOW | RTLD_LOCAL);
-  if (!a->handle) {
-    error = std::filesystem::exists(plugin) ? std::string(dlerror())
-                                            : plugin.string() + " not built (configure with libopen3d-dev installed)";
-    *why = error;
-    return nullptr;
-  }
-  a->create = reinterpret_cast<VdmapTsdfCreateFn>(dlsym(a->handle, "vdmap_tsdf_create"));
-  a->integrate = reinterpret_cast<VdmapTsdfIntegrateFn>(dlsym(a->handle, "vdmap_tsdf_integrate"));
-  a->extract = reinterpret_cast<VdmapTsdfExtractFn>(dlsym(a->handle, "vdmap_tsdf_extract"));
-  a->destroy = reinterpret_cast<VdmapTsdfDestroyFn>(dlsym(a->handle, "vdmap_tsdf_destroy"));
-  if (!a->create || !a->integrate || !a->extract || !a->destroy) {
-    error = plugin.string() + ": missing vdmap_tsdf_* functions";
-    *why = error;
-    return nullptr;
-  }
-  api = a;
-  return api;
+  a->create = reinterpret_cast<VdmapTsdfCreateFn>(open3dPeerSymbol("vdmap_tsdf_create", why));
+  a->integrate = reinterpret_cast<VdmapTsdfIntegrateFn>(open3dPeerSymbol("vdmap_tsdf_integrate", why));
+  a->extract = reinterpret_cast<VdmapTsdfExtractFn>(open3dPeerSymbol("vdmap_tsdf_extract", why));
+  a->destroy = reinterpret_cast<VdmapTsdfDestroyFn>(open3dPeerSymbol("vdmap_tsdf_destroy", why));
+  if (!a->create || !a->integrate || !a->extract || !a->destroy) return nullptr;
+  return a;
 }
 
 }  // namespace

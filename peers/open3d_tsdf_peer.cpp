@@ -8,6 +8,7 @@
 #include <open3d/Open3D.h>
 
 #include "app/timing.h"
+#include "peers/open3d_images.h"
 #include "peers/tsdf_peer_abi.h"
 
 namespace {
@@ -48,12 +49,8 @@ void* vdmap_tsdf_create(double voxel_m, double sdf_trunc_m, int width, int heigh
 
 double vdmap_tsdf_integrate(void* volume, const std::uint8_t* rgb, const std::uint16_t* depth, const double* T_W_C) {
   auto* v = static_cast<Volume*>(volume);
-  const int w = v->intrinsic.width_, h = v->intrinsic.height_;
   open3d::geometry::Image color, depth_image;
-  color.Prepare(w, h, 3, 1);
-  depth_image.Prepare(w, h, 1, 2);
-  std::memcpy(color.data_.data(), rgb, 3 * w * h);
-  std::memcpy(depth_image.data_.data(), depth, sizeof(std::uint16_t) * w * h);
+  vdmap::peers::toOpen3dImages(rgb, depth, v->intrinsic.width_, v->intrinsic.height_, &color, &depth_image);
   const Eigen::Matrix4d T_C_W = Eigen::Map<const Eigen::Matrix4d>(T_W_C).inverse();
   std::shared_ptr<open3d::geometry::RGBDImage> rgbd;  // freed after the timed part
   return vdmap::app::cpuTimeMs([&] {

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <random>
 
 #include <Eigen/Eigenvalues>
 
@@ -57,25 +58,60 @@ glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid
   Eigen::Vector3d up = Eigen::Vector3d::Zero();
   for (const Transform& T : T_W_C) up -= T.linear().col(1);
   // Cameras turned every way (or none) give no direction: keep the +z convention.
-  if (up.norm() < 0.3 * static_cast<double>(T_W_C.size()) || T_W_C.empty()) return {0.f, 0.f, 1.f};
+  if (T_W_C.empty() || up.norm() < 0.3 * static_cast<double>(T_W_C.size())) return {0.f, 0.f, 1.f};
   up.normalize();
-  // At most ~4000 ellipsoids (evenly strided): enough for the mean normal, cheap on the UI thread.
-  const std::size_t stride = std::max<std::size_t>(1, map.size() / 4000);
-  const double cos_limit = std::cos(25.0 * M_PI / 180.0);
-  Eigen::Vector3d normals = Eigen::Vector3d::Zero();
-  double weight = 0.0;
-  for (std::size_t i = 0; i < map.size(); i += stride) {
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.compute(map[i].cov);
-    const Eigen::Vector3d lambda = eig.eigenvalues();  // ascending
-    if (!(lambda[0] < 0.1 * lambda[1])) continue;      // not flat: no normal
-    Eigen::Vector3d n = eig.eigenvectors().col(0);
+  // The largest plane of the map whose normal lies within 40 degrees of the cameras' up: the
+  // floor, a table, a ceiling; each is level, so its normal is the true up. RANSAC over at most
+  // ~3000 means (evenly strided), 2 cm inliers, a fixed seed (the same map gives the same up);
+  // ~5 ms on the UI thread, once per framing.
+  const std::size_t stride = std::max<std::size_t>(1, map.size() / 3000);
+  std::vector<Eigen::Vector3d> points;
+  for (std::size_t i = 0; i < map.size(); i += stride) points.push_back(map[i].mean);
+  if (points.size() < 30) return {static_cast<float>(up.x()), static_cast<float>(up.y()), static_cast<float>(up.z())};
+  const double cos_limit = std::cos(40.0 * M_PI / 180.0), inlier_m = 0.02;
+  std::mt19937 rng(1);
+  std::size_t best = 0;
+  Eigen::Vector3d best_normal = up;
+  double best_offset = 0.0;
+  std::vector<std::size_t> near;
+  for (int it = 0; it < 300; ++it) {
+    // Three points of one neighbourhood (0.3 m): far likelier to lie on one surface than three
+    // drawn from the whole map, where a floor of 10% of it would be hit once in 1000 draws.
+    const Eigen::Vector3d& a = points[rng() % points.size()];
+    near.clear();
+    for (std::size_t i = 0; i < points.size(); ++i)
+      if ((points[i] - a).squaredNorm() < 0.09) near.push_back(i);
+    if (near.size() < 3) continue;
+    const Eigen::Vector3d& b = points[near[rng() % near.size()]];
+    const Eigen::Vector3d& c = points[near[rng() % near.size()]];
+    Eigen::Vector3d n = (b - a).cross(c - a);
+    if (n.norm() < 1e-9) continue;
+    n.normalize();
     if (n.dot(up) < 0) n = -n;
     if (n.dot(up) < cos_limit) continue;
-    normals += map[i].count * n;
-    weight += map[i].count;
+    const double offset = n.dot(a);
+    std::size_t inliers = 0;
+    for (const Eigen::Vector3d& p : points) inliers += std::abs(n.dot(p) - offset) < inlier_m;
+    if (inliers > best) best = inliers, best_normal = n, best_offset = offset;
   }
-  if (weight > 0 && normals.norm() > 0) up = normals.normalized();
+  // A plane of at least 5% of the map: refine it by least squares over its inliers (twice, the
+  // inliers re-counted with the refined plane).
+  if (best * 20 >= points.size()) {
+    for (int round = 0; round < 3; ++round) {
+      Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+      std::vector<Eigen::Vector3d> inliers;
+      for (const Eigen::Vector3d& p : points)
+        if (std::abs(best_normal.dot(p) - best_offset) < inlier_m) inliers.push_back(p), mean += p;
+      if (inliers.size() < 3) break;
+      mean /= static_cast<double>(inliers.size());
+      Eigen::Matrix3d scatter = Eigen::Matrix3d::Zero();
+      for (const Eigen::Vector3d& p : inliers) scatter += (p - mean) * (p - mean).transpose();
+      const Eigen::Vector3d n = Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(scatter).eigenvectors().col(0);
+      best_normal = n.dot(up) < 0 ? Eigen::Vector3d(-n) : n;
+      best_offset = best_normal.dot(mean);
+    }
+    up = best_normal;
+  }
   return {static_cast<float>(up.x()), static_cast<float>(up.y()), static_cast<float>(up.z())};
 }
 

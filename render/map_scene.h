@@ -24,9 +24,10 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 /// trajectory through the keyframe centres in creation order (grey).
 /// The world's up direction estimated from the data: the mean of the cameras' image-up
 /// directions (-y of each camera, which a hand-held or robot camera keeps roughly level),
-/// refined by the normals of the map's horizontal surfaces (floor, tables: flat ellipsoids whose
-/// normal lies within 25 degrees of that mean; count-weighted), which removes the bias of cameras
-/// that look down. Unit length; +z when there are no cameras or they point every way.
+/// replaced by the normal of the map's largest plane within 40 degrees of it (floor, tables,
+/// ceiling: level surfaces, found by RANSAC over the ellipsoid means), which removes the bias of
+/// cameras that look down. Unit length, deterministic; +z when there are no cameras or they
+/// point every way.
 glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map);
 
 ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m);

@@ -336,6 +336,7 @@ const std::vector<BadCase>& badCases() {
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --offset 100")},
       {"command_line", "eval_trajectory_zero_max_difference", E::kCliError, "maximum timestamp difference",
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --max-difference 0")},
+      {"command_line", "bench_unknown_pose_source", E::kCliUsage, "--poses", args("bench {dir}/seq --poses imu")},
       {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
   };
   return all;

@@ -1,19 +1,23 @@
 // The workbench without a window: settings persistence, the mapping session (play, step, seek,
 // live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
 #include <future>
+#include <random>
 #include <regex>
 
 #include <gtest/gtest.h>
 
+#include <Eigen/Eigenvalues>
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/gui/settings.h"
 #include "app/gui/workbench.h"
 #include "render/colormap.h"
+#include "render/map_scene.h"
 #include "tests/test_util.h"
 
 namespace vdmap::app::gui {
 namespace {
+namespace fs = std::filesystem;
 
 // Ten frames of a textured plane, a keyframe every three frames (so the test does not depend on
 // ORB matching of random texture).
@@ -423,6 +427,340 @@ TEST(GuiWorkbench, EulerAnglesRoundTrip) {
   // the convention: yaw about z turns x into y, roll about x turns y into z.
   EXPECT_TRUE((eulerDegToRotation({0.f, 0.f, 90.f}) * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-6));
   EXPECT_TRUE((eulerDegToRotation({90.f, 0.f, 0.f}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-6));
+}
+
+TEST(GuiWorkbench, PitchStaysWithin90DegreesAndTheRotationIsKept) {
+  for (const float pitch : {100.f, -135.f, 90.f, -90.f, 45.f, 179.f}) {
+    const Eigen::Matrix3d R = eulerDegToRotation({30.f, pitch, -60.f});
+    const glm::vec3 back = rotationToEulerDeg(R);
+    EXPECT_LE(std::abs(back.y), 90.f) << pitch;
+    EXPECT_LE(std::abs(back.x), 180.f) << pitch;
+    EXPECT_LE(std::abs(back.z), 180.f) << pitch;
+    EXPECT_TRUE(eulerDegToRotation(back).isApprox(R, 1e-5)) << pitch;
+  }
+}
+
+TEST(GuiSession, TheTrajectoryFollowsAKeyframesPoseEdit) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.session().play();
+  t.session().waitIdle();
+  const auto before = t.session().mapping();
+  bench.selectKeyframe(1);
+  bench.ui().pose_translation_m.z += 0.2f;
+  bench.applyPoseEdit();
+  t.session().waitIdle();
+  const auto after = t.session().mapping();
+  ASSERT_EQ(after->trajectory.size(), 10u);
+  int moved = 0;
+  for (std::size_t i = 0; i < after->trajectory.size(); ++i) {
+    const Eigen::Vector3d d = after->framePose(i).translation() - before->framePose(i).translation();
+    if (after->trajectory[i].keyframe == 1) {
+      EXPECT_NEAR(d.z(), 0.2, 1e-6) << i;
+      ++moved;
+    } else {
+      EXPECT_NEAR(d.norm(), 0.0, 1e-9) << i;
+    }
+  }
+  EXPECT_EQ(moved, 3);  // frames 3, 4, 5 went into keyframe 1
+  // Before any edit the trajectory is the sequence's ground truth.
+  EXPECT_NEAR(before->framePose(4).translation().x(), 0.04, 1e-9);
+}
+
+TEST(GuiWorkbench, APendingParameterIsNotUsedUntilApplied) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  const Parameter& cell = *findParameter("cell_size");
+  ASSERT_TRUE(bench.editParameter(cell, 8));
+  EXPECT_TRUE(bench.pending(cell));
+  EXPECT_EQ(bench.inUse(cell), 5);
+  t.session().play();
+  t.session().waitIdle();
+  EXPECT_EQ(t.session().mapping()->mapper.local_map.cell_size_px, 5) << "a pending value was used";
+  EXPECT_TRUE(bench.pending(cell));
+  EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 5) << "not applied: not the user's setting yet";
+  const std::size_t cells_at_5 = t.session().mapping()->keyframes[0].ellipsoids;
+  bench.rerun();
+  t.session().waitIdle();
+  EXPECT_EQ(t.session().mapping()->mapper.local_map.cell_size_px, 8);
+  EXPECT_LT(t.session().mapping()->keyframes[0].ellipsoids, cells_at_5);
+  EXPECT_FALSE(bench.pending(cell));
+  EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 8);
+  // A live threshold applies at once; it is pending only until its map arrives.
+  const Parameter& min_points = *findParameter("min_points");
+  ASSERT_TRUE(bench.editParameter(min_points, 60));
+  t.session().waitIdle();
+  EXPECT_EQ(t.session().global()->params.filter.min_points, 60);
+  EXPECT_FALSE(bench.pending(min_points));
+  // A refused value changes nothing.
+  EXPECT_FALSE(bench.editParameter(min_points, -1));
+  EXPECT_EQ(bench.ui().params.global.filter.min_points, 60);
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
+  EXPECT_NE(bench.ui().status.text.find("min_points must be >= 0"), std::string::npos) << bench.ui().status.text;
+}
+
+TEST(GuiWorkbench, ASavedSessionShowsItsOwnParametersAndLeavesTheUsersSettingsAlone) {
+  TinyBench t;
+  ASSERT_TRUE(t.bench.editParameter(*findParameter("merge_distance"), 0.4));
+  t.session().play();
+  t.session().waitIdle();
+  t.bench.ui().session_text = (t.dir / "s.vdmap").string();
+  t.bench.saveSession();
+  t.session().waitIdle();
+  Settings user;
+  user.thresholds.filter.min_points = 9;
+  Workbench other{user};
+  ASSERT_TRUE(other.openPath((t.dir / "s.vdmap").string())) << other.ui().status.text;
+  EXPECT_TRUE(other.savedSession());
+  EXPECT_DOUBLE_EQ(other.ui().params.global.merge_distance_m, 0.4);  // the session's, not the user's 0.25
+  EXPECT_EQ(other.ui().params.global.filter.min_points, 6);
+  EXPECT_EQ(other.ui().params.mapper.keyframe_every, 3);
+  EXPECT_TRUE(other.editParameter(*findParameter("tau_group"), 0.5));
+  other.session()->waitIdle();
+  EXPECT_DOUBLE_EQ(other.session()->global()->params.tau_group, 0.5);
+  EXPECT_DOUBLE_EQ(other.ui().settings.thresholds.tau_group, Settings{}.thresholds.tau_group) << "the user's settings changed";
+  EXPECT_EQ(other.ui().settings.thresholds.filter.min_points, 9);
+  EXPECT_FALSE(other.pending(*findParameter("cell_size")));
+  other.rerun();  // nothing to re-map
+  other.session()->waitIdle();
+  EXPECT_EQ(other.session()->mapping()->frames_mapped, 10);
+  // Paths in messages are absolute.
+  EXPECT_NE(t.session().status().message.find((t.dir / "s.vdmap").string()), std::string::npos);
+  EXPECT_EQ(other.ui().status.text, "opened " + (t.dir / "s.vdmap").string());
+}
+
+TEST(GuiSettings, OnlyWhatTheUserChangedIsSavedAndACorruptFileIsKept) {
+  test::TempDir dir;
+  const fs::path file = dir / "settings.json";
+  Settings saved;
+  saved.thresholds.filter.min_points = 9;
+  saveSettings(file, saved);
+  std::string warning;
+  Settings start = loadSettings(file, &warning);
+  applySetting(start, "merge_distance=0.5");  // --set: this run only
+  Settings end = start;
+  end.color = render::ColorMode::kCount;      // changed in the window
+  end.window_width = 1000;
+  saveChangedSettings(file, start, end);
+  const Settings reread = loadSettings(file, &warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  EXPECT_DOUBLE_EQ(reread.thresholds.merge_distance_m, Settings{}.thresholds.merge_distance_m) << "--set was saved";
+  EXPECT_EQ(reread.thresholds.filter.min_points, 9);
+  EXPECT_EQ(reread.color, render::ColorMode::kCount);
+  EXPECT_EQ(reread.window_width, 1000);
+
+  test::writeText(file, "{not json");
+  EXPECT_THROW(saveChangedSettings(file, start, end), std::runtime_error);
+  EXPECT_EQ(test::readFile(file), "{not json") << "a corrupt settings file was replaced";
+  fs::remove(file);
+  saveChangedSettings(file, start, start);
+  EXPECT_FALSE(fs::exists(file)) << "nothing changed, nothing written";
+}
+
+TEST(GuiWorkbench, KeysDriveThePlayerAndTheViewFollowsTheMapUntilMoved) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  MapSession& s = t.session();
+  bench.key(KeyAction::kStepForward);
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 1);
+  bench.key(KeyAction::kNextKeyframe);
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 4);
+  bench.key(KeyAction::kStepBack);
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 3);
+  bench.key(KeyAction::kHelp);
+  EXPECT_TRUE(bench.ui().show_help);
+  bench.key(KeyAction::kEscape);
+  EXPECT_FALSE(bench.ui().show_help);
+  bench.key(KeyAction::kPlayPause);
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 10);
+
+  bench.sync();  // frames the map
+  EXPECT_TRUE(bench.ui().follow_map);
+  const render::OrbitCamera framed = bench.ui().camera;
+  bench.orbit(0.3f, 0.f);
+  EXPECT_FALSE(bench.ui().follow_map);
+  const render::OrbitCamera moved = bench.ui().camera;
+  ASSERT_TRUE(bench.editParameter(*findParameter("min_points"), 3));  // a new map
+  s.waitIdle();
+  bench.sync();
+  EXPECT_EQ(bench.ui().camera.yaw, moved.yaw) << "the view moved after the user moved it";
+  EXPECT_EQ(bench.ui().camera.distance_m, moved.distance_m);
+  bench.key(KeyAction::kFrameMap);  // F: the same direction, framed, following again
+  EXPECT_TRUE(bench.ui().follow_map);
+  EXPECT_EQ(bench.ui().camera.yaw, moved.yaw);
+  bench.key(KeyAction::kResetView);  // R: the default direction
+  EXPECT_EQ(bench.ui().camera.yaw, framed.yaw);
+}
+
+TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.session().play();
+  t.session().waitIdle();
+  bench.sync();
+  const auto global = t.session().global();
+  const ViewportView v = bench.view(640, 480);
+  const Eigen::Vector3d& m = global->map.ellipsoids[global->map.ellipsoids.size() / 2].mean;
+  const glm::vec4 p = v.camera.T_C_W * glm::vec4(m.x(), m.y(), m.z(), 1.f);
+  bench.pick(v.camera.fx * p.x / p.z + v.camera.cx, v.camera.fy * p.y / p.z + v.camera.cy, 640, 480);
+  ASSERT_TRUE(bench.ui().picked);
+  EXPECT_EQ(bench.ui().selected_keyframe, bench.ui().picked->keyframe);
+  bench.sync();
+  EXPECT_TRUE(bench.ui().picked) << "the same map: the pick stays";
+  ASSERT_TRUE(bench.editParameter(*findParameter("merge_distance"), 0.1));
+  t.session().waitIdle();
+  bench.sync();
+  EXPECT_FALSE(bench.ui().picked) << "a new map: the old pick may not exist in it";
+}
+
+TEST(GuiWorkbench, UndoPutsBackThePoseFromBeforeTheEdit) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.session().play();
+  t.session().waitIdle();
+  bench.selectKeyframe(2);
+  const glm::vec3 start = bench.ui().pose_translation_m;
+  EXPECT_FALSE(bench.canUndoPoseEdit());
+  bench.beginPoseEdit();  // a drag starts
+  for (int i = 0; i < 5; ++i) {
+    bench.ui().pose_translation_m.y += 0.05f;
+    bench.applyPoseEdit();
+  }
+  t.session().waitIdle();
+  EXPECT_NEAR(t.session().mapping()->keyframes[2].T_W_K.translation().y(), start.y + 0.25, 1e-6);
+  EXPECT_TRUE(bench.undoPoseEdit());
+  t.session().waitIdle();
+  EXPECT_NEAR(t.session().mapping()->keyframes[2].T_W_K.translation().y(), start.y, 1e-6);
+  EXPECT_NEAR(bench.ui().pose_translation_m.y, start.y, 1e-6);
+  EXPECT_FALSE(bench.undoPoseEdit());
+}
+
+TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
+  EXPECT_EQ(render::letterbox(1000, 500, 640, 480), (render::PixelRect{166, 0, 667, 500}));
+  EXPECT_EQ(render::letterbox(600, 900, 640, 480), (render::PixelRect{0, 225, 600, 450}));
+  TinyBench t;
+  t.session().play();
+  t.session().waitIdle();
+  t.bench.ui().view_from_keyframe = 1;
+  const ViewportView v = t.bench.view(1000, 500);
+  const PinholeCamera& c = t.session().mapping()->camera;
+  EXPECT_EQ(v.image.height, 500);
+  EXPECT_NEAR(static_cast<double>(v.image.width) / v.image.height, static_cast<double>(c.width) / c.height, 0.01);
+  // The image scaled alike along both axes (to the rounding of the letterbox to whole pixels).
+  EXPECT_NEAR(v.camera.fx / v.camera.fy, c.fx / c.fy, 2e-3) << "stretched";
+  EXPECT_NEAR(v.camera.fy, c.fy * 500.0 / c.height, 1e-3);
+}
+
+TEST(GuiView, FramingFitsTheBoxInNarrowAndWideViewports) {
+  const glm::vec3 lo(-2.f, -1.f, 0.f), hi(3.f, 1.5f, 2.f);
+  for (const auto& [w, h] : {std::pair{300, 900}, std::pair{1600, 400}, std::pair{800, 800}}) {
+    const render::OrbitCamera cam =
+        render::OrbitCamera::framing(lo, hi, {0.f, 0.f, 1.f}, static_cast<float>(w) / static_cast<float>(h));
+    const render::ViewCamera v = cam.view(w, h);
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec3 p((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+      const glm::vec4 q = v.T_C_W * glm::vec4(p, 1.f);
+      const float u = v.fx * q.x / q.z + v.cx, y = v.fy * q.y / q.z + v.cy;
+      EXPECT_TRUE(u >= 0 && u <= w && y >= 0 && y <= h) << w << "x" << h << " corner " << c << ": " << u << ", " << y;
+    }
+  }
+}
+
+// The floor, found without the workbench's estimate: planes through the ellipsoid means (3 cm;
+// RANSAC, fixed seed) that every camera is at least 0.3 m above, with their normal within 45
+// degrees of the cameras' mean image-up; of those holding 3% of the map or more, the lowest.
+struct Floor {
+  Eigen::Vector3d normal = Eigen::Vector3d::Zero(), centroid = Eigen::Vector3d::Zero();
+  std::size_t inliers = 0;
+};
+Floor findFloor(const std::vector<Ellipsoid>& map, const std::vector<Transform>& cameras) {
+  Eigen::Vector3d prior = Eigen::Vector3d::Zero();
+  for (const Transform& T : cameras) prior -= T.linear().col(1);
+  prior.normalize();
+  const auto planeThrough = [&](const Eigen::Vector3d& n, double offset) {
+    Floor f;
+    f.normal = n;
+    for (const Ellipsoid& e : map)
+      if (std::abs(n.dot(e.mean) - offset) < 0.03) {
+        f.centroid += e.mean;
+        ++f.inliers;
+      }
+    if (f.inliers > 0) f.centroid /= static_cast<double>(f.inliers);
+    return f;
+  };
+  std::vector<Floor> candidates;
+  std::mt19937 rng(7);
+  for (int it = 0; it < 2000; ++it) {
+    const Eigen::Vector3d& a = map[rng() % map.size()].mean;
+    Eigen::Vector3d n = (map[rng() % map.size()].mean - a).cross(map[rng() % map.size()].mean - a);
+    if (n.norm() < 1e-12) continue;
+    n.normalize();
+    if (n.dot(prior) < 0) n = -n;
+    if (n.dot(prior) < std::cos(M_PI / 4)) continue;
+    bool below_cameras = true;
+    for (const Transform& T : cameras) below_cameras &= n.dot(T.translation() - a) > 0.3;
+    if (!below_cameras) continue;
+    const Floor f = planeThrough(n, n.dot(a));
+    if (f.inliers * 100 >= 3 * map.size()) candidates.push_back(f);
+  }
+  if (candidates.empty()) return {};
+  // The lowest planes (within 0.3 m of the lowest), and of those the largest: a plane tilted
+  // through the floor's edge is low too, but holds less of it.
+  double lowest = INFINITY;
+  for (const Floor& f : candidates) lowest = std::min(lowest, prior.dot(f.centroid));
+  Floor best;
+  for (const Floor& f : candidates)
+    if (prior.dot(f.centroid) < lowest + 0.3 && f.inliers > best.inliers) best = f;
+  return best;
+}
+
+// Opens a real sequence, maps it, resets the view as the workbench does, and checks on the map
+// that the floor is at the bottom of the 3-D view with its normal pointing up on screen.
+void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
+  Workbench bench{Settings{}};
+  ASSERT_TRUE(bench.open({folder.string(), "", frames})) << bench.ui().status.text;
+  bench.session()->play();
+  bench.session()->waitIdle();
+  bench.ui().view_width = 800;
+  bench.ui().view_height = 600;
+  bench.sync();  // the first map: the default view about the estimated up axis
+  const auto global = bench.session()->global();
+  const std::vector<Transform> cameras = bench.session()->mapping()->trajectoryWorld();
+  const Floor floor = findFloor(global->map.ellipsoids, cameras);
+  ASSERT_GT(floor.inliers, 0u) << "no floor found";
+  const glm::vec3 up = bench.upVector();
+  const double angle_deg = std::acos(std::clamp(floor.normal.dot(Eigen::Vector3d(up.x, up.y, up.z)), -1.0, 1.0)) * 180 / M_PI;
+  std::printf("%s: up (%.3f %.3f %.3f), floor normal (%.3f %.3f %.3f), %.1f deg apart; floor %zu of %zu ellipsoids\n",
+              folder.filename().c_str(), up.x, up.y, up.z, floor.normal.x(), floor.normal.y(), floor.normal.z(),
+              angle_deg, floor.inliers, global->map.ellipsoids.size());
+  EXPECT_LT(angle_deg, 5.0);
+  const render::ViewCamera v = bench.view(800, 600).camera;
+  const auto project = [&](const Eigen::Vector3d& p) {
+    const glm::vec4 q = v.T_C_W * glm::vec4(p.x(), p.y(), p.z(), 1.f);
+    return Eigen::Vector2d(v.fx * q.x / q.z + v.cx, v.fy * q.y / q.z + v.cy);
+  };
+  // The floor normal points up on screen (image v decreases along it).
+  const Eigen::Vector2d d = project(floor.centroid + 0.3 * floor.normal) - project(floor.centroid);
+  EXPECT_LT(d.y(), -2.0 * std::abs(d.x())) << "floor normal on screen: " << d.transpose();
+  // The floor lies below the middle of the map on screen.
+  Eigen::Vector3d centre = Eigen::Vector3d::Zero();
+  for (const Ellipsoid& e : global->map.ellipsoids) centre += e.mean;
+  centre /= static_cast<double>(global->map.ellipsoids.size());
+  EXPECT_GT(project(floor.centroid).y(), project(centre).y());
+}
+
+TEST(GuiRealData, SevenScenesFloorIsAtTheBottomOfTheDefaultView) {
+  VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
+  expectFloorAtTheBottom(dir, "0:60");
+}
+
+TEST(GuiRealData, ReplicaRenderFloorIsAtTheBottomOfTheDefaultView) {
+  VDMAP_REQUIRE_SHARED_DATA(dir, "replica-office0");
+  expectFloorAtTheBottom(dir, "");
 }
 
 }  // namespace

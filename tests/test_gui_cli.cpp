@@ -27,7 +27,7 @@ bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0
 RunResult runInXvfb(const TempDir& home, const std::string& args) {
   const std::string prefix = "XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
                              (home / "cache").string() + "' xvfb-run -a -f '" + (home / "Xauthority").string() +
-                             "' -s '-screen 0 1920x1080x24 -noreset'";
+                             "' -s '-screen 0 2560x1440x24 -noreset'";
   return runVdmap(args, prefix);
 }
 
@@ -72,6 +72,59 @@ TEST(GuiCli, BuiltinScenePlayedToTheEndShowsAMapAndMergeDistanceChangesSigmaEPri
   // what 25 cm joins, so more ellipsoids stay.
   EXPECT_GT(sb["sigma_e_prime"].get<int>(), sa["sigma_e_prime"].get<int>());
   EXPECT_FALSE(fs::exists(home / "config" / "vdmap" / "settings.json"));  // scripted runs leave settings alone
+}
+
+// The layout at a window size: panels inside the window, the map's projected bounding box inside
+// the 3-D viewport (between the panels), no label cut.
+void expectLayoutFits(const nlohmann::json& stats, int width, int height) {
+  const nlohmann::json& layout = stats["layout"];
+  ASSERT_EQ(layout["window"], nlohmann::json({width, height})) << layout.dump();
+  for (const auto& [name, r] : layout["panels"].items()) {
+    const double x = r[0], y = r[1], w = r[2], h = r[3];
+    EXPECT_TRUE(x >= 0 && y >= 0 && x + w <= width + 0.5 && y + h <= height + 0.5) << name << " " << r.dump();
+    EXPECT_GT(w, 200) << name;
+  }
+  const nlohmann::json& v = layout["viewport"];
+  const double vx = v[0], vy = v[1], vw = v[2], vh = v[3];
+  EXPECT_GE(vx, layout["panels"]["Sequence"][2].get<double>() - 0.5) << "the view starts under the left panel";
+  EXPECT_LE(vx + vw, layout["panels"]["Map"][0].get<double>() + 0.5) << "the view ends under the right panel";
+  ASSERT_TRUE(layout.contains("map_bbox_px")) << layout.dump();
+  const nlohmann::json& b = layout["map_bbox_px"];
+  EXPECT_TRUE(b[0] >= vx && b[1] >= vy && b[2] <= vx + vw && b[3] <= vy + vh) << "map " << b.dump() << " view " << v.dump();
+  EXPECT_GT(b[2].get<double>() - b[0].get<double>(), 0.4 * vw) << "the map fills the view";
+  EXPECT_EQ(layout["labels_cut"], 0);
+}
+
+TEST(GuiCli, PanelsDockAndTheMapFitsTheViewAt1280x720And1920x1080) {
+  REQUIRE_XVFB();
+  TempDir home;
+  for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{1920, 1080}}) {
+    const std::string size = std::to_string(w) + "x" + std::to_string(h);
+    const fs::path png = home / (size + ".png"), json = home / (size + ".json");
+    const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --exit --window-size " + size + " --screenshot '" +
+                                            png.string() + "' --stats-json '" + json.string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const cv::Mat image = cv::imread(png.string());
+    EXPECT_EQ(image.cols, w);
+    EXPECT_EQ(image.rows, h);
+    SCOPED_TRACE(size);
+    expectLayoutFits(readJson(json), w, h);
+  }
+}
+
+TEST(GuiCli, AnIdleWindowCostsNoCpuAndKeyTapsWithinOneFrameAreAllHandled) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeTinySequence(home / "seq", 6);
+  // Three Right taps arrive together (one UI frame): each maps one frame. H opens the help.
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --exit --press right,right,right,h "
+                                      "--measure-idle 3 --stats-json '" + (home / "s.json").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(home / "s.json");
+  EXPECT_EQ(stats["frames_mapped"], 3);
+  EXPECT_EQ(stats["show_help"], true);
+  // Process CPU over 3 s with the window open and nothing happening (the worker idle too).
+  EXPECT_LE(stats["idle_cpu_s"].get<double>(), 0.15);
 }
 
 TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {

@@ -145,6 +145,10 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_flag("--exit", args.script.exit, "close once the screenshot/stats are written (settings are not touched)");
   app.add_option("--set", args.set,
                  "KEY=VALUE for this run (as in settings.json; not saved): " + gui::settingKeyList());
+  app.add_option_function<std::string>(
+      "--press", [&args](const std::string& keys) { args.script.press = gui::parseKeyNames(keys); },
+      "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
+      "f1, esc; e.g. h for the help)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
   app.add_option("--measure-latency", args.script.latency_runs,
                  "scripted: after the screenshot, N merge-distance edits, each timed until its map is drawn (stats: "

@@ -259,7 +259,7 @@ void MapSession::setFps(float fps) {
 void MapSession::step() {
   update([this] {
     playing_ = false;
-    target_ = std::min(mapped_ + 1, framesTotal());
+    target_ = std::min(std::max(target_, mapped_) + 1, framesTotal());  // taps add up before they are mapped
   });
 }
 

@@ -106,7 +106,7 @@ class MapSession {
   void play();
   void pause();
   void setFps(float fps);
-  /// Maps one more frame.
+  /// Maps one more frame than asked for so far (two quick steps map two frames).
   void step();
   /// Maps until a frame starts a new keyframe (or the end).
   void stepToKeyframe();

@@ -28,8 +28,10 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"K", "map to the next keyframe"},
       {"F", "frame the map (keeps the direction; the view follows the map again)"},
       {"R", "reset the view (default direction about the up axis)"},
+      {"V", "view from the selected keyframe (its own intrinsics)"},
+      {"C", "the selected keyframe's container view, large (zoom, grid)"},
       {"H, F1", "this help"},
-      {"Esc", "close the help, leave \"view from keyframe\""},
+      {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
       {"left drag", "orbit about the up axis"},
       {"right / middle drag, Shift + left drag", "pan"},
@@ -400,16 +402,21 @@ void Workbench::key(KeyAction action) {
       if (s) s->step();
       break;
     case KeyAction::kStepBack:
-      if (s && s->mapping()->frames_mapped >= 2) s->seek(s->mapping()->frames_mapped - 2);
+      // From the frame asked for (not the one mapped yet), so quick taps add up.
+      if (s && s->status().target >= 2) s->seek(s->status().target - 2);
       break;
     case KeyAction::kNextKeyframe:
       if (s) s->stepToKeyframe();
       break;
     case KeyAction::kFrameMap: frameMap(); break;
     case KeyAction::kResetView: resetView(); break;
+    case KeyAction::kViewFromKeyframe:
+      if (ui_.selected_keyframe >= 0) ui_.view_from_keyframe = ui_.view_from_keyframe >= 0 ? -1 : ui_.selected_keyframe;
+      break;
+    case KeyAction::kContainer: ui_.show_container = !ui_.show_container; break;
     case KeyAction::kHelp: ui_.show_help = !ui_.show_help; break;
     case KeyAction::kEscape:
-      ui_.show_help = false;
+      ui_.show_help = ui_.show_container = false;
       ui_.view_from_keyframe = -1;
       break;
     case KeyAction::kUndo: undoPoseEdit(); break;

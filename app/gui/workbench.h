@@ -46,12 +46,16 @@ struct UiState {
   std::string session_text = "map.vdmap";     ///< "save session" file
   StatusLine status;
   bool show_help = false;         ///< the key and mouse overlay (H, F1)
+  bool show_container = false;    ///< the large container view window (C)
   bool reset_layout = false;      ///< panels go back to their default widths next frame
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
 
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
-enum class KeyAction { kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kHelp, kEscape, kUndo };
+enum class KeyAction {
+  kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
+  kEscape, kUndo
+};
 
 /// The keys and mouse actions, for the help overlay and the README: {keys, what they do}.
 const std::vector<std::pair<const char*, const char*>>& keyHelp();

@@ -10,6 +10,7 @@
 #include <deque>
 #include <future>
 #include <iostream>
+#include <sstream>
 #include <thread>
 
 #define GLFW_INCLUDE_NONE
@@ -112,6 +113,8 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_K: return KeyAction::kNextKeyframe;
     case GLFW_KEY_F: return KeyAction::kFrameMap;
     case GLFW_KEY_R: return KeyAction::kResetView;
+    case GLFW_KEY_V: return KeyAction::kViewFromKeyframe;
+    case GLFW_KEY_C: return KeyAction::kContainer;
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return KeyAction::kHelp;
     case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
@@ -222,6 +225,8 @@ class WorkbenchWindow {
 
   void frame() {
     const auto t0 = Clock::now();
+    if (script_phase_ == Phase::kIdle && t0 >= idle_until_ && idle_cpu_s_ == 0 && script_.idle_seconds > 0)
+      idle_cpu_s_ = processCpuSeconds() - idle_cpu_start_;  // before this frame draws anything
     // ImGui shows hover and active states a frame late: after input, draw two more frames.
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
     keys_.events = 0;
@@ -260,6 +265,14 @@ class WorkbenchWindow {
     advanceScript();
     glfwSwapBuffers(context_.window());
     frame_ms_ = msSince(t0);
+    if (script_phase_ == Phase::kIdle) {
+      if (idle_until_ == Clock::time_point::max()) {  // the measurement starts now
+        idle_cpu_start_ = processCpuSeconds();
+        idle_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(script_.idle_seconds));
+      } else if (t0 < idle_until_) {
+        ++idle_frames_;
+      }
+    }
     frame_times_.push_back(frame_ms_);
     if (frame_times_.size() > 30) frame_times_.pop_front();
     if (bench_.session() && bench_.session()->status().busy) busy_frame_ms_.push_back(frame_ms_);
@@ -801,7 +814,7 @@ class WorkbenchWindow {
       ImGui::Image(textureId(container), {w, w * container.height() / std::max(1, container.width())});
       tip("The container view (paper Fig. 1): the keyframe's image in the middle of its 2W x 2H container with its "
           "kept ellipsoids projected as 2-sigma ellipses. Click to enlarge.");
-      if (ImGui::IsItemClicked()) container_open_ = true;
+      if (ImGui::IsItemClicked()) ui().show_container = true;
     }
     std::string neighbours;
     for (const CovisibilityEdge& e : mapping_->edges)
@@ -815,7 +828,7 @@ class WorkbenchWindow {
     if (ImGui::Button("View from keyframe")) ui().view_from_keyframe = id;
     tip("Looks through the keyframe with its own intrinsics (its image's aspect kept; Esc or a drag leaves).");
     ImGui::SameLine();
-    if (ImGui::Button("Container view")) container_open_ = true;
+    if (ImGui::Button("Container view")) ui().show_container = true;
     tip("A larger container view with zoom, cell grid and image bounds.");
     checkFits();
     ImGui::TextUnformatted("pose T_W_K (drag to correct):");
@@ -993,13 +1006,13 @@ class WorkbenchWindow {
   }
 
   void drawContainerWindow() {
-    if (!container_open_ || mirror_.containerImage().empty() || !mapping_) return;
+    if (!ui().show_container || mirror_.containerImage().empty() || !mapping_) return;
     const ImVec2 display = ImGui::GetIO().DisplaySize;
     ImGui::SetNextWindowSize({display.x * 0.55f, display.y * 0.6f}, ImGuiCond_FirstUseEver);
     ImGui::SetNextWindowPos({display.x * 0.22f, display.y * 0.15f}, ImGuiCond_FirstUseEver);
     char title[64];
     std::snprintf(title, sizeof title, "Container view K%d###container", ui().selected_keyframe);
-    if (!ImGui::Begin(title, &container_open_)) return ImGui::End();
+    if (!ImGui::Begin(title, &ui().show_container)) return ImGui::End();
     Settings& s = ui().settings;
     ImGui::Checkbox("cell grid", &s.container_grid);
     tip("The container's cells (s px of the keyframe image), drawn once they are 4 screen pixels apart.");
@@ -1097,6 +1110,7 @@ class WorkbenchWindow {
         }
         bench_.resetView();
         if (script_.keyframe >= 0) bench_.selectKeyframe(script_.keyframe);
+        for (const int key : script_.press) keys_.presses.emplace_back(key, 0);  // as if typed now
         countdown_ = 3;  // frames to draw the final map before the screenshot
         script_phase_ = Phase::kSettle;
         return;
@@ -1119,13 +1133,12 @@ class WorkbenchWindow {
           orbit_frame_start_ = Clock::now();
           return;
         }
-        script_phase_ = Phase::kIdle;
-        idle_until_ = Clock::now() + std::chrono::duration_cast<Clock::duration>(std::chrono::duration<double>(script_.idle_seconds));
-        idle_cpu_start_ = processCpuSeconds();
+        if ((session && session->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
+        script_phase_ = Phase::kIdle;  // starts once this frame is on screen (frame())
+        idle_until_ = Clock::time_point::max();
         return;
       case Phase::kIdle:
         if (Clock::now() < idle_until_) return;
-        if (script_.idle_seconds > 0) idle_cpu_s_ = processCpuSeconds() - idle_cpu_start_;
         script_phase_ = Phase::kFinish;
         return;
       case Phase::kFinish:
@@ -1211,9 +1224,14 @@ class WorkbenchWindow {
     stats["ui_frames_while_busy"] = busy_frame_ms_.size();
     stats["ui_frame_ms_median_while_busy"] = median(busy_frame_ms_);
     stats["layout"] = layout_;
+    stats["show_help"] = ui().show_help;
+    stats["view_from_keyframe"] = ui().view_from_keyframe;
     if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
     if (!orbit_ms_.empty()) stats["orbit_frame_ms"] = orbit_ms_;
-    if (script_.idle_seconds > 0) stats["idle_cpu_s"] = idle_cpu_s_;
+    if (script_.idle_seconds > 0) {
+      stats["idle_cpu_s"] = idle_cpu_s_;
+      stats["idle_frames"] = idle_frames_;  // UI frames drawn meanwhile
+    }
     try {
       writeFileAtomically(file, stats.dump(2) + "\n");
     } catch (const std::exception& e) {
@@ -1249,7 +1267,6 @@ class WorkbenchWindow {
   bool drag_in_view_[3] = {false, false, false};
   int scrub_ = 0;
   bool scrubbing_ = false;
-  bool container_open_ = false;
   float container_zoom_ = 1.f;
   ImVec2 container_center_{0.5f, 0.5f};
   std::string screenshot_text_ = "vdmap_screenshot.png", screenshot_request_;
@@ -1266,9 +1283,25 @@ class WorkbenchWindow {
   std::vector<double> latency_ms_, orbit_ms_;
   bool orbit_started_ = false;
   double idle_cpu_start_ = 0, idle_cpu_s_ = 0;
+  int idle_frames_ = 0;
 };
 
 }  // namespace
+
+std::vector<int> parseKeyNames(const std::string& comma_separated) {
+  std::vector<int> keys;
+  std::stringstream in(comma_separated);
+  for (std::string name; std::getline(in, name, ',');) {
+    if (name.size() == 1 && name[0] >= 'a' && name[0] <= 'z') keys.push_back(GLFW_KEY_A + (name[0] - 'a'));
+    else if (name == "space") keys.push_back(GLFW_KEY_SPACE);
+    else if (name == "right") keys.push_back(GLFW_KEY_RIGHT);
+    else if (name == "left") keys.push_back(GLFW_KEY_LEFT);
+    else if (name == "f1") keys.push_back(GLFW_KEY_F1);
+    else if (name == "esc") keys.push_back(GLFW_KEY_ESCAPE);
+    else throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc)");
+  }
+  return keys;
+}
 
 int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file, Preparation prepare) {
   Settings& s = bench.ui().settings;

@@ -2,6 +2,7 @@
 // The workbench window: GLFW + Dear ImGui drawing of a Workbench (all logic lives there).
 #include <functional>
 #include <string>
+#include <vector>
 
 #include "app/gui/workbench.h"
 
@@ -11,6 +12,7 @@ namespace vdmap::app::gui {
 struct ScriptOptions {
   bool play_to_end = false;   ///< press Play at start
   int keyframe = -1;          ///< select this keyframe in the inspector before the screenshot
+  std::vector<int> press;     ///< GLFW keys pressed then, before the screenshot (keyNames())
   std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
   bool exit = false;          ///< close the window once the above are written
@@ -28,6 +30,10 @@ struct Preparation {
   SequenceArgs args;
   std::function<std::string(const std::function<void(std::size_t, std::size_t)>& progress)> run;
 };
+
+/// The keys --press takes, by name ("space", "right", "h", ...), as GLFW key codes. Throws
+/// std::invalid_argument naming the key for an unknown name.
+std::vector<int> parseKeyNames(const std::string& comma_separated);
 
 /// Opens the window (and runs `prepare` first when given), runs until it is closed (or the script
 /// is done with `exit`). `settings_file`'s folder keeps the window layout (imgui.ini) unless it is
