@@ -15,6 +15,7 @@
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/export/map_export.h"
+#include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/session_file.h"
 
@@ -79,6 +80,13 @@ void runMap(MapArgs args) {
   if (tracking) {
     options.run_stats["tracking_ms"] = median(tracking_ms);
     options.run_stats["frames_lost"] = mapper.framesLost();
+    double pose_graph_ms = 0;
+    for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
+    options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
+    options.run_stats["pose_graph_ms"] = pose_graph_ms;  // all optimisations of the run, wall clock
+    const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
+    if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
+      options.run_stats["ate_rmse_m"] = evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse;
   }
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
@@ -99,7 +107,12 @@ void runMap(MapArgs args) {
               mapper.framesMapped(), graph.size(), graph.edges().size(), mapper.revisits(), global.sigma_e,
               global.sigma_e_prime, global.t_g_s, median(pipeline_ms), median(features_ms), median(tracking_ms),
               median(decision_ms), median(update_ms), out_dir.c_str());
-  if (tracking) std::printf("tracked poses: %d frames lost (skipped)\n", mapper.framesLost());
+  if (tracking) {
+    std::printf("tracked poses: %d frames lost (skipped), %zu loop closures", mapper.framesLost(),
+                mapper.poseGraph().loops().size());
+    if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
+    std::printf("\n");
+  }
 }
 
 }  // namespace

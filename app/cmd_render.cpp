@@ -187,7 +187,9 @@ void runRender(const RenderArgs& args) {
   std::optional<TumSequence> seq;
   if (from_sequence) {
     seq.emplace(openSequence(args.sequence));
-    mapper = std::make_unique<Mapper>(seq->camera());
+    MapperParams params;
+    params.poses = poseSource(args.sequence, *seq);
+    mapper = std::make_unique<Mapper>(seq->camera(), params);
     mapSequence(*seq, *mapper);
     const KeyframeGraph& graph = mapper->graph();
     scene.camera = seq->camera();
@@ -239,6 +241,7 @@ void addRenderCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("render", "Map a sequence (or read a map / mesh) and render a view headless to PNG with OSMesa");
   auto args = std::make_shared<RenderArgs>();
   addSequenceArgs(*verb, args->sequence);
+  addPoseSourceArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description("sequence to map (default parameters) and render");
   verb->add_option("--map", args->map, "ellipsoid PLY (SPEC section 7 layout) instead of SEQ; global view only");
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");

@@ -134,7 +134,7 @@ TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   std::string newer = good;
   putU32(&newer, 8, kSessionFormatVersion + 1);
   resealHeader(&newer);
-  EXPECT_NE(decodeError(newer).find("format version 2 is newer than this vdmap reads (1)"), std::string::npos)
+  EXPECT_NE(decodeError(newer).find("format version " + std::to_string(kSessionFormatVersion + 1) + " is newer than this vdmap reads (" + std::to_string(kSessionFormatVersion) + ")"), std::string::npos)
       << decodeError(newer);
 
   std::string big_endian = good;

@@ -16,7 +16,7 @@ namespace {
 
 // A new field in these structs must be added to the file (and the version raised): these
 // sizes are a tripwire for that, not a layout promise.
-static_assert(sizeof(MapperParams) == sizeof(MapperParams), "MapperParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(GlobalMapParams) == 72, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
 
@@ -188,6 +188,7 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->f64(k.covisibility.lowe_ratio);
   w->f64(k.covisibility.max_reprojection_px);
   w->i32(m.keyframe_every);
+  w->u32(static_cast<std::uint32_t>(m.poses));
   const GlobalMapParams& g = info.global;
   w->u32(static_cast<std::uint32_t>(g.filter.model));
   w->f64(g.filter.filter_sigma_factor);
@@ -202,7 +203,7 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->u32(static_cast<std::uint32_t>(keyframes));
 }
 
-std::uint32_t readParams(Reader* r, SessionInfo* info) {
+std::uint32_t readParams(Reader* r, SessionInfo* info, std::uint32_t version) {
   PinholeCamera& c = info->camera;
   c.width = r->i32("camera width");
   c.height = r->i32("camera height");
@@ -230,6 +231,11 @@ std::uint32_t readParams(Reader* r, SessionInfo* info) {
   k.covisibility.lowe_ratio = r->f64("lowe_ratio");
   k.covisibility.max_reprojection_px = r->f64("max_reprojection");
   m.keyframe_every = r->i32("keyframe_every");
+  if (version >= 2) {  // version 1 sessions were all mapped with ground-truth poses
+    const std::uint32_t poses = r->u32("pose source");
+    r->check(poses <= static_cast<std::uint32_t>(PoseSource::kTrack), "unknown pose source " + std::to_string(poses));
+    m.poses = static_cast<PoseSource>(poses);
+  }
   r->checkValid("mapper parameters", [&m] { m.validate(); });
   GlobalMapParams& g = info->global;
   const std::uint32_t model = r->u32("sensor model");
@@ -489,7 +495,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
       body.fail("checksum mismatch (the file is corrupted)");
     Reader r(payload, name, where);
     if (s == 0) {
-      keyframes = readParams(&r, &session.info);
+      keyframes = readParams(&r, &session.info, version);
       if (sections != keyframes + std::uint64_t{2})
         r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + 2ull) +
                " sections, the header says " + std::to_string(sections));

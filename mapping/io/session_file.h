@@ -12,8 +12,8 @@
 
 namespace vdmap {
 
-/// The format version this build writes and the newest it reads.
-inline constexpr std::uint32_t kSessionFormatVersion = 1;
+/// The format version this build writes and the newest it reads (it reads every older one).
+inline constexpr std::uint32_t kSessionFormatVersion = 2;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {

@@ -30,9 +30,9 @@ void MapperParams::validate() const {
   check(keyframe_every >= 0, "keyframe_every must be >= 0");
 }
 
-Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
-    : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map),
-      tracker_(params.tracking) {
+Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, const TrackingParams& tracking)
+    : camera_(camera), params_(params), tracking_(tracking), extractor_(params.features),
+      integrator_(params.local_map), tracker_(tracking.tracker) {
   camera_.validate();
   params_.validate();
   // Fail on a bad cell size now rather than at the first keyframe.
@@ -72,17 +72,17 @@ std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed,
 }
 
 RelativePoseParams Mapper::loopEstimateParams() const {
-  RelativePoseParams p = params_.tracking.relative;
+  RelativePoseParams p = tracking_.tracker.relative;
   // The revisited keyframe sits where the drift put it: allow that much disagreement.
-  p.max_jump_m = params_.loops.max_drift_m;
-  p.max_jump_deg = params_.loops.max_drift_deg;
+  p.max_jump_m = tracking_.loops.max_drift_m;
+  p.max_jump_deg = tracking_.loops.max_drift_deg;
   return p;
 }
 
 void Mapper::optimisePoseGraph(RgbdFrame* frame, int keyframe, const Transform& T_K_C, FrameReport* report) {
   const auto start = std::chrono::steady_clock::now();
   PoseGraphResult result;
-  const double moved = pose_graph_.optimise(&graph_, params_.loops.graph, &result);
+  const double moved = pose_graph_.optimise(&graph_, tracking_.loops.graph, &result);
   report->ms.pose_graph_ms += msSince(start);
   frame->T_W_C = graph_.keyframe(keyframe).T_W_K * T_K_C;
   report->loop_closed = true;
@@ -93,11 +93,11 @@ bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* 
   const Keyframe& R = graph_.keyframe(revisited);
   const RelativePose estimate =
       estimateRelativePose(R, observed, camera_, R.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
-  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < params_.loops.min_inliers) return false;
+  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) return false;
   // Edge R -> current from the frame: T_R_cur = T_R_C (measured) * T_C_cur (tracked). The
   // information of T_R_C moves into the current keyframe's frame.
   const Transform T_cur_C = graph_.keyframe(current_).T_W_K.inverse() * frame->T_W_C;
-  const Matrix6d info = informationInFrame(edgeInformation(estimate, params_.loops.edge_noise), T_cur_C.inverse());
+  const Matrix6d info = informationInFrame(edgeInformation(estimate, tracking_.loops.edge_noise), T_cur_C.inverse());
   pose_graph_.add({revisited, current_, estimate.T_K_C * T_cur_C.inverse(), info, true});
   optimisePoseGraph(frame, revisited, estimate.T_K_C, report);
   pose_graph_.recordLoop({frame->index, current_, revisited, estimate.pnp_inliers, report->loop_correction_m,
@@ -110,30 +110,30 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
                               RgbdFrame* frame, FrameReport* report) {
   if (tracked.keyframe >= 0)
     pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
-                     edgeInformation(tracked.estimate, params_.loops.edge_noise), false});
+                     edgeInformation(tracked.estimate, tracking_.loops.edge_noise), false});
   bool loop = false;
   int loop_inliers = 0, loop_to = -1;
   for (const auto& [other, weight] : covisible) {
     if (other == tracked.keyframe) continue;
     // A keyframe the previous one is not linked to is a place seen again: a loop edge.
     const bool is_loop = other != previous && !graph_.edges().hasEdge(previous, other);
-    if (is_loop && !params_.loops.enabled) continue;
+    if (is_loop && !tracking_.loops.enabled) continue;
     const Keyframe& K = graph_.keyframe(other);
     const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C,
-                                                       is_loop ? loopEstimateParams() : params_.tracking.relative);
-    if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < params_.loops.min_inliers))
+                                                       is_loop ? loopEstimateParams() : tracking_.tracker.relative);
+    if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < tracking_.loops.min_inliers))
       continue;
-    pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, params_.loops.edge_noise), is_loop});
+    pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), is_loop});
     if (is_loop && estimate.pnp_inliers > loop_inliers) loop_inliers = estimate.pnp_inliers, loop_to = other;
     loop = loop || is_loop;
   }
-  if (!loop && params_.loops.enabled) {
+  if (!loop && tracking_.loops.enabled) {
     // Drift may have moved the place seen again beyond the covisibility test's 8 px: candidates
     // are the keyframes the previous one is not linked to whose keypoints could project into
     // this frame at all (covisibilityBound, with a drift-sized margin), most first; each is
     // verified by a relative-pose estimate (descriptor matching, PnP, dense refinement).
     CovisibilityParams margin = params_.keyframes.covisibility;
-    margin.max_reprojection_px = params_.loops.candidate_margin_px;
+    margin.max_reprojection_px = tracking_.loops.candidate_margin_px;
     std::vector<std::pair<double, int>> candidates;
     for (const Keyframe& K : graph_.keyframes()) {
       if (K.id == created || K.id == previous || graph_.edges().hasEdge(previous, K.id) ||
@@ -145,12 +145,12 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
     std::sort(candidates.begin(), candidates.end());
     int tried = 0;
     for (const auto& [negative_bound, other] : candidates) {
-      if (tried++ >= params_.loops.candidates) break;
+      if (tried++ >= tracking_.loops.candidates) break;
       const Keyframe& K = graph_.keyframe(other);
       const RelativePose estimate =
           estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
-      if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < params_.loops.min_inliers) continue;
-      pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, params_.loops.edge_noise), true});
+      if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) continue;
+      pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), true});
       loop = true;
       loop_inliers = estimate.pnp_inliers;
       loop_to = other;
@@ -186,7 +186,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   TrackingOutcome tracked;
   if (tracking) {
     const auto track_start = std::chrono::steady_clock::now();
-    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, params_.tracking.relative.dense.stride_px);
+    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.stride_px);
     const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
     report.ms.tracking_ms = msSince(track_start);
     if (!outcome) {
@@ -214,7 +214,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
       ++revisits_;
       report.keyframe = report.decision.keyframe;
       // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
-      if (tracking && params_.loops.enabled && current_ >= 0 && !graph_.edges().hasEdge(current_, report.keyframe))
+      if (tracking && tracking_.loops.enabled && current_ >= 0 && !graph_.edges().hasEdge(current_, report.keyframe))
         closeLoop(report.keyframe, observed, &frame, &report);
       // The frame links the place it left to the place it recognised.
       if (current_ >= 0) graph_.edges().strengthen(current_, report.keyframe, report.decision.delta_current);

@@ -28,12 +28,17 @@ struct MapperParams {
   /// schedule, for comparisons); 0: the covisibility decision of SPEC section 5.
   int keyframe_every = 0;
   PoseSource poses = PoseSource::kGroundTruth;
-  TrackerParams tracking;  ///< used with PoseSource::kTrack
-  LoopClosureParams loops; ///< used with PoseSource::kTrack
 
   /// Throws std::invalid_argument naming the first value out of range (the cell size is checked
   /// against the camera by Mapper).
   void validate() const;
+};
+
+/// How poses are tracked and loops closed (PoseSource::kTrack). Not user settings: sessions do
+/// not store them; tests and experiments pass others to the Mapper.
+struct TrackingParams {
+  TrackerParams tracker;
+  LoopClosureParams loops;
 };
 
 /// Wall time of each stage of one frame, milliseconds.
@@ -70,7 +75,7 @@ struct FrameReport {
 /// others may read the graph only while it is not inside addFrame().
 class Mapper {
  public:
-  explicit Mapper(const PinholeCamera& camera, const MapperParams& params = {});
+  explicit Mapper(const PinholeCamera& camera, const MapperParams& params = {}, const TrackingParams& tracking = {});
 
   /// Maps one frame with its pose (PoseSource::kGroundTruth) or at the pose the tracker
   /// estimates (kTrack; a frame it cannot place is skipped: FrameReport::lost). Throws
@@ -121,6 +126,7 @@ class Mapper {
 
   PinholeCamera camera_;
   MapperParams params_;
+  TrackingParams tracking_;
   FeatureExtractor extractor_;
   LocalMapIntegrator integrator_;
   KeyframeGraph graph_;

@@ -83,12 +83,12 @@ struct Linearisation {
 };
 
 Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, const Transform& T_K_C,
-                        const NdtRefinementParams& params, Scratch* scratch) {
+                        const NdtRefinementParams& params, double robust_k, Scratch* scratch) {
   const PinholeCamera& cam = map.camera();
   const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
   const Eigen::Vector3f t = T_K_C.translation().cast<float>();
   const float gate2 = static_cast<float>(params.max_distance_m * params.max_distance_m);
-  const float inv_k2 = static_cast<float>(1.0 / (params.robust_k * params.robust_k));
+  const float inv_k2 = static_cast<float>(1.0 / (robust_k * robust_k));
   const StoredCell* base = map.cells().data();
   // Float sums of one point's terms are exact enough (1e-7 relative); the frame's sums are double.
   double H[21] = {}, g[6] = {}, inlier_m2 = 0.0, support = 0.0;
@@ -154,11 +154,11 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
 // Adds the reprojection terms of the features to `lin`. T_C_K' = T_C_K exp(-xi) for the
 // perturbation T_K_C' = exp(xi) T_K_C, so y = T_C_K X moves by -R (rho + phi x X).
 void addFeatureTerms(std::span<const FeatureObservation> features, const PinholeCamera& cam, const Transform& T_K_C,
-                     const NdtRefinementParams& params, Linearisation* lin) {
+                     const NdtRefinementParams& params, double anneal, Linearisation* lin) {
   const Transform T_C_K = T_K_C.inverse();
   const Eigen::Matrix3d R = T_C_K.linear();
   const double info = 1.0 / (params.feature_sigma_px * params.feature_sigma_px);
-  const double inv_k2 = 1.0 / (params.feature_robust_k * params.feature_robust_k);
+  const double inv_k2 = 1.0 / (anneal * anneal * params.feature_robust_k * params.feature_robust_k);
   for (const FeatureObservation& f : features) {
     const Eigen::Vector3d y = T_C_K * f.X_K;
     if (y.z() <= 0.0) continue;
@@ -193,10 +193,15 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     for (CellInfo& c : scratch.cells) c.stamp = 0;
     scratch.stamp = 1;
   }
+  // Annealing: the first steps take points up to annealing_factor times farther (the basin of
+  // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
+  // threshold down to robust_k, where the last steps and the final measurement are made.
+  const auto anneal = [&params](int it) { return std::max(1.0, params.annealing_factor / std::pow(2.0, it)); };
   Linearisation lin;
   for (int it = 0; it <= params.iterations; ++it) {
-    lin = linearise(map, frame, *T_K_C, params, &scratch);
-    addFeatureTerms(features, map.camera(), *T_K_C, params, &lin);
+    const double a = it == params.iterations ? 1.0 : anneal(it);
+    lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, &scratch);
+    addFeatureTerms(features, map.camera(), *T_K_C, params, a, &lin);
     // The last pass only measures the pose the previous step reached.
     if (it == params.iterations || lin.associated < 6) break;
     const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(lin.H);
@@ -209,9 +214,9 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     step.translation() = rho;
     *T_K_C = step * *T_K_C;
     ++result.iterations;
-    if (rho.norm() < params.converged_m && phi.norm() < params.converged_rad) {
-      lin = linearise(map, frame, *T_K_C, params, &scratch);
-      addFeatureTerms(features, map.camera(), *T_K_C, params, &lin);
+    if (a == 1.0 && rho.norm() < params.converged_m && phi.norm() < params.converged_rad) {
+      lin = linearise(map, frame, *T_K_C, params, params.robust_k, &scratch);
+      addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
       break;
     }
   }

@@ -41,6 +41,9 @@ struct NdtRefinementParams {
   /// the far side of an occluding edge cannot pull the pose (a Huber tail, whose pull never
   /// vanishes, biased 7-Scenes estimates by centimetres).
   double robust_k = 3.0;
+  /// The first step's threshold is this times robust_k (and the features' likewise); each step
+  /// halves it down to robust_k. 1: no annealing.
+  double annealing_factor = 8.0;
   /// Isotropic variance added to every cell covariance besides the sensor's axial noise at the
   /// cell's depth: keeps a cell of perfectly planar (noise-free, synthetic) points invertible.
   double min_variance_m2 = 1e-6;
