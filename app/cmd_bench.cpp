@@ -20,12 +20,14 @@
 #include <nlohmann/json.hpp>
 #include <octomap/OcTree.h>
 
+#include "app/bench_long.h"
 #include "app/commands.h"
 #include "app/eval_report.h"
 #include "app/odometry_peers.h"
 #include "app/progress.h"
 #include "app/timing.h"
 #include "app/tsdf_peer.h"
+#include "mapping/core/timing.h"
 #include "mapping/baseline/ndt_om_baseline.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/export/map_export.h"
@@ -48,6 +50,8 @@ struct BenchArgs {
   bool no_octomap = false;
   bool no_open3d = false;
   std::string poses = "gt";
+  bool long_run = false;
+  LongRunOptions long_options;
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
 };
 
@@ -158,8 +162,12 @@ struct Comparison {
   }
 };
 
+// A peer that did not run has null figures, as at the top level of bench.json (not 0).
 nlohmann::json methodJson(const MethodResult& r) {
-  nlohmann::json j = {{"name", r.name}, {"ms_per_frame", r.ms}, {"elements", r.elements}};
+  const bool ran = r.note.empty();
+  nlohmann::json j = {{"name", r.name},
+                      {"ms_per_frame", ran ? nlohmann::json(rounded(r.ms)) : nlohmann::json(nullptr)},
+                      {"elements", ran ? nlohmann::json(r.elements) : nlohmann::json(nullptr)}};
   if (r.accuracy) j["accuracy"] = toJson(*r.accuracy);
   if (!r.note.empty()) j["note"] = r.note;
   return j;
@@ -268,10 +276,10 @@ nlohmann::json odometryJson(const OdometryRow& r, std::size_t frames) {
     j["note"] = r.run.note;
     return j;
   }
-  j["ms_per_frame"] = r.ms;
+  j["ms_per_frame"] = rounded(r.ms);
   j["failures"] = r.run.failures;
   if (r.run.keyframes > 0) j["keyframes"] = r.run.keyframes;
-  j["ate_rmse_m"] = r.error ? nlohmann::json(r.error->ate_m.rmse) : nlohmann::json(nullptr);
+  j["ate_rmse_m"] = r.error ? nlohmann::json(rounded(r.error->ate_m.rmse)) : nlohmann::json(nullptr);
   if (r.error) j["rpe_per_frame"] = toJson(r.error->rpe_per_frame);
   return j;
 }
@@ -295,16 +303,26 @@ std::string odometryTable(const std::vector<OdometryRow>& rows) {
 }
 
 void runBench(BenchArgs args) {
-  // A plain number N means the first N frames (0:N) here: "bench --frames 100" reads as a count.
-  std::string& frames = args.sequence.frames;
-  if (frames.empty()) frames = "0:30";
-  else if (frames.find(':') == std::string::npos) frames = "0:" + frames;
+  if (args.long_run) {  // every frame unless --frames says otherwise, never all decoded at once
+    const std::filesystem::path out_dir = args.out;
+    checkExportFolder(out_dir);
+    MapperParams mapper;
+    mapper.local_map = args.local_map;
+    args.long_options.json = args.json;
+    return runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options);
+  }
+  // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
+  // it is shorter (a range typed past the end is an error, as everywhere).
+  const bool default_range = args.sequence.frames.empty();
+  if (default_range) args.sequence.frames = "0:30";
   if (args.keyframe_every < 1) throw std::invalid_argument("--keyframe-every must be at least 1");
+  // Like map --out: created if missing (checked now, before any work).
   const std::filesystem::path out_dir = args.out;
-  if (!std::filesystem::is_directory(out_dir)) throw std::runtime_error(out_dir.string() + ": no such folder (--out)");
+  checkExportFolder(out_dir);
   std::optional<ColoredTriangleMesh> mesh;
   if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
-  const TumSequence seq = openSequence(args.sequence);
+  const TumSequence seq = openSequence(args.sequence, default_range);
+  const std::string frame_range = frameRangeText(seq.frameRange());
   const PinholeCamera& cam = seq.camera();
   for (const int s : args.accuracy_cell_sizes)
     if (s < 1 || s > std::min(cam.width, cam.height)) throw std::invalid_argument("--accuracy-cell-sizes: bad cell size " + std::to_string(s));
@@ -393,6 +411,7 @@ void runBench(BenchArgs args) {
   std::vector<OdometryRow> odometry;
   int loop_closures = 0, no_loops = 0;
   if (args.poses == "track") {
+    std::filesystem::create_directories(out_dir);  // the trajectories go there
     odometry.push_back(trackVdmap(decoded, cam, args, true, out_dir, &loop_closures));
     odometry.push_back(trackVdmap(decoded, cam, args, false, out_dir, &no_loops));
     for (OdometryRow& row : odometryPeers(decoded, cam, args, out_dir)) odometry.push_back(std::move(row));
@@ -401,27 +420,29 @@ void runBench(BenchArgs args) {
   const auto ratio = [vd](double o) { return vd > 0 ? o / vd : 0.0; };
   nlohmann::json out = {
       {"frames", decoded.size()},
-      {"vd_update_ms", vd},
-      {"vd_update_ms_max", vd_ms.empty() ? 0.0 : *std::max_element(vd_ms.begin(), vd_ms.end())},
+      {"frame_range", frame_range},
+      {"vd_update_ms", rounded(vd)},
+      {"vd_update_ms_max", rounded(vd_ms.empty() ? 0.0 : *std::max_element(vd_ms.begin(), vd_ms.end()))},
       {"cell_size_px", args.local_map.cell_size_px},
       {"keyframe_every", args.keyframe_every},
       {"ellipsoids", cells},
       {"bytes_per_ellipsoid", sizeof(StoredCell)},
       {"container_bytes", bytes},
-      {"vd_pipeline_ms", median(pipeline_ms)},
-      {"pipeline_stage_ms", {{"features", median(features_ms)}, {"decision", median(decision_ms)},
-                             {"update", median(update_ms)}}},
+      {"vd_pipeline_ms", rounded(median(pipeline_ms))},
+      {"pipeline_stage_ms", {{"features", rounded(median(features_ms))}, {"decision", rounded(median(decision_ms))},
+                             {"update", rounded(median(update_ms))}}},
       {"revisits", mapper.revisits()},
   };
   out.update(globalMapStats(mapper.graph(), global));  // keyframes, sigma_e, sigma_e', t_g, ...
   const double t_g_us = out["t_g_us_per_ellipsoid"];
   for (std::size_t i = first_peer; i < rows.size(); ++i) {
     const MethodResult& r = rows[i];
-    out[r.key + "_ms"] = r.note.empty() ? nlohmann::json(r.ms) : nlohmann::json(nullptr);
-    out["ratio_" + r.key] = r.note.empty() ? nlohmann::json(ratio(r.ms)) : nlohmann::json(nullptr);
+    out[r.key + "_ms"] = r.note.empty() ? nlohmann::json(rounded(r.ms)) : nlohmann::json(nullptr);
+    out["ratio_" + r.key] = r.note.empty() ? nlohmann::json(rounded(ratio(r.ms))) : nlohmann::json(nullptr);
   }
-  out["ratio_octomap_010_pipeline"] =
-      median(pipeline_ms) > 0 && rows[first_peer].note.empty() ? rows[first_peer].ms / median(pipeline_ms) : 0.0;
+  out["ratio_octomap_010_pipeline"] = median(pipeline_ms) > 0 && rows[first_peer].note.empty()
+                                          ? nlohmann::json(rounded(rows[first_peer].ms / median(pipeline_ms)))
+                                          : nlohmann::json(nullptr);
   out["methods"] = nlohmann::json::object();  // sorted by key, so the table's order goes beside it
   out["method_order"] = nlohmann::json::array();
   for (const MethodResult& r : rows) {
@@ -444,30 +465,34 @@ void runBench(BenchArgs args) {
   }
 
   std::ostringstream md;
+  char global_line[256];
+  std::snprintf(global_line, sizeof global_line,
+                "Global map: %s, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid).\n",
+                counted(mapper.graph().size(), "keyframe").c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s,
+                t_g_us);
   md << "# vdmap bench\n\n" << decoded.size() << " frames of `" << args.sequence.folder << "` (" << cam.width << "x"
-     << cam.height << "), frames " << args.sequence.frames << ", keyframe every " << args.keyframe_every
+     << cam.height << "), frames " << frame_range << ", keyframe every " << args.keyframe_every
      << " (update) / covisibility (pipeline), one thread. Times are medians of CPU time per frame.\n\n"
-     << markdownTable(rows, vd, mesh.has_value()) << "\nGlobal map: " << mapper.graph().size()
-     << " keyframes, Sigma_e " << global.sigma_e << " -> Sigma_e' " << global.sigma_e_prime << " in "
-     << global.t_g_s << " s (" << t_g_us << " us per ellipsoid).\n";
+     << markdownTable(rows, vd, mesh.has_value()) << "\n" << global_line;
   if (!odometry.empty())
     md << "\nTracking (--poses track) on the same frames, one thread: median CPU time per frame (vdmap: its whole "
           "pipeline, which tracking makes " << out["vd_tracking_added_ms"].get<double>() << " ms slower than with "
           "ground-truth poses; the peers: registration only), ATE after the rigid alignment against the sequence's "
           "ground truth. vdmap closed " << loop_closures << " loops.\n\n"
        << odometryTable(odometry);
+  std::filesystem::create_directories(out_dir);
   writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
   writeFileAtomically(out_dir / "bench.md", md.str());
   if (args.json) {
     std::cout << out.dump(2) << "\n";
     return;
   }
-  std::printf("frames          %zu (%dx%d), keyframe every %d, cell %d px\n", decoded.size(), cam.width, cam.height,
-              args.keyframe_every, args.local_map.cell_size_px);
+  std::printf("frames          %zu of %s (%dx%d), keyframe every %d, cell %d px\n", decoded.size(),
+              frame_range.c_str(), cam.width, cam.height, args.keyframe_every, args.local_map.cell_size_px);
   std::printf("vdmap pipeline  %8.3f ms/frame CPU (median); wall-clock stages: features %.2f, decision %.2f, update %.2f\n",
               median(pipeline_ms), median(features_ms), median(decision_ms), median(update_ms));
-  std::printf("global map      %zu keyframes, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid)\n",
-              mapper.graph().size(), global.sigma_e, global.sigma_e_prime, global.t_g_s, t_g_us);
+  std::printf("global map      %s, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid)\n",
+              counted(mapper.graph().size(), "keyframe").c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, t_g_us);
   std::printf("\n%-34s %12s %10s %10s\n", "method", "ms/frame", "x vdmap", "elements");
   for (const MethodResult& r : rows) {
     if (!r.note.empty()) {
@@ -484,8 +509,10 @@ void runBench(BenchArgs args) {
       std::printf("%-44s not run: %s\n", r.run.name.c_str(), r.run.note.c_str());
       continue;
     }
-    std::printf("%-48s %12.2f %10.2f %10d %10s\n", r.run.name.c_str(), r.ms, r.error ? 100 * r.error->ate_m.rmse : NAN,
-                r.run.failures, r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
+    char ate[32] = "-";
+    if (r.error) std::snprintf(ate, sizeof ate, "%.2f", 100 * r.error->ate_m.rmse);
+    std::printf("%-48s %12.2f %10s %10d %10s\n", r.run.name.c_str(), r.ms, ate, r.run.failures,
+                r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
   }
   if (!odometry.empty())
     std::printf("tracking adds %.2f ms per frame to vdmap's pipeline (CPU medians); %d loop closures\n",
@@ -500,8 +527,8 @@ void addBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("--frames")->description(
-      "frames A:B of the depth list; a plain N means 0:N (default 0:30). Frames are held decoded "
-      "in memory, ~1.5 MB each at 640x480");
+      "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
+      "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
   verb->add_option("--keyframe-every", args->keyframe_every, "every N-th frame starts a keyframe (update timing)")
       ->capture_default_str();
   verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")->capture_default_str();
@@ -523,6 +550,11 @@ void addBenchCommand(CLI::App& app) {
                    "against the ground truth, and trajectory_<method>.txt in --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
+  verb->add_flag("--long", args->long_run,
+                 "the long run instead (issue 16): the whole pipeline over every frame (or --frames), per-frame CPU "
+                 "time, resident memory, keyframes and the global map's size into long.csv and long.json");
+  verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
+      ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });
 }

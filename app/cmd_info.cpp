@@ -6,38 +6,53 @@
 
 #include "app/commands.h"
 #include "app/progress.h"
+#include "mapping/core/timing.h"
 
 namespace vdmap::app {
 namespace {
 
+// Raw depth codes that are not measurements: 0 (no return, SPEC 1) and 65535, the largest
+// 16-bit value, which 7-Scenes writes for invalid pixels (65.535 m at its scale of 1000) and
+// other sensors for saturation; no real reading lands exactly on it.
+constexpr std::uint16_t kNoDepth = 0, kInvalidDepthCode = 65535;
+
 struct DepthStats {
   int frames_sampled = 0;
-  double min_m = 0, median_m = 0, max_m = 0;
+  double min_m = 0, median_m = 0, max_m = 0;  ///< over valid pixels
   double valid_fraction = 0;
+  double no_depth_fraction = 0;      ///< raw 0
+  double invalid_code_fraction = 0;  ///< raw 65535
 };
 
 // Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
 DepthStats sampleDepth(const TumSequence& seq, int samples) {
   DepthStats stats;
-  std::vector<float> depths;
-  std::size_t pixels = 0;
+  std::vector<std::uint16_t> valid;
+  std::size_t pixels = 0, zero = 0, code = 0;
   const std::size_t n = std::min<std::size_t>(samples, seq.size());
   ProgressBar progress("reading depth", n);
   for (std::size_t k = 0; k < n; ++k) {
     const RgbdFrame frame = seq.load(n == 1 ? 0 : k * (seq.size() - 1) / (n - 1));
     pixels += frame.depth.total();
-    for (auto it = frame.depth.begin<std::uint16_t>(); it != frame.depth.end<std::uint16_t>(); ++it)
-      if (*it) depths.push_back(static_cast<float>(*it / seq.camera().depth_scale));
+    for (auto it = frame.depth.begin<std::uint16_t>(); it != frame.depth.end<std::uint16_t>(); ++it) {
+      if (*it == kNoDepth) ++zero;
+      else if (*it == kInvalidDepthCode) ++code;
+      else valid.push_back(*it);
+    }
     progress.update(k + 1);
   }
   stats.frames_sampled = static_cast<int>(n);
-  if (!depths.empty()) {
-    std::sort(depths.begin(), depths.end());
-    stats.min_m = depths.front();
-    stats.median_m = depths[depths.size() / 2];
-    stats.max_m = depths.back();
-    stats.valid_fraction = static_cast<double>(depths.size()) / pixels;
+  const double scale = seq.camera().depth_scale, total = static_cast<double>(std::max<std::size_t>(pixels, 1));
+  if (!valid.empty()) {
+    std::nth_element(valid.begin(), valid.begin() + valid.size() / 2, valid.end());
+    stats.median_m = valid[valid.size() / 2] / scale;
+    const auto [lo, hi] = std::minmax_element(valid.begin(), valid.end());
+    stats.min_m = *lo / scale;
+    stats.max_m = *hi / scale;
   }
+  stats.valid_fraction = static_cast<double>(valid.size()) / total;
+  stats.no_depth_fraction = static_cast<double>(zero) / total;
+  stats.invalid_code_fraction = static_cast<double>(code) / total;
   return stats;
 }
 
@@ -53,6 +68,7 @@ void runInfo(const SequenceArgs& args, bool json) {
         {"folder", seq.folder().string()},
         {"listed_depth_frames", seq.listedDepthFrames()},
         {"frames", seq.size()},
+        {"frame_range", frameRangeText(seq.frameRange())},
         {"frames_with_pose", with_pose},
         {"groundtruth", seq.hasGroundTruth()},
         {"time_span_s", {t0, t1}},
@@ -61,7 +77,10 @@ void runInfo(const SequenceArgs& args, bool json) {
                     {"depth_scale", cam.depth_scale}}},
         {"depth_m", {{"frames_sampled", depth.frames_sampled}, {"min", depth.min_m},
                      {"median", depth.median_m}, {"max", depth.max_m},
-                     {"valid_fraction", depth.valid_fraction}}},
+                     {"valid_fraction", rounded(depth.valid_fraction)},
+                     {"invalid_fraction", rounded(1.0 - depth.valid_fraction)},
+                     {"no_depth_fraction", rounded(depth.no_depth_fraction)},
+                     {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
         {"dropped", {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}}},
     };
     std::cout << out.dump(2) << "\n";
@@ -69,16 +88,18 @@ void runInfo(const SequenceArgs& args, bool json) {
   }
   std::printf("sequence   %s\n", seq.folder().c_str());
   if (seq.hasGroundTruth())
-    std::printf("frames     %zu usable (all with poses) of %d listed depth frames\n", seq.size(),
-                seq.listedDepthFrames());
+    std::printf("frames     %zu usable (all with poses) of %d listed depth frames; frames %s\n", seq.size(),
+                seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   else
-    std::printf("frames     %zu usable of %d listed depth frames; no groundtruth.txt (vdmap tracks the poses)\n",
-                seq.size(), seq.listedDepthFrames());
+    std::printf("frames     %zu usable of %d listed depth frames; frames %s; no groundtruth.txt (vdmap tracks the "
+                "poses)\n", seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
   std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width,
               cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
-  std::printf("depth      %.3f .. %.3f m, median %.3f m, %.0f%% of pixels valid (%d frames sampled)\n",
-              depth.min_m, depth.max_m, depth.median_m, 100.0 * depth.valid_fraction, depth.frames_sampled);
+  std::printf("depth      %.3f .. %.3f m, median %.3f m over valid pixels; %.3g%% invalid (%.3g%% 0 = no "
+              "measurement, %.3g%% 65535 = invalid code) (%d frames sampled)\n",
+              depth.min_m, depth.max_m, depth.median_m, 100.0 * (1.0 - depth.valid_fraction),
+              100.0 * depth.no_depth_fraction, 100.0 * depth.invalid_code_fraction, depth.frames_sampled);
   std::printf("dropped    %d without an rgb frame within 0.02 s, %d without a pose within 0.1 s, "
               "%d outside --frames\n", d.no_rgb, d.no_pose, d.outside_range);
 }

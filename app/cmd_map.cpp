@@ -2,10 +2,12 @@
 // keyframe decision, local-map update; or a fixed keyframe schedule with --keyframe-every), then
 // the global map is built from the local maps and exported with exportMap (map_export.h).
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
+#include <optional>
 
 #include <nlohmann/json.hpp>
 
@@ -14,6 +16,8 @@
 #include "app/parameter_table.h"
 #include "app/progress.h"
 #include "app/timing.h"
+#include "mapping/core/error.h"
+#include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
@@ -26,25 +30,70 @@ struct MapArgs {
   SequenceArgs sequence;
   std::string out;
   std::string save;
+  std::string load;
   bool json = false;
   MappingParams params;  // every parameter of the table (app/parameter_table.h)
   double octomap_resolution_m = 0.0;
+  bool octomap_given = false;
 };
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
   validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
-  if (!(args.octomap_resolution_m >= 0.0)) throw std::invalid_argument("--octomap must be > 0 m");
+  // 0 is refused like -1 (it used to mean "no OctoMap" silently); the map's extent is checked
+  // against OctoMap's keys once the map exists (exportMap).
+  if (args.octomap_given && !(args.octomap_resolution_m > 0.0 && std::isfinite(args.octomap_resolution_m)))
+    throw std::invalid_argument("--octomap must be > 0 m");
   const fs::path out_dir = args.out;
   // Fail before any work when DIR cannot be written; it is created only when there is a map to
   // write, so a failed run leaves nothing behind.
   checkExportFolder(out_dir);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
+  if (!args.load.empty() && !isSessionFile(args.load))
+    throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
+                                                                   : "no such session file (--load)");
 
+  // --load: continue a saved session where it stopped. The mapping parameters are the session's
+  // (they shaped its local maps; an option that would change them is refused), the frames
+  // default to those after its last one, and the global-map options apply as given.
+  std::optional<Session> loaded;
+  if (!args.load.empty()) {
+    loaded.emplace(loadSession(args.load));
+    const SessionInfo& info = loaded->info;
+    if (info.state.current_keyframe < 0 && loaded->graph.size() > 0)
+      throw InputError(args.load, "session format " + std::to_string(info.format_version) +
+                                      " does not store the mapper's state, so mapping cannot continue from it (it "
+                                      "can still be rendered or opened)");
+    if (!sameMapperParams(args.params.mapper, MapperParams{}) && !sameMapperParams(args.params.mapper, info.mapper))
+      throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
+                                  "them (cell size, depth range, ORB features, tau, tau-edge, keyframe-every, "
+                                  "prefilter)");
+    args.params.mapper = info.mapper;
+    // The pose source is the session's too (its keyframes were placed that way).
+    const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";
+    if (!args.sequence.poses.empty() && args.sequence.poses != session_poses)
+      throw std::invalid_argument("--poses " + args.sequence.poses + ": " + args.load + " was mapped with --poses " +
+                                  session_poses + "; drop --poses to continue it");
+    args.sequence.poses = session_poses;
+    if (args.sequence.frames.empty()) args.sequence.frames = std::to_string(info.state.last_frame_index + 1) + ":";
+  }
   const TumSequence seq = openSequence(args.sequence);
-  args.params.mapper.poses = poseSource(args.sequence, seq);
+  if (loaded) {
+    const MapperState& state = loaded->info.state;
+    if (seq.frameRange().first <= state.last_frame_index)
+      throw std::invalid_argument("--frames " + frameRangeText(seq.frameRange()) + ": " + args.load +
+                                  " has mapped frames up to " + std::to_string(state.last_frame_index) +
+                                  "; continue from " + std::to_string(state.last_frame_index + 1));
+    if (!(seq.camera() == loaded->info.camera))
+      throw InputError(seq.folder().string(), "its camera (" + seq.cameraSource() + ") is not the one of " + args.load +
+                                                  " (give --camera to match it)");
+  } else {
+    args.params.mapper.poses = poseSource(args.sequence, seq);
+  }
   const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
-  Mapper mapper(seq.camera(), args.params.mapper);
+  Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
+                         : Mapper(seq.camera(), args.params.mapper);
+  const int frames_loaded = mapper.framesMapped();
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
   mapSequence(seq, mapper, [&](const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
@@ -68,11 +117,13 @@ void runMap(MapArgs args) {
   options.octomap_resolution_m = args.octomap_resolution_m;
   options.run_stats = {
       {"frames", mapper.framesMapped()},
+      {"frame_range", frameRangeText(seq.frameRange())},
+      {"frames_loaded", frames_loaded},
       {"revisits", mapper.revisits()},
-      {"update_ms", median(update_ms)},
-      {"pipeline_ms", median(pipeline_ms)},
-      {"features_ms", median(features_ms)},
-      {"decision_ms", median(decision_ms)},
+      {"update_ms", rounded(median(update_ms))},
+      {"pipeline_ms", rounded(median(pipeline_ms))},
+      {"features_ms", rounded(median(features_ms))},
+      {"decision_ms", rounded(median(decision_ms))},
       {"camera", seq.cameraSource()},
       {"poses", tracking ? "track" : "gt"},
   };
@@ -96,20 +147,20 @@ void runMap(MapArgs args) {
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   octomap_bar.reset();  // its last line before the summary, not after it
   // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global));
+  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
   if (args.json) {
     std::cout << stats.dump(2) << "\n";
     return;
   }
-  std::printf("%d frames, %zu keyframes, %zu edges, %d revisits; %zu kept ellipsoids -> %zu in the global map "
-              "(t_g %.3f s)\nmedian per frame: pipeline %.2f ms (features %.2f, tracking %.2f, decision %.2f, "
-              "update %.2f) -> %s\n",
-              mapper.framesMapped(), graph.size(), graph.edges().size(), mapper.revisits(), global.sigma_e,
-              global.sigma_e_prime, global.t_g_s, median(pipeline_ms), median(features_ms), median(tracking_ms),
-              median(decision_ms), median(update_ms), out_dir.c_str());
+  const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
+                             counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
+  std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: pipeline %.2f ms "
+              "(features %.2f, tracking %.2f, decision %.2f, update %.2f) -> %s\n",
+              counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(pipeline_ms),
+              median(features_ms), median(tracking_ms), median(decision_ms), median(update_ms), out_dir.c_str());
   if (tracking) {
-    std::printf("tracked poses: %d frames lost (skipped), %zu loop closures", mapper.framesLost(),
-                mapper.poseGraph().loops().size());
+    std::printf("tracked poses: %s lost (skipped), %s", counted(mapper.framesLost(), "frame").c_str(),
+                counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
     if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
     std::printf("\n");
   }
@@ -127,13 +178,20 @@ void addMapCommand(CLI::App& app) {
                    "global_points.ply, global_ellipsoids.ply, global_gaussians.ply, [global.bt], stats.json")
       ->required();
   verb->add_option("--save", args->save, "also save the whole session (a .vdmap file, docs/vdmap-format.md)");
-  verb->add_option("--octomap", args->octomap_resolution_m,
-                   "also write global.bt, an OctoMap of this resolution (m) sampled from the global map");
+  verb->add_option("--load", args->load,
+                   "continue a saved session (.vdmap) on SEQ where it stopped: its keyframes, graph, parameters and "
+                   "state; --frames defaults to the frames after its last one (save the result with --save)");
+  CLI::Option* octomap = verb->add_option("--octomap", args->octomap_resolution_m,
+                   "also write global.bt, an OctoMap of this resolution (m, > 0) sampled from the global map; "
+                   "the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)");
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   addParameterOptions(*verb, args->params);
   verb->add_option("--threads", args->params.global.threads, "global-map threads (0: all); the map does not depend on it")
       ->capture_default_str();
-  verb->callback([args] { runMap(*args); });
+  verb->callback([args, octomap] {
+    args->octomap_given = octomap->count() > 0;
+    runMap(*args);
+  });
 }
 
 }  // namespace vdmap::app

@@ -4,6 +4,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <random>
 #include <regex>
 
@@ -14,7 +15,9 @@
 #include "app/timing.h"
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/core/error.h"
 #include "mapping/io/ply_reader.h"
+#include "mapping/io/session_file.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/context.h"
@@ -117,12 +120,19 @@ struct RenderScene {
   int cell_size_px = 5;
 };
 
-render::ViewCamera globalView(const RenderScene& scene, int w, int h) {
-  std::vector<glm::vec3> points;
-  for (const auto& e : scene.ellipsoids) points.push_back(e.mean);
-  for (const auto& p : scene.mesh.positions) points.emplace_back(p.x(), p.y(), p.z());
-  for (const auto& p : scene.lines.positions) points.push_back(p);
-  const auto [lo, hi] = render::robustBounds(points);
+// The whole scene: exact bounds of every ellipsoid (its mean +- sigma along the axes), mesh
+// vertex and graph line, so nothing at the edges is cut (a percentile box cropped the map).
+render::ViewCamera globalView(const RenderScene& scene, float sigma, int w, int h) {
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  const auto add = [&](const glm::vec3& p, const glm::vec3& r) {
+    lo = glm::min(lo, p - r);
+    hi = glm::max(hi, p + r);
+  };
+  for (const auto& e : scene.ellipsoids)
+    add(e.mean, sigma * glm::sqrt(glm::max(glm::vec3(e.cov[0][0], e.cov[1][1], e.cov[2][2]), glm::vec3(0.f))));
+  for (const auto& p : scene.mesh.positions) add({p.x(), p.y(), p.z()}, glm::vec3(0.f));
+  for (const auto& p : scene.lines.positions) add(p, glm::vec3(0.f));
+  if (!(lo.x <= hi.x)) lo = glm::vec3(-1.f), hi = glm::vec3(1.f);  // nothing to frame
   return render::OrbitCamera::framing(lo, hi).view(w, h);
 }
 
@@ -131,7 +141,7 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
   render::Framebuffer fb(gl, w, h);
   if (choice.kind == ViewChoice::Kind::kContainer) {
     render::ContainerRenderer container(gl);
-    container.setKeyframe(scene.keyframe->rgb, scene.camera, scene.keyframe->T_W_K);
+    container.setKeyframe(scene.keyframe->rgb(), scene.camera, scene.keyframe->T_W_K);
     container.setEllipsoids(scene.container_ellipsoids, {.sigma = args.sigma, .color = color,
                                                          .cell_size_px = scene.cell_size_px, .show_grid = args.grid});
     fb.bindAndClear(0.f, 0.f, 0.f);
@@ -140,7 +150,7 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
   }
   const render::ViewCamera view = choice.kind == ViewChoice::Kind::kKeyframe
                                       ? render::ViewCamera::fromPinhole(scene.camera, scene.keyframe->T_W_K, w, h)
-                                      : globalView(scene, w, h);
+                                      : globalView(scene, args.sigma, w, h);
   fb.bindAndClear(1.f, 1.f, 1.f);
   if (!scene.mesh.triangles.empty()) {
     render::MeshRenderer mesh_renderer(gl);
@@ -163,56 +173,94 @@ cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& c
   return fb.readRgb();
 }
 
-void runRender(const RenderArgs& args) {
+// What the scene was made from, for the summary line.
+struct SceneSource {
+  std::string name;  ///< the sequence folder or the session file (keyframe range errors name it)
+  int frames = 0;
+  const KeyframeGraph* graph = nullptr;
+};
+
+// The views of a keyframe graph (mapped from a sequence or loaded from a session): the global
+// map with the graph's lines, or keyframe K's view or container.
+void addGraph(RenderScene* scene, const KeyframeGraph& graph, const PinholeCamera& camera, int cell_size_px,
+              const GlobalMapParams& global_params, const ViewChoice& choice, const std::string& source,
+              const std::string& view_text) {
+  scene->camera = camera;
+  scene->cell_size_px = cell_size_px;
+  if (choice.kind == ViewChoice::Kind::kContainer || choice.kind == ViewChoice::Kind::kKeyframe) {
+    if (choice.keyframe >= static_cast<int>(graph.size()))
+      throw std::invalid_argument("--view " + view_text + ": " + source +
+                                  (graph.size() == 0 ? std::string(" has no keyframe")
+                                                     : " has keyframes 0.." + std::to_string(graph.size() - 1)));
+    scene->keyframe = &graph.keyframe(choice.keyframe);
+  }
+  if (choice.kind == ViewChoice::Kind::kContainer) {
+    scene->container_ellipsoids = render::toInstances(
+        keptEllipsoids(scene->keyframe->container, global_params.filter, scene->keyframe->T_W_K, scene->keyframe->id));
+  } else {
+    scene->ellipsoids = render::toInstances(buildGlobalMap(graph, global_params).ellipsoids);
+  }
+  // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well for
+  // rooms (the data vdmap is made for). Only the global view draws the graph.
+  if (choice.kind == ViewChoice::Kind::kGlobal) scene->lines = render::keyframeGraphLines(graph, camera, 0.15f);
+}
+
+void runRender(RenderArgs args) {
+  namespace fs = std::filesystem;
   if (!(args.sigma > 0.f && std::isfinite(args.sigma))) throw std::invalid_argument("--sigma must be a positive number");
   if (args.bench_ellipsoids > 0) return runBench(args);
-  if (args.out.empty()) throw std::invalid_argument("--out PNG is required");
+  // A missing option is a command-line error like map's: CLI11's message and exit code.
+  if (args.out.empty()) throw CLI::RequiredError("--out");
   checkOutputFile(args.out, "--out");
+  // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map.
+  if (!args.sequence.folder.empty() && isSessionFile(args.sequence.folder)) {
+    if (!args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
+    std::swap(args.map, args.sequence.folder);
+  }
   const bool from_sequence = !args.sequence.folder.empty();
+  const bool from_session = !args.map.empty() && isSessionFile(args.map);
   const ViewChoice choice = parseView(args.view);
   if (from_sequence && !args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
-  if (!from_sequence && choice.kind != ViewChoice::Kind::kGlobal)
-    throw std::invalid_argument("--view " + args.view + " needs a sequence (SEQ): a --map file has no keyframes");
+  if (!from_sequence && !from_session && choice.kind != ViewChoice::Kind::kGlobal)
+    throw std::invalid_argument("--view " + args.view +
+                                " needs keyframes: give a sequence (SEQ) or a session (.vdmap); a --map PLY or map "
+                                "folder has none");
   if (!from_sequence && args.map.empty() && args.mesh.empty())
-    throw std::invalid_argument("give SEQ, --map FILE (ellipsoid PLY), --mesh PLY, or --map and --mesh");
+    throw std::invalid_argument("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
+                                "--mesh PLY, or --map and --mesh");
   const std::pair<int, int> size = args.size.empty() ? std::pair{0, 0} : parseSize(args.size);  // 0: default
   const render::ColorMode color = render::parseColorMode(args.color);
 
   RenderScene scene;
-  if (!args.map.empty()) scene.ellipsoids = render::toInstances(readPlyEllipsoids(args.map));
+  std::optional<Session> session;
+  if (from_session) {
+    session.emplace(loadSession(args.map));
+  } else if (!args.map.empty()) {
+    // A `vdmap map` folder is drawn by its global map.
+    const fs::path ply = fs::is_directory(args.map) ? fs::path(args.map) / "global_ellipsoids.ply" : fs::path(args.map);
+    if (fs::is_directory(args.map) && !fs::exists(ply))
+      throw InputError(args.map, "has no global_ellipsoids.ply (expected a `vdmap map` output folder)");
+    scene.ellipsoids = render::toInstances(readPlyEllipsoids(ply));
+  }
   if (!args.mesh.empty()) scene.mesh = readPlyMesh(args.mesh);
   // The context comes before the mapping: a missing OSMesa should not cost a mapping run.
   auto context = render::createOffscreenContext();
   std::unique_ptr<Mapper> mapper;
-  std::optional<TumSequence> seq;
+  SceneSource source;
   if (from_sequence) {
-    seq.emplace(openSequence(args.sequence));
+    const TumSequence seq = openSequence(args.sequence);
     MapperParams params;
-    params.poses = poseSource(args.sequence, *seq);
-    mapper = std::make_unique<Mapper>(seq->camera(), params);
-    mapSequence(*seq, *mapper);
-    const KeyframeGraph& graph = mapper->graph();
-    scene.camera = seq->camera();
-    scene.cell_size_px = mapper->params().local_map.cell_size_px;
-    const GlobalMapParams global_params;
-    if (choice.kind == ViewChoice::Kind::kContainer || choice.kind == ViewChoice::Kind::kKeyframe) {
-      if (choice.keyframe >= static_cast<int>(graph.size()))
-        throw std::invalid_argument(
-            "--view " + args.view + ": " + seq->folder().string() +
-            (graph.size() == 0 ? std::string(" made no keyframe")
-                               : " has keyframes 0.." + std::to_string(graph.size() - 1)));
-      scene.keyframe = &graph.keyframe(choice.keyframe);
-    }
-    if (choice.kind == ViewChoice::Kind::kContainer) {
-      scene.container_ellipsoids = render::toInstances(
-          keptEllipsoids(scene.keyframe->container, global_params.filter, scene.keyframe->T_W_K, scene.keyframe->id));
-    } else {
-      scene.ellipsoids = render::toInstances(buildGlobalMap(graph, global_params).ellipsoids);
-    }
-    // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well for
-    // rooms (the data vdmap is made for). Only the global view draws the graph.
-    if (choice.kind == ViewChoice::Kind::kGlobal)
-      scene.lines = render::keyframeGraphLines(graph, scene.camera, 0.15f);
+    params.poses = poseSource(args.sequence, seq);
+    mapper = std::make_unique<Mapper>(seq.camera(), params);
+    mapSequence(seq, *mapper);
+    addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
+             choice, seq.folder().string(), args.view);
+    source = {seq.folder().string(), mapper->framesMapped(), &mapper->graph()};
+  } else if (session) {
+    // The session's own live thresholds, as the workbench showed them when it was saved.
+    addGraph(&scene, session->graph, session->info.camera, session->info.mapper.local_map.cell_size_px,
+             session->info.global, choice, args.map, args.view);
+    source = {args.map, session->info.state.frames_mapped, &session->graph};
   }
 
   // Default sizes: the keyframe's own image for keyframe:K, the whole 2W x 2H container for
@@ -227,23 +275,29 @@ void runRender(const RenderArgs& args) {
   render::writePng(args.out, draw(context->gl(), scene, choice, w, h, args, color));
   const std::size_t drawn =
       choice.kind == ViewChoice::Kind::kContainer ? scene.container_ellipsoids.size() : scene.ellipsoids.size();
-  std::printf("wrote %s (%dx%d, view %s, %zu ellipsoids, %zu triangles", args.out.c_str(), w, h, args.view.c_str(),
-              drawn, scene.mesh.triangles.size());
-  if (mapper)
-    std::printf(", %d frames, %zu keyframes, %zu edges", mapper->framesMapped(), mapper->graph().size(),
-                mapper->graph().edges().size());
+  std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), w, h, args.view.c_str(),
+              counted(static_cast<long long>(drawn), "ellipsoid").c_str(),
+              counted(static_cast<long long>(scene.mesh.triangles.size()), "triangle").c_str());
+  if (source.graph)
+    std::printf(", %s, %s, %s", counted(source.frames, "frame").c_str(),
+                counted(static_cast<long long>(source.graph->size()), "keyframe").c_str(),
+                counted(static_cast<long long>(source.graph->edges().size()), "edge").c_str());
   std::printf(")\n");
 }
 
 }  // namespace
 
 void addRenderCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("render", "Map a sequence (or read a map / mesh) and render a view headless to PNG with OSMesa");
+  auto* verb = app.add_subcommand(
+      "render", "Render a view of a session, a map or a sequence (mapped first) headless to PNG with OSMesa");
   auto args = std::make_shared<RenderArgs>();
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
-  verb->get_option("SEQ")->required(false)->description("sequence to map (default parameters) and render");
-  verb->add_option("--map", args->map, "ellipsoid PLY (SPEC section 7 layout) instead of SEQ; global view only");
+  verb->get_option("SEQ")->required(false)->description(
+      "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
+  verb->add_option("--map", args->map,
+                   "instead of SEQ: a saved session (.vdmap: every view, with its keyframes and graph), or an "
+                   "ellipsoid PLY (SPEC section 7) or `vdmap map` folder (its global_ellipsoids.ply; global view only)");
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
   verb->add_option("--view", args->view,
                    "global (map, frustums, covisibility edges coloured by weight) | keyframe:K (the map from "

@@ -19,7 +19,6 @@ struct SynthArgs {
 };
 
 void runSynth(const SynthArgs& args) {
-  if (args.out.empty()) throw std::invalid_argument("--out DIR is required");
   render::SynthOptions options;
   options.noise.model = parseDepthNoiseModel(args.noise);
   if (!args.frames.empty()) {
@@ -48,12 +47,19 @@ void runSynth(const SynthArgs& args) {
     if (trajectory.empty()) throw std::invalid_argument(args.trajectory + ": no poses");
   }
   if (options.noise.model == DepthNoiseModel::kNone) options.noise.max_range_m = 1e9;  // only the 16-bit limit
-  const int last = options.last_frame < 0 ? static_cast<int>(trajectory.size()) : options.last_frame;
-  ProgressBar progress("rendering", static_cast<std::size_t>(std::max(0, last - options.first_frame)));
+  // --frames counts poses of the trajectory, as it counts depth frames of a sequence: a range
+  // past the end is an error, and the echo shows the range rendered.
+  const int poses = static_cast<int>(trajectory.size());
+  const FrameRange range{options.first_frame, options.last_frame < 0 ? poses : options.last_frame};
+  if (range.first >= poses || range.last > poses)
+    throw std::invalid_argument("--frames " + args.frames + " ends past the trajectory: it has " + std::to_string(poses) +
+                                " poses (0:" + std::to_string(poses) + ")");
+  options.last_frame = range.last;
+  ProgressBar progress("rendering", static_cast<std::size_t>(range.last - range.first));
   options.progress = [&progress](std::size_t done, std::size_t) { progress.update(done); };
   render::synthesizeSequence(mesh, trajectory, options, args.out);
-  std::printf("wrote %s: %d frames %dx%d, noise %s, %zu triangles\n", args.out.c_str(),
-              std::min(last, static_cast<int>(trajectory.size())) - options.first_frame, options.camera.width,
+  std::printf("wrote %s: %d frames (poses %s of %d) %dx%d, noise %s, %zu triangles\n", args.out.c_str(),
+              range.last - range.first, frameRangeText(range).c_str(), poses, options.camera.width,
               options.camera.height, args.noise.c_str(), mesh.triangles.size());
 }
 
@@ -66,7 +72,9 @@ void addSynthCommand(CLI::App& app) {
   verb->add_option("--trajectory", args->trajectory, "TUM trajectory (timestamp tx ty tz qx qy qz qw, T_W_C)");
   verb->add_option("--camera", args->camera, "camera preset: " + cameraPresetList());
   verb->add_option("--noise", args->noise, "depth sensor model: none | nguyen2012")->capture_default_str();
-  verb->add_option("--frames", args->frames, "poses A:B of the trajectory (B exclusive; A: or :B)");
+  verb->add_option("--frames", args->frames,
+                   "poses A:B of the trajectory (B exclusive; A: or :B; a plain N means 0:N); a range past the end "
+                   "is an error");
   verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk)");
   verb->add_option("--builtin-frames", args->builtin_frames, "poses per lap of the built-in walk (default 300)");
   verb->add_option("--builtin-laps", args->builtin_laps,

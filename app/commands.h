@@ -22,13 +22,25 @@ void addGuiCommand(CLI::App& app);
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);
 
+/// "1 keyframe", "2 keyframes": a count with its noun (regular plurals only).
+inline std::string counted(long long n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
 /// Fails before any work when `file`, given as `option`, cannot become an output file: it is a
-/// folder, or its folder does not exist (throws std::invalid_argument).
+/// folder, its folder does not exist, or a file stands where a folder of its path should be
+/// (throws std::invalid_argument).
 inline void checkOutputFile(const std::string& file, const std::string& option) {
   namespace fs = std::filesystem;
   if (fs::is_directory(file)) throw std::invalid_argument(file + ": is a folder (" + option + " wants a file)");
-  if (!fs::is_directory(fs::absolute(file).parent_path()))
-    throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
+  const fs::path folder = fs::absolute(file).parent_path();
+  if (fs::is_directory(folder)) return;
+  fs::path existing = folder;  // the nearest part of the path that exists
+  while (!fs::exists(existing) && existing.has_parent_path() && existing.parent_path() != existing)
+    existing = existing.parent_path();
+  if (fs::exists(existing) && !fs::is_directory(existing))
+    throw std::invalid_argument(file + ": " + existing.string() + " is a file, not a folder (" + option + ")");
+  throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
 }
 
 }  // namespace vdmap::app
@@ -55,6 +67,8 @@ PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
 std::string cameraPresetList();
 /// Opens the sequence the arguments name (throws InputError / std::invalid_argument). With
 /// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
-TumSequence openSequence(const SequenceArgs& args);
+/// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
+/// instead of refused.
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false);
 
 }  // namespace vdmap::app

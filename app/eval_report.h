@@ -5,15 +5,16 @@
 
 #include <nlohmann/json.hpp>
 
+#include "mapping/core/timing.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/trajectory_error.h"
 
 namespace vdmap::app {
 
 inline nlohmann::json toJson(const AccuracyReport& r) {
-  return {{"elements", r.elements},           {"rmse_mm", r.rmse_mm},
-          {"mean_mm", r.mean_mm},             {"median_mm", r.median_mm},
-          {"completion_mean_mm", r.completion_mean_mm}, {"completion_ratio_5cm", r.completion_ratio}};
+  return {{"elements", r.elements},           {"rmse_mm", rounded(r.rmse_mm)},
+          {"mean_mm", rounded(r.mean_mm)},    {"median_mm", rounded(r.median_mm)},
+          {"completion_mean_mm", rounded(r.completion_mean_mm)}, {"completion_ratio_5cm", rounded(r.completion_ratio)}};
 }
 
 inline std::string toText(const AccuracyReport& r) {

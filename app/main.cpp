@@ -3,9 +3,12 @@
 #include <iostream>
 
 #include "app/commands.h"
+#include "mapping/core/temporary_paths.h"
 
 int main(int argc, char** argv) {
   using namespace vdmap::app;
+  // An interrupted export or save removes its temporary files and folders (issue #17).
+  vdmap::installTemporaryPathCleanup();
   CLI::App app{"vdmap: keyframe-based dense mapping with view-dependent local maps (RGB-D)\n"
                "With no verb, opens the workbench on the built-in scene."};
   app.require_subcommand(0, 1);

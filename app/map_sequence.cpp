@@ -8,10 +8,11 @@ namespace vdmap::app {
 void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<void(const FrameReport&)>& on_frame) {
   FramePrefetcher frames(seq);
   ProgressBar progress("mapping", seq.size());
+  std::size_t done = 0;  // of this sequence (a continued session has mapped others before)
   while (std::optional<RgbdFrame> frame = frames.next()) {
     const FrameReport report = mapper.addFrame(*frame);
     if (on_frame) on_frame(report);
-    progress.update(static_cast<std::size_t>(mapper.framesMapped()));
+    progress.update(++done);
   }
 }
 

@@ -60,6 +60,17 @@ const Parameter kTable[] = {
              "occlusion group.",
      .kind = K::kReal, .live = true, .lo = 0, .hi = 180, .slider_lo = 0, .slider_hi = 180,
      ACCESS(global.occlusion_angle_deg)},
+    {.key = "fuse_across_groups", .flag = "--no-fusion", .label = "fusion across groups", .unit = "",
+     .help = "SPEC 6.5: after occlusion removal, ellipsoids of different merge groups that are copies of one "
+             "surface become one (moment matching), so the map grows with the area seen, not with revisits. "
+             "Off: the paper's map, one copy per group.",
+     .kind = K::kBool, .live = true, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1, ACCESS(global.fuse_across_groups)},
+    {.key = "fusion_max_distance", .flag = "--fusion-max-distance", .label = "fusion distance", .unit = "",
+     .help = "SPEC 6.5: two ellipsoids of different groups are copies of one surface when their Bhattacharyya "
+             "distance (offset of the means relative to their spread, plus the difference of their shapes) is at "
+             "most this and their means lie within 1.5 median standard deviations along every axis.",
+     .kind = K::kReal, .live = true, .lo = 0, .hi = 10, .slider_lo = 0, .slider_hi = 3,
+     ACCESS(global.fusion_max_distance)},
     // Re-run: keyframes and local maps (SPEC sections 2 and 5).
     {.key = "cell_size", .flag = "--cell-size", .label = "cell size s", .unit = "px",
      .help = "s (SPEC 2): side of a container cell in keyframe pixels; each cell holds one ellipsoid, so near "
@@ -81,7 +92,7 @@ const Parameter kTable[] = {
      .kind = K::kReal, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1, ACCESS(mapper.keyframes.tau)},
     {.key = "tau_edge", .flag = "--tau-edge", .label = "edge tau", .unit = "",
      .help = "tau_edge (SPEC 5): a new keyframe gets a covisibility edge to each keyframe it re-observes at least "
-             "this share of.",
+             "this share of; the edge to the previous keyframe is always kept, whatever its weight.",
      .kind = K::kReal, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1, ACCESS(mapper.keyframes.tau_edge)},
     {.key = "keyframe_every", .flag = "--keyframe-every", .label = "keyframe every", .unit = "frames",
      .help = "0: keyframes by covisibility (SPEC 5); N > 0: every N-th frame starts a keyframe (a fixed schedule, "

@@ -12,7 +12,9 @@ std::string cameraPresetList() {
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
   verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList());
-  verb.add_option("--frames", args.frames, "frames A:B of the depth list (B exclusive; A: or :B)");
+  verb.add_option("--frames", args.frames,
+                  "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
+                  "a range past the end is an error");
 }
 
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
@@ -27,9 +29,10 @@ PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
   return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
 }
 
-TumSequence openSequence(const SequenceArgs& args) {
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end) {
   SequenceOptions options;
   options.camera_preset = args.camera;
+  options.cut_range_at_end = cut_range_at_end;
   // No --poses: ground truth when there is some (frames without a pose are then dropped, as with
   // --poses gt), else tracking.
   options.require_poses =

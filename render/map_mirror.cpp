@@ -165,7 +165,10 @@ void MapMirror::setContainer(int generation, int keyframe, const cv::Mat& rgb, c
 
 void MapMirror::setHighlight(const std::optional<Ellipsoid>& ellipsoid) {
   has_highlight_ = ellipsoid.has_value();
-  if (ellipsoid) highlight_.set(diamond(*ellipsoid));
+  if (!ellipsoid) return;
+  if (highlighted_ && highlighted_->mean == ellipsoid->mean && highlighted_->cov == ellipsoid->cov) return;
+  highlighted_ = ellipsoid;
+  highlight_.set(diamond(*ellipsoid));
 }
 
 void MapMirror::draw(const ViewCamera& view, bool with_lines) const {

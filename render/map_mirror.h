@@ -84,6 +84,7 @@ class MapMirror {
   void setContainer(int generation, int keyframe, const cv::Mat& rgb, const PinholeCamera& camera,
                     const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids, const ContainerStyle& style);
   /// Marks one ellipsoid (the picked one) with a wire diamond drawn over everything; empty: none.
+  /// Re-sent only when the ellipsoid differs from the one marked.
   void setHighlight(const std::optional<Ellipsoid>& ellipsoid);
 
   /// Draws map, lines and highlight into the bound framebuffer's current viewport (whose size
@@ -122,6 +123,7 @@ class MapMirror {
   MirrorStyle graph_style_, points_style_;
   ContainerStyle container_style_;
   bool has_highlight_ = false;
+  std::optional<Ellipsoid> highlighted_;  // what highlight_ holds
   Uploads uploads_;
 };
 

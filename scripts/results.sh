@@ -2,7 +2,8 @@
 # Reproduces the README "Results": the speed comparison on 7-Scenes (3 runs; the README quotes
 # the median of the runs' per-frame medians) and the accuracy comparison on a noisy render of
 # the Replica office0 mesh (the paper's Table III, extended with Open3D's TSDF), then the plots.
-# Usage: scripts/results.sh [OUT_DIR]   (from the checkout, after building; ~30 min)
+# Then the odometry peers of `bench --poses track` (issue 15).
+# Usage: scripts/results.sh [OUT_DIR]   (from the checkout, after building; ~60 min)
 set -euo pipefail
 VDMAP=${VDMAP:-build/bin/vdmap}
 PLOT=${PLOT:-build/bin/plot_bench}
@@ -36,6 +37,16 @@ accuracy() {
 # Both at once (the accuracy run's times are not quoted); set SEQUENTIAL=1 on a quiet machine.
 # `wait PID` passes the speed runs' failure on (a bare `wait` returns 0).
 if [ -n "${SEQUENTIAL:-}" ]; then speed; accuracy; else speed & speed_pid=$!; accuracy; wait "$speed_pid"; fi
+
+# Tracking peers (issue 15): the odometry peers of `bench --poses track` on 7-Scenes frames
+# 0:500, 3 runs for the time medians (~7 CPU minutes each, most of it Open3D's odometry; OctoMap
+# is skipped, it is timed in the speed runs). Alone, so the times are not disturbed.
+for run in 1 2 3; do
+  mkdir -p "$OUT/tracking-$run"
+  "$VDMAP" bench "$DATA/7scenes-redkitchen" --frames 0:500 --poses track --no-octomap --out "$OUT/tracking-$run" \
+    > "$OUT/tracking-$run/stdout.txt"
+done
+"$PLOT" --tracking "$OUT"/tracking-*/bench.json
 
 # Tables (medians over the speed runs) and plots.
 "$PLOT" --speed "$OUT"/speed-*/bench.json --accuracy "$OUT/accuracy/bench.json" --png-dir "$OUT"

@@ -1,10 +1,12 @@
 // plot_bench: the README "Results" tables and plots from `vdmap bench` outputs (scripts/results.sh).
 // Speed: the median over runs of each method's per-frame median, as a markdown table and a
 // log-scale bar chart. Accuracy: a markdown table and RMSE against element count (log x).
+// Tracking (`vdmap bench --poses track`): the odometry peers' table, median time over the runs.
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 #include <string>
 #include <vector>
 
@@ -96,17 +98,130 @@ void scatter(const std::vector<Point>& points, const std::string& title, const s
   cv::imwrite(file, img);
 }
 
+// The odometry table of `bench --poses track` runs: median over the runs of each peer's per-frame
+// median; ATE, failures and keyframes from the first run (the peers are deterministic).
+void trackingTable(const std::vector<json>& runs) {
+  std::printf("| method | t [ms/frame], median of %zu runs | runs (min-max) | ATE RMSE [cm] | frames not registered | "
+              "keyframes |\n|---|---:|---:|---:|---:|---:|\n", runs.size());
+  for (const std::string& k : runs[0]["odometry_order"].get<std::vector<std::string>>()) {
+    const json& m = runs[0]["odometry"][k];
+    if (m.contains("note")) {
+      std::printf("| %s | not run: %s |\n", m["name"].get<std::string>().c_str(), m["note"].get<std::string>().c_str());
+      continue;
+    }
+    std::vector<double> ms;
+    for (const json& r : runs) ms.push_back(r["odometry"][k]["ms_per_frame"].get<double>());
+    std::printf("| %s | %.2f | %.2f-%.2f | %.2f | %d | %s |\n", m["name"].get<std::string>().c_str(),
+                vdmap::app::median(ms), *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
+                m["ate_rmse_m"].is_number() ? 100 * m["ate_rmse_m"].get<double>() : NAN, m["failures"].get<int>(),
+                m.contains("keyframes") ? std::to_string(m["keyframes"].get<int>()).c_str() : "-");
+  }
+}
+
+// The long run (`vdmap bench --long`, long.csv): per frame, stacked panels over the frame index:
+// CPU time (each frame grey, the running median of 101 frames blue), resident memory, keyframes,
+// and the global map's size where it was built.
+void longRunPlot(const std::string& csv_file, const std::string& file) {
+  std::ifstream in(csv_file);
+  if (!in) throw std::runtime_error(csv_file + ": cannot open");
+  std::string line;
+  std::getline(in, line);  // header
+  std::vector<double> cpu, rss, keyframes, global_frame, global_size;
+  while (std::getline(in, line)) {
+    std::vector<std::string> f;
+    std::stringstream row(line);
+    for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
+    if (f.size() < 5) throw std::runtime_error(csv_file + ": a row has fewer than 5 columns: " + line);
+    cpu.push_back(std::stod(f[1]));
+    rss.push_back(std::stod(f[3]));
+    keyframes.push_back(std::stod(f[4]));
+    if (f.size() > 5 && !f[5].empty()) global_frame.push_back(static_cast<double>(cpu.size() - 1)), global_size.push_back(std::stod(f[5]));
+  }
+  if (cpu.empty()) throw std::runtime_error(csv_file + ": no frames");
+  std::vector<double> running(cpu.size());
+  for (std::size_t i = 0; i < cpu.size(); ++i) {
+    const std::size_t a = i >= 50 ? i - 50 : 0, b = std::min(cpu.size(), i + 51);
+    running[i] = vdmap::app::median(std::vector<double>(cpu.begin() + static_cast<long>(a), cpu.begin() + static_cast<long>(b)));
+  }
+  const int w = 1000, left = 80, right = 30, top = 70, panel = 150, gap = 40;
+  const int h = top + 4 * (panel + gap) + 20;
+  cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
+  const double frames = static_cast<double>(cpu.size());
+  const auto px = [&](double frame) { return left + static_cast<int>(frame / frames * (w - left - right)); };
+  text(img, "long run: " + std::to_string(cpu.size()) + " frames, one thread", {10, 25}, 0.6);
+  int y0 = top;
+  // One panel: y from 0 to the largest value (of `clip` if given, so a few slow frames do not
+  // flatten the rest), a dot or a line per series.
+  auto axes = [&](const std::string& title, double ymax) {
+    cv::rectangle(img, {left, y0}, {w - right, y0 + panel}, kGrid);
+    for (int k = 0; k <= 2; ++k) {
+      char v[32];
+      std::snprintf(v, sizeof v, ymax * k / 2 >= 100 ? "%.0f" : "%.1f", ymax * k / 2);
+      const int y = y0 + panel - panel * k / 2;
+      cv::line(img, {left, y}, {w - right, y}, kGrid);
+      text(img, v, {left - 60, y + 5}, 0.4);
+    }
+    text(img, title, {left + 5, y0 - 6}, 0.45);
+  };
+  auto py = [&](double v, double ymax) { return y0 + panel - static_cast<int>(std::min(v, ymax) / ymax * panel); };
+  auto series = [&](const std::vector<double>& x, const std::vector<double>& v, double ymax, cv::Scalar c, bool dots) {
+    for (std::size_t i = 0; i < v.size(); ++i) {
+      const cv::Point p(px(x.empty() ? static_cast<double>(i) : x[i]), py(v[i], ymax));
+      if (dots) cv::circle(img, p, 1, c, cv::FILLED);
+      if (i > 0 && !dots) cv::line(img, {px(x.empty() ? static_cast<double>(i - 1) : x[i - 1]), py(v[i - 1], ymax)}, p, c, 2, cv::LINE_AA);
+    }
+  };
+  auto maxOf = [](const std::vector<double>& v) { return std::max(1e-9, *std::max_element(v.begin(), v.end())) * 1.1; };
+  std::vector<double> sorted = cpu;
+  std::sort(sorted.begin(), sorted.end());
+  const double cpu_max = sorted[sorted.size() * 99 / 100] * 1.5;  // the 99th percentile sets the scale
+  axes("CPU ms per frame (grey: each frame, blue: running median of 101; the slowest 1% may be cut)", cpu_max);
+  series({}, cpu, cpu_max, cv::Scalar(190, 190, 190), true);
+  series({}, running, cpu_max, kVdmap, false);
+  y0 += panel + gap;
+  axes("resident memory, MB", maxOf(rss));
+  series({}, rss, maxOf(rss), kVdmap, false);
+  y0 += panel + gap;
+  axes("keyframes", maxOf(keyframes));
+  series({}, keyframes, maxOf(keyframes), kVdmap, false);
+  y0 += panel + gap;
+  if (!global_size.empty()) {
+    axes("global map ellipsoids", maxOf(global_size));
+    series(global_frame, global_size, maxOf(global_size), kVdmap, false);
+    for (std::size_t i = 0; i < global_size.size(); ++i)
+      cv::circle(img, {px(global_frame[i]), py(global_size[i], maxOf(global_size))}, 4, kVdmap, cv::FILLED, cv::LINE_AA);
+  }
+  for (int k = 0; k <= 4; ++k) text(img, std::to_string(static_cast<int>(frames * k / 4)), {px(frames * k / 4) - 12, h - 8}, 0.4);
+  if (!cv::imwrite(file, img)) throw std::runtime_error(file + ": cannot write");
+}
+
 }  // namespace
 
 int main(int argc, char** argv) {
   CLI::App app{"Tables and plots of vdmap bench outputs"};
-  std::vector<std::string> speed;
-  std::string accuracy, png_dir = ".";
-  app.add_option("--speed", speed, "bench.json of each speed run")->required();
+  std::vector<std::string> speed, tracking;
+  std::string accuracy, png_dir = ".", long_csv;
+  auto* speed_option = app.add_option("--speed", speed, "bench.json of each speed run");
+  app.add_option("--tracking", tracking, "bench.json of each `bench --poses track` run: the odometry peers' table");
   app.add_option("--accuracy", accuracy, "bench.json of the run with --mesh");
-  app.add_option("--png-dir", png_dir, "where speed.png and accuracy.png go");
+  app.add_option("--long", long_csv, "long.csv of `vdmap bench --long`: plots it into long.png instead")
+      ->excludes(speed_option);
+  app.add_option("--png-dir", png_dir, "where speed.png and accuracy.png (or long.png) go");
   CLI11_PARSE(app, argc, argv);
   try {
+    if (!long_csv.empty()) {
+      longRunPlot(long_csv, png_dir + "/long.png");
+      return 0;
+    }
+    if (!tracking.empty()) {
+      std::vector<json> runs;
+      for (const auto& f : tracking) runs.push_back(load(f));
+      trackingTable(runs);
+    }
+    if (speed.empty()) {
+      if (!tracking.empty()) return 0;
+      throw std::runtime_error("--speed, --tracking or --long is required");
+    }
     std::vector<json> runs;
     for (const auto& f : speed) runs.push_back(load(f));
     // Methods in the order of the first run; medians over the runs.

@@ -145,6 +145,31 @@ std::function<std::string(const fs::path&)> image(const char* file, cv::Mat pixe
     return std::string();
   };
 }
+// Damages one image by writing `pixels` encoded as `ext` (".jpg", ".png"), cut to `fraction` of
+// its bytes, in its place (the decoder goes by the bytes, not the file name).
+std::function<std::string(const fs::path&)> cutImage(const char* file, cv::Mat pixels, const char* ext,
+                                                     double fraction) {
+  return [=](const fs::path& d) {
+    std::vector<unsigned char> bytes;
+    cv::imencode(ext, pixels, bytes);
+    writeText(d / file, std::string(bytes.begin(), bytes.begin() + static_cast<long>(bytes.size() * fraction)));
+    return std::string();
+  };
+}
+// A textured 64x48 colour image, so that its JPEG has entropy-coded data to cut.
+cv::Mat texture() {
+  cv::Mat m(48, 64, CV_8UC3);
+  cv::randu(m, cv::Scalar::all(0), cv::Scalar::all(255));
+  return m;
+}
+// Applies `damage`, then returns `arguments` (a command-line row on a damaged input).
+std::function<std::string(const fs::path&)> then(std::function<std::string(const fs::path&)> damage,
+                                                 std::string arguments) {
+  return [=](const fs::path& d) {
+    damage(d);
+    return arguments;
+  };
+}
 std::function<std::string(const fs::path&)> removeFile(const char* file) {
   return [file](const fs::path& d) {
     fs::remove_all(d / file);
@@ -204,6 +229,32 @@ const std::vector<BadCase>& badCases() {
        image("seq/depth/000000.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)))},
       {"sequence", "rgb_wrong_size", E::kInputError, "colour image is",
        image("seq/rgb/000000.png", cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)))},
+      // Damaged images are one error naming the file (issue #17: a JPEG cut to 2/3 was mapped
+      // with libjpeg's grey fill and an anonymous warning; a cut PNG printed a libpng line).
+      {"sequence", "rgb_jpeg_cut", E::kInputError,
+       "rgb/000000.png: cannot decode colour image: Premature end of JPEG file",
+       cutImage("seq/rgb/000000.png", texture(), ".jpg", 2.0 / 3)},
+      {"sequence", "rgb_png_cut", E::kInputError, "rgb/000000.png: cannot decode colour image: the file ends early",
+       cutImage("seq/rgb/000000.png", texture(), ".png", 2.0 / 3)},
+      {"sequence", "rgb_png_cut_before_iend", E::kInputError, "rgb/000000.png: cannot decode colour image",
+       [](const fs::path& d) {
+         const std::string bytes = readFile(d / "seq/rgb/000000.png");
+         writeText(d / "seq/rgb/000000.png", bytes.substr(0, bytes.size() - 12));  // the IEND chunk
+         return std::string();
+       }},
+      {"sequence", "depth_png_cut", E::kInputError, "depth/000000.png: cannot decode depth image: the file ends early",
+       cutImage("seq/depth/000000.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(7000)), ".png", 2.0 / 3)},
+      {"sequence", "depth_png_bit_flip", E::kInputError, "depth/000000.png: cannot decode depth image",
+       [](const fs::path& d) {
+         std::string bytes = readFile(d / "seq/depth/000000.png");
+         bytes[bytes.size() / 2] ^= 0x10;  // inside the pixel data: its CRC no longer matches
+         writeText(d / "seq/depth/000000.png", bytes);
+         return std::string();
+       }},
+      {"sequence", "depth_as_jpeg", E::kInputError, "depth image must be 16-bit single-channel, got 8-bit 3-channel (JPEG)",
+       cutImage("seq/depth/000000.png", texture(), ".jpg", 1.0)},
+      {"sequence", "rgb_not_an_image", E::kInputError, "rgb/000000.png: cannot decode colour image: not a PNG or JPEG file",
+       write("seq/rgb/000000.png", "GIF89a")},
       {"sequence", "camera_file_missing_key", E::kInputError, "camera.yaml: missing key 'cy'",
        write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 31.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
       // Poses (TUM trajectories: ground truth, corrected trajectories).
@@ -249,6 +300,8 @@ const std::vector<BadCase>& badCases() {
       {"ply_mesh", "not_ply", E::kInputError, "m.ply:1: not a PLY file", write("m.ply", "solid cube\n")},
       {"ply_mesh", "no_end_header", E::kInputError, "does not end with 'end_header'",
        write("m.ply", "ply\nformat ascii 1.0\nelement vertex 3\n")},
+      {"ply_mesh", "binary_without_end_header", E::kInputError, "unexpected header line '\\x01\\x02\\xff",
+       write("m.ply", std::string("ply\nformat binary_little_endian 1.0\nelement vertex 3\n\x01\x02\xff\x7f\x80 data", 63))},
       {"ply_mesh", "unknown_format", E::kInputError, "unknown format 'binary_middle_endian'",
        write("m.ply", "ply\nformat binary_middle_endian 1.0\nend_header\n")},
       {"ply_mesh", "unknown_property_type", E::kInputError, "known type",
@@ -338,6 +391,32 @@ const std::vector<BadCase>& badCases() {
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --max-difference 0")},
       {"command_line", "bench_unknown_pose_source", E::kCliUsage, "--poses", args("bench {dir}/seq --poses imu")},
       {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
+      // Issue #17's smaller items.
+      {"command_line", "octomap_zero", E::kCliError, "--octomap must be > 0 m", args("map {dir}/seq --out {dir}/out --octomap 0")},
+      {"command_line", "octomap_negative", E::kCliError, "--octomap must be > 0 m",
+       args("map {dir}/seq --out {dir}/out --octomap -1")},
+      {"command_line", "octomap_finer_than_the_keys_hold", E::kCliError, "is too fine for this map",
+       args("map {dir}/seq --out {dir}/out --octomap 1e-9")},
+      {"command_line", "frames_end_past_the_end", E::kCliError, "--frames 1:9 ends past the sequence: it lists 3 depth frames (0:3)",
+       args("map {dir}/seq --out {dir}/out --frames 1:9")},
+      {"command_line", "frames_zero_count", E::kCliError, "N means the first N frames", args("map {dir}/seq --out {dir}/out --frames 0")},
+      {"command_line", "render_without_out", E::kCliUsage, "--out is required", args("render {dir}/seq")},
+      {"command_line", "render_out_under_a_file", E::kCliError, "seq/rgb.txt is a file, not a folder (--out)",
+       args("render {dir}/seq --out {dir}/seq/rgb.txt/x.png")},
+      {"command_line", "load_missing_session", E::kCliError, "no such session file (--load)",
+       args("map {dir}/seq --out {dir}/out --load {dir}/none.vdmap")},
+      {"command_line", "load_not_a_session", E::kCliError, "not a vdmap session file (--load)",
+       args("map {dir}/seq --out {dir}/out --load {dir}/seq/rgb.txt")},
+      {"command_line", "render_folder_without_a_map", E::kCliError, "has no global_ellipsoids.ply",
+       args("render --map {dir}/seq --out {dir}/o.png")},
+      {"command_line", "synth_frames_past_the_trajectory", E::kCliError, "ends past the trajectory: it has 3 poses (0:3)",
+       args("synth --builtin --builtin-frames 3 --frames 0:5 --out {dir}/out")},
+      // Damaged images through the command line: the one line is vdmap's, no library's (issue #17).
+      {"command_line", "map_rgb_jpeg_cut", E::kCliError, "rgb/000000.png: cannot decode colour image",
+       then(cutImage("seq/rgb/000000.png", texture(), ".jpg", 2.0 / 3), "map {dir}/seq --out {dir}/out")},
+      {"command_line", "map_depth_png_cut", E::kCliError, "depth/000001.png: cannot decode depth image",
+       then(cutImage("seq/depth/000001.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(7000)), ".png", 0.5),
+            "map {dir}/seq --out {dir}/out")},
   };
   return all;
 }

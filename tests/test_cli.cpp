@@ -2,6 +2,8 @@
 #include <algorithm>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+#include <opencv2/imgcodecs.hpp>
 
 #include "tests/test_util.h"
 
@@ -53,6 +55,49 @@ TEST(Cli, InfoOnSevenScenes) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("500 usable (all with poses)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("preset 7scenes"), std::string::npos) << r.out;
+}
+
+// Issue #17: render without --out is a command-line error with CLI11's code, as map's is.
+TEST(Cli, AMissingOutHasTheSameCodeInEveryVerb) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 2);
+  const auto map = runVdmap("map '" + (dir / "seq").string() + "'");
+  const auto render = runVdmap("render '" + (dir / "seq").string() + "'");
+  EXPECT_GT(map.exit_code, 1);
+  EXPECT_EQ(render.exit_code, map.exit_code) << render.err;
+  EXPECT_EQ(render.err, "vdmap render: error: --out is required (see --help)\n");
+}
+
+// Issue #17: the help says that the edge to the previous keyframe is always kept (SPEC 5).
+TEST(Cli, MapHelpSaysTheEdgeToThePreviousKeyframeIsKept) {
+  const auto r = runVdmap("map --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("the edge to the previous keyframe is always kept"), std::string::npos) << r.out;
+}
+
+// Issue #17: vdmap info reports the range of valid depth and the share of invalid pixels;
+// 65535 (7-Scenes' invalid code, 65.535 m there) is not a depth.
+TEST(Cli, InfoReportsValidDepthAndTheShareOfInvalidPixels) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 2);  // 64x48, all 7500 (1.5 m at scale 5000)
+  for (const char* name : {"000000.png", "000001.png"}) {
+    cv::Mat depth(48, 64, CV_16UC1, cv::Scalar(7500));
+    depth.rowRange(0, 12).setTo(65535);  // a quarter invalid code
+    depth.rowRange(12, 24).setTo(0);     // a quarter no measurement
+    depth.at<std::uint16_t>(30, 30) = 10000;
+    cv::imwrite((dir / "seq" / "depth" / name).string(), depth);
+  }
+  const auto r = runVdmap("info '" + (dir / "seq").string() + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out)["depth_m"];
+  EXPECT_EQ(j["min"], 1.5);
+  EXPECT_EQ(j["max"], 2.0);
+  EXPECT_EQ(j["invalid_fraction"], 0.5);
+  EXPECT_EQ(j["invalid_code_fraction"], 0.25);
+  EXPECT_EQ(j["no_depth_fraction"], 0.25);
+  const auto text = runVdmap("info '" + (dir / "seq").string() + "'");
+  EXPECT_NE(text.out.find("1.500 .. 2.000 m"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("50% invalid (25% 0 = no measurement, 25% 65535 = invalid code)"), std::string::npos) << text.out;
 }
 
 }  // namespace

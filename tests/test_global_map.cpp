@@ -1,6 +1,7 @@
 // The global map (SPEC section 6): grouping, mean-shift merging, moment matching, occlusion
 // removal, determinism across thread counts, parameter checks.
 #include <map>
+#include <numeric>
 #include <random>
 
 #include <Eigen/Eigenvalues>
@@ -228,6 +229,143 @@ TEST(GlobalMap, SameResultWithOneAndTwoThreads) {
   expectSameMap(a, buildGlobalMap(graph, params));
 }
 
+// Fusion across groups (SPEC 6.5) written out plainly, the oracle of fuseAcrossGroups: every pair
+// of ellipsoids of different groups, no spatial hash, no pre-filter, the same greedy choice.
+std::vector<Ellipsoid> fuseAcrossGroupsReference(const std::vector<Ellipsoid>& e, const std::vector<int>& group,
+                                                 const GlobalMapParams& params) {
+  const double max_distance = params.fusion_max_distance, half = fusionHalfWidth(e, params);
+  const std::size_t n = e.size();
+  std::vector<double> lambda_max(n);
+  for (std::size_t i = 0; i < n; ++i) {
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    eig.computeDirect(e[i].cov + 1e-10 * Eigen::Matrix3d::Identity(), Eigen::EigenvaluesOnly);
+    lambda_max[i] = eig.eigenvalues()(2);
+  }
+  std::vector<std::size_t> order(n);
+  std::iota(order.begin(), order.end(), 0);
+  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lambda_max[a] < lambda_max[b]; });
+  std::vector<std::size_t> seed_of(n, n);
+  for (std::size_t s : order) {
+    if (seed_of[s] < n) continue;
+    seed_of[s] = s;
+    std::map<int, std::pair<double, std::size_t>> nearest;  // per other group: (distance, index)
+    for (std::size_t j = 0; j < n; ++j) {
+      if (seed_of[j] < n || group[j] == group[s] || (e[j].mean - e[s].mean).cwiseAbs().maxCoeff() > half) continue;
+      const double d = bhattacharyyaDistance(e[s], e[j]);
+      if (d > max_distance) continue;
+      const auto it = nearest.find(group[j]);
+      if (it == nearest.end() || std::make_pair(d, j) < it->second) nearest[group[j]] = {d, j};
+    }
+    for (const auto& [g, best] : nearest) seed_of[best.second] = s;
+  }
+  std::vector<Ellipsoid> out;
+  for (std::size_t i = 0; i < n; ++i) {
+    if (seed_of[i] != i) continue;
+    std::vector<const Ellipsoid*> cluster = {&e[i]};
+    for (std::size_t j = 0; j < n; ++j)
+      if (j != i && seed_of[j] == i) cluster.push_back(&e[j]);
+    out.push_back(cluster.size() == 1 ? e[i] : momentMatch(cluster));
+  }
+  return out;
+}
+
+// A flat patch (a wall cell): spread `half_width_m` in x and y, `thickness_m` along z, then rotated.
+Ellipsoid patch(const Eigen::Vector3d& mean, double half_width_m, double thickness_m,
+                const Eigen::Matrix3d& R = Eigen::Matrix3d::Identity(), std::uint32_t count = 20) {
+  Ellipsoid e;
+  e.mean = mean;
+  const Eigen::Vector3d sigma(half_width_m / std::sqrt(3.0), half_width_m / std::sqrt(3.0), thickness_m);
+  e.cov = R * sigma.array().square().matrix().asDiagonal() * R.transpose();
+  e.count = count;
+  e.color = Eigen::Vector3f(100, 100, 100);
+  return e;
+}
+
+TEST(GlobalMap, FusionJoinsCopiesOfOneWallButNotACornerOrOneGroup) {
+  GlobalMapParams params;
+  const Eigen::Matrix3d wall_x = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  // Two groups' cells of one wall, offset by less than a cell: one ellipsoid, the union's moments.
+  const std::vector<Ellipsoid> copies = {patch({0, 0, 2}, 0.005, 0.001), patch({0.004, 0.002, 2.0005}, 0.005, 0.001)};
+  const std::vector<Ellipsoid> fused = fuseAcrossGroups(copies, {0, 1}, params);
+  ASSERT_EQ(fused.size(), 1u);
+  EXPECT_EQ(fused[0].count, 40u);
+  EXPECT_NEAR(fused[0].mean.x(), 0.002, 1e-12);
+  EXPECT_EQ(fuseAcrossGroups(copies, {3, 3}, params).size(), 2u) << "one group's cells stay apart";
+  // The same offset between flat patches of two perpendicular walls (a corner): shapes differ.
+  const std::vector<Ellipsoid> corner = {patch({0, 0, 2}, 0.005, 0.0005),
+                                         patch({0.004, 0.002, 2.0005}, 0.005, 0.0005, wall_x)};
+  EXPECT_EQ(fuseAcrossGroups(corner, {0, 1}, params).size(), 2u);
+  // Two cells apart on the wall: neighbours, not copies.
+  const std::vector<Ellipsoid> neighbours = {patch({0, 0, 2}, 0.005, 0.001), patch({0.02, 0, 2}, 0.005, 0.001)};
+  EXPECT_EQ(fuseAcrossGroups(neighbours, {0, 1}, params).size(), 2u);
+  // Three groups' copies: the most precise takes one of each other group, the nearest.
+  const std::vector<Ellipsoid> three = {patch({0.001, 0, 2}, 0.006, 0.001), patch({0, 0, 2}, 0.004, 0.001),
+                                        patch({0.003, 0, 2}, 0.006, 0.001), patch({-0.002, 0, 2}, 0.006, 0.001)};
+  const std::vector<Ellipsoid> one = fuseAcrossGroups(three, {0, 1, 2, 2}, params);
+  ASSERT_EQ(one.size(), 2u);
+  EXPECT_EQ(one[0].count, 60u) << "seed (index 1) with index 0 and the nearer of group 2 (index 3)";
+  EXPECT_EQ(one[1].mean, three[2].mean) << "group 2's farther copy stays";
+  params.fusion_max_distance = 0;
+  EXPECT_EQ(fuseAcrossGroups(copies, {0, 1}, params).size(), 2u);
+}
+
+// Many groups seeing the same walls at different grid offsets, sizes and depths, plus a
+// perpendicular wall: the spatial hash finds what the all-pairs oracle finds, for 1 and 2 threads.
+TEST(GlobalMap, FusionEqualsTheReference) {
+  std::mt19937 rng(7);
+  std::uniform_real_distribution<double> jitter(-0.004, 0.004), size(0.003, 0.012);
+  const Eigen::Matrix3d wall_x = Eigen::AngleAxisd(M_PI / 2, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  std::vector<Ellipsoid> ellipsoids;
+  std::vector<int> group;
+  for (int g = 0; g < 5; ++g)
+    for (int i = 0; i < 12; ++i)
+      for (int j = 0; j < 12; ++j) {
+        const double w = size(rng);
+        ellipsoids.push_back(patch({0.01 * i + jitter(rng), 0.01 * j + jitter(rng), 2 + 0.1 * jitter(rng)}, w, 0.001));
+        group.push_back(g);
+        ellipsoids.push_back(patch({0.12 + 0.1 * jitter(rng), 0.01 * j + jitter(rng), 2 - 0.01 * i}, w, 0.001, wall_x));
+        group.push_back(g);
+      }
+  GlobalMapParams params;
+  for (double max_distance : {0.5, 1.0, 3.0}) {
+    params.fusion_max_distance = max_distance;
+    const std::vector<Ellipsoid> expected = fuseAcrossGroupsReference(ellipsoids, group, params);
+    EXPECT_LT(expected.size(), ellipsoids.size() * 2 / 3) << "most copies fuse at " << max_distance;
+    EXPECT_GT(expected.size(), ellipsoids.size() / 10) << "at most one per group";
+    for (int threads : {1, 2}) {
+      params.threads = threads;
+      const std::vector<Ellipsoid> fused = fuseAcrossGroups(ellipsoids, group, params);
+      ASSERT_EQ(fused.size(), expected.size()) << max_distance;
+      for (std::size_t i = 0; i < fused.size(); ++i) {
+        ASSERT_EQ(fused[i].mean, expected[i].mean) << i;
+        ASSERT_EQ(fused[i].cov, expected[i].cov) << i;
+        ASSERT_EQ(fused[i].count, expected[i].count) << i;
+      }
+    }
+  }
+}
+
+// Two keyframes of one wall that are not graph neighbours (two merge groups): without fusion the
+// map keeps both copies, with it about half, and the means stay on the wall.
+TEST(GlobalMap, FusionHalvesTwoUnlinkedViewsOfOneWall) {
+  KeyframeGraph graph;
+  addKeyframe(&graph, facingWall(0.0), facingWall(0.0));
+  addKeyframe(&graph, test::lookAt({0.01, 0, 0.01}, {0.01, 0, 2}), test::lookAt({0.01, 0, 0.01}, {0.01, 0, 2}));
+  GlobalMapParams params;
+  params.occlusion_removal = false;
+  const GlobalMap fused = buildGlobalMap(graph, params);
+  params.fuse_across_groups = false;
+  const GlobalMap apart = buildGlobalMap(graph, params);
+  ASSERT_EQ(fused.groups.size(), 2u);
+  EXPECT_EQ(apart.sigma_e_prime, apart.sigma_e);
+  EXPECT_EQ(apart.merged_across_groups, 0u);
+  EXPECT_EQ(fused.sigma_e_prime + fused.merged_across_groups, fused.sigma_e);
+  const double ratio = static_cast<double>(fused.sigma_e_prime) / static_cast<double>(fused.sigma_e);
+  EXPECT_GT(ratio, 0.45);
+  EXPECT_LT(ratio, 0.65);
+  for (const Ellipsoid& e : fused.ellipsoids) ASSERT_NEAR(e.mean.z(), 2.0, 2e-4);
+}
+
 TEST(GlobalMap, EmptyGraphAndBadParameters) {
   KeyframeGraph graph;
   const GlobalMap map = buildGlobalMap(graph, {});
@@ -240,6 +378,9 @@ TEST(GlobalMap, EmptyGraphAndBadParameters) {
   EXPECT_THROW(buildGlobalMap(graph, p), std::invalid_argument);
   p = {};
   p.occlusion_angle_deg = 181;
+  EXPECT_THROW(buildGlobalMap(graph, p), std::invalid_argument);
+  p = {};
+  p.fusion_max_distance = -0.1;
   EXPECT_THROW(buildGlobalMap(graph, p), std::invalid_argument);
 }
 

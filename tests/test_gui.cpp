@@ -389,6 +389,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
 
   Workbench reopened{Settings{}};
   ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << "a session to the sequence's end is no warning";
   MapSession& s = *reopened.session();
   EXPECT_EQ(s.sequence(), nullptr);
   s.play();  // nothing to play: the map stays as saved
@@ -404,6 +405,48 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
   EXPECT_NE(reopened.ui().status.text.find("bad.vdmap"), std::string::npos) << reopened.ui().status.text;
   EXPECT_NE(reopened.session(), nullptr);  // the open session stays
+}
+
+// Issue #17: an opened session whose sequence is still there continues in the player from the
+// session's state, to the same map as one run over all frames; seeking back goes no further
+// back than the session.
+TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
+  TinyBench t;
+  t.session().seek(4);  // frames 0..4
+  t.session().waitIdle();
+  t.bench.ui().session_text = (t.dir / "half.vdmap").string();
+  t.bench.saveSession();
+  t.session().waitIdle();
+  ASSERT_TRUE(t.session().status().error.empty()) << t.session().status().error;
+  t.session().play();
+  t.session().waitIdle();
+
+  Workbench reopened{Settings{}};
+  ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << reopened.ui().status.text;
+  MapSession& s = *reopened.session();
+  ASSERT_NE(s.sequence(), nullptr);
+  EXPECT_EQ(s.mapping()->frames_mapped, 5);
+  EXPECT_EQ(s.mapping()->frames_total, 10);
+  s.play();
+  s.waitIdle();
+  ASSERT_TRUE(s.status().error.empty()) << s.status().error;
+  const auto whole = t.session().mapping(), continued = s.mapping();
+  EXPECT_EQ(continued->frames_mapped, 10);
+  ASSERT_EQ(continued->keyframes.size(), whole->keyframes.size());
+  for (std::size_t i = 0; i < whole->keyframes.size(); ++i) {
+    EXPECT_EQ(continued->keyframes[i].frame, whole->keyframes[i].frame);
+    EXPECT_EQ(continued->keyframes[i].ellipsoids, whole->keyframes[i].ellipsoids);
+    EXPECT_EQ(continued->keyframes[i].frames_integrated, whole->keyframes[i].frames_integrated);
+  }
+  EXPECT_EQ(s.global()->map.sigma_e_prime, t.session().global()->map.sigma_e_prime);
+  s.seek(1);  // before the session's end: back to the session as saved, then mapping on
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 5);
+  s.play();
+  s.waitIdle();
+  EXPECT_EQ(s.mapping()->frames_mapped, 10);
+  EXPECT_EQ(s.mapping()->keyframes.size(), whole->keyframes.size());
 }
 
 TEST(GuiWorkbench, PickingFindsTheNearestProjectedMean) {

@@ -168,5 +168,37 @@ TEST(GuiCli, NoDisplayFailsBeforeRenderingTheBuiltinScene) {
   EXPECT_TRUE(fs::is_empty(home / "cache")) << "the built-in scene was rendered before the display was checked";
 }
 
+// A failed scripted run writes neither the screenshot nor the stats (issue #17: a bad session
+// exited 1 but wrote a screenshot of the error dialog and its stats).
+TEST(GuiCli, AFailedScriptedRunWritesNeitherFile) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeTinySequence(home / "seq", 3);
+  const std::string session = (home / "s.vdmap").string();
+  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  std::string bytes = readFile(session);
+  bytes[bytes.size() / 2] ^= 1;  // a checksum mismatch
+  writeText(home / "bad.vdmap", bytes);
+  const RunResult r = runInXvfb(home, "gui '" + (home / "bad.vdmap").string() + "' --exit --screenshot '" +
+                                          (home / "p.png").string() + "' --stats-json '" + (home / "j.json").string() + "'");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("checksum mismatch"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(home / "p.png"));
+  EXPECT_FALSE(fs::exists(home / "j.json"));
+}
+
+// Without a display, a missing sequence or session is named (it named the display), in one line.
+TEST(GuiCli, AMissingInputIsNamedBeforeTheDisplay) {
+  TempDir home;
+  for (const std::string& input : {std::string("'") + (home / "nope").string() + "'",
+                                   "--map '" + (home / "nope.vdmap").string() + "'"}) {
+    const RunResult r = runVdmap("gui " + input + " --exit", "DISPLAY= WAYLAND_DISPLAY=");
+    EXPECT_EQ(r.exit_code, 1) << r.err;
+    EXPECT_NE(r.err.find("nope"), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find("display"), std::string::npos) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
 }  // namespace
 }  // namespace vdmap::test

@@ -1,5 +1,7 @@
 // vdmap map / vdmap bench end to end on a tiny generated sequence.
 #include <fstream>
+#include <sstream>
+#include <regex>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -58,8 +60,89 @@ TEST(BenchCli, JsonHasTheContractKeys) {
                           "t_g_s", "t_g_us_per_ellipsoid"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);  // a plain N means 0:N
+  EXPECT_EQ(j["frame_range"], "0:2");
   EXPECT_TRUE(fs::exists(tmp / "bench.json"));
   EXPECT_TRUE(fs::exists(tmp / "bench.md"));
+}
+
+// The long run: a row per frame, a global map every --global-every frames and after the last,
+// and the summary's windows (frames [N/6, N/3) and the last N/6).
+TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 12);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 5 --json --out '" +
+                               tmp.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["frames"], 12);
+  EXPECT_EQ(j["early_frames"], nlohmann::json({2, 4}));
+  EXPECT_EQ(j["late_frames"], nlohmann::json({10, 12}));
+  EXPECT_GT(j["rss_mb_end"].get<double>(), 0.0);
+  EXPECT_GT(j["global_ellipsoids_end"].get<long>(), 0);
+  std::istringstream csv(readFile(tmp / "long.csv"));
+  std::string line;
+  std::getline(csv, line);
+  EXPECT_EQ(line, "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s");
+  std::vector<std::string> rows;
+  while (std::getline(csv, line)) rows.push_back(line);
+  ASSERT_EQ(rows.size(), 12u);
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const bool global = i == 4 || i == 9 || i == 11;
+    EXPECT_EQ(rows[i].back() != ',', global) << "row " << i << ": " << rows[i];
+  }
+  EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
+                .exit_code,
+            1);
+}
+
+// Every number in a JSON text has at most `digits` significant digits (issue #17: figures such as
+// 0.37278400000000003 are noise, not precision).
+void expectTidyNumbers(const std::string& json, int digits) {
+  static const std::regex number(R"((-?)(\d+)\.(\d+)(?:[eE][-+]?\d+)?)");
+  for (auto it = std::sregex_iterator(json.begin(), json.end(), number); it != std::sregex_iterator(); ++it) {
+    std::string all = (*it)[2].str() + (*it)[3].str();
+    all.erase(0, std::min(all.find_first_not_of('0'), all.size()));
+    EXPECT_LE(static_cast<int>(all.size()), digits) << it->str();
+  }
+}
+
+// Issue #17's small map items: counts in the singular, no bare " done." from liboctomap on stderr,
+// figures without float noise, the effective frame range in stats.json.
+TEST(MapCli, OneFrameOneKeyframeAndAQuietOctomapExport) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --frames 1 --octomap 0.05 --out '" +
+                               (tmp / "out").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("1 frame, 1 keyframe, 0 edges, 0 revisits;"), std::string::npos) << r.out;
+  EXPECT_EQ(r.err, "") << "stderr is not a terminal: no progress, no library lines";
+  const std::string stats = readFile(tmp / "out" / "stats.json");
+  expectTidyNumbers(stats, 6);
+  EXPECT_EQ(nlohmann::json::parse(stats)["frame_range"], "0:1");
+}
+
+// bench --out is created like map --out; a peer that did not run has null figures in `methods`
+// as at the top level (it had 0.0), and the numbers carry no float noise; bench.md echoes the
+// range that ran.
+TEST(BenchCli, CreatesItsOutFolderAndSkippedPeersAreNull) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const fs::path out = tmp / "new" / "bench";
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --no-octomap --no-open3d --json --out '" +
+                               out.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(readFile(out / "bench.json"));
+  EXPECT_TRUE(j["octomap_010_ms"].is_null());
+  EXPECT_TRUE(j["methods"]["octomap_010"]["ms_per_frame"].is_null()) << j["methods"]["octomap_010"];
+  EXPECT_TRUE(j["methods"]["octomap_010"]["elements"].is_null());
+  EXPECT_TRUE(j["ratio_octomap_010_pipeline"].is_null());
+  EXPECT_FALSE(j["methods"]["ndt_om_010"]["ms_per_frame"].is_null());
+  EXPECT_EQ(j["frame_range"], "0:3") << "the default 0:30, cut at the end of a shorter sequence";
+  expectTidyNumbers(readFile(out / "bench.json"), 6);
+  const std::string md = readFile(out / "bench.md");
+  EXPECT_NE(md.find("frames 0:3,"), std::string::npos) << md;
+  EXPECT_NE(md.find("Global map: "), std::string::npos) << md;
+  EXPECT_EQ(md.find("Global map: 1 keyframes"), std::string::npos) << md;
 }
 
 }  // namespace

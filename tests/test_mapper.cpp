@@ -207,6 +207,25 @@ TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
   ASSERT_EQ(ea.size(), eb.size());
   for (std::size_t i = 0; i < ea.size(); ++i) EXPECT_EQ(ea[i].weight, eb[i].weight);
   std::printf("7-Scenes 500 frames: %d keyframes, %d revisits, %zu edges\n", keyframes, a.revisits(), ea.size());
+
+  // Issue 16 asks for at most 0.5 MB per keyframe beyond its local map's ellipsoids; the raw
+  // images alone were 1.5 MB. Measured: PNG images 0.495 MB (the colour image was a JPEG, so
+  // lossless PNG keeps its noise), features 0.078, slot grid 0.188: 0.76 MB, goal not reached
+  // (holding the source files' bytes would make the images ~0.14 MB). This bounds what we have.
+  KeyframeMemory total;
+  for (const Keyframe& k : a.graph().keyframes()) {
+    const KeyframeMemory m = k.memory();
+    total.images += m.images, total.features += m.features, total.cell_slots += m.cell_slots;
+    total.ellipsoids += m.ellipsoids;
+    EXPECT_EQ(cv::norm(k.depth(), seq.load(static_cast<std::size_t>(k.frame_index)).depth, cv::NORM_INF), 0.0)
+        << "the compressed depth image must be lossless";
+  }
+  const double n = keyframes, mb = 1 << 20;
+  std::printf("resident per keyframe (mean): images %.3f MB, features %.3f MB, slot grid %.3f MB, ellipsoids "
+              "%.3f MB\n", total.images / n / mb, total.features / n / mb, total.cell_slots / n / mb,
+              total.ellipsoids / n / mb);
+  EXPECT_LE((total.images + total.features) / n, 0.6 * mb);
+  EXPECT_LE((total.images + total.features + total.cell_slots) / n, 0.8 * mb);
 }
 
 }  // namespace

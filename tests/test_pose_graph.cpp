@@ -177,8 +177,12 @@ TEST(PoseGraph, RobustLossDownWeightsAWrongLoopEdge) {
   loop.edges.push_back({25, 75, Transform::Identity(), information(0.01, 0.5 * kDeg), true});
 
   std::vector<Transform> robust = loop.odometry;
-  optimizePoseGraph(&robust, loop.edges);
+  const PoseGraphResult result = optimizePoseGraph(&robust, loop.edges);
   EXPECT_LT(maxPositionError(robust, reference), 0.005);
+  // The edge statistics tell the outlier apart: the false edge is ~4 m off at 1 cm sigma.
+  ASSERT_EQ(result.edge_chi2.size(), loop.edges.size());
+  EXPECT_GT(result.edge_chi2.back(), 1e4);
+  EXPECT_LT(result.edge_chi2[loop.edges.size() - 2], 3.5 * 3.5) << "the correct loop edge";
   EXPECT_LT(maxPositionError(robust, loop.truth), 0.05);
 
   for (PoseGraphEdge& e : loop.edges) e.robust = false;

@@ -84,7 +84,7 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
       {"render --mesh '" + (tmp / "nocolor.ply").string() + "'" + out, "no property 'red'"},
       {"render --mesh '" + (tmp / "truncated.ply").string() + "'" + out, "truncated"},
       {"render --map '" + (tmp / "missing.ply").string() + "'" + out, "cannot open"},
-      {"render" + map + out + " --view keyframe:0", "needs a sequence (SEQ)"},
+      {"render" + map + out + " --view keyframe:0", "needs keyframes"},
       {"render" + map + out + " --view side", "expected global, keyframe:K or container:K"},
       {"render '" + tmp.path().string() + "'" + map + out, "give SEQ or --map FILE, not both"},
       {"render '" + (tmp / "no_such_sequence").string() + "'" + out, "no_such_sequence"},
@@ -192,6 +192,33 @@ TEST_F(RenderSequenceCli, AnUnknownKeyframeNamesTheValidRange) {
   EXPECT_NE(r.err.find("has keyframes 0.."), std::string::npos) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_FALSE(std::filesystem::exists(out("none.png")));
+}
+
+// Issue #17: render draws a saved session (every view, from its keyframes and graph) without
+// mapping again, pixel for pixel what mapping the sequence draws, and a `vdmap map` folder.
+TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
+  const auto saved = runVdmap("map " + seq() + " --out '" + out("map") + "' --save '" + out("s.vdmap") + "'");
+  ASSERT_EQ(saved.exit_code, 0) << saved.err;
+  for (const char* view : {"global", "keyframe:1", "container:1"}) {
+    const std::string a = out(std::string("seq-") + view + ".png"), b = out(std::string("session-") + view + ".png");
+    const auto from_seq = runVdmap("render " + seq() + " --view " + view + " --size 320x240 --out '" + a + "'");
+    const auto from_session = runVdmap("render '" + out("s.vdmap") + "' --view " + view + " --size 320x240 --out '" + b + "'");
+    ASSERT_EQ(from_seq.exit_code, 0) << from_seq.err;
+    ASSERT_EQ(from_session.exit_code, 0) << from_session.err;
+    EXPECT_EQ(cv::norm(cv::imread(a), cv::imread(b), cv::NORM_INF), 0.0) << view;
+    EXPECT_NE(from_session.out.find("keyframes"), std::string::npos) << from_session.out;
+  }
+  const auto with_map = runVdmap("render --map '" + out("s.vdmap") + "' --view keyframe:0 --out '" + out("k.png") + "'");
+  EXPECT_EQ(with_map.exit_code, 0) << with_map.err;
+  const auto folder = runVdmap("render --map '" + out("map") + "' --size 320x240 --out '" + out("folder.png") + "'");
+  ASSERT_EQ(folder.exit_code, 0) << folder.err;
+  // --map alone frames the whole map: nothing drawn touches the image's edges (it was cropped
+  // at the left and bottom).
+  const cv::Mat img = cv::imread(out("folder.png"), cv::IMREAD_GRAYSCALE);
+  ASSERT_FALSE(img.empty());
+  EXPECT_GT(cv::countNonZero(img < 250), 1000) << "nothing was drawn";
+  for (const cv::Mat edge : {img.row(0), img.row(img.rows - 1), img.col(0), img.col(img.cols - 1)})
+    EXPECT_EQ(cv::countNonZero(edge < 250), 0) << "the map reaches the image's edge";
 }
 
 TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {

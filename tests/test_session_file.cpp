@@ -82,15 +82,15 @@ TEST(SessionFile, ReloadedSessionIsEqualReSavesByteIdenticalAndMergesIdentically
 
   EXPECT_EQ(loaded.info.camera.fx, s.info.camera.fx);
   EXPECT_EQ(loaded.info.global.merge_distance_m, 0.2);
-  EXPECT_EQ(loaded.info.frames_mapped, 66);
-  EXPECT_EQ(loaded.info.revisits, s.mapper.revisits());
+  EXPECT_EQ(loaded.info.state.frames_mapped, 66);
+  EXPECT_EQ(loaded.info.state.revisits, s.mapper.revisits());
   ASSERT_EQ(loaded.graph.size(), graph.size());
   for (std::size_t i = 0; i < graph.size(); ++i) {
     const Keyframe &a = graph.keyframes()[i], &b = loaded.graph.keyframes()[i];
     EXPECT_EQ(a.T_W_K.matrix(), b.T_W_K.matrix());
     EXPECT_EQ(a.timestamp, b.timestamp);
-    EXPECT_EQ(cv::norm(a.rgb, b.rgb, cv::NORM_INF), 0.0);
-    EXPECT_EQ(cv::norm(a.depth, b.depth, cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.rgb(), b.rgb(), cv::NORM_INF), 0.0);
+    EXPECT_EQ(cv::norm(a.depth(), b.depth(), cv::NORM_INF), 0.0);
     ASSERT_EQ(a.features.size(), b.features.size());
     EXPECT_EQ(cv::norm(a.features.descriptors, b.features.descriptors, cv::NORM_INF), 0.0);
     ASSERT_EQ(a.container.size(), b.container.size());
@@ -125,6 +125,79 @@ TEST(SessionFile, EmptySessionRoundTrips) {
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
 }
 
+std::uint64_t u64At(const std::string& bytes, std::size_t at) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v |= std::uint64_t{static_cast<unsigned char>(bytes[at + i])} << (8 * i);
+  return v;
+}
+
+// Removes `n` bytes at `at` of the payload of the section starting at `section`, and fixes the
+// section's length and checksum.
+void eraseInSection(std::string* bytes, std::size_t section, std::size_t at, std::size_t n) {
+  const std::size_t payload = section + 16;
+  const std::uint64_t length = u64At(*bytes, section + 4) - n;
+  bytes->erase(payload + at, n);
+  for (int i = 0; i < 8; ++i) (*bytes)[section + 4 + i] = static_cast<char>(length >> (8 * i));
+  const std::string_view view(*bytes);
+  putU32(bytes, section + 12, crc32(view.substr(payload, length), crc32(view.substr(section, 12))));
+}
+
+// `bytes` as format 3 wrote it: PARM without the pose source (u32 after keyframe_every, 133
+// bytes into it) and MSTA without what version 4 added after the sequence folder.
+std::string asFormat3(const std::string& bytes) {
+  constexpr std::size_t kParm = 24, kPoseSourceAt = 48 + 85;
+  std::string old = bytes;
+  eraseInSection(&old, kParm, kPoseSourceAt, 4);
+  const std::size_t msta = kParm + 16 + u64At(old, kParm + 4);
+  EXPECT_EQ(old.substr(msta, 4), "MSTA");
+  std::uint32_t folder = 0;
+  for (int i = 0; i < 4; ++i) folder |= std::uint32_t{static_cast<unsigned char>(old[msta + 16 + 16 + i])} << (8 * i);
+  const std::size_t kept = 20 + folder;
+  eraseInSection(&old, msta, kept, u64At(old, msta + 4) - kept);
+  putU32(&old, 8, 3);
+  resealHeader(&old);
+  return old;
+}
+
+// `bytes` as format 2 wrote it: format 3's PARM without the two fusion fields (bool, f64) that
+// format 3 added before the frame counts (i32, i32, u32).
+std::string asFormat2(const std::string& bytes) {
+  constexpr std::size_t kParm = 24, kFusionBytes = 9, kTailBytes = 12;
+  std::string old = asFormat3(bytes);
+  eraseInSection(&old, kParm, u64At(old, kParm + 4) - kTailBytes - kFusionBytes, kFusionBytes);
+  putU32(&old, 8, 2);
+  resealHeader(&old);
+  return old;
+}
+
+// Format 3 (before tracking): ground-truth poses, no trajectory; re-saved as the current format
+// it is the same session (the small session has ground-truth poses).
+TEST(SessionFile, Format3FilesLoadWithGroundTruthPoses) {
+  const Saved& s = smallSession();
+  const Session old = decodeSession(asFormat3(s.bytes), "v3.vdmap");
+  EXPECT_EQ(old.info.format_version, 3u);
+  EXPECT_EQ(old.info.mapper.poses, PoseSource::kGroundTruth);
+  EXPECT_TRUE(old.info.state.frame_poses.empty());
+  EXPECT_EQ(old.info.state.current_keyframe, s.info.state.current_keyframe);
+  SessionInfo info = old.info;
+  info.state.frame_poses = s.info.state.frame_poses;
+  EXPECT_EQ(encodeSession(old.graph, info), s.bytes);
+}
+
+TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
+  const Saved& s = smallSession();
+  ASSERT_TRUE(s.info.global.fuse_across_groups);
+  const Session old = decodeSession(asFormat2(s.bytes), "v2.vdmap");
+  EXPECT_EQ(old.info.format_version, 2u);
+  EXPECT_FALSE(old.info.global.fuse_across_groups);
+  EXPECT_EQ(old.info.global.merge_distance_m, 0.2);
+  EXPECT_EQ(old.graph.size(), s.mapper.graph().size());
+  SessionInfo info = old.info;
+  info.global.fuse_across_groups = true;
+  info.state.frame_poses = s.info.state.frame_poses;  // format 4 added the trajectory
+  EXPECT_EQ(encodeSession(old.graph, info), s.bytes) << "re-saved in the current format";
+}
+
 TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   const std::string& good = smallSession().bytes;
   EXPECT_NE(decodeError("").find("wrong magic"), std::string::npos);
@@ -134,8 +207,9 @@ TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
   std::string newer = good;
   putU32(&newer, 8, kSessionFormatVersion + 1);
   resealHeader(&newer);
-  EXPECT_NE(decodeError(newer).find("format version " + std::to_string(kSessionFormatVersion + 1) + " is newer than this vdmap reads (" + std::to_string(kSessionFormatVersion) + ")"), std::string::npos)
-      << decodeError(newer);
+  const std::string expected = "format version " + std::to_string(kSessionFormatVersion + 1) +
+                               " is newer than this vdmap reads (" + std::to_string(kSessionFormatVersion) + ")";
+  EXPECT_NE(decodeError(newer).find(expected), std::string::npos) << decodeError(newer);
 
   std::string big_endian = good;
   putU32(&big_endian, 12, 0x04030201);
@@ -185,11 +259,13 @@ TEST(SessionFile, InconsistentContentWithValidChecksumsIsRejected) {
   KeyframeGraph graph;
   graph.add(Keyframe{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(s.info.camera, 5), 0});
   graph.edges().strengthen(0, 3, 0.5);  // keyframe 3 does not exist
-  EXPECT_NE(decodeError(encodeSession(graph, s.info)).find("edge 0-3 does not join two of the 1 keyframes"),
+  SessionInfo info = s.info;
+  info.state = {};  // a state that fits one keyframe
+  EXPECT_NE(decodeError(encodeSession(graph, info)).find("edge 0-3 does not join two of the 1 keyframes"),
             std::string::npos)
-      << decodeError(encodeSession(graph, s.info));
+      << decodeError(encodeSession(graph, info));
 
-  SessionInfo bad_params = s.info;
+  SessionInfo bad_params = info;
   bad_params.mapper.keyframes.tau = 2.0;
   EXPECT_NE(decodeError(encodeSession(KeyframeGraph{}, bad_params)).find("tau and tau_edge must be within 0..1"),
             std::string::npos);
@@ -269,10 +345,127 @@ TEST(SessionFile, MapVerbSavesTheSessionItMapped) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const Session s = loadSession(dir / "s.vdmap");
   EXPECT_EQ(s.graph.size(), 3u);
-  EXPECT_EQ(s.info.frames_mapped, 6);
+  EXPECT_EQ(s.info.state.frames_mapped, 6);
   EXPECT_EQ(s.info.mapper.keyframe_every, 2);
   EXPECT_EQ(s.info.global.merge_distance_m, 0.3);
   EXPECT_EQ(s.info.camera.width, 64);
+}
+
+// The same session in format 1 (before the mapper state): format 2's with the MSTA section cut
+// out, the version and the section count set back, the header resealed.
+std::string asFormat1(const std::string& current) {
+  const std::string v2 = asFormat2(current);
+  const std::size_t parm = 24, msta = parm + 16 + u64At(v2, parm + 4), after = msta + 16 + u64At(v2, msta + 4);
+  EXPECT_EQ(v2.substr(msta, 4), "MSTA");
+  std::string v1 = v2.substr(0, msta) + v2.substr(after);
+  putU32(&v1, 8, 1);
+  std::uint32_t sections = 0;
+  for (int i = 0; i < 4; ++i) sections |= static_cast<std::uint32_t>(static_cast<std::uint8_t>(v2[16 + i])) << (8 * i);
+  putU32(&v1, 16, sections - 1);
+  resealHeader(&v1);
+  return v1;
+}
+
+// Old files still load (docs/vdmap-format.md): a format-1 session reads with its keyframes and
+// counts, cannot continue mapping (it never stored the current keyframe), and re-saves in the
+// current format, which stays non-continuable rather than guessing.
+TEST(SessionFile, Format1FilesLoadAndCannotContinue) {
+  const Saved& s = smallSession();
+  const Session old = decodeSession(asFormat1(s.bytes), "old.vdmap");
+  EXPECT_EQ(old.info.format_version, 1u);
+  EXPECT_EQ(old.graph.size(), s.mapper.graph().size());
+  EXPECT_EQ(old.info.state.frames_mapped, 10);
+  EXPECT_EQ(old.info.state.current_keyframe, -1);
+  Mapper mapper(old.info.camera, old.info.mapper, old.graph, old.info.state);
+  EXPECT_FALSE(mapper.canContinue());
+  try {
+    mapper.addFrame(test::turningBoxRoomFrame(old.info.camera, 10, 6.0));
+    ADD_FAILURE() << "mapped on without a current keyframe";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("cannot continue"), std::string::npos) << e.what();
+  }
+  const Session resaved = decodeSession(encodeSession(old.graph, old.info), "resaved.vdmap");
+  EXPECT_EQ(resaved.info.format_version, kSessionFormatVersion);
+  EXPECT_EQ(resaved.info.state.current_keyframe, -1);
+  EXPECT_EQ(encodeSession(resaved.graph, resaved.info), encodeSession(old.graph, old.info));
+}
+
+// Issue #17: a saved session continues mapping where it stopped. Frames 0:70 in one run and
+// 0:35 then 35:70 from the saved session give the same keyframes, graph, local maps and state,
+// byte for byte, so the same global map (the walk revisits its start past frame 60).
+TEST(SessionFile, ASavedSessionContinuesAsIfItHadNotStopped) {
+  const PinholeCamera camera{160, 120, 131.25, 131.25, 79.5, 59.5, 5000.0};
+  Mapper whole(camera);
+  Mapper first(camera);
+  for (int i = 0; i < 70; ++i) whole.addFrame(test::turningBoxRoomFrame(camera, i, 6.0));
+  for (int i = 0; i < 35; ++i) first.addFrame(test::turningBoxRoomFrame(camera, i, 6.0));
+  ASSERT_GT(whole.revisits(), 0);
+  const Session saved = decodeSession(encodeSession(first.graph(), sessionInfo(first, {})), "half.vdmap");
+  EXPECT_EQ(saved.info.state.current_keyframe, first.currentKeyframe());
+  EXPECT_EQ(saved.info.state.last_frame_index, 34);
+  Mapper rest(saved.info.camera, saved.info.mapper, saved.graph, saved.info.state);
+  ASSERT_TRUE(rest.canContinue());
+  for (int i = 35; i < 70; ++i) rest.addFrame(test::turningBoxRoomFrame(camera, i, 6.0));
+  EXPECT_EQ(rest.revisits(), whole.revisits());
+  EXPECT_EQ(encodeSession(rest.graph(), sessionInfo(rest, {})), encodeSession(whole.graph(), sessionInfo(whole, {})));
+  const GlobalMap a = buildGlobalMap(whole.graph(), {}), b = buildGlobalMap(rest.graph(), {});
+  ASSERT_EQ(a.ellipsoids.size(), b.ellipsoids.size());
+  for (std::size_t i = 0; i < a.ellipsoids.size(); ++i) {
+    ASSERT_EQ(a.ellipsoids[i].mean, b.ellipsoids[i].mean);
+    ASSERT_EQ(a.ellipsoids[i].cov, b.ellipsoids[i].cov);
+  }
+}
+
+// A damaged state section is one clear error, like every other field.
+TEST(SessionFile, AStateThatDoesNotFitTheGraphIsRejected) {
+  const Saved& s = smallSession();
+  SessionInfo info = s.info;
+  const int keyframes = static_cast<int>(s.mapper.graph().size());
+  info.state.current_keyframe = keyframes;  // one past the last
+  EXPECT_THROW(encodeSession(s.mapper.graph(), info), std::invalid_argument) << "the writer refuses it too";
+  info.state.current_keyframe = 0;
+  info.sequence = "/data/seq";
+  const std::string bytes = encodeSession(s.mapper.graph(), info);
+  EXPECT_EQ(decodeSession(bytes, "s.vdmap").info.sequence, "/data/seq");
+  std::string bad = bytes;
+  const std::size_t msta = bad.find("MSTA");
+  ASSERT_NE(msta, std::string::npos);
+  putU32(&bad, msta + 16, 7 + keyframes);  // the current keyframe, first in the payload
+  const std::uint64_t length = u64At(bad, msta + 4);
+  putU32(&bad, msta + 12, crc32(std::string_view(bad).substr(msta + 16, length), crc32(std::string_view(bad).substr(msta, 12))));
+  const std::string expected = "section 1 'MSTA': mapper state: current keyframe " + std::to_string(7 + keyframes) +
+                               " is not one of the " + std::to_string(keyframes) + " keyframes";
+  EXPECT_NE(decodeError(bad).find(expected), std::string::npos) << decodeError(bad);
+}
+
+// vdmap map --load continues a saved session on the sequence (issue #17), byte-identical to one
+// run over all the frames; a run on frames the session has mapped, other mapping parameters or a
+// format-1 session are clear errors.
+TEST(SessionFile, MapVerbContinuesASavedSession) {
+  TempDir dir;
+  test::writeBoxRoomSequence(dir / "seq", 70);
+  const std::string seq = "map '" + (dir / "seq").string() + "'";
+  const auto out = [&](const char* name) { return " --out '" + (dir / name).string() + "'"; };
+  const auto file = [&](const char* name) { return "'" + (dir / name).string() + "'"; };
+  ASSERT_EQ(test::runVdmap(seq + out("whole") + " --save " + file("whole.vdmap")).exit_code, 0);
+  ASSERT_EQ(test::runVdmap(seq + " --frames 0:35" + out("a") + " --save " + file("a.vdmap")).exit_code, 0);
+  const test::RunResult r = test::runVdmap(seq + " --load " + file("a.vdmap") + out("b") + " --save " + file("b.vdmap"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readFile(dir / "b.vdmap"), readFile(dir / "whole.vdmap"));
+  EXPECT_EQ(readFile(dir / "b" / "global_ellipsoids.ply"), readFile(dir / "whole" / "global_ellipsoids.ply"));
+  EXPECT_NE(r.out.find("70 frames"), std::string::npos) << r.out;
+
+  const test::RunResult overlap = test::runVdmap(seq + " --load " + file("a.vdmap") + " --frames 30:70" + out("c"));
+  EXPECT_EQ(overlap.exit_code, 1);
+  EXPECT_NE(overlap.err.find("has mapped frames up to 34; continue from 35"), std::string::npos) << overlap.err;
+  const test::RunResult params = test::runVdmap(seq + " --load " + file("a.vdmap") + " --cell-size 7" + out("c"));
+  EXPECT_EQ(params.exit_code, 1);
+  EXPECT_NE(params.err.find("the mapping parameters are the session's"), std::string::npos) << params.err;
+  test::writeText(dir / "old.vdmap", asFormat1(readFile(dir / "a.vdmap")));
+  const test::RunResult old = test::runVdmap(seq + " --load " + file("old.vdmap") + out("c"));
+  EXPECT_EQ(old.exit_code, 1);
+  EXPECT_NE(old.err.find("does not store the mapper's state"), std::string::npos) << old.err;
+  EXPECT_FALSE(std::filesystem::exists(dir / "c"));
 }
 
 }  // namespace

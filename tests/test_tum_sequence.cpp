@@ -1,7 +1,10 @@
 #include <gtest/gtest.h>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "mapping/core/error.h"
 #include "mapping/io/frame_prefetcher.h"
+#include "mapping/io/image_decode.h"
 #include "mapping/io/tum_sequence.h"
 #include "tests/test_util.h"
 
@@ -71,6 +74,45 @@ TEST(TumSequence, FrameRangeSelectsDepthListIndices) {
   EXPECT_THROW(TumSequence::open(dir.path(), options), InputError);
 }
 
+// One meaning of --frames everywhere (issue #17): a plain N is the first N frames, 0:N (it was
+// frame N alone in info/map/render/gui and 0:N in bench); frame K alone is K:K+1.
+TEST(TumSequence, APlainFrameCountMeansTheFirstFrames) {
+  EXPECT_EQ(parseFrameRange("4").first, 0);
+  EXPECT_EQ(parseFrameRange("4").last, 4);
+  EXPECT_THROW(parseFrameRange("0"), std::invalid_argument);
+  EXPECT_EQ(frameRangeText(parseFrameRange("2:")), "2:");
+  EXPECT_EQ(frameRangeText(parseFrameRange("2:5")), "2:5");
+  TempDir dir;
+  test::writeTinySequence(dir.path(), 5);
+  SequenceOptions options;
+  options.frames = parseFrameRange("3");
+  EXPECT_EQ(TumSequence::open(dir.path(), options).size(), 3u);
+}
+
+// A range past the end is an error naming the sequence's range (450:900 on 500 frames was cut
+// silently); a verb's default range may ask to be cut. The effective range is what echoes show.
+TEST(TumSequence, ARangePastTheEndIsAnErrorNamingTheRange) {
+  TempDir dir;
+  test::writeTinySequence(dir.path(), 5);
+  SequenceOptions options;
+  options.frames = parseFrameRange("3:9");
+  try {
+    TumSequence::open(dir.path(), options);
+    ADD_FAILURE() << "accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("--frames 3:9 ends past the sequence: it lists 5 depth frames (0:5)"),
+              std::string::npos) << e.what();
+  }
+  options.cut_range_at_end = true;
+  const TumSequence cut = TumSequence::open(dir.path(), options);
+  EXPECT_EQ(cut.size(), 2u);
+  EXPECT_EQ(frameRangeText(cut.frameRange()), "3:5");
+  options = {};
+  options.frames = parseFrameRange("1:");
+  EXPECT_EQ(frameRangeText(TumSequence::open(dir.path(), options).frameRange()), "1:5");
+  EXPECT_EQ(frameRangeText(TumSequence::open(dir.path()).frameRange()), "0:5");
+}
+
 TEST(TumSequence, PrefetcherYieldsEveryFrameInOrder) {
   TempDir dir;
   test::writeTinySequence(dir.path(), 6);
@@ -119,6 +161,46 @@ TEST(TumSequenceRealData, IclNuimAndReplicaPickTheirCameras) {
   SequenceOptions forced;
   forced.camera_preset = "tum-fr1";
   EXPECT_EQ(TumSequence::open(icl, forced).camera().fx, 517.306);
+}
+
+// The decoder (libpng/libjpeg with their hooks, image_decode.h) gives the pixels OpenCV's
+// imread gave, for every layout a colour PNG can have and for 16-bit depth, so the switch changed
+// no map; damaged files are the bad-input matrix's rows.
+TEST(ImageDecode, GivesOpenCvsPixels) {
+  TempDir dir;
+  cv::Mat colour(37, 53, CV_8UC3), grey(37, 53, CV_8UC1), depth(37, 53, CV_16UC1);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::randu(grey, 0, 255);
+  cv::randu(depth, 0, 65535);
+  cv::Mat rgba, colour16;
+  cv::cvtColor(colour, rgba, cv::COLOR_BGR2BGRA);
+  colour.convertTo(colour16, CV_16UC3, 257.0);
+  const cv::Size size(53, 37);
+  for (const auto& [name, image] : std::vector<std::pair<std::string, cv::Mat>>{
+           {"colour.png", colour}, {"grey.png", grey}, {"rgba.png", rgba}, {"colour16.png", colour16},
+           {"colour.jpg", colour}, {"grey.jpg", grey}}) {
+    const std::filesystem::path file = dir / name;
+    ASSERT_TRUE(cv::imwrite(file.string(), image));
+    cv::Mat expected;
+    cv::cvtColor(cv::imread(file.string(), cv::IMREAD_COLOR), expected, cv::COLOR_BGR2RGB);
+    EXPECT_EQ(cv::norm(readColorImage(file, size), expected, cv::NORM_INF), 0.0) << name;
+  }
+  ASSERT_TRUE(cv::imwrite((dir / "depth.png").string(), depth));
+  EXPECT_EQ(cv::norm(readDepthImage(dir / "depth.png", size), depth, cv::NORM_INF), 0.0);
+  EXPECT_THROW(readDepthImage(dir / "depth.png", {52, 37}), InputError);
+}
+
+TEST(ImageDecode, GivesOpenCvsPixelsOnSevenScenes) {
+  VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
+  const TumSequence seq = TumSequence::open(folder);
+  for (const std::size_t i : {std::size_t{0}, seq.size() / 2, seq.size() - 1}) {
+    const RgbdFrame frame = seq.load(i);
+    cv::Mat expected;
+    cv::cvtColor(cv::imread(seq.entries()[i].rgb_path.string(), cv::IMREAD_COLOR), expected, cv::COLOR_BGR2RGB);
+    EXPECT_EQ(cv::norm(frame.rgb, expected, cv::NORM_INF), 0.0) << i;
+    EXPECT_EQ(cv::norm(frame.depth, cv::imread(seq.entries()[i].depth_path.string(), cv::IMREAD_UNCHANGED), cv::NORM_INF),
+              0.0) << i;
+  }
 }
 
 }  // namespace

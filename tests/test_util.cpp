@@ -5,6 +5,7 @@
 
 #include <cstdio>
 #include <fstream>
+#include <iomanip>
 #include <sstream>
 
 #include <opencv2/imgcodecs.hpp>
@@ -140,8 +141,41 @@ RgbdFrame turningBoxRoomFrame(const PinholeCamera& camera, int i, double degrees
   return f;
 }
 
+namespace {
+const PinholeCamera kTurningCamera{160, 120, 131.25, 131.25, 79.5, 59.5, 5000.0};
+}  // namespace
+
+void writeBoxRoomSequence(const fs::path& dir, int frames) {
+  fs::create_directories(dir / "rgb");
+  fs::create_directories(dir / "depth");
+  std::ostringstream rgb_list, depth_list, gt;
+  for (int i = 0; i < frames; ++i) {
+    const RgbdFrame f = turningBoxRoomFrame(kTurningCamera, i, 6.0);
+    char name[32];
+    std::snprintf(name, sizeof name, "%06d.png", i);
+    cv::Mat bgr;
+    cv::cvtColor(f.rgb, bgr, cv::COLOR_RGB2BGR);
+    cv::imwrite((dir / "rgb" / name).string(), bgr);
+    cv::imwrite((dir / "depth" / name).string(), f.depth);
+    rgb_list << std::fixed << std::setprecision(6) << f.timestamp << " rgb/" << name << "\n";
+    depth_list << std::fixed << std::setprecision(6) << f.timestamp << " depth/" << name << "\n";
+    const Eigen::Quaterniond q(f.T_W_C.linear());
+    const Eigen::Vector3d t = f.T_W_C.translation();
+    gt << std::setprecision(17) << f.timestamp << " " << t.x() << " " << t.y() << " " << t.z() << " " << q.x() << " "
+       << q.y() << " " << q.z() << " " << q.w() << "\n";
+  }
+  writeText(dir / "rgb.txt", rgb_list.str());
+  writeText(dir / "depth.txt", depth_list.str());
+  writeText(dir / "groundtruth.txt", gt.str());
+  const PinholeCamera& c = kTurningCamera;
+  std::ostringstream cam;
+  cam << std::setprecision(17) << "fx: " << c.fx << "\nfy: " << c.fy << "\ncx: " << c.cx << "\ncy: " << c.cy
+      << "\ndepth_scale: " << c.depth_scale << "\nwidth: " << c.width << "\nheight: " << c.height << "\n";
+  writeText(dir / "camera.yaml", cam.str());
+}
+
 Mapper mapTurningBoxRoom(int frames) {
-  const PinholeCamera camera{160, 120, 131.25, 131.25, 79.5, 59.5, 5000.0};
+  const PinholeCamera& camera = kTurningCamera;
   Mapper mapper(camera);
   for (int i = 0; i < frames; ++i) mapper.addFrame(turningBoxRoomFrame(camera, i, 6.0));
   return mapper;

@@ -49,6 +49,10 @@ Transform lookAt(const Eigen::Vector3d& position, const Eigen::Vector3d& target)
 /// `degrees_per_frame` (index i, 30 fps timestamp).
 RgbdFrame turningBoxRoomFrame(const PinholeCamera& camera, int i, double degrees_per_frame);
 
+/// Writes frames 0..frames-1 of the turning box room (mapTurningBoxRoom's camera and walk) as a
+/// TUM sequence with a camera.yaml, for command-line tests that need real keyframe decisions.
+void writeBoxRoomSequence(const fs::path& dir, int frames);
+
 /// A small whole session: a 160x120 camera at the centre of the box room turning 6 degrees a
 /// frame through `frames` frames (several keyframes, covisibility edges, a revisit past 60).
 Mapper mapTurningBoxRoom(int frames);

@@ -10,6 +10,8 @@
 #include "app/gui/workbench.h"
 #include "app/gui/workbench_window.h"
 #include "app/progress.h"
+#include "mapping/core/error.h"
+#include "mapping/io/session_file.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 
@@ -109,6 +111,11 @@ void runGui(GuiArgs args, bool builtin) {
     settings.window_width = w;
     settings.window_height = h;
   }
+  // A missing sequence or session is named before the display is looked at (without a display,
+  // `gui /nope` named the display); a damaged session still opens the window with its error.
+  if (!builtin && !args.map.empty() && !isSessionFile(args.map))
+    throw InputError(args.map, fs::exists(args.map) ? "not a vdmap session file" : "no such session file");
+  if (!builtin && args.map.empty()) openSequence(args.sequence);
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
   gui::Workbench bench(settings, warning);

@@ -23,18 +23,21 @@ std::vector<Transform> MappingSnapshot::trajectoryWorld() const {
 }
 
 MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
-    : sequence_(std::move(sequence)), mapper_params_(mapper), thresholds_(thresholds) {
+    : sequence_(std::move(sequence)), sequence_folder_(sequence_->folder().string()), mapper_params_(mapper),
+      thresholds_(thresholds) {
   thresholds_.validate();
   mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   start();
 }
 
-MapSession::MapSession(Session saved, const GlobalMapParams& thresholds)
-    : mapper_params_(saved.info.mapper), thresholds_(thresholds) {
+MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest)
+    : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
+      thresholds_(thresholds) {
   thresholds_.validate();
-  mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_);
-  mapper_->graph() = std::move(saved.graph);
-  mapped_ = target_ = saved.info.frames_mapped;
+  base_frames_ = saved.info.state.frames_mapped;
+  if (sequence_) origin_ = std::make_shared<const Session>(saved);  // kept to seek back to
+  mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_, std::move(saved.graph), saved.info.state);
+  mapped_ = target_ = base_frames_;
   for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity()});
   global_dirty_ = true;
   start();
@@ -117,7 +120,7 @@ void MapSession::publishMapping() {
   snap->times = times_.view();
   snap->trajectory = trajectory_.view();
   for (const Keyframe& k : mapper_->graph().keyframes())
-    snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb, k.container.size(), k.frames_integrated});
+    snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
   {
     std::lock_guard lock(mutex_);
@@ -129,7 +132,7 @@ void MapSession::publishMapping() {
 void MapSession::mapOneFrame() {
   const int i = mapper_->framesMapped();
   try {
-    const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i));
+    const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i - base_frames_));
     const FrameReport report = mapper_->addFrame(frame);
     times_.push_back(report.ms);
     const Transform& T_W_K = mapper_->graph().keyframe(report.keyframe).T_W_K;
@@ -207,14 +210,19 @@ void MapSession::publishSelection() {
 }
 
 void MapSession::restartMapper() {
-  mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   times_.clear();
   trajectory_.clear();
+  if (origin_) {  // back to the saved session, whose frames are not in the sequence
+    mapper_ = std::make_unique<Mapper>(origin_->info.camera, mapper_params_, origin_->graph, origin_->info.state);
+    for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity()});
+  } else {
+    mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
+  }
   last_rgb_ = cv::Mat();
   last_depth_ = cv::Mat();
   publishMapping();
   std::lock_guard lock(mutex_);
-  mapped_ = 0;
+  mapped_ = base_frames_;
   global_dirty_ = true;
 }
 
@@ -273,7 +281,7 @@ void MapSession::stepToKeyframe() {
 
 void MapSession::seek(int frame) {
   if (!sequence_) return;
-  frame = std::clamp(frame, 0, framesTotal() - 1);
+  frame = std::clamp(frame, std::max(0, base_frames_ - 1), framesTotal() - 1);
   bool restart = false;
   {
     std::lock_guard lock(mutex_);
@@ -298,7 +306,7 @@ void MapSession::setThresholds(const GlobalMapParams& thresholds) {
 }
 
 void MapSession::rerun(const MapperParams& mapper) {
-  if (!sequence_) return;
+  if (!sequence_ || origin_) return;
   {
     std::lock_guard lock(mutex_);
     target_ = playing_ ? framesTotal() : std::max(target_, mapped_);

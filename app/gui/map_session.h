@@ -28,7 +28,7 @@ struct KeyframeInfo {
   int id = 0;
   int frame = 0;               ///< position in the sequence of the frame that created it
   Transform T_W_K = Transform::Identity();
-  cv::Mat rgb;                 ///< shared with the keyframe (never written after creation)
+  CompressedImage rgb;         ///< shared with the keyframe; decode() when shown
   std::size_t ellipsoids = 0;  ///< stored in its container
   int frames_integrated = 0;
 };
@@ -92,15 +92,19 @@ class MapSession {
  public:
   /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
   MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds);
-  /// A saved session (.vdmap): its keyframes are there, there is no sequence to play, so the
-  /// player commands, seek and re-run do nothing; thresholds and poses are live as usual.
-  MapSession(Session saved, const GlobalMapParams& thresholds);
+  /// A saved session (.vdmap): its keyframes are there; thresholds and poses are live as usual.
+  /// With `rest`, the frames of its sequence after the session's last one, the player continues
+  /// mapping from the session's state (seeking back to before the session's end restores it);
+  /// without, the player commands and seek do nothing. Re-run does nothing either way.
+  MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt);
   ~MapSession();
   MapSession(const MapSession&) = delete;
   MapSession& operator=(const MapSession&) = delete;
 
-  /// Null for a saved session.
+  /// Null for a saved session without its sequence; for one with, the frames after the session's.
   const TumSequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
+  /// The folder the map's frames come from (a saved session's as stored; "" when unknown).
+  const std::string& sequenceFolder() const { return sequence_folder_; }
 
   /// Maps to the end at up to `fps` frames per second (0: as fast as possible).
   void play();
@@ -154,9 +158,12 @@ class MapSession {
   bool workLeft() const;  // mutex_ held
 
   void start();
-  int framesTotal() const { return sequence_ ? static_cast<int>(sequence_->size()) : mapped_; }
+  int framesTotal() const { return sequence_ ? base_frames_ + static_cast<int>(sequence_->size()) : mapped_; }
 
   std::optional<TumSequence> sequence_;
+  std::shared_ptr<const Session> origin_;  // the saved session the mapper started from, if any
+  int base_frames_ = 0;                    // frames in the map before sequence_'s first entry
+  std::string sequence_folder_;
   MapperParams mapper_params_;
   std::unique_ptr<Mapper> mapper_;     // worker thread only
   AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)

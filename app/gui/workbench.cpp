@@ -2,6 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
+#include <filesystem>
+#include <optional>
 
 #include <Eigen/Geometry>
 
@@ -120,19 +122,54 @@ bool Workbench::open(const SequenceArgs& args) {
   return true;
 }
 
+namespace {
+
+// The frames of a saved session's sequence after its last one, for the player to continue
+// with: none when the session cannot continue, its folder is gone, or its camera is not the
+// session's (*why says which, for a warning).
+std::optional<TumSequence> framesAfter(const Session& saved, std::string* why) {
+  const SessionInfo& info = saved.info;
+  if (info.sequence.empty() || info.state.frames_mapped == 0) return std::nullopt;
+  if (info.state.current_keyframe < 0) {
+    *why = "the session (format 1) cannot continue mapping: the player is off";
+    return std::nullopt;
+  }
+  try {
+    // A session mapped to the end of its sequence has nothing to continue with: no warning.
+    if (std::filesystem::is_directory(info.sequence) &&
+        TumSequence::open(info.sequence).listedDepthFrames() <= info.state.last_frame_index + 1)
+      return std::nullopt;
+    SequenceOptions options;
+    options.frames.first = info.state.last_frame_index + 1;
+    TumSequence rest = TumSequence::open(info.sequence, options);
+    if (!(rest.camera() == info.camera))
+      throw std::invalid_argument("its camera is not the session's");
+    return rest;
+  } catch (const std::exception& e) {
+    *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
+           e.what() + ")";
+    return std::nullopt;
+  }
+}
+
+}  // namespace
+
 bool Workbench::openSession(const std::string& file) {
   const std::string path = absolute(file);
+  std::string why;
   try {
     Session saved = loadSession(path);
     // The session's own parameters, shown and used; the user's settings stay as they are.
     const MappingParams params{saved.info.mapper, saved.info.global};
-    session_ = std::make_unique<MapSession>(std::move(saved), params.global);
+    std::optional<TumSequence> rest = framesAfter(saved, &why);
+    session_ = std::make_unique<MapSession>(std::move(saved), params.global, std::move(rest));
     ui_.params = params;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return false;
   }
   opened(path);
+  if (!why.empty()) report(StatusLine::Kind::kWarning, why);
   return true;
 }
 
@@ -170,10 +207,10 @@ void Workbench::exportMap() {
 void Workbench::saveSession() {
   if (!session_) return;
   const std::string file = absolute(ui_.session_text);
-  session_->withMapper([file](const Mapper& mapper, const GlobalSnapshot& global) {
-    SessionInfo info = sessionInfo(mapper, global.params);
-    info.frames_mapped = std::max(info.frames_mapped, global.frames_mapped);  // a re-saved session
-    vdmap::saveSession(file, mapper.graph(), info);
+  // The session remembers its sequence, so that it can be continued (vdmap map --load, Open).
+  const std::string folder = session_->sequenceFolder();
+  session_->withMapper([file, folder](const Mapper& mapper, const GlobalSnapshot& global) {
+    vdmap::saveSession(file, mapper.graph(), sessionInfo(mapper, global.params, folder));
     return "saved the session to " + file;
   });
 }

@@ -8,6 +8,7 @@
 #include <cstdio>
 #include <ctime>
 #include <deque>
+#include <filesystem>
 #include <future>
 #include <iostream>
 #include <sstream>
@@ -170,7 +171,8 @@ class WorkbenchWindow {
   }
 
   // Scripted runs (--exit) fail on an error shown during the run; a user closing the window never does.
-  int exitCode() const { return script_.exit && !bench_.firstError().empty() ? 1 : 0; }
+  int exitCode() const { return failedRun() ? 1 : 0; }
+  bool failedRun() const { return script_.exit && !bench_.firstError().empty(); }
 
  private:
   UiState& ui() { return bench_.ui(); }
@@ -319,8 +321,9 @@ class WorkbenchWindow {
     ui().view_height = std::max(1, static_cast<int>(view_.h * scale.y));
   }
 
-  // Opens a docked panel; returns its actual width (the user may have dragged its inner edge).
-  void beginPanel(const char* name, Rect& r, float& width, bool left) {
+  // Opens a docked panel at r; r becomes where it is, width its width (the user may drag its
+  // inner edge).
+  void beginPanel(const char* name, Rect& r, float& width) {
     const float font = ImGui::GetFontSize();
     ImGui::SetNextWindowPos({r.x, r.y}, ImGuiCond_Always);
     ImGui::SetNextWindowSize({r.w, r.h}, ImGuiCond_Always);
@@ -328,7 +331,6 @@ class WorkbenchWindow {
     ImGui::Begin(name, nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
     const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
     if (size.x != r.w) width = size.x;  // dragged: next frame re-docks with the new width
-    (void)left;
     r = {pos.x, pos.y, size.x, size.y};
   }
 
@@ -402,7 +404,10 @@ class WorkbenchWindow {
         const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
         // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
         // container, which lives in the keyframe frame, but the ellipsoids are in the world).
-        mirror_.setContainer(session_base_ + selection->serial, id, k.rgb, mapping->camera, k.T_W_K, selection->local, style);
+        // The keyframe image is held compressed: decode it once per selection, not per UI frame.
+        const int generation = session_base_ + selection->serial;
+        if (decoded_rgb_for_ != generation) decoded_rgb_ = k.rgb.decode(), decoded_rgb_for_ = generation;
+        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, k.T_W_K, selection->local, style);
       } else {
         mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
       }
@@ -472,7 +477,7 @@ class WorkbenchWindow {
   // --- the left panel: sequence and player ------------------------------------------------------
 
   void drawSequencePanel() {
-    beginPanel("Sequence", left_, left_w_, true);
+    beginPanel("Sequence", left_, left_w_);
     const float open_w = ImGui::CalcTextSize("Open").x + 2 * ImGui::GetStyle().FramePadding.x;
     ImGui::SetNextItemWidth(-open_w - ImGui::GetStyle().ItemSpacing.x);
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
@@ -505,8 +510,12 @@ class WorkbenchWindow {
     if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
     tip(saved ? why_saved : "Maps one more frame (Right).");
     ImGui::SameLine();
+    ImGui::BeginDisabled(status.target < 2);
     if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
-    tip(saved ? why_saved : "One frame back (Left): the map is rebuilt from the first frame.");
+    tip(saved ? why_saved
+        : status.target < 2 ? "Nothing to go back to: fewer than two frames mapped."
+                            : "One frame back (Left): the map is rebuilt from the first frame.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
     tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
@@ -599,7 +608,7 @@ class WorkbenchWindow {
   // --- the right panel: map, parameters, keyframes ---------------------------------------------
 
   void drawMapPanel() {
-    beginPanel("Map", right_, right_w_, false);
+    beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
       if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
       if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
@@ -662,9 +671,14 @@ class WorkbenchWindow {
 
   void drawThresholds() {
     const bool occlusion_off = !ui().params.global.occlusion_removal;
+    const bool fusion_off = !ui().params.global.fuse_across_groups;
     if (beginRows("thresholds")) {
       for (const Parameter& p : parameterTable()) {
         if (!p.live) continue;
+        if (p.key == "fusion_max_distance") {
+          parameterRow(p, fusion_off, "Fusion across groups is off: this has no effect.");
+          continue;
+        }
         const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
         parameterRow(p, occlusion_param && occlusion_off, "Occlusion removal is off: this has no effect.");
       }
@@ -686,8 +700,11 @@ class WorkbenchWindow {
           "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
       row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
           m.merged);
-      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging and occlusion removal.", "%zu",
-          m.sigma_e_prime);
+      row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (SPEC 6.5).", "%zu",
+          m.merged_across_groups);
+      row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+                      "fusion across groups.",
+          "%zu", m.sigma_e_prime);
       row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
           "%zu", m.groups.size());
       row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
@@ -883,7 +900,10 @@ class WorkbenchWindow {
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui().trajectory_text);
     tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
+    ImGui::BeginDisabled(ui().trajectory_text.empty());
     if (ImGui::Button("Load corrected trajectory")) bench_.loadTrajectory();
+    tip(ui().trajectory_text.empty() ? "Type the trajectory file's path above first." : "Replaces the matching keyframes' poses; the map is rebuilt.");
+    ImGui::EndDisabled();
   }
 
   void drawExport() {
@@ -894,9 +914,15 @@ class WorkbenchWindow {
       ImGui::InputText("##session", &ui().session_text);
       ImGui::EndTable();
     }
+    ImGui::BeginDisabled(ui().export_text.empty());
     if (ImGui::Button("Export")) bench_.exportMap();
+    tip(ui().export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(ui().session_text.empty());
     if (ImGui::Button("Save session")) bench_.saveSession();
+    tip(ui().session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
+    ImGui::EndDisabled();
     checkFits();
   }
 
@@ -1118,7 +1144,10 @@ class WorkbenchWindow {
       case Phase::kSettle:
         if (--countdown_ > 0) return;
         recordLayout();
-        if (!script_.screenshot.empty()) saveScreenshot(script_.screenshot);
+        if (!script_.screenshot.empty() && !failedRun()) {
+          saveScreenshot(script_.screenshot);
+          screenshot_taken_ = true;
+        }
         script_phase_ = Phase::kLatency;
         return;
       case Phase::kLatency:
@@ -1127,10 +1156,15 @@ class WorkbenchWindow {
         return;
       case Phase::kOrbit:
         if (static_cast<int>(orbit_ms_.size()) < script_.orbit_frames) {
-          if (orbit_started_) orbit_ms_.push_back(msSince(orbit_frame_start_));
+          const double cpu = processCpuSeconds();
+          if (orbit_started_) {
+            orbit_ms_.push_back(msSince(orbit_frame_start_));
+            orbit_cpu_ms_.push_back(1e3 * (cpu - orbit_cpu_start_));
+          }
           orbit_started_ = true;
           bench_.orbit(0.03f, 0.f);
           orbit_frame_start_ = Clock::now();
+          orbit_cpu_start_ = cpu;
           return;
         }
         if ((session && session->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
@@ -1142,7 +1176,14 @@ class WorkbenchWindow {
         script_phase_ = Phase::kFinish;
         return;
       case Phase::kFinish:
-        if (!script_.stats_json.empty()) writeStats(script_.stats_json);
+        // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file:
+        // a screenshot of the error would pass for a result (issue #17). One taken before a
+        // later failure is removed.
+        if (!failedRun() && !script_.stats_json.empty()) writeStats(script_.stats_json);
+        if (failedRun() && screenshot_taken_) {
+          std::error_code ignored;
+          std::filesystem::remove(script_.screenshot, ignored);
+        }
         script_finished_ = script_.exit;
         script_phase_ = Phase::kDone;
         return;
@@ -1227,7 +1268,10 @@ class WorkbenchWindow {
     stats["show_help"] = ui().show_help;
     stats["view_from_keyframe"] = ui().view_from_keyframe;
     if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
-    if (!orbit_ms_.empty()) stats["orbit_frame_ms"] = orbit_ms_;
+    if (!orbit_ms_.empty()) {
+      stats["orbit_frame_ms"] = orbit_ms_;
+      stats["orbit_frame_cpu_ms"] = orbit_cpu_ms_;  // process CPU (all of llvmpipe's threads), per frame
+    }
     if (script_.idle_seconds > 0) {
       stats["idle_cpu_s"] = idle_cpu_s_;
       stats["idle_frames"] = idle_frames_;  // UI frames drawn meanwhile
@@ -1243,6 +1287,7 @@ class WorkbenchWindow {
   GlfwWindowContext& context_;
   const render::Gl& gl_;
   ScriptOptions script_;
+  bool screenshot_taken_ = false;  // by the script, so a failure removes it (and no older file)
   KeyQueue& keys_;
   render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
@@ -1250,6 +1295,8 @@ class WorkbenchWindow {
   const MapSession* mirrored_session_ = nullptr;
   const MapSession* hooked_session_ = nullptr;
   int session_base_ = 0;
+  int decoded_rgb_for_ = -1;  // the container generation decoded_rgb_ was decoded for
+  cv::Mat decoded_rgb_;
   Seen last_seen_;
   int settle_frames_ = 2;
   // Preparation (the built-in scene) on its own thread.
@@ -1280,7 +1327,8 @@ class WorkbenchWindow {
   nlohmann::json layout_ = nlohmann::json::object();
   int latency_generation_ = -1;
   Clock::time_point latency_start_, orbit_frame_start_, idle_until_;
-  std::vector<double> latency_ms_, orbit_ms_;
+  std::vector<double> latency_ms_, orbit_ms_, orbit_cpu_ms_;
+  double orbit_cpu_start_ = 0;
   bool orbit_started_ = false;
   double idle_cpu_start_ = 0, idle_cpu_s_ = 0;
   int idle_frames_ = 0;

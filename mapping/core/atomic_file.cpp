@@ -8,6 +8,8 @@
 #include <stdexcept>
 #include <string>
 
+#include "mapping/core/temporary_paths.h"
+
 namespace vdmap {
 namespace {
 
@@ -33,6 +35,7 @@ void syncFolder(const std::filesystem::path& folder) {
 
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
   const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
+  const TemporaryPath interrupt_cleanup(tmp);
   // The data reaches the disk before the rename publishes it, so a crash or power loss at any
   // moment leaves the old file or the complete new one.
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);

@@ -7,7 +7,8 @@ namespace vdmap {
 /// Writes `bytes` to a temporary file beside `file`, fsyncs it and renames it into place (atomic
 /// on POSIX within a folder; the folder is fsynced after), so a reader, an interrupted run or a
 /// power cut never sees a half-written file. Throws std::runtime_error naming `file` and the
-/// reason when it cannot be written; no temporary is left behind (unless the process is killed).
+/// reason when it cannot be written; no temporary is left behind (an interrupt removes it too when
+/// installTemporaryPathCleanup() is in place; a SIGKILL leaves it).
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes);
 
 }  // namespace vdmap

@@ -34,6 +34,8 @@ struct PinholeCamera {
   }
   /// Throws std::invalid_argument naming the first bad field (non-positive size/focal, ...).
   void validate() const;
+
+  bool operator==(const PinholeCamera&) const = default;
 };
 
 }  // namespace vdmap

@@ -1,14 +1,20 @@
 #include "mapping/export/map_export.h"
 
+#include <signal.h>
 #include <unistd.h>
 
+#include <algorithm>
+#include <cerrno>
 #include <cmath>
+#include <memory>
 #include <stdexcept>
 #include <string>
 #include <system_error>
 #include <vector>
 
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/temporary_paths.h"
+#include "mapping/core/timing.h"
 #include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/trajectory_io.h"
@@ -18,17 +24,44 @@ namespace {
 
 namespace fs = std::filesystem;
 
+// Every file an export can write; a new export removes those of an older one it does not write
+// (a global.bt from a run with --octomap), so the folder never mixes two runs.
+const char* const kExportFiles[] = {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply",
+                                    "global_ellipsoids.ply", "global_gaussians.ply", "global.bt", "stats.json"};
+constexpr char kStagingPrefix[] = ".vdmap-export-";
+
+// Removes the staging folders of exports whose process is gone (killed with SIGKILL, or before
+// the interrupt cleanup existed). A live process's folder is left alone.
+void removeStaleStagingFolders(const fs::path& dir) {
+  std::error_code ec;
+  for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
+    const std::string name = entry.path().filename().string();
+    if (name.rfind(kStagingPrefix, 0) != 0) continue;
+    const std::string digits = name.substr(sizeof(kStagingPrefix) - 1);
+    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
+    const pid_t pid = static_cast<pid_t>(std::stol(digits));
+    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    std::error_code ignored;
+    fs::remove_all(entry.path(), ignored);
+  }
+}
+
 // A folder inside the export folder that receives every file first; commit() renames them into
 // the export folder (same file system, so each rename is atomic), and the destructor removes
-// whatever is left, so a failed export leaves nothing of itself behind.
+// whatever is left, so a failed export leaves nothing of itself behind. The folder and its files
+// are registered as temporary paths, so an interrupt (SIGINT, SIGTERM) removes them as well.
 class StagingFolder {
  public:
-  explicit StagingFolder(const fs::path& dir) : dir_(dir), path_(dir / (".vdmap-export-" + std::to_string(::getpid()))) {
+  explicit StagingFolder(const fs::path& dir)
+      : dir_(dir), path_(dir / (kStagingPrefix + std::to_string(::getpid()))) {
     checkExportFolder(dir);
     std::error_code ec;
+    if (!fs::exists(dir, ec)) created_ = std::make_unique<TemporaryPath>(dir, true);
     fs::create_directories(dir, ec);
     if (ec) throw std::runtime_error(dir.string() + ": cannot create the output folder (" + ec.message() + ")");
+    removeStaleStagingFolders(dir);
     fs::remove_all(path_, ec);
+    registered_ = std::make_unique<TemporaryPath>(path_, true);
     if (!fs::create_directory(path_, ec) || ec)
       throw std::runtime_error(dir.string() + ": cannot write into the output folder (" +
                                (ec ? ec.message() : std::string("exists")) + ")");
@@ -36,16 +69,19 @@ class StagingFolder {
   ~StagingFolder() {
     std::error_code ec;
     fs::remove_all(path_, ec);
+    if (created_ && !committed_) fs::remove(dir_, ec);  // only when empty: the folder this export made
   }
   StagingFolder(const StagingFolder&) = delete;
   StagingFolder& operator=(const StagingFolder&) = delete;
 
-  /// Where to write `name` now.
+  /// Where to write `name` (one of kExportFiles) now.
   fs::path operator/(const std::string& name) {
     names_.push_back(name);
+    files_.push_back(std::make_unique<TemporaryPath>(path_ / name));
     return path_ / name;
   }
-  /// Moves every staged file into the export folder.
+  /// Moves every staged file into the export folder and removes the files of kExportFiles
+  /// that this export did not write.
   void commit() {
     for (const std::string& name : names_)  // a rename would fail half-way through the set
       if (fs::is_directory(dir_ / name))
@@ -55,11 +91,21 @@ class StagingFolder {
       fs::rename(path_ / name, dir_ / name, ec);
       if (ec) throw std::runtime_error((dir_ / name).string() + ": cannot write (" + ec.message() + ")");
     }
+    for (const char* name : kExportFiles) {
+      if (std::find(names_.begin(), names_.end(), name) != names_.end()) continue;
+      std::error_code ec;
+      if (fs::is_regular_file(dir_ / name, ec)) fs::remove(dir_ / name, ec);
+    }
+    committed_ = true;
   }
 
  private:
   fs::path dir_, path_;
+  std::unique_ptr<TemporaryPath> created_;  // the export folder, when this export created it
+  std::unique_ptr<TemporaryPath> registered_;
+  bool committed_ = false;
   std::vector<std::string> names_;
+  std::vector<std::unique_ptr<TemporaryPath>> files_;
 };
 
 }  // namespace
@@ -85,10 +131,15 @@ nlohmann::json globalMapStats(const KeyframeGraph& graph, const GlobalMap& map) 
       {"groups", map.groups.size()},
       {"sigma_e", map.sigma_e},
       {"merged", map.merged},
+      {"merged_across_groups", map.merged_across_groups},
       {"sigma_e_prime", map.sigma_e_prime},
-      {"t_g_s", map.t_g_s},
-      {"t_g_us_per_ellipsoid", map.sigma_e > 0 ? map.t_g_s * 1e6 / static_cast<double>(map.sigma_e) : 0.0},
-      {"global_stage_ms", {{"groups", map.groups_ms}, {"merge", map.merge_ms}, {"occlusion", map.occlusion_ms}}},
+      {"t_g_s", rounded(map.t_g_s)},
+      {"t_g_us_per_ellipsoid", rounded(map.sigma_e > 0 ? map.t_g_s * 1e6 / static_cast<double>(map.sigma_e) : 0.0)},
+      {"global_stage_ms",
+       {{"groups", rounded(map.groups_ms)},
+        {"merge", rounded(map.merge_ms)},
+        {"occlusion", rounded(map.occlusion_ms)},
+        {"fusion", rounded(map.fusion_ms)}}},
   };
 }
 
@@ -96,6 +147,7 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
                          const MapExportOptions& options) {
   if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
+  if (options.octomap_resolution_m > 0.0) checkOctomapResolution(options.octomap_resolution_m, graph, map.ellipsoids);
   StagingFolder stage(dir);
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
@@ -118,8 +170,8 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
     stats["octomap"] = {{"resolution_m", options.octomap_resolution_m},
                         {"points", r.points},
                         {"occupied_leaves", r.occupied_leaves},
-                        {"means_occupied", r.means_occupied},
-                        {"seconds", r.seconds}};
+                        {"means_occupied", rounded(r.means_occupied)},
+                        {"seconds", rounded(r.seconds)}};
   }
   writeFileAtomically(stage / "stats.json", stats.dump(2) + "\n");
   stage.commit();

@@ -35,11 +35,16 @@ struct MapExportOptions {
 ///   global_gaussians.ply  global-map ellipsoids as 3-D Gaussian splats (SPEC 7)
 ///   global.bt             only with options.octomap_resolution_m > 0 (octomap_export.h)
 ///   stats.json            options.run_stats + the global-map and export figures
-/// All files are first written into a staging folder inside `dir` and then renamed into place,
-/// so a failure (unwritable folder, full disk) leaves no file of this export behind and earlier
-/// files of the same names untouched. Throws std::runtime_error naming the folder or file.
+/// All files are first written into a staging folder inside `dir` (.vdmap-export-PID) and then
+/// renamed into place, so a failure (unwritable folder, full disk) leaves no file of this export
+/// behind and earlier files of the same names untouched; an interrupt removes the staging folder
+/// when installTemporaryPathCleanup() is in place, and staging folders of dead processes are
+/// removed by the next export into `dir`. Files of this list that an earlier export wrote and
+/// this one does not (global.bt) are removed once the new ones are in place, so the folder holds
+/// one run. Throws std::runtime_error naming the folder or file.
 /// Reads `graph` and `map` only; the caller keeps them unchanged for the duration of the call.
-/// Throws std::invalid_argument for a negative or non-finite octomap resolution, before writing.
+/// Throws std::invalid_argument for a negative or non-finite octomap resolution, or one the map
+/// does not fit in (checkOctomapResolution), before writing.
 /// Returns the stats that were written to stats.json.
 nlohmann::json exportMap(const std::filesystem::path& dir, const KeyframeGraph& graph, const GlobalMap& map,
                          const MapExportOptions& options = {});

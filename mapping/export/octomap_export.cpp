@@ -1,6 +1,8 @@
 #include "mapping/export/octomap_export.h"
 
 #include <chrono>
+#include <cmath>
+#include <cstdio>
 #include <sstream>
 #include <stdexcept>
 
@@ -24,11 +26,36 @@ std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e) {
   return points;
 }
 
+double octomapExtent(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids) {
+  double extent = 0.0;
+  for (const Ellipsoid& e : ellipsoids) {
+    // A sample point lies within sqrt(lambda_max) <= sqrt(trace) of the mean along any axis.
+    const double reach = std::sqrt(std::max(e.cov.trace(), 0.0));
+    extent = std::max(extent, e.mean.cwiseAbs().maxCoeff() + reach);
+    if (e.keyframe >= 0 && e.keyframe < static_cast<int>(graph.size()))
+      extent = std::max(extent, graph.keyframe(e.keyframe).T_W_K.translation().cwiseAbs().maxCoeff());
+  }
+  return extent;
+}
+
+void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
+    throw std::invalid_argument("octomap resolution must be > 0 m");
+  const double extent = octomapExtent(graph, ellipsoids);
+  if (extent / resolution_m >= kOctomapMaxVoxels) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "octomap resolution %g m is too fine for this map: it reaches %.3f m from the origin and "
+                  "OctoMap's 16-bit keys hold %d voxels each way, so the resolution must be at least %.3g m",
+                  resolution_m, extent, kOctomapMaxVoxels, std::nextafter(extent / kOctomapMaxVoxels, INFINITY));
+    throw std::invalid_argument(text);
+  }
+}
+
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
                                    const std::vector<Ellipsoid>& ellipsoids, double resolution_m,
                                    const ExportProgress& progress) {
-  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
-    throw std::invalid_argument("octomap resolution must be > 0 m");
+  checkOctomapResolution(resolution_m, graph, ellipsoids);
   const auto start = std::chrono::steady_clock::now();
   OctomapExportReport report;
   std::vector<octomap::Pointcloud> scans(graph.size());
@@ -57,8 +84,13 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
   report.means_occupied = ellipsoids.empty() ? 1.0 : static_cast<double>(inside) / ellipsoids.size();
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
     if (tree.isNodeOccupied(*it)) ++report.occupied_leaves;
+  // The bytes of OcTree::writeBinaryConst, written here because liboctomap's own prints a bare
+  // " done." line to stderr.
   std::ostringstream bytes;
-  tree.writeBinaryConst(bytes);
+  bytes << "# Octomap OcTree binary file\n# (feel free to add / change comments, but leave the first line as it "
+           "is!)\n#\nid "
+        << tree.getTreeType() << "\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
+  if (tree.getRoot()) tree.writeBinaryNode(bytes, tree.getRoot());
   writeFileAtomically(file, bytes.str());
   report.seconds = secondsSince(start);
   return report;

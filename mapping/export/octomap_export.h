@@ -25,11 +25,25 @@ struct OctomapExportReport {
 /// deviation along each principal axis (7 points; the sigma points of the Gaussian), world frame.
 std::vector<Eigen::Vector3d> ellipsoidSamplePoints(const Ellipsoid& e);
 
+/// OctoMap addresses voxels with 16-bit keys centred on the origin: a coordinate must satisfy
+/// |c| / resolution < 32768 (liboctomap's tree_max_val); one voxel is kept as margin.
+inline constexpr int kOctomapMaxVoxels = 32767;
+
+/// How far (m, max norm) the OctoMap of `ellipsoids` reaches from the origin: the sample points
+/// (bounded by mean +- sqrt(trace Sigma)) and the sensor origins of their keyframes.
+double octomapExtent(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids);
+
+/// Throws std::invalid_argument for a resolution that is not > 0 and finite, or one so fine that
+/// the map's extent does not fit in OctoMap's keys (liboctomap would drop those points with a
+/// warning each and write a wrong map); the message names the finest resolution that fits.
+void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids);
+
 /// Builds an OctoMap (octomap::OcTree, default sensor model) of `resolution_m` from world-frame
 /// `ellipsoids`: their sample points are inserted as one scan per keyframe (Ellipsoid::keyframe)
 /// with that keyframe's centre as the sensor origin, so free space is carved along the rays
 /// (SPEC section 7). Writes the binary .bt atomically. Throws std::invalid_argument for a
-/// resolution that is not > 0, std::runtime_error naming `file` when it cannot be written.
+/// resolution checkOctomapResolution refuses, std::runtime_error naming `file` when it cannot
+/// be written.
 /// `progress`, when given, is called after each keyframe's scan with (done, total) scans.
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
                                    const std::vector<Ellipsoid>& ellipsoids, double resolution_m,

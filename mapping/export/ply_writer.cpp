@@ -6,6 +6,7 @@
 #include <cstdint>
 #include <cstring>
 #include <string>
+#include <vector>
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
@@ -38,12 +39,31 @@ std::string vertexHeader(const char* comment, std::size_t count, const char* ext
          "property uchar red\nproperty uchar green\nproperty uchar blue\n" + extra + "end_header\n";
 }
 
+double smallestEigenvalue(const Eigen::Matrix3f& m) {
+  return Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(m.cast<double>(), Eigen::EigenvaluesOnly).eigenvalues()(0);
+}
+
 void putPointAndColor(std::string& bytes, const Ellipsoid& e) {
   for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
   for (int k = 0; k < 3; ++k) put(bytes, toByte(e.color(k)));
 }
 
 }  // namespace
+
+Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov) {
+  Eigen::Matrix3f stored = cov.cast<float>();
+  if (smallestEigenvalue(stored) >= 0.0) return stored;
+  // Clamp the eigenvalues at a floor above float rounding (~6e-8 of the largest), raised until the
+  // float matrix is positive semi-definite (once in practice).
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(cov);
+  const Eigen::Matrix3d& V = eig.eigenvectors();
+  double floor = std::max(eig.eigenvalues()(2), 0.0) * 1e-7;
+  for (int attempt = 0; attempt < 10; ++attempt, floor *= 10) {
+    stored = (V * eig.eigenvalues().cwiseMax(floor).asDiagonal() * V.transpose()).cast<float>();
+    if (smallestEigenvalue(stored) >= 0.0) return stored;
+  }
+  return Eigen::Matrix3f(stored.diagonal().cwiseMax(0.f).asDiagonal());  // unreachable for finite input
+}
 
 void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
   std::string bytes = vertexHeader("vdmap ellipsoid means (SPEC 7)", ellipsoids.size(), "");
@@ -60,9 +80,8 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
   bytes.reserve(bytes.size() + ellipsoids.size() * (12 + 3 + 24 + 8));
   for (const Ellipsoid& e : ellipsoids) {
     putPointAndColor(bytes, e);
-    const Eigen::Matrix3d& c = e.cov;
-    for (double v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)})
-      put(bytes, static_cast<float>(v));
+    const Eigen::Matrix3f c = storedCovariance(e.cov);
+    for (float v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)}) put(bytes, v);
     put(bytes, static_cast<std::uint32_t>(e.count));
     put(bytes, static_cast<std::int32_t>(e.keyframe));
   }
@@ -73,11 +92,15 @@ void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellip
   constexpr double kSh0 = 0.28209479177387814;  // the degree-0 spherical harmonic, 1 / (2 sqrt(pi))
   std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians (SPEC 7)\nelement vertex " +
                       std::to_string(ellipsoids.size()) + "\n";
-  for (const char* name : {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2", "opacity", "scale_0",
-                           "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
-    bytes += std::string("property float ") + name + "\n";
+  // The reference 3DGS loader's order; it asserts 3 * ((degree + 1)^2 - 1) = 45 f_rest at its
+  // default degree 3, so all 45 are written, zero: the colour has no view dependence.
+  std::vector<std::string> names = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"};
+  for (int k = 0; k < kGaussianRestCoefficients; ++k) names.push_back("f_rest_" + std::to_string(k));
+  for (const char* name : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    names.emplace_back(name);
+  for (const std::string& name : names) bytes += "property float " + name + "\n";
   bytes += "end_header\n";
-  bytes.reserve(bytes.size() + ellipsoids.size() * 17 * 4);
+  bytes.reserve(bytes.size() + ellipsoids.size() * names.size() * 4);
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
   for (const Ellipsoid& e : ellipsoids) {
     eig.compute(e.cov);  // ascending eigenvalues, orthonormal eigenvectors
@@ -87,6 +110,7 @@ void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellip
     for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
     for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(R(k, 0)));
     for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>((e.color(k) / 255.0 - 0.5) / kSh0));
+    for (int k = 0; k < kGaussianRestCoefficients; ++k) put(bytes, 0.f);
     put(bytes, kGaussianOpacityLogit);
     for (int k = 0; k < 3; ++k)
       put(bytes, static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));

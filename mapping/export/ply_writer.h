@@ -4,12 +4,21 @@
 #include <filesystem>
 #include <vector>
 
+#include <Eigen/Core>
+
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap {
 
+/// The covariance as the ellipsoid PLY stores it: rounded to float and positive semi-definite in
+/// that form (computed in double). A flat cell's smallest eigenvalue can fall a few 1e-12 m^2
+/// below zero through float accumulation or rounding; such a matrix is rebuilt from its
+/// eigen-decomposition with the eigenvalues clamped at 1e-7 of the largest (raised tenfold until
+/// the float matrix passes). Any other matrix is only rounded to float.
+Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov);
+
 /// Writes ellipsoids as binary little-endian PLY: x y z float, red green blue uchar,
-/// cxx cxy cxz cyy cyz czz float, count uint, keyframe int (SPEC section 7). Writes to a
+/// cxx cxy cxz cyy cyz czz float (storedCovariance), count uint, keyframe int (SPEC section 7). Writes to a
 /// temporary name in the same folder and renames it, so an interrupted export leaves no
 /// half-written file. Throws std::runtime_error naming the file on an I/O failure.
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
@@ -24,9 +33,13 @@ inline constexpr float kGaussianOpacityLogit = 2.1972246f;  // log(0.9 / 0.1)
 /// Smallest principal standard deviation written (m): a perfectly flat cell would give log(0).
 inline constexpr double kGaussianMinSigma = 1e-5;
 
+/// Higher-band spherical-harmonic coefficients per Gaussian (degree 3: 3 x 15), written as zeros.
+inline constexpr int kGaussianRestCoefficients = 45;
+
 /// Writes ellipsoids as 3-D Gaussian splats in the layout Gaussian-splatting viewers read
 /// (SPEC section 7): binary little-endian PLY, all float: x y z, nx ny nz (the axis of least
-/// spread, the surface normal up to sign), f_dc_0..2 = (rgb/255 - 0.5) / 0.28209479, opacity
+/// spread, the surface normal up to sign), f_dc_0..2 = (rgb/255 - 0.5) / 0.28209479,
+/// f_rest_0..44 = 0 (kGaussianRestCoefficients), opacity
 /// (kGaussianOpacityLogit), scale_0..2 = log(sigma) per principal axis (sigma clamped to
 /// kGaussianMinSigma), rot_0..3 = unit quaternion w x y z of the proper rotation R whose columns
 /// are the principal axes, so Sigma = R diag(exp(2 scale)) R^T. Atomic like writeEllipsoidPly.

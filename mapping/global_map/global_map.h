@@ -17,6 +17,12 @@ struct GlobalMapParams {
   bool occlusion_removal = true;
   double occlusion_distance_m = 0.5;
   double occlusion_angle_deg = 30.0;
+  /// SPEC 6.5: after merging and occlusion removal, fuse ellipsoids of different merge groups
+  /// that describe the same surface, so the map grows with the area seen rather than with revisits.
+  bool fuse_across_groups = true;
+  /// Two ellipsoids of different groups are the same surface when their Bhattacharyya distance
+  /// (bhattacharyyaDistance) is at most this; 0..10.
+  double fusion_max_distance = 1.0;
   int threads = 0;                     ///< 0: all cores. The result does not depend on it.
   /// Throws std::invalid_argument naming the first parameter out of range.
   void validate() const;
@@ -36,10 +42,11 @@ struct GlobalMap {
   /// forEachKeptEllipsoid, the local maps this map was built from, without filtering again.
   std::vector<std::vector<bool>> kept;
   std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
-  std::size_t merged = 0;             ///< after merging, before occlusion removal
-  std::size_t sigma_e_prime = 0;      ///< after merging and occlusion removal
-  double t_g_s = 0;                   ///< wall time of grouping, merging and occlusion removal
-  double groups_ms = 0, merge_ms = 0, occlusion_ms = 0;
+  std::size_t merged = 0;             ///< after merging within groups, before occlusion removal and fusion
+  std::size_t merged_across_groups = 0;  ///< ellipsoids fused into one of another group (SPEC 6.5)
+  std::size_t sigma_e_prime = 0;      ///< after merging, occlusion removal and fusion
+  double t_g_s = 0;                   ///< wall time of grouping, merging, occlusion removal and fusion
+  double groups_ms = 0, merge_ms = 0, fusion_ms = 0, occlusion_ms = 0;
 };
 
 /// Greedy merge groups of SPEC section 6 step 1 (deterministic: ties go to the lower id).
@@ -53,6 +60,29 @@ std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, co
 /// Moment matching of a cluster: n = sum n_i, mean = sum n_i mean_i / n, colour count-weighted,
 /// and the covariance of the union of the clusters' points (scatters combined, see the .cpp).
 Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster);
+
+/// Bhattacharyya distance between the Gaussians of two ellipsoids (covariances floored at a
+/// 10 um standard deviation): 1/8 d^T S^-1 d + 1/2 ln(det S / sqrt(det Sa det Sb)),
+/// S = (Sa + Sb) / 2. 0 for identical ellipsoids; grows with the offset of the means relative to
+/// their spread and with the difference of their shapes, so a wall patch never matches a patch
+/// of the perpendicular wall at the corner.
+double bhattacharyyaDistance(const Ellipsoid& a, const Ellipsoid& b);
+
+/// Half-width (m) of the cube in which fusion looks for copies of an ellipsoid: 1.5 times the
+/// median over `ellipsoids` of sqrt(lambda_max) (covariances floored as in bhattacharyyaDistance),
+/// at least 10 um.
+double fusionHalfWidth(const std::vector<Ellipsoid>& ellipsoids, const GlobalMapParams& params);
+
+/// Fusion across groups (SPEC 6.5) of world-frame ellipsoids, `group_of[i]` being the merge group
+/// ellipsoid i came from. Two ellipsoids are copies of one surface when they come from different
+/// groups, their means lie within fusionHalfWidth() of each other along every axis, and their
+/// bhattacharyyaDistance() is at most fusion_max_distance. Most precise first (smallest
+/// lambda_max, then lowest index), every ellipsoid not yet fused takes from each other group its
+/// nearest copy not yet fused (ties: lowest index); they become one ellipsoid by moment matching,
+/// with the seed's keyframe and cell. One copy per group keeps each group's own resolution.
+/// Output in the order of the seeds' indices. Deterministic for any thread count.
+std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
+                                        const GlobalMapParams& params);
 
 /// Builds the global map. Deterministic: bit for bit the same for any thread count.
 /// Throws std::invalid_argument for parameters out of range; an empty graph gives an empty map.

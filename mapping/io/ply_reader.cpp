@@ -96,7 +96,7 @@ class Reader {
         if (f == "ascii") format_ = Format::kAscii;
         else if (f == "binary_little_endian") format_ = Format::kBinaryLittle;
         else if (f == "binary_big_endian") format_ = Format::kBinaryBig;
-        else fail("unknown format '" + f + "' (expected ascii, binary_little_endian or binary_big_endian)", n);
+        else fail("unknown format " + printable(f) + " (expected ascii, binary_little_endian or binary_big_endian)", n);
         format_seen = true;
       } else if (key == "element") {
         Element e;
@@ -119,10 +119,10 @@ class Reader {
         if (!format_seen) fail("header has no 'format' line", n);
         return;
       } else if (key != "comment" && key != "obj_info" && !key.empty()) {
-        fail("unexpected header line '" + line + "'", n);
+        fail("unexpected header line " + printable(line), n);
       }
     }
-    fail("header does not end with 'end_header'");
+    fail("header does not end with 'end_header' (" + std::to_string(n) + " lines read)");
   }
 
   // A header may claim any number of records: reject counts the rest of the file cannot hold
@@ -134,12 +134,12 @@ class Reader {
     in_.seekg(data);
     for (const Element& e : elements_) {
       if (e.count == 0) continue;
-      if (e.properties.empty()) fail("element '" + e.name + "' has no properties");
+      if (e.properties.empty()) fail("element " + printable(e.name) + " has no properties");
       std::uint64_t record = 0;  // the fewest bytes one record takes
       for (const Property& p : e.properties)
         record += format_ != Format::kAscii ? typeSize(p.count_type.empty() ? p.type : p.count_type) : 1;
       if (e.count > bytes / record)
-        fail("element '" + e.name + "' has " + std::to_string(e.count) + " records but only " + std::to_string(bytes) +
+        fail("element " + printable(e.name) + " has " + std::to_string(e.count) + " records but only " + std::to_string(bytes) +
              " bytes follow the header (truncated?)");
     }
   }
@@ -182,11 +182,11 @@ class Reader {
           continue;
         }
         const double n = readScalar(p.count_type);
-        if (n < 0 || n > 1e6) fail("element '" + e.name + "' has a list of " + std::to_string(n) + " items");
+        if (n < 0 || n > 1e6) fail("element " + printable(e.name) + " has a list of " + std::to_string(n) + " items");
         std::vector<std::int64_t> items(static_cast<std::size_t>(n));
         for (auto& item : items) {
           const double v = readScalar(p.type);
-          if (!(std::abs(v) < 9e18)) fail("element '" + e.name + "' has a list item out of range (" + std::to_string(v) + ")");
+          if (!(std::abs(v) < 9e18)) fail("element " + printable(e.name) + " has a list item out of range (" + std::to_string(v) + ")");
           item = static_cast<std::int64_t>(v);
         }
         if (!list_taken) e.lists.push_back(std::move(items));
@@ -213,7 +213,7 @@ std::vector<int> columns(const std::filesystem::path& file, const Element& e,
   std::vector<int> cols;
   for (const auto& n : names) {
     const int c = e.scalarIndex(n);
-    if (c < 0) throw InputError(file.string(), "'" + e.name + "' has no property '" + n + "' (" + what + ")");
+    if (c < 0) throw InputError(file.string(), printable(e.name) + " has no property '" + n + "' (" + what + ")");
     cols.push_back(c);
   }
   return cols;

@@ -1,5 +1,6 @@
 #include "mapping/io/session_file.h"
 
+#include <algorithm>
 #include <array>
 #include <bit>
 #include <cmath>
@@ -17,14 +18,17 @@ namespace {
 // A new field in these structs must be added to the file (and the version raised): these
 // sizes are a tripwire for that, not a layout promise.
 static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
-static_assert(sizeof(GlobalMapParams) == 72, "GlobalMapParams changed: store the new field in the .vdmap file");
+static_assert(sizeof(GlobalMapParams) == 88, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
+static_assert(sizeof(MapperState) == 400, "MapperState changed: store the new field in the .vdmap file");
 
 constexpr char kMagic[8] = {'V', 'D', 'M', 'A', 'P', 'S', 'E', 'S'};
 constexpr std::uint32_t kEndianMark = 0x01020304;  // written little-endian: 04 03 02 01
 constexpr std::size_t kHeaderBytes = 24;           // magic, version, endianness, sections, crc
 constexpr std::size_t kSectionHeaderBytes = 16;    // tag, payload length (u64), crc
 constexpr std::array<char, 4> kParams = {'P', 'A', 'R', 'M'};
+constexpr std::array<char, 4> kState = {'M', 'S', 'T', 'A'};  // version >= 2
+constexpr std::size_t kMaxSequencePathBytes = 4096;
 constexpr std::array<char, 4> kKeyframe = {'K', 'F', 'R', 'M'};
 constexpr std::array<char, 4> kEdges = {'E', 'D', 'G', 'E'};
 
@@ -139,22 +143,6 @@ class Reader {
   std::string where_;
 };
 
-// A section tag for a message; bytes of a corrupted tag that are not printable are escaped.
-std::string tagName(std::string_view tag) {
-  std::string out(1, '\'');
-  for (char ch : tag) {
-    if (ch >= 0x20 && ch < 0x7F) {
-      out += ch;
-    } else {
-      constexpr char kHex[] = "0123456789abcdef";
-      const auto b = static_cast<std::uint8_t>(ch);
-      out += {'\\', 'x', kHex[b >> 4], kHex[b & 15]};
-    }
-  }
-  out += '\'';
-  return out;
-}
-
 void appendSection(Writer* file, const std::array<char, 4>& tag, const std::string& payload) {
   Writer head;
   head.bytes({tag.data(), tag.size()});
@@ -167,12 +155,7 @@ void appendSection(Writer* file, const std::array<char, 4>& tag, const std::stri
 
 // --- parameters -------------------------------------------------------------------------------
 
-void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
-  const PinholeCamera& c = info.camera;
-  w->i32(c.width);
-  w->i32(c.height);
-  for (double v : {c.fx, c.fy, c.cx, c.cy, c.depth_scale}) w->f64(v);
-  const MapperParams& m = info.mapper;
+void writeMapperParams(Writer* w, const MapperParams& m) {
   w->i32(m.local_map.cell_size_px);
   w->f64(m.local_map.depth_range.min_m);
   w->f64(m.local_map.depth_range.max_m);
@@ -189,6 +172,14 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->f64(k.covisibility.max_reprojection_px);
   w->i32(m.keyframe_every);
   w->u32(static_cast<std::uint32_t>(m.poses));
+}
+
+void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
+  const PinholeCamera& c = info.camera;
+  w->i32(c.width);
+  w->i32(c.height);
+  for (double v : {c.fx, c.fy, c.cx, c.cy, c.depth_scale}) w->f64(v);
+  writeMapperParams(w, info.mapper);
   const GlobalMapParams& g = info.global;
   w->u32(static_cast<std::uint32_t>(g.filter.model));
   w->f64(g.filter.filter_sigma_factor);
@@ -198,12 +189,14 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->boolean(g.occlusion_removal);
   w->f64(g.occlusion_distance_m);
   w->f64(g.occlusion_angle_deg);
-  w->i32(info.frames_mapped);
-  w->i32(info.revisits);
+  w->boolean(g.fuse_across_groups);
+  w->f64(g.fusion_max_distance);
+  w->i32(info.state.frames_mapped);
+  w->i32(info.state.revisits);
   w->u32(static_cast<std::uint32_t>(keyframes));
 }
 
-std::uint32_t readParams(Reader* r, SessionInfo* info, std::uint32_t version) {
+std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
   PinholeCamera& c = info->camera;
   c.width = r->i32("camera width");
   c.height = r->i32("camera height");
@@ -231,7 +224,7 @@ std::uint32_t readParams(Reader* r, SessionInfo* info, std::uint32_t version) {
   k.covisibility.lowe_ratio = r->f64("lowe_ratio");
   k.covisibility.max_reprojection_px = r->f64("max_reprojection");
   m.keyframe_every = r->i32("keyframe_every");
-  if (version >= 2) {  // version 1 sessions were all mapped with ground-truth poses
+  if (version >= 4) {  // sessions before version 4 were all mapped with ground-truth poses
     const std::uint32_t poses = r->u32("pose source");
     r->check(poses <= static_cast<std::uint32_t>(PoseSource::kTrack), "unknown pose source " + std::to_string(poses));
     m.poses = static_cast<PoseSource>(poses);
@@ -248,13 +241,114 @@ std::uint32_t readParams(Reader* r, SessionInfo* info, std::uint32_t version) {
   g.occlusion_removal = r->boolean("occlusion_removal");
   g.occlusion_distance_m = r->f64("occlusion_distance");
   g.occlusion_angle_deg = r->f64("occlusion_angle");
+  // Versions 1 and 2 predate fusion across groups: their maps were built without it.
+  g.fuse_across_groups = version >= 3 ? r->boolean("fuse_across_groups") : false;
+  if (version >= 3) g.fusion_max_distance = r->f64("fusion_max_distance");
   r->checkValid("global map", [&g] { g.validate(); });
-  info->frames_mapped = r->i32("frames_mapped");
-  info->revisits = r->i32("revisits");
-  r->check(info->frames_mapped >= 0 && info->revisits >= 0, "frame and revisit counts must be >= 0");
+  info->state.frames_mapped = r->i32("frames_mapped");
+  info->state.revisits = r->i32("revisits");
+  r->check(info->state.frames_mapped >= 0 && info->state.revisits >= 0, "frame and revisit counts must be >= 0");
   const std::uint32_t keyframes = r->u32("keyframe count");
   r->expectEnd();
   return keyframes;
+}
+
+// --- mapper state (version >= 2) ------------------------------------------------------------
+
+constexpr std::uint64_t kTransformBytes = 12 * 8;  // the top three rows, row by row
+
+void writeTransform(Writer* w, const Transform& T) {
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) w->f64(T.matrix()(row, col));
+}
+
+Transform readTransform(Reader* r, const char* what) {
+  Transform T = Transform::Identity();
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) T.matrix()(row, col) = r->f64(what);
+  r->check(isValidTransform(T), std::string(what) + " is not a rigid transform");
+  return T;
+}
+
+void writeState(Writer* w, const SessionInfo& info) {
+  w->i32(info.state.current_keyframe);
+  w->i32(info.state.last_frame_index);
+  w->f64(info.state.last_timestamp);
+  w->u32(static_cast<std::uint32_t>(info.sequence.size()));
+  w->bytes(info.sequence);
+  const MapperState& s = info.state;
+  w->i32(s.frames_lost);
+  w->u32(static_cast<std::uint32_t>(s.frame_poses.size()));
+  for (const FramePose& f : s.frame_poses) {
+    w->i32(f.frame_index);
+    w->f64(f.timestamp);
+    w->i32(f.keyframe);
+    writeTransform(w, f.T_K_C);
+  }
+  w->i32(s.tracker.keyframe);
+  writeTransform(w, s.tracker.T_K_C);
+  writeTransform(w, s.tracker.velocity);
+  w->i32(s.tracker.frames_lost);
+  w->u32(static_cast<std::uint32_t>(s.pose_graph_edges.size()));
+  for (const PoseGraphEdge& e : s.pose_graph_edges) {
+    w->i32(e.from);
+    w->i32(e.to);
+    writeTransform(w, e.T_from_to);
+    for (int row = 0; row < 6; ++row)
+      for (int col = row; col < 6; ++col) w->f64(e.information(row, col));
+    w->boolean(e.robust);
+  }
+  w->u32(static_cast<std::uint32_t>(s.loops.size()));
+  for (const LoopClosure& l : s.loops) {
+    for (int v : {l.frame_index, l.from, l.to, l.inliers}) w->i32(v);
+    w->f64(l.correction_m);
+    w->f64(l.pose_graph_ms);
+  }
+}
+
+void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_t keyframes) {
+  MapperState& s = info->state;
+  s.current_keyframe = r->i32("current keyframe");
+  s.last_frame_index = r->i32("last frame index");
+  s.last_timestamp = r->f64("last timestamp");
+  const std::uint32_t n = r->count(1, "sequence folder");
+  r->check(n <= kMaxSequencePathBytes, "sequence folder of " + std::to_string(n) + " bytes is too long");
+  info->sequence = r->bytes(n, "sequence folder");
+  r->check(info->sequence.find('\0') == std::string::npos, "sequence folder holds a NUL byte");
+  if (version >= 4) {  // the trajectory, the tracker's and the pose graph's state
+    s.frames_lost = r->i32("frames lost");
+    const std::uint32_t poses = r->count(4 + 8 + 4 + kTransformBytes, "frame poses");
+    s.frame_poses.resize(poses);
+    for (FramePose& f : s.frame_poses) {
+      f.frame_index = r->i32("frame index");
+      f.timestamp = r->f64("frame timestamp");
+      f.keyframe = r->i32("frame keyframe");
+      f.T_K_C = readTransform(r, "frame pose");
+    }
+    s.tracker.keyframe = r->i32("tracker keyframe");
+    s.tracker.T_K_C = readTransform(r, "tracker pose");
+    s.tracker.velocity = readTransform(r, "tracker velocity");
+    s.tracker.frames_lost = r->i32("tracker frames lost");
+    const std::uint32_t edges = r->count(4 + 4 + kTransformBytes + 21 * 8 + 1, "pose-graph edges");
+    s.pose_graph_edges.resize(edges);
+    for (PoseGraphEdge& e : s.pose_graph_edges) {
+      e.from = r->i32("edge from");
+      e.to = r->i32("edge to");
+      e.T_from_to = readTransform(r, "edge measurement");
+      for (int row = 0; row < 6; ++row)
+        for (int col = row; col < 6; ++col) e.information(row, col) = e.information(col, row) = r->f64("edge information");
+      e.robust = r->boolean("edge robust");
+    }
+    const std::uint32_t loops = r->count(4 * 4 + 2 * 8, "loop closures");
+    s.loops.resize(loops);
+    for (LoopClosure& l : s.loops) {
+      for (int* v : {&l.frame_index, &l.from, &l.to, &l.inliers}) *v = r->i32("loop closure");
+      l.correction_m = r->f64("loop correction");
+      l.pose_graph_ms = r->f64("loop time");
+    }
+  }
+  r->checkValid("mapper state", [&] { s.validate(keyframes); });
+  r->expectEnd();
 }
 
 // --- keyframes --------------------------------------------------------------------------------
@@ -304,8 +398,8 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   for (int row = 0; row < 3; ++row)
     for (int col = 0; col < 4; ++col) w->f64(k.T_W_K.matrix()(row, col));
   w->i32(k.frames_integrated);
-  writeMat(w, k.rgb);
-  writeMat(w, k.depth);
+  writeMat(w, k.rgb());
+  writeMat(w, k.depth());
   const FrameFeatures& f = k.features;
   w->u32(static_cast<std::uint32_t>(f.keypoints.size()));
   for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
@@ -339,8 +433,8 @@ Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info) {
   r->check(isValidTransform(k.T_W_K), "pose is not a rigid transform");
   k.frames_integrated = r->i32("frames integrated");
   r->check(k.frames_integrated >= 0, "frames integrated must be >= 0");
-  k.rgb = readMat(r, CV_8UC3, camera.height, camera.width, "rgb image");
-  k.depth = readMat(r, CV_16UC1, camera.height, camera.width, "depth image");
+  k.rgb_image = CompressedImage(readMat(r, CV_8UC3, camera.height, camera.width, "rgb image"));
+  k.depth_image = CompressedImage(readMat(r, CV_16UC1, camera.height, camera.width, "depth image"));
 
   FrameFeatures& f = k.features;
   const std::uint32_t n = r->count(32, "keypoints");
@@ -418,8 +512,17 @@ std::uint32_t crc32(std::string_view bytes, std::uint32_t crc) {
   return ~crc;
 }
 
-SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global) {
-  return {mapper.camera(), mapper.params(), global, mapper.framesMapped(), mapper.revisits()};
+SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global, const std::filesystem::path& sequence) {
+  std::error_code ec;
+  const std::filesystem::path absolute = sequence.empty() ? sequence : std::filesystem::absolute(sequence, ec);
+  return {mapper.camera(), mapper.params(), global, mapper.state(), (ec ? sequence : absolute).lexically_normal().string()};
+}
+
+bool sameMapperParams(const MapperParams& a, const MapperParams& b) {
+  Writer wa, wb;
+  writeMapperParams(&wa, a);
+  writeMapperParams(&wb, b);
+  return wa.str() == wb.str();
 }
 
 std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
@@ -427,12 +530,17 @@ std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
   file.bytes({kMagic, sizeof(kMagic)});
   file.u32(kSessionFormatVersion);
   file.u32(kEndianMark);
-  file.u32(static_cast<std::uint32_t>(graph.size() + 2));
+  file.u32(static_cast<std::uint32_t>(graph.size() + 3));
   file.u32(crc32(file.str()));
 
   Writer params;
   writeParams(&params, info, graph.size());
   appendSection(&file, kParams, params.str());
+  info.state.validate(graph.size());  // a programming error otherwise: the reader would refuse the file
+  if (info.sequence.size() > kMaxSequencePathBytes) throw std::invalid_argument("sequence folder path too long");
+  Writer state;
+  writeState(&state, info);
+  appendSection(&file, kState, state.str());
   for (const Keyframe& k : graph.keyframes()) {
     const PinholeCamera& c = k.container.camera();
     if (k.container.cellSizePx() != info.mapper.local_map.cell_size_px || c.width != info.camera.width ||
@@ -474,14 +582,23 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
                 std::to_string(kSessionFormatVersion) + "); update vdmap");
   if (version == 0) header.fail("format version 0 does not exist");
 
-  // Sections: the checksum of each is verified before its payload is parsed.
-  if (sections < 2) header.fail("a session has at least 2 sections, the header says " + std::to_string(sections));
+  // Sections: the checksum of each is verified before its payload is parsed. Version 1 has no
+  // state section: PARM, KFRM..., EDGE.
+  const std::uint32_t fixed_sections = version >= 2 ? 3 : 2;  // all but the keyframes
+  if (sections < fixed_sections)
+    header.fail("a session has at least " + std::to_string(fixed_sections) + " sections, the header says " +
+                std::to_string(sections));
+  const std::uint32_t first_keyframe = version >= 2 ? 2 : 1;
   Reader body(bytes.substr(kHeaderBytes), name, "file");
   Session session;
+  session.info.format_version = version;
   std::uint32_t keyframes = 0;
   for (std::uint32_t s = 0; s < sections; ++s) {
-    const std::array<char, 4>& expected = s == 0 ? kParams : s + 1 == sections ? kEdges : kKeyframe;
-    const std::string where = "section " + std::to_string(s) + " " + tagName({expected.data(), 4});
+    const std::array<char, 4>& expected = s == 0                    ? kParams
+                                          : s + 1 == sections       ? kEdges
+                                          : s < first_keyframe      ? kState
+                                                                    : kKeyframe;
+    const std::string where = "section " + std::to_string(s) + " " + printable({expected.data(), 4});
     body.setWhere(where);
     const std::string_view head = body.bytes(kSectionHeaderBytes, "the section header");
     Reader section_header(head, name, where);
@@ -489,25 +606,35 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     const std::uint64_t length = section_header.u64("length");
     const std::uint32_t crc = section_header.u32("checksum");
     if (tag != std::string_view(expected.data(), 4))
-      body.fail("found tag " + tagName(tag) + " (the file is corrupted or the section count is wrong)");
+      body.fail("found tag " + printable(tag) + " (the file is corrupted or the section count is wrong)");
     const std::string_view payload = body.bytes(length, "the section");
     if (options.verify_checksums && crc != crc32(payload, crc32(head.substr(0, 12))))
       body.fail("checksum mismatch (the file is corrupted)");
     Reader r(payload, name, where);
     if (s == 0) {
-      keyframes = readParams(&r, &session.info, version);
-      if (sections != keyframes + std::uint64_t{2})
-        r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + 2ull) +
+      keyframes = readParams(&r, version, &session.info);
+      if (sections != keyframes + std::uint64_t{fixed_sections})
+        r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + std::uint64_t{fixed_sections}) +
                " sections, the header says " + std::to_string(sections));
-    } else if (s + 1 < sections) {
-      session.graph.add(readKeyframe(&r, static_cast<int>(s - 1), session.info));
-    } else {
+    } else if (s + 1 == sections) {
       readEdges(&r, &session.graph);
+    } else if (s < first_keyframe) {
+      readState(&r, version, &session.info, keyframes);
+    } else {
+      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info));
     }
   }
   body.setWhere("file");
   body.expectEnd();
   return session;
+}
+
+bool isSessionFile(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (!std::filesystem::is_regular_file(file, ec)) return false;
+  std::ifstream in(file, std::ios::binary);
+  char magic[sizeof(kMagic)] = {};
+  return in.read(magic, sizeof magic) && std::equal(magic, magic + sizeof magic, kMagic);
 }
 
 Session loadSession(const std::filesystem::path& file) {

@@ -12,16 +12,23 @@
 
 namespace vdmap {
 
-/// The format version this build writes and the newest it reads (it reads every older one).
-inline constexpr std::uint32_t kSessionFormatVersion = 2;
+/// The format version this build writes and the newest it reads. 2 added the mapper's state
+/// (current keyframe, last frame) and the sequence folder, so a session can continue mapping;
+/// version 1 files still load (MapperState without a current keyframe: they cannot continue).
+/// 3 added fusion across groups' parameters (versions 1 and 2 load with fusion off). 4 added the
+/// pose source (ground truth or tracked) and, in the mapper state, the lost frames, every mapped
+/// frame's pose in its keyframe (the trajectory), the tracker's motion state and the keyframe
+/// pose graph (edges, loop closures), so a tracked session continues as if it had not stopped.
+inline constexpr std::uint32_t kSessionFormatVersion = 4;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {
   PinholeCamera camera;
   MapperParams mapper;
   GlobalMapParams global;  ///< the live global-map settings when saved (threads not stored)
-  int frames_mapped = 0;
-  int revisits = 0;
+  MapperState state;       ///< what the Mapper needs to continue (Mapper::state())
+  std::string sequence;    ///< the folder the frames came from (absolute; "" when unknown)
+  std::uint32_t format_version = kSessionFormatVersion;  ///< of the file it was read from
 };
 
 /// A loaded session. The graph is what buildGlobalMap(), the renderer and the workbench use.
@@ -30,11 +37,16 @@ struct Session {
   KeyframeGraph graph;
 };
 
-/// The info of a Mapper's session with the given global-map settings.
-SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global);
+/// The info of a Mapper's session with the given global-map settings and sequence folder (made
+/// absolute).
+SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global, const std::filesystem::path& sequence = {});
 
-/// The file's bytes. Deterministic: the same graph and info give the same bytes, and
-/// encodeSession(decodeSession(b)) == b.
+/// True when the parameters store as the same bytes (every field equal), e.g. to check that a
+/// run's parameters are a loaded session's.
+bool sameMapperParams(const MapperParams& a, const MapperParams& b);
+
+/// The file's bytes, always in the current format. Deterministic: the same graph and info give
+/// the same bytes, and encodeSession(decodeSession(b)) == b for a file of the current format.
 std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info);
 
 /// Writes the session atomically (temporary file, fsync, rename, fsync of the folder): an
@@ -52,6 +64,10 @@ struct SessionDecodeOptions {
 /// a checksum mismatch and the section it is in, a malformed or inconsistent field). Every
 /// field is validated before a Session is returned: there is never a partial map.
 Session decodeSession(std::string_view bytes, const std::string& name, const SessionDecodeOptions& options = {});
+
+/// True when `file` is a regular file that starts with the session magic ('VDMAPSES'), so a
+/// verb can take a session where it takes a sequence folder or a map. Reads 8 bytes.
+bool isSessionFile(const std::filesystem::path& file);
 
 /// Reads and decodes a session file (InputError as decodeSession, or when it cannot be read).
 Session loadSession(const std::filesystem::path& file);

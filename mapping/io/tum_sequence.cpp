@@ -6,11 +6,10 @@
 #include <optional>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/io/image_decode.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
 
@@ -57,13 +56,6 @@ std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t,
   return T;
 }
 
-std::string sizeText(const cv::Mat& m) { return std::to_string(m.cols) + "x" + std::to_string(m.rows); }
-
-std::string typeText(const cv::Mat& m) {
-  static const char* depths[] = {"8-bit", "8-bit signed", "16-bit", "16-bit signed", "32-bit int", "32-bit float", "64-bit float", "16-bit float"};
-  return std::string(depths[m.depth()]) + " " + std::to_string(m.channels()) + "-channel";
-}
-
 }  // namespace
 
 FrameRange parseFrameRange(const std::string& text) {
@@ -71,14 +63,14 @@ FrameRange parseFrameRange(const std::string& text) {
     int value = 0;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
     if (ec != std::errc() || ptr != s.data() + s.size() || value < 0)
-      throw std::invalid_argument("--frames '" + text + "': expected A:B with frame numbers >= 0");
+      throw std::invalid_argument("--frames '" + text + "': expected A:B (or N for 0:N) with frame numbers >= 0");
     return value;
   };
   const auto colon = text.find(':');
   FrameRange range;
   if (colon == std::string::npos) {
-    range.first = number(text);
-    range.last = range.first + 1;
+    range.last = number(text);
+    if (range.last == 0) throw std::invalid_argument("--frames '" + text + "': N means the first N frames (0:N); give N >= 1");
     return range;
   }
   const std::string a = text.substr(0, colon), b = text.substr(colon + 1);
@@ -87,6 +79,10 @@ FrameRange parseFrameRange(const std::string& text) {
   if (range.last >= 0 && range.last <= range.first)
     throw std::invalid_argument("--frames '" + text + "': the end must be after the start");
   return range;
+}
+
+std::string frameRangeText(const FrameRange& range) {
+  return std::to_string(range.first) + ":" + (range.last < 0 ? std::string() : std::to_string(range.last));
 }
 
 TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& options) {
@@ -145,6 +141,11 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     throw InputError(folder.string(), "--frames starts at " + std::to_string(options.frames.first) +
                                           " but the sequence lists only " + std::to_string(seq.listed_) +
                                           " depth frames");
+  if (options.frames.last > seq.listed_ && !options.cut_range_at_end)
+    throw InputError(folder.string(), "--frames " + frameRangeText(options.frames) + " ends past the sequence: it lists " +
+                                          std::to_string(seq.listed_) + " depth frames (0:" +
+                                          std::to_string(seq.listed_) + ")");
+  seq.range_ = {options.frames.first, options.frames.last < 0 ? seq.listed_ : std::min(options.frames.last, seq.listed_)};
   for (int i = 0; i < seq.listed_; ++i) {
     const Pair& pair = pairs[i];
     if (i < options.frames.first || (options.frames.last >= 0 && i >= options.frames.last)) {
@@ -185,20 +186,9 @@ RgbdFrame TumSequence::load(std::size_t i) const {
   frame.timestamp = e.t_depth;
   frame.T_W_C = e.T_W_C;
 
-  const cv::Mat bgr = cv::imread(e.rgb_path.string(), cv::IMREAD_COLOR);
-  if (bgr.empty()) throw InputError(e.rgb_path.string(), "cannot decode colour image (corrupt, or not PNG/JPEG)");
-  if (bgr.cols != camera_.width || bgr.rows != camera_.height)
-    throw InputError(e.rgb_path.string(), "colour image is " + sizeText(bgr) + " but the camera is " +
-                                              std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
-  cv::cvtColor(bgr, frame.rgb, cv::COLOR_BGR2RGB);
-
-  frame.depth = cv::imread(e.depth_path.string(), cv::IMREAD_UNCHANGED);
-  if (frame.depth.empty()) throw InputError(e.depth_path.string(), "cannot decode depth image (corrupt, or not PNG)");
-  if (frame.depth.type() != CV_16UC1)
-    throw InputError(e.depth_path.string(), "depth image must be 16-bit single-channel, got " + typeText(frame.depth));
-  if (frame.depth.cols != camera_.width || frame.depth.rows != camera_.height)
-    throw InputError(e.depth_path.string(), "depth image is " + sizeText(frame.depth) + " but the camera is " +
-                                                std::to_string(camera_.width) + "x" + std::to_string(camera_.height));
+  const cv::Size size(camera_.width, camera_.height);
+  frame.rgb = readColorImage(e.rgb_path, size);
+  frame.depth = readDepthImage(e.depth_path, size);
   return frame;
 }
 

@@ -14,12 +14,20 @@ struct FrameRange {
   int last = -1;
 };
 
-/// Parses "A:B", "A:", ":B" or "A" (one frame). Throws std::invalid_argument on bad text.
+/// Parses "A:B", "A:", ":B" or "N". A plain N means the first N frames, 0:N, wherever --frames
+/// is read (vdmap has one meaning of --frames; frame K alone is K:K+1). Throws
+/// std::invalid_argument on bad text or an empty range.
 FrameRange parseFrameRange(const std::string& text);
+
+/// "A:B", or "A:" for a range to the end.
+std::string frameRangeText(const FrameRange& range);
 
 struct SequenceOptions {
   std::string camera_preset;      ///< empty: choose from the folder (chooseCamera)
   FrameRange frames;              ///< which depth frames to keep
+  /// A range that ends past the last listed frame is an error (it names the sequence's range);
+  /// true cuts it there instead (for a verb's default range, such as bench's 0:30).
+  bool cut_range_at_end = false;
   double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (SPEC section 1)
   double max_pose_dt_s = 0.1;     ///< pose interpolation window
   /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
@@ -51,7 +59,8 @@ struct DropCounts {
 /// load(), which is const and safe to call from several threads.
 class TumSequence {
  public:
-  /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input.
+  /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input, and
+  /// ("FOLDER: --frames ...") for a range outside the listed frames.
   static TumSequence open(const std::filesystem::path& folder, const SequenceOptions& options = {});
 
   const std::filesystem::path& folder() const { return folder_; }
@@ -62,10 +71,14 @@ class TumSequence {
   int listedDepthFrames() const { return listed_; }
   /// True when the folder has groundtruth.txt (its poses are in the entries that have one).
   bool hasGroundTruth() const { return has_ground_truth_; }
+  /// The depth-list range the sequence was opened with, its end resolved: [first, last) with
+  /// last <= listedDepthFrames(). What verbs echo as "frames A:B".
+  FrameRange frameRange() const { return range_; }
   const DropCounts& dropped() const { return dropped_; }
 
-  /// Decodes frame i (0 <= i < size()). Throws InputError on a corrupt image, a depth image
-  /// that is not 16-bit single channel, or an image whose size differs from the camera's.
+  /// Decodes frame i (0 <= i < size()) through image_decode.h. Throws InputError naming the file
+  /// on a damaged or truncated image, a depth image that is not 16-bit single channel, or an
+  /// image whose size differs from the camera's.
   RgbdFrame load(std::size_t i) const;
 
  private:
@@ -74,6 +87,7 @@ class TumSequence {
   std::string camera_source_;
   std::vector<FrameEntry> entries_;
   int listed_ = 0;
+  FrameRange range_;
   DropCounts dropped_;
   bool has_ground_truth_ = false;
 };

@@ -7,6 +7,16 @@
 
 namespace vdmap {
 
+KeyframeMemory Keyframe::memory() const {
+  KeyframeMemory m;
+  m.images = rgb_image.compressedBytes() + depth_image.compressedBytes();
+  m.features = features.keypoints.capacity() * sizeof(cv::KeyPoint) + features.descriptors.total() +
+               features.depth_m.capacity() * sizeof(float);
+  m.ellipsoids = container.cells().capacity() * sizeof(StoredCell);
+  m.cell_slots = container.memoryBytes() - m.ellipsoids;
+  return m;
+}
+
 Keyframe& KeyframeGraph::add(Keyframe keyframe) {
   keyframe.id = static_cast<int>(keyframes_.size());
   keyframes_.push_back(std::move(keyframe));

@@ -5,6 +5,7 @@
 
 #include <opencv2/core.hpp>
 
+#include "mapping/core/compressed_image.h"
 #include "mapping/keyframe/covisibility_graph.h"
 #include "mapping/keyframe/frame_features.h"
 #include "mapping/keyframe/keyframe_selector.h"
@@ -13,17 +14,32 @@
 
 namespace vdmap {
 
+/// Heap bytes one keyframe holds, by part (what stays resident while the graph grows).
+struct KeyframeMemory {
+  std::size_t images = 0;      ///< the compressed colour and depth images
+  std::size_t features = 0;    ///< keypoints, descriptors, keypoint depths
+  std::size_t cell_slots = 0;  ///< the local map's slot grid (4 B per grid cell)
+  std::size_t ellipsoids = 0;  ///< the local map's stored cells
+};
+
 /// A keyframe (SPEC section 2): its pose, its own images and features, and its local map.
+/// The images are held PNG-compressed (~1/3 of their raw 1.5 MB at 640x480) and decoded by
+/// rgb() / depth() when shown or saved; nothing on the per-frame path reads them.
 struct Keyframe {
   int id = 0;
   int frame_index = 0;    ///< the sequence frame that created it
   double timestamp = 0;   ///< s, that frame's depth timestamp
   Transform T_W_K = Transform::Identity();
-  cv::Mat rgb;            ///< CV_8UC3 RGB, for the container view
-  cv::Mat depth;          ///< CV_16UC1 raw units
+  CompressedImage rgb_image;    ///< CV_8UC3 RGB, for the container view
+  CompressedImage depth_image;  ///< CV_16UC1 raw units
   FrameFeatures features;
   KeyframeContainer container;
   int frames_integrated = 0;
+
+  /// The colour image, decoded (a few ms; cache it where it is shown every UI frame).
+  cv::Mat rgb() const { return rgb_image.decode(); }
+  cv::Mat depth() const { return depth_image.decode(); }
+  KeyframeMemory memory() const;
 };
 
 /// What applyTrajectory() matched.

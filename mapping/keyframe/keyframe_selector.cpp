@@ -37,7 +37,7 @@ std::vector<Candidate> candidates(std::span<const KeyframeView> keyframes, int s
 
 FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F, int current,
                              std::span<const KeyframeView> keyframes, const PinholeCamera& camera,
-                             const KeyframeParams& params) {
+                             const KeyframeParams& params, CovisibilityMeasure measure) {
   FrameDecision decision;
   for (const KeyframeView& k : keyframes) {
     if (k.id != current) continue;
@@ -48,7 +48,7 @@ FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F,
       }
       return decision;
     }
-    decision.delta_current = covisibility(*k.features, *k.T_W_K, frame, T_W_F, camera, params.covisibility);
+    decision.delta_current = measure(*k.features, *k.T_W_K, frame, T_W_F, camera, params.covisibility);
     ++decision.matched;
     if (decision.delta_current >= params.tau) {
       decision.kind = FrameDecision::Kind::kUpdate;
@@ -64,7 +64,7 @@ FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F,
       ++decision.pruned;
       continue;
     }
-    const double delta = covisibility(*c.keyframe->features, *c.keyframe->T_W_K, frame, T_W_F, camera,
+    const double delta = measure(*c.keyframe->features, *c.keyframe->T_W_K, frame, T_W_F, camera,
                                       params.covisibility);
     ++decision.matched;
     if (delta >= params.tau && (best_id < 0 || delta > decision.delta_best ||
@@ -82,7 +82,8 @@ FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F,
 
 std::vector<std::pair<int, double>> edgesOfNewKeyframe(const FrameFeatures& features, const Transform& T_W_N,
                                                        int previous, std::span<const KeyframeView> keyframes,
-                                                       const PinholeCamera& camera, const KeyframeParams& params) {
+                                                       const PinholeCamera& camera, const KeyframeParams& params,
+                                                       CovisibilityMeasure measure) {
   std::vector<std::pair<int, double>> edges;
   for (const KeyframeView& k : keyframes) {
     const bool is_previous = k.id == previous;
@@ -90,7 +91,7 @@ std::vector<std::pair<int, double>> edgesOfNewKeyframe(const FrameFeatures& feat
     if (!is_previous &&
         covisibilityBound(*k.features, *k.T_W_K, T_W_N, camera, params.covisibility) < params.tau_edge)
       continue;
-    const double delta = covisibility(*k.features, *k.T_W_K, features, T_W_N, camera, params.covisibility);
+    const double delta = measure(*k.features, *k.T_W_K, features, T_W_N, camera, params.covisibility);
     if (is_previous || delta >= params.tau_edge) edges.emplace_back(k.id, delta);
   }
   std::sort(edges.begin(), edges.end());

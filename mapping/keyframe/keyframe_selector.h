@@ -40,16 +40,19 @@ struct FrameDecision {
 /// Decides what frame F does (SPEC section 5): update `current` when delta >= tau; otherwise
 /// the keyframe with the best delta >= tau becomes current (a revisit, ties to the lower id);
 /// otherwise F starts a new keyframe. `current` < 0 means there is none yet. The loop-closure
-/// search prunes with covisibilityBound(), which never changes the result.
+/// search prunes with covisibilityBound(), which never changes the result. `keyframes` are the
+/// ones considered: all of them (the exhaustive search) or a KeyframeIndex's candidates plus
+/// `current`. `measure` is delta (the brute-force oracle in tests).
 FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F, int current,
                              std::span<const KeyframeView> keyframes, const PinholeCamera& camera,
-                             const KeyframeParams& params);
+                             const KeyframeParams& params, CovisibilityMeasure measure = covisibility);
 
 /// Edges of a newly created keyframe N to the existing `keyframes` (SPEC section 5): weight
 /// delta(N, K) where it is >= tau_edge, plus the edge to `previous` (if >= 0) whatever its
 /// weight. Sorted by keyframe id.
 std::vector<std::pair<int, double>> edgesOfNewKeyframe(const FrameFeatures& features, const Transform& T_W_N,
                                                        int previous, std::span<const KeyframeView> keyframes,
-                                                       const PinholeCamera& camera, const KeyframeParams& params);
+                                                       const PinholeCamera& camera, const KeyframeParams& params,
+                                                       CovisibilityMeasure measure = covisibility);
 
 }  // namespace vdmap

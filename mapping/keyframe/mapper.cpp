@@ -30,6 +30,31 @@ void MapperParams::validate() const {
   check(keyframe_every >= 0, "keyframe_every must be >= 0");
 }
 
+void MapperState::validate(std::size_t keyframes) const {
+  if (current_keyframe < -1 || current_keyframe >= static_cast<long long>(keyframes))
+    throw std::invalid_argument("current keyframe " + std::to_string(current_keyframe) + " is not one of the " +
+                                std::to_string(keyframes) + " keyframes");
+  if (frames_mapped < 0 || revisits < 0 || revisits > frames_mapped || last_frame_index < -1)
+    throw std::invalid_argument("frame counts must satisfy 0 <= revisits <= frames and the last frame index >= -1");
+  if (!std::isfinite(last_timestamp)) throw std::invalid_argument("the last timestamp is not finite");
+  if (frames_lost < 0 || frames_lost + revisits > frames_mapped ||
+      frame_poses.size() + static_cast<std::size_t>(frames_lost) > static_cast<std::size_t>(frames_mapped))
+    throw std::invalid_argument("frames lost and frame poses must fit the frames mapped");
+  const auto keyframe = [keyframes](int k) { return k >= 0 && k < static_cast<long long>(keyframes); };
+  for (const FramePose& f : frame_poses)
+    if (!keyframe(f.keyframe) || !isValidTransform(f.T_K_C) || !std::isfinite(f.timestamp))
+      throw std::invalid_argument("frame " + std::to_string(f.frame_index) + ": its pose is not a rigid transform in a keyframe");
+  if ((tracker.keyframe != -1 && !keyframe(tracker.keyframe)) || !isValidTransform(tracker.T_K_C) ||
+      !isValidTransform(tracker.velocity) || tracker.frames_lost < 0)
+    throw std::invalid_argument("the tracker's state does not fit the keyframes");
+  for (const PoseGraphEdge& e : pose_graph_edges)
+    if (!keyframe(e.from) || !keyframe(e.to) || e.from == e.to || !isValidTransform(e.T_from_to) ||
+        !e.information.allFinite())
+      throw std::invalid_argument("a pose-graph edge does not join two keyframes with a finite measurement");
+  for (const LoopClosure& l : loops)
+    if (!keyframe(l.from) || !keyframe(l.to)) throw std::invalid_argument("a loop closure names a missing keyframe");
+}
+
 Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, const TrackingParams& tracking)
     : camera_(camera), params_(params), tracking_(tracking), extractor_(params.features),
       integrator_(params.local_map), tracker_(tracking.tracker) {
@@ -39,16 +64,40 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, const Tr
   KeyframeContainer(camera_, params_.local_map.cell_size_px);
 }
 
+Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, KeyframeGraph graph, const MapperState& state,
+               const TrackingParams& tracking)
+    : Mapper(camera, params, tracking) {
+  state.validate(graph.size());
+  for (const Keyframe& k : graph.keyframes())
+    if (k.container.cellSizePx() != params_.local_map.cell_size_px || !(k.container.camera() == camera_))
+      throw std::invalid_argument("keyframe " + std::to_string(k.id) +
+                                  ": its container does not use the mapper's camera and cell size");
+  graph_ = std::move(graph);
+  state_ = state;
+  tracker_.restore(state_.tracker);
+  pose_graph_.restore(std::move(state_.pose_graph_edges), std::move(state_.loops));
+  state_.pose_graph_edges.clear();
+  state_.loops.clear();
+}
+
+MapperState Mapper::state() const {
+  MapperState out = state_;
+  out.tracker = tracker_.state();
+  out.pose_graph_edges.assign(pose_graph_.edges().begin(), pose_graph_.edges().end());
+  out.loops = pose_graph_.loops();
+  return out;
+}
+
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, frame.rgb.clone(), frame.depth.clone(),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
 }
 
 std::vector<StampedPose> Mapper::trajectory() const {
   std::vector<StampedPose> out;
-  out.reserve(frame_poses_.size());
-  for (const FramePose& f : frame_poses_) out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
+  out.reserve(state_.frame_poses.size());
+  for (const FramePose& f : state_.frame_poses) out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
   return out;
 }
 
@@ -56,14 +105,13 @@ std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed,
                                                  FrameReport* report) {
   // The first frame anchors the world frame at its given pose (the ground truth's when the
   // sequence has one, so maps and trajectories overlay it; else the identity).
-  if (current_ < 0) return TrackingOutcome{};
-  TrackingOutcome outcome = tracker_.track(graph_, current_, observed, camera_, params_.keyframes.prefilter);
-  if (getenv("TDEBUG")) { const RelativePose& e = outcome.estimate; std::fprintf(stderr, "frame %d kf %d status %d matches %d inl %d pnp_used %d dense assoc %d inl %d rms %.2f it %d trusted %d\n", frame->index, outcome.keyframe, int(e.status), e.matches, e.pnp_inliers, e.pnp_used, e.dense.associated, e.dense.inliers, e.dense.rms_mahalanobis, e.dense.iterations, e.dense_trusted); }
+  if (state_.current_keyframe < 0) return TrackingOutcome{};
+  TrackingOutcome outcome = tracker_.track(graph_, state_.current_keyframe, observed, camera_, params_.keyframes.prefilter);
   report->weak = outcome.weak;
   report->relocalised = outcome.relocalised;
   if (outcome.lost()) {
     tracker_.lose();
-    ++frames_lost_;
+    ++state_.frames_lost;
     report->lost = true;
     return std::nullopt;
   }
@@ -96,11 +144,11 @@ bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* 
   if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) return false;
   // Edge R -> current from the frame: T_R_cur = T_R_C (measured) * T_C_cur (tracked). The
   // information of T_R_C moves into the current keyframe's frame.
-  const Transform T_cur_C = graph_.keyframe(current_).T_W_K.inverse() * frame->T_W_C;
+  const Transform T_cur_C = graph_.keyframe(state_.current_keyframe).T_W_K.inverse() * frame->T_W_C;
   const Matrix6d info = informationInFrame(edgeInformation(estimate, tracking_.loops.edge_noise), T_cur_C.inverse());
-  pose_graph_.add({revisited, current_, estimate.T_K_C * T_cur_C.inverse(), info, true});
+  pose_graph_.add({revisited, state_.current_keyframe, estimate.T_K_C * T_cur_C.inverse(), info, true});
   optimisePoseGraph(frame, revisited, estimate.T_K_C, report);
-  pose_graph_.recordLoop({frame->index, current_, revisited, estimate.pnp_inliers, report->loop_correction_m,
+  pose_graph_.recordLoop({frame->index, state_.current_keyframe, revisited, estimate.pnp_inliers, report->loop_correction_m,
                           report->ms.pose_graph_ms});
   return true;
 }
@@ -169,6 +217,9 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
 }
 
 FrameReport Mapper::addFrame(const RgbdFrame& input) {
+  if (!canContinue())
+    throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
+                                "so mapping cannot continue from it; it can still be rendered, exported or opened");
   const bool tracking = params_.poses == PoseSource::kTrack;
   if (!isValidTransform(input.T_W_C))
     throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
@@ -190,7 +241,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
     const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
     report.ms.tracking_ms = msSince(track_start);
     if (!outcome) {
-      ++frames_;
+      ++state_.frames_mapped;
+      state_.last_frame_index = input.index;
+      state_.last_timestamp = input.timestamp;
       report.ms.total_ms = msSince(start);
       return report;
     }
@@ -199,55 +252,72 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();
+  const int current = state_.current_keyframe;
   if (params_.keyframe_every > 0) {
-    const bool start_new = current_ < 0 || frames_ % params_.keyframe_every == 0;
+    const bool start_new = current < 0 || state_.frames_mapped % params_.keyframe_every == 0;
     report.decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
-    report.decision.keyframe = start_new ? -1 : current_;
+    report.decision.keyframe = start_new ? -1 : current;
   } else {
-    report.decision = decideKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+    // The current keyframe first; only a frame that lost it asks the index for candidates
+    // (the loop-closure search and, for a new keyframe, its edges).
+    const std::span<const KeyframeView> current_view =
+        current >= 0 ? std::span<const KeyframeView>(&views[current], 1) : std::span<const KeyframeView>();
+    report.decision = decideKeyframe(features, frame.T_W_C, current, current_view, camera_, params_.keyframes);
+    if (report.decision.kind != FrameDecision::Kind::kUpdate) {
+      index_.sync(views);
+      const std::vector<KeyframeView> candidates =
+          index_.candidates(features, frame.T_W_C, views, params_.keyframes.prefilter, {current});
+      report.decision = decideKeyframe(features, frame.T_W_C, current, candidates, camera_, params_.keyframes);
+    }
   }
   switch (report.decision.kind) {
     case FrameDecision::Kind::kUpdate:
       report.keyframe = report.decision.keyframe;
       break;
     case FrameDecision::Kind::kRevisit:
-      ++revisits_;
+      ++state_.revisits;
       report.keyframe = report.decision.keyframe;
       // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
-      if (tracking && tracking_.loops.enabled && current_ >= 0 && !graph_.edges().hasEdge(current_, report.keyframe))
+      if (tracking && tracking_.loops.enabled && state_.current_keyframe >= 0 && !graph_.edges().hasEdge(state_.current_keyframe, report.keyframe))
         closeLoop(report.keyframe, observed, &frame, &report);
       // The frame links the place it left to the place it recognised.
-      if (current_ >= 0) graph_.edges().strengthen(current_, report.keyframe, report.decision.delta_current);
+      if (current >= 0) graph_.edges().strengthen(current, report.keyframe, report.decision.delta_current);
       break;
     case FrameDecision::Kind::kNewKeyframe: {
       const auto edges = params_.keyframe_every > 0
                              ? std::vector<std::pair<int, double>>{}
-                             : edgesOfNewKeyframe(features, frame.T_W_C, current_, views, camera_, params_.keyframes);
+                             : edgesOfNewKeyframe(features, frame.T_W_C, current,
+                                                  index_.candidates(features, frame.T_W_C, views,
+                                                                    params_.keyframes.prefilter, {current},
+                                                                    index_.params().max_edge_candidates),
+                                                  camera_, params_.keyframes);
       // The keyframe keeps the features (the estimates below only read them through `observed`).
       const FrameFeatures* kept = nullptr;
       report.keyframe = newKeyframe(frame, std::move(features));
       kept = &graph_.keyframe(report.keyframe).features;
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
-      if (params_.keyframe_every > 0 && current_ >= 0) graph_.edges().strengthen(report.keyframe, current_, 0.0);
-      if (tracking && current_ >= 0)
-        addKeyframeEdges(report.keyframe, current_, tracked, edges, {kept, &points}, &frame, &report);
+      if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report.keyframe, current, 0.0);
+      if (tracking && current >= 0)
+        addKeyframeEdges(report.keyframe, current, tracked, edges, {kept, &points}, &frame, &report);
       break;
     }
   }
   report.T_W_C = frame.T_W_C;
-  current_ = report.keyframe;
+  state_.current_keyframe = report.keyframe;
   report.ms.decision_ms = msSince(decide_start);
 
   const auto update_start = std::chrono::steady_clock::now();
-  Keyframe& keyframe = graph_.keyframe(current_);
+  Keyframe& keyframe = graph_.keyframe(state_.current_keyframe);
   integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
   ++keyframe.frames_integrated;
   report.ms.update_ms = msSince(update_start);
   const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
-  frame_poses_.push_back({frame.index, frame.timestamp, current_, T_K_C});
-  if (tracking) tracker_.accept(graph_, current_, T_K_C);
+  state_.frame_poses.push_back({frame.index, frame.timestamp, state_.current_keyframe, T_K_C});
+  if (tracking) tracker_.accept(graph_, state_.current_keyframe, T_K_C);
   report.ms.total_ms = msSince(start);
-  ++frames_;
+  ++state_.frames_mapped;
+  state_.last_frame_index = frame.index;
+  state_.last_timestamp = frame.timestamp;
   return report;
 }
 

@@ -5,6 +5,7 @@
 
 #include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/keyframe/keyframe_index.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/tracking/keyframe_pose_graph.h"
 #include "mapping/tracking/tracker.h"
@@ -70,37 +71,74 @@ struct FrameReport {
   StageTimes ms;
 };
 
+/// A mapped frame's pose relative to the keyframe it went into.
+struct FramePose {
+  int frame_index = 0;
+  double timestamp = 0;
+  int keyframe = 0;
+  Transform T_K_C = Transform::Identity();
+};
+
+/// What a Mapper carries from one frame to the next besides its graph: with the graph and the
+/// parameters it is everything needed to go on mapping exactly as if the run had not stopped
+/// (a session file stores it, session_file.h). Per-frame state that a later stage adds (a
+/// tracker's velocity, the last pose) belongs here, with its field in the session file.
+struct MapperState {
+  /// The keyframe the last frame went into; -1 before the first frame (or unknown: a session of
+  /// format 1, which cannot be continued).
+  int current_keyframe = -1;
+  int frames_mapped = 0;
+  int revisits = 0;
+  int last_frame_index = -1;  ///< depth-list index of the last frame mapped (-1: none)
+  double last_timestamp = 0;  ///< s, its depth timestamp
+  int frames_lost = 0;        ///< frames PoseSource::kTrack could not place (skipped, not integrated)
+  /// One pose per integrated frame, relative to the keyframe it went into, so the trajectory
+  /// follows every keyframe pose correction.
+  std::vector<FramePose> frame_poses;
+  // PoseSource::kTrack: the tracker's motion state and the keyframe pose graph (its edges and
+  // the loops closed so far); the poses before the last optimisation are not kept.
+  TrackerState tracker;
+  std::vector<PoseGraphEdge> pose_graph_edges;
+  std::vector<LoopClosure> loops;
+
+  /// Throws std::invalid_argument when a field is out of range for a graph of `keyframes` keyframes.
+  void validate(std::size_t keyframes) const;
+};
+
 /// The per-frame mapping path shared by the command line and the workbench: features,
 /// keyframe decision, local-map update. Deterministic. Not thread-safe: one thread feeds it;
 /// others may read the graph only while it is not inside addFrame().
 class Mapper {
  public:
   explicit Mapper(const PinholeCamera& camera, const MapperParams& params = {}, const TrackingParams& tracking = {});
+  /// Continues a run that stopped with `graph` and `state` (a loaded session): the next frame is
+  /// mapped as it would have been in the run that made them (when canContinue()). Throws
+  /// std::invalid_argument when the state does not fit the graph, or a keyframe's container does
+  /// not use `camera` and the cell size.
+  Mapper(const PinholeCamera& camera, const MapperParams& params, KeyframeGraph graph, const MapperState& state,
+         const TrackingParams& tracking = {});
 
   /// Maps one frame with its pose (PoseSource::kGroundTruth) or at the pose the tracker
   /// estimates (kTrack; a frame it cannot place is skipped: FrameReport::lost). Throws
-  /// std::invalid_argument when a given pose is not a finite rigid transform or the images do not
-  /// fit the camera (see LocalMapIntegrator).
+  /// std::invalid_argument when a given pose is not a finite rigid transform, the images do not
+  /// fit the camera (see LocalMapIntegrator), or the mapper cannot continue (canContinue()).
   FrameReport addFrame(const RgbdFrame& frame);
 
   const KeyframeGraph& graph() const { return graph_; }
   KeyframeGraph& graph() { return graph_; }
   const PinholeCamera& camera() const { return camera_; }
   const MapperParams& params() const { return params_; }
-  int currentKeyframe() const { return current_; }
-  int revisits() const { return revisits_; }
+  int currentKeyframe() const { return state_.current_keyframe; }
+  int revisits() const { return state_.revisits; }
   /// Frames fed to addFrame(), lost ones included.
-  int framesMapped() const { return frames_; }
-  int framesLost() const { return frames_lost_; }
-  /// One pose per integrated frame, relative to the keyframe it went into, so the trajectory
-  /// follows every keyframe pose correction.
-  struct FramePose {
-    int frame_index = 0;
-    double timestamp = 0;
-    int keyframe = 0;
-    Transform T_K_C = Transform::Identity();
-  };
-  const std::vector<FramePose>& framePoses() const { return frame_poses_; }
+  int framesMapped() const { return state_.frames_mapped; }
+  int framesLost() const { return state_.frames_lost; }
+  /// The state to save: the counters, the tracker's and the pose graph's.
+  MapperState state() const;
+  /// False for keyframes restored without their current keyframe (a format-1 session): they
+  /// can be viewed and exported, not mapped further.
+  bool canContinue() const { return graph_.size() == 0 || state_.current_keyframe >= 0; }
+  const std::vector<FramePose>& framePoses() const { return state_.frame_poses; }
   /// The world poses of framePoses() with the keyframes' current poses, as a TUM trajectory.
   std::vector<StampedPose> trajectory() const;
   const Tracker& tracker() const { return tracker_; }
@@ -130,13 +168,10 @@ class Mapper {
   FeatureExtractor extractor_;
   LocalMapIntegrator integrator_;
   KeyframeGraph graph_;
-  int current_ = -1;
-  int revisits_ = 0;
-  int frames_ = 0;
-  int frames_lost_ = 0;
+  MapperState state_;
+  KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
   Tracker tracker_;
   KeyframePoseGraph pose_graph_;
-  std::vector<FramePose> frame_poses_;
 };
 
 }  // namespace vdmap

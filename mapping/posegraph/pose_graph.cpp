@@ -90,7 +90,7 @@ PoseGraphResult optimizePoseGraph(std::vector<Transform>* T_W_nodes, std::span<c
   if (options.max_iterations < 1) throw std::invalid_argument("pose graph: max_iterations must be >= 1");
 
   PoseGraphResult result;
-  if (edges.empty()) {
+  if (edges.empty()) {  // edge_chi2 stays empty, as `edges`
     result.converged = true;
     result.time_ms = msSince(start);
     return result;
@@ -149,6 +149,14 @@ PoseGraphResult optimizePoseGraph(std::vector<Transform>* T_W_nodes, std::span<c
     Transform& T = (*T_W_nodes)[i];
     T.linear() = q[i].normalized().toRotationMatrix();
     T.translation() = p[i];
+  }
+  result.edge_chi2.resize(edges.size());
+  for (size_t i = 0; i < edges.size(); ++i) {
+    const PoseGraphEdge& e = edges[i];
+    Eigen::Matrix<double, 6, 1> r;
+    RelativePoseCost(e.T_from_to, sqrt_information[i])(p[e.from].data(), q[e.from].coeffs().data(), p[e.to].data(),
+                                                       q[e.to].coeffs().data(), r.data());
+    result.edge_chi2[i] = r.squaredNorm();
   }
   result.initial_cost = summary.initial_cost;
   result.final_cost = summary.final_cost;

@@ -46,7 +46,8 @@ struct PoseGraphOptions {
   /// down-weighted.
   double robust_scale = 3.5;
   /// Nodes held constant. Empty: the first node (fixes the gauge: the graph is otherwise free to
-  /// move rigidly).
+  /// move rigidly). A part of the graph joined to no fixed node has no gauge; Levenberg-Marquardt's
+  /// damping keeps it near its start.
   std::vector<int> fixed_nodes;
   int max_iterations = 100;
   /// Stop when the relative cost decrease of a step falls below this (Ceres function_tolerance).
@@ -59,6 +60,9 @@ struct PoseGraphResult {
   int iterations = 0;
   double time_ms = 0.0;    ///< wall time of the solve
   bool converged = false;  ///< Ceres reported convergence (not a hit iteration limit or a failure)
+  /// r^T * information * r of every edge at the solution (before any robust loss), in the order
+  /// of `edges`. A robust edge far above robust_scale^2 was treated as an outlier.
+  std::vector<double> edge_chi2;
 };
 
 /// Optimises the node poses T_W_nodes (in place) so that they agree with the edges.

@@ -68,6 +68,12 @@ class KeyframePoseGraph {
   /// Keyframe poses as they were before the last optimisation (empty before the first).
   const std::vector<Transform>& posesBeforeOptimisation() const { return before_; }
   void recordLoop(const LoopClosure& loop) { loops_.push_back(loop); }
+  /// Continues a saved graph (its edges and loops; no poses before an optimisation).
+  void restore(std::vector<PoseGraphEdge> edges, std::vector<LoopClosure> loops) {
+    edges_ = std::move(edges);
+    loops_ = std::move(loops);
+    before_.clear();
+  }
   const std::vector<LoopClosure>& loops() const { return loops_; }
 
  private:

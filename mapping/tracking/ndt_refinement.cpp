@@ -167,6 +167,7 @@ void addFeatureTerms(std::span<const FeatureObservation> features, const Pinhole
     const double u = e.squaredNorm() * info * inv_k2;
     if (u >= 1.0) continue;
     const double w = info * (1.0 - u) * (1.0 - u);
+    lin->support += (1.0 - u) * (1.0 - u) * (1.0 - u);  // a feature counts like a point
     Eigen::Matrix<double, 2, 3> P;
     P << cam.fx * iz, 0, -cam.fx * y.x() * iz * iz, 0, cam.fy * iz, -cam.fy * y.y() * iz * iz;
     Eigen::Matrix<double, 3, 6> dy;

@@ -66,8 +66,10 @@ struct NdtRefinementResult {
   int associated = 0;   ///< of those, landing on a cell with an ellipsoid within max_distance_m (last step)
   int inliers = 0;      ///< of those, within robust_k (Mahalanobis)
   double rms_mahalanobis = 0.0;  ///< over the inliers
-  /// Sum over the points of 1 - rho(d) / rho_max (Tukey's loss of the Mahalanobis distance d):
-  /// a soft inlier count, higher where the frame fits the local map better.
+  /// Sum over the points and the features of 1 - rho(d) / rho_max (Tukey's loss of the
+  /// Mahalanobis distance d, or of the reprojection error): a soft inlier count, higher where the
+  /// frame fits the local map and the matched keypoints better. The features count: the dense
+  /// points alone favour a pose slid along a wall that puts more of them inside the map.
   double support = 0.0;
   int iterations = 0;   ///< Gauss-Newton steps taken
   /// Gauss-Newton normal matrix at the solution for a perturbation T_K_C <- exp(xi) T_K_C,

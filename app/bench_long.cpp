@@ -1,0 +1,118 @@
+#include "app/bench_long.h"
+
+#include <unistd.h>
+
+#include <cstdio>
+#include <ctime>
+#include <fstream>
+#include <iostream>
+#include <sstream>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "app/map_sequence.h"
+#include "app/timing.h"
+#include "mapping/core/atomic_file.h"
+
+namespace vdmap::app {
+namespace {
+
+double threadCpuMs() {
+  timespec t{};
+  clock_gettime(CLOCK_THREAD_CPUTIME_ID, &t);
+  return 1e3 * static_cast<double>(t.tv_sec) + 1e-6 * static_cast<double>(t.tv_nsec);
+}
+
+// Resident set size of this process, MB (0 where /proc is unavailable).
+double residentMb() {
+  std::ifstream statm("/proc/self/statm");
+  std::size_t pages = 0, resident = 0;
+  statm >> pages >> resident;
+  return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
+}
+
+struct FrameRow {
+  double cpu_ms = 0, wall_ms = 0, rss_mb = 0;
+  std::size_t keyframes = 0;
+  long long global_ellipsoids = -1;  ///< -1: no global map built after this frame
+  double t_g_s = 0;
+};
+
+double medianCpu(const std::vector<FrameRow>& rows, std::size_t begin, std::size_t end) {
+  std::vector<double> v;
+  for (std::size_t i = begin; i < end && i < rows.size(); ++i) v.push_back(rows[i].cpu_ms);
+  return median(std::move(v));
+}
+
+}  // namespace
+
+void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
+                  const std::filesystem::path& out_dir, const LongRunOptions& options) {
+  if (options.global_every < 1) throw std::invalid_argument("--global-every must be at least 1");
+  Mapper mapper(seq.camera(), mapper_params);
+  std::vector<FrameRow> rows;
+  rows.reserve(seq.size());
+  auto buildGlobal = [&](FrameRow& row) {
+    const GlobalMap map = buildGlobalMap(mapper.graph(), global);
+    row.global_ellipsoids = static_cast<long long>(map.sigma_e_prime);
+    row.t_g_s = map.t_g_s;
+  };
+  double last = threadCpuMs();
+  mapSequence(seq, mapper, [&](const FrameReport& report) {
+    FrameRow row;
+    row.cpu_ms = threadCpuMs() - last;  // the frame's mapping, and the progress bar's update
+    row.wall_ms = report.ms.total_ms;
+    row.rss_mb = residentMb();
+    row.keyframes = mapper.graph().size();
+    if (static_cast<int>(rows.size() + 1) % options.global_every == 0) buildGlobal(row);
+    rows.push_back(row);
+    last = threadCpuMs();  // a global-map build is not the next frame's cost
+  });
+  if (!rows.empty() && rows.back().global_ellipsoids < 0) buildGlobal(rows.back());
+
+  std::ostringstream csv;
+  csv << "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s\n";
+  for (std::size_t i = 0; i < rows.size(); ++i) {
+    const FrameRow& r = rows[i];
+    csv << i << ',' << r.cpu_ms << ',' << r.wall_ms << ',' << r.rss_mb << ',' << r.keyframes << ',';
+    if (r.global_ellipsoids >= 0) csv << r.global_ellipsoids << ',' << r.t_g_s;
+    else csv << ',';
+    csv << '\n';
+  }
+  const std::size_t n = rows.size();
+  const double early = medianCpu(rows, n / 6, n / 3), late = medianCpu(rows, n - n / 6, n);
+  const double rss_half = n > 0 ? rows[n / 2].rss_mb : 0.0, rss_end = n > 0 ? rows.back().rss_mb : 0.0;
+  const nlohmann::json summary = {
+      {"frames", n},
+      {"keyframes", mapper.graph().size()},
+      {"revisits", mapper.revisits()},
+      {"cpu_ms_median_early", early},
+      {"early_frames", {n / 6, n / 3}},
+      {"cpu_ms_median_late", late},
+      {"late_frames", {n - n / 6, n}},
+      {"cpu_ratio_late_to_early", early > 0 ? late / early : 0.0},
+      {"cpu_ms_median_all", medianCpu(rows, 0, n)},
+      {"rss_mb_half", rss_half},
+      {"rss_mb_end", rss_end},
+      {"rss_growth_last_half", rss_half > 0 ? rss_end / rss_half - 1.0 : 0.0},
+      {"global_ellipsoids_end", n > 0 ? rows.back().global_ellipsoids : 0},
+      {"t_g_s_end", n > 0 ? rows.back().t_g_s : 0.0},
+  };
+  writeFileAtomically(out_dir / "long.csv", csv.str());
+  writeFileAtomically(out_dir / "long.json", summary.dump(2) + "\n");
+  if (options.json) {
+    std::cout << summary.dump(2) << '\n';
+    return;
+  }
+  std::printf("long run: %zu frames, %zu keyframes, %d revisits\n", n, mapper.graph().size(), mapper.revisits());
+  std::printf("CPU per frame, median: frames %zu-%zu %.2f ms, last %zu frames %.2f ms (x%.2f)\n", n / 6, n / 3, early,
+              n / 6, late, early > 0 ? late / early : 0.0);
+  std::printf("resident memory: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", rss_half, rss_end,
+              rss_half > 0 ? 100.0 * (rss_end / rss_half - 1.0) : 0.0);
+  std::printf("global map at the end: %lld ellipsoids in %.2f s\n", n > 0 ? rows.back().global_ellipsoids : 0LL,
+              n > 0 ? rows.back().t_g_s : 0.0);
+  std::printf("wrote %s and %s\n", (out_dir / "long.csv").c_str(), (out_dir / "long.json").c_str());
+}
+
+}  // namespace vdmap::app

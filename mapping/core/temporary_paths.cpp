@@ -1,0 +1,74 @@
+#include "mapping/core/temporary_paths.h"
+
+#include <climits>
+#include <csignal>
+#include <cstring>
+#include <unistd.h>
+
+#include <atomic>
+
+namespace vdmap {
+namespace {
+
+// Fixed storage, no allocation: the signal handler reads it. A slot is published (kReady) only
+// once its path is complete.
+constexpr int kSlots = 256;
+enum SlotState : int { kFree = 0, kWriting = 1, kReady = 2 };
+struct Slot {
+  std::atomic<int> state{kFree};
+  bool folder = false;
+  char path[PATH_MAX] = {};
+};
+Slot g_slots[kSlots];
+static_assert(std::atomic<int>::is_always_lock_free, "the signal handler reads the slots' state");
+
+void onInterrupt(int signal) {
+  removeTemporaryPaths();
+  // SA_RESETHAND restored the default action; the signal is blocked in here, so it ends the
+  // process once the handler returns.
+  ::raise(signal);
+}
+
+}  // namespace
+
+TemporaryPath::TemporaryPath(const std::filesystem::path& path, bool folder) {
+  const std::string& text = path.native();
+  if (text.empty() || text.size() >= PATH_MAX) return;
+  for (int i = 0; i < kSlots; ++i) {
+    int expected = kFree;
+    if (!g_slots[i].state.compare_exchange_strong(expected, kWriting)) continue;
+    std::memcpy(g_slots[i].path, text.c_str(), text.size() + 1);
+    g_slots[i].folder = folder;
+    g_slots[i].state.store(kReady, std::memory_order_release);
+    slot_ = i;
+    return;
+  }
+}
+
+TemporaryPath::~TemporaryPath() {
+  if (slot_ >= 0) g_slots[slot_].state.store(kFree, std::memory_order_release);
+}
+
+void removeTemporaryPaths() {
+  // Files first; then folders, a few passes, so a folder holding another registered folder goes
+  // whatever their slot order (rmdir removes only empty ones).
+  for (const int pass : {0, 1, 2, 3})
+    for (Slot& slot : g_slots)
+      if (slot.state.load(std::memory_order_acquire) == kReady && slot.folder == (pass > 0))
+        pass > 0 ? ::rmdir(slot.path) : ::unlink(slot.path);
+}
+
+void installTemporaryPathCleanup() {
+  for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
+    struct sigaction old{};
+    ::sigaction(signal, nullptr, &old);
+    if (old.sa_handler == SIG_IGN) continue;  // e.g. SIGHUP under nohup: stay immune
+    struct sigaction action{};
+    action.sa_handler = onInterrupt;
+    action.sa_flags = SA_RESETHAND;
+    sigemptyset(&action.sa_mask);
+    ::sigaction(signal, &action, nullptr);
+  }
+}
+
+}  // namespace vdmap
