@@ -1,5 +1,6 @@
 #include "app/bench_long.h"
 
+#include <malloc.h>
 #include <unistd.h>
 
 #include <cstdio>
@@ -14,6 +15,7 @@
 #include "app/map_sequence.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/timing.h"
 
 namespace vdmap::app {
 namespace {
@@ -32,8 +34,15 @@ double residentMb() {
   return static_cast<double>(resident) * static_cast<double>(sysconf(_SC_PAGESIZE)) / (1024.0 * 1024.0);
 }
 
+// Bytes the allocator has handed out and not got back, MB: the live heap, which unlike the
+// resident size does not count freed memory glibc keeps in its arenas for re-use.
+double liveHeapMb() {
+  const struct mallinfo2 m = mallinfo2();
+  return static_cast<double>(m.uordblks + m.hblkhd) / (1024.0 * 1024.0);
+}
+
 struct FrameRow {
-  double cpu_ms = 0, wall_ms = 0, rss_mb = 0;
+  double cpu_ms = 0, wall_ms = 0, rss_mb = 0, heap_mb = 0;
   std::size_t keyframes = 0;
   long long global_ellipsoids = -1;  ///< -1: no global map built after this frame
   double t_g_s = 0;
@@ -64,6 +73,7 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
     row.cpu_ms = threadCpuMs() - last;  // the frame's mapping, and the progress bar's update
     row.wall_ms = report.ms.total_ms;
     row.rss_mb = residentMb();
+    row.heap_mb = liveHeapMb();
     row.keyframes = mapper.graph().size();
     if (static_cast<int>(rows.size() + 1) % options.global_every == 0) buildGlobal(row);
     rows.push_back(row);
@@ -72,32 +82,36 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
   if (!rows.empty() && rows.back().global_ellipsoids < 0) buildGlobal(rows.back());
 
   std::ostringstream csv;
-  csv << "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s\n";
+  csv << "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s,heap_mb\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
     const FrameRow& r = rows[i];
     csv << i << ',' << r.cpu_ms << ',' << r.wall_ms << ',' << r.rss_mb << ',' << r.keyframes << ',';
     if (r.global_ellipsoids >= 0) csv << r.global_ellipsoids << ',' << r.t_g_s;
     else csv << ',';
-    csv << '\n';
+    csv << ',' << r.heap_mb << '\n';
   }
   const std::size_t n = rows.size();
   const double early = medianCpu(rows, n / 6, n / 3), late = medianCpu(rows, n - n / 6, n);
   const double rss_half = n > 0 ? rows[n / 2].rss_mb : 0.0, rss_end = n > 0 ? rows.back().rss_mb : 0.0;
+  const double heap_half = n > 0 ? rows[n / 2].heap_mb : 0.0, heap_end = n > 0 ? rows.back().heap_mb : 0.0;
   const nlohmann::json summary = {
       {"frames", n},
       {"keyframes", mapper.graph().size()},
       {"revisits", mapper.revisits()},
-      {"cpu_ms_median_early", early},
+      {"cpu_ms_median_early", rounded(early)},
       {"early_frames", {n / 6, n / 3}},
-      {"cpu_ms_median_late", late},
+      {"cpu_ms_median_late", rounded(late)},
       {"late_frames", {n - n / 6, n}},
-      {"cpu_ratio_late_to_early", early > 0 ? late / early : 0.0},
-      {"cpu_ms_median_all", medianCpu(rows, 0, n)},
-      {"rss_mb_half", rss_half},
-      {"rss_mb_end", rss_end},
-      {"rss_growth_last_half", rss_half > 0 ? rss_end / rss_half - 1.0 : 0.0},
+      {"cpu_ratio_late_to_early", rounded(early > 0 ? late / early : 0.0)},
+      {"cpu_ms_median_all", rounded(medianCpu(rows, 0, n))},
+      {"rss_mb_half", rounded(rss_half)},
+      {"rss_mb_end", rounded(rss_end)},
+      {"rss_growth_last_half", rounded(rss_half > 0 ? rss_end / rss_half - 1.0 : 0.0)},
+      {"heap_mb_half", rounded(heap_half)},
+      {"heap_mb_end", rounded(heap_end)},
+      {"heap_growth_last_half", rounded(heap_half > 0 ? heap_end / heap_half - 1.0 : 0.0)},
       {"global_ellipsoids_end", n > 0 ? rows.back().global_ellipsoids : 0},
-      {"t_g_s_end", n > 0 ? rows.back().t_g_s : 0.0},
+      {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
   writeFileAtomically(out_dir / "long.csv", csv.str());
   writeFileAtomically(out_dir / "long.json", summary.dump(2) + "\n");
@@ -110,6 +124,8 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
               n / 6, late, early > 0 ? late / early : 0.0);
   std::printf("resident memory: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", rss_half, rss_end,
               rss_half > 0 ? 100.0 * (rss_end / rss_half - 1.0) : 0.0);
+  std::printf("live heap: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", heap_half, heap_end,
+              heap_half > 0 ? 100.0 * (heap_end / heap_half - 1.0) : 0.0);
   std::printf("global map at the end: %lld ellipsoids in %.2f s\n", n > 0 ? rows.back().global_ellipsoids : 0LL,
               n > 0 ? rows.back().t_g_s : 0.0);
   std::printf("wrote %s and %s\n", (out_dir / "long.csv").c_str(), (out_dir / "long.json").c_str());

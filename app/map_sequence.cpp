@@ -6,7 +6,7 @@
 namespace vdmap::app {
 
 void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<void(const FrameReport&)>& on_frame) {
-  FramePrefetcher frames(seq);
+  FramePrefetcher frames(seq, 4, mapper.featuresAhead());
   ProgressBar progress("mapping", seq.size());
   std::size_t done = 0;  // of this sequence (a continued session has mapped others before)
   while (std::optional<RgbdFrame> frame = frames.next()) {

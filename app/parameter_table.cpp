@@ -214,12 +214,14 @@ void addParameterOptions(CLI::App& verb, MappingParams& params) {
   for (const Parameter& p : kTable) {
     if (p.flag.empty()) continue;
     const std::string flag(p.flag);
-    const std::string help = std::string(p.help) + " [" + validityText(p) + "]";
     if (p.kind == K::kBool) {
+      const std::string help = std::string(p.help) + (p.get(defaults) != 0 ? " [on by default; this flag turns it off]"
+                                                                              : " [off by default; this flag turns it on]");
       // The flag flips the default (--no-occlusion-removal turns a default-on step off).
       verb.add_flag_callback(flag, [&params, &p, defaults] { p.set(params, p.get(defaults) != 0 ? 0 : 1); }, help);
       continue;
     }
+    const std::string help = std::string(p.help) + " [" + validityText(p) + "]";
     verb.add_option_function<std::string>(
             flag,
             [&params, &p, flag](const std::string& text) {

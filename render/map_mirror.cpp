@@ -120,11 +120,11 @@ void MapMirror::setGraph(int generation, int selected_keyframe, const std::funct
     const glm::u8vec3 color = id == scene.selected_keyframe  ? kSelected
                               : id == scene.current_keyframe ? kCurrent
                                                              : keyframeColor(id);
-    addFrustum(lines, scene.camera, scene.keyframes[i], 0.25f, color);
+    addFrustum(lines, scene.camera, scene.keyframes[i], kKeyframeFrustumDepthM, color);
   }
   if (style_.graph) addEdges(lines, scene.keyframes, scene.edges);
   if (style_.trajectory) addTrajectory(lines, scene.trajectory, kTrajectory);
-  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), 0.15f, kCamera);
+  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
   lines_.set(lines);
   ++uploads_.graph;
 }

@@ -33,6 +33,9 @@ struct GraphScene {
   int selected_keyframe = -1;         ///< drawn white
 };
 
+/// Depth of the drawn frustums, m: keyframes and the camera now (the view frames them whole).
+constexpr float kKeyframeFrustumDepthM = 0.25f, kCameraFrustumDepthM = 0.15f;
+
 /// How the 3-D view draws the mirror.
 struct MirrorStyle {
   ColorMode color = ColorMode::kRgb;

@@ -126,7 +126,7 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
   if (!in) throw std::runtime_error(csv_file + ": cannot open");
   std::string line;
   std::getline(in, line);  // header
-  std::vector<double> cpu, rss, keyframes, global_frame, global_size;
+  std::vector<double> cpu, rss, heap, keyframes, global_frame, global_size;
   while (std::getline(in, line)) {
     std::vector<std::string> f;
     std::stringstream row(line);
@@ -135,6 +135,7 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
     cpu.push_back(std::stod(f[1]));
     rss.push_back(std::stod(f[3]));
     keyframes.push_back(std::stod(f[4]));
+    if (f.size() > 7) heap.push_back(std::stod(f[7]));
     if (f.size() > 5 && !f[5].empty()) global_frame.push_back(static_cast<double>(cpu.size() - 1)), global_size.push_back(std::stod(f[5]));
   }
   if (cpu.empty()) throw std::runtime_error(csv_file + ": no frames");
@@ -179,7 +180,8 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
   series({}, cpu, cpu_max, cv::Scalar(190, 190, 190), true);
   series({}, running, cpu_max, kVdmap, false);
   y0 += panel + gap;
-  axes("resident memory, MB", maxOf(rss));
+  axes(heap.empty() ? "resident memory, MB" : "memory, MB (blue: resident, grey: live heap)", maxOf(rss));
+  if (heap.size() == rss.size()) series({}, heap, maxOf(rss), cv::Scalar(150, 150, 150), false);
   series({}, rss, maxOf(rss), kVdmap, false);
   y0 += panel + gap;
   axes("keyframes", maxOf(keyframes));

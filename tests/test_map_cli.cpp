@@ -78,17 +78,23 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
   EXPECT_EQ(j["early_frames"], nlohmann::json({2, 4}));
   EXPECT_EQ(j["late_frames"], nlohmann::json({10, 12}));
   EXPECT_GT(j["rss_mb_end"].get<double>(), 0.0);
+  EXPECT_GT(j["heap_mb_end"].get<double>(), 0.0);
+  EXPECT_LE(j["heap_mb_end"].get<double>(), j["rss_mb_end"].get<double>());
   EXPECT_GT(j["global_ellipsoids_end"].get<long>(), 0);
   std::istringstream csv(readFile(tmp / "long.csv"));
   std::string line;
   std::getline(csv, line);
-  EXPECT_EQ(line, "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s");
+  EXPECT_EQ(line, "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s,heap_mb");
   std::vector<std::string> rows;
   while (std::getline(csv, line)) rows.push_back(line);
   ASSERT_EQ(rows.size(), 12u);
   for (std::size_t i = 0; i < rows.size(); ++i) {
+    std::vector<std::string> f;
+    std::stringstream row(rows[i]);
+    for (std::string cell; std::getline(row, cell, ',');) f.push_back(cell);
+    ASSERT_EQ(f.size(), 8u) << "row " << i << ": " << rows[i];
     const bool global = i == 4 || i == 9 || i == 11;
-    EXPECT_EQ(rows[i].back() != ',', global) << "row " << i << ": " << rows[i];
+    EXPECT_EQ(!f[5].empty(), global) << "row " << i << ": " << rows[i];
   }
   EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
                 .exit_code,

@@ -2,10 +2,12 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "mapping/core/compressed_image.h"
 #include "mapping/core/error.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/image_decode.h"
 #include "mapping/io/tum_sequence.h"
+#include "mapping/keyframe/mapper.h"
 #include "tests/test_util.h"
 
 namespace vdmap {
@@ -188,6 +190,44 @@ TEST(ImageDecode, GivesOpenCvsPixels) {
   ASSERT_TRUE(cv::imwrite((dir / "depth.png").string(), depth));
   EXPECT_EQ(cv::norm(readDepthImage(dir / "depth.png", size), depth, cv::NORM_INF), 0.0);
   EXPECT_THROW(readDepthImage(dir / "depth.png", {52, 37}), InputError);
+}
+
+// A keyframe holds the files a frame was read from (issue 16: 7-Scenes' JPEG and PNG are ~0.13 MB
+// where re-compressing the pixels as PNG took ~0.5 MB) and gets back exactly the frame's pixels;
+// pixels that came from no file are PNG-compressed, losslessly too.
+TEST(CompressedImage, HoldsTheSourceFilesAndDecodesThemToTheFramesPixels) {
+  TempDir dir;
+  cv::Mat colour(37, 53, CV_8UC3), depth(37, 53, CV_16UC1);
+  cv::randu(colour, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::randu(depth, 0, 65535);
+  const cv::Size size(53, 37);
+  ASSERT_TRUE(cv::imwrite((dir / "colour.jpg").string(), colour));
+  ASSERT_TRUE(cv::imwrite((dir / "depth.png").string(), depth));
+  std::string rgb_bytes, depth_bytes;
+  const cv::Mat rgb = readColorImage(dir / "colour.jpg", size, &rgb_bytes);
+  const cv::Mat d = readDepthImage(dir / "depth.png", size, &depth_bytes);
+  EXPECT_EQ(rgb_bytes.size(), std::filesystem::file_size(dir / "colour.jpg"));
+  const CompressedImage held_rgb(rgb, std::make_shared<const std::string>(rgb_bytes));
+  const CompressedImage held_depth(d, std::make_shared<const std::string>(depth_bytes));
+  EXPECT_EQ(held_rgb.compressedBytes(), rgb_bytes.size());
+  EXPECT_EQ(held_depth.compressedBytes(), depth_bytes.size());
+  EXPECT_EQ(cv::norm(held_rgb.decode(), rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(held_depth.decode(), d, cv::NORM_INF), 0.0);
+  EXPECT_EQ(held_rgb.decode().type(), CV_8UC3);
+  const CompressedImage png(rgb);
+  EXPECT_GT(png.compressedBytes(), 0u);
+  EXPECT_EQ(cv::norm(png.decode(), rgb, cv::NORM_INF), 0.0);
+  // Through the sequence and the mapper: the keyframe keeps the loaded frame's files.
+  test::writeTinySequence(dir / "seq", 2);
+  const TumSequence seq = TumSequence::open(dir / "seq");
+  const RgbdFrame frame = seq.load(0);
+  ASSERT_TRUE(frame.rgb_file && frame.depth_file);
+  Mapper mapper(seq.camera());
+  mapper.addFrame(frame);
+  const Keyframe& k = mapper.graph().keyframe(0);
+  EXPECT_EQ(k.memory().images, frame.rgb_file->size() + frame.depth_file->size());
+  EXPECT_EQ(cv::norm(k.rgb(), frame.rgb, cv::NORM_INF), 0.0);
+  EXPECT_EQ(cv::norm(k.depth(), frame.depth, cv::NORM_INF), 0.0);
 }
 
 TEST(ImageDecode, GivesOpenCvsPixelsOnSevenScenes) {

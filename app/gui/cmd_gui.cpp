@@ -157,6 +157,8 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
       "f1, esc; e.g. h for the help)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
+  app.add_flag("--expand-sections", args.script.expand_sections,
+               "scripted: open every collapsible section of the panels (the stats' labels_cut then covers them all)");
   app.add_option("--measure-latency", args.script.latency_runs,
                  "scripted: after the screenshot, N merge-distance edits, each timed until its map is drawn (stats: "
                  "slider_to_map_ms)");

@@ -8,7 +8,9 @@
 #include <Eigen/Geometry>
 
 #include "mapping/export/map_export.h"
+#include "render/map_mirror.h"
 #include "render/map_scene.h"
+#include "render/scene_lines.h"
 
 namespace vdmap::app::gui {
 namespace fs = std::filesystem;
@@ -26,19 +28,19 @@ std::string absolute(const std::string& path) {
 const std::vector<std::pair<const char*, const char*>>& keyHelp() {
   static const std::vector<std::pair<const char*, const char*>> keys = {
       {"Space", "play / pause"},
-      {"Right / Left", "one frame forward / back (back re-maps from the start)"},
+      {"Right / Left", "one frame forward / back (taps add up, none is lost; back re-maps from the start)"},
       {"K", "map to the next keyframe"},
-      {"F", "frame the map (keeps the direction; the view follows the map again)"},
+      {"F", "frame the map and the cameras (keeps the direction; the view follows the map again)"},
       {"R", "reset the view (default direction about the up axis)"},
-      {"V", "view from the selected keyframe (its own intrinsics)"},
-      {"C", "the selected keyframe's container view, large (zoom, grid)"},
-      {"H, F1", "this help"},
+      {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
+      {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
+      {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
       {"left drag", "orbit about the up axis"},
       {"right / middle drag, Shift + left drag", "pan"},
       {"wheel", "zoom"},
-      {"click", "pick an ellipsoid (its keyframe is selected)"},
+      {"click", "pick an ellipsoid (marked magenta; its keyframe is selected)"},
       {"container view: wheel, drag", "zoom, pan"},
   };
   return keys;
@@ -369,23 +371,31 @@ void Workbench::sync() {
   }
 }
 
-std::vector<glm::vec3> Workbench::framePoints() const {
-  std::vector<glm::vec3> points;
-  if (!session_) return points;
+std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
+  if (!session_) return render::robustBounds({});
+  std::vector<glm::vec3> means;
   if (const auto global = session_->global())
-    for (const Ellipsoid& e : global->map.ellipsoids) points.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+    for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  // The cameras are few beside the map's ellipsoids and lie off its surfaces: trimmed with them,
+  // they would be the first to go and their frustums would be cut at the viewport's edge.
+  render::ColoredLines cameras;
   const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
+  for (const KeyframeInfo& k : mapping->keyframes)
+    render::addFrustum(cameras, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
   for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
     const Eigen::Vector3d t = mapping->framePose(i).translation();
-    points.emplace_back(t.x(), t.y(), t.z());
+    cameras.positions.emplace_back(t.x(), t.y(), t.z());
   }
-  return points;
+  if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
+  auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
+  for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return {lo, hi};
 }
 
 void Workbench::frameMap() {
   const auto global = session_ ? session_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = render::robustBounds(framePoints());
+  const auto [lo, hi] = frameBounds();
   ui_.camera.up = upVector();
   ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
@@ -395,7 +405,7 @@ void Workbench::frameMap() {
 void Workbench::resetView() {
   const auto global = session_ ? session_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = render::robustBounds(framePoints());
+  const auto [lo, hi] = frameBounds();
   ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;

@@ -168,8 +168,10 @@ class Workbench {
   void opened(const std::string& path);
   void showPose(const Transform& T_W_K);
   void sendPose(int id, const Transform& T_W_K);
-  // Points to frame: the global map's means and the camera positions.
-  std::vector<glm::vec3> framePoints() const;
+  // The box the view frames: the global map's means without their outer 2 % per axis (a few
+  // stray ellipsoids would shrink the map to a dot), grown to hold every camera of the
+  // trajectory and every keyframe's frustum as drawn.
+  std::pair<glm::vec3, glm::vec3> frameBounds() const;
 
   UiState ui_;
   std::string first_error_;

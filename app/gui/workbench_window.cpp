@@ -483,8 +483,11 @@ class WorkbenchWindow {
     const bool enter = ImGui::InputText("##folder", &ui().sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
     tip("A TUM RGB-D folder (rgb.txt, depth.txt, groundtruth.txt) or a saved session (.vdmap).");
     ImGui::SameLine();
-    if (ImGui::Button("Open") || enter) bench_.openPath(ui().sequence_text);
-    tip("Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::BeginDisabled(ui().sequence_text.empty());
+    if (ImGui::Button("Open") || (enter && !ui().sequence_text.empty())) bench_.openPath(ui().sequence_text);
+    tip(ui().sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
+                                   : "Opens the folder or session typed on the left; errors show in the status line below.");
+    ImGui::EndDisabled();
     MapSession* session = bench_.session();
     if (!session) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
@@ -498,17 +501,28 @@ class WorkbenchWindow {
       ImGui::TextWrapped("%s", sequence->folder().c_str());
       ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping_->camera.width,
                          mapping_->camera.height, total);
+      tip("Where the intrinsics come from (--camera, camera.yaml or a preset named by the folder), the image size "
+          "in pixels, and the frames selected.");
     } else {
       ImGui::TextWrapped("%s", ui().settings.last_sequence.c_str());
       ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping_->keyframes.size());
+      tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
+          "they were mapped with (the Re-run parameters show them).");
     }
     const std::string why_saved = "A saved session has its keyframes but no sequence to play or re-map.";
+    // Play, Step and Next keyframe cannot act once every frame is asked for (Pause still can).
+    const bool at_end = status.target >= total;
+    const std::string why_end = "All " + std::to_string(total) + " frames are mapped: Back (Left) or the scrubber go back.";
     ImGui::BeginDisabled(saved);
+    ImGui::BeginDisabled(at_end && !status.playing);
     if (ImGui::Button(status.playing ? "Pause" : "Play")) bench_.key(KeyAction::kPlayPause);
-    tip(saved ? why_saved : "Maps the frames one after another up to the end (Space).");
+    tip(saved ? why_saved : at_end && !status.playing ? why_end : "Maps the frames one after another up to the end (Space).");
+    ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(at_end);
     if (ImGui::Button("Step")) bench_.key(KeyAction::kStepForward);
-    tip(saved ? why_saved : "Maps one more frame (Right).");
+    tip(saved ? why_saved : at_end ? why_end : "Maps one more frame (Right).");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     ImGui::BeginDisabled(status.target < 2);
     if (ImGui::Button("Back")) bench_.key(KeyAction::kStepBack);
@@ -517,8 +531,10 @@ class WorkbenchWindow {
                             : "One frame back (Left): the map is rebuilt from the first frame.");
     ImGui::EndDisabled();
     ImGui::SameLine();
+    ImGui::BeginDisabled(at_end);
     if (ImGui::Button("Next keyframe")) bench_.key(KeyAction::kNextKeyframe);
-    tip(saved ? why_saved : "Maps up to the next frame that starts a keyframe (K).");
+    tip(saved ? why_saved : at_end ? why_end : "Maps up to the next frame that starts a keyframe (K).");
+    ImGui::EndDisabled();
     checkFits();
     if (beginRows("player")) {
       label("fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
@@ -543,6 +559,8 @@ class WorkbenchWindow {
     ImGui::Text("%d / %d frames mapped, %zu keyframes%s", mapped, total, mapping_->keyframes.size(),
                 status.busy ? " (working)" : "");
     checkFits();
+    tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "
+        "keyframes they made (SPEC 5: a new one when a frame re-observes under tau of the current one's features).");
 
     const float image_width = ImGui::GetContentRegionAvail().x;
     if (!mirror_.rgbTexture().empty() && mapped > 0 && !saved) {
@@ -610,21 +628,27 @@ class WorkbenchWindow {
   void drawMapPanel() {
     beginPanel("Map", right_, right_w_);
     if (bench_.session()) {
-      if (ImGui::CollapsingHeader("Thresholds (live)", ImGuiTreeNodeFlags_DefaultOpen)) drawThresholds();
-      if (ImGui::CollapsingHeader("Re-run parameters")) drawRerun();
-      if (ImGui::CollapsingHeader("View", ImGuiTreeNodeFlags_DefaultOpen)) drawView();
-      if (ImGui::CollapsingHeader("Keyframes", ImGuiTreeNodeFlags_DefaultOpen)) drawKeyframes();
-      if (ImGui::CollapsingHeader("Picked ellipsoid", ImGuiTreeNodeFlags_DefaultOpen)) drawPicked();
-      if (ImGui::CollapsingHeader("Pose correction")) drawPoseFile();
-      if (ImGui::CollapsingHeader("Export and save")) drawExport();
+      if (section("Thresholds (live)", true)) drawThresholds();
+      if (section("Re-run parameters")) drawRerun();
+      if (section("View", true)) drawView();
+      if (section("Keyframes", true)) drawKeyframes();
+      if (section("Picked ellipsoid", true)) drawPicked();
+      if (section("Pose correction")) drawPoseFile();
+      if (section("Export and save")) drawExport();
     }
-    if (ImGui::CollapsingHeader("Settings")) {
+    if (section("Settings")) {
       if (ImGui::Button("Reset to defaults")) bench_.resetToDefaults();
       tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
       ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
                          settingsPath().c_str());
     }
     ImGui::End();
+  }
+
+  // A collapsible section of a panel; a scripted layout check (--expand-sections) opens them all.
+  bool section(const char* name, bool open_by_default = false) {
+    if (script_.expand_sections) ImGui::SetNextItemOpen(true, ImGuiCond_Always);
+    return ImGui::CollapsingHeader(name, open_by_default ? ImGuiTreeNodeFlags_DefaultOpen : 0);
   }
 
   // One parameter of the table as a slider, combo or checkbox.
@@ -791,8 +815,10 @@ class WorkbenchWindow {
     ImGui::SameLine();
     if (ImGui::Button("Help (H)")) bench_.key(KeyAction::kHelp);
     checkFits();
+    ImGui::BeginDisabled(screenshot_text_.empty());
     if (ImGui::Button("Screenshot")) screenshot_request_ = screenshot_text_;
-    tip("Writes the whole window as a PNG to the file named on the right.");
+    tip(screenshot_text_.empty() ? "Type a file name on the right first." : "Writes the whole window as a PNG to the file named on the right.");
+    ImGui::EndDisabled();
     ImGui::SameLine();
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::InputText("##shot", &screenshot_text_);
@@ -825,6 +851,8 @@ class WorkbenchWindow {
     }
     ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
                        k.frames_integrated);
+    tip("Its local map: one ellipsoid per touched container cell (SPEC 2); of those, the ones the filter keeps with "
+        "the live thresholds (min points, k; SPEC 4); and the frames whose depth went into it.");
     const render::Texture2D& container = mirror_.containerTexture();
     if (!mirror_.containerImage().empty()) {
       const float w = ImGui::GetContentRegionAvail().x;

@@ -13,6 +13,7 @@ struct ScriptOptions {
   bool play_to_end = false;   ///< press Play at start
   int keyframe = -1;          ///< select this keyframe in the inspector before the screenshot
   std::vector<int> press;     ///< GLFW keys pressed then, before the screenshot (keyNames())
+  bool expand_sections = false;  ///< every collapsible section of the panels open (layout checks)
   std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
   bool exit = false;          ///< close the window once the above are written

@@ -5,6 +5,8 @@
 
 #include <opencv2/imgcodecs.hpp>
 
+#include "mapping/io/image_decode.h"
+
 namespace vdmap {
 
 // PNG level 1 (zlib's fastest): on 7-Scenes keyframes it is ~4 ms for colour and depth
@@ -20,7 +22,20 @@ CompressedImage::CompressedImage(const cv::Mat& image) : rows_(image.rows), cols
   png_ = std::make_shared<const std::vector<std::uint8_t>>(std::move(png));
 }
 
+CompressedImage::CompressedImage(const cv::Mat& image, std::shared_ptr<const std::string> file)
+    : CompressedImage(file ? cv::Mat() : image) {
+  if (!file) return;
+  assert(image.type() == CV_8UC3 || image.type() == CV_16UC1);
+  rows_ = image.rows, cols_ = image.cols, type_ = image.type();
+  file_ = std::move(file);
+}
+
 cv::Mat CompressedImage::decode() const {
+  if (file_) {
+    const cv::Size size(cols_, rows_);
+    return type_ == CV_16UC1 ? decodeDepthImage(*file_, size, "a keyframe's depth file")
+                             : decodeColorImage(*file_, size, "a keyframe's colour file");
+  }
   if (!png_) return cv::Mat(rows_, cols_, type_);
   cv::Mat out = cv::imdecode(*png_, cv::IMREAD_UNCHANGED);
   if (out.rows != rows_ || out.cols != cols_ || out.type() != type_)

@@ -1,4 +1,6 @@
 #pragma once
+#include <memory>
+#include <string>
 #include <array>
 #include <cstdint>
 #include <vector>
@@ -11,12 +13,22 @@
 namespace vdmap {
 
 /// One decoded RGB-D frame with its pose.
+struct FrameFeatures;  // mapping/keyframe/frame_features.h
+
 struct RgbdFrame {
   int index = -1;          ///< position in the sequence's depth list (what --frames counts)
   double timestamp = 0.0;  ///< depth timestamp, seconds
   cv::Mat rgb;             ///< CV_8UC3, RGB channel order, camera size
   cv::Mat depth;           ///< CV_16UC1, raw units: metres = value / camera.depth_scale
   Transform T_W_C = Transform::Identity();
+  /// The encoded files rgb and depth were decoded from, when read from files (empty otherwise):
+  /// a new keyframe keeps these bytes instead of compressing the pixels again.
+  std::shared_ptr<const std::string> rgb_file, depth_file;
+  /// The frame's ORB features computed ahead, on the prefetch thread, by the function
+  /// Mapper::featuresAhead() gave (for that Mapper, `features_for`); otherwise null and
+  /// addFrame() extracts them itself. Either way they are the same features.
+  std::shared_ptr<const FrameFeatures> features;
+  const void* features_for = nullptr;
 };
 
 /// A coloured point cloud; points and colours are parallel arrays.

@@ -2,8 +2,9 @@
 
 namespace vdmap {
 
-FramePrefetcher::FramePrefetcher(const TumSequence& sequence, std::size_t capacity)
-    : sequence_(sequence), capacity_(capacity < 1 ? 1 : capacity), worker_([this] { run(); }) {}
+FramePrefetcher::FramePrefetcher(const TumSequence& sequence, std::size_t capacity, Prepare prepare)
+    : sequence_(sequence), capacity_(capacity < 1 ? 1 : capacity), prepare_(std::move(prepare)),
+      worker_([this] { run(); }) {}
 
 FramePrefetcher::~FramePrefetcher() {
   {
@@ -23,6 +24,7 @@ void FramePrefetcher::run() {
     }
     try {
       RgbdFrame frame = sequence_.load(i);
+      if (prepare_) prepare_(frame);
       std::lock_guard lock(mutex_);
       ready_.push_back(std::move(frame));
     } catch (...) {

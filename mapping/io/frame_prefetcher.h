@@ -2,6 +2,7 @@
 #include <condition_variable>
 #include <deque>
 #include <exception>
+#include <functional>
 #include <mutex>
 #include <optional>
 #include <thread>
@@ -14,8 +15,12 @@ namespace vdmap {
 /// of the consumer, so decoding overlaps mapping and memory stays bounded. One consumer thread.
 class FramePrefetcher {
  public:
+  /// Work done on the prefetch thread to each frame after decoding it (e.g. the Mapper's
+  /// featuresAhead(): its ORB extraction then overlaps the previous frame's mapping).
+  using Prepare = std::function<void(RgbdFrame&)>;
+
   /// `sequence` must outlive the prefetcher.
-  explicit FramePrefetcher(const TumSequence& sequence, std::size_t capacity = 4);
+  explicit FramePrefetcher(const TumSequence& sequence, std::size_t capacity = 4, Prepare prepare = {});
   ~FramePrefetcher();
   FramePrefetcher(const FramePrefetcher&) = delete;
   FramePrefetcher& operator=(const FramePrefetcher&) = delete;
@@ -29,6 +34,7 @@ class FramePrefetcher {
 
   const TumSequence& sequence_;
   const std::size_t capacity_;
+  const Prepare prepare_;
   std::mutex mutex_;
   std::condition_variable changed_;
   std::deque<RgbdFrame> ready_;

@@ -185,9 +185,8 @@ std::string readBytes(const std::filesystem::path& file, const std::string& what
 
 std::string sizeText(cv::Size s) { return std::to_string(s.width) + "x" + std::to_string(s.height); }
 
-cv::Mat decodeImage(const std::filesystem::path& file, cv::Size expected, bool depth) {
+cv::Mat decodeImage(const std::string& bytes, const std::filesystem::path& file, cv::Size expected, bool depth) {
   const std::string what = depth ? "depth image" : "colour image";
-  const std::string bytes = readBytes(file, what);
   const Format format = formatOf(bytes);
   if (format == Format::kOther)
     throw InputError(file.string(), "cannot decode " + what + ": not a " + (depth ? "PNG" : "PNG or JPEG") + " file");
@@ -206,12 +205,26 @@ cv::Mat decodeImage(const std::filesystem::path& file, cv::Size expected, bool d
 
 }  // namespace
 
-cv::Mat readColorImage(const std::filesystem::path& file, cv::Size expected) {
-  return decodeImage(file, expected, false);
+cv::Mat readColorImage(const std::filesystem::path& file, cv::Size expected, std::string* file_bytes) {
+  std::string bytes = readBytes(file, "colour image");
+  cv::Mat image = decodeImage(bytes, file, expected, false);
+  if (file_bytes) *file_bytes = std::move(bytes);
+  return image;
 }
 
-cv::Mat readDepthImage(const std::filesystem::path& file, cv::Size expected) {
-  return decodeImage(file, expected, true);
+cv::Mat readDepthImage(const std::filesystem::path& file, cv::Size expected, std::string* file_bytes) {
+  std::string bytes = readBytes(file, "depth image");
+  cv::Mat image = decodeImage(bytes, file, expected, true);
+  if (file_bytes) *file_bytes = std::move(bytes);
+  return image;
+}
+
+cv::Mat decodeColorImage(const std::string& bytes, cv::Size expected, const std::string& name) {
+  return decodeImage(bytes, name, expected, false);
+}
+
+cv::Mat decodeDepthImage(const std::string& bytes, cv::Size expected, const std::string& name) {
+  return decodeImage(bytes, name, expected, true);
 }
 
 }  // namespace vdmap

@@ -187,8 +187,11 @@ RgbdFrame TumSequence::load(std::size_t i) const {
   frame.T_W_C = e.T_W_C;
 
   const cv::Size size(camera_.width, camera_.height);
-  frame.rgb = readColorImage(e.rgb_path, size);
-  frame.depth = readDepthImage(e.depth_path, size);
+  std::string rgb_bytes, depth_bytes;
+  frame.rgb = readColorImage(e.rgb_path, size, &rgb_bytes);
+  frame.depth = readDepthImage(e.depth_path, size, &depth_bytes);
+  frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+  frame.depth_file = std::make_shared<const std::string>(std::move(depth_bytes));
   return frame;
 }
 

@@ -89,7 +89,8 @@ MapperState Mapper::state() const {
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb), CompressedImage(frame.depth),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb, frame.rgb_file),
+             CompressedImage(frame.depth, frame.depth_file),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
 }
@@ -216,6 +217,15 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
                           report->ms.pose_graph_ms});
 }
 
+std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
+  auto extractor = std::make_shared<const FeatureExtractor>(params_.features);
+  return [this, extractor](RgbdFrame& frame) {
+    frame.features =
+        std::make_shared<const FrameFeatures>(extractor->extract(frame, camera_, params_.local_map.depth_range));
+    frame.features_for = this;
+  };
+}
+
 FrameReport Mapper::addFrame(const RgbdFrame& input) {
   if (!canContinue())
     throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
@@ -227,7 +237,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   FrameReport report;
   report.frame_index = input.index;
 
-  FrameFeatures features = extractor_.extract(input, camera_, params_.local_map.depth_range);
+  FrameFeatures features = input.features && input.features_for == this
+                               ? *input.features
+                               : extractor_.extract(input, camera_, params_.local_map.depth_range);
   report.features = features.size();
   report.ms.features_ms = msSince(start);
 

@@ -1,4 +1,5 @@
 #pragma once
+#include <functional>
 #include <optional>
 #include <span>
 #include <vector>
@@ -123,6 +124,11 @@ class Mapper {
   /// std::invalid_argument when a given pose is not a finite rigid transform, the images do not
   /// fit the camera (see LocalMapIntegrator), or the mapper cannot continue (canContinue()).
   FrameReport addFrame(const RgbdFrame& frame);
+
+  /// A function that computes a frame's features exactly as addFrame() would, for another
+  /// thread (a FramePrefetcher's: ORB then overlaps mapping, issue 16). It holds its own
+  /// extractor, so it may run beside addFrame(); the Mapper must outlive it.
+  std::function<void(RgbdFrame&)> featuresAhead() const;
 
   const KeyframeGraph& graph() const { return graph_; }
   KeyframeGraph& graph() { return graph_; }
