@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/map_sequence.h"
+#include "app/release_memory.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -63,9 +64,12 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
   std::vector<FrameRow> rows;
   rows.reserve(seq.size());
   auto buildGlobal = [&](FrameRow& row) {
-    const GlobalMap map = buildGlobalMap(mapper.graph(), global);
-    row.global_ellipsoids = static_cast<long long>(map.sigma_e_prime);
-    row.t_g_s = map.t_g_s;
+    {
+      const GlobalMap map = buildGlobalMap(mapper.graph(), global);
+      row.global_ellipsoids = static_cast<long long>(map.sigma_e_prime);
+      row.t_g_s = map.t_g_s;
+    }
+    releaseFreedMemory();  // as the workbench does after each build
   };
   double last = threadCpuMs();
   mapSequence(seq, mapper, [&](const FrameReport& report) {

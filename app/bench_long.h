@@ -13,8 +13,9 @@ struct LongRunOptions {
   bool json = false;       ///< print long.json to stdout instead of the summary
 };
 
-/// Maps every frame of `seq` with the whole pipeline on this thread and records, per frame, the
-/// mapping thread's CPU time and the Mapper's wall time, the process's resident memory and the
+/// Maps every frame of `seq` as `vdmap map` does (decoding and ORB on the prefetch thread, the
+/// keyframe decision and update on this one) and records, per frame, this mapping thread's CPU
+/// time and the Mapper's wall time, the process's resident memory and live heap, and the
 /// keyframe count; every `global_every` frames it builds the global map and records its size and
 /// t_g. Writes long.csv (one row per frame) and long.json (the summary: median CPU time per frame
 /// over frames [N/6, N/3) and over the last N/6, i.e. 1000-2000 and the last 1000 of 6000, and

@@ -574,8 +574,9 @@ void addBenchCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
   verb->add_flag("--long", args->long_run,
-                 "the long run instead (issue 16): the whole pipeline over every frame (or --frames), per-frame CPU "
-                 "time, resident memory, keyframes and the global map's size into long.csv and long.json");
+                 "the long run instead (issue 16): every frame (or --frames) mapped as `vdmap map` does, the mapping "
+                 "thread's CPU time per frame, resident memory, live heap, keyframes and the global map's size into "
+                 "long.csv and long.json");
   verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");

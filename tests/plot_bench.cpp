@@ -149,7 +149,7 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const double frames = static_cast<double>(cpu.size());
   const auto px = [&](double frame) { return left + static_cast<int>(frame / frames * (w - left - right)); };
-  text(img, "long run: " + std::to_string(cpu.size()) + " frames, one thread", {10, 25}, 0.6);
+  text(img, "long run: " + std::to_string(cpu.size()) + " frames; CPU of the mapping thread (decoding and ORB run on the prefetch thread)", {10, 25}, 0.6);
   int y0 = top;
   // One panel: y from 0 to the largest value (of `clip` if given, so a few slow frames do not
   // flatten the rest), a dot or a line per series.
@@ -176,7 +176,7 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
   std::vector<double> sorted = cpu;
   std::sort(sorted.begin(), sorted.end());
   const double cpu_max = sorted[sorted.size() * 99 / 100] * 1.5;  // the 99th percentile sets the scale
-  axes("CPU ms per frame (grey: each frame, blue: running median of 101; the slowest 1% may be cut)", cpu_max);
+  axes("mapping thread CPU ms per frame (grey: each frame, blue: running median of 101; the slowest 1% may be cut)", cpu_max);
   series({}, cpu, cpu_max, cv::Scalar(190, 190, 190), true);
   series({}, running, cpu_max, kVdmap, false);
   y0 += panel + gap;

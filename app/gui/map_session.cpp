@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "app/release_memory.h"
 #include "mapping/core/timing.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
@@ -171,6 +172,7 @@ void MapSession::rebuildGlobal() {
     error_ = std::string("global map: ") + e.what();
     return;
   }
+  releaseFreedMemory();  // the build's temporaries, before the next frames
   snap->params = params;
   {
     std::lock_guard lock(mutex_);
