@@ -119,13 +119,22 @@ TEST(GuiCli, AnIdleWindowCostsNoCpuAndKeyTapsWithinOneFrameAreAllHandled) {
   REQUIRE_XVFB();
   TempDir home;
   writeTinySequence(home / "seq", 6);
-  // Three Right taps arrive together (one UI frame): each maps one frame. H opens the help.
-  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --exit --press right,right,right,h "
+  // Three Right taps arrive together (one UI frame): each maps one frame. H opens the help (in the
+  // smallest window, whose 3-D view is narrowest).
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --exit --window-size 1280x720 --press right,right,right,h "
                                       "--measure-idle 3 --stats-json '" + (home / "s.json").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(home / "s.json");
   EXPECT_EQ(stats["frames_mapped"], 3);
   EXPECT_EQ(stats["show_help"], true);
+  // The help lies over the 3-D view, not over the panels.
+  const nlohmann::json& help = stats["layout"]["help"];
+  const nlohmann::json& view = stats["layout"]["viewport"];
+  const double hx = help[0], hy = help[1], hw = help[2], hh = help[3];
+  const double vx = view[0], vy = view[1], vw = view[2], vh = view[3];
+  EXPECT_GT(hw * hh, 0) << help.dump();
+  EXPECT_TRUE(hx >= vx && hy >= vy && hx + hw <= vx + vw && hy + hh <= vy + vh)
+      << "help " << help.dump() << " view " << view.dump();
   // Process CPU over 3 s with the window open and nothing happening (the worker idle too).
   EXPECT_LE(stats["idle_cpu_s"].get<double>(), 0.15);
 }

@@ -1126,23 +1126,30 @@ class WorkbenchWindow {
   }
 
   void drawHelp() {
+    help_ = {};
     if (!ui().show_help) return;
+    // Over the 3-D view, as wide as it (wrapping the descriptions) but at least 40 characters.
     const ImVec2 display = ImGui::GetIO().DisplaySize;
+    const float font = ImGui::GetFontSize();
+    const float width = std::min(display.x * 0.95f, std::max(view_.w - 2.f * font, 40.f * font));
     ImGui::SetNextWindowPos({view_.x + view_.w / 2, view_.y + view_.h / 2}, ImGuiCond_Always, {0.5f, 0.5f});
-    ImGui::SetNextWindowSizeConstraints({0, 0}, {display.x * 0.9f, display.y * 0.9f});
+    ImGui::SetNextWindowSize({width, 0.f}, ImGuiCond_Always);  // 0: the height fits the content
     ImGui::Begin("Keys and mouse (H, F1 or Esc closes)", &ui().show_help,
-                 ImGuiWindowFlags_AlwaysAutoResize | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings);
-    if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_SizingFixedFit | ImGuiTableFlags_RowBg)) {
+                 ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoResize);
+    if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_RowBg)) {
+      ImGui::TableSetupColumn("keys", ImGuiTableColumnFlags_WidthFixed);
+      ImGui::TableSetupColumn("what", ImGuiTableColumnFlags_WidthStretch);
       for (const auto& [keys, what] : keyHelp()) {
         ImGui::TableNextRow();
         ImGui::TableSetColumnIndex(0);
         ImGui::TextColored({1.f, 0.86f, 0.4f, 1.f}, "%s", keys);
         ImGui::TableSetColumnIndex(1);
-        ImGui::TextUnformatted(what);
+        ImGui::TextWrapped("%s", what);
       }
       ImGui::EndTable();
     }
     ImGui::TextDisabled("Hover over any control or figure for what it means.");
+    help_ = {ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowWidth(), ImGui::GetWindowHeight()};
     ImGui::End();
   }
 
@@ -1243,6 +1250,7 @@ class WorkbenchWindow {
                {"viewport", view_.json()},
                {"panels", {{"Sequence", left_.json()}, {"Map", right_.json()}, {"Status", status_.json()}}},
                {"labels_cut", labels_cut_},
+               {"help", help_.json()},  // all zero while the help is closed
                {"up", {ui().camera.up.x, ui().camera.up.y, ui().camera.up.z}}};
     if (!global_ || global_->map.ellipsoids.empty()) return;
     std::vector<glm::vec3> means;
@@ -1334,7 +1342,7 @@ class WorkbenchWindow {
   std::shared_ptr<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>> progress_ =
       std::make_shared<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>>(0, 0);
   // Layout (ImGui coordinates).
-  Rect left_, right_, status_, view_;
+  Rect left_, right_, status_, view_, help_;
   float left_w_ = 0, right_w_ = 0, status_h_ = 0;
   ImVec2 last_size_{0, 0};
   int fb_width_ = 0, fb_height_ = 0;
