@@ -237,6 +237,38 @@ std::vector<OdometryRow> odometryPeers(const std::vector<RgbdFrame>& frames, con
   return rows;
 }
 
+/// vdmap's own tracking (PoseSource::kTrack) on the decoded frames as a row of the odometry
+/// table: the whole pipeline (features, tracking, keyframe decision, loop closure, local-map
+/// update), CPU ms per frame, scored like the peers; its trajectory goes to
+/// trajectory_<key>.txt. Without loop closure it shows what the pose graph adds.
+OdometryRow trackVdmap(const std::vector<RgbdFrame>& frames, const PinholeCamera& cam, const BenchArgs& args,
+                       bool loops, const std::filesystem::path& out_dir, int* loop_closures) {
+  MapperParams params;
+  params.local_map = args.local_map;
+  params.poses = PoseSource::kTrack;
+  TrackingParams tracking;
+  tracking.loops.enabled = loops;
+  Mapper mapper(cam, params, tracking);
+  OdometryRow row;
+  row.run.name = loops ? "vdmap tracking + loop closure (whole pipeline)" : "vdmap tracking, no loop closure (whole pipeline)";
+  row.run.key = loops ? "vdmap_track" : "vdmap_track_no_loops";
+  ProgressBar progress(row.run.name, frames.size());
+  for (std::size_t i = 0; i < frames.size(); ++i) {
+    row.run.ms.push_back(cpuTimeMs([&] { mapper.addFrame(frames[i]); }));
+    progress.update(i + 1);
+  }
+  row.run.trajectory = mapper.trajectory();
+  row.run.failures = mapper.framesLost();
+  row.run.keyframes = static_cast<int>(mapper.graph().size());
+  *loop_closures = static_cast<int>(mapper.poseGraph().loops().size());
+  row.ms = median(row.run.ms);
+  std::vector<StampedPose> groundtruth;
+  for (const RgbdFrame& f : frames) groundtruth.push_back({f.timestamp, f.T_W_C});
+  if (row.run.trajectory.size() >= 3) row.error = evaluateTrajectory(row.run.trajectory, groundtruth);
+  writeTumTrajectory(out_dir / ("trajectory_" + row.run.key + ".txt"), row.run.trajectory, "vdmap bench: " + row.run.name);
+  return row;
+}
+
 nlohmann::json odometryJson(const OdometryRow& r, std::size_t frames) {
   nlohmann::json j = {{"name", r.run.name}, {"frames", frames}};
   if (!r.run.note.empty()) {
@@ -397,9 +429,12 @@ void runBench(BenchArgs args) {
     rows.push_back(args.no_open3d ? peerRow("Open3D TSDF", "open3d_tsdf", voxel, "--no-open3d") : cmp.tsdf(voxel));
 
   std::vector<OdometryRow> odometry;
+  int loop_closures = 0, no_loops = 0;
   if (args.poses == "track") {
-    std::filesystem::create_directories(out_dir);  // the peers' trajectories go there
-    odometry = odometryPeers(decoded, cam, args, out_dir);
+    std::filesystem::create_directories(out_dir);  // the trajectories go there
+    odometry.push_back(trackVdmap(decoded, cam, args, true, out_dir, &loop_closures));
+    odometry.push_back(trackVdmap(decoded, cam, args, false, out_dir, &no_loops));
+    for (OdometryRow& row : odometryPeers(decoded, cam, args, out_dir)) odometry.push_back(std::move(row));
   }
 
   const auto ratio = [vd](double o) { return vd > 0 ? o / vd : 0.0; };
@@ -445,6 +480,10 @@ void runBench(BenchArgs args) {
       out["odometry"][r.run.key] = odometryJson(r, decoded.size());
       out["odometry_order"].push_back(r.run.key);
     }
+    // What tracking adds to the pipeline: the tracked pipeline's median CPU time per frame
+    // minus the ground-truth pipeline's, on the same frames.
+    out["vd_tracking_added_ms"] = odometry.front().ms - median(pipeline_ms);
+    out["odometry"]["vdmap_track"]["loop_closures"] = loop_closures;
   }
 
   std::ostringstream md;
@@ -458,8 +497,10 @@ void runBench(BenchArgs args) {
      << " (update) / covisibility (pipeline), one thread. Times are medians of CPU time per frame.\n\n"
      << markdownTable(rows, vd, mesh.has_value()) << "\n" << pipelineLine(median(pipeline_ms), median(features_cpu_ms), mapping_ms, median(decode_ms)) << "\n\n" << global_line;
   if (!odometry.empty())
-    md << "\nOdometry peers (--poses track) on the same frames, one thread: median CPU time per frame, ATE after "
-          "the rigid alignment against the sequence's ground truth.\n\n"
+    md << "\nTracking (--poses track) on the same frames, one thread: median CPU time per frame (vdmap: its whole "
+          "pipeline, which tracking makes " << out["vd_tracking_added_ms"].get<double>() << " ms slower than with "
+          "ground-truth poses; the peers: registration only), ATE after the rigid alignment against the sequence's "
+          "ground truth. vdmap closed " << loop_closures << " loops.\n\n"
        << odometryTable(odometry);
   std::filesystem::create_directories(out_dir);
   writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
@@ -484,7 +525,8 @@ void runBench(BenchArgs args) {
     std::printf("%-34s %12.2f %10.1f %10zu\n", r.name.c_str(), r.ms, ratio(r.ms), r.elements);
     if (r.accuracy) std::printf("    %s\n", toText(*r.accuracy).c_str());
   }
-  if (!odometry.empty()) std::printf("\n%-44s %12s %10s %10s %10s\n", "odometry", "ms/frame", "ATE [cm]", "lost", "keyframes");
+  if (!odometry.empty())
+    std::printf("\n%-48s %12s %10s %10s %10s\n", "tracking (vdmap: whole pipeline)", "ms/frame", "ATE [cm]", "lost", "keyframes");
   for (const OdometryRow& r : odometry) {
     if (!r.run.note.empty()) {
       std::printf("%-44s not run: %s\n", r.run.name.c_str(), r.run.note.c_str());
@@ -492,9 +534,12 @@ void runBench(BenchArgs args) {
     }
     char ate[32] = "-";
     if (r.error) std::snprintf(ate, sizeof ate, "%.2f", 100 * r.error->ate_m.rmse);
-    std::printf("%-44s %12.2f %10s %10d %10s\n", r.run.name.c_str(), r.ms, ate, r.run.failures,
+    std::printf("%-48s %12.2f %10s %10d %10s\n", r.run.name.c_str(), r.ms, ate, r.run.failures,
                 r.run.keyframes > 0 ? std::to_string(r.run.keyframes).c_str() : "-");
   }
+  if (!odometry.empty())
+    std::printf("tracking adds %.2f ms per frame to vdmap's pipeline (CPU medians); %d loop closures\n",
+                out["vd_tracking_added_ms"].get<double>(), loop_closures);
   std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }
 
@@ -522,9 +567,10 @@ void addBenchCommand(CLI::App& app) {
   verb->add_flag("--no-octomap", args->no_octomap, "skip the OctoMap peers (for profiling)");
   verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D peers (TSDF, and odometry with --poses track)");
   verb->add_option("--poses", args->poses,
-                   "gt: map with the sequence's ground-truth poses; track: also run the odometry peers (OpenCV "
-                   "RgbdOdometry and ICPOdometry frame to frame and against keyframes, Open3D's hybrid odometry) on "
-                   "the same frames: ms per frame and ATE against the ground truth, and trajectory_<peer>.txt in --out")
+                   "gt: map with the sequence's ground-truth poses; track: also track the poses with vdmap (with and "
+                   "without loop closure) and the odometry peers (OpenCV RgbdOdometry and ICPOdometry frame to frame "
+                   "and against keyframes, Open3D's hybrid odometry) on the same frames: ms per frame and ATE "
+                   "against the ground truth, and trajectory_<method>.txt in --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
   verb->add_flag("--long", args->long_run,

@@ -62,13 +62,15 @@ void runInfo(const SequenceArgs& args, bool json) {
   const DepthStats depth = sampleDepth(seq, 10);
   const double t0 = seq.entries().front().t_depth, t1 = seq.entries().back().t_depth;
   const DropCounts& d = seq.dropped();
+  const auto with_pose = std::count_if(seq.entries().begin(), seq.entries().end(), [](const FrameEntry& e) { return e.has_pose; });
   if (json) {
     nlohmann::json out = {
         {"folder", seq.folder().string()},
         {"listed_depth_frames", seq.listedDepthFrames()},
         {"frames", seq.size()},
         {"frame_range", frameRangeText(seq.frameRange())},
-        {"frames_with_pose", seq.size()},
+        {"frames_with_pose", with_pose},
+        {"groundtruth", seq.hasGroundTruth()},
         {"time_span_s", {t0, t1}},
         {"camera", {{"source", seq.cameraSource()}, {"width", cam.width}, {"height", cam.height},
                     {"fx", cam.fx}, {"fy", cam.fy}, {"cx", cam.cx}, {"cy", cam.cy},
@@ -85,8 +87,12 @@ void runInfo(const SequenceArgs& args, bool json) {
     return;
   }
   std::printf("sequence   %s\n", seq.folder().c_str());
-  std::printf("frames     %zu usable (all with poses) of %d listed depth frames; frames %s\n", seq.size(),
-              seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+  if (seq.hasGroundTruth())
+    std::printf("frames     %zu usable (all with poses) of %d listed depth frames; frames %s\n", seq.size(),
+                seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+  else
+    std::printf("frames     %zu usable of %d listed depth frames; frames %s; no groundtruth.txt (vdmap tracks the "
+                "poses)\n", seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
   std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width,
               cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());

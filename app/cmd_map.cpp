@@ -19,6 +19,7 @@
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
+#include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/session_file.h"
 
@@ -68,6 +69,12 @@ void runMap(MapArgs args) {
                                   "them (cell size, depth range, ORB features, tau, tau-edge, keyframe-every, "
                                   "prefilter)");
     args.params.mapper = info.mapper;
+    // The pose source is the session's too (its keyframes were placed that way).
+    const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";
+    if (!args.sequence.poses.empty() && args.sequence.poses != session_poses)
+      throw std::invalid_argument("--poses " + args.sequence.poses + ": " + args.load + " was mapped with --poses " +
+                                  session_poses + "; drop --poses to continue it");
+    args.sequence.poses = session_poses;
     if (args.sequence.frames.empty()) args.sequence.frames = std::to_string(info.state.last_frame_index + 1) + ":";
   }
   const TumSequence seq = openSequence(args.sequence);
@@ -80,16 +87,20 @@ void runMap(MapArgs args) {
     if (!(seq.camera() == loaded->info.camera))
       throw InputError(seq.folder().string(), "its camera (" + seq.cameraSource() + ") is not the one of " + args.load +
                                                   " (give --camera to match it)");
+  } else {
+    args.params.mapper.poses = poseSource(args.sequence, seq);
   }
+  const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
   Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
                          : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();
-  std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms;
+  std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
   mapSequence(seq, mapper, [&](const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
     pipeline_ms.push_back(r.ms.total_ms);
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
+    tracking_ms.push_back(r.ms.tracking_ms);
   });
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.params.global);
@@ -114,7 +125,20 @@ void runMap(MapArgs args) {
       {"features_ms", rounded(median(features_ms))},
       {"decision_ms", rounded(median(decision_ms))},
       {"camera", seq.cameraSource()},
+      {"poses", tracking ? "track" : "gt"},
   };
+  options.trajectory = mapper.trajectory();
+  if (tracking) {
+    options.run_stats["tracking_ms"] = median(tracking_ms);
+    options.run_stats["frames_lost"] = mapper.framesLost();
+    double pose_graph_ms = 0;
+    for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
+    options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
+    options.run_stats["pose_graph_ms"] = pose_graph_ms;  // all optimisations of the run, wall clock
+    const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
+    if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
+      options.run_stats["ate_rmse_m"] = evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse;
+  }
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
@@ -131,9 +155,15 @@ void runMap(MapArgs args) {
   const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
                              counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
   std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: mapping thread "
-              "%.2f ms (ORB %.2f on the prefetch thread, decision %.2f, update %.2f) -> %s\n",
+              "%.2f ms (ORB %.2f on the prefetch thread, tracking %.2f, decision %.2f, update %.2f) -> %s\n",
               counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(pipeline_ms),
-              median(features_ms), median(decision_ms), median(update_ms), out_dir.c_str());
+              median(features_ms), median(tracking_ms), median(decision_ms), median(update_ms), out_dir.c_str());
+  if (tracking) {
+    std::printf("tracked poses: %s lost (skipped), %s", counted(mapper.framesLost(), "frame").c_str(),
+                counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
+    if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
+    std::printf("\n");
+  }
 }
 
 }  // namespace
@@ -142,8 +172,9 @@ void addMapCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("map", "Map a sequence: keyframes with local maps, covisibility graph, global map");
   auto args = std::make_shared<MapArgs>();
   addSequenceArgs(*verb, args->sequence);
+  addPoseSourceArg(*verb, args->sequence);
   verb->add_option("--out", args->out,
-                   "output folder (created if missing): local_maps.ply, keyframes.txt, graph.txt, "
+                   "output folder (created if missing): local_maps.ply, keyframes.txt, trajectory.txt, graph.txt, "
                    "global_points.ply, global_ellipsoids.ply, global_gaussians.ply, [global.bt], stats.json")
       ->required();
   verb->add_option("--save", args->save, "also save the whole session (a .vdmap file, docs/vdmap-format.md)");

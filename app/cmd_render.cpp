@@ -249,7 +249,9 @@ void runRender(RenderArgs args) {
   SceneSource source;
   if (from_sequence) {
     const TumSequence seq = openSequence(args.sequence);
-    mapper = std::make_unique<Mapper>(seq.camera());
+    MapperParams params;
+    params.poses = poseSource(args.sequence, seq);
+    mapper = std::make_unique<Mapper>(seq.camera(), params);
     mapSequence(seq, *mapper);
     addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
              choice, seq.folder().string(), args.view);
@@ -290,6 +292,7 @@ void addRenderCommand(CLI::App& app) {
       "render", "Render a view of a session, a map or a sequence (mapped first) headless to PNG with OSMesa");
   auto args = std::make_shared<RenderArgs>();
   addSequenceArgs(*verb, args->sequence);
+  addPoseSourceArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description(
       "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
   verb->add_option("--map", args->map,

@@ -46,19 +46,27 @@ inline void checkOutputFile(const std::string& file, const std::string& option) 
 }  // namespace vdmap::app
 
 #include "mapping/io/tum_sequence.h"
+#include "mapping/keyframe/mapper.h"
 
 namespace vdmap::app {
 
-/// The options every verb that reads a sequence shares: SEQ, --camera, --frames.
+/// The options every verb that reads a sequence shares: SEQ, --camera, --frames, and for the
+/// verbs that map it --poses.
 struct SequenceArgs {
   std::string folder;
   std::string camera;
   std::string frames;
+  std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
 };
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args);
+/// --poses gt|track, for the verbs that map a sequence.
+void addPoseSourceArg(CLI::App& verb, SequenceArgs& args);
+/// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
+PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
 /// The camera preset names, comma-separated, for --camera help texts.
 std::string cameraPresetList();
-/// Opens the sequence the arguments name (throws InputError / std::invalid_argument).
+/// Opens the sequence the arguments name (throws InputError / std::invalid_argument). With
+/// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
 /// instead of refused.
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false);

@@ -16,4 +16,11 @@ void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<voi
   }
 }
 
+std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {
+  std::vector<StampedPose> out;
+  for (const FrameEntry& e : seq.entries())
+    if (e.has_pose) out.push_back({e.t_depth, e.T_W_C});
+  return out;
+}
+
 }  // namespace vdmap::app

@@ -12,4 +12,7 @@ namespace vdmap::app {
 void mapSequence(const TumSequence& seq, Mapper& mapper,
                  const std::function<void(const FrameReport&)>& on_frame = {});
 
+/// The ground-truth poses of the sequence's frames (those that have one), for trajectory error.
+std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq);
+
 }  // namespace vdmap::app

@@ -17,10 +17,26 @@ void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
                   "a range past the end is an error");
 }
 
+void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("--poses", args.poses,
+                  "gt: the sequence's groundtruth.txt; track: estimate every pose (tracking, loop closure, "
+                  "pose graph). Default: gt when the sequence has groundtruth.txt, else track")
+      ->check(CLI::IsMember({"gt", "track"}));
+}
+
+PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
+  if (args.poses.empty()) return sequence.hasGroundTruth() ? PoseSource::kGroundTruth : PoseSource::kTrack;
+  return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+}
+
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end) {
   SequenceOptions options;
   options.camera_preset = args.camera;
   options.cut_range_at_end = cut_range_at_end;
+  // No --poses: ground truth when there is some (frames without a pose are then dropped, as with
+  // --poses gt), else tracking.
+  options.require_poses =
+      args.poses == "gt" || (args.poses.empty() && std::filesystem::exists(std::filesystem::path(args.folder) / "groundtruth.txt"));
   if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
   return TumSequence::open(args.folder, options);
 }

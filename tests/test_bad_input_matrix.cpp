@@ -200,7 +200,7 @@ const std::vector<BadCase>& badCases() {
        }},
       {"sequence", "missing_rgb_list", E::kInputError, "rgb.txt: cannot open", removeFile("seq/rgb.txt")},
       {"sequence", "missing_depth_list", E::kInputError, "depth.txt: cannot open", removeFile("seq/depth.txt")},
-      {"sequence", "missing_groundtruth", E::kInputError, "groundtruth.txt: cannot open",
+      {"sequence", "missing_groundtruth", E::kInputError, "groundtruth.txt: no such file; --poses gt needs",
        removeFile("seq/groundtruth.txt")},
       {"sequence", "extra_column", E::kInputError, "depth.txt:2: expected 'timestamp path', got 3",
        write("seq/depth.txt", "0.0 depth/000000.png\n0.0333 depth/000001.png extra\n")},

@@ -125,21 +125,63 @@ TEST(SessionFile, EmptySessionRoundTrips) {
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
 }
 
-// `bytes` as format 2 wrote it: PARM without the two fusion fields (bool, f64) that format 3
-// added before the frame counts (i32, i32, u32).
-std::string asFormat2(const std::string& bytes) {
-  constexpr std::size_t kSection = 24, kPayload = kSection + 16, kFusionBytes = 9, kTailBytes = 12;
-  std::uint64_t length = 0;
-  for (int i = 0; i < 8; ++i) length |= std::uint64_t{static_cast<unsigned char>(bytes[kSection + 4 + i])} << (8 * i);
+std::uint64_t u64At(const std::string& bytes, std::size_t at) {
+  std::uint64_t v = 0;
+  for (int i = 0; i < 8; ++i) v |= std::uint64_t{static_cast<unsigned char>(bytes[at + i])} << (8 * i);
+  return v;
+}
+
+// Removes `n` bytes at `at` of the payload of the section starting at `section`, and fixes the
+// section's length and checksum.
+void eraseInSection(std::string* bytes, std::size_t section, std::size_t at, std::size_t n) {
+  const std::size_t payload = section + 16;
+  const std::uint64_t length = u64At(*bytes, section + 4) - n;
+  bytes->erase(payload + at, n);
+  for (int i = 0; i < 8; ++i) (*bytes)[section + 4 + i] = static_cast<char>(length >> (8 * i));
+  const std::string_view view(*bytes);
+  putU32(bytes, section + 12, crc32(view.substr(payload, length), crc32(view.substr(section, 12))));
+}
+
+// `bytes` as format 3 wrote it: PARM without the pose source (u32 after keyframe_every, 133
+// bytes into it) and MSTA without what version 4 added after the sequence folder.
+std::string asFormat3(const std::string& bytes) {
+  constexpr std::size_t kParm = 24, kPoseSourceAt = 48 + 85;
   std::string old = bytes;
-  old.erase(kPayload + length - kTailBytes - kFusionBytes, kFusionBytes);
-  length -= kFusionBytes;
-  for (int i = 0; i < 8; ++i) old[kSection + 4 + i] = static_cast<char>(length >> (8 * i));
-  const std::string_view view(old);
-  putU32(&old, kSection + 12, crc32(view.substr(kPayload, length), crc32(view.substr(kSection, 12))));
+  eraseInSection(&old, kParm, kPoseSourceAt, 4);
+  const std::size_t msta = kParm + 16 + u64At(old, kParm + 4);
+  EXPECT_EQ(old.substr(msta, 4), "MSTA");
+  std::uint32_t folder = 0;
+  for (int i = 0; i < 4; ++i) folder |= std::uint32_t{static_cast<unsigned char>(old[msta + 16 + 16 + i])} << (8 * i);
+  const std::size_t kept = 20 + folder;
+  eraseInSection(&old, msta, kept, u64At(old, msta + 4) - kept);
+  putU32(&old, 8, 3);
+  resealHeader(&old);
+  return old;
+}
+
+// `bytes` as format 2 wrote it: format 3's PARM without the two fusion fields (bool, f64) that
+// format 3 added before the frame counts (i32, i32, u32).
+std::string asFormat2(const std::string& bytes) {
+  constexpr std::size_t kParm = 24, kFusionBytes = 9, kTailBytes = 12;
+  std::string old = asFormat3(bytes);
+  eraseInSection(&old, kParm, u64At(old, kParm + 4) - kTailBytes - kFusionBytes, kFusionBytes);
   putU32(&old, 8, 2);
   resealHeader(&old);
   return old;
+}
+
+// Format 3 (before tracking): ground-truth poses, no trajectory; re-saved as the current format
+// it is the same session (the small session has ground-truth poses).
+TEST(SessionFile, Format3FilesLoadWithGroundTruthPoses) {
+  const Saved& s = smallSession();
+  const Session old = decodeSession(asFormat3(s.bytes), "v3.vdmap");
+  EXPECT_EQ(old.info.format_version, 3u);
+  EXPECT_EQ(old.info.mapper.poses, PoseSource::kGroundTruth);
+  EXPECT_TRUE(old.info.state.frame_poses.empty());
+  EXPECT_EQ(old.info.state.current_keyframe, s.info.state.current_keyframe);
+  SessionInfo info = old.info;
+  info.state.frame_poses = s.info.state.frame_poses;
+  EXPECT_EQ(encodeSession(old.graph, info), s.bytes);
 }
 
 TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
@@ -152,6 +194,7 @@ TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
   EXPECT_EQ(old.graph.size(), s.mapper.graph().size());
   SessionInfo info = old.info;
   info.global.fuse_across_groups = true;
+  info.state.frame_poses = s.info.state.frame_poses;  // format 4 added the trajectory
   EXPECT_EQ(encodeSession(old.graph, info), s.bytes) << "re-saved in the current format";
 }
 
@@ -312,12 +355,7 @@ TEST(SessionFile, MapVerbSavesTheSessionItMapped) {
 // out, the version and the section count set back, the header resealed.
 std::string asFormat1(const std::string& current) {
   const std::string v2 = asFormat2(current);
-  const auto u64At = [&](std::size_t at) {
-    std::uint64_t v = 0;
-    for (int i = 0; i < 8; ++i) v |= static_cast<std::uint64_t>(static_cast<std::uint8_t>(v2[at + 4 + i])) << (8 * i);
-    return v;
-  };
-  const std::size_t parm = 24, msta = parm + 16 + u64At(parm), after = msta + 16 + u64At(msta);
+  const std::size_t parm = 24, msta = parm + 16 + u64At(v2, parm + 4), after = msta + 16 + u64At(v2, msta + 4);
   EXPECT_EQ(v2.substr(msta, 4), "MSTA");
   std::string v1 = v2.substr(0, msta) + v2.substr(after);
   putU32(&v1, 8, 1);
@@ -393,7 +431,7 @@ TEST(SessionFile, AStateThatDoesNotFitTheGraphIsRejected) {
   const std::size_t msta = bad.find("MSTA");
   ASSERT_NE(msta, std::string::npos);
   putU32(&bad, msta + 16, 7 + keyframes);  // the current keyframe, first in the payload
-  const std::uint64_t length = 4 + 4 + 8 + 4 + 9;
+  const std::uint64_t length = u64At(bad, msta + 4);
   putU32(&bad, msta + 12, crc32(std::string_view(bad).substr(msta + 16, length), crc32(std::string_view(bad).substr(msta, 12))));
   const std::string expected = "section 1 'MSTA': mapper state: current keyframe " + std::to_string(7 + keyframes) +
                                " is not one of the " + std::to_string(keyframes) + " keyframes";

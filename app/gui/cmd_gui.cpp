@@ -174,6 +174,7 @@ void addGuiCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("gui", "Open the workbench on a sequence");
   auto args = std::make_shared<GuiArgs>();
   addSequenceArgs(*verb, args->sequence);
+  addPoseSourceArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false);
   verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence (a .vdmap file as SEQ does too)");
   addGuiOptions(*verb, *args);

@@ -108,10 +108,14 @@ bool Workbench::open(const SequenceArgs& args) {
   absolute_args.folder = absolute(args.folder);
   try {
     TumSequence sequence = openSequence(absolute_args);
-    auto session = std::make_unique<MapSession>(std::move(sequence), ui_.settings.mapper, ui_.settings.thresholds);
+    // The pose source belongs to the sequence (--poses, or whether it has ground truth), not
+    // to the settings; re-runs keep it.
+    MapperParams mapper = ui_.settings.mapper;
+    mapper.poses = poseSource(absolute_args, sequence);
+    auto session = std::make_unique<MapSession>(std::move(sequence), mapper, ui_.settings.thresholds);
     session->setFps(ui_.settings.play_fps);
     session_ = std::move(session);  // the old session (if any) stops here
-    ui_.params = {ui_.settings.mapper, ui_.settings.thresholds};
+    ui_.params = {mapper, ui_.settings.thresholds};
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return false;
@@ -174,7 +178,7 @@ bool Workbench::openSession(const std::string& file) {
 bool Workbench::openPath(const std::string& path) {
   const fs::path p(path);
   if (p.extension() == ".vdmap" && !fs::is_directory(p)) return openSession(path);
-  return open({path, "", ""});
+  return open({path, "", "", ""});
 }
 
 void Workbench::opened(const std::string& path) {
@@ -275,7 +279,11 @@ void Workbench::resetToDefaults() {
                                                               MappingParams{defaults.mapper, {}});
   ui_.settings = defaults;
   ui_.params.global = defaults.thresholds;
-  if (!savedSession()) ui_.params.mapper = defaults.mapper;  // a saved session keeps the parameters it was mapped with
+  if (!savedSession()) {  // a saved session keeps the parameters it was mapped with
+    const PoseSource poses = ui_.params.mapper.poses;  // the sequence's, not a setting
+    ui_.params.mapper = defaults.mapper;
+    ui_.params.mapper.poses = poses;
+  }
   ui_.reset_layout = true;
   applyThresholds();
   if (session_) session_->setFps(ui_.settings.play_fps);

@@ -154,6 +154,9 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
+  if (!options.trajectory.empty())
+    writeTumTrajectory(stage / "trajectory.txt", options.trajectory,
+                       "vdmap frame poses T_W_C (camera-to-world), every mapped frame");
   graph.edges().writeEdgeList(stage / "graph.txt");
   writePointPly(stage / "global_points.ply", map.ellipsoids);
   writeEllipsoidPly(stage / "global_ellipsoids.ply", map.ellipsoids);

@@ -7,6 +7,7 @@
 
 #include "mapping/export/octomap_export.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/keyframe_graph.h"
 
 namespace vdmap {
@@ -20,11 +21,14 @@ struct MapExportOptions {
   /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
   /// stats.json; the global-map and export figures are added by exportMap.
   nlohmann::json run_stats = nlohmann::json::object();
+  /// Non-empty: also write trajectory.txt, the pose of every mapped frame (Mapper::trajectory()).
+  std::vector<StampedPose> trajectory;
 };
 
 /// Writes into `dir` (created if missing):
 ///   local_maps.ply        localEllipsoids(graph, map): the local maps, world frame (SPEC 7 ellipsoid PLY)
 ///   keyframes.txt         keyframe poses T_W_K, TUM format, line i = keyframe i
+///   trajectory.txt        only with options.trajectory: every mapped frame's T_W_C, TUM format
 ///   graph.txt             covisibility edges `a b weight`
 ///   global_points.ply     global-map ellipsoid means with colour
 ///   global_ellipsoids.ply global-map ellipsoids (SPEC 7)

@@ -20,7 +20,7 @@ namespace {
 static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(GlobalMapParams) == 88, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
-static_assert(sizeof(MapperState) == 24, "MapperState changed: store the new field in the .vdmap file");
+static_assert(sizeof(MapperState) == 400, "MapperState changed: store the new field in the .vdmap file");
 
 constexpr char kMagic[8] = {'V', 'D', 'M', 'A', 'P', 'S', 'E', 'S'};
 constexpr std::uint32_t kEndianMark = 0x01020304;  // written little-endian: 04 03 02 01
@@ -171,6 +171,7 @@ void writeMapperParams(Writer* w, const MapperParams& m) {
   w->f64(k.covisibility.lowe_ratio);
   w->f64(k.covisibility.max_reprojection_px);
   w->i32(m.keyframe_every);
+  w->u32(static_cast<std::uint32_t>(m.poses));
 }
 
 void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
@@ -223,6 +224,11 @@ std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
   k.covisibility.lowe_ratio = r->f64("lowe_ratio");
   k.covisibility.max_reprojection_px = r->f64("max_reprojection");
   m.keyframe_every = r->i32("keyframe_every");
+  if (version >= 4) {  // sessions before version 4 were all mapped with ground-truth poses
+    const std::uint32_t poses = r->u32("pose source");
+    r->check(poses <= static_cast<std::uint32_t>(PoseSource::kTrack), "unknown pose source " + std::to_string(poses));
+    m.poses = static_cast<PoseSource>(poses);
+  }
   r->checkValid("mapper parameters", [&m] { m.validate(); });
   GlobalMapParams& g = info->global;
   const std::uint32_t model = r->u32("sensor model");
@@ -249,24 +255,99 @@ std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
 
 // --- mapper state (version >= 2) ------------------------------------------------------------
 
+constexpr std::uint64_t kTransformBytes = 12 * 8;  // the top three rows, row by row
+
+void writeTransform(Writer* w, const Transform& T) {
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) w->f64(T.matrix()(row, col));
+}
+
+Transform readTransform(Reader* r, const char* what) {
+  Transform T = Transform::Identity();
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) T.matrix()(row, col) = r->f64(what);
+  r->check(isValidTransform(T), std::string(what) + " is not a rigid transform");
+  return T;
+}
+
 void writeState(Writer* w, const SessionInfo& info) {
   w->i32(info.state.current_keyframe);
   w->i32(info.state.last_frame_index);
   w->f64(info.state.last_timestamp);
   w->u32(static_cast<std::uint32_t>(info.sequence.size()));
   w->bytes(info.sequence);
+  const MapperState& s = info.state;
+  w->i32(s.frames_lost);
+  w->u32(static_cast<std::uint32_t>(s.frame_poses.size()));
+  for (const FramePose& f : s.frame_poses) {
+    w->i32(f.frame_index);
+    w->f64(f.timestamp);
+    w->i32(f.keyframe);
+    writeTransform(w, f.T_K_C);
+  }
+  w->i32(s.tracker.keyframe);
+  writeTransform(w, s.tracker.T_K_C);
+  writeTransform(w, s.tracker.velocity);
+  w->i32(s.tracker.frames_lost);
+  w->u32(static_cast<std::uint32_t>(s.pose_graph_edges.size()));
+  for (const PoseGraphEdge& e : s.pose_graph_edges) {
+    w->i32(e.from);
+    w->i32(e.to);
+    writeTransform(w, e.T_from_to);
+    for (int row = 0; row < 6; ++row)
+      for (int col = row; col < 6; ++col) w->f64(e.information(row, col));
+    w->boolean(e.robust);
+  }
+  w->u32(static_cast<std::uint32_t>(s.loops.size()));
+  for (const LoopClosure& l : s.loops) {
+    for (int v : {l.frame_index, l.from, l.to, l.inliers}) w->i32(v);
+    w->f64(l.correction_m);
+    w->f64(l.pose_graph_ms);
+  }
 }
 
-void readState(Reader* r, SessionInfo* info, std::uint32_t keyframes) {
+void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_t keyframes) {
   MapperState& s = info->state;
   s.current_keyframe = r->i32("current keyframe");
   s.last_frame_index = r->i32("last frame index");
   s.last_timestamp = r->f64("last timestamp");
-  r->checkValid("mapper state", [&] { s.validate(keyframes); });
   const std::uint32_t n = r->count(1, "sequence folder");
   r->check(n <= kMaxSequencePathBytes, "sequence folder of " + std::to_string(n) + " bytes is too long");
   info->sequence = r->bytes(n, "sequence folder");
   r->check(info->sequence.find('\0') == std::string::npos, "sequence folder holds a NUL byte");
+  if (version >= 4) {  // the trajectory, the tracker's and the pose graph's state
+    s.frames_lost = r->i32("frames lost");
+    const std::uint32_t poses = r->count(4 + 8 + 4 + kTransformBytes, "frame poses");
+    s.frame_poses.resize(poses);
+    for (FramePose& f : s.frame_poses) {
+      f.frame_index = r->i32("frame index");
+      f.timestamp = r->f64("frame timestamp");
+      f.keyframe = r->i32("frame keyframe");
+      f.T_K_C = readTransform(r, "frame pose");
+    }
+    s.tracker.keyframe = r->i32("tracker keyframe");
+    s.tracker.T_K_C = readTransform(r, "tracker pose");
+    s.tracker.velocity = readTransform(r, "tracker velocity");
+    s.tracker.frames_lost = r->i32("tracker frames lost");
+    const std::uint32_t edges = r->count(4 + 4 + kTransformBytes + 21 * 8 + 1, "pose-graph edges");
+    s.pose_graph_edges.resize(edges);
+    for (PoseGraphEdge& e : s.pose_graph_edges) {
+      e.from = r->i32("edge from");
+      e.to = r->i32("edge to");
+      e.T_from_to = readTransform(r, "edge measurement");
+      for (int row = 0; row < 6; ++row)
+        for (int col = row; col < 6; ++col) e.information(row, col) = e.information(col, row) = r->f64("edge information");
+      e.robust = r->boolean("edge robust");
+    }
+    const std::uint32_t loops = r->count(4 * 4 + 2 * 8, "loop closures");
+    s.loops.resize(loops);
+    for (LoopClosure& l : s.loops) {
+      for (int* v : {&l.frame_index, &l.from, &l.to, &l.inliers}) *v = r->i32("loop closure");
+      l.correction_m = r->f64("loop correction");
+      l.pose_graph_ms = r->f64("loop time");
+    }
+  }
+  r->checkValid("mapper state", [&] { s.validate(keyframes); });
   r->expectEnd();
 }
 
@@ -538,7 +619,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     } else if (s + 1 == sections) {
       readEdges(&r, &session.graph);
     } else if (s < first_keyframe) {
-      readState(&r, &session.info, keyframes);
+      readState(&r, version, &session.info, keyframes);
     } else {
       session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info));
     }

@@ -15,8 +15,11 @@ namespace vdmap {
 /// The format version this build writes and the newest it reads. 2 added the mapper's state
 /// (current keyframe, last frame) and the sequence folder, so a session can continue mapping;
 /// version 1 files still load (MapperState without a current keyframe: they cannot continue).
-/// 3 added fusion across groups' parameters (versions 1 and 2 load with fusion off).
-inline constexpr std::uint32_t kSessionFormatVersion = 3;
+/// 3 added fusion across groups' parameters (versions 1 and 2 load with fusion off). 4 added the
+/// pose source (ground truth or tracked) and, in the mapper state, the lost frames, every mapped
+/// frame's pose in its keyframe (the trajectory), the tracker's motion state and the keyframe
+/// pose graph (edges, loop closures), so a tracked session continues as if it had not stopped.
+inline constexpr std::uint32_t kSessionFormatVersion = 4;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {

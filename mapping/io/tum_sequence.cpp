@@ -129,7 +129,10 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     }
   }
   const fs::path gt_file = folder / "groundtruth.txt";
-  const std::vector<StampedPose> poses = readTumTrajectory(gt_file);
+  seq.has_ground_truth_ = fs::exists(gt_file);
+  if (!seq.has_ground_truth_ && options.require_poses)
+    throw InputError(gt_file.string(), "no such file; --poses gt needs ground-truth poses (--poses track estimates them)");
+  const std::vector<StampedPose> poses = seq.has_ground_truth_ ? readTumTrajectory(gt_file) : std::vector<StampedPose>{};
 
   seq.listed_ = static_cast<int>(pairs.size());
   if (pairs.empty())
@@ -154,7 +157,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
       continue;
     }
     const std::optional<Transform> pose = poseAt(poses, pair.depth.t, options.max_pose_dt_s);
-    if (!pose) {
+    if (!pose && options.require_poses) {
       ++seq.dropped_.no_pose;
       continue;
     }
@@ -163,7 +166,8 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
         throw InputError(image->list.string(), image->line,
                          "image '" + image->path.lexically_relative(folder).string() + "' does not exist");
     }
-    seq.entries_.push_back({i, pair.depth.t, pair.rgb->t, pair.rgb->path, pair.depth.path, *pose});
+    seq.entries_.push_back({i, pair.depth.t, pair.rgb->t, pair.rgb->path, pair.depth.path,
+                            pose.value_or(Transform::Identity()), pose.has_value()});
   }
   if (seq.entries_.empty())
     throw InputError(folder.string(),

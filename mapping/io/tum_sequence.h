@@ -30,6 +30,10 @@ struct SequenceOptions {
   bool cut_range_at_end = false;
   double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (SPEC section 1)
   double max_pose_dt_s = 0.1;     ///< pose interpolation window
+  /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
+  /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
+  /// ground-truth pose with has_pose = false and the identity.
+  bool require_poses = true;
 };
 
 /// One usable frame: an rgb/depth pair with an interpolated pose. Paths are absolute.
@@ -39,7 +43,8 @@ struct FrameEntry {
   double t_rgb = 0.0;    ///< s
   std::filesystem::path rgb_path;
   std::filesystem::path depth_path;
-  Transform T_W_C = Transform::Identity();
+  Transform T_W_C = Transform::Identity();  ///< ground truth; the identity when !has_pose
+  bool has_pose = true;
 };
 
 /// How many listed depth frames were not kept, by reason.
@@ -64,6 +69,8 @@ class TumSequence {
   const std::vector<FrameEntry>& entries() const { return entries_; }
   std::size_t size() const { return entries_.size(); }
   int listedDepthFrames() const { return listed_; }
+  /// True when the folder has groundtruth.txt (its poses are in the entries that have one).
+  bool hasGroundTruth() const { return has_ground_truth_; }
   /// The depth-list range the sequence was opened with, its end resolved: [first, last) with
   /// last <= listedDepthFrames(). What verbs echo as "frames A:B".
   FrameRange frameRange() const { return range_; }
@@ -82,6 +89,7 @@ class TumSequence {
   int listed_ = 0;
   FrameRange range_;
   DropCounts dropped_;
+  bool has_ground_truth_ = false;
 };
 
 }  // namespace vdmap

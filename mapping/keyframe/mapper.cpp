@@ -1,11 +1,14 @@
 #include "mapping/keyframe/mapper.h"
 
+#include <algorithm>
 #include <chrono>
+#include <cstdio>
 #include <cmath>
 #include <stdexcept>
 #include <string>
 
 #include "mapping/core/timing.h"
+#include "mapping/tracking/ndt_refinement.h"
 
 namespace vdmap {
 
@@ -34,18 +37,36 @@ void MapperState::validate(std::size_t keyframes) const {
   if (frames_mapped < 0 || revisits < 0 || revisits > frames_mapped || last_frame_index < -1)
     throw std::invalid_argument("frame counts must satisfy 0 <= revisits <= frames and the last frame index >= -1");
   if (!std::isfinite(last_timestamp)) throw std::invalid_argument("the last timestamp is not finite");
+  if (frames_lost < 0 || frames_lost + revisits > frames_mapped ||
+      frame_poses.size() + static_cast<std::size_t>(frames_lost) > static_cast<std::size_t>(frames_mapped))
+    throw std::invalid_argument("frames lost and frame poses must fit the frames mapped");
+  const auto keyframe = [keyframes](int k) { return k >= 0 && k < static_cast<long long>(keyframes); };
+  for (const FramePose& f : frame_poses)
+    if (!keyframe(f.keyframe) || !isValidTransform(f.T_K_C) || !std::isfinite(f.timestamp))
+      throw std::invalid_argument("frame " + std::to_string(f.frame_index) + ": its pose is not a rigid transform in a keyframe");
+  if ((tracker.keyframe != -1 && !keyframe(tracker.keyframe)) || !isValidTransform(tracker.T_K_C) ||
+      !isValidTransform(tracker.velocity) || tracker.frames_lost < 0)
+    throw std::invalid_argument("the tracker's state does not fit the keyframes");
+  for (const PoseGraphEdge& e : pose_graph_edges)
+    if (!keyframe(e.from) || !keyframe(e.to) || e.from == e.to || !isValidTransform(e.T_from_to) ||
+        !e.information.allFinite())
+      throw std::invalid_argument("a pose-graph edge does not join two keyframes with a finite measurement");
+  for (const LoopClosure& l : loops)
+    if (!keyframe(l.from) || !keyframe(l.to)) throw std::invalid_argument("a loop closure names a missing keyframe");
 }
 
-Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params)
-    : camera_(camera), params_(params), extractor_(params.features), integrator_(params.local_map) {
+Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, const TrackingParams& tracking)
+    : camera_(camera), params_(params), tracking_(tracking), extractor_(params.features),
+      integrator_(params.local_map), tracker_(tracking.tracker) {
   camera_.validate();
   params_.validate();
   // Fail on a bad cell size now rather than at the first keyframe.
   KeyframeContainer(camera_, params_.local_map.cell_size_px);
 }
 
-Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, KeyframeGraph graph, const MapperState& state)
-    : Mapper(camera, params) {
+Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, KeyframeGraph graph, const MapperState& state,
+               const TrackingParams& tracking)
+    : Mapper(camera, params, tracking) {
   state.validate(graph.size());
   for (const Keyframe& k : graph.keyframes())
     if (k.container.cellSizePx() != params_.local_map.cell_size_px || !(k.container.camera() == camera_))
@@ -53,6 +74,18 @@ Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, Keyframe
                                   ": its container does not use the mapper's camera and cell size");
   graph_ = std::move(graph);
   state_ = state;
+  tracker_.restore(state_.tracker);
+  pose_graph_.restore(std::move(state_.pose_graph_edges), std::move(state_.loops));
+  state_.pose_graph_edges.clear();
+  state_.loops.clear();
+}
+
+MapperState Mapper::state() const {
+  MapperState out = state_;
+  out.tracker = tracker_.state();
+  out.pose_graph_edges.assign(pose_graph_.edges().begin(), pose_graph_.edges().end());
+  out.loops = pose_graph_.loops();
+  return out;
 }
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
@@ -60,6 +93,128 @@ int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
              CompressedImage(frame.depth, frame.depth_file),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
+}
+
+std::vector<StampedPose> Mapper::trajectory() const {
+  std::vector<StampedPose> out;
+  out.reserve(state_.frame_poses.size());
+  for (const FramePose& f : state_.frame_poses) out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
+  return out;
+}
+
+std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed, RgbdFrame* frame,
+                                                 FrameReport* report) {
+  // The first frame anchors the world frame at its given pose (the ground truth's when the
+  // sequence has one, so maps and trajectories overlay it; else the identity).
+  if (state_.current_keyframe < 0) return TrackingOutcome{};
+  TrackingOutcome outcome = tracker_.track(graph_, state_.current_keyframe, observed, camera_, params_.keyframes.prefilter);
+  report->weak = outcome.weak;
+  report->relocalised = outcome.relocalised;
+  if (outcome.lost()) {
+    tracker_.lose();
+    ++state_.frames_lost;
+    report->lost = true;
+    return std::nullopt;
+  }
+  frame->T_W_C = graph_.keyframe(outcome.keyframe).T_W_K * outcome.estimate.T_K_C;
+  return outcome;
+}
+
+RelativePoseParams Mapper::loopEstimateParams() const {
+  RelativePoseParams p = tracking_.tracker.relative;
+  // The revisited keyframe sits where the drift put it: allow that much disagreement.
+  p.max_jump_m = tracking_.loops.max_drift_m;
+  p.max_jump_deg = tracking_.loops.max_drift_deg;
+  return p;
+}
+
+void Mapper::optimisePoseGraph(RgbdFrame* frame, int keyframe, const Transform& T_K_C, FrameReport* report) {
+  const auto start = std::chrono::steady_clock::now();
+  PoseGraphResult result;
+  const double moved = pose_graph_.optimise(&graph_, tracking_.loops.graph, &result);
+  report->ms.pose_graph_ms += msSince(start);
+  frame->T_W_C = graph_.keyframe(keyframe).T_W_K * T_K_C;
+  report->loop_closed = true;
+  report->loop_correction_m = std::max(report->loop_correction_m, moved);
+}
+
+bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report) {
+  const Keyframe& R = graph_.keyframe(revisited);
+  const RelativePose estimate =
+      estimateRelativePose(R, observed, camera_, R.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
+  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) return false;
+  // Edge R -> current from the frame: T_R_cur = T_R_C (measured) * T_C_cur (tracked). The
+  // information of T_R_C moves into the current keyframe's frame.
+  const Transform T_cur_C = graph_.keyframe(state_.current_keyframe).T_W_K.inverse() * frame->T_W_C;
+  const Matrix6d info = informationInFrame(edgeInformation(estimate, tracking_.loops.edge_noise), T_cur_C.inverse());
+  pose_graph_.add({revisited, state_.current_keyframe, estimate.T_K_C * T_cur_C.inverse(), info, true});
+  optimisePoseGraph(frame, revisited, estimate.T_K_C, report);
+  pose_graph_.recordLoop({frame->index, state_.current_keyframe, revisited, estimate.pnp_inliers, report->loop_correction_m,
+                          report->ms.pose_graph_ms});
+  return true;
+}
+
+void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
+                              std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
+                              RgbdFrame* frame, FrameReport* report) {
+  if (tracked.keyframe >= 0)
+    pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
+                     edgeInformation(tracked.estimate, tracking_.loops.edge_noise), false});
+  bool loop = false;
+  int loop_inliers = 0, loop_to = -1;
+  for (const auto& [other, weight] : covisible) {
+    if (other == tracked.keyframe) continue;
+    // A keyframe the previous one is not linked to is a place seen again: a loop edge.
+    const bool is_loop = other != previous && !graph_.edges().hasEdge(previous, other);
+    if (is_loop && !tracking_.loops.enabled) continue;
+    const Keyframe& K = graph_.keyframe(other);
+    const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C,
+                                                       is_loop ? loopEstimateParams() : tracking_.tracker.relative);
+    if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < tracking_.loops.min_inliers))
+      continue;
+    pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), is_loop});
+    if (is_loop && estimate.pnp_inliers > loop_inliers) loop_inliers = estimate.pnp_inliers, loop_to = other;
+    loop = loop || is_loop;
+  }
+  if (!loop && tracking_.loops.enabled) {
+    // Drift may have moved the place seen again beyond the covisibility test's 8 px: candidates
+    // are the keyframes the previous one is not linked to whose keypoints could project into
+    // this frame at all (covisibilityBound, with a drift-sized margin), most first; each is
+    // verified by a relative-pose estimate (descriptor matching, PnP, dense refinement).
+    CovisibilityParams margin = params_.keyframes.covisibility;
+    margin.max_reprojection_px = tracking_.loops.candidate_margin_px;
+    std::vector<std::pair<double, int>> candidates;
+    for (const Keyframe& K : graph_.keyframes()) {
+      if (K.id == created || K.id == previous || graph_.edges().hasEdge(previous, K.id) ||
+          graph_.edges().hasEdge(created, K.id) || !params_.keyframes.prefilter.accepts(K.T_W_K, frame->T_W_C))
+        continue;
+      const double bound = covisibilityBound(K.features, K.T_W_K, frame->T_W_C, camera_, margin);
+      if (bound >= params_.keyframes.tau) candidates.emplace_back(-bound, K.id);
+    }
+    std::sort(candidates.begin(), candidates.end());
+    int tried = 0;
+    for (const auto& [negative_bound, other] : candidates) {
+      if (tried++ >= tracking_.loops.candidates) break;
+      const Keyframe& K = graph_.keyframe(other);
+      const RelativePose estimate =
+          estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
+      if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) continue;
+      pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), true});
+      loop = true;
+      loop_inliers = estimate.pnp_inliers;
+      loop_to = other;
+      break;
+    }
+  }
+  if (!loop) return;
+  optimisePoseGraph(frame, created, Transform::Identity(), report);
+  // The covisibility edge of the loop, weighted by delta at the corrected poses.
+  const Keyframe& N = graph_.keyframe(created);
+  const Keyframe& L = graph_.keyframe(loop_to);
+  graph_.edges().strengthen(created, loop_to,
+                            covisibility(L.features, L.T_W_K, N.features, N.T_W_K, camera_, params_.keyframes.covisibility));
+  pose_graph_.recordLoop({frame->index, previous, loop_to, loop_inliers, report->loop_correction_m,
+                          report->ms.pose_graph_ms});
 }
 
 std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
@@ -73,22 +228,42 @@ std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
   };
 }
 
-FrameReport Mapper::addFrame(const RgbdFrame& frame) {
+FrameReport Mapper::addFrame(const RgbdFrame& input) {
   if (!canContinue())
     throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
                                 "so mapping cannot continue from it; it can still be rendered, exported or opened");
-  if (!isValidTransform(frame.T_W_C))
-    throw std::invalid_argument("frame " + std::to_string(frame.index) + ": pose is not a finite rigid transform");
+  const bool tracking = params_.poses == PoseSource::kTrack;
+  if (!isValidTransform(input.T_W_C))
+    throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
   const auto start = std::chrono::steady_clock::now();
   FrameReport report;
-  report.frame_index = frame.index;
+  report.frame_index = input.index;
 
-  report.ms.features_ahead = frame.features && frame.features_for == this;
+  report.ms.features_ahead = input.features && input.features_for == this;
   FrameFeatures features = report.ms.features_ahead
-                               ? *frame.features
-                               : extractor_.extract(frame, camera_, params_.local_map.depth_range);
+                               ? *input.features
+                               : extractor_.extract(input, camera_, params_.local_map.depth_range);
   report.features = features.size();
-  report.ms.features_ms = report.ms.features_ahead ? frame.features_ms : msSince(start);
+  report.ms.features_ms = report.ms.features_ahead ? input.features_ms : msSince(start);
+
+  RgbdFrame frame = input;  // shares the images; only the pose may change
+  DensePoints points;
+  const TrackingFrame observed{&features, &points};
+  TrackingOutcome tracked;
+  if (tracking) {
+    const auto track_start = std::chrono::steady_clock::now();
+    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.stride_px);
+    const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
+    report.ms.tracking_ms = msSince(track_start);
+    if (!outcome) {
+      ++state_.frames_mapped;
+      state_.last_frame_index = input.index;
+      state_.last_timestamp = input.timestamp;
+      report.ms.total_ms = msSince(start);
+      return report;
+    }
+    tracked = *outcome;
+  }
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();
@@ -117,6 +292,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
     case FrameDecision::Kind::kRevisit:
       ++state_.revisits;
       report.keyframe = report.decision.keyframe;
+      // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
+      if (tracking && tracking_.loops.enabled && state_.current_keyframe >= 0 && !graph_.edges().hasEdge(state_.current_keyframe, report.keyframe))
+        closeLoop(report.keyframe, observed, &frame, &report);
       // The frame links the place it left to the place it recognised.
       if (current >= 0) graph_.edges().strengthen(current, report.keyframe, report.decision.delta_current);
       break;
@@ -128,12 +306,18 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
                                                                     params_.keyframes.prefilter, {current},
                                                                     index_.params().max_edge_candidates),
                                                   camera_, params_.keyframes);
+      // The keyframe keeps the features (the estimates below only read them through `observed`).
+      const FrameFeatures* kept = nullptr;
       report.keyframe = newKeyframe(frame, std::move(features));
+      kept = &graph_.keyframe(report.keyframe).features;
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
       if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report.keyframe, current, 0.0);
+      if (tracking && current >= 0)
+        addKeyframeEdges(report.keyframe, current, tracked, edges, {kept, &points}, &frame, &report);
       break;
     }
   }
+  report.T_W_C = frame.T_W_C;
   state_.current_keyframe = report.keyframe;
   report.ms.decision_ms = msSince(decide_start);
 
@@ -142,6 +326,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& frame) {
   integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
   ++keyframe.frames_integrated;
   report.ms.update_ms = msSince(update_start);
+  const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
+  state_.frame_poses.push_back({frame.index, frame.timestamp, state_.current_keyframe, T_K_C});
+  if (tracking) tracker_.accept(graph_, state_.current_keyframe, T_K_C);
   report.ms.total_ms = msSince(start);
   ++state_.frames_mapped;
   state_.last_frame_index = frame.index;

@@ -1,0 +1,69 @@
+#include "mapping/tracking/keyframe_pose_graph.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+
+namespace vdmap {
+namespace {
+
+Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
+  Eigen::Matrix3d m;
+  m << 0, -v.z(), v.y(), v.z(), 0, -v.x(), -v.y(), v.x(), 0;
+  return m;
+}
+
+}  // namespace
+
+Matrix6d edgeInformation(const RelativePose& estimate, const EdgeNoise& floor) {
+  const double st = floor.translation_m, sr = floor.rotation_deg * M_PI / 180.0;
+  Matrix6d floor_cov = Matrix6d::Zero();
+  floor_cov.diagonal() << st * st, st * st, st * st, sr * sr, sr * sr, sr * sr;
+  if (!estimate.dense_trusted) return (9.0 * floor_cov).inverse();
+  // exp(xi_K) T_K_C = T_K_C exp(xi_C) with xi_K = Ad(T_K_C) xi_C, Ad = [[R, [t]x R], [0, R]]
+  // (translation first), so the information of xi_C is Ad^T H Ad.
+  const Eigen::Matrix3d R = estimate.T_K_C.linear();
+  Matrix6d Ad = Matrix6d::Zero();
+  Ad.topLeftCorner<3, 3>() = R;
+  Ad.topRightCorner<3, 3>() = skew(estimate.T_K_C.translation()) * R;
+  Ad.bottomRightCorner<3, 3>() = R;
+  Matrix6d info = Ad.transpose() * estimate.dense.information * Ad;
+  info = 0.5 * (info + info.transpose());
+  // The normal matrix can be singular along a direction the surfaces do not constrain (a single
+  // wall): invert it regularised, the floor then bounds that direction.
+  const Matrix6d cov = (info + 1e-9 * info.trace() * Matrix6d::Identity() + 1e-12 * Matrix6d::Identity()).inverse();
+  Matrix6d out = (cov + floor_cov).inverse();
+  return 0.5 * (out + out.transpose());
+}
+
+Matrix6d informationInFrame(const Matrix6d& info_B, const Transform& T_B_X) {
+  // T_A_B exp(xi_B) T_B_X = T_A_X exp(xi_X) with xi_B = Ad(T_B_X) xi_X.
+  const Eigen::Matrix3d R = T_B_X.linear();
+  Matrix6d Ad = Matrix6d::Zero();
+  Ad.topLeftCorner<3, 3>() = R;
+  Ad.topRightCorner<3, 3>() = skew(T_B_X.translation()) * R;
+  Ad.bottomRightCorner<3, 3>() = R;
+  const Matrix6d out = Ad.transpose() * info_B * Ad;
+  return 0.5 * (out + out.transpose());
+}
+
+double KeyframePoseGraph::optimise(KeyframeGraph* graph, const PoseGraphOptions& options, PoseGraphResult* result) {
+  std::vector<Transform> poses;
+  for (const Keyframe& k : graph->keyframes()) poses.push_back(k.T_W_K);
+  before_ = poses;
+  const PoseGraphResult r = optimizePoseGraph(&poses, edges_, options);
+  if (result) *result = r;
+  double largest = 0.0;
+  for (std::size_t i = 0; i < poses.size(); ++i) {
+    // The optimiser's quaternions are unit to rounding; make the rotation exactly orthonormal.
+    Transform T = Transform::Identity();
+    T.linear() = Eigen::Quaterniond(poses[i].linear()).normalized().toRotationMatrix();
+    T.translation() = poses[i].translation();
+    largest = std::max(largest, (T.translation() - before_[i].translation()).norm());
+    graph->setKeyframePose(static_cast<int>(i), T);
+  }
+  return largest;
+}
+
+}  // namespace vdmap

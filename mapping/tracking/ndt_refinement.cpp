@@ -1,0 +1,232 @@
+#include "mapping/tracking/ndt_refinement.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include <Eigen/Cholesky>
+#include <Eigen/Eigenvalues>
+#include <Eigen/Geometry>
+
+#include "mapping/local_map/sensor_model.h"
+
+namespace vdmap {
+
+DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
+                              int stride_px) {
+  DensePoints out;
+  if (frame.depth.empty() || stride_px < 1) return out;
+  const double inv_scale = 1.0 / camera.depth_scale;
+  for (int v = stride_px / 2; v < frame.depth.rows; v += stride_px) {
+    const auto* row = frame.depth.ptr<std::uint16_t>(v);
+    for (int u = stride_px / 2; u < frame.depth.cols; u += stride_px) {
+      const double d = row[u] * inv_scale;
+      if (row[u] == 0 || !range.contains(d)) continue;
+      out.points_C.push_back(camera.backProject(u, v, d).cast<float>());
+    }
+  }
+  return out;
+}
+
+namespace {
+
+// A cell's distribution as the refinement uses it: mean and information matrix (upper triangle
+// xx xy xz yy yz zz), computed once per refinement on first use.
+struct CellInfo {
+  Eigen::Vector3f mean;
+  float omega[6];
+  std::uint32_t stamp = 0;  ///< the refinement that filled it
+  bool usable = false;      ///< enough points for a distribution
+};
+
+// Per-thread scratch, one entry per stored cell of the container being refined against; the
+// stamp marks which refinement an entry belongs to, so nothing is cleared between calls.
+struct Scratch {
+  std::vector<CellInfo> cells;
+  std::uint32_t stamp = 0;
+};
+
+const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint32_t stamp,
+                         const NdtRefinementParams& params) {
+  if (info->stamp == stamp) return *info;
+  info->stamp = stamp;
+  info->usable = cell.n >= static_cast<std::uint32_t>(std::max(params.min_cell_points, 2));
+  if (!info->usable) return *info;
+  info->mean = cell.mean;
+  // The cell's covariance plus the sensor's axial noise at its depth (a single frame's points
+  // scatter that much about the surface) and the floor that keeps a noise-free plane invertible.
+  const double sd = nguyenAxialSd(cell.mean.z());
+  const double extra = params.min_variance_m2 + sd * sd;
+  const std::array<float, 6>& s = cell.scatter;
+  const double inv_n1 = 1.0 / (cell.n - 1.0);
+  Eigen::Matrix3d sigma;
+  sigma << s[0] * inv_n1 + extra, s[1] * inv_n1, s[2] * inv_n1,  //
+      s[1] * inv_n1, s[3] * inv_n1 + extra, s[4] * inv_n1,      //
+      s[2] * inv_n1, s[4] * inv_n1, s[5] * inv_n1 + extra;
+  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
+  es.computeDirect(sigma);
+  Eigen::Vector3d lambda = es.eigenvalues();  // ascending
+  lambda(1) *= params.in_plane_inflation;
+  lambda(2) *= params.in_plane_inflation;
+  const Eigen::Matrix3d o = es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+  const float values[6] = {float(o(0, 0)), float(o(0, 1)), float(o(0, 2)), float(o(1, 1)), float(o(1, 2)), float(o(2, 2))};
+  std::copy(values, values + 6, info->omega);
+  return *info;
+}
+
+struct Linearisation {
+  Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+  int associated = 0;
+  int inliers = 0;
+  double inlier_m2 = 0.0;
+  double support = 0.0;  ///< sum over the points of 1 - rho / rho_max (Tukey): a soft inlier count
+};
+
+Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, const Transform& T_K_C,
+                        const NdtRefinementParams& params, double robust_k, Scratch* scratch) {
+  const PinholeCamera& cam = map.camera();
+  const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
+  const Eigen::Vector3f t = T_K_C.translation().cast<float>();
+  const float gate2 = static_cast<float>(params.max_distance_m * params.max_distance_m);
+  const float inv_k2 = static_cast<float>(1.0 / (robust_k * robust_k));
+  const StoredCell* base = map.cells().data();
+  // Float sums of one point's terms are exact enough (1e-7 relative); the frame's sums are double.
+  double H[21] = {}, g[6] = {}, inlier_m2 = 0.0, support = 0.0;
+  int associated = 0, inliers = 0;
+  for (std::size_t i = 0; i < frame.size(); ++i) {
+    const Eigen::Vector3f q = R * frame.points_C[i] + t;
+    if (q.z() <= 0.0f) continue;
+    const float inv_z = 1.0f / q.z();
+    const int index = map.gridIndexOfPixel(cam.fx * q.x() * inv_z + cam.cx, cam.fy * q.y() * inv_z + cam.cy);
+    if (index < 0) continue;
+    const StoredCell* cell = map.find(index);
+    if (!cell) continue;
+    const CellInfo& c = cellInfo(*cell, &scratch->cells[static_cast<std::size_t>(cell - base)], scratch->stamp, params);
+    if (!c.usable) continue;
+    const Eigen::Vector3f r = q - c.mean;
+    if (r.squaredNorm() > gate2) continue;
+    ++associated;
+    const float* o = c.omega;
+    // a = Omega r
+    const float ax = o[0] * r.x() + o[1] * r.y() + o[2] * r.z();
+    const float ay = o[1] * r.x() + o[3] * r.y() + o[4] * r.z();
+    const float az = o[2] * r.x() + o[4] * r.y() + o[5] * r.z();
+    const float m2 = r.x() * ax + r.y() * ay + r.z() * az;
+    // Tukey's biweight (NdtRefinementParams::robust_k).
+    const float u = m2 * inv_k2;
+    if (u >= 1.0f) continue;
+    ++inliers;
+    inlier_m2 += m2;
+    const float w = (1.0f - u) * (1.0f - u);
+    support += w * (1.0f - u);  // 1 - rho/rho_max with rho = k^2/6 (1 - (1 - u)^3)
+    // J = [I, -[q]x] (q(xi) = exp(xi) q). J^T Omega r = (a, q x a); J^T Omega J has the blocks
+    // Omega, -Omega [q]x and [q]x^T Omega [q]x.
+    const float qx = q.x(), qy = q.y(), qz = q.z();
+    const float gx = qy * az - qz * ay, gy = qz * ax - qx * az, gz = qx * ay - qy * ax;
+    g[0] += w * ax, g[1] += w * ay, g[2] += w * az, g[3] += w * gx, g[4] += w * gy, g[5] += w * gz;
+    // B = Omega [q]x^T = -Omega [q]x, column j of [q]x^T is q x e_j... written out:
+    // [q]x = [[0,-qz,qy],[qz,0,-qx],[-qy,qx,0]]; B = Omega * [q]x^T.
+    const float b00 = o[1] * -qz + o[2] * qy, b01 = o[0] * qz + o[2] * -qx, b02 = o[0] * -qy + o[1] * qx;
+    const float b10 = o[3] * -qz + o[4] * qy, b11 = o[1] * qz + o[4] * -qx, b12 = o[1] * -qy + o[3] * qx;
+    const float b20 = o[4] * -qz + o[5] * qy, b21 = o[2] * qz + o[5] * -qx, b22 = o[2] * -qy + o[4] * qx;
+    // C = [q]x B (= [q]x Omega [q]x^T), symmetric: rows of [q]x times columns of B.
+    const float c00 = -qz * b10 + qy * b20, c01 = -qz * b11 + qy * b21, c02 = -qz * b12 + qy * b22;
+    const float c11 = qz * b01 - qx * b21, c12 = qz * b02 - qx * b22;
+    const float c22 = -qy * b02 + qx * b12;
+    const float terms[21] = {o[0], o[1], o[2], b00, b01, b02,  //
+                             o[3], o[4], b10, b11, b12,        //
+                             o[5], b20, b21, b22,              //
+                             c00, c01, c02, c11, c12, c22};
+    for (int k = 0; k < 21; ++k) H[k] += w * terms[k];
+  }
+  Linearisation lin;
+  int k = 0;
+  for (int row = 0; row < 6; ++row)
+    for (int col = row; col < 6; ++col) lin.H(row, col) = lin.H(col, row) = H[k++];
+  for (int j = 0; j < 6; ++j) lin.g(j) = g[j];
+  lin.associated = associated;
+  lin.inliers = inliers;
+  lin.inlier_m2 = inlier_m2;
+  lin.support = support;
+  return lin;
+}
+
+// Adds the reprojection terms of the features to `lin`. T_C_K' = T_C_K exp(-xi) for the
+// perturbation T_K_C' = exp(xi) T_K_C, so y = T_C_K X moves by -R (rho + phi x X).
+void addFeatureTerms(std::span<const FeatureObservation> features, const PinholeCamera& cam, const Transform& T_K_C,
+                     const NdtRefinementParams& params, double anneal, Linearisation* lin) {
+  const Transform T_C_K = T_K_C.inverse();
+  const Eigen::Matrix3d R = T_C_K.linear();
+  const double info = 1.0 / (params.feature_sigma_px * params.feature_sigma_px);
+  const double inv_k2 = 1.0 / (anneal * anneal * params.feature_robust_k * params.feature_robust_k);
+  for (const FeatureObservation& f : features) {
+    const Eigen::Vector3d y = T_C_K * f.X_K;
+    if (y.z() <= 0.0) continue;
+    const double iz = 1.0 / y.z();
+    const Eigen::Vector2d e = Eigen::Vector2d(cam.fx * y.x() * iz + cam.cx, cam.fy * y.y() * iz + cam.cy) - f.pixel;
+    const double u = e.squaredNorm() * info * inv_k2;
+    if (u >= 1.0) continue;
+    const double w = info * (1.0 - u) * (1.0 - u);
+    lin->support += (1.0 - u) * (1.0 - u) * (1.0 - u);  // a feature counts like a point
+    Eigen::Matrix<double, 2, 3> P;
+    P << cam.fx * iz, 0, -cam.fx * y.x() * iz * iz, 0, cam.fy * iz, -cam.fy * y.y() * iz * iz;
+    Eigen::Matrix<double, 3, 6> dy;
+    dy.leftCols<3>() = -R;
+    Eigen::Matrix3d skew_X;
+    skew_X << 0, -f.X_K.z(), f.X_K.y(), f.X_K.z(), 0, -f.X_K.x(), -f.X_K.y(), f.X_K.x(), 0;
+    dy.rightCols<3>() = R * skew_X;
+    const Eigen::Matrix<double, 2, 6> J = P * dy;
+    lin->H.noalias() += w * J.transpose() * J;
+    lin->g.noalias() += w * J.transpose() * e;
+  }
+}
+
+}  // namespace
+
+NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
+                                          std::span<const FeatureObservation> features, Transform* T_K_C,
+                                          const NdtRefinementParams& params) {
+  NdtRefinementResult result;
+  result.points = static_cast<int>(frame.size());
+  static thread_local Scratch scratch;
+  if (scratch.cells.size() < map.size()) scratch.cells.resize(map.size());
+  if (++scratch.stamp == 0) {  // wrapped: forget every entry
+    for (CellInfo& c : scratch.cells) c.stamp = 0;
+    scratch.stamp = 1;
+  }
+  // Annealing: the first steps take points up to annealing_factor times farther (the basin of
+  // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
+  // threshold down to robust_k, where the last steps and the final measurement are made.
+  const auto anneal = [&params](int it) { return std::max(1.0, params.annealing_factor / std::pow(2.0, it)); };
+  Linearisation lin;
+  for (int it = 0; it <= params.iterations; ++it) {
+    const double a = it == params.iterations ? 1.0 : anneal(it);
+    lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, &scratch);
+    addFeatureTerms(features, map.camera(), *T_K_C, params, a, &lin);
+    // The last pass only measures the pose the previous step reached.
+    if (it == params.iterations || lin.associated < 6) break;
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(lin.H);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12).all()) break;
+    const Eigen::Matrix<double, 6, 1> xi = -ldlt.solve(lin.g);
+    if (!xi.allFinite()) break;
+    const Eigen::Vector3d rho = xi.head<3>(), phi = xi.tail<3>();
+    Transform step = Transform::Identity();
+    if (phi.norm() > 0) step.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
+    step.translation() = rho;
+    *T_K_C = step * *T_K_C;
+    ++result.iterations;
+    if (a == 1.0 && rho.norm() < params.converged_m && phi.norm() < params.converged_rad) {
+      lin = linearise(map, frame, *T_K_C, params, params.robust_k, &scratch);
+      addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
+      break;
+    }
+  }
+  result.associated = lin.associated;
+  result.inliers = lin.inliers;
+  result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
+  result.support = lin.support;
+  result.information = lin.H;
+  return result;
+}
+
+}  // namespace vdmap

@@ -1,0 +1,89 @@
+#pragma once
+// Dense refinement of a frame's pose against one keyframe's local map (SPEC section 11): frame
+// points are projected into the keyframe's container, associated with the ellipsoid of the cell
+// they land in (the container's projective association, no search), and the point-to-distribution
+// (NDT) distances are minimised by Gauss-Newton.
+
+#include <span>
+#include <vector>
+
+#include <Eigen/Core>
+
+#include "mapping/core/rgbd_frame.h"
+#include "mapping/local_map/keyframe_container.h"
+
+namespace vdmap {
+
+/// A frame's points on a regular pixel grid (camera frame C, metres): what the dense refinement
+/// aligns. Computed once per frame and shared by every keyframe the frame is compared with.
+struct DensePoints {
+  std::vector<Eigen::Vector3f> points_C;
+  std::size_t size() const { return points_C.size(); }
+};
+
+/// Every `stride_px`-th pixel of every `stride_px`-th row whose depth lies in `range`.
+DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
+                              int stride_px);
+
+/// A feature correspondence the refinement also honours: keyframe point X_K (the keyframe's
+/// keypoint with its depth) observed at frame pixel `pixel` (PnP's inliers).
+struct FeatureObservation {
+  Eigen::Vector3d X_K;
+  Eigen::Vector2d pixel;
+};
+
+struct NdtRefinementParams {
+  int stride_px = 8;            ///< pixel grid of sampleDensePoints: 4800 points at 640x480
+  int iterations = 6;           ///< Gauss-Newton steps at most
+  int min_cell_points = 6;      ///< cells with fewer points give no distribution (SPEC 4 min_points)
+  double max_distance_m = 0.1;  ///< a point farther than this from its cell's mean is not associated
+  /// Tukey biweight threshold on the Mahalanobis distance: a point beyond it has no weight, so
+  /// the far side of an occluding edge cannot pull the pose (a Huber tail, whose pull never
+  /// vanishes, biased 7-Scenes estimates by centimetres).
+  double robust_k = 3.0;
+  /// The first step's threshold is this times robust_k (and the features' likewise); each step
+  /// halves it down to robust_k. 1: no annealing.
+  double annealing_factor = 8.0;
+  /// Isotropic variance added to every cell covariance besides the sensor's axial noise at the
+  /// cell's depth: keeps a cell of perfectly planar (noise-free, synthetic) points invertible.
+  double min_variance_m2 = 1e-6;
+  /// Weight of the in-plane axes of a cell: its two larger eigenvalues are multiplied by this.
+  /// The projective association puts a point in whichever cell it lands in, so its offset
+  /// along the surface says little about the pose; at full weight it pulls points towards cell
+  /// centres and slows convergence along the surface (feature terms constrain that instead).
+  double in_plane_inflation = 3.0;
+  /// Reprojection noise of a feature observation, px (one sigma), and its Tukey threshold in
+  /// sigmas. 2 px, not 1: JPEG colour that is not registered to the depth (7-Scenes) biases
+  /// keypoint depths, and the dense terms should decide along the surface normals.
+  double feature_sigma_px = 2.0;
+  double feature_robust_k = 4.0;
+  double converged_m = 1e-5;    ///< stop when a step moves less than this ...
+  double converged_rad = 1e-5;  ///< ... and turns less than this
+};
+
+struct NdtRefinementResult {
+  int points = 0;       ///< points of the frame
+  int associated = 0;   ///< of those, landing on a cell with an ellipsoid within max_distance_m (last step)
+  int inliers = 0;      ///< of those, within robust_k (Mahalanobis)
+  double rms_mahalanobis = 0.0;  ///< over the inliers
+  /// Sum over the points and the features of 1 - rho(d) / rho_max (Tukey's loss of the
+  /// Mahalanobis distance d, or of the reprojection error): a soft inlier count, higher where the
+  /// frame fits the local map and the matched keypoints better. The features count: the dense
+  /// points alone favour a pose slid along a wall that puts more of them inside the map.
+  double support = 0.0;
+  int iterations = 0;   ///< Gauss-Newton steps taken
+  /// Gauss-Newton normal matrix at the solution for a perturbation T_K_C <- exp(xi) T_K_C,
+  /// xi = (translation, rotation) in the keyframe frame: the estimate's information matrix.
+  Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
+};
+
+/// Refines T_K_C (the frame's pose in the keyframe frame) in place: NDT distances of the frame's
+/// points to the local map plus the reprojection errors of `features` (may be empty).
+/// Deterministic. A step whose normal matrix is singular (too few associations) ends the
+/// refinement with T_K_C unchanged by it.
+NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
+                                          std::span<const FeatureObservation> features, Transform* T_K_C,
+                                          const NdtRefinementParams& params = {});
+
+}  // namespace vdmap

@@ -1,0 +1,76 @@
+#pragma once
+// The pose of a frame relative to one keyframe (SPEC section 11): PnP RANSAC on the frame's ORB
+// matches to the keyframe's keypoints (which have depth), checked against a prediction, then
+// refined densely against the keyframe's own local map. Tracking, relocalisation, loop closure
+// and the pose-graph edges of new keyframes all measure relative poses with this one function.
+
+#include <optional>
+
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/tracking/ndt_refinement.h"
+
+namespace vdmap {
+
+struct PnpParams {
+  int max_hamming = 64;          ///< descriptor distance limit (SPEC 5)
+  double lowe_ratio = 0.8;       ///< best / second-best distance must be below this
+  int min_matches = 12;          ///< fewer matches with depth: no PnP
+  int ransac_iterations = 100;
+  double ransac_reprojection_px = 3.0;
+  int min_inliers = 20;          ///< fewer RANSAC inliers: the PnP pose is not used
+};
+
+/// What the frame needs for a relative-pose estimate (non-owning).
+struct TrackingFrame {
+  const FrameFeatures* features = nullptr;
+  const DensePoints* points = nullptr;
+};
+
+struct RelativePoseParams {
+  PnpParams pnp;
+  NdtRefinementParams dense;
+  bool dense_refinement = true;  ///< false: PnP alone (for comparison; the tests show it is worse)
+  /// Motion check: a PnP pose farther than this from the prediction is a bad RANSAC draw and is
+  /// not used (the anchors: one bad pose throws the whole trajectory off otherwise).
+  double max_jump_m = 0.15;
+  double max_jump_deg = 15.0;
+  /// The refinement's basin is about a centimetre: it starts from the prior (in steady motion a
+  /// constant-velocity prediction is smoother than PnP on a few hundred inliers) when PnP agrees
+  /// with it within this; otherwise it runs from both and keeps the one the local map supports
+  /// better (NdtRefinementResult::support): the prior wins in steady motion, PnP after a jerk or
+  /// when there is no velocity yet.
+  double seed_agreement_m = 0.005;
+  double seed_agreement_deg = 0.3;
+  /// The dense estimate is trusted when at least this share of the associated points are inliers
+  /// and at least min_dense_inliers of them ...
+  double min_dense_inlier_ratio = 0.5;
+  int min_dense_inliers = 300;
+  /// ... and the refinement moved the pose less than max_jump from where it started.
+};
+
+/// One estimate of T_K_C.
+struct RelativePose {
+  /// kGood: PnP and the dense refinement agree; kWeak: only one of them is trusted (few
+  /// inliers, a large residual, no texture); kLost: neither, the pose is not usable.
+  enum class Status { kGood, kWeak, kLost };
+  Status status = Status::kLost;
+  Transform T_K_C = Transform::Identity();
+  int matches = 0;       ///< descriptor matches to keypoints with depth
+  int pnp_inliers = 0;   ///< RANSAC inliers (0: PnP not run or failed)
+  bool pnp_used = false; ///< the PnP pose passed the inlier and motion checks and seeded the refinement
+  NdtRefinementResult dense;
+  bool dense_trusted = false;
+  bool usable() const { return status != Status::kLost; }
+};
+
+/// Estimates the pose of the frame in keyframe K's frame. `prior_T_K_C` (the constant-velocity
+/// prediction, or the current estimate) seeds the refinement when PnP fails and is the reference
+/// of the motion check; without a prior PnP must succeed. Deterministic.
+RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame, const PinholeCamera& camera,
+                                  const std::optional<Transform>& prior_T_K_C, const RelativePoseParams& params);
+
+/// Translation (m) and rotation (degrees) between two poses.
+double translationBetween(const Transform& a, const Transform& b);
+double degreesBetween(const Transform& a, const Transform& b);
+
+}  // namespace vdmap

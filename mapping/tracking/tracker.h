@@ -1,0 +1,68 @@
+#pragma once
+// Frame-to-keyframe tracking with a constant-velocity motion model (SPEC section 11).
+
+#include <optional>
+
+#include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/tracking/relative_pose.h"
+
+namespace vdmap {
+
+struct TrackerParams {
+  RelativePoseParams relative;
+  /// When the current keyframe gives only a weak or no estimate, this many other keyframes
+  /// (those the revisit search's pose pre-filter accepts at the predicted pose, most promising
+  /// covisibility bound first) are tried; the first good estimate places the frame.
+  int relocalisation_candidates = 3;
+};
+
+/// What the tracker carries from frame to frame (a saved session needs it to continue). The last
+/// pose is kept relative to its keyframe, so a pose-graph correction moves the prediction too.
+struct TrackerState {
+  int keyframe = -1;                         ///< keyframe of the last placed frame (-1: none yet)
+  Transform T_K_C = Transform::Identity();   ///< the last placed frame in that keyframe
+  Transform velocity = Transform::Identity();///< T_Cprev_Ccur of the last two placed frames
+  int frames_lost = 0;                       ///< frames skipped since the last placed one
+};
+
+/// The outcome for one frame.
+struct TrackingOutcome {
+  RelativePose estimate;       ///< against `keyframe`
+  int keyframe = -1;           ///< the keyframe the pose is relative to (-1: lost)
+  bool relocalised = false;    ///< placed against another keyframe than the current one
+  bool weak = false;           ///< the current keyframe's estimate was not good
+  bool lost() const { return keyframe < 0; }
+};
+
+/// Places frames relative to the current keyframe, or relocalises them against nearby ones.
+/// Deterministic. Not thread-safe: one thread feeds it.
+class Tracker {
+ public:
+  explicit Tracker(const TrackerParams& params = {}) : params_(params) {}
+
+  /// The constant-velocity prediction of the next frame's pose, world frame; nullopt before
+  /// the first placed frame.
+  std::optional<Transform> predict(const KeyframeGraph& graph) const;
+
+  /// Estimates the frame's pose against keyframe `current`; when that is not good, against
+  /// up to relocalisation_candidates others (the first good one wins; else a weak estimate of
+  /// the current keyframe is kept; else the frame is lost). Does not change the state: call
+  /// accept() or lose() with what the caller did with the frame.
+  TrackingOutcome track(const KeyframeGraph& graph, int current, const TrackingFrame& frame,
+                        const PinholeCamera& camera, const PosePrefilter& prefilter) const;
+
+  /// The frame was placed at T_K_C in keyframe `keyframe` (updates the velocity).
+  void accept(const KeyframeGraph& graph, int keyframe, const Transform& T_K_C);
+  /// The frame could not be placed: the next prediction has no velocity and a wider motion check.
+  void lose() { ++state_.frames_lost; state_.velocity = Transform::Identity(); }
+
+  const TrackerState& state() const { return state_; }
+  void restore(const TrackerState& state) { state_ = state; }
+  const TrackerParams& params() const { return params_; }
+
+ private:
+  TrackerParams params_;
+  TrackerState state_;
+};
+
+}  // namespace vdmap
