@@ -79,7 +79,6 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
   EXPECT_EQ(j["late_frames"], nlohmann::json({10, 12}));
   EXPECT_GT(j["rss_mb_end"].get<double>(), 0.0);
   // The live heap comes from glibc's mallinfo2, which reads 0 under AddressSanitizer's allocator.
-  EXPECT_GE(j["heap_mb_end"].get<double>(), 0.0);
   EXPECT_LE(j["heap_mb_end"].get<double>(), j["rss_mb_end"].get<double>());
   EXPECT_GT(j["global_ellipsoids_end"].get<long>(), 0);
   std::istringstream csv(readFile(tmp / "long.csv"));

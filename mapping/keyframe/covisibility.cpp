@@ -65,21 +65,31 @@ double covisibility(const FrameFeatures& K, const Transform& T_W_K, const FrameF
   return static_cast<double>(reobserved) / static_cast<double>(K.size());
 }
 
+std::vector<cv::DMatch> ratioTestMatches(const FrameFeatures& K, const FrameFeatures& F, int max_hamming,
+                                         double lowe_ratio) {
+  std::vector<cv::DMatch> matches;
+  if (K.size() == 0 || F.size() == 0) return matches;
+  static thread_local cv::BFMatcher matcher(cv::NORM_HAMMING, false);
+  std::vector<std::vector<cv::DMatch>> knn;
+  matcher.knnMatch(K.descriptors, F.descriptors, knn, 2);
+  for (const std::vector<cv::DMatch>& pair : knn) {
+    if (pair.empty()) continue;
+    const cv::DMatch& best = pair[0];
+    if (best.distance > max_hamming) continue;
+    if (pair.size() > 1 && !(best.distance < lowe_ratio * pair[1].distance)) continue;
+    matches.push_back(best);
+  }
+  return matches;
+}
+
 double covisibilityBruteForce(const FrameFeatures& K, const Transform& T_W_K, const FrameFeatures& F,
                               const Transform& T_W_F, const PinholeCamera& camera,
                               const CovisibilityParams& params) {
   if (K.size() == 0 || F.size() < 2) return 0.0;
-  static thread_local cv::BFMatcher matcher(cv::NORM_HAMMING, false);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(K.descriptors, F.descriptors, knn, 2);
   const Transform T_F_K = T_W_F.inverse() * T_W_K;
   const double max_sq = params.max_reprojection_px * params.max_reprojection_px;
   std::size_t reobserved = 0;
-  for (const std::vector<cv::DMatch>& pair : knn) {
-    if (pair.empty()) continue;
-    const cv::DMatch& best = pair[0];
-    if (best.distance > params.max_hamming) continue;
-    if (pair.size() > 1 && !(best.distance < params.lowe_ratio * pair[1].distance)) continue;
+  for (const cv::DMatch& best : ratioTestMatches(K, F, params.max_hamming, params.lowe_ratio)) {
     const std::size_t i = static_cast<std::size_t>(best.queryIdx);
     if (K.depth_m[i] > 0.0f) {
       const Eigen::Vector3d p_F = predictInFrame(K, i, T_F_K, camera);

@@ -36,6 +36,13 @@ double covisibilityBruteForce(const FrameFeatures& keyframe, const Transform& T_
                               const Transform& T_W_F, const PinholeCamera& camera,
                               const CovisibilityParams& params = {});
 
+/// The brute-force matches of SPEC section 5: for each of K's descriptors its nearest of F's
+/// (cv::BFMatcher 2-NN, Hamming) when within `max_hamming` and below `lowe_ratio` times the
+/// second nearest; queryIdx indexes K, trainIdx F. Shared by covisibilityBruteForce() and the
+/// tracker's PnP matches.
+std::vector<cv::DMatch> ratioTestMatches(const FrameFeatures& K, const FrameFeatures& F, int max_hamming,
+                                         double lowe_ratio);
+
 /// Either of the two above (the decision takes the measure, so tests can run the oracle).
 using CovisibilityMeasure = double (*)(const FrameFeatures&, const Transform&, const FrameFeatures&,
                                        const Transform&, const PinholeCamera&, const CovisibilityParams&);

@@ -239,12 +239,11 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   FrameReport report;
   report.frame_index = input.index;
 
-  report.ms.features_ahead = input.features && input.features_for == this;
-  FrameFeatures features = report.ms.features_ahead
-                               ? *input.features
-                               : extractor_.extract(input, camera_, params_.local_map.depth_range);
+  const bool features_ahead = input.features && input.features_for == this;
+  FrameFeatures features =
+      features_ahead ? *input.features : extractor_.extract(input, camera_, params_.local_map.depth_range);
   report.features = features.size();
-  report.ms.features_ms = report.ms.features_ahead ? input.features_ms : msSince(start);
+  report.ms.features_ms = features_ahead ? input.features_ms : msSince(start);
 
   RgbdFrame frame = input;  // shares the images; only the pose may change
   DensePoints points;

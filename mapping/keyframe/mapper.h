@@ -45,8 +45,7 @@ struct TrackingParams {
 
 /// Wall time of each stage of one frame, milliseconds.
 struct StageTimes {
-  double features_ms = 0;  ///< ORB, on this thread or, when computed ahead, on the prefetch thread
-  bool features_ahead = false;  ///< the features came from featuresAhead() (not in total_ms)
+  double features_ms = 0;  ///< ORB, on this thread or, computed ahead, on the prefetch thread (then not in total_ms)
   double decision_ms = 0;  ///< covisibility against the current keyframe, loop search, edges
   double update_ms = 0;    ///< local-map integration
   double tracking_ms = 0;  ///< pose estimate (PoseSource::kTrack): dense sampling, PnP, refinement

@@ -5,6 +5,8 @@
 #include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
+#include "mapping/keyframe/covisibility.h"
+
 namespace vdmap {
 namespace {
 
@@ -12,14 +14,7 @@ namespace {
 void matchWithDepth(const FrameFeatures& K, const FrameFeatures& F, const PnpParams& params,
                     const PinholeCamera& camera, std::vector<cv::Point3f>* object, std::vector<cv::Point2f>* image) {
   if (K.size() == 0 || F.size() < 2) return;
-  static thread_local cv::BFMatcher matcher(cv::NORM_HAMMING, false);
-  std::vector<std::vector<cv::DMatch>> knn;
-  matcher.knnMatch(K.descriptors, F.descriptors, knn, 2);
-  for (const std::vector<cv::DMatch>& pair : knn) {
-    if (pair.empty()) continue;
-    const cv::DMatch& best = pair[0];
-    if (best.distance > params.max_hamming) continue;
-    if (pair.size() > 1 && !(best.distance < params.lowe_ratio * pair[1].distance)) continue;
+  for (const cv::DMatch& best : ratioTestMatches(K, F, params.max_hamming, params.lowe_ratio)) {
     const std::size_t i = static_cast<std::size_t>(best.queryIdx);
     if (K.depth_m[i] <= 0.0f) continue;
     const cv::Point2f& pt = K.keypoints[i].pt;
