@@ -107,7 +107,19 @@ std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed,
   // The first frame anchors the world frame at its given pose (the ground truth's when the
   // sequence has one, so maps and trajectories overlay it; else the identity).
   if (state_.current_keyframe < 0) return TrackingOutcome{};
-  TrackingOutcome outcome = tracker_.track(graph_, state_.current_keyframe, observed, camera_, params_.keyframes.prefilter);
+  // After lost frames the prediction is stale: place recognition proposes keyframes whatever
+  // their pose (the vocabulary's best scores; the views nearest the last pose before it is trained).
+  std::vector<int> recognised;
+  if (tracker_.framesLost() > 0) {
+    const std::vector<KeyframeView> views = graph_.views();
+    index_.sync(views);
+    const PosePrefilter everywhere{.enabled = false};
+    const Transform T_W_pred = *tracker_.predict(graph_);
+    recognised = index_.ranked(*observed.features, T_W_pred, views, everywhere);
+    if (recognised.empty()) recognised = index_.nearestViews(*observed.features, T_W_pred, views, everywhere);
+  }
+  TrackingOutcome outcome =
+      tracker_.track(graph_, state_.current_keyframe, observed, camera_, params_.keyframes.prefilter, recognised);
   report->weak = outcome.weak;
   report->relocalised = outcome.relocalised;
   if (outcome.lost()) {
@@ -125,6 +137,7 @@ RelativePoseParams Mapper::loopEstimateParams() const {
   // The revisited keyframe sits where the drift put it: allow that much disagreement.
   p.max_jump_m = tracking_.loops.max_drift_m;
   p.max_jump_deg = tracking_.loops.max_drift_deg;
+  p.pnp.search_radius_px = 0;  // and so far off that matches by projection would miss: brute force
   return p;
 }
 
@@ -251,7 +264,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   TrackingOutcome tracked;
   if (tracking) {
     const auto track_start = std::chrono::steady_clock::now();
-    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.stride_px);
+    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.strideFor(camera_));
     const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
     report.ms.tracking_ms = msSince(track_start);
     if (!outcome) {

@@ -1,5 +1,6 @@
 #include "mapping/local_map/keyframe_container.h"
 
+#include <atomic>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -23,6 +24,11 @@ void StoredCell::fromStats(const CellStats& s) {
   scatter = {float(s.scatter(0, 0)), float(s.scatter(0, 1)), float(s.scatter(0, 2)),
              float(s.scatter(1, 1)), float(s.scatter(1, 2)), float(s.scatter(2, 2))};
   color = s.color.cast<float>();
+}
+
+std::uint64_t KeyframeContainer::UniqueId::next() {
+  static std::atomic<std::uint64_t> counter{0};
+  return ++counter;
 }
 
 KeyframeContainer::KeyframeContainer(const PinholeCamera& camera, int cell_size_px)

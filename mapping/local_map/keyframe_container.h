@@ -67,12 +67,29 @@ class KeyframeContainer {
   /// Heap bytes held: the slot grid plus the cells.
   std::size_t memoryBytes() const;
 
+  /// A number no other container has had: new on construction and copy, handed over by a move
+  /// (the moved-from container takes a new one). A cell only changes by gaining points, so a
+  /// cache of something computed from cells()[i] stays valid while (id(), i, n) are the same
+  /// (the dense refinement's cell distributions).
+  std::uint64_t id() const { return id_.value; }
+
  private:
+  struct UniqueId {
+    static std::uint64_t next();
+    std::uint64_t value = next();
+    UniqueId() = default;
+    UniqueId(const UniqueId&) : value(next()) {}
+    UniqueId(UniqueId&& other) noexcept : value(other.value) { other.value = next(); }
+    UniqueId& operator=(const UniqueId&) { value = next(); return *this; }
+    UniqueId& operator=(UniqueId&& other) noexcept { value = other.value; other.value = next(); return *this; }
+  };
+
   PinholeCamera camera_;
   int cell_size_px_;
   int cols_, rows_;
   std::vector<std::int32_t> slot_;
   std::vector<StoredCell> cells_;
+  UniqueId id_;
 };
 
 }  // namespace vdmap

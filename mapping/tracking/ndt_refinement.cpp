@@ -30,25 +30,38 @@ DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camer
 namespace {
 
 // A cell's distribution as the refinement uses it: mean and information matrix (upper triangle
-// xx xy xz yy yz zz), computed once per refinement on first use.
+// xx xy xz yy yz zz), computed on first use and kept while the cell is unchanged.
 struct CellInfo {
+  std::uint64_t container = 0;  ///< KeyframeContainer::id() it was computed for (0: never)
+  std::uint32_t n = 0;          ///< the cell's count then: a cell changes only by gaining points
+  bool usable = false;          ///< enough points for a distribution
   Eigen::Vector3f mean;
   float omega[6];
-  std::uint32_t stamp = 0;  ///< the refinement that filled it
-  bool usable = false;      ///< enough points for a distribution
 };
 
-// Per-thread scratch, one entry per stored cell of the container being refined against; the
-// stamp marks which refinement an entry belongs to, so nothing is cleared between calls.
+// Per-thread cache, one entry per stored cell (by its index in cells()) of the container last
+// refined against: tracking refines every frame against the current keyframe, whose cells
+// mostly did not change since the previous frame.
+// Entries depend on the parameters they were computed with: other parameters clear them.
 struct Scratch {
   std::vector<CellInfo> cells;
-  std::uint32_t stamp = 0;
+  int min_cell_points = -1;
+  double min_variance_m2 = -1, in_plane_inflation = -1;
+  void use(const KeyframeContainer& map, const NdtRefinementParams& p) {
+    if (cells.size() < map.size()) cells.resize(map.size());
+    if (p.min_cell_points == min_cell_points && p.min_variance_m2 == min_variance_m2 &&
+        p.in_plane_inflation == in_plane_inflation)
+      return;
+    for (CellInfo& c : cells) c.container = 0;
+    min_cell_points = p.min_cell_points, min_variance_m2 = p.min_variance_m2, in_plane_inflation = p.in_plane_inflation;
+  }
 };
 
-const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint32_t stamp,
+const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint64_t container,
                          const NdtRefinementParams& params) {
-  if (info->stamp == stamp) return *info;
-  info->stamp = stamp;
+  if (info->container == container && info->n == cell.n) return *info;
+  info->container = container;
+  info->n = cell.n;
   info->usable = cell.n >= static_cast<std::uint32_t>(std::max(params.min_cell_points, 2));
   if (!info->usable) return *info;
   info->mean = cell.mean;
@@ -101,7 +114,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
     if (index < 0) continue;
     const StoredCell* cell = map.find(index);
     if (!cell) continue;
-    const CellInfo& c = cellInfo(*cell, &scratch->cells[static_cast<std::size_t>(cell - base)], scratch->stamp, params);
+    const CellInfo& c = cellInfo(*cell, &scratch->cells[static_cast<std::size_t>(cell - base)], map.id(), params);
     if (!c.usable) continue;
     const Eigen::Vector3f r = q - c.mean;
     if (r.squaredNorm() > gate2) continue;
@@ -189,11 +202,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
   NdtRefinementResult result;
   result.points = static_cast<int>(frame.size());
   static thread_local Scratch scratch;
-  if (scratch.cells.size() < map.size()) scratch.cells.resize(map.size());
-  if (++scratch.stamp == 0) {  // wrapped: forget every entry
-    for (CellInfo& c : scratch.cells) c.stamp = 0;
-    scratch.stamp = 1;
-  }
+  scratch.use(map, params);
   // Annealing: the first steps take points up to annealing_factor times farther (the basin of
   // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
   // threshold down to robust_k, where the last steps and the final measurement are made.

@@ -1,27 +1,54 @@
 #include "mapping/tracking/relative_pose.h"
 
 #include <cmath>
+#include <functional>
 
 #include <opencv2/calib3d.hpp>
+#include <Eigen/Cholesky>
 #include <opencv2/core/eigen.hpp>
 
 #include "mapping/keyframe/covisibility.h"
+#include "mapping/keyframe/projection_matcher.h"
 
 namespace vdmap {
 namespace {
 
-// K's keypoints with depth (3-D, keyframe frame) and the frame keypoints they match.
-void matchWithDepth(const FrameFeatures& K, const FrameFeatures& F, const PnpParams& params,
-                    const PinholeCamera& camera, std::vector<cv::Point3f>* object, std::vector<cv::Point2f>* image) {
-  if (K.size() == 0 || F.size() < 2) return;
-  for (const cv::DMatch& best : ratioTestMatches(K, F, params.max_hamming, params.lowe_ratio)) {
-    const std::size_t i = static_cast<std::size_t>(best.queryIdx);
-    if (K.depth_m[i] <= 0.0f) continue;
+// Keyframe points with depth (keyframe frame) and the frame pixels they were matched to.
+struct Correspondences {
+  std::vector<cv::Point3f> object;
+  std::vector<cv::Point2f> image;
+  void add(const FrameFeatures& K, std::size_t i, const cv::Point2f& pixel, const PinholeCamera& camera) {
     const cv::Point2f& pt = K.keypoints[i].pt;
     const Eigen::Vector3d p = camera.backProject(pt.x, pt.y, K.depth_m[i]);
-    object->emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
-    image->push_back(F.keypoints[best.trainIdx].pt);
+    object.emplace_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+    image.push_back(pixel);
   }
+  std::size_t size() const { return object.size(); }
+};
+
+// Brute-force 2-NN with the ratio test over every keypoint of K with depth.
+Correspondences bruteForceMatches(const FrameFeatures& K, const FrameFeatures& F, const PnpParams& params,
+                                  const PinholeCamera& camera) {
+  Correspondences out;
+  if (K.size() == 0 || F.size() < 2) return out;
+  for (const cv::DMatch& best : ratioTestMatches(K, F, params.max_hamming, params.lowe_ratio))
+    if (K.depth_m[static_cast<std::size_t>(best.queryIdx)] > 0.0f)
+      out.add(K, static_cast<std::size_t>(best.queryIdx), F.keypoints[static_cast<std::size_t>(best.trainIdx)].pt, camera);
+  return out;
+}
+
+// K's keypoints with depth matched near where the prior T_F_K projects them (matchByProjection).
+Correspondences projectionMatches(const FrameFeatures& K, const FrameFeatures& F, const Transform& T_F_K,
+                                  const PnpParams& params, const PinholeCamera& camera) {
+  Correspondences out;
+  ProjectionSearchParams search;
+  search.radius_px = params.search_radius_px;
+  search.context_radius_px = 2 * params.search_radius_px;
+  search.max_hamming = params.max_hamming;
+  search.lowe_ratio = params.lowe_ratio;
+  for (const FeatureMatch& m : matchByProjection(K, T_F_K, F, KeypointGrid(F.keypoints, camera), camera, search))
+    out.add(K, static_cast<std::size_t>(m.keyframe), F.keypoints[static_cast<std::size_t>(m.frame)].pt, camera);
+  return out;
 }
 
 Transform fromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
@@ -35,76 +62,104 @@ Transform fromRvecTvec(const cv::Mat& rvec, const cv::Mat& tvec) {
   return T_F_K;
 }
 
-// The matches whose reprojection at T_F_K lies within `px`.
-std::vector<int> inliersAt(const Transform& T_F_K, const std::vector<cv::Point3f>& object,
-                           const std::vector<cv::Point2f>& image, const PinholeCamera& camera, double px) {
+// The correspondences whose reprojection at T_F_K lies within `px`.
+std::vector<int> inliersAt(const Transform& T_F_K, const Correspondences& c, const PinholeCamera& camera, double px) {
   std::vector<int> out;
-  for (std::size_t k = 0; k < object.size(); ++k) {
-    const Eigen::Vector3d y = T_F_K * Eigen::Vector3d(object[k].x, object[k].y, object[k].z);
+  for (std::size_t k = 0; k < c.size(); ++k) {
+    const Eigen::Vector3d y = T_F_K * Eigen::Vector3d(c.object[k].x, c.object[k].y, c.object[k].z);
     if (y.z() <= 0) continue;
     const Eigen::Vector2d uv = camera.project(y);
-    if ((uv - Eigen::Vector2d(image[k].x, image[k].y)).squaredNorm() <= px * px) out.push_back(static_cast<int>(k));
+    if ((uv - Eigen::Vector2d(c.image[k].x, c.image[k].y)).squaredNorm() <= px * px) out.push_back(static_cast<int>(k));
   }
   return out;
 }
 
-// Levenberg-Marquardt on `inliers` from T_F_K; the inliers at the result.
-Transform refineLm(const Transform& T_F_K, const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
-                   const PinholeCamera& camera, std::vector<int>* inliers) {
-  const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
-  std::vector<cv::Point3f> o;
-  std::vector<cv::Point2f> i;
-  for (const int k : *inliers) o.push_back(object[k]), i.push_back(image[k]);
-  cv::Mat R, rvec, tvec;
-  cv::eigen2cv(Eigen::Matrix3d(T_F_K.linear()), R);
-  cv::Rodrigues(R, rvec);
-  tvec = (cv::Mat_<double>(3, 1) << T_F_K.translation().x(), T_F_K.translation().y(), T_F_K.translation().z());
-  cv::solvePnPRefineLM(o, i, K, cv::noArray(), rvec, tvec);
-  return fromRvecTvec(rvec, tvec);
+// Gauss-Newton on the reprojection errors of `inliers` from T_F_K (what cv::solvePnPRefineLM
+// does, without its cv::Mat overhead, which made it a sixth of the tracking's time): steps
+// T_F_K <- exp(xi) T_F_K until a step is below 1e-7 or 10 steps; a singular system stops it.
+Transform refineReprojection(const Transform& T_F_K, const Correspondences& c, const PinholeCamera& camera,
+                   const std::vector<int>& inliers) {
+  Transform T = T_F_K;
+  for (int step = 0; step < 10; ++step) {
+    Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
+    Eigen::Matrix<double, 6, 1> g = Eigen::Matrix<double, 6, 1>::Zero();
+    for (const int k : inliers) {
+      const Eigen::Vector3d y = T * Eigen::Vector3d(c.object[k].x, c.object[k].y, c.object[k].z);
+      if (y.z() <= 0) continue;
+      const double iz = 1.0 / y.z();
+      const Eigen::Vector2d e(camera.fx * y.x() * iz + camera.cx - c.image[k].x,
+                              camera.fy * y.y() * iz + camera.cy - c.image[k].y);
+      Eigen::Matrix<double, 2, 3> P;
+      P << camera.fx * iz, 0, -camera.fx * y.x() * iz * iz, 0, camera.fy * iz, -camera.fy * y.y() * iz * iz;
+      Eigen::Matrix3d minus_skew_y;  // d(y)/d(phi) for y <- y + phi x y
+      minus_skew_y << 0, y.z(), -y.y(), -y.z(), 0, y.x(), y.y(), -y.x(), 0;
+      Eigen::Matrix<double, 2, 6> J;
+      J.leftCols<3>() = P;
+      J.rightCols<3>() = P * minus_skew_y;
+      H.noalias() += J.transpose() * J;
+      g.noalias() += J.transpose() * e;
+    }
+    const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(H);
+    if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12).all()) break;
+    const Eigen::Matrix<double, 6, 1> xi = -ldlt.solve(g);
+    if (!xi.allFinite()) break;
+    Transform delta = Transform::Identity();
+    const Eigen::Vector3d phi = xi.tail<3>();
+    if (phi.norm() > 0) delta.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
+    delta.translation() = xi.head<3>();
+    T = delta * T;
+    T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();  // exactly a rotation
+    if (xi.norm() < 1e-7) break;
+  }
+  return T;
 }
 
-// T_K_C by PnP RANSAC (EPnP on 5-point samples: AP3P picked wrong poses on the box room that
-// explained a sixth of the matches while the truth explained all; then Levenberg-Marquardt on the inliers). A
+// T_F_K refined from the prior's inverse: Gauss-Newton on the correspondences within 10 px of where the
+// prior puts them (it is some px off), then again on those within px. nullopt when fewer than 4.
+std::optional<Transform> refineFromPrior(const Transform& prior_T_K_C, const Correspondences& c,
+                                         const PinholeCamera& camera, double px, std::vector<int>* inliers) {
+  Transform T = prior_T_K_C.inverse();
+  *inliers = inliersAt(T, c, camera, 10 * px);
+  for (int pass = 0; pass < 2; ++pass) {
+    if (inliers->size() < 4) return std::nullopt;
+    T = refineReprojection(T, c, camera, *inliers);
+    *inliers = inliersAt(T, c, camera, px);
+  }
+  if (inliers->size() < 4) return std::nullopt;
+  return T;
+}
+
+// T_F_K by PnP RANSAC (EPnP on 5-point samples: AP3P picked wrong poses on the box room that
+// explained a sixth of the matches while the truth explained all; then Gauss-Newton on the inliers). A
 // scene that is mostly one plane has a second, mirrored PnP solution that explains the matches
-// almost as well: with a prior, LM also starts from it (on the matches it explains), and the
-// prior's solution is kept when it explains nearly as many matches (95%).
-std::optional<Transform> solvePnp(const std::vector<cv::Point3f>& object, const std::vector<cv::Point2f>& image,
-                                  const PinholeCamera& camera, const PnpParams& params,
-                                  const std::optional<Transform>& prior_T_K_C, int* inlier_count,
-                                  std::vector<FeatureObservation>* inlier_observations) {
+// almost as well: with a prior, Gauss-Newton also starts from it (on the matches it explains), and the
+// prior's solution is kept when it explains nearly as many matches (95%). A solution `plausible`
+// rejects (the motion check) is not a candidate.
+std::optional<Transform> solvePnpRansac(const Correspondences& c, const PinholeCamera& camera, const PnpParams& params,
+                                        const std::optional<Transform>& prior_T_K_C,
+                                        const std::function<bool(const Transform& T_F_K)>& plausible,
+                                        std::vector<int>* inliers) {
   const cv::Matx33d K(camera.fx, 0, camera.cx, 0, camera.fy, camera.cy, 0, 0, 1);
   cv::Mat rvec, tvec;
-  std::vector<int> inliers;
   // A fixed seed: cv::solvePnPRansac draws from cv::theRNG(), which is per thread and carries
   // state from earlier calls; reseeding makes every estimate depend only on its input.
   cv::theRNG().state = 0x12345678;
   const double px = params.ransac_reprojection_px;
   std::optional<Transform> best;
-  if (cv::solvePnPRansac(object, image, K, cv::noArray(), rvec, tvec, false, params.ransac_iterations,
-                         static_cast<float>(px), 0.99, inliers, cv::SOLVEPNP_EPNP) &&
-      inliers.size() >= 4) {
-    best = refineLm(fromRvecTvec(rvec, tvec), object, image, camera, &inliers);
-    inliers = inliersAt(*best, object, image, camera, px);
+  if (cv::solvePnPRansac(c.object, c.image, K, cv::noArray(), rvec, tvec, false, params.ransac_iterations,
+                         static_cast<float>(px), 0.99, *inliers, cv::SOLVEPNP_EPNP) &&
+      inliers->size() >= 4) {
+    best = refineReprojection(fromRvecTvec(rvec, tvec), c, camera, *inliers);
+    *inliers = inliersAt(*best, c, camera, px);
+    if (!plausible(*best)) best.reset(), inliers->clear();
   }
+  std::vector<int> near;
   if (prior_T_K_C) {
-    Transform T = prior_T_K_C->inverse();
-    std::vector<int> near = inliersAt(T, object, image, camera, 10 * px);  // the prior is some px off
-    if (near.size() >= 4) {
-      T = refineLm(T, object, image, camera, &near);
-      near = inliersAt(T, object, image, camera, px);
-      if (near.size() >= 4) {
-        T = refineLm(T, object, image, camera, &near);
-        near = inliersAt(T, object, image, camera, px);
-        if (!best || 20 * near.size() >= 19 * inliers.size()) best = T, inliers = std::move(near);
-      }
-    }
+    const std::optional<Transform> T = refineFromPrior(*prior_T_K_C, c, camera, px, &near);
+    if (T && plausible(*T) && (!best || 20 * near.size() >= 19 * inliers->size())) best = T, *inliers = std::move(near);
   }
-  if (!best || inliers.size() < 4 || !best->matrix().allFinite()) return std::nullopt;
-  *inlier_count = static_cast<int>(inliers.size());
-  for (const int k : inliers)
-    inlier_observations->push_back({Eigen::Vector3d(object[k].x, object[k].y, object[k].z),
-                                    Eigen::Vector2d(image[k].x, image[k].y)});
-  return best->inverse();
+  if (!best || inliers->size() < 4) return std::nullopt;
+  return best;
 }
 
 // The rotation made exactly orthonormal again after many composed steps.
@@ -131,39 +186,59 @@ RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame,
   const auto near = [&](const Transform& a, const Transform& b) {
     return translationBetween(a, b) <= params.max_jump_m && degreesBetween(a, b) <= params.max_jump_deg;
   };
-  std::vector<cv::Point3f> object;
-  std::vector<cv::Point2f> image;
-  matchWithDepth(K.features, *frame.features, params.pnp, camera, &object, &image);
-  out.matches = static_cast<int>(object.size());
+  // PnP: from the prior on matches by projection when that explains enough of them; else
+  // brute-force matches and RANSAC.
+  const PnpParams& pp = params.pnp;
+  const auto plausible = [&](const Transform& T_F_K) { return !prior_T_K_C || near(T_F_K.inverse(), *prior_T_K_C); };
+  const FrameFeatures& F = *frame.features;
+  Correspondences c;
+  std::vector<int> pnp_inliers;
+  std::optional<Transform> T_F_K;
+  if (prior_T_K_C && pp.search_radius_px > 0) {
+    c = projectionMatches(K.features, F, prior_T_K_C->inverse(), pp, camera);
+    if (static_cast<int>(c.size()) >= pp.min_matches)
+      T_F_K = refineFromPrior(*prior_T_K_C, c, camera, pp.ransac_reprojection_px, &pnp_inliers);
+    if (T_F_K && (static_cast<int>(pnp_inliers.size()) < pp.min_inliers || !plausible(*T_F_K))) T_F_K.reset();
+  }
+  if (!T_F_K) {
+    c = bruteForceMatches(K.features, F, pp, camera);
+    if (static_cast<int>(c.size()) >= pp.min_matches)
+      T_F_K = solvePnpRansac(c, camera, pp, prior_T_K_C, plausible, &pnp_inliers);
+  }
+  out.matches = static_cast<int>(c.size());
   std::optional<Transform> pnp;
   std::vector<FeatureObservation> inliers;
-  if (out.matches >= params.pnp.min_matches) {
-    pnp = solvePnp(object, image, camera, params.pnp, prior_T_K_C, &out.pnp_inliers, &inliers);
-    if (pnp && (out.pnp_inliers < params.pnp.min_inliers || (prior_T_K_C && !near(*pnp, *prior_T_K_C)))) {
+  if (T_F_K && T_F_K->matrix().allFinite()) {
+    pnp = T_F_K->inverse();
+    out.pnp_inliers = static_cast<int>(pnp_inliers.size());
+    if (out.pnp_inliers < pp.min_inliers) {
       pnp.reset();
-      inliers.clear();
+    } else {
+      for (const int k : pnp_inliers)
+        inliers.push_back({Eigen::Vector3d(c.object[k].x, c.object[k].y, c.object[k].z),
+                           Eigen::Vector2d(c.image[k].x, c.image[k].y)});
     }
   }
   out.pnp_used = pnp.has_value();
-  std::vector<Transform> seeds;
-  if (prior_T_K_C) seeds.push_back(*prior_T_K_C);
-  if (pnp && (seeds.empty() || !params.dense_refinement || translationBetween(*pnp, seeds[0]) > params.seed_agreement_m ||
-              degreesBetween(*pnp, seeds[0]) > params.seed_agreement_deg))
-    seeds.insert(seeds.begin(), *pnp);  // PnP first: without refinement it is the estimate
-  if (seeds.empty()) return out;
-  out.T_K_C = seeds[0];
+  if (!pnp && !prior_T_K_C) return out;
+  out.T_K_C = pnp ? *pnp : *prior_T_K_C;  // the estimate unless a trusted refinement replaces it
   if (params.dense_refinement && frame.points) {
-    bool first = true;
-    for (const Transform& seed : seeds) {
-      Transform refined = seed;
-      NdtRefinementResult dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
-      if (!first && dense.support <= out.dense.support) continue;
-      first = false;
-      out.dense = dense;
-      out.dense_trusted = dense.inlierRatio() >= params.min_dense_inlier_ratio &&
-                          dense.inliers >= params.min_dense_inliers && near(refined, seed);
-      out.T_K_C = out.dense_trusted ? orthonormalised(refined) : seeds[0];
+    Transform seed = prior_T_K_C ? *prior_T_K_C : *pnp;
+    if (pnp && prior_T_K_C &&
+        (translationBetween(*pnp, seed) > params.seed_agreement_m || degreesBetween(*pnp, seed) > params.seed_agreement_deg)) {
+      // Both measured where they are (no step); the one the local map and the features support better is refined.
+      NdtRefinementParams measure = params.dense;
+      measure.iterations = 0;
+      const auto support = [&](Transform T) {
+        return refineAgainstLocalMap(K.container, *frame.points, inliers, &T, measure).support;
+      };
+      if (support(*pnp) >= support(seed)) seed = *pnp;
     }
+    Transform refined = seed;
+    out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
+    out.dense_trusted = out.dense.inlierRatio() >= params.min_dense_inlier_ratio &&
+                        out.dense.inliers >= params.min_dense_inliers && near(refined, seed);
+    if (out.dense_trusted) out.T_K_C = orthonormalised(refined);
   }
   const bool dense_ok = out.dense_trusted || !params.dense_refinement;
   if (out.pnp_used && dense_ok) out.status = RelativePose::Status::kGood;

@@ -11,13 +11,17 @@ std::optional<Transform> Tracker::predict(const KeyframeGraph& graph) const {
 }
 
 TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const TrackingFrame& frame,
-                               const PinholeCamera& camera, const PosePrefilter& prefilter) const {
+                               const PinholeCamera& camera, const PosePrefilter& prefilter,
+                               std::span<const int> recognised) const {
   TrackingOutcome out;
   const std::optional<Transform> T_W_pred = predict(graph);
   // After lost frames the camera may have moved further than one frame's motion.
   RelativePoseParams params = params_.relative;
   params.max_jump_m *= 1 + state_.frames_lost;
   params.max_jump_deg *= 1 + state_.frames_lost;
+  // ... and the prediction may be so far off that matches by projection pair wrong keypoints:
+  // brute-force matching and RANSAC until a frame is placed again.
+  if (state_.frames_lost > 0) params.pnp.search_radius_px = 0;
   const auto prior = [&](const Keyframe& K) -> std::optional<Transform> {
     if (!T_W_pred) return std::nullopt;
     return K.T_W_K.inverse() * *T_W_pred;
@@ -40,9 +44,22 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
     std::sort(candidates.begin(), candidates.end());
     if (candidates.size() > static_cast<std::size_t>(params_.relocalisation_candidates))
       candidates.resize(static_cast<std::size_t>(params_.relocalisation_candidates));
+    if (state_.frames_lost > 0) {
+      int proposed = 0;
+      for (const int id : recognised) {
+        if (proposed >= params_.recognition_candidates) break;
+        if (id == current || std::any_of(candidates.begin(), candidates.end(), [id](const auto& c) { return c.second == id; }))
+          continue;
+        candidates.emplace_back(1.0, id);  // after the pose-based ones; no prior (see below)
+        ++proposed;
+      }
+    }
     for (const auto& [negative_bound, id] : candidates) {
       const Keyframe& R = graph.keyframe(id);
-      RelativePose estimate = estimateRelativePose(R, frame, camera, prior(R), params);
+      // A recognised place is estimated without the stale prediction: PnP RANSAC decides alone.
+      const bool recognised_place = negative_bound > 0;
+      RelativePose estimate =
+          estimateRelativePose(R, frame, camera, recognised_place ? std::nullopt : prior(R), params);
       if (estimate.status == RelativePose::Status::kGood) {
         out.estimate = std::move(estimate);
         out.keyframe = id;
@@ -51,7 +68,9 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
       }
     }
   }
-  if (out.estimate.usable()) out.keyframe = current;
+  // A weak estimate continues the track; after lost frames, whose prediction is stale, it is
+  // as likely a wrong place that fits (the box-like rooms of the built-in scene): not used.
+  if (out.estimate.usable() && state_.frames_lost == 0) out.keyframe = current;
   return out;
 }
 

@@ -2,6 +2,7 @@
 // Frame-to-keyframe tracking with a constant-velocity motion model (SPEC section 11).
 
 #include <optional>
+#include <span>
 
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/tracking/relative_pose.h"
@@ -14,6 +15,9 @@ struct TrackerParams {
   /// (those the revisit search's pose pre-filter accepts at the predicted pose, most promising
   /// covisibility bound first) are tried; the first good estimate places the frame.
   int relocalisation_candidates = 3;
+  /// After lost frames, also up to this many keyframes place recognition proposes
+  /// (Tracker::track's `recognised`), whatever the stale prediction says.
+  int recognition_candidates = 8;
 };
 
 /// What the tracker carries from frame to frame (a saved session needs it to continue). The last
@@ -45,11 +49,16 @@ class Tracker {
   std::optional<Transform> predict(const KeyframeGraph& graph) const;
 
   /// Estimates the frame's pose against keyframe `current`; when that is not good, against
-  /// up to relocalisation_candidates others (the first good one wins; else a weak estimate of
-  /// the current keyframe is kept; else the frame is lost). Does not change the state: call
-  /// accept() or lose() with what the caller did with the frame.
+  /// up to relocalisation_candidates others near the prediction and, after lost frames, up to
+  /// recognition_candidates of `recognised` (place recognition's proposals, best first). The
+  /// first good one wins; else a weak estimate of the current keyframe is kept unless frames
+  /// were lost; else the frame is lost. Does not change the state: call accept() or lose()
+  /// with what the caller did with the frame.
   TrackingOutcome track(const KeyframeGraph& graph, int current, const TrackingFrame& frame,
-                        const PinholeCamera& camera, const PosePrefilter& prefilter) const;
+                        const PinholeCamera& camera, const PosePrefilter& prefilter,
+                        std::span<const int> recognised = {}) const;
+  /// Frames lost since the last placed one.
+  int framesLost() const { return state_.frames_lost; }
 
   /// The frame was placed at T_K_C in keyframe `keyframe` (updates the velocity).
   void accept(const KeyframeGraph& graph, int keyframe, const Transform& T_K_C);
