@@ -237,6 +237,22 @@ TEST(GuiSession, StepStepToKeyframePlayAndSeekBack) {
   EXPECT_TRUE(s.status().error.empty());
 }
 
+// With --frames A:B the scrubber counts from A: keyframe ticks (and loop markers) stand at the
+// frame's position in the selection, not at its depth-list index.
+TEST(GuiSession, KeyframesAreAtTheirScrubberPositionWithAFrameRange) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 10);
+  Workbench bench{TinyBench::settings()};
+  ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "4:10", ""})) << bench.ui().status.text;
+  bench.session()->play();
+  bench.session()->waitIdle();
+  const auto mapping = bench.session()->mapping();
+  EXPECT_EQ(mapping->frames_total, 6);
+  ASSERT_EQ(mapping->keyframes.size(), 2u);
+  EXPECT_EQ(mapping->keyframes[0].frame, 0);  // depth frame 4
+  EXPECT_EQ(mapping->keyframes[1].frame, 3);  // depth frame 7
+}
+
 TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   TinyBench t;
   Workbench& bench = t.bench;

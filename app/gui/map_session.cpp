@@ -149,7 +149,7 @@ void MapSession::publishMapping() {
   snap->times = times_.view();
   snap->trajectory = trajectory_.view();
   for (const Keyframe& k : mapper_->graph().keyframes())
-    snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
+    snap->keyframes.push_back({k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
   snap->frames_lost = mapper_->framesLost();
   for (const LoopClosure& loop : mapper_->poseGraph().loops()) snap->loops.push_back({loop, positionOf(loop.frame_index)});

@@ -26,7 +26,7 @@ namespace vdmap::app::gui {
 /// One keyframe as the UI sees it.
 struct KeyframeInfo {
   int id = 0;
-  int frame = 0;               ///< position in the sequence of the frame that created it
+  int frame = 0;               ///< position in the sequence (on the scrubber, after --frames) of the frame that created it
   Transform T_W_K = Transform::Identity();
   CompressedImage rgb;         ///< shared with the keyframe; decode() when shown
   std::size_t ellipsoids = 0;  ///< stored in its container
