@@ -28,7 +28,7 @@ struct TinyBench {
   Workbench bench{settings()};
   TinyBench() {
     test::writeTinySequence(dir / "seq", 10);
-    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   }
   static Settings settings() {
     Settings s;
@@ -195,12 +195,12 @@ TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
 TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;
-  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
   ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
   EXPECT_EQ(bench.session()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
-  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_EQ(empty.session(), nullptr);
 }
 
@@ -792,7 +792,7 @@ Floor findFloor(const std::vector<Ellipsoid>& map, const std::vector<Transform>&
 // that the cameras are in view.
 void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.open({folder.string(), "", frames})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.open({folder.string(), "", frames, ""})) << bench.ui().status.text;
   bench.session()->play();
   bench.session()->waitIdle();
   constexpr int kWidth = 602, kHeight = 685;  // the 3-D viewport of a 1280x720 window
@@ -893,13 +893,13 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
   EXPECT_GT(loop.loop.from, loop.loop.to);
   ASSERT_EQ(mapping->keyframes_before.size(), mapping->keyframes.size());
   // The 3-D view: a loop edge per loop, the ground truth beside the tracked trajectory.
-  const render::GraphScene after = bench.graphScene();
+  const render::GraphScene after = bench.graphScene(*bench.session()->mapping());
   ASSERT_EQ(after.loops.size(), mapping->loops.size());
   EXPECT_EQ(after.loops.back().a, mapping->loops.back().loop.from);
   EXPECT_EQ(after.loops.back().b, mapping->loops.back().loop.to);
   EXPECT_EQ(after.groundtruth.size(), after.trajectory.size());
   bench.ui().settings.show_groundtruth = false;
-  EXPECT_TRUE(bench.graphScene().groundtruth.empty());
+  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
 
   // Before the last optimisation: other keyframe poses and trajectory, and a global map rebuilt
   // with them; after it again: the same map as before, bit for bit (the mapper's poses were
@@ -909,13 +909,18 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
   ASSERT_TRUE(bench.canShowBeforeOptimisation());
   ASSERT_TRUE(bench.showBeforeOptimisation(true));
   t.session().waitIdle();
-  const render::GraphScene before = bench.graphScene();
+  const render::GraphScene before = bench.graphScene(*bench.session()->mapping());
   const double moved = largestMove(before.keyframes, after.keyframes);
   std::printf("loop closed at frame %d (K%d -> K%d, correction %.2f mm); keyframes before it moved up to %.2f mm\n",
               loop.position, loop.loop.from, loop.loop.to, 1e3 * loop.loop.correction_m, 1e3 * moved);
   EXPECT_NEAR(moved, loop.loop.correction_m, 1e-9);  // the correction is the largest keyframe move
   EXPECT_GT(moved, 0.005) << "6 degrees a frame drifts by centimetres over a turn";
   EXPECT_GT(largestMove(before.trajectory, after.trajectory), 1e-5);
+  // The inspector's local map is at the pose the global map shows.
+  const int from = loop.loop.from;
+  const auto selection = selectAndWait(bench, from);
+  EXPECT_TRUE(selection->T_W_K.isApprox(before.keyframes[static_cast<std::size_t>(from)], 1e-12));
+  EXPECT_FALSE(selection->T_W_K.isApprox(after.keyframes[static_cast<std::size_t>(from)], 1e-6));
   const auto map_before = t.session().global();
   ASSERT_TRUE(map_before->before_optimisation);
   ASSERT_EQ(map_before->frames_mapped, mapping->frames_mapped);
@@ -977,7 +982,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
       EXPECT_TRUE(shown[i].isApprox(estimated[i].T_W_C, 1e-12)) << poses << " " << i;
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
-    EXPECT_EQ(bench.graphScene().groundtruth.size(), tracked ? shown.size() : 0u) << poses;
+    EXPECT_EQ(bench.graphScene(*bench.session()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
   Workbench bench{Settings{}};
@@ -987,7 +992,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   EXPECT_EQ(bench.session()->mapping()->mapper.poses, PoseSource::kTrack);
   EXPECT_EQ(bench.session()->mapping()->frames_mapped, 8);
   EXPECT_FALSE(bench.session()->mapping()->hasGroundTruth());
-  EXPECT_TRUE(bench.graphScene().groundtruth.empty());
+  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
   EXPECT_FALSE(bench.canShowBeforeOptimisation());
   EXPECT_TRUE(bench.session()->status().error.empty()) << bench.session()->status().error;
 }

@@ -284,9 +284,10 @@ void MapSession::publishSelection() {
     // Filtered again rather than read from global->map.kept: the container may have grown since
     // the build, and one keyframe's filter costs little. At the pose the global map was built with.
     const Keyframe& k = graph.keyframe(snap->keyframe);
+    const auto id = static_cast<std::size_t>(k.id);
     const std::vector<Transform> before = global->before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
-    const Transform& T_W_K = static_cast<std::size_t>(k.id) < before.size() ? before[static_cast<std::size_t>(k.id)] : k.T_W_K;
-    snap->local = keptEllipsoids(k.container, global->params.filter, T_W_K, k.id);
+    snap->T_W_K = id < before.size() ? before[id] : k.T_W_K;
+    snap->local = keptEllipsoids(k.container, global->params.filter, snap->T_W_K, k.id);
   }
   {
     std::lock_guard lock(mutex_);

@@ -104,6 +104,9 @@ struct SelectionSnapshot {
   /// The keyframe's ellipsoids kept by those thresholds, world frame, container order; empty while
   /// the keyframe does not exist (yet).
   std::vector<Ellipsoid> local;
+  /// The keyframe pose `local` was moved to the world with: the global map's (its pose before the
+  /// last optimisation when that map shows it).
+  Transform T_W_K = Transform::Identity();
 };
 
 /// Playback state as the UI shows it.

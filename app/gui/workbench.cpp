@@ -367,18 +367,16 @@ bool Workbench::showBeforeOptimisation(bool before) {
   return true;
 }
 
-render::GraphScene Workbench::graphScene() const {
+render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
   render::GraphScene scene;
-  if (!session_) return scene;
-  const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
   const bool before = ui_.show_before_optimisation;
-  scene.camera = mapping->camera;
-  scene.keyframes = mapping->keyframePoses(before);
-  for (const CovisibilityEdge& e : mapping->edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
-  for (const LoopEvent& e : mapping->loops) scene.loops.push_back({e.loop.from, e.loop.to, 1.f});
-  scene.trajectory = mapping->trajectoryWorld(before);
-  if (ui_.settings.show_groundtruth) scene.groundtruth = mapping->groundTruthWorld();
-  scene.current_keyframe = mapping->current_keyframe;
+  scene.camera = mapping.camera;
+  scene.keyframes = mapping.keyframePoses(before);
+  for (const CovisibilityEdge& e : mapping.edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  for (const LoopEvent& e : mapping.loops) scene.loops.push_back({e.loop.from, e.loop.to, 1.f});
+  scene.trajectory = mapping.trajectoryWorld(before);
+  if (ui_.settings.show_groundtruth) scene.groundtruth = mapping.groundTruthWorld();
+  scene.current_keyframe = mapping.current_keyframe;
   scene.selected_keyframe = ui_.selected_keyframe;
   return scene;
 }
@@ -422,6 +420,9 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
     const Eigen::Vector3d t = mapping->framePose(i).translation();
     cameras.positions.emplace_back(t.x(), t.y(), t.z());
   }
+  if (ui_.settings.show_groundtruth)
+    for (const Transform& T : mapping->groundTruthWorld())
+      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
   if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
   auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
   for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);

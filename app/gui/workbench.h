@@ -148,10 +148,10 @@ class Workbench {
   bool showBeforeOptimisation(bool before);
   /// Whether the open session has had a pose-graph optimisation (the toggle above can act).
   bool canShowBeforeOptimisation() const;
-  /// The keyframe graph as the 3-D view draws it now: keyframe poses, covisibility and loop
-  /// edges, trajectory (before the last optimisation when ui().show_before_optimisation) and the
-  /// ground truth (tracked poses, when the sequence has one and the setting shows it).
-  render::GraphScene graphScene() const;
+  /// The keyframe graph of `mapping` as the 3-D view draws it now: keyframe poses, covisibility
+  /// and loop edges, trajectory (before the last optimisation when ui().show_before_optimisation)
+  /// and the ground truth (tracked poses, when the sequence has one and the setting shows it).
+  render::GraphScene graphScene(const MappingSnapshot& mapping) const;
 
   /// Once per UI frame: pose fields, the session's news into the status line, the pick cleared
   /// when the map changed, and the view re-framed while it follows the map.

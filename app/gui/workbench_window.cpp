@@ -387,8 +387,8 @@ class WorkbenchWindow {
     else mirror_.setMap(session_base_, {});
     const auto mapping = mapping_;
     mirror_.setFrame(session_base_ + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
-    mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, [&] { return bench_.graphScene(); },
-                     ui().show_before_optimisation ? 1 : 0);
+    const auto scene = [&] { return bench_.graphScene(*mapping); };
+    mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, scene, ui().show_before_optimisation);
     mirror_.setHighlight(ui().picked);
     const auto selection = session->selection();
     if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
@@ -401,7 +401,7 @@ class WorkbenchWindow {
         // The keyframe image is held compressed: decode it once per selection, not per UI frame.
         const int generation = session_base_ + selection->serial;
         if (decoded_rgb_for_ != generation) decoded_rgb_ = k.rgb.decode(), decoded_rgb_for_ = generation;
-        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, k.T_W_K, selection->local, style);
+        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, selection->T_W_K, selection->local, style);
       } else {
         mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
       }
@@ -889,7 +889,8 @@ class WorkbenchWindow {
     ImGui::EndDisabled();
     checkFits();
     if (mapping_->loops.empty()) return;
-    if (ImGui::BeginListBox("##loops", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * std::min(4.5f, mapping_->loops.size() + 0.5f)})) {
+    const float rows = std::min(4.5f, static_cast<float>(mapping_->loops.size()) + 0.5f);
+    if (ImGui::BeginListBox("##loops", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * rows})) {
       for (std::size_t i = mapping_->loops.size(); i-- > 0;) {  // newest first
         const LoopEvent& e = mapping_->loops[i];
         char text[128];
