@@ -16,7 +16,7 @@ namespace {
 // few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
 constexpr EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
 constexpr glm::u8vec3 kSelected{255, 255, 255}, kCurrent{255, 220, 0}, kCamera{255, 60, 60};
-constexpr glm::u8vec3 kTrajectory{90, 200, 255}, kHighlight{255, 0, 255};
+constexpr glm::u8vec3 kHighlight{255, 0, 255};
 
 glm::vec3 toVec(const Eigen::Vector3d& p) { return {float(p.x()), float(p.y()), float(p.z())}; }
 
@@ -78,9 +78,13 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
 }
 
 MapMirror::MapMirror(const Gl& gl)
-    : gl_(&gl), ellipsoids_(gl, kEllipsoidStyle), points_(gl), lines_(gl), highlight_(gl), container_(gl),
+    : gl_(&gl), ellipsoids_(gl, kEllipsoidStyle), points_(gl), lines_(gl), paths_(gl), highlight_(gl), container_(gl),
       rgb_(gl), depth_(gl), container_image_(gl) {
   lines_.setWidth(1.5f);
+  // The trajectories and loop edges are what one compares: drawn over the map, never hidden by
+  // it, and wider where the context allows (a core profile draws 1 px).
+  paths_.setWidth(3.f);
+  paths_.setOnTop(true);
   highlight_.setWidth(2.f);
   highlight_.setOnTop(true);
 }
@@ -106,12 +110,14 @@ void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
   ++uploads_.map;
 }
 
-void MapMirror::setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build) {
+void MapMirror::setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build, int variant) {
   const bool toggles_same = style_.frustums == graph_style_.frustums && style_.graph == graph_style_.graph &&
-                            style_.trajectory == graph_style_.trajectory;
-  if (generation == graph_generation_ && selected_keyframe == graph_selected_ && toggles_same) return;
+                            style_.trajectory == graph_style_.trajectory && style_.groundtruth == graph_style_.groundtruth;
+  if (generation == graph_generation_ && selected_keyframe == graph_selected_ && variant == graph_variant_ && toggles_same)
+    return;
   graph_generation_ = generation;
   graph_selected_ = selected_keyframe;
+  graph_variant_ = variant;
   graph_style_ = style_;
   const GraphScene scene = build();
   ColoredLines lines;
@@ -123,9 +129,13 @@ void MapMirror::setGraph(int generation, int selected_keyframe, const std::funct
     addFrustum(lines, scene.camera, scene.keyframes[i], kKeyframeFrustumDepthM, color);
   }
   if (style_.graph) addEdges(lines, scene.keyframes, scene.edges);
-  if (style_.trajectory) addTrajectory(lines, scene.trajectory, kTrajectory);
   if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
   lines_.set(lines);
+  ColoredLines paths;
+  if (style_.graph) addEdges(paths, scene.keyframes, scene.loops, kLoopEdgeColor);
+  if (style_.groundtruth) addTrajectory(paths, scene.groundtruth, kGroundTruthColor);
+  if (style_.trajectory) addTrajectory(paths, scene.trajectory, kTrajectoryColor);
+  paths_.set(paths);
   ++uploads_.graph;
 }
 
@@ -175,6 +185,7 @@ void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
   if (style_.ellipsoids) ellipsoids_.draw(view);
   else points_.draw(view);
   if (with_lines) lines_.draw(view);
+  if (with_lines) paths_.draw(view);
   if (has_highlight_) highlight_.draw(view);
 }
 

@@ -27,11 +27,17 @@ namespace vdmap::render {
 struct GraphScene {
   PinholeCamera camera;
   std::vector<Transform> keyframes;   ///< T_W_K by keyframe id
-  std::vector<GraphEdge> edges;
+  std::vector<GraphEdge> edges;       ///< covisibility edges, viridis by weight
+  std::vector<GraphEdge> loops;       ///< loop-closure edges (kLoopEdgeColor), drawn with the graph
   std::vector<Transform> trajectory;  ///< T_W_C per mapped frame; the last one is the current camera
+  std::vector<Transform> groundtruth; ///< T_W_C of the sequence's ground truth (kGroundTruthColor), if shown
   int current_keyframe = -1;          ///< drawn yellow
   int selected_keyframe = -1;         ///< drawn white
 };
+
+/// Line colours the window's legend names: the (estimated) trajectory, the ground-truth
+/// trajectory beside it, loop-closure edges (apart from viridis, keyframe yellow and camera red).
+constexpr glm::u8vec3 kTrajectoryColor{90, 200, 255}, kGroundTruthColor{120, 235, 120}, kLoopEdgeColor{255, 120, 20};
 
 /// Depth of the drawn frustums, m: keyframes and the camera now (the view frames them whole).
 constexpr float kKeyframeFrustumDepthM = 0.25f, kCameraFrustumDepthM = 0.15f;
@@ -42,6 +48,7 @@ struct MirrorStyle {
   float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
   bool ellipsoids = true;             ///< false: the ellipsoid centres as points
   bool frustums = true, graph = true, trajectory = true;
+  bool groundtruth = true;            ///< GraphScene::groundtruth
   bool operator==(const MirrorStyle&) const = default;
 };
 
@@ -76,9 +83,10 @@ class MapMirror {
   /// from the one shown; generation 0 with an empty span clears the view.
   void setMap(int generation, std::span<const Ellipsoid> ellipsoids);
   /// The keyframe graph of mapping snapshot `generation`: build() is called, and the lines
-  /// re-sent, only when the generation or the selected keyframe changed (or the style's
-  /// frustum/graph/trajectory toggles).
-  void setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build);
+  /// re-sent, only when the generation, the selected keyframe or `variant` (anything else the
+  /// build depends on, such as which keyframe poses it shows) changed, or the style's
+  /// frustum/graph/trajectory/groundtruth toggles.
+  void setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build, int variant = 0);
   /// The last mapped frame's images (RGB, raw depth) of mapping snapshot `generation`.
   void setFrame(int generation, const cv::Mat& rgb, const cv::Mat& depth, double depth_scale);
   /// The container view (paper Fig. 1) of keyframe `keyframe` (its RGB image, camera, pose and
@@ -115,14 +123,14 @@ class MapMirror {
   MirrorStyle style_;
   EllipsoidRenderer ellipsoids_;
   PointRenderer points_;
-  LineRenderer lines_, highlight_;
+  LineRenderer lines_, paths_, highlight_;  // paths_: trajectories and loop edges, wider
   ContainerRenderer container_;
   std::unique_ptr<Framebuffer> container_fb_;
   Texture2D rgb_, depth_, container_image_;
   cv::Mat container_rgb_;
   std::vector<EllipsoidInstance> instances_;
   int map_generation_ = -1, frame_generation_ = -1, container_generation_ = -1;
-  int graph_generation_ = -1, graph_selected_ = -2;
+  int graph_generation_ = -1, graph_selected_ = -2, graph_variant_ = 0;
   MirrorStyle graph_style_, points_style_;
   ContainerStyle container_style_;
   bool has_highlight_ = false;

@@ -23,10 +23,11 @@ void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transfor
   lines.add(top, top + 0.25f * (top - 0.5f * (corner[2] + corner[3])), color);
 }
 
-void addEdges(ColoredLines& lines, std::span<const Transform> T_W_K, std::span<const GraphEdge> edges) {
+void addEdges(ColoredLines& lines, std::span<const Transform> T_W_K, std::span<const GraphEdge> edges,
+              const std::optional<glm::u8vec3>& color) {
   for (const GraphEdge& e : edges) {
     if (e.a < 0 || e.b < 0 || e.a >= int(T_W_K.size()) || e.b >= int(T_W_K.size())) continue;
-    lines.add(toGlm(T_W_K[e.a].translation()), toGlm(T_W_K[e.b].translation()), colormap(e.weight));
+    lines.add(toGlm(T_W_K[e.a].translation()), toGlm(T_W_K[e.b].translation()), color ? *color : colormap(e.weight));
   }
 }
 

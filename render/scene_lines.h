@@ -1,5 +1,6 @@
 #pragma once
 // Line sets for the global view: keyframe frustums, covisibility edges, the trajectory.
+#include <optional>
 #include <span>
 #include <vector>
 
@@ -19,8 +20,10 @@ struct GraphEdge {
 void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transform& T_W_K,
                 float depth_m, const glm::u8vec3& color);
 /// Adds one segment per edge between the keyframe centres, coloured by weight on the viridis
-/// ramp (weak edges dark, strong ones bright). Edges naming unknown keyframes are skipped.
-void addEdges(ColoredLines& lines, std::span<const Transform> T_W_K, std::span<const GraphEdge> edges);
+/// ramp (weak edges dark, strong ones bright) or all in `color`. Edges naming unknown keyframes
+/// are skipped.
+void addEdges(ColoredLines& lines, std::span<const Transform> T_W_K, std::span<const GraphEdge> edges,
+              const std::optional<glm::u8vec3>& color = std::nullopt);
 /// Adds the polyline through the camera centres.
 void addTrajectory(ColoredLines& lines, std::span<const Transform> T_W_C, const glm::u8vec3& color);
 

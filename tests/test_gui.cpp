@@ -28,7 +28,7 @@ struct TinyBench {
   Workbench bench{settings()};
   TinyBench() {
     test::writeTinySequence(dir / "seq", 10);
-    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   }
   static Settings settings() {
     Settings s;
@@ -195,12 +195,12 @@ TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
 TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;
-  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
   ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
   EXPECT_EQ(bench.session()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
-  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", ""}));
+  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_EQ(empty.session(), nullptr);
 }
 
@@ -235,6 +235,22 @@ TEST(GuiSession, StepStepToKeyframePlayAndSeekBack) {
   s.waitIdle();
   EXPECT_EQ(s.global()->map.sigma_e_prime, sigma_e_prime);  // same frames, same map
   EXPECT_TRUE(s.status().error.empty());
+}
+
+// With --frames A:B the scrubber counts from A: keyframe ticks (and loop markers) stand at the
+// frame's position in the selection, not at its depth-list index.
+TEST(GuiSession, KeyframesAreAtTheirScrubberPositionWithAFrameRange) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 10);
+  Workbench bench{TinyBench::settings()};
+  ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "4:10", ""})) << bench.ui().status.text;
+  bench.session()->play();
+  bench.session()->waitIdle();
+  const auto mapping = bench.session()->mapping();
+  EXPECT_EQ(mapping->frames_total, 6);
+  ASSERT_EQ(mapping->keyframes.size(), 2u);
+  EXPECT_EQ(mapping->keyframes[0].frame, 0);  // depth frame 4
+  EXPECT_EQ(mapping->keyframes[1].frame, 3);  // depth frame 7
 }
 
 TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
@@ -776,7 +792,7 @@ Floor findFloor(const std::vector<Ellipsoid>& map, const std::vector<Transform>&
 // that the cameras are in view.
 void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.open({folder.string(), "", frames})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.open({folder.string(), "", frames, ""})) << bench.ui().status.text;
   bench.session()->play();
   bench.session()->waitIdle();
   constexpr int kWidth = 602, kHeight = 685;  // the 3-D viewport of a 1280x720 window
@@ -831,6 +847,154 @@ TEST(GuiRealData, SevenScenesFloorIsAtTheBottomOfTheDefaultView) {
 TEST(GuiRealData, ReplicaRenderFloorIsAtTheBottomOfTheDefaultView) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "replica-office0");
   expectFloorAtTheBottom(dir, "");
+}
+
+}  // namespace
+}  // namespace vdmap::app::gui
+
+namespace vdmap::app::gui {
+namespace {
+
+// The turning box room (test_util's writeBoxRoomSequence: 6 degrees a frame on the spot, so frame
+// 60 faces where frame 0 did) mapped with tracked poses one frame at a time until tracking
+// re-observes a first keyframe from a last one and closes a loop (frame 64 here): the last
+// optimisation is then that loop's.
+struct TrackedLoopBench {
+  test::TempDir dir;
+  Workbench bench{Settings{}};
+  TrackedLoopBench() {
+    test::writeBoxRoomSequence(dir / "seq", kFrames);
+    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", "track"})) << bench.ui().status.text;
+    while (session().mapping()->loops.empty() && session().mapping()->frames_mapped < kFrames) {
+      session().step();
+      session().waitIdle();
+    }
+    bench.sync();
+  }
+  static constexpr int kFrames = 90;
+  MapSession& session() { return *bench.session(); }
+};
+
+double largestMove(std::span<const Transform> a, std::span<const Transform> b) {
+  double largest = 0;
+  for (std::size_t i = 0; i < std::min(a.size(), b.size()); ++i)
+    largest = std::max(largest, (a[i].translation() - b[i].translation()).norm());
+  return largest;
+}
+
+TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisationCanBeShown) {
+  TrackedLoopBench t;
+  Workbench& bench = t.bench;
+  const auto mapping = t.session().mapping();
+  ASSERT_GE(mapping->loops.size(), 1u) << "the turn past its start closes a loop";
+  const LoopEvent& loop = mapping->loops.back();
+  EXPECT_EQ(loop.position, mapping->frames_mapped - 1);  // closed by the frame just mapped
+  EXPECT_EQ(loop.position, loop.loop.frame_index);       // the sequence starts at depth frame 0
+  EXPECT_GT(loop.loop.from, loop.loop.to);
+  ASSERT_EQ(mapping->keyframes_before.size(), mapping->keyframes.size());
+  // The 3-D view: a loop edge per loop, the ground truth beside the tracked trajectory.
+  const render::GraphScene after = bench.graphScene(*bench.session()->mapping());
+  ASSERT_EQ(after.loops.size(), mapping->loops.size());
+  EXPECT_EQ(after.loops.back().a, mapping->loops.back().loop.from);
+  EXPECT_EQ(after.loops.back().b, mapping->loops.back().loop.to);
+  EXPECT_EQ(after.groundtruth.size(), after.trajectory.size());
+  bench.ui().settings.show_groundtruth = false;
+  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
+
+  // Before the last optimisation: other keyframe poses and trajectory, and a global map rebuilt
+  // with them; after it again: the same map as before, bit for bit (the mapper's poses were
+  // swapped for the build and put back).
+  const auto map_after = t.session().global();
+  ASSERT_FALSE(map_after->before_optimisation);
+  ASSERT_TRUE(bench.canShowBeforeOptimisation());
+  ASSERT_TRUE(bench.showBeforeOptimisation(true));
+  t.session().waitIdle();
+  const render::GraphScene before = bench.graphScene(*bench.session()->mapping());
+  const double moved = largestMove(before.keyframes, after.keyframes);
+  std::printf("loop closed at frame %d (K%d -> K%d, correction %.2f mm); keyframes before it moved up to %.2f mm\n",
+              loop.position, loop.loop.from, loop.loop.to, 1e3 * loop.loop.correction_m, 1e3 * moved);
+  EXPECT_NEAR(moved, loop.loop.correction_m, 1e-9);  // the correction is the largest keyframe move
+  EXPECT_GT(moved, 0.005) << "6 degrees a frame drifts by centimetres over a turn";
+  EXPECT_GT(largestMove(before.trajectory, after.trajectory), 1e-5);
+  // The inspector's local map is at the pose the global map shows.
+  const int from = loop.loop.from;
+  const auto selection = selectAndWait(bench, from);
+  EXPECT_TRUE(selection->T_W_K.isApprox(before.keyframes[static_cast<std::size_t>(from)], 1e-12));
+  EXPECT_FALSE(selection->T_W_K.isApprox(after.keyframes[static_cast<std::size_t>(from)], 1e-6));
+  const auto map_before = t.session().global();
+  ASSERT_TRUE(map_before->before_optimisation);
+  ASSERT_EQ(map_before->frames_mapped, mapping->frames_mapped);
+  double mean_moved = 0;
+  const std::size_t n = std::min(map_before->map.ellipsoids.size(), map_after->map.ellipsoids.size());
+  for (std::size_t i = 0; i < n; ++i)
+    mean_moved = std::max(mean_moved, (map_before->map.ellipsoids[i].mean - map_after->map.ellipsoids[i].mean).norm());
+  EXPECT_TRUE(map_before->map.ellipsoids.size() != map_after->map.ellipsoids.size() || mean_moved > 1e-6)
+      << "the global map follows the keyframe poses";
+  // Exports take the map as it is, whatever is shown.
+  bool exported_before = true;
+  t.session().withMapper([&](const Mapper&, const GlobalSnapshot& global) {
+    exported_before = global.before_optimisation;
+    return std::string();
+  });
+  t.session().waitIdle();
+  EXPECT_FALSE(exported_before);
+  bench.key(KeyAction::kBeforeOptimisation);  // B: after again
+  t.session().waitIdle();
+  EXPECT_FALSE(bench.ui().show_before_optimisation);
+  const auto map_again = t.session().global();
+  EXPECT_FALSE(map_again->before_optimisation);
+  ASSERT_EQ(map_again->map.ellipsoids.size(), map_after->map.ellipsoids.size());
+  for (std::size_t i = 0; i < map_again->map.ellipsoids.size(); ++i)
+    ASSERT_EQ(map_again->map.ellipsoids[i].mean, map_after->map.ellipsoids[i].mean) << i;
+
+  // Seeking back before the loops forgets them: the toggle goes off and is refused.
+  ASSERT_TRUE(bench.showBeforeOptimisation(true));
+  t.session().seek(5);
+  t.session().waitIdle();
+  bench.sync();
+  EXPECT_TRUE(t.session().mapping()->loops.empty());
+  EXPECT_FALSE(bench.ui().show_before_optimisation);
+  EXPECT_FALSE(bench.showBeforeOptimisation(true));
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kWarning);
+}
+
+// The tracked trajectory is the mapper's (not the sequence's ground truth); the ground truth is
+// there iff the sequence has one and poses are tracked.
+TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
+  test::TempDir dir;
+  test::writeBoxRoomSequence(dir / "seq", 8);
+  for (const char* poses : {"track", "gt"}) {
+    Workbench bench{Settings{}};
+    ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", poses})) << bench.ui().status.text;
+    bench.session()->play();
+    bench.session()->waitIdle();
+    const auto mapping = bench.session()->mapping();
+    ASSERT_EQ(mapping->frames_mapped, 8);
+    std::vector<StampedPose> estimated;
+    bench.session()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
+      estimated = mapper.trajectory();
+      return std::string();
+    });
+    bench.session()->waitIdle();
+    const std::vector<Transform> shown = mapping->trajectoryWorld();
+    ASSERT_EQ(shown.size(), estimated.size()) << poses;
+    for (std::size_t i = 0; i < shown.size(); ++i)
+      EXPECT_TRUE(shown[i].isApprox(estimated[i].T_W_C, 1e-12)) << poses << " " << i;
+    const bool tracked = std::string(poses) == "track";
+    EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
+    EXPECT_EQ(bench.graphScene(*bench.session()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
+  }
+  fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
+  Workbench bench{Settings{}};
+  ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  bench.session()->play();
+  bench.session()->waitIdle();
+  EXPECT_EQ(bench.session()->mapping()->mapper.poses, PoseSource::kTrack);
+  EXPECT_EQ(bench.session()->mapping()->frames_mapped, 8);
+  EXPECT_FALSE(bench.session()->mapping()->hasGroundTruth());
+  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
+  EXPECT_FALSE(bench.canShowBeforeOptimisation());
+  EXPECT_TRUE(bench.session()->status().error.empty()) << bench.session()->status().error;
 }
 
 }  // namespace

@@ -139,6 +139,39 @@ TEST(GuiCli, AnIdleWindowCostsNoCpuAndKeyTapsWithinOneFrameAreAllHandled) {
   EXPECT_LE(stats["idle_cpu_s"].get<double>(), 0.15);
 }
 
+// Pixels of `bgr` inside `r` (x, y, w, h) within `tolerance` (L1) of RGB colour `rgb`.
+int pixelsNear(const cv::Mat& bgr, const nlohmann::json& r, cv::Vec3b rgb, int tolerance = 30) {
+  const cv::Rect rect(r[0].get<int>(), r[1].get<int>(), r[2].get<int>(), r[3].get<int>());
+  const cv::Vec3b color(rgb[2], rgb[1], rgb[0]);
+  int n = 0;
+  for (int y = rect.y; y < rect.y + rect.height && y < bgr.rows; ++y)
+    for (int x = rect.x; x < rect.x + rect.width && x < bgr.cols; ++x) n += cv::norm(bgr.at<cv::Vec3b>(y, x), color, cv::NORM_L1) <= tolerance;
+  return n;
+}
+
+// A tracked sequence that closes loops: the loop markers above the scrubber (left panel) and B
+// showing the map before the last optimisation, whose banner the 3-D view shows in the loop colour.
+TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisation) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 70);
+  const std::string common = "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit --window-size 1280x720";
+  const fs::path png = home / "b.png", json = home / "b.json";
+  const RunResult r = runInXvfb(home, common + " --press b --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  EXPECT_EQ(stats["frames_mapped"], 70);
+  EXPECT_GE(stats["loop_closures"].get<int>(), 1);
+  EXPECT_EQ(stats["has_groundtruth"], true);
+  EXPECT_EQ(stats["show_before_optimisation"], true);
+  EXPECT_EQ(stats["map_before_optimisation"], true);
+  EXPECT_EQ(stats["layout"]["labels_cut"], 0);
+  const cv::Mat image = cv::imread(png.string());
+  const cv::Vec3b loop_color(255, 120, 20);  // render::kLoopEdgeColor
+  EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
+  EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
+}
+
 TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
   REQUIRE_XVFB();
   TempDir home;

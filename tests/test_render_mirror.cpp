@@ -117,6 +117,43 @@ TEST_F(MapMirrorTest, UploadsOnlyWhatANewGenerationChanged) {
   EXPECT_EQ(mirror.uploads().map, 2);
 }
 
+// Pixels of exactly `color` (lines are drawn unshaded, in their vertices' colour).
+int pixelsOf(const cv::Mat& rgb, const glm::u8vec3& color) {
+  cv::Mat mask;
+  cv::inRange(rgb, cv::Scalar(color.r, color.g, color.b), cv::Scalar(color.r, color.g, color.b), mask);
+  return cv::countNonZero(mask);
+}
+
+TEST_F(MapMirrorTest, LoopEdgesAndTheGroundTruthHaveTheirOwnColoursAndToggles) {
+  MapMirror mirror(gl());
+  mirror.setMap(1, gridMap());  // the paths are drawn over it
+  int builds = 0;
+  const auto build = [&] {
+    ++builds;
+    GraphScene scene = ringScene();
+    scene.loops = {{0, 3, 1.f}};
+    for (const Transform& T : scene.trajectory) scene.groundtruth.push_back(Eigen::Translation3d(0, 0, 0.3) * T);
+    return scene;
+  };
+  mirror.setGraph(1, -1, build);
+  const cv::Mat shown = draw(mirror);
+  EXPECT_GT(pixelsOf(shown, kLoopEdgeColor), 40) << "the loop edge K0-K3";
+  EXPECT_GT(pixelsOf(shown, kGroundTruthColor), 40) << "the ground-truth trajectory";
+  EXPECT_GT(pixelsOf(shown, kTrajectoryColor), 40) << "the trajectory";
+  MirrorStyle style;
+  style.groundtruth = false;
+  mirror.setStyle(style);
+  mirror.setGraph(1, -1, build);
+  EXPECT_EQ(pixelsOf(draw(mirror), kGroundTruthColor), 0);
+  style.graph = false;  // loop edges belong to the graph
+  mirror.setStyle(style);
+  mirror.setGraph(1, -1, build);
+  EXPECT_EQ(pixelsOf(draw(mirror), kLoopEdgeColor), 0);
+  EXPECT_EQ(builds, 3);
+  mirror.setGraph(1, -1, build, 1);  // another variant of the same snapshot (poses before an optimisation)
+  EXPECT_EQ(builds, 4);
+}
+
 TEST_F(MapMirrorTest, ContainerViewIsTheContainerRenderersAndFollowsItsStyle) {
   // The scene of RenderGolden.ContainerView, through the mirror.
   MapMirror mirror(gl());

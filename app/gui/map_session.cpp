@@ -9,18 +9,46 @@
 namespace vdmap::app::gui {
 namespace {
 using Clock = std::chrono::steady_clock;
+
+std::vector<Transform> snapshotPoses(const KeyframeGraph& graph) {
+  std::vector<Transform> poses;
+  poses.reserve(graph.size());
+  for (const Keyframe& k : graph.keyframes()) poses.push_back(k.T_W_K);
+  return poses;
+}
 }  // namespace
 
-Transform MappingSnapshot::framePose(std::size_t i) const {
-  const FramePose& f = trajectory[i];
-  return keyframes[static_cast<std::size_t>(f.keyframe)].T_W_K * f.T_K_C;
+std::vector<Transform> MappingSnapshot::keyframePoses(bool before_optimisation) const {
+  if (before_optimisation && !keyframes_before.empty()) return keyframes_before;
+  std::vector<Transform> out;
+  out.reserve(keyframes.size());
+  for (const KeyframeInfo& k : keyframes) out.push_back(k.T_W_K);
+  return out;
 }
 
-std::vector<Transform> MappingSnapshot::trajectoryWorld() const {
+Transform MappingSnapshot::framePose(std::size_t i, bool before_optimisation) const {
+  const FramePose& f = trajectory[i];
+  const auto k = static_cast<std::size_t>(f.keyframe);
+  const bool before = before_optimisation && k < keyframes_before.size();
+  return (before ? keyframes_before[k] : keyframes[k].T_W_K) * f.T_K_C;
+}
+
+std::vector<Transform> MappingSnapshot::trajectoryWorld(bool before_optimisation) const {
   std::vector<Transform> out;
   out.reserve(trajectory.size());
-  for (std::size_t i = 0; i < trajectory.size(); ++i) out.push_back(framePose(i));
+  for (std::size_t i = 0; i < trajectory.size(); ++i) out.push_back(framePose(i, before_optimisation));
   return out;
+}
+
+std::vector<Transform> MappingSnapshot::groundTruthWorld() const {
+  std::vector<Transform> out;
+  for (const FramePose& f : trajectory)
+    if (f.T_W_C_truth) out.push_back(*f.T_W_C_truth);
+  return out;
+}
+
+bool MappingSnapshot::hasGroundTruth() const {
+  return std::any_of(trajectory.begin(), trajectory.end(), [](const FramePose& f) { return f.T_W_C_truth.has_value(); });
 }
 
 MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
@@ -39,7 +67,7 @@ MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::op
   if (sequence_) origin_ = std::make_shared<const Session>(saved);  // kept to seek back to
   mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_, std::move(saved.graph), saved.info.state);
   mapped_ = target_ = base_frames_;
-  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity()});
+  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
   global_dirty_ = true;
   start();
 }
@@ -121,8 +149,11 @@ void MapSession::publishMapping() {
   snap->times = times_.view();
   snap->trajectory = trajectory_.view();
   for (const Keyframe& k : mapper_->graph().keyframes())
-    snap->keyframes.push_back({k.id, k.frame_index, k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
+    snap->keyframes.push_back({k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
+  snap->frames_lost = mapper_->framesLost();
+  for (const LoopClosure& loop : mapper_->poseGraph().loops()) snap->loops.push_back({loop, positionOf(loop.frame_index)});
+  snap->keyframes_before = posesBeforeOptimisation();
   {
     std::lock_guard lock(mutex_);
     mapping_ = std::move(snap);
@@ -136,8 +167,13 @@ void MapSession::mapOneFrame() {
     const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i - base_frames_));
     const FrameReport report = mapper_->addFrame(frame);
     times_.push_back(report.ms);
-    const Transform& T_W_K = mapper_->graph().keyframe(report.keyframe).T_W_K;
-    trajectory_.push_back({report.keyframe, T_W_K.inverse() * frame.T_W_C});
+    if (!report.lost) {  // a frame the tracker could not place has no pose
+      const vdmap::FramePose& placed = mapper_->framePoses().back();
+      FramePose pose{placed.keyframe, placed.T_K_C, std::nullopt};
+      const FrameEntry& entry = sequence_->entries()[static_cast<std::size_t>(i - base_frames_)];
+      if (mapper_params_.poses == PoseSource::kTrack && entry.has_pose) pose.T_W_C_truth = entry.T_W_C;
+      trajectory_.push_back(pose);
+    }
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;
     publishMapping();
@@ -156,24 +192,70 @@ void MapSession::mapOneFrame() {
   }
 }
 
+std::vector<Transform> MapSession::posesBeforeOptimisation() const {
+  const KeyframeGraph& graph = mapper_->graph();
+  const std::vector<Transform>& before = mapper_->poseGraph().posesBeforeOptimisation();
+  const std::size_t n = std::min(before.size(), graph.size());
+  if (n == 0) return {};
+  std::vector<Transform> out(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(n));
+  const Transform correction = before[n - 1] * graph.keyframe(static_cast<int>(n - 1)).T_W_K.inverse();
+  for (std::size_t id = n; id < graph.size(); ++id) out.push_back(correction * graph.keyframe(static_cast<int>(id)).T_W_K);
+  return out;
+}
+
+int MapSession::positionOf(int frame_index) const {
+  if (!sequence_) return frame_index;
+  const std::vector<FrameEntry>& entries = sequence_->entries();
+  const auto it = std::lower_bound(entries.begin(), entries.end(), frame_index,
+                                   [](const FrameEntry& e, int index) { return e.index < index; });
+  if (it == entries.end() || it->index != frame_index) return frame_index;  // a saved session's own frame
+  return base_frames_ + static_cast<int>(it - entries.begin());
+}
+
+std::shared_ptr<GlobalSnapshot> MapSession::buildGlobal(const GlobalMapParams& params, bool before_optimisation) {
+  auto snap = std::make_shared<GlobalSnapshot>();
+  snap->params = params;
+  const std::vector<Transform> before = before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
+  if (before.empty()) {
+    snap->map = buildGlobalMap(mapper_->graph(), params);
+    return snap;
+  }
+  // The local maps live in their keyframes' frames and do not change: the graph's poses are
+  // swapped for the build and put back (the worker owns the mapper; nothing else reads it now).
+  KeyframeGraph& graph = mapper_->graph();
+  const std::vector<Transform> now = snapshotPoses(graph);
+  struct Restore {
+    KeyframeGraph& graph;
+    const std::vector<Transform>& poses;
+    ~Restore() {
+      for (std::size_t id = 0; id < poses.size(); ++id) graph.setKeyframePose(static_cast<int>(id), poses[id]);
+    }
+  } restore{graph, now};
+  for (std::size_t id = 0; id < before.size(); ++id) graph.setKeyframePose(static_cast<int>(id), before[id]);
+  snap->map = buildGlobalMap(graph, params);
+  snap->before_optimisation = true;
+  return snap;
+}
+
 void MapSession::rebuildGlobal() {
   GlobalMapParams params;
+  bool before = false;
   {
     std::lock_guard lock(mutex_);
     params = thresholds_;
+    before = before_optimisation_;
     global_dirty_ = false;
   }
   const auto t0 = Clock::now();
-  auto snap = std::make_shared<GlobalSnapshot>();
+  std::shared_ptr<GlobalSnapshot> snap;
   try {
-    snap->map = buildGlobalMap(mapper_->graph(), params);
+    snap = buildGlobal(params, before);
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
     error_ = std::string("global map: ") + e.what();
     return;
   }
   releaseFreedMemory();  // the build's temporaries, before the next frames
-  snap->params = params;
   {
     std::lock_guard lock(mutex_);
     snap->frames_mapped = mapped_;
@@ -200,9 +282,12 @@ void MapSession::publishSelection() {
   const KeyframeGraph& graph = mapper_->graph();
   if (global && snap->keyframe >= 0 && snap->keyframe < static_cast<int>(graph.size())) {
     // Filtered again rather than read from global->map.kept: the container may have grown since
-    // the build, and one keyframe's filter costs little.
+    // the build, and one keyframe's filter costs little. At the pose the global map was built with.
     const Keyframe& k = graph.keyframe(snap->keyframe);
-    snap->local = keptEllipsoids(k.container, global->params.filter, k.T_W_K, k.id);
+    const auto id = static_cast<std::size_t>(k.id);
+    const std::vector<Transform> before = global->before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
+    snap->T_W_K = id < before.size() ? before[id] : k.T_W_K;
+    snap->local = keptEllipsoids(k.container, global->params.filter, snap->T_W_K, k.id);
   }
   {
     std::lock_guard lock(mutex_);
@@ -216,7 +301,7 @@ void MapSession::restartMapper() {
   trajectory_.clear();
   if (origin_) {  // back to the saved session, whose frames are not in the sequence
     mapper_ = std::make_unique<Mapper>(origin_->info.camera, mapper_params_, origin_->graph, origin_->info.state);
-    for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity()});
+    for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
   } else {
     mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   }
@@ -353,8 +438,11 @@ void MapSession::withMapper(std::function<std::string(const Mapper&, const Globa
       dirty = global_dirty_ || !global_;
     }
     if (dirty) rebuildGlobal();
-    const auto global_map = global();
+    std::shared_ptr<const GlobalSnapshot> global_map = global();
     if (!global_map) throw std::runtime_error("there is no global map to export yet");
+    // What is exported or saved is the map as it is, not the one before the last optimisation
+    // that may be on screen.
+    if (global_map->before_optimisation) global_map = buildGlobal(global_map->params, false);
     const std::string message = f(*mapper_, *global_map);
     std::lock_guard lock(mutex_);
     message_ = message;
@@ -369,6 +457,16 @@ std::shared_ptr<const MappingSnapshot> MapSession::mapping() const {
 std::shared_ptr<const GlobalSnapshot> MapSession::global() const {
   std::lock_guard lock(mutex_);
   return global_;
+}
+
+void MapSession::showBeforeOptimisation(bool before) {
+  {
+    std::lock_guard lock(mutex_);
+    if (before == before_optimisation_) return;
+    before_optimisation_ = before;
+    global_dirty_ = true;
+  }
+  wake_.notify_all();
 }
 
 void MapSession::selectKeyframe(int id) {

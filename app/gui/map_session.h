@@ -26,7 +26,7 @@ namespace vdmap::app::gui {
 /// One keyframe as the UI sees it.
 struct KeyframeInfo {
   int id = 0;
-  int frame = 0;               ///< position in the sequence of the frame that created it
+  int frame = 0;               ///< position in the sequence (on the scrubber, after --frames) of the frame that created it
   Transform T_W_K = Transform::Identity();
   CompressedImage rgb;         ///< shared with the keyframe; decode() when shown
   std::size_t ellipsoids = 0;  ///< stored in its container
@@ -38,6 +38,16 @@ struct KeyframeInfo {
 struct FramePose {
   int keyframe = 0;
   Transform T_K_C = Transform::Identity();
+  /// With tracked poses (PoseSource::kTrack): the sequence's ground-truth T_W_C of the frame,
+  /// when it has one (the tracker anchors the world frame at the first frame's, so the two
+  /// trajectories share a frame and are drawn as they are, unaligned).
+  std::optional<Transform> T_W_C_truth;
+};
+
+/// One loop closure (Mapper::poseGraph().loops()) as the scrubber shows it.
+struct LoopEvent {
+  LoopClosure loop;
+  int position = 0;  ///< the closing frame on the scrubber (0-based, counted like frames_mapped)
 };
 
 /// The mapping state after the last mapped frame (replaced after every frame).
@@ -52,13 +62,27 @@ struct MappingSnapshot {
   SharedSpan<StageTimes> times;        ///< per mapped frame
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
-  SharedSpan<FramePose> trajectory;    ///< per mapped frame
+  SharedSpan<FramePose> trajectory;    ///< per mapped frame that was placed (lost ones have none)
   int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
+  int frames_lost = 0;         ///< frames the tracker could not place (skipped, not integrated)
+  std::vector<LoopEvent> loops;  ///< loop closures so far, oldest first
+  /// T_W_K of every keyframe as it was before the last pose-graph optimisation; empty when there
+  /// was none. Keyframes made after it are moved by the correction of the newest keyframe that
+  /// existed then (they were tracked from the corrected poses), so the map and trajectory keep
+  /// their shape behind it.
+  std::vector<Transform> keyframes_before;
 
-  /// T_W_C of mapped frame i under the keyframe poses of this snapshot.
-  Transform framePose(std::size_t i) const;
-  /// framePose of every mapped frame.
-  std::vector<Transform> trajectoryWorld() const;
+  /// Keyframe poses by id: the current ones, or those before the last optimisation (when there
+  /// was one).
+  std::vector<Transform> keyframePoses(bool before_optimisation = false) const;
+  /// T_W_C of trajectory entry i under the keyframe poses of this snapshot (or those before the
+  /// last optimisation).
+  Transform framePose(std::size_t i, bool before_optimisation = false) const;
+  /// framePose of every trajectory entry.
+  std::vector<Transform> trajectoryWorld(bool before_optimisation = false) const;
+  /// The ground-truth T_W_C of the entries that have one (tracked poses only; else empty).
+  std::vector<Transform> groundTruthWorld() const;
+  bool hasGroundTruth() const;
 };
 
 /// One global map build (replaced after every rebuild).
@@ -67,6 +91,9 @@ struct GlobalSnapshot {
   GlobalMapParams params;
   int frames_mapped = 0;         ///< the mapping state it was built from
   int generation = 0;            ///< 1, 2, ... per build
+  /// Built with the keyframe poses before the last pose-graph optimisation
+  /// (MapSession::showBeforeOptimisation).
+  bool before_optimisation = false;
 };
 
 /// The selected keyframe's local map (replaced after a selection change and after every rebuild).
@@ -77,6 +104,9 @@ struct SelectionSnapshot {
   /// The keyframe's ellipsoids kept by those thresholds, world frame, container order; empty while
   /// the keyframe does not exist (yet).
   std::vector<Ellipsoid> local;
+  /// The keyframe pose `local` was moved to the world with: the global map's (its pose before the
+  /// last optimisation when that map shows it).
+  Transform T_W_K = Transform::Identity();
 };
 
 /// Playback state as the UI shows it.
@@ -128,6 +158,11 @@ class MapSession {
   /// Runs `f` on the worker with the mapper and the current global map while nothing changes
   /// them (export, save); its exception text goes to status().error, its return to message.
   void withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f);
+  /// Shows the map as it was before the last pose-graph optimisation (true) or as it is: the
+  /// global map and the selection are rebuilt from the unchanged local maps with the other
+  /// keyframe poses. The Mapper's poses are never changed by it, so mapping goes on, exports and
+  /// saves stay the optimised map. Without an optimisation it has no effect.
+  void showBeforeOptimisation(bool before);
   /// The keyframe the inspector shows (-1: none; an id not mapped yet is kept and filled once it
   /// is). A change makes the worker publish a new selection().
   void selectKeyframe(int id);
@@ -149,6 +184,13 @@ class MapSession {
   void run();
   void mapOneFrame();
   void rebuildGlobal();
+  // Builds the global map with the current keyframe poses, or those before the last
+  // optimisation when asked and there was one (then the snapshot says so).
+  std::shared_ptr<GlobalSnapshot> buildGlobal(const GlobalMapParams& params, bool before_optimisation);
+  // The poses MappingSnapshot::keyframes_before holds (worker thread).
+  std::vector<Transform> posesBeforeOptimisation() const;
+  // The scrubber position of a frame by its depth-list index.
+  int positionOf(int frame_index) const;
   void restartMapper();
   void publishMapping();
   void publishSelection();
@@ -179,6 +221,7 @@ class MapSession {
   int mapped_ = 0, target_ = 0;
   bool playing_ = false, stop_at_keyframe_ = false, global_dirty_ = false, working_ = false;
   bool stop_ = false;
+  bool before_optimisation_ = false;
   int selected_keyframe_ = -1;
   bool selection_dirty_ = false;
   float fps_ = 0.f;

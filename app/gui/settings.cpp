@@ -59,6 +59,7 @@ json toJson(const Settings& s) {
         {"show_frustums", s.show_frustums},
         {"show_graph", s.show_graph},
         {"show_trajectory", s.show_trajectory},
+        {"show_groundtruth", s.show_groundtruth},
         {"ellipsoid_sigma", s.ellipsoid_sigma},
         {"play_fps", s.play_fps},
         {"up_axis", kUpAxisNames[static_cast<int>(s.up_axis)]},
@@ -111,6 +112,7 @@ Settings fromJson(const json& j) {
     read(v, "view", "show_frustums", s.show_frustums);
     read(v, "view", "show_graph", s.show_graph);
     read(v, "view", "show_trajectory", s.show_trajectory);
+    read(v, "view", "show_groundtruth", s.show_groundtruth);
     read(v, "view", "ellipsoid_sigma", s.ellipsoid_sigma);
     read(v, "view", "play_fps", s.play_fps);
     read(v, "view", "up_axis", up);

@@ -23,6 +23,7 @@ struct Settings {
   render::ColorMode color = render::ColorMode::kRgb;
   bool show_ellipsoids = true;          ///< false: ellipsoid centres as points
   bool show_frustums = true, show_graph = true, show_trajectory = true;
+  bool show_groundtruth = true;         ///< tracked poses: the ground-truth trajectory beside them
   float ellipsoid_sigma = 2.f;
   float play_fps = 0.f;                 ///< playback limit, frames per second; 0: as fast as mapping goes
   UpAxis up_axis = UpAxis::kData;       ///< kData: estimated from the cameras and the map's floor

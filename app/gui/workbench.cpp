@@ -34,6 +34,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"R", "reset the view (default direction about the up axis)"},
       {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
       {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
+      {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
@@ -188,6 +189,7 @@ void Workbench::opened(const std::string& path) {
   ui_.selected_keyframe = ui_.view_from_keyframe = -1;  // as the new session's selection
   ui_.picked.reset();
   ui_.follow_map = true;
+  ui_.show_before_optimisation = false;  // as the new session's
   framed_generation_ = -1;
   pose_edits_sent_ = 0;  // a new session has handled none
   pose_undo_.clear();
@@ -322,7 +324,8 @@ void Workbench::sendPose(int id, const Transform& T_W_K) {
 }
 
 void Workbench::applyPoseEdit() {
-  if (!session_ || ui_.selected_keyframe < 0) return;
+  // Poses are edited on the map as it is, not on the one before the last optimisation.
+  if (!session_ || ui_.selected_keyframe < 0 || ui_.show_before_optimisation) return;
   Transform T = Transform::Identity();
   T.linear() = eulerDegToRotation(ui_.pose_rotation_deg);
   T.translation() = Eigen::Vector3d(ui_.pose_translation_m.x, ui_.pose_translation_m.y, ui_.pose_translation_m.z);
@@ -349,8 +352,39 @@ void Workbench::loadTrajectory() {
   if (session_) session_->loadTrajectory(absolute(ui_.trajectory_text));
 }
 
+bool Workbench::canShowBeforeOptimisation() const {
+  return session_ && !session_->mapping()->keyframes_before.empty();
+}
+
+bool Workbench::showBeforeOptimisation(bool before) {
+  if (before && !canShowBeforeOptimisation()) {
+    ui_.show_before_optimisation = false;
+    report(StatusLine::Kind::kWarning, "no pose-graph optimisation yet: there is no map before one to show");
+    return false;
+  }
+  ui_.show_before_optimisation = before;
+  if (session_) session_->showBeforeOptimisation(before);
+  return true;
+}
+
+render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
+  render::GraphScene scene;
+  const bool before = ui_.show_before_optimisation;
+  scene.camera = mapping.camera;
+  scene.keyframes = mapping.keyframePoses(before);
+  for (const CovisibilityEdge& e : mapping.edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  for (const LoopEvent& e : mapping.loops) scene.loops.push_back({e.loop.from, e.loop.to, 1.f});
+  scene.trajectory = mapping.trajectoryWorld(before);
+  if (ui_.settings.show_groundtruth) scene.groundtruth = mapping.groundTruthWorld();
+  scene.current_keyframe = mapping.current_keyframe;
+  scene.selected_keyframe = ui_.selected_keyframe;
+  return scene;
+}
+
 void Workbench::sync() {
   if (!session_) return;
+  // Seeking back or re-running forgets the optimisation: show the map as it is again.
+  if (ui_.show_before_optimisation && !canShowBeforeOptimisation()) showBeforeOptimisation(false);
   syncPoseFields();
   const PlayerStatus st = session_->status();
   if (st.error != shown_error_) {
@@ -386,6 +420,9 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
     const Eigen::Vector3d t = mapping->framePose(i).translation();
     cameras.positions.emplace_back(t.x(), t.y(), t.z());
   }
+  if (ui_.settings.show_groundtruth)
+    for (const Transform& T : mapping->groundTruthWorld())
+      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
   if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
   auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
   for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
@@ -475,6 +512,7 @@ void Workbench::key(KeyAction action) {
       ui_.view_from_keyframe = -1;
       break;
     case KeyAction::kUndo: undoPoseEdit(); break;
+    case KeyAction::kBeforeOptimisation: showBeforeOptimisation(!ui_.show_before_optimisation); break;
   }
 }
 

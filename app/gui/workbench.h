@@ -10,6 +10,7 @@
 #include "app/gui/map_session.h"
 #include "app/gui/settings.h"
 #include "app/parameter_table.h"
+#include "render/map_mirror.h"
 #include "render/view_camera.h"
 
 namespace vdmap::app::gui {
@@ -47,6 +48,9 @@ struct UiState {
   StatusLine status;
   bool show_help = false;         ///< the key and mouse overlay (H, F1)
   bool show_container = false;    ///< the large container view window (C)
+  /// The map, keyframes and trajectory as they were before the last pose-graph optimisation
+  /// (Workbench::showBeforeOptimisation); off again when there is none (after seeking back).
+  bool show_before_optimisation = false;
   bool reset_layout = false;      ///< panels go back to their default widths next frame
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
@@ -54,7 +58,7 @@ struct UiState {
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo
+  kEscape, kUndo, kBeforeOptimisation
 };
 
 /// The keys and mouse actions, for the help overlay and the README: {keys, what they do}.
@@ -139,6 +143,15 @@ class Workbench {
   /// starts from the pose shown.
   void syncPoseFields();
   void loadTrajectory();
+  /// Shows the map before the last pose-graph optimisation (true) or after; refused (false
+  /// returned, status line says why) when there was no optimisation.
+  bool showBeforeOptimisation(bool before);
+  /// Whether the open session has had a pose-graph optimisation (the toggle above can act).
+  bool canShowBeforeOptimisation() const;
+  /// The keyframe graph of `mapping` as the 3-D view draws it now: keyframe poses, covisibility
+  /// and loop edges, trajectory (before the last optimisation when ui().show_before_optimisation)
+  /// and the ground truth (tracked poses, when the sequence has one and the setting shows it).
+  render::GraphScene graphScene(const MappingSnapshot& mapping) const;
 
   /// Once per UI frame: pose fields, the session's news into the status line, the pick cleared
   /// when the map changed, and the view re-framed while it follows the map.

@@ -116,6 +116,7 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_R: return KeyAction::kResetView;
     case GLFW_KEY_V: return KeyAction::kViewFromKeyframe;
     case GLFW_KEY_C: return KeyAction::kContainer;
+    case GLFW_KEY_B: return KeyAction::kBeforeOptimisation;
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return KeyAction::kHelp;
     case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
@@ -374,7 +375,8 @@ class WorkbenchWindow {
                       .ellipsoids = s.show_ellipsoids,
                       .frustums = s.show_frustums,
                       .graph = s.show_graph,
-                      .trajectory = s.show_trajectory});
+                      .trajectory = s.show_trajectory,
+                      .groundtruth = s.show_groundtruth});
     MapSession* session = bench_.session();
     if (!session) return;
     if (session != mirrored_session_) {  // generations restart with every session
@@ -385,16 +387,8 @@ class WorkbenchWindow {
     else mirror_.setMap(session_base_, {});
     const auto mapping = mapping_;
     mirror_.setFrame(session_base_ + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
-    mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, [&] {
-      render::GraphScene scene;
-      scene.camera = mapping->camera;
-      for (const KeyframeInfo& k : mapping->keyframes) scene.keyframes.push_back(k.T_W_K);
-      for (const CovisibilityEdge& e : mapping->edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
-      scene.trajectory = mapping->trajectoryWorld();
-      scene.current_keyframe = mapping->current_keyframe;
-      scene.selected_keyframe = ui().selected_keyframe;
-      return scene;
-    });
+    const auto scene = [&] { return bench_.graphScene(*mapping); };
+    mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, scene, ui().show_before_optimisation);
     mirror_.setHighlight(ui().picked);
     const auto selection = session->selection();
     if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
@@ -407,7 +401,7 @@ class WorkbenchWindow {
         // The keyframe image is held compressed: decode it once per selection, not per UI frame.
         const int generation = session_base_ + selection->serial;
         if (decoded_rgb_for_ != generation) decoded_rgb_ = k.rgb.decode(), decoded_rgb_for_ = generation;
-        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, k.T_W_K, selection->local, style);
+        mirror_.setContainer(generation, id, decoded_rgb_, mapping->camera, selection->T_W_K, selection->local, style);
       } else {
         mirror_.setContainer(session_base_ + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {}, style);
       }
@@ -542,6 +536,7 @@ class WorkbenchWindow {
         session->setFps(ui().settings.play_fps);
       ImGui::EndTable();
     }
+    if (mapping_->mapper.poses == PoseSource::kTrack) drawLoopStrip(total);
     // The scrubber, with a tick under it at every keyframe's first frame.
     if (!scrubbing_) scrub_ = std::max(0, mapped - 1);
     ImGui::SetNextItemWidth(-FLT_MIN);
@@ -574,6 +569,33 @@ class WorkbenchWindow {
     }
     drawTimes(image_width);
     ImGui::End();
+  }
+
+  // Above the scrubber: a marker at every loop closure's frame, its figures in a tooltip.
+  void drawLoopStrip(int total) {
+    const float font = ImGui::GetFontSize();
+    ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
+    const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    ImDrawList* draw = ImGui::GetWindowDrawList();
+    const ImU32 color = rgbColor(render::kLoopEdgeColor);
+    const float mouse_x = ImGui::GetIO().MousePos.x;
+    std::string hovered;
+    for (const LoopEvent& e : mapping_->loops) {
+      // Where the scrubber's grab stands at that frame (the keyframe ticks' formula).
+      const float x = lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(e.position) / std::max(1, total - 1);
+      draw->AddTriangleFilled({x - 0.35f * font, lo.y}, {x + 0.35f * font, lo.y}, {x, hi.y}, color);
+      if (std::abs(mouse_x - x) <= 0.5f * font) {
+        char text[160];
+        std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited), %d inliers, correction %s, "
+                      "pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
+                      e.loop.inliers, metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
+        hovered += text;
+      }
+    }
+    tip(!hovered.empty() ? hovered
+        : mapping_->loops.empty()
+            ? "Loop closures appear here (orange markers) when tracking re-observes a keyframe it is not linked to."
+            : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time.");
   }
 
   void drawDepthScale(float width) {
@@ -630,6 +652,7 @@ class WorkbenchWindow {
     if (bench_.session()) {
       if (section("Thresholds (live)", true)) drawThresholds();
       if (section("Re-run parameters")) drawRerun();
+      if (mapping_->mapper.poses == PoseSource::kTrack && section("Tracking and loop closures", true)) drawTracking();
       if (section("View", true)) drawView();
       if (section("Keyframes", true)) drawKeyframes();
       if (section("Picked ellipsoid", true)) drawPicked();
@@ -824,6 +847,63 @@ class WorkbenchWindow {
     ImGui::InputText("##shot", &screenshot_text_);
   }
 
+  // A colour swatch as wide as a short line, in the text's row.
+  void swatch(const glm::u8vec3& color) {
+    const float h = ImGui::GetTextLineHeight();
+    const ImVec2 at = ImGui::GetCursorScreenPos();
+    const float y = at.y + ImGui::GetStyle().FramePadding.y + 0.5f * h;
+    ImGui::GetWindowDrawList()->AddLine({at.x, y}, {at.x + 1.4f * h, y}, rgbColor(color), 3.f);
+    ImGui::Dummy({1.4f * h, ImGui::GetFrameHeight()});
+    ImGui::SameLine();
+  }
+
+  void drawTracking() {
+    Settings& s = ui().settings;
+    const bool truth = mapping_->hasGroundTruth();
+    const int placed = static_cast<int>(mapping_->trajectory.size());
+    swatch(render::kTrajectoryColor);
+    ImGui::AlignTextToFramePadding();
+    ImGui::Text("tracked: %d frames placed, %d lost", placed, mapping_->frames_lost);
+    tip("The camera trajectory vdmap estimated (blue), every placed frame at its pose relative to its keyframe, so "
+        "it follows each correction. Lost frames could not be placed and were skipped, never integrated.");
+    swatch(render::kGroundTruthColor);
+    ImGui::BeginDisabled(!truth);
+    ImGui::Checkbox("ground truth", &s.show_groundtruth);
+    tip(truth ? "The sequence's groundtruth.txt poses of the same frames (green), in the same world frame (the first "
+                "frame anchors both), not aligned: the gap is the drift."
+              : "The sequence has no groundtruth.txt poses for these frames.");
+    ImGui::EndDisabled();
+    swatch(render::kLoopEdgeColor);
+    ImGui::AlignTextToFramePadding();
+    ImGui::Text("%zu loop closures", mapping_->loops.size());
+    tip("Loop-closure edges between the two keyframes (orange; covisibility edges are viridis) and markers above the "
+        "scrubber. After each loop the keyframe pose graph is optimised and the global map rebuilt.");
+    const bool can = bench_.canShowBeforeOptimisation();
+    ImGui::BeginDisabled(!can);
+    bool before = ui().show_before_optimisation;
+    if (ImGui::Checkbox("show before last optimisation (B)", &before)) bench_.showBeforeOptimisation(before);
+    tip(!can ? "No pose-graph optimisation yet: it runs after a loop closure."
+             : "The keyframe poses, frustums, trajectory and global map as they were before the last pose-graph "
+               "optimisation (rebuilt from the same local maps); off: after it. Pose edits and exports use the map "
+               "after it.");
+    ImGui::EndDisabled();
+    checkFits();
+    if (mapping_->loops.empty()) return;
+    const float rows = std::min(4.5f, static_cast<float>(mapping_->loops.size()) + 0.5f);
+    if (ImGui::BeginListBox("##loops", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * rows})) {
+      for (std::size_t i = mapping_->loops.size(); i-- > 0;) {  // newest first
+        const LoopEvent& e = mapping_->loops[i];
+        char text[128];
+        std::snprintf(text, sizeof text, "frame %d  K%d -> K%d  %s  %.1f ms##loop%zu", e.position, e.loop.from, e.loop.to,
+                      metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms, i);
+        if (ImGui::Selectable(text, ui().selected_keyframe == e.loop.to)) bench_.selectKeyframe(e.loop.to);
+      }
+      ImGui::EndListBox();
+    }
+    tip("Loop closures, newest first: the frame that closed it, the keyframe it was tracked in -> the keyframe it "
+        "revisited, the largest keyframe move of the optimisation and its time. Click to select the revisited keyframe.");
+  }
+
   void drawKeyframes() {
     if (mapping_->keyframes.empty()) return ImGui::TextUnformatted("no keyframes yet");
     if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
@@ -878,6 +958,8 @@ class WorkbenchWindow {
     checkFits();
     ImGui::TextUnformatted("pose T_W_K (drag to correct):");
     bool moved = false;
+    const bool before = ui().show_before_optimisation;
+    ImGui::BeginDisabled(before);
     if (beginRows("pose")) {
       label("t (m)", "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt.");
       moved |= ImGui::DragFloat3("##t", &ui().pose_translation_m.x, 0.005f, -1000.f, 1000.f, "%.3f");
@@ -891,6 +973,8 @@ class WorkbenchWindow {
       for (float* a : {&rpy.x, &rpy.z}) *a = *a - 360.f * std::round(*a / 360.f);
       rpy.y = std::clamp(rpy.y, -90.f, 90.f);
     }
+    ImGui::EndDisabled();
+    if (before) tip("Showing the map before the last optimisation: poses are edited on the map after it (B).");
     if (moved) bench_.applyPoseEdit();
     ImGui::BeginDisabled(!bench_.canUndoPoseEdit());
     if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench_.undoPoseEdit();
@@ -1011,10 +1095,34 @@ class WorkbenchWindow {
                        : ui().follow_map            ? "following the map (a drag stops it, F resumes)"
                                                     : "F: frame the map, R: reset, H: help";
     draw->AddText({view_.x + pad, view_.y + pad}, dim, mode);
+    float line_y = view_.y + pad + 1.3f * font;
     if (ui().view_from_keyframe >= 0) {
       char text[64];
       std::snprintf(text, sizeof text, "K%d, its own intrinsics", ui().view_from_keyframe);
-      draw->AddText({view_.x + pad, view_.y + pad + 1.3f * font}, dim, text);
+      draw->AddText({view_.x + pad, line_y}, dim, text);
+      line_y += 1.3f * font;
+    }
+    if (mapping_->mapper.poses == PoseSource::kTrack && ui().view_from_keyframe < 0) {
+      // The line colours of tracking, under the mode line.
+      float x = view_.x + pad;
+      const auto key = [&](const glm::u8vec3& color, const char* text) {
+        draw->AddLine({x, line_y + 0.55f * font}, {x + 1.4f * font, line_y + 0.55f * font}, rgbColor(color), 3.f);
+        x += 1.8f * font;
+        draw->AddText({x, line_y}, text_color, text);
+        x += ImGui::CalcTextSize(text).x + font;
+      };
+      key(render::kTrajectoryColor, "tracked");
+      if (mapping_->hasGroundTruth() && ui().settings.show_groundtruth) key(render::kGroundTruthColor, "ground truth");
+      if (!mapping_->loops.empty()) key(render::kLoopEdgeColor, "loop closure");
+      line_y += 1.3f * font;
+    }
+    if (ui().show_before_optimisation && !mapping_->loops.empty()) {
+      const LoopEvent& last = mapping_->loops.back();
+      char text[160];
+      std::snprintf(text, sizeof text, "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)",
+                    last.position, metres(last.loop.correction_m).c_str());
+      draw->AddText(ImGui::GetFont(), font, {view_.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), text, nullptr,
+                    view_.w - 2 * pad);  // wrapped in a narrow view
     }
     // The colour legend, bottom left.
     const float bar_w = std::min(16.f * font, view_.w - 2 * pad), bar_h = 0.8f * font;
@@ -1177,6 +1285,7 @@ class WorkbenchWindow {
         return;
       }
       case Phase::kSettle:
+        if (session && session->status().busy) return;  // a key pressed above may have asked for a rebuild
         if (--countdown_ > 0) return;
         recordLayout();
         if (!script_.screenshot.empty() && !failedRun()) {
@@ -1290,6 +1399,9 @@ class WorkbenchWindow {
       stats["keyframes"] = mapping_->keyframes.size();
       stats["edges"] = mapping_->edges.size();
       stats["cell_size_px"] = mapping_->mapper.local_map.cell_size_px;
+      stats["loop_closures"] = mapping_->loops.size();
+      stats["frames_lost"] = mapping_->frames_lost;
+      stats["has_groundtruth"] = mapping_->hasGroundTruth();
     }
     if (global_) {
       stats["sigma_e"] = global_->map.sigma_e;
@@ -1303,6 +1415,8 @@ class WorkbenchWindow {
     stats["layout"] = layout_;
     stats["show_help"] = ui().show_help;
     stats["view_from_keyframe"] = ui().view_from_keyframe;
+    stats["show_before_optimisation"] = ui().show_before_optimisation;
+    if (global_) stats["map_before_optimisation"] = global_->before_optimisation;
     if (!latency_ms_.empty()) stats["slider_to_map_ms"] = latency_ms_;
     if (!orbit_ms_.empty()) {
       stats["orbit_frame_ms"] = orbit_ms_;
