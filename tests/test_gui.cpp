@@ -446,11 +446,16 @@ TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
   ASSERT_NE(s.sequence(), nullptr);
   EXPECT_EQ(s.mapping()->frames_mapped, 5);
   EXPECT_EQ(s.mapping()->frames_total, 10);
+  EXPECT_EQ(s.mapping()->trajectory.size(), 5u);  // every saved frame's pose, not the keyframes'
   s.play();
   s.waitIdle();
   ASSERT_TRUE(s.status().error.empty()) << s.status().error;
   const auto whole = t.session().mapping(), continued = s.mapping();
   EXPECT_EQ(continued->frames_mapped, 10);
+  const std::vector<Transform> whole_path = whole->trajectoryWorld(), continued_path = continued->trajectoryWorld();
+  ASSERT_EQ(continued_path.size(), whole_path.size());
+  for (std::size_t i = 0; i < whole_path.size(); ++i)
+    EXPECT_TRUE(continued_path[i].isApprox(whole_path[i], 1e-9)) << "frame " << i;
   ASSERT_EQ(continued->keyframes.size(), whole->keyframes.size());
   for (std::size_t i = 0; i < whole->keyframes.size(); ++i) {
     EXPECT_EQ(continued->keyframes[i].frame, whole->keyframes[i].frame);

@@ -67,9 +67,18 @@ MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::op
   if (sequence_) origin_ = std::make_shared<const Session>(saved);  // kept to seek back to
   mapper_ = std::make_unique<Mapper>(saved.info.camera, mapper_params_, std::move(saved.graph), saved.info.state);
   mapped_ = target_ = base_frames_;
-  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
+  trajectoryOfSession();
   global_dirty_ = true;
   start();
+}
+
+void MapSession::trajectoryOfSession() {
+  // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
+  if (!mapper_->framePoses().empty()) {
+    for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.T_K_C, std::nullopt});
+    return;
+  }
+  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
 }
 
 void MapSession::start() {
@@ -301,7 +310,7 @@ void MapSession::restartMapper() {
   trajectory_.clear();
   if (origin_) {  // back to the saved session, whose frames are not in the sequence
     mapper_ = std::make_unique<Mapper>(origin_->info.camera, mapper_params_, origin_->graph, origin_->info.state);
-    for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
+    trajectoryOfSession();
   } else {
     mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   }

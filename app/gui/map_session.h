@@ -192,6 +192,8 @@ class MapSession {
   // The scrubber position of a frame by its depth-list index.
   int positionOf(int frame_index) const;
   void restartMapper();
+  // Fills trajectory_ from a saved session's mapper: every frame's pose when it stores them.
+  void trajectoryOfSession();
   void publishMapping();
   void publishSelection();
   void notifyChange() const;  // calls on_change_ (mutex_ not held)
