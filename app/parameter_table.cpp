@@ -112,10 +112,6 @@ std::string number(double v) {
   return text;
 }
 
-std::string withUnit(const Parameter& p, double v) {
-  return number(v) + (p.unit.empty() ? "" : " " + std::string(p.unit));
-}
-
 }  // namespace
 
 bool MappingParams::operator==(const MappingParams& other) const {

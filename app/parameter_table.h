@@ -39,7 +39,7 @@ struct Parameter {
   double (*get)(const MappingParams&) = nullptr;
   void (*set)(MappingParams&, double) = nullptr;
   /// kChoice: the names of values 0, 1, ...
-  std::span<const char* const> choices;
+  std::span<const char* const> choices = {};
 };
 
 /// The table, live parameters first, in the workbench's order.
