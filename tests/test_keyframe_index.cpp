@@ -50,7 +50,9 @@ TEST(Vocabulary, TrainingIsDeterministicAndNearDescriptorsShareAWord) {
   float sum = 0;
   for (std::size_t i = 0; i < bow.size(); ++i) {
     sum += bow[i].second;
-    if (i > 0) EXPECT_LT(bow[i - 1].first, bow[i].first);
+    if (i > 0) {
+      EXPECT_LT(bow[i - 1].first, bow[i].first);
+    }
   }
   EXPECT_NEAR(sum, 1.0f, 1e-5f);
 }

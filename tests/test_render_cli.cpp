@@ -217,7 +217,7 @@ TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
   const cv::Mat img = cv::imread(out("folder.png"), cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(img.empty());
   EXPECT_GT(cv::countNonZero(img < 250), 1000) << "nothing was drawn";
-  for (const cv::Mat edge : {img.row(0), img.row(img.rows - 1), img.col(0), img.col(img.cols - 1)})
+  for (const cv::Mat& edge : {img.row(0), img.row(img.rows - 1), img.col(0), img.col(img.cols - 1)})
     EXPECT_EQ(cv::countNonZero(edge < 250), 0) << "the map reaches the image's edge";
 }
 
