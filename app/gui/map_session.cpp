@@ -468,25 +468,20 @@ std::shared_ptr<const GlobalSnapshot> MapSession::global() const {
   return global_;
 }
 
-void MapSession::showBeforeOptimisation(bool before) {
+template <class T>
+void MapSession::setAndWake(T* field, T value, bool* dirty) {
   {
     std::lock_guard lock(mutex_);
-    if (before == before_optimisation_) return;
-    before_optimisation_ = before;
-    global_dirty_ = true;
+    if (*field == value) return;
+    *field = value;
+    *dirty = true;
   }
   wake_.notify_all();
 }
 
-void MapSession::selectKeyframe(int id) {
-  {
-    std::lock_guard lock(mutex_);
-    if (id == selected_keyframe_) return;
-    selected_keyframe_ = id;
-    selection_dirty_ = true;
-  }
-  wake_.notify_all();
-}
+void MapSession::showBeforeOptimisation(bool before) { setAndWake(&before_optimisation_, before, &global_dirty_); }
+
+void MapSession::selectKeyframe(int id) { setAndWake(&selected_keyframe_, id, &selection_dirty_); }
 
 std::shared_ptr<const SelectionSnapshot> MapSession::selection() const {
   std::lock_guard lock(mutex_);

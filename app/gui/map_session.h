@@ -199,6 +199,9 @@ class MapSession {
   void notifyChange() const;  // calls on_change_ (mutex_ not held)
   void post(std::function<void()> command);
   void update(const std::function<void()>& change);  // under the lock, then wakes the worker
+  // Under the lock: when `field` differs from `value`, sets it and `dirty`; then wakes the worker.
+  template <class T>
+  void setAndWake(T* field, T value, bool* dirty);
   bool workLeft() const;  // mutex_ held
 
   void start();
