@@ -2,6 +2,7 @@
 // integrator against the slow reference, the filter as a view, and bad input.
 #include <algorithm>
 #include <cmath>
+#include <random>
 #include <vector>
 
 #include <Eigen/Eigenvalues>
@@ -253,6 +254,51 @@ TEST(LocalMap, FilterRemovesDiscontinuityEllipsoidsAndIsAView) {
   belter.model = SensorModel::kBelter2018;
   EXPECT_EQ(keptEllipsoids(container, belter, Transform::Identity(), 0).size(),
             static_cast<std::size_t>(face));
+}
+
+// keepCell decides most cells from cheap bounds on the eigenvalues; it must decide every cell as
+// SPEC 4 written out with the eigenvalues does, most of all those near the threshold.
+TEST(LocalMap, FilterBoundsDecideAsTheEigenvalues) {
+  const PinholeCamera cam = sceneCamera();
+  const KeyframeContainer container(cam, 5);
+  std::mt19937 rng(3);
+  std::uniform_real_distribution<double> u(0.0, 1.0);
+  const FilterParams filter;
+  int kept = 0, rejected = 0;
+  for (int trial = 0; trial < 20000; ++trial) {
+    const double depth = 0.5 + 4.0 * u(rng);
+    const Eigen::Vector3d mean = cam.backProject(cam.width * (2 * u(rng) - 0.5), cam.height * (2 * u(rng) - 0.5), depth);
+    const Eigen::Vector2d uv = cam.project(mean);
+    const Eigen::Matrix3d expected = expectedCellCovariance(filter.model, cam, uv.x(), uv.y(), depth, 5);
+    // A random covariance whose largest eigenvalue is 0.1 .. 30 times the expected one, so that
+    // many cells fall within a few percent of the threshold k^2 = 9.
+    const Eigen::Matrix3d R = Eigen::Quaterniond::UnitRandom().toRotationMatrix();
+    const double ratio = trial % 2 == 0 ? 9.0 * (1.0 + 0.02 * (u(rng) - 0.5)) : 0.1 + 30.0 * u(rng);
+    const double lambda = ratio * Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d>(expected).eigenvalues()(2);
+    const Eigen::Vector3d axes(lambda, lambda * u(rng), lambda * 1e-3 * u(rng));
+    const int n = 6 + trial % 40;
+    CellStats stats;
+    stats.n = n;
+    stats.mean = mean;
+    stats.scatter = (n - 1.0) * R * axes.asDiagonal() * R.transpose();
+    StoredCell cell;
+    cell.fromStats(stats);
+    const Eigen::Matrix3d cov = cell.toStats().covariance();
+    const Eigen::Vector2d uv_stored = cam.project(cell.toStats().mean);
+    const Eigen::Matrix3d expected_stored =
+        expectedCellCovariance(filter.model, cam, uv_stored.x(), uv_stored.y(), cell.toStats().mean.z(), 5);
+    auto largest = [](const Eigen::Matrix3d& m) {
+      Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+      eig.computeDirect(m, Eigen::EigenvaluesOnly);
+      return eig.eigenvalues()(2);
+    };
+    const double k = filter.filter_sigma_factor;
+    const bool reference = largest(cov) <= k * k * largest(expected_stored);
+    ASSERT_EQ(keepCell(cell, container, filter), reference) << "trial " << trial;
+    (reference ? kept : rejected)++;
+  }
+  EXPECT_GT(kept, 5000);
+  EXPECT_GT(rejected, 5000);
 }
 
 TEST(LocalMap, WorldAndKeyframeFramesAgree) {

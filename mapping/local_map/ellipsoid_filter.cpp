@@ -15,6 +15,12 @@ double largestEigenvalue(const Eigen::Matrix3d& m) {
   return solver.eigenvalues()(2);  // ascending
 }
 
+// Bounds on the largest eigenvalue of a symmetric matrix without its trigonometry (the filter runs
+// on every cell of every keyframe at each global-map rebuild): it is at least the largest diagonal
+// entry (a Rayleigh quotient) and at most the Frobenius norm (sqrt of the sum of squared eigenvalues).
+double largestEigenvalueAtLeast(const Eigen::Matrix3d& m) { return m.diagonal().maxCoeff(); }
+double largestEigenvalueAtMost(const Eigen::Matrix3d& m) { return m.norm(); }
+
 }  // namespace
 
 bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter) {
@@ -27,8 +33,16 @@ bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const 
   const Eigen::Matrix3d expected = expectedCellCovariance(
       filter.model, container.camera(), uv.x(), uv.y(), stats.mean.z(), container.cellSizePx());
   // Compare variances: sqrt(a) <= k sqrt(b)  <=>  a <= k^2 b for a, b >= 0.
-  const double k = filter.filter_sigma_factor;
-  return largestEigenvalue(stats.covariance()) <= k * k * largestEigenvalue(expected);
+  const double k2 = filter.filter_sigma_factor * filter.filter_sigma_factor;
+  const Eigen::Matrix3d cov = stats.covariance();
+  // Most cells are far from the threshold, and the bounds decide them as the eigenvalues would;
+  // the margin covers the eigen solver's rounding (relative 1e-15) many times over.
+  constexpr double kMargin = 1e-6;
+  if (largestEigenvalueAtMost(cov) * (1.0 + kMargin) < k2 * largestEigenvalueAtLeast(expected) * (1.0 - kMargin))
+    return true;
+  if (largestEigenvalueAtLeast(cov) * (1.0 - kMargin) > k2 * largestEigenvalueAtMost(expected) * (1.0 + kMargin))
+    return false;
+  return largestEigenvalue(cov) <= k2 * largestEigenvalue(expected);
 }
 
 std::vector<bool> keptCells(const KeyframeContainer& container, const FilterParams& filter) {
