@@ -44,14 +44,6 @@ KeyframeContainer::KeyframeContainer(const PinholeCamera& camera, int cell_size_
   slot_.assign(static_cast<std::size_t>(cols_) * rows_, -1);
 }
 
-int KeyframeContainer::gridIndexOfPixel(double u, double v) const {
-  const double up = u + offsetU() + 0.5, vp = v + offsetV() + 0.5;
-  if (!(up >= 0.0 && vp >= 0.0 && up < 2.0 * camera_.width && vp < 2.0 * camera_.height))
-    return -1;
-  const int col = static_cast<int>(up) / cell_size_px_, row = static_cast<int>(vp) / cell_size_px_;
-  return row * cols_ + col;
-}
-
 StoredCell& KeyframeContainer::findOrCreate(int grid_index) {
   std::int32_t& s = slot_[grid_index];
   if (s < 0) {

@@ -51,7 +51,13 @@ class KeyframeContainer {
 
   /// The grid index of the cell holding keyframe pixel (u, v), or -1 when it is outside the
   /// container. A container pixel covers [u' - 0.5, u' + 0.5).
-  int gridIndexOfPixel(double u, double v) const;
+  /// Inline: the global map's occlusion removal and the tracker call it for millions of points.
+  int gridIndexOfPixel(double u, double v) const {
+    const double up = u + offsetU() + 0.5, vp = v + offsetV() + 0.5;
+    if (!(up >= 0.0 && vp >= 0.0 && up < 2.0 * camera_.width && vp < 2.0 * camera_.height)) return -1;
+    const int col = static_cast<int>(up) / cell_size_px_, row = static_cast<int>(vp) / cell_size_px_;
+    return row * cols_ + col;
+  }
 
   /// The stored cell at a grid index, or nullptr.
   const StoredCell* find(int grid_index) const {
