@@ -60,6 +60,35 @@ TEST(GlobalMap, MeanShiftSeparatesClustersFartherThanH) {
   EXPECT_EQ(meanShiftClusters(means, {1, 1, 1, 1}, 1.0), (std::vector<int>{0, 0, 0, 0}));
 }
 
+// meanShiftClusters skips the iteration when all means lie within h of each other; it must label
+// exactly as the iteration does, near that boundary, across it, and for h = 0 (equal means).
+TEST(GlobalMap, MeanShiftShortcutLabelsAsTheIteration) {
+  std::mt19937 rng(5);
+  std::uniform_real_distribution<double> u(-1.0, 1.0);
+  std::uniform_int_distribution<int> size(1, 9), count(1, 50);
+  int shortcuts = 0;
+  for (int trial = 0; trial < 3000; ++trial) {
+    const double h = 0.25, spread = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.09 : 0.3);  // all within h; around it; apart
+    std::vector<Eigen::Vector3d> means(static_cast<std::size_t>(size(rng)));
+    std::vector<double> weights;
+    const Eigen::Vector3d centre(u(rng), u(rng), 2.0 + u(rng));
+    for (Eigen::Vector3d& m : means) {
+      m = centre + spread * Eigen::Vector3d(u(rng), u(rng), u(rng));
+      weights.push_back(count(rng));
+    }
+    const std::vector<int> label = meanShiftClusters(means, weights, h);
+    ASSERT_EQ(label, meanShiftClustersByIteration(means, weights, h)) << "trial " << trial;
+    if (std::count(label.begin(), label.end(), 0) == static_cast<long>(label.size())) ++shortcuts;
+  }
+  EXPECT_GT(shortcuts, 1000) << "the one-cluster case is common and checked";
+  // Two means exactly h apart are within the kernel for the iteration; with h = 0, equal means
+  // each start their own cluster (distance 0 is not below h/2).
+  const std::vector<Eigen::Vector3d> pair = {{0, 0, 1}, {0.25, 0, 1}}, same = {{0, 0, 1}, {0, 0, 1}};
+  EXPECT_EQ(meanShiftClusters(pair, {1, 1}, 0.25), meanShiftClustersByIteration(pair, {1, 1}, 0.25));
+  EXPECT_EQ(meanShiftClusters(same, {1, 1}, 0.0), meanShiftClustersByIteration(same, {1, 1}, 0.0));
+  EXPECT_EQ(meanShiftClusters(same, {1, 1}, 0.0), (std::vector<int>{0, 1}));
+}
+
 TEST(GlobalMap, MomentMatchingEqualsTheStatisticsOfTheUnion) {
   std::mt19937 rng(11);
   std::normal_distribution<double> g(0.0, 1.0);

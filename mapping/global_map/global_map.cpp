@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -13,6 +14,7 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <tbb/parallel_for.h>
+#include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
 
 #include "mapping/core/timing.h"
@@ -176,6 +178,14 @@ void parallelFor(int threads, std::size_t n, const Body& body) {
   arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { body(i); }); });
 }
 
+// Sorts [begin, end) on `threads` threads (0: all). Only for elements without ties (an index in
+// each), so the unstable parallel sort still gives the one sorted order whatever the thread count.
+template <typename Iterator>
+void parallelSort(int threads, Iterator begin, Iterator end) {
+  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
+  arena.execute([&] { tbb::parallel_sort(begin, end); });
+}
+
 // SPEC 6.3: the keyframes whose ellipsoids viewpoint K judges: K, its covisibility neighbours,
 // and every keyframe within occlusion_distance whose optical axis is within occlusion_angle of
 // K's. Ascending ids.
@@ -277,6 +287,25 @@ std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group
 
 std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights,
                                    double h) {
+  // Most cells of a merge group hold one surface seen from a few keyframes, all means within h of
+  // each other. Then every seed's first window holds every mean, so its first step lands it on the
+  // same weighted mean (the same sum in the same order); that point lies in the means' convex hull,
+  // hence within h of each of them, so its window again holds them all and it stays: one cluster.
+  // The margin on h^2 is far above the rounding of that weighted mean. Not for h = 0 (equal modes
+  // still start new clusters there: a distance of 0 is not below h/2) nor without positive weights.
+  const double one_kernel_m2 = h * h * (1.0 - 1e-9);
+  bool one_cluster = h > 0.0;
+  for (std::size_t i = 0; i < means.size() && one_cluster; ++i) {
+    one_cluster = weights[i] > 0.0;
+    for (std::size_t j = i + 1; j < means.size() && one_cluster; ++j)
+      one_cluster = (means[i] - means[j]).squaredNorm() <= one_kernel_m2;
+  }
+  if (one_cluster) return std::vector<int>(means.size(), 0);
+  return meanShiftClustersByIteration(means, weights, h);
+}
+
+std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
+                                              const std::vector<double>& weights, double h) {
   constexpr double kConverged = 1e-4;  // m (SPEC)
   constexpr int kMaxSteps = 50;
   const double h2 = h * h;
@@ -330,8 +359,18 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
   return out;
 }
 
+namespace {
+
+// largestEigenvalue of every ellipsoid's covariance (occlusion removal and fusion both rank by it).
+std::vector<double> largestEigenvalues(const std::vector<Ellipsoid>& ellipsoids, int threads) {
+  std::vector<double> lambda_max(ellipsoids.size());
+  parallelFor(threads, ellipsoids.size(), [&](std::size_t i) { lambda_max[i] = largestEigenvalue(ellipsoids[i].cov); });
+  return lambda_max;
+}
+
+// occludingEllipsoids with lambda_max = largestEigenvalues(ellipsoids).
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
-                                      const GlobalMapParams& params) {
+                                      const std::vector<double>& lambda_max, const GlobalMapParams& params) {
   // Ellipsoid indices and means by keyframe, contiguous, so that each viewpoint streams through
   // its group's ellipsoids instead of gathering them from the big records.
   std::vector<int> keyframe_of(ellipsoids.size());
@@ -340,43 +379,57 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
   std::vector<Eigen::Vector3d> mean_by_keyframe(ellipsoids.size());
   for (std::size_t j = 0; j < ellipsoids.size(); ++j)
     mean_by_keyframe[j] = ellipsoids[static_cast<std::size_t>(by_keyframe.order[j])].mean;
-  // Per ellipsoid, once: the inverse covariance and the largest eigenvalue.
+  // Per ellipsoid, once: the inverse covariance.
   std::vector<Eigen::Matrix3d> information(ellipsoids.size());
-  std::vector<double> lambda_max(ellipsoids.size());
-  parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) {
-    const Eigen::Matrix3d cov = floored(ellipsoids[i].cov);
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-    eig.computeDirect(cov);
-    lambda_max[i] = eig.eigenvalues()(2);
-    information[i] = cov.inverse();
-  });
+  parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) { information[i] = floored(ellipsoids[i].cov).inverse(); });
 
   std::vector<std::vector<int>> removed_by(graph.size());
   parallelFor(params.threads, graph.size(), [&](std::size_t v) {
     const Keyframe& K = graph.keyframe(static_cast<int>(v));
     const Transform T_K_W = K.T_W_K.inverse();
     const Eigen::Vector3d centre = K.T_W_K.translation();
-    std::vector<ViewItem> projected;
-    std::vector<int> cell_of;
-    for (int g : occlusionGroup(graph, K, params))
+    // What the viewpoint sees, bucketed by cell with a counting sort. Most cells hold one
+    // ellipsoid and are never judged, so an entry carries only what finds its cell's others.
+    struct Seen {
+      int cell;
+      int j;  // into by_keyframe.order / mean_by_keyframe
+      double z;
+    };
+    const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
+    std::vector<int> start(cells + 1, 0);
+    const std::vector<int> group = occlusionGroup(graph, K, params);
+    std::size_t candidates = 0;
+    for (int g : group)
+      candidates += static_cast<std::size_t>(by_keyframe.start[static_cast<std::size_t>(g) + 1] - by_keyframe.start[static_cast<std::size_t>(g)]);
+    std::vector<Seen> seen;
+    seen.reserve(candidates);
+    for (int g : group)
       for (int j = by_keyframe.start[static_cast<std::size_t>(g)]; j < by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
-        const Eigen::Vector3d& mean = mean_by_keyframe[static_cast<std::size_t>(j)];
-        const Eigen::Vector3d p = T_K_W * mean;
+        const Eigen::Vector3d p = T_K_W * mean_by_keyframe[static_cast<std::size_t>(j)];
         if (p.z() <= 0.0) continue;
         const Eigen::Vector2d uv = K.container.camera().project(p);
         const int cell = K.container.gridIndexOfPixel(uv.x(), uv.y());
         if (cell < 0) continue;
-        const int i = by_keyframe.order[static_cast<std::size_t>(j)];
-        projected.push_back({p.z(), lambda_max[static_cast<std::size_t>(i)], mean - centre, i});
-        cell_of.push_back(cell);
+        seen.push_back({cell, j, p.z()});
+        ++start[static_cast<std::size_t>(cell) + 1];
       }
-    const Buckets by_cell = bucketByKey(cell_of, static_cast<std::size_t>(K.container.cols()) * K.container.rows());
-    std::vector<ViewItem> items(projected.size());
-    for (std::size_t j = 0; j < items.size(); ++j) items[j] = projected[static_cast<std::size_t>(by_cell.order[j])];
+    std::partial_sum(start.begin(), start.end(), start.begin());
+    const auto by_cell = std::make_unique_for_overwrite<Seen[]>(seen.size());
+    {
+      std::vector<int> fill(start.begin(), start.end() - 1);
+      for (const Seen& e : seen) by_cell[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.cell)]++)] = e;
+    }
+    std::vector<ViewItem> items;
     std::vector<double> scratch;
-    for (std::size_t cell = 0; cell + 1 < by_cell.start.size(); ++cell) {
-      const auto begin = items.begin() + by_cell.start[cell], end = items.begin() + by_cell.start[cell + 1];
-      if (end - begin >= 2) removeOccludersInCell(std::span<ViewItem>(begin, end), information, &scratch, &removed_by[v]);
+    for (std::size_t cell = 0; cell < cells; ++cell) {
+      if (start[cell + 1] - start[cell] < 2) continue;
+      items.clear();
+      for (int k = start[cell]; k < start[cell + 1]; ++k) {
+        const Seen& e = by_cell[static_cast<std::size_t>(k)];
+        const int i = by_keyframe.order[static_cast<std::size_t>(e.j)];
+        items.push_back({e.z, lambda_max[static_cast<std::size_t>(i)], mean_by_keyframe[static_cast<std::size_t>(e.j)] - centre, i});
+      }
+      removeOccludersInCell(items, information, &scratch, &removed_by[v]);
     }
   });
   std::vector<bool> removed(ellipsoids.size(), false);
@@ -385,23 +438,37 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
   return removed;
 }
 
+// fuseAcrossGroups with lambda_max = largestEigenvalues(ellipsoids).
+std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
+                                        const std::vector<double>& lambda_max, const GlobalMapParams& params);
+
+}  // namespace
+
+std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
+                                      const GlobalMapParams& params) {
+  return occludingEllipsoids(graph, ellipsoids, largestEigenvalues(ellipsoids, params.threads), params);
+}
+
 double bhattacharyyaDistance(const Ellipsoid& a, const Ellipsoid& b) {
   const SymmetricCov Sa = SymmetricCov::of(a.cov), Sb = SymmetricCov::of(b.cov), S = Sa.average(Sb);
   return meanTerm(a.mean - b.mean, S) + shapeTerm(S, Sa, Sb);
 }
 
 double fusionHalfWidth(const std::vector<Ellipsoid>& ellipsoids, const GlobalMapParams& params) {
-  std::vector<double> lambda_max(ellipsoids.size());
-  parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) { lambda_max[i] = largestEigenvalue(ellipsoids[i].cov); });
-  return fusionHalfWidth(std::move(lambda_max));
+  return fusionHalfWidth(largestEigenvalues(ellipsoids, params.threads));
 }
 
 std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
                                         const GlobalMapParams& params) {
+  return fuseAcrossGroups(ellipsoids, group_of, largestEigenvalues(ellipsoids, params.threads), params);
+}
+
+namespace {
+
+std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
+                                        const std::vector<double>& lambda_max, const GlobalMapParams& params) {
   const std::size_t n = ellipsoids.size();
   const double max_distance = params.fusion_max_distance;
-  std::vector<double> lambda_max(n);
-  parallelFor(params.threads, n, [&](std::size_t i) { lambda_max[i] = largestEigenvalue(ellipsoids[i].cov); });
   // Voxels of side >= half, so that the cube around a mean lies in the 27 voxels around its own,
   // counted from the map's corner and packed 21 bits per axis into one key that sorts like (x, y,
   // z); a map wider than 2^21 - 2 voxels along an axis gets larger voxels.
@@ -419,7 +486,7 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
     entries[i] = {key(static_cast<std::int64_t>(c.x()), static_cast<std::int64_t>(c.y()), static_cast<std::int64_t>(c.z())),
                   static_cast<int>(i)};
   });
-  std::sort(entries.begin(), entries.end());
+  parallelSort(params.threads, entries.begin(), entries.end());
   // What the search reads, in that order.
   std::vector<Eigen::Vector3d> mean(n);
   std::vector<SymmetricCov> cov(n);
@@ -445,8 +512,8 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
   constexpr int kForward = 13;
   std::vector<std::array<int, kForward>> neighbour(voxels);  // -1: none
   constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
-  for (int o = 0; o < kForward; ++o) {
-    const int c = 14 + o;  // (dx, dy, dz) = (c % 3, c / 3 % 3, c / 9) - 1
+  parallelFor(params.threads, kForward, [&](std::size_t o) {
+    const int c = 14 + static_cast<int>(o);  // (dx, dy, dz) = (c % 3, c / 3 % 3, c / 9) - 1
     std::size_t u = 0;
     for (std::size_t v = 0; v < voxels; ++v) {
       neighbour[v][static_cast<std::size_t>(o)] = -1;
@@ -456,9 +523,9 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
       if (x < 0 || y < 0 || z < 0) continue;
       const std::uint64_t target = key(x, y, z);
       while (u < voxels && voxel[u] < target) ++u;
-      if (u < voxels && voxel[u] == target) neighbour[v][static_cast<std::size_t>(o)] = static_cast<int>(u);
+      if (u < voxels && voxel[u] == target) neighbour[v][o] = static_cast<int>(u);
     }
-  }
+  });
 
   // Every pair of different groups within the cube whose distance is at most max_distance.
   // The shape term is >= 0 and the mean term >= |d|^2 / (8 lambda_max(S)) >= |d|^2 / (4 (lambda_a +
@@ -511,7 +578,7 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
   std::vector<std::pair<double, int>> order;
   for (std::size_t i = 0; i < n; ++i)
     if (partner_start[i + 1] > partner_start[i]) order.push_back({lambda_max[i], static_cast<int>(i)});
-  std::sort(order.begin(), order.end());
+  parallelSort(params.threads, order.begin(), order.end());
   std::vector<int> seed_of(n, -1);            // the seed whose cluster ellipsoid i joined; -1: alone
   std::vector<std::pair<int, double>> taken;  // per partner group: its nearest partner so far
   for (const auto& [lambda_s, s] : order) {
@@ -537,21 +604,26 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
   std::vector<int> member_of(n);  // the seed an ellipsoid joined, -1 for seeds and lone ones
   for (std::size_t i = 0; i < n; ++i) member_of[i] = seed_of[i] == static_cast<int>(i) ? -1 : seed_of[i];
   const Buckets members = bucketByKey(member_of, n);
-  std::vector<Ellipsoid> out;
-  out.reserve(n);
-  std::vector<const Ellipsoid*> cluster;
-  for (std::size_t i = 0; i < n; ++i) {
-    if (seed_of[i] < 0) {
-      out.push_back(ellipsoids[i]);
-    } else if (seed_of[i] == static_cast<int>(i)) {
-      cluster.assign(1, &ellipsoids[i]);
-      for (int k = members.start[i]; k < members.start[i + 1]; ++k)
-        cluster.push_back(&ellipsoids[static_cast<std::size_t>(members.order[static_cast<std::size_t>(k)])]);
-      out.push_back(momentMatch(cluster));  // keeps the seed's keyframe and cell
+  std::vector<std::size_t> slot(n + 1, 0);  // where seed or lone ellipsoid i goes in the output
+  for (std::size_t i = 0; i < n; ++i) slot[i + 1] = slot[i] + (member_of[i] < 0 ? 1 : 0);
+  std::vector<Ellipsoid> out(slot[n]);
+  parallelFor(params.threads, (n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    std::vector<const Ellipsoid*> cluster;
+    for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
+      if (seed_of[i] < 0) {
+        out[slot[i]] = ellipsoids[i];
+      } else if (seed_of[i] == static_cast<int>(i)) {
+        cluster.assign(1, &ellipsoids[i]);
+        for (int k = members.start[i]; k < members.start[i + 1]; ++k)
+          cluster.push_back(&ellipsoids[static_cast<std::size_t>(members.order[static_cast<std::size_t>(k)])]);
+        out[slot[i]] = momentMatch(cluster);  // keeps the seed's keyframe and cell
+      }
     }
-  }
+  });
   return out;
 }
+
+}  // namespace
 
 std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map) {
   std::vector<Ellipsoid> local;
@@ -591,20 +663,23 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   // fused ellipsoid carries only its seed's keyframe, so fusing first would hide copies from the
   // viewpoints whose coarse occluders they remove.
   const auto occlusion_start = Clock::now();
+  std::vector<double> lambda_max;
+  if (params.occlusion_removal || params.fuse_across_groups) lambda_max = largestEigenvalues(all, params.threads);
   if (params.occlusion_removal) {
-    const std::vector<bool> removed = occludingEllipsoids(graph, all, params);
+    const std::vector<bool> removed = occludingEllipsoids(graph, all, lambda_max, params);
     std::size_t kept = 0;
     for (std::size_t i = 0; i < all.size(); ++i)
-      if (!removed[i]) all[kept] = all[i], group_of[kept] = group_of[i], ++kept;
+      if (!removed[i]) all[kept] = all[i], group_of[kept] = group_of[i], lambda_max[kept] = lambda_max[i], ++kept;
     all.resize(kept);
     group_of.resize(kept);
+    lambda_max.resize(kept);
   }
   map.occlusion_ms = msSince(occlusion_start);
 
   const auto fusion_start = Clock::now();
   if (params.fuse_across_groups) {
     const std::size_t before = all.size();
-    all = fuseAcrossGroups(all, group_of, params);
+    all = fuseAcrossGroups(all, group_of, lambda_max, params);
     map.merged_across_groups = before - all.size();
   }
   map.ellipsoids = std::move(all);

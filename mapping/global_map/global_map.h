@@ -54,8 +54,13 @@ std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group
 
 /// Mean-shift with a flat kernel of radius h on count-weighted means (SPEC section 6 step 2):
 /// returns, for each input, the index of its cluster (0..clusters-1, in order of first member).
+/// Means that all lie within h of each other form one cluster without iterating.
 std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights,
                                    double h);
+
+/// meanShiftClusters by the SPEC's iteration from every seed, always (its reference in tests).
+std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
+                                              const std::vector<double>& weights, double h);
 
 /// Moment matching of a cluster: n = sum n_i, mean = sum n_i mean_i / n, colour count-weighted,
 /// and the covariance of the union of the clusters' points (scatters combined, see the .cpp).
