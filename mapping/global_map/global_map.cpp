@@ -5,7 +5,6 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
-#include <memory>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -13,6 +12,7 @@
 
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
+#include <tbb/enumerable_thread_specific.h>
 #include <tbb/parallel_for.h>
 #include <tbb/parallel_sort.h>
 #include <tbb/task_arena.h>
@@ -116,20 +116,38 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
   const Keyframe& centre = graph.keyframe(group.centre);
   const KeyframeContainer& box = centre.container;
   const Transform T_C_W = centre.T_W_K.inverse();
-  std::vector<Ellipsoid> in_centre;
+  // First only the means, to find each kept ellipsoid's cell in the centre; the whole ellipsoid
+  // is made when its cell is merged (holding all of them would write ~120 bytes per ellipsoid).
+  struct Source {
+    int member;      // index into group.members
+    int cell_index;  // into that keyframe's container cells()
+  };
+  std::vector<Transform> T_C_K;
+  std::vector<Source> sources;
   std::vector<int> cell_of;
-  for (int id : group.members) {
+  for (int m = 0; m < static_cast<int>(group.members.size()); ++m) {
+    const int id = group.members[static_cast<std::size_t>(m)];
     const Keyframe& k = graph.keyframe(id);
-    forEachKeptEllipsoid(k.container, kept[static_cast<std::size_t>(id)], T_C_W * k.T_W_K, id, [&](const Ellipsoid& e) {
+    const std::vector<bool>& kept_cells = kept[static_cast<std::size_t>(id)];
+    T_C_K.push_back(T_C_W * k.T_W_K);
+    for (std::size_t i = 0; i < kept_cells.size(); ++i) {
+      if (!kept_cells[i]) continue;
+      const Eigen::Vector3d mean = T_C_K.back() * k.container.cells()[i].mean.cast<double>();
       int cell = -1;
-      if (e.mean.z() > 0.0) {
-        const Eigen::Vector2d uv = box.camera().project(e.mean);
+      if (mean.z() > 0.0) {
+        const Eigen::Vector2d uv = box.camera().project(mean);
         cell = box.gridIndexOfPixel(uv.x(), uv.y());
       }
-      in_centre.push_back(e);
+      sources.push_back({m, static_cast<int>(i)});
       cell_of.push_back(cell);
-    });
+    }
   }
+  auto inCentre = [&](int source) {
+    const Source& src = sources[static_cast<std::size_t>(source)];
+    const int id = group.members[static_cast<std::size_t>(src.member)];
+    return cellEllipsoid(graph.keyframe(id).container.cells()[static_cast<std::size_t>(src.cell_index)],
+                         T_C_K[static_cast<std::size_t>(src.member)], id);
+  };
 
   // By cell, stable: members in id order, cells in container order.
   const std::size_t cells = static_cast<std::size_t>(box.cols()) * box.rows();
@@ -138,27 +156,29 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
   const std::vector<int>& order = by_cell.order;
 
   std::vector<Ellipsoid> out;
-  out.reserve(in_centre.size());
+  out.reserve(sources.size());
+  std::vector<Ellipsoid> in_cell;
   std::vector<Eigen::Vector3d> means;
   std::vector<double> weights;
   std::vector<const Ellipsoid*> cluster;
   for (std::size_t c = 0; c < cells; ++c) {
     const int begin = start[c], end = start[c + 1];
-    if (end - begin == 1) out.push_back(transformed(in_centre[static_cast<std::size_t>(order[begin])], centre.T_W_K));
+    if (end - begin == 1) out.push_back(transformed(inCentre(order[begin]), centre.T_W_K));
     if (end - begin <= 1) continue;
+    in_cell.clear();
     means.clear();
     weights.clear();
     for (int i = begin; i < end; ++i) {
-      const Ellipsoid& e = in_centre[static_cast<std::size_t>(order[i])];
-      means.push_back(e.mean);
-      weights.push_back(e.count);
+      in_cell.push_back(inCentre(order[i]));
+      means.push_back(in_cell.back().mean);
+      weights.push_back(in_cell.back().count);
     }
     const std::vector<int> label = meanShiftClusters(means, weights, params.merge_distance_m);
     const int clusters = *std::max_element(label.begin(), label.end()) + 1;
     for (int k = 0; k < clusters; ++k) {
       cluster.clear();
-      for (int i = begin; i < end; ++i)
-        if (label[static_cast<std::size_t>(i - begin)] == k) cluster.push_back(&in_centre[static_cast<std::size_t>(order[i])]);
+      for (std::size_t i = 0; i < in_cell.size(); ++i)
+        if (label[i] == k) cluster.push_back(&in_cell[i]);
       Ellipsoid merged = momentMatch(cluster);
       merged.keyframe = group.centre;
       merged.grid_index = static_cast<int>(c);
@@ -166,7 +186,7 @@ std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& 
     }
   }
   for (std::size_t i = 0; i < cell_of.size(); ++i)
-    if (cell_of[i] < 0) out.push_back(transformed(in_centre[i], centre.T_W_K));
+    if (cell_of[i] < 0) out.push_back(transformed(inCentre(static_cast<int>(i)), centre.T_W_K));
   return out;
 }
 
@@ -205,6 +225,28 @@ std::vector<int> occlusionGroup(const KeyframeGraph& graph, const Keyframe& K, c
   group.erase(std::unique(group.begin(), group.end()), group.end());
   return group;
 }
+
+// KeyframeContainer::gridIndexOfPixel with its two divisions by the cell size looked up in
+// tables: occlusion removal asks it for ~10^7 points per build. The same answer for every pixel.
+class CellOfPixel {
+ public:
+  explicit CellOfPixel(const KeyframeContainer& box)
+      : offset_u_(box.offsetU()), offset_v_(box.offsetV()),
+        width_(2.0 * box.camera().width), height_(2.0 * box.camera().height),
+        col_(static_cast<std::size_t>(2 * box.camera().width)), row_start_(static_cast<std::size_t>(2 * box.camera().height)) {
+    for (std::size_t x = 0; x < col_.size(); ++x) col_[x] = static_cast<int>(x) / box.cellSizePx();
+    for (std::size_t y = 0; y < row_start_.size(); ++y) row_start_[y] = static_cast<int>(y) / box.cellSizePx() * box.cols();
+  }
+  int operator()(double u, double v) const {
+    const double up = u + offset_u_ + 0.5, vp = v + offset_v_ + 0.5;  // rounded as gridIndexOfPixel rounds
+    if (!(up >= 0.0 && vp >= 0.0 && up < width_ && vp < height_)) return -1;
+    return row_start_[static_cast<std::size_t>(vp)] + col_[static_cast<std::size_t>(up)];
+  }
+
+ private:
+  double offset_u_, offset_v_, width_, height_;
+  std::vector<int> col_, row_start_;
+};
 
 // An ellipsoid as one occlusion viewpoint sees it.
 struct ViewItem {
@@ -384,52 +426,53 @@ std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vec
   parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) { information[i] = floored(ellipsoids[i].cov).inverse(); });
 
   std::vector<std::vector<int>> removed_by(graph.size());
+  // What a viewpoint sees, bucketed by cell with a counting sort. Most cells hold one ellipsoid
+  // and are never judged, so an entry carries only what finds its cell's others. The buffers are
+  // per thread and reused across viewpoints (fresh ones cost a page fault per 4 KiB).
+  struct Seen {
+    int cell;
+    int j;  // into by_keyframe.order / mean_by_keyframe
+    double z;
+  };
+  struct Scratch {
+    std::vector<int> start, fill;
+    std::vector<Seen> seen, by_cell;
+    std::vector<ViewItem> items;
+    std::vector<double> finest;
+  };
+  tbb::enumerable_thread_specific<Scratch> scratch_per_thread;
   parallelFor(params.threads, graph.size(), [&](std::size_t v) {
     const Keyframe& K = graph.keyframe(static_cast<int>(v));
     const Transform T_K_W = K.T_W_K.inverse();
     const Eigen::Vector3d centre = K.T_W_K.translation();
-    // What the viewpoint sees, bucketed by cell with a counting sort. Most cells hold one
-    // ellipsoid and are never judged, so an entry carries only what finds its cell's others.
-    struct Seen {
-      int cell;
-      int j;  // into by_keyframe.order / mean_by_keyframe
-      double z;
-    };
+    Scratch& s = scratch_per_thread.local();
     const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
-    std::vector<int> start(cells + 1, 0);
-    const std::vector<int> group = occlusionGroup(graph, K, params);
-    std::size_t candidates = 0;
-    for (int g : group)
-      candidates += static_cast<std::size_t>(by_keyframe.start[static_cast<std::size_t>(g) + 1] - by_keyframe.start[static_cast<std::size_t>(g)]);
-    std::vector<Seen> seen;
-    seen.reserve(candidates);
-    for (int g : group)
+    const CellOfPixel cellOfPixel(K.container);
+    s.start.assign(cells + 1, 0);
+    s.seen.clear();
+    for (int g : occlusionGroup(graph, K, params))
       for (int j = by_keyframe.start[static_cast<std::size_t>(g)]; j < by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
         const Eigen::Vector3d p = T_K_W * mean_by_keyframe[static_cast<std::size_t>(j)];
         if (p.z() <= 0.0) continue;
         const Eigen::Vector2d uv = K.container.camera().project(p);
-        const int cell = K.container.gridIndexOfPixel(uv.x(), uv.y());
+        const int cell = cellOfPixel(uv.x(), uv.y());
         if (cell < 0) continue;
-        seen.push_back({cell, j, p.z()});
-        ++start[static_cast<std::size_t>(cell) + 1];
+        s.seen.push_back({cell, j, p.z()});
+        ++s.start[static_cast<std::size_t>(cell) + 1];
       }
-    std::partial_sum(start.begin(), start.end(), start.begin());
-    const auto by_cell = std::make_unique_for_overwrite<Seen[]>(seen.size());
-    {
-      std::vector<int> fill(start.begin(), start.end() - 1);
-      for (const Seen& e : seen) by_cell[static_cast<std::size_t>(fill[static_cast<std::size_t>(e.cell)]++)] = e;
-    }
-    std::vector<ViewItem> items;
-    std::vector<double> scratch;
+    std::partial_sum(s.start.begin(), s.start.end(), s.start.begin());
+    s.by_cell.resize(s.seen.size());
+    s.fill.assign(s.start.begin(), s.start.end() - 1);
+    for (const Seen& e : s.seen) s.by_cell[static_cast<std::size_t>(s.fill[static_cast<std::size_t>(e.cell)]++)] = e;
     for (std::size_t cell = 0; cell < cells; ++cell) {
-      if (start[cell + 1] - start[cell] < 2) continue;
-      items.clear();
-      for (int k = start[cell]; k < start[cell + 1]; ++k) {
-        const Seen& e = by_cell[static_cast<std::size_t>(k)];
+      if (s.start[cell + 1] - s.start[cell] < 2) continue;
+      s.items.clear();
+      for (int k = s.start[cell]; k < s.start[cell + 1]; ++k) {
+        const Seen& e = s.by_cell[static_cast<std::size_t>(k)];
         const int i = by_keyframe.order[static_cast<std::size_t>(e.j)];
-        items.push_back({e.z, lambda_max[static_cast<std::size_t>(i)], mean_by_keyframe[static_cast<std::size_t>(e.j)] - centre, i});
+        s.items.push_back({e.z, lambda_max[static_cast<std::size_t>(i)], mean_by_keyframe[static_cast<std::size_t>(e.j)] - centre, i});
       }
-      removeOccludersInCell(items, information, &scratch, &removed_by[v]);
+      removeOccludersInCell(s.items, information, &s.finest, &removed_by[v]);
     }
   });
   std::vector<bool> removed(ellipsoids.size(), false);
@@ -649,12 +692,15 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   std::vector<std::vector<Ellipsoid>> merged(map.groups.size());
   parallelFor(params.threads, map.groups.size(),
               [&](std::size_t g) { merged[g] = mergeGroup(graph, map.groups[g], params, map.kept); });
-  std::vector<Ellipsoid> all;
-  std::vector<int> group_of;
-  for (std::size_t g = 0; g < merged.size(); ++g) {
-    all.insert(all.end(), merged[g].begin(), merged[g].end());
-    group_of.insert(group_of.end(), merged[g].size(), static_cast<int>(g));
-  }
+  std::vector<std::size_t> offset(merged.size() + 1, 0);  // group g goes to all[offset[g] ..]
+  for (std::size_t g = 0; g < merged.size(); ++g) offset[g + 1] = offset[g] + merged[g].size();
+  std::vector<Ellipsoid> all(offset.back());
+  std::vector<int> group_of(offset.back());
+  parallelFor(params.threads, merged.size(), [&](std::size_t g) {
+    std::copy(merged[g].begin(), merged[g].end(), all.begin() + static_cast<std::ptrdiff_t>(offset[g]));
+    std::fill_n(group_of.begin() + static_cast<std::ptrdiff_t>(offset[g]), merged[g].size(), static_cast<int>(g));
+    merged[g] = {};
+  });
   map.merge_ms = msSince(merge_start);
 
   map.merged = all.size();

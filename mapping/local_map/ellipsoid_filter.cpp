@@ -56,20 +56,21 @@ void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<
                           const Transform& T_X_K, int keyframe_id,
                           const std::function<void(const Ellipsoid&)>& visit) {
   if (kept.size() != container.size()) throw std::invalid_argument("forEachKeptEllipsoid: kept does not fit the container");
+  for (std::size_t i = 0; i < kept.size(); ++i)
+    if (kept[i]) visit(cellEllipsoid(container.cells()[i], T_X_K, keyframe_id));
+}
+
+Ellipsoid cellEllipsoid(const StoredCell& cell, const Transform& T_X_K, int keyframe_id) {
   const Eigen::Matrix3d R = T_X_K.linear();
-  for (std::size_t i = 0; i < kept.size(); ++i) {
-    if (!kept[i]) continue;
-    const StoredCell& cell = container.cells()[i];
-    const CellStats stats = cell.toStats();
-    Ellipsoid e;
-    e.mean = T_X_K * stats.mean;
-    e.cov = R * stats.covariance() * R.transpose();
-    e.color = cell.color;
-    e.count = cell.n;
-    e.keyframe = keyframe_id;
-    e.grid_index = cell.grid_index;
-    visit(e);
-  }
+  const CellStats stats = cell.toStats();
+  Ellipsoid e;
+  e.mean = T_X_K * stats.mean;
+  e.cov = R * stats.covariance() * R.transpose();
+  e.color = cell.color;
+  e.count = cell.n;
+  e.keyframe = keyframe_id;
+  e.grid_index = cell.grid_index;
+  return e;
 }
 
 std::vector<Ellipsoid> keptEllipsoids(const KeyframeContainer& container, const FilterParams& filter,

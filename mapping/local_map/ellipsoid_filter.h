@@ -40,6 +40,9 @@ bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const 
 /// keepCell for every cell of `container`, in container order.
 std::vector<bool> keptCells(const KeyframeContainer& container, const FilterParams& filter);
 
+/// A stored cell as an ellipsoid with mean and covariance moved into the frame of T_X_K.
+Ellipsoid cellEllipsoid(const StoredCell& cell, const Transform& T_X_K, int keyframe_id);
+
 /// Calls `visit` for every cell of `container` whose `kept` entry is set (keptCells' answer), as an
 /// ellipsoid with mean and covariance moved into the frame of T_X_K (Identity: keyframe frame;
 /// T_W_K: world), in container order.
