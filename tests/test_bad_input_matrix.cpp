@@ -217,6 +217,16 @@ const std::vector<BadCase>& badCases() {
        write("seq/associations.txt", "0.0 rgb/000000.png 0.0\n")},
       {"sequence", "image_missing", E::kInputError, "rgb.txt:3: image 'rgb/000001.png' does not exist",
        removeFile("seq/rgb/000001.png")},
+      // Names the file system cannot look up are the list's error, not a std::filesystem
+      // exception (the fuzzer found these: libFuzzer saw an uncaught filesystem_error).
+      {"sequence", "image_in_symlink_loop", E::kInputError,
+       "depth.txt:1: image 'loop/000000.png' cannot be read: Too many levels of symbolic links",
+       [](const fs::path& d) {
+         fs::create_symlink("loop", d / "seq/loop");
+         return write("seq/depth.txt", "0.0 loop/000000.png\n")(d);
+       }},
+      {"sequence", "image_name_too_long", E::kInputError, "depth.txt:1: image 'aaaa",
+       write("seq/depth.txt", "0.0 " + std::string(5000, 'a') + "\n")},
       // Images (decoded lazily: load(0)).
       {"sequence", "corrupt_depth_png", E::kInputError, "depth/000000.png: cannot decode depth image",
        write("seq/depth/000000.png", "\x89PNG\r\n garbage")},
