@@ -109,6 +109,8 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     CameraChoice choice = chooseCamera(folder, options.camera_preset);
     seq.camera_ = choice.camera;
     seq.camera_source_ = choice.source;
+    seq.colour_ = choice.colour;
+    if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
   } catch (const std::invalid_argument& e) {
     throw InputError("--camera", e.what());
   }
@@ -200,9 +202,14 @@ RgbdFrame TumSequence::load(std::size_t i) const {
 
   const cv::Size size(camera_.width, camera_.height);
   std::string rgb_bytes, depth_bytes;
-  frame.rgb = readColorImage(e.rgb_path, size, &rgb_bytes);
+  frame.rgb = readColorImage(e.rgb_path, size, colour_ ? nullptr : &rgb_bytes);
   frame.depth = readDepthImage(e.depth_path, size, &depth_bytes);
-  frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+  if (colour_) {
+    frame.rgb = registerColour(frame.rgb, frame.depth, camera_, *colour_);
+    frame.rgb_resampled = true;
+  } else {
+    frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+  }
   frame.depth_file = std::make_shared<const std::string>(std::move(depth_bytes));
   return frame;
 }
