@@ -217,6 +217,16 @@ const std::vector<BadCase>& badCases() {
        write("seq/associations.txt", "0.0 rgb/000000.png 0.0\n")},
       {"sequence", "image_missing", E::kInputError, "rgb.txt:3: image 'rgb/000001.png' does not exist",
        removeFile("seq/rgb/000001.png")},
+      // Names the file system cannot look up are the list's error, not a std::filesystem
+      // exception (the fuzzer found these: libFuzzer saw an uncaught filesystem_error).
+      {"sequence", "image_in_symlink_loop", E::kInputError,
+       "depth.txt:1: image 'loop/000000.png' cannot be read: Too many levels of symbolic links",
+       [](const fs::path& d) {
+         fs::create_symlink("loop", d / "seq/loop");
+         return write("seq/depth.txt", "0.0 loop/000000.png\n")(d);
+       }},
+      {"sequence", "image_name_too_long", E::kInputError, "depth.txt:1: image 'aaaa",
+       write("seq/depth.txt", "0.0 " + std::string(5000, 'a') + "\n")},
       // Images (decoded lazily: load(0)).
       {"sequence", "corrupt_depth_png", E::kInputError, "depth/000000.png: cannot decode depth image",
        write("seq/depth/000000.png", "\x89PNG\r\n garbage")},
@@ -288,6 +298,14 @@ const std::vector<BadCase>& badCases() {
       {"camera_yaml", "value_not_a_number", E::kInputError, "camera.yaml:1: key 'fx' must be a number",
        write("camera.yaml", "fx: fast\nfy: 1\ncx: 1\ncy: 1\ndepth_scale: 1\nwidth: 1\nheight: 1\n")},
       {"camera_yaml", "negative_focal_length", E::kInputError, "fx", write("camera.yaml", "preset: 7scenes\nfx: -3\n")},
+      {"camera_yaml", "colour_missing_key", E::kInputError, "camera.yaml:1: colour: missing key 'cy'",
+       write("camera.yaml", "colour: {fx: 525, fy: 525, cx: 320}\nfx: 500\nfy: 500\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640\nheight: 480\n")},
+      {"camera_yaml", "colour_not_a_map", E::kInputError, "key 'colour' must be a map",
+       write("camera.yaml", "preset: 7scenes\ncolour: yes\n")},
+      {"camera_yaml", "colour_pose_not_a_rotation", E::kInputError, "colour: T_colour_depth is not a finite rigid transform",
+       write("camera.yaml", "preset: 7scenes\ncolour: {fx: 525, fy: 525, cx: 320, cy: 240, T_colour_depth: [2, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1, 0]}\n")},
+      {"camera_yaml", "colour_pose_eleven_numbers", E::kInputError, "colour: T_colour_depth must be 12 numbers",
+       write("camera.yaml", "preset: 7scenes\ncolour: {fx: 525, fy: 525, cx: 320, cy: 240, T_colour_depth: [1, 0, 0, 0, 0, 1, 0, 0, 0, 0, 1]}\n")},
       {"camera_yaml", "unknown_preset", E::kInputError, "unknown camera preset 'kinect9'",
        write("camera.yaml", "preset: kinect9\n")},
       {"camera_yaml", "not_a_map", E::kInputError, "expected a map of camera keys", write("camera.yaml", "- 1\n- 2\n")},

@@ -1,6 +1,10 @@
 #include <gtest/gtest.h>
 
+#include <cmath>
+#include <optional>
+
 #include "mapping/core/camera.h"
+#include "mapping/core/colour_registration.h"
 #include "mapping/core/rgbd_frame.h"
 #include "mapping/io/camera_config.h"
 #include "tests/test_util.h"
@@ -86,6 +90,73 @@ TEST(CameraFile, ReadsYamlJsonAndPresetOverrides) {
   const PinholeCamera c = readCameraFile(dir / "c.yaml");
   EXPECT_EQ(c.fx, 580.0);
   EXPECT_EQ(c.depth_scale, 1000.0);
+}
+
+TEST(CameraFile, ColourCameraOfAPresetAFileOrNone) {
+  test::TempDir dir;
+  std::optional<ColourCamera> colour;
+  // 7scenes carries its colour camera: 525 px, 2.56 cm beside the depth camera.
+  test::writeText(dir / "a.yaml", "preset: 7scenes\n");
+  readCameraFile(dir / "a.yaml", &colour);
+  ASSERT_TRUE(colour.has_value());
+  EXPECT_EQ(*colour, *cameraPresetColour("7scenes"));
+  EXPECT_EQ(colour->fx, 525.0);
+  EXPECT_NEAR(colour->T_colour_depth.translation().x(), -0.02556, 1e-5);
+  EXPECT_TRUE(isValidTransform(colour->T_colour_depth));
+  EXPECT_FALSE(cameraPresetColour("tum-fr1").has_value());
+  test::writeText(dir / "b.yaml", "preset: 7scenes\ncolour: registered\n");
+  readCameraFile(dir / "b.yaml", &colour);
+  EXPECT_FALSE(colour.has_value());
+  test::writeText(dir / "c.yaml", "preset: tum-fr1\ncolour: {fx: 500, fy: 501, cx: 300, cy: 200, "
+                                  "T_colour_depth: [1, 0, 0, 0.05, 0, 1, 0, 0, 0, 0, 1, 0]}\n");
+  readCameraFile(dir / "c.yaml", &colour);
+  ASSERT_TRUE(colour.has_value());
+  EXPECT_EQ(colour->fy, 501.0);
+  EXPECT_EQ(colour->T_colour_depth.translation().x(), 0.05);
+}
+
+TEST(ColourRegistration, AColourCameraThatIsTheDepthCameraChangesNothing) {
+  const PinholeCamera cam{64, 48, 60.0, 60.0, 31.5, 23.5, 1000.0};
+  cv::Mat rgb(48, 64, CV_8UC3), depth(48, 64, CV_16UC1);
+  cv::randu(rgb, cv::Scalar::all(0), cv::Scalar::all(255));
+  cv::randu(depth, cv::Scalar::all(0), cv::Scalar::all(4000));
+  const cv::Mat registered = registerColour(rgb, depth, cam, {cam.fx, cam.fy, cam.cx, cam.cy, Transform::Identity()});
+  EXPECT_EQ(cv::norm(registered, rgb, cv::NORM_INF), 0.0);
+}
+
+// A wall 2 m ahead, painted with a pattern of its own coordinates, seen by a depth camera and by
+// a colour camera of another focal length 2.5 cm beside it (and turned 1 degree): registered, the
+// colour at each depth pixel is the paint at that pixel's point (within bilinear interpolation),
+// where the unregistered image is ~17 grey levels off on average.
+TEST(ColourRegistration, GivesEachDepthPixelTheColourOfItsPoint) {
+  const PinholeCamera depth_cam{160, 120, 146.0, 146.0, 79.5, 59.5, 1000.0};
+  ColourCamera colour{131.0, 131.0, 80.0, 60.0, Transform::Identity()};
+  colour.T_colour_depth.linear() = Eigen::AngleAxisd(M_PI / 180, Eigen::Vector3d::UnitY()).toRotationMatrix();
+  colour.T_colour_depth.translation() = Eigen::Vector3d(-0.025, 0.0, 0.0);
+  const double wall = 2.0;
+  auto paint = [](double x, double y) { return 128.0 + 100.0 * std::sin(6.0 * x) * std::cos(5.0 * y); };
+  // The colour image: each colour pixel's ray hits the wall (z = 2 in the depth frame).
+  cv::Mat rgb(120, 160, CV_8UC3);
+  const Transform T_depth_colour = colour.T_colour_depth.inverse();
+  for (int v = 0; v < rgb.rows; ++v)
+    for (int u = 0; u < rgb.cols; ++u) {
+      const Eigen::Vector3d origin = T_depth_colour.translation();
+      const Eigen::Vector3d dir = T_depth_colour.linear() * Eigen::Vector3d((u - colour.cx) / colour.fx, (v - colour.cy) / colour.fy, 1);
+      const Eigen::Vector3d p = origin + dir * ((wall - origin.z()) / dir.z());
+      rgb.at<cv::Vec3b>(v, u) = cv::Vec3b::all(cv::saturate_cast<std::uint8_t>(paint(p.x(), p.y())));
+    }
+  const cv::Mat depth(120, 160, CV_16UC1, cv::Scalar(wall * 1000));
+  const cv::Mat registered = registerColour(rgb, depth, depth_cam, colour);
+  double registered_error = 0, raw_error = 0;
+  int n = 0;
+  for (int v = 10; v < 110; ++v)
+    for (int u = 10; u < 150; ++u, ++n) {
+      const Eigen::Vector3d p = depth_cam.backProject(u, v, wall);
+      registered_error += std::abs(registered.at<cv::Vec3b>(v, u)[0] - paint(p.x(), p.y()));
+      raw_error += std::abs(rgb.at<cv::Vec3b>(v, u)[0] - paint(p.x(), p.y()));
+    }
+  EXPECT_LT(registered_error / n, 2.0);
+  EXPECT_GT(raw_error / n, 10.0);  // measured 17
 }
 
 // Bad camera files: tests/test_bad_input_matrix.cpp.

@@ -11,13 +11,17 @@ namespace vdmap {
 
 // PNG level 1 (zlib's fastest): on 7-Scenes keyframes it is ~4 ms for colour and depth
 // together, and the higher levels save only a few percent more.
-CompressedImage::CompressedImage(const cv::Mat& image) : rows_(image.rows), cols_(image.cols), type_(image.type()) {
+CompressedImage::CompressedImage(const cv::Mat& image, int jpeg_quality)
+    : rows_(image.rows), cols_(image.cols), type_(image.type()) {
   if (image.empty()) return;
   assert(type_ == CV_8UC1 || type_ == CV_8UC3 || type_ == CV_16UC1);
+  assert(jpeg_quality >= 0 && jpeg_quality <= 100 && (jpeg_quality == 0 || type_ != CV_16UC1));
   // imencode takes 3 channels as BGR and imdecode returns them as BGR: the order round-trips.
   std::vector<std::uint8_t> png;
-  if (!cv::imencode(".png", image, png, {cv::IMWRITE_PNG_COMPRESSION, 1}))
-    throw std::runtime_error("PNG encoding of a keyframe image failed");
+  const bool jpeg = jpeg_quality > 0;
+  if (!cv::imencode(jpeg ? ".jpg" : ".png", image, png,
+                    {jpeg ? cv::IMWRITE_JPEG_QUALITY : cv::IMWRITE_PNG_COMPRESSION, jpeg ? jpeg_quality : 1}))
+    throw std::runtime_error("encoding of a keyframe image failed");
   png.shrink_to_fit();
   png_ = std::make_shared<const std::vector<std::uint8_t>>(std::move(png));
 }

@@ -3,7 +3,10 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
 #include "mapping/core/camera.h"
+#include "mapping/core/colour_registration.h"
 
 namespace vdmap {
 
@@ -14,16 +17,23 @@ const std::vector<std::string>& cameraPresetNames();
 /// names when `name` is unknown.
 PinholeCamera cameraPreset(const std::string& name);
 
+/// The preset's colour camera when its colour images are not registered to the depth (7scenes),
+/// else nothing. Throws like cameraPreset.
+std::optional<ColourCamera> cameraPresetColour(const std::string& name);
+
 /// Reads a camera file (camera.yaml, camera.json, or the nvblox/NICE-SLAM cam_params.json with
 /// its "camera" block). Keys: fx, fy, cx, cy, depth_scale (or "scale"), width/w, height/h;
-/// a file may name a `preset` and override some keys of it. Throws InputError naming the file
-/// and the missing or malformed key.
-PinholeCamera readCameraFile(const std::filesystem::path& file);
+/// a file may name a `preset` and override some keys of it. Unregistered colour: a map
+/// `colour: {fx, fy, cx, cy, T_colour_depth: [12 numbers, the 3x4 [R|t] row by row, metres]}`
+/// (T_colour_depth defaults to the identity), or `colour: registered` to drop a preset's colour
+/// camera. Throws InputError naming the file and the missing or malformed key.
+PinholeCamera readCameraFile(const std::filesystem::path& file, std::optional<ColourCamera>* colour = nullptr);
 
 /// The camera of a sequence folder, and a sentence saying where it came from.
 struct CameraChoice {
   PinholeCamera camera;
   std::string source;
+  std::optional<ColourCamera> colour = {};  ///< set when the colour images need registering
 };
 
 /// Chooses the camera of a sequence folder: `preset_override` when not empty; else a

@@ -56,6 +56,18 @@ std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t,
   return T;
 }
 
+// An image a list names must be a regular file. A name the file system cannot even look up (a
+// symbolic-link loop, a name too long) is the list's error too, not a std::filesystem exception.
+void checkImage(const Stamped& image, const fs::path& folder) {
+  std::error_code ec;
+  if (fs::is_regular_file(image.path, ec)) return;
+  const bool missing = !ec || ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory;
+  std::string name = image.path.lexically_relative(folder).string();
+  if (name.size() > 80) name = name.substr(0, 77) + "...";
+  throw InputError(image.list.string(), image.line,
+                   "image '" + name + "' " + (missing ? std::string("does not exist") : "cannot be read: " + ec.message()));
+}
+
 }  // namespace
 
 FrameRange parseFrameRange(const std::string& text) {
@@ -85,7 +97,9 @@ std::string frameRangeText(const FrameRange& range) {
   return std::to_string(range.first) + ":" + (range.last < 0 ? std::string() : std::to_string(range.last));
 }
 
-TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& options) {
+// A function try block: whatever the file system refuses to look up (a symbolic-link loop in the
+// folder's name, say) is reported as bad input like every other problem with the sequence.
+TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& options) try {
   if (!fs::is_directory(folder))
     throw InputError(folder.string(), fs::exists(folder) ? "is not a folder (expected a TUM RGB-D sequence folder)"
                                                          : "no such sequence folder");
@@ -95,6 +109,8 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     CameraChoice choice = chooseCamera(folder, options.camera_preset);
     seq.camera_ = choice.camera;
     seq.camera_source_ = choice.source;
+    seq.colour_ = choice.colour;
+    if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
   } catch (const std::invalid_argument& e) {
     throw InputError("--camera", e.what());
   }
@@ -161,11 +177,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
       ++seq.dropped_.no_pose;
       continue;
     }
-    for (const Stamped* image : {&pair.depth, &*pair.rgb}) {
-      if (!fs::is_regular_file(image->path))
-        throw InputError(image->list.string(), image->line,
-                         "image '" + image->path.lexically_relative(folder).string() + "' does not exist");
-    }
+    for (const Stamped* image : {&pair.depth, &*pair.rgb}) checkImage(*image, folder);
     seq.entries_.push_back({i, pair.depth.t, pair.rgb->t, pair.rgb->path, pair.depth.path,
                             pose.value_or(Transform::Identity()), pose.has_value()});
   }
@@ -177,6 +189,8 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
                          " without a ground-truth pose within " + std::to_string(options.max_pose_dt_s) +
                          " s, " + std::to_string(seq.dropped_.outside_range) + " outside --frames");
   return seq;
+} catch (const fs::filesystem_error& e) {
+  throw InputError(e.path1().string(), e.code().message());
 }
 
 RgbdFrame TumSequence::load(std::size_t i) const {
@@ -188,9 +202,14 @@ RgbdFrame TumSequence::load(std::size_t i) const {
 
   const cv::Size size(camera_.width, camera_.height);
   std::string rgb_bytes, depth_bytes;
-  frame.rgb = readColorImage(e.rgb_path, size, &rgb_bytes);
+  frame.rgb = readColorImage(e.rgb_path, size, colour_ ? nullptr : &rgb_bytes);
   frame.depth = readDepthImage(e.depth_path, size, &depth_bytes);
-  frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+  if (colour_) {
+    frame.rgb = registerColour(frame.rgb, frame.depth, camera_, *colour_);
+    frame.rgb_resampled = true;
+  } else {
+    frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+  }
   frame.depth_file = std::make_shared<const std::string>(std::move(depth_bytes));
   return frame;
 }

@@ -3,6 +3,9 @@
 #include <string>
 #include <vector>
 
+#include <optional>
+
+#include "mapping/core/colour_registration.h"
 #include "mapping/core/rgbd_frame.h"
 
 namespace vdmap {
@@ -66,6 +69,9 @@ class TumSequence {
   const std::filesystem::path& folder() const { return folder_; }
   const PinholeCamera& camera() const { return camera_; }
   const std::string& cameraSource() const { return camera_source_; }
+  /// The colour camera when the colour images are not registered to the depth (load() registers
+  /// them; see colour_registration.h), else nothing.
+  const std::optional<ColourCamera>& colourCamera() const { return colour_; }
   const std::vector<FrameEntry>& entries() const { return entries_; }
   std::size_t size() const { return entries_.size(); }
   int listedDepthFrames() const { return listed_; }
@@ -78,13 +84,15 @@ class TumSequence {
 
   /// Decodes frame i (0 <= i < size()) through image_decode.h. Throws InputError naming the file
   /// on a damaged or truncated image, a depth image that is not 16-bit single channel, or an
-  /// image whose size differs from the camera's.
+  /// image whose size differs from the camera's. With a colour camera, the colour image is
+  /// registered to the depth (and rgb_file left empty: the file holds the unregistered pixels).
   RgbdFrame load(std::size_t i) const;
 
  private:
   std::filesystem::path folder_;
   PinholeCamera camera_;
   std::string camera_source_;
+  std::optional<ColourCamera> colour_;
   std::vector<FrameEntry> entries_;
   int listed_ = 0;
   FrameRange range_;

@@ -88,8 +88,12 @@ MapperState Mapper::state() const {
   return out;
 }
 
+// Quality of a keyframe's resampled colour image: decodes within a few grey levels of the pixels.
+constexpr int kResampledJpegQuality = 95;
+
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C, CompressedImage(frame.rgb, frame.rgb_file),
+  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C,
+             frame.rgb_resampled ? CompressedImage(frame.rgb, kResampledJpegQuality) : CompressedImage(frame.rgb, frame.rgb_file),
              CompressedImage(frame.depth, frame.depth_file),
              std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
   return graph_.add(std::move(k)).id;
