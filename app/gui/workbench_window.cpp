@@ -616,12 +616,13 @@ class WorkbenchWindow {
 
   void drawTimes(float width) {
     std::vector<float> total_ms;
-    std::vector<double> features, decision, update;
+    std::vector<double> features, tracking, decision, update;
     const std::size_t n = mapping_->times.size(), first = n > 200 ? n - 200 : 0;
     for (std::size_t i = first; i < n; ++i) {
       const StageTimes& t = mapping_->times[i];
       total_ms.push_back(static_cast<float>(t.total_ms));
       features.push_back(t.features_ms);
+      tracking.push_back(t.tracking_ms);
       decision.push_back(t.decision_ms);
       update.push_back(t.update_ms);
     }
@@ -630,13 +631,18 @@ class WorkbenchWindow {
     std::snprintf(overlay, sizeof overlay, "median %.1f ms", median({total_ms.begin(), total_ms.end()}));
     ImGui::PlotLines("##times", total_ms.data(), static_cast<int>(total_ms.size()), 0, overlay, 0.f, FLT_MAX,
                      {width, ImGui::GetFontSize() * 4.5f});
-    tip("Mapping time of each of the last 200 frames (features, keyframe decision and local-map update), ms.");
+    tip("Mapping time of each of the last 200 frames (features, tracking with --poses track, keyframe decision and "
+        "local-map update), ms.");
     if (beginRows("times")) {
       const auto row = [&](const char* name, const char* help, double ms) {
         label(name, help);
         ImGui::Text("%.1f ms", ms);
       };
       row("features", "ORB detection and the depth under each keypoint, median per frame (SPEC 5).", median(features));
+      if (mapping_->mapper.poses == PoseSource::kTrack)
+        row("tracking", "The frame's pose against the current keyframe: matches by projection (or brute force and PnP "
+            "RANSAC), then the dense refinement against its local map; relocalisation when weak. Median per frame.",
+            median(tracking));
       row("keyframe decision", "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
           median(decision));
       row("local-map update", "Integrating the frame's depth into the keyframe's container (SPEC 2), median per frame.",
