@@ -574,8 +574,9 @@ class WorkbenchWindow {
   // Above the scrubber: a marker at every loop closure's frame, its figures in a tooltip.
   void drawLoopStrip(int total) {
     const float font = ImGui::GetFontSize();
-    ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
+    const bool clicked = ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    int revisited = -1;  // the keyframe of the loop under the mouse (the last one when several are)
     ImDrawList* draw = ImGui::GetWindowDrawList();
     const ImU32 color = rgbColor(render::kLoopEdgeColor);
     const float mouse_x = ImGui::GetIO().MousePos.x;
@@ -585,17 +586,20 @@ class WorkbenchWindow {
       const float x = lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(e.position) / std::max(1, total - 1);
       draw->AddTriangleFilled({x - 0.35f * font, lo.y}, {x + 0.35f * font, lo.y}, {x, hi.y}, color);
       if (std::abs(mouse_x - x) <= 0.5f * font) {
-        char text[160];
-        std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited), %d inliers, correction %s, "
-                      "pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
+        char text[200];
+        std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited; click selects it), %d inliers, "
+                      "correction %s, pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
                       e.loop.inliers, metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
         hovered += text;
+        revisited = e.loop.to;
       }
     }
+    if (clicked && revisited >= 0) bench_.selectKeyframe(revisited);
     tip(!hovered.empty() ? hovered
         : mapping_->loops.empty()
             ? "Loop closures appear here (orange markers) when tracking re-observes a keyframe it is not linked to."
-            : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time.");
+            : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time; click "
+              "it to select the revisited keyframe.");
   }
 
   void drawDepthScale(float width) {
