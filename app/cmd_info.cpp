@@ -25,6 +25,16 @@ struct DepthStats {
 };
 
 // Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
+// The colour camera of an unregistered sequence (null when the colour is registered already).
+nlohmann::json colourJson(const std::optional<ColourCamera>& c) {
+  if (!c) return nullptr;
+  const Eigen::Matrix<double, 3, 4> T = c->T_colour_depth.matrix().topRows<3>();
+  std::vector<double> rows;
+  for (int r = 0; r < 3; ++r)
+    for (int k = 0; k < 4; ++k) rows.push_back(T(r, k));
+  return {{"fx", c->fx}, {"fy", c->fy}, {"cx", c->cx}, {"cy", c->cy}, {"T_colour_depth", rows}};
+}
+
 DepthStats sampleDepth(const TumSequence& seq, int samples) {
   DepthStats stats;
   std::vector<std::uint16_t> valid;
@@ -75,6 +85,7 @@ void runInfo(const SequenceArgs& args, bool json) {
         {"camera", {{"source", seq.cameraSource()}, {"width", cam.width}, {"height", cam.height},
                     {"fx", cam.fx}, {"fy", cam.fy}, {"cx", cam.cx}, {"cy", cam.cy},
                     {"depth_scale", cam.depth_scale}}},
+        {"colour_camera", colourJson(seq.colourCamera())},
         {"depth_m", {{"frames_sampled", depth.frames_sampled}, {"min", depth.min_m},
                      {"median", depth.median_m}, {"max", depth.max_m},
                      {"valid_fraction", rounded(depth.valid_fraction)},
@@ -96,6 +107,10 @@ void runInfo(const SequenceArgs& args, bool json) {
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
   std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width,
               cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
+  if (const auto& c = seq.colourCamera())
+    std::printf("colour     fx %.3f fy %.3f cx %.3f cy %.3f, %.1f mm and %.2f deg from the depth camera: registered "
+                "to the depth when loaded\n", c->fx, c->fy, c->cx, c->cy, 1000.0 * c->T_colour_depth.translation().norm(),
+                Eigen::AngleAxisd(c->T_colour_depth.linear()).angle() * 180.0 / M_PI);
   std::printf("depth      %.3f .. %.3f m, median %.3f m over valid pixels; %.3g%% invalid (%.3g%% 0 = no "
               "measurement, %.3g%% 65535 = invalid code) (%d frames sampled)\n",
               depth.min_m, depth.max_m, depth.median_m, 100.0 * (1.0 - depth.valid_fraction),

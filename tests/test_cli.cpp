@@ -55,6 +55,7 @@ TEST(Cli, InfoOnSevenScenes) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("500 usable (all with poses)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("preset 7scenes"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("colour     fx 525.000 fy 525.000 cx 320.000 cy 240.000, 25.6 mm"), std::string::npos) << r.out;
 }
 
 // Issue #17: render without --out is a command-line error with CLI11's code, as map's is.

@@ -574,8 +574,9 @@ class WorkbenchWindow {
   // Above the scrubber: a marker at every loop closure's frame, its figures in a tooltip.
   void drawLoopStrip(int total) {
     const float font = ImGui::GetFontSize();
-    ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
+    const bool clicked = ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
+    int revisited = -1;  // the keyframe of the loop under the mouse (the last one when several are)
     ImDrawList* draw = ImGui::GetWindowDrawList();
     const ImU32 color = rgbColor(render::kLoopEdgeColor);
     const float mouse_x = ImGui::GetIO().MousePos.x;
@@ -585,17 +586,20 @@ class WorkbenchWindow {
       const float x = lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(e.position) / std::max(1, total - 1);
       draw->AddTriangleFilled({x - 0.35f * font, lo.y}, {x + 0.35f * font, lo.y}, {x, hi.y}, color);
       if (std::abs(mouse_x - x) <= 0.5f * font) {
-        char text[160];
-        std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited), %d inliers, correction %s, "
-                      "pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
+        char text[200];
+        std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited; click selects it), %d inliers, "
+                      "correction %s, pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
                       e.loop.inliers, metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
         hovered += text;
+        revisited = e.loop.to;
       }
     }
+    if (clicked && revisited >= 0) bench_.selectKeyframe(revisited);
     tip(!hovered.empty() ? hovered
         : mapping_->loops.empty()
             ? "Loop closures appear here (orange markers) when tracking re-observes a keyframe it is not linked to."
-            : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time.");
+            : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time; click "
+              "it to select the revisited keyframe.");
   }
 
   void drawDepthScale(float width) {
@@ -616,12 +620,13 @@ class WorkbenchWindow {
 
   void drawTimes(float width) {
     std::vector<float> total_ms;
-    std::vector<double> features, decision, update;
+    std::vector<double> features, tracking, decision, update;
     const std::size_t n = mapping_->times.size(), first = n > 200 ? n - 200 : 0;
     for (std::size_t i = first; i < n; ++i) {
       const StageTimes& t = mapping_->times[i];
       total_ms.push_back(static_cast<float>(t.total_ms));
       features.push_back(t.features_ms);
+      tracking.push_back(t.tracking_ms);
       decision.push_back(t.decision_ms);
       update.push_back(t.update_ms);
     }
@@ -630,13 +635,18 @@ class WorkbenchWindow {
     std::snprintf(overlay, sizeof overlay, "median %.1f ms", median({total_ms.begin(), total_ms.end()}));
     ImGui::PlotLines("##times", total_ms.data(), static_cast<int>(total_ms.size()), 0, overlay, 0.f, FLT_MAX,
                      {width, ImGui::GetFontSize() * 4.5f});
-    tip("Mapping time of each of the last 200 frames (features, keyframe decision and local-map update), ms.");
+    tip("Mapping time of each of the last 200 frames (features, tracking with --poses track, keyframe decision and "
+        "local-map update), ms.");
     if (beginRows("times")) {
       const auto row = [&](const char* name, const char* help, double ms) {
         label(name, help);
         ImGui::Text("%.1f ms", ms);
       };
       row("features", "ORB detection and the depth under each keypoint, median per frame (SPEC 5).", median(features));
+      if (mapping_->mapper.poses == PoseSource::kTrack)
+        row("tracking", "The frame's pose against the current keyframe: matches by projection (or brute force and PnP "
+            "RANSAC), then the dense refinement against its local map; relocalisation when weak. Median per frame.",
+            median(tracking));
       row("keyframe decision", "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
           median(decision));
       row("local-map update", "Integrating the frame's depth into the keyframe's container (SPEC 2), median per frame.",
