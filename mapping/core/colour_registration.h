@@ -19,7 +19,7 @@ struct ColourCamera {
   Transform T_colour_depth = Transform::Identity();
 
   bool operator==(const ColourCamera& o) const {
-    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && T_colour_depth.isApprox(o.T_colour_depth, 0.0);
+    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && T_colour_depth.matrix() == o.T_colour_depth.matrix();
   }
 };
 
