@@ -90,18 +90,18 @@ void runMap(MapArgs args) {
   } else {
     args.params.mapper.poses = poseSource(args.sequence, seq);
   }
-  const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
   Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
                          : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
-  mapSequence(seq, mapper, [&](const FrameReport& r) {
+  const MapRefinementResult refined = mapSequence(seq, mapper, [&](const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
     pipeline_ms.push_back(r.ms.total_ms);
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
     tracking_ms.push_back(r.ms.tracking_ms);
   });
+  const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.params.global);
 
@@ -135,6 +135,8 @@ void runMap(MapArgs args) {
     for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
     options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
     options.run_stats["pose_graph_ms"] = pose_graph_ms;  // all optimisations of the run, wall clock
+    options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
+                                           {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)}};
     const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
     if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
       options.run_stats["ate_rmse_m"] = evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse;
@@ -161,6 +163,8 @@ void runMap(MapArgs args) {
   if (tracking) {
     std::printf("tracked poses: %s lost (skipped), %s", counted(mapper.framesLost(), "frame").c_str(),
                 counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
+    std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
+                refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
     if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
     std::printf("\n");
   }

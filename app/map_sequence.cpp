@@ -5,7 +5,8 @@
 
 namespace vdmap::app {
 
-void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<void(const FrameReport&)>& on_frame) {
+MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
+                                const std::function<void(const FrameReport&)>& on_frame) {
   FramePrefetcher frames(seq, 4, mapper.featuresAhead());
   ProgressBar progress("mapping", seq.size());
   std::size_t done = 0;  // of this sequence (a continued session has mapped others before)
@@ -14,6 +15,7 @@ void mapSequence(const TumSequence& seq, Mapper& mapper, const std::function<voi
     if (on_frame) on_frame(report);
     progress.update(++done);
   }
+  return mapper.params().poses == PoseSource::kTrack ? mapper.refineKeyframePoses() : MapRefinementResult{};
 }
 
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {

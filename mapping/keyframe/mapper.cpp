@@ -352,4 +352,8 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   return report;
 }
 
+MapRefinementResult Mapper::refineKeyframePoses(const MapRefinementParams& params) {
+  return vdmap::refineKeyframePoses(&graph_, &pose_graph_, tracking_.loops.graph, params);
+}
+
 }  // namespace vdmap

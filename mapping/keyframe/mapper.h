@@ -9,6 +9,7 @@
 #include "mapping/keyframe/keyframe_index.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/tracking/keyframe_pose_graph.h"
+#include "mapping/tracking/map_registration.h"
 #include "mapping/tracking/tracker.h"
 
 namespace vdmap {
@@ -151,6 +152,10 @@ class Mapper {
   /// PoseSource::kTrack: the keyframe pose graph, its loop closures and the poses before the
   /// last optimisation.
   const KeyframePoseGraph& poseGraph() const { return pose_graph_; }
+  /// PoseSource::kTrack, when the sequence has been mapped: registers the local maps of covisible
+  /// keyframes and optimises the keyframe poses with those edges (map_registration.h). Frames
+  /// follow their keyframes; the global map needs a rebuild.
+  MapRefinementResult refineKeyframePoses(const MapRefinementParams& params = {});
 
  private:
   int newKeyframe(const RgbdFrame& frame, FrameFeatures features);

@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <set>
 
 #include <Eigen/Cholesky>
 
@@ -48,10 +49,19 @@ Matrix6d informationInFrame(const Matrix6d& info_B, const Transform& T_B_X) {
   return 0.5 * (out + out.transpose());
 }
 
-double KeyframePoseGraph::optimise(KeyframeGraph* graph, const PoseGraphOptions& options, PoseGraphResult* result) {
+void KeyframePoseGraph::replaceMeasuredEdges(std::span<const PoseGraphEdge> edges) {
+  std::set<std::pair<int, int>> pairs;
+  for (const PoseGraphEdge& e : edges) pairs.insert(std::minmax(e.from, e.to));
+  std::erase_if(edges_, [&pairs](const PoseGraphEdge& e) { return !e.robust && pairs.contains(std::minmax(e.from, e.to)); });
+  edges_.insert(edges_.end(), edges.begin(), edges.end());
+}
+
+double KeyframePoseGraph::optimise(KeyframeGraph* graph, const PoseGraphOptions& options, PoseGraphResult* result,
+                                   bool keep_before) {
   std::vector<Transform> poses;
   for (const Keyframe& k : graph->keyframes()) poses.push_back(k.T_W_K);
-  before_ = poses;
+  const std::vector<Transform> start = poses;
+  if (!keep_before || before_.size() != poses.size()) before_ = poses;
   const PoseGraphResult r = optimizePoseGraph(&poses, edges_, options);
   if (result) *result = r;
   double largest = 0.0;
@@ -60,7 +70,7 @@ double KeyframePoseGraph::optimise(KeyframeGraph* graph, const PoseGraphOptions&
     Transform T = Transform::Identity();
     T.linear() = Eigen::Quaterniond(poses[i].linear()).normalized().toRotationMatrix();
     T.translation() = poses[i].translation();
-    largest = std::max(largest, (T.translation() - before_[i].translation()).norm());
+    largest = std::max(largest, (T.translation() - start[i].translation()).norm());
     graph->setKeyframePose(static_cast<int>(i), T);
   }
   return largest;

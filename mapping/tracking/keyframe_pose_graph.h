@@ -64,7 +64,12 @@ class KeyframePoseGraph {
   /// Optimises every keyframe pose (keyframe 0 fixed: it anchors the world frame) with
   /// optimizePoseGraph and writes them back with KeyframeGraph::setKeyframePose. Returns the
   /// largest keyframe move (m). The poses before it are kept (posesBeforeOptimisation()).
-  double optimise(KeyframeGraph* graph, const PoseGraphOptions& options, PoseGraphResult* result = nullptr);
+  /// `keep_before`: posesBeforeOptimisation() stays as it was (a refinement's later rounds).
+  double optimise(KeyframeGraph* graph, const PoseGraphOptions& options, PoseGraphResult* result = nullptr,
+                  bool keep_before = false);
+  /// Adds `edges` (non-robust, measured) in place of the non-robust edges between the same
+  /// keyframe pairs (either direction): map_registration.h's map-to-map edges.
+  void replaceMeasuredEdges(std::span<const PoseGraphEdge> edges);
   /// Keyframe poses as they were before the last optimisation (empty before the first).
   const std::vector<Transform>& posesBeforeOptimisation() const { return before_; }
   void recordLoop(const LoopClosure& loop) { loops_.push_back(loop); }
