@@ -807,8 +807,9 @@ bool sameFilter(const FilterParams& a, const FilterParams& b) {
 
 GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params, GlobalMapWorkspace* workspace) {
   params.validate();
-  GlobalMapWorkspace scratch_workspace;  // holds nothing until used
-  GlobalMapWorkspace::Buffers& ws = *(workspace != nullptr ? workspace : &scratch_workspace)->buffers_;
+  std::unique_ptr<GlobalMapWorkspace> own;  // this build's, without one given
+  if (workspace == nullptr) workspace = (own = std::make_unique<GlobalMapWorkspace>()).get();
+  GlobalMapWorkspace::Buffers& ws = *workspace->buffers_;
   GlobalMap map;
   const auto start = Clock::now();
   map.groups = mergeGroups(graph, params.tau_group);
