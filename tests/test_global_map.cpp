@@ -340,6 +340,52 @@ TEST(GlobalMap, FusionJoinsCopiesOfOneWallButNotACornerOrOneGroup) {
 
 // Many groups seeing the same walls at different grid offsets, sizes and depths, plus a
 // perpendicular wall: the spatial hash finds what the all-pairs oracle finds, for 1 and 2 threads.
+// A workspace reused across builds (the workbench's) gives every build the map a fresh build
+// gives, whatever changed in between: poses, the filter, a container's cells, the keyframes, the
+// stages switched on, the thread count.
+TEST(GlobalMap, AWorkspaceReusedAcrossBuildsGivesTheMapOfAFreshBuild) {
+  KeyframeGraph graph;
+  for (int i = 0; i < 3; ++i) {
+    const Transform T = test::lookAt({0.05 * i, 0, 0}, {2 * std::sin(0.2 * i), 0.2, 2 * std::cos(0.2 * i)});
+    addKeyframe(&graph, T, T);
+  }
+  graph.edges().strengthen(0, 1, 0.5);
+  GlobalMapWorkspace workspace;
+  GlobalMapParams params;
+  auto check = [&](const char* what) {
+    const GlobalMap fresh = buildGlobalMap(graph, params);
+    const GlobalMap reused = buildGlobalMap(graph, params, &workspace);
+    SCOPED_TRACE(what);
+    expectSameMap(fresh, reused);
+    EXPECT_EQ(fresh.kept, reused.kept);
+    EXPECT_EQ(fresh.merged, reused.merged);
+    EXPECT_GT(fresh.sigma_e_prime, 0u);
+  };
+  check("first build");
+  check("the same again");
+  graph.setKeyframePose(2, test::lookAt({0.2, 0.05, 0}, {0.4, 0.2, 2}));
+  check("a pose moved");
+  params.filter.filter_sigma_factor = 1.5;
+  check("a tighter filter");
+  // A kept cell of keyframe 1 gets a wide spread: the filter must reject it now.
+  const std::vector<bool> before = buildGlobalMap(graph, params, &workspace).kept[1];
+  const std::size_t cell = static_cast<std::size_t>(std::find(before.begin(), before.end(), true) - before.begin());
+  ASSERT_LT(cell, before.size());
+  KeyframeContainer& box = graph.keyframe(1).container;
+  box.findOrCreate(box.cells()[cell].grid_index).scatter = {1e3f, 0, 0, 1e3f, 0, 1e3f};
+  EXPECT_FALSE(buildGlobalMap(graph, params, &workspace).kept[1][cell]) << "the kept cells follow the container";
+  check("a cell changed");
+  addKeyframe(&graph, facingWall(0.0), facingWall(0.0));
+  check("a keyframe added");
+  params.fuse_across_groups = false;
+  check("without fusion");
+  params.occlusion_removal = false;
+  check("without occlusion removal");
+  params = {};
+  params.threads = 1;
+  check("one thread");
+}
+
 TEST(GlobalMap, FusionEqualsTheReference) {
   std::mt19937 rng(7);
   std::uniform_real_distribution<double> jitter(-0.004, 0.004), size(0.003, 0.012);

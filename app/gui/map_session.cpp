@@ -237,7 +237,7 @@ std::shared_ptr<GlobalSnapshot> MapSession::buildGlobal(const GlobalMapParams& p
   snap->params = params;
   const std::vector<Transform> before = before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
   if (before.empty()) {
-    snap->map = buildGlobalMap(mapper_->graph(), params);
+    snap->map = buildGlobalMap(mapper_->graph(), params, &global_workspace_);
     return snap;
   }
   // The local maps live in their keyframes' frames and do not change: the graph's poses are
@@ -252,7 +252,7 @@ std::shared_ptr<GlobalSnapshot> MapSession::buildGlobal(const GlobalMapParams& p
     }
   } restore{graph, now};
   for (std::size_t id = 0; id < before.size(); ++id) graph.setKeyframePose(static_cast<int>(id), before[id]);
-  snap->map = buildGlobalMap(graph, params);
+  snap->map = buildGlobalMap(graph, params, &global_workspace_);
   snap->before_optimisation = true;
   return snap;
 }
@@ -275,7 +275,7 @@ void MapSession::rebuildGlobal() {
     error_ = std::string("global map: ") + e.what();
     return;
   }
-  releaseFreedMemory();  // the build's temporaries, before the next frames
+  releaseFreedMemory();  // the build's other temporaries, before the next frames
   {
     std::lock_guard lock(mutex_);
     snap->frames_mapped = mapped_;

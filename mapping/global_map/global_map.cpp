@@ -5,6 +5,7 @@
 #include <chrono>
 #include <cmath>
 #include <limits>
+#include <memory>
 #include <numeric>
 #include <span>
 #include <stdexcept>
@@ -89,17 +90,16 @@ struct Buckets {
   std::vector<int> order;
 };
 
-Buckets bucketByKey(const std::vector<int>& keys, std::size_t buckets) {
-  Buckets b;
-  b.start.assign(buckets + 1, 0);
+// bucketByKey into `b`, reusing its memory (`fill` is scratch).
+void bucketByKey(const std::vector<int>& keys, std::size_t buckets, Buckets* b, std::vector<int>* fill) {
+  b->start.assign(buckets + 1, 0);
   for (int k : keys)
-    if (k >= 0) ++b.start[static_cast<std::size_t>(k) + 1];
-  std::partial_sum(b.start.begin(), b.start.end(), b.start.begin());
-  b.order.resize(static_cast<std::size_t>(b.start.back()));
-  std::vector<int> fill(b.start.begin(), b.start.end() - 1);
+    if (k >= 0) ++b->start[static_cast<std::size_t>(k) + 1];
+  std::partial_sum(b->start.begin(), b->start.end(), b->start.begin());
+  b->order.resize(static_cast<std::size_t>(b->start.back()));
+  fill->assign(b->start.begin(), b->start.end() - 1);
   for (std::size_t i = 0; i < keys.size(); ++i)
-    if (keys[i] >= 0) b.order[static_cast<std::size_t>(fill[static_cast<std::size_t>(keys[i])]++)] = static_cast<int>(i);
-  return b;
+    if (keys[i] >= 0) b->order[static_cast<std::size_t>((*fill)[static_cast<std::size_t>(keys[i])]++)] = static_cast<int>(i);
 }
 
 Ellipsoid transformed(const Ellipsoid& e, const Transform& T_B_A) {
@@ -109,85 +109,98 @@ Ellipsoid transformed(const Ellipsoid& e, const Transform& T_B_A) {
   return out;
 }
 
-// SPEC section 6 step 2 for one group: members' kept ellipsoids re-projected into the centre's
-// container and merged cell by cell. Output order: cells ascending, then the pass-throughs.
-std::vector<Ellipsoid> mergeGroup(const KeyframeGraph& graph, const MergeGroup& group, const GlobalMapParams& params,
-                                  const std::vector<std::vector<bool>>& kept) {
-  const Keyframe& centre = graph.keyframe(group.centre);
-  const KeyframeContainer& box = centre.container;
-  const Transform T_C_W = centre.T_W_K.inverse();
-  // First only the means, to find each kept ellipsoid's cell in the centre; the whole ellipsoid
-  // is made when its cell is merged (holding all of them would write ~120 bytes per ellipsoid).
+// meanShiftClusters into `label` (resized to the means).
+void meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights, double h,
+                       std::vector<int>* label);
+
+// What merging one group needs besides its output; one per thread, reused across groups and builds.
+struct MergeScratch {
   struct Source {
     int member;      // index into group.members
     int cell_index;  // into that keyframe's container cells()
   };
   std::vector<Transform> T_C_K;
   std::vector<Source> sources;
-  std::vector<int> cell_of;
+  std::vector<int> cell_of, fill, label;
+  Buckets by_cell;
+  std::vector<Ellipsoid> in_cell;
+  std::vector<Eigen::Vector3d> means;
+  std::vector<double> weights;
+  std::vector<const Ellipsoid*> cluster;
+};
+
+// SPEC section 6 step 2 for one group: members' kept ellipsoids re-projected into the centre's
+// container and merged cell by cell, into `out` (replacing what it held). Output order: cells
+// ascending, then the pass-throughs.
+void mergeGroup(const KeyframeGraph& graph, const MergeGroup& group, const GlobalMapParams& params,
+                const std::vector<std::vector<bool>>& kept, MergeScratch* scratch, std::vector<Ellipsoid>* out) {
+  MergeScratch& s = *scratch;
+  const Keyframe& centre = graph.keyframe(group.centre);
+  const KeyframeContainer& box = centre.container;
+  const Transform T_C_W = centre.T_W_K.inverse();
+  // First only the means, to find each kept ellipsoid's cell in the centre; the whole ellipsoid
+  // is made when its cell is merged (holding all of them would write ~120 bytes per ellipsoid).
+  s.T_C_K.clear();
+  s.sources.clear();
+  s.cell_of.clear();
   for (int m = 0; m < static_cast<int>(group.members.size()); ++m) {
     const int id = group.members[static_cast<std::size_t>(m)];
     const Keyframe& k = graph.keyframe(id);
     const std::vector<bool>& kept_cells = kept[static_cast<std::size_t>(id)];
-    T_C_K.push_back(T_C_W * k.T_W_K);
+    s.T_C_K.push_back(T_C_W * k.T_W_K);
     for (std::size_t i = 0; i < kept_cells.size(); ++i) {
       if (!kept_cells[i]) continue;
-      const Eigen::Vector3d mean = T_C_K.back() * k.container.cells()[i].mean.cast<double>();
+      const Eigen::Vector3d mean = s.T_C_K.back() * k.container.cells()[i].mean.cast<double>();
       int cell = -1;
       if (mean.z() > 0.0) {
         const Eigen::Vector2d uv = box.camera().project(mean);
         cell = box.gridIndexOfPixel(uv.x(), uv.y());
       }
-      sources.push_back({m, static_cast<int>(i)});
-      cell_of.push_back(cell);
+      s.sources.push_back({m, static_cast<int>(i)});
+      s.cell_of.push_back(cell);
     }
   }
   auto inCentre = [&](int source) {
-    const Source& src = sources[static_cast<std::size_t>(source)];
+    const MergeScratch::Source& src = s.sources[static_cast<std::size_t>(source)];
     const int id = group.members[static_cast<std::size_t>(src.member)];
     return cellEllipsoid(graph.keyframe(id).container.cells()[static_cast<std::size_t>(src.cell_index)],
-                         T_C_K[static_cast<std::size_t>(src.member)], id);
+                         s.T_C_K[static_cast<std::size_t>(src.member)], id);
   };
 
   // By cell, stable: members in id order, cells in container order.
   const std::size_t cells = static_cast<std::size_t>(box.cols()) * box.rows();
-  const Buckets by_cell = bucketByKey(cell_of, cells);
-  const std::vector<int>& start = by_cell.start;
-  const std::vector<int>& order = by_cell.order;
+  bucketByKey(s.cell_of, cells, &s.by_cell, &s.fill);
+  const std::vector<int>& start = s.by_cell.start;
+  const std::vector<int>& order = s.by_cell.order;
 
-  std::vector<Ellipsoid> out;
-  out.reserve(sources.size());
-  std::vector<Ellipsoid> in_cell;
-  std::vector<Eigen::Vector3d> means;
-  std::vector<double> weights;
-  std::vector<const Ellipsoid*> cluster;
+  out->clear();
+  out->reserve(s.sources.size());
   for (std::size_t c = 0; c < cells; ++c) {
     const int begin = start[c], end = start[c + 1];
-    if (end - begin == 1) out.push_back(transformed(inCentre(order[begin]), centre.T_W_K));
+    if (end - begin == 1) out->push_back(transformed(inCentre(order[begin]), centre.T_W_K));
     if (end - begin <= 1) continue;
-    in_cell.clear();
-    means.clear();
-    weights.clear();
+    s.in_cell.clear();
+    s.means.clear();
+    s.weights.clear();
     for (int i = begin; i < end; ++i) {
-      in_cell.push_back(inCentre(order[i]));
-      means.push_back(in_cell.back().mean);
-      weights.push_back(in_cell.back().count);
+      s.in_cell.push_back(inCentre(order[i]));
+      s.means.push_back(s.in_cell.back().mean);
+      s.weights.push_back(s.in_cell.back().count);
     }
-    const std::vector<int> label = meanShiftClusters(means, weights, params.merge_distance_m);
-    const int clusters = *std::max_element(label.begin(), label.end()) + 1;
+    meanShiftClusters(s.means, s.weights, params.merge_distance_m, &s.label);
+    const int clusters = *std::max_element(s.label.begin(), s.label.end()) + 1;
     for (int k = 0; k < clusters; ++k) {
-      cluster.clear();
-      for (std::size_t i = 0; i < in_cell.size(); ++i)
-        if (label[i] == k) cluster.push_back(&in_cell[i]);
-      Ellipsoid merged = momentMatch(cluster);
+      s.cluster.clear();
+      for (std::size_t i = 0; i < s.in_cell.size(); ++i)
+        if (s.label[i] == k) s.cluster.push_back(&s.in_cell[i]);
+      Ellipsoid merged = momentMatch(s.cluster);
       merged.keyframe = group.centre;
       merged.grid_index = static_cast<int>(c);
-      out.push_back(transformed(merged, centre.T_W_K));
+      out->push_back(transformed(merged, centre.T_W_K));
     }
   }
-  for (std::size_t i = 0; i < cell_of.size(); ++i)
-    if (cell_of[i] < 0) out.push_back(transformed(inCentre(static_cast<int>(i)), centre.T_W_K));
-  return out;
+  for (std::size_t i = 0; i < s.cell_of.size(); ++i)
+    if (s.cell_of[i] < 0) out->push_back(transformed(inCentre(static_cast<int>(i)), centre.T_W_K));
 }
 
 // Runs body(i) for i in [0, n) on `threads` threads (0: all). Each i writes only its own slot,
@@ -253,11 +266,13 @@ struct ViewItem {
   double z;             // depth in the viewpoint's camera
   double lambda_max;    // largest eigenvalue of its covariance: smaller is more precise
   Eigen::Vector3d ray;  // mean - viewpoint centre, world frame
+  int j;                // into the occlusion's by-keyframe arrays (its information matrix)
   int index;            // into the ellipsoids
 };
 
 // The ellipsoids of one viewpoint cell: appends to `removed` every A that occludes a more precise
-// B behind it (SPEC 6.3). `cell` is reordered near to far; `finest_behind` is scratch space.
+// B behind it (SPEC 6.3). `cell` is reordered near to far (ties by index; the result does not
+// depend on their order, as only a B strictly farther than A counts); `finest_behind` is scratch.
 void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Matrix3d>& information,
                            std::vector<double>* finest_behind, std::vector<int>* removed) {
   std::sort(cell.begin(), cell.end(),
@@ -268,7 +283,7 @@ void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Ma
   for (std::size_t j = cell.size(); j-- > 0;) finest[j] = std::min(finest[j + 1], cell[j].lambda_max);
   for (std::size_t a = 0; a + 1 < cell.size(); ++a) {
     if (!(finest[a + 1] < cell[a].lambda_max)) continue;  // nothing more precise behind A
-    const Eigen::Matrix3d& P = information[static_cast<std::size_t>(cell[a].index)];
+    const Eigen::Matrix3d& P = information[static_cast<std::size_t>(cell[a].j)];
     const Eigen::Vector3d& mu = cell[a].ray;
     const Eigen::Vector3d P_mu = P * mu;
     const double mu_P_mu = mu.dot(P_mu);
@@ -284,6 +299,36 @@ void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Ma
     }
   }
 }
+
+// What one occlusion viewpoint needs; one per thread, reused across viewpoints and builds (fresh
+// buffers cost a page fault per 4 KiB).
+struct OcclusionScratch {
+  // A point of the viewpoint's group that falls into one of its cells. Most cells hold one point
+  // and are never judged, so this carries only what finds its cell's others.
+  struct Seen {
+    int cell;
+    int j;  // into OcclusionBuffers' by-keyframe arrays
+    double z;
+  };
+  std::vector<Seen> seen;
+  std::vector<int> count, start, fill;  // per cell
+  std::vector<ViewItem> items;          // the judged cells' (two or more points), cell by cell
+  std::vector<double> finest;
+};
+
+// Occlusion removal's buffers, reused across builds.
+struct OcclusionBuffers {
+  std::vector<int> keyframe_of, fill;
+  Buckets by_keyframe;  // ellipsoid indices by keyframe; j indexes its order
+  struct Point {
+    Eigen::Vector3d mean;
+    double lambda_max;
+  };
+  std::vector<Point> point;                  // by j
+  std::vector<Eigen::Matrix3d> information;  // by j: the floored covariance's inverse
+  std::vector<std::vector<int>> removed_by;  // per viewpoint, ellipsoid indices
+  tbb::enumerable_thread_specific<OcclusionScratch> scratch;
+};
 
 }  // namespace
 
@@ -329,6 +374,15 @@ std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group
 
 std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights,
                                    double h) {
+  std::vector<int> label;
+  meanShiftClusters(means, weights, h, &label);
+  return label;
+}
+
+namespace {
+
+void meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights, double h,
+                       std::vector<int>* label) {
   // Most cells of a merge group hold one surface seen from a few keyframes, all means within h of
   // each other. Then every seed's first window holds every mean, so its first step lands it on the
   // same weighted mean (the same sum in the same order); that point lies in the means' convex hull,
@@ -342,9 +396,13 @@ std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, co
     for (std::size_t j = i + 1; j < means.size() && one_cluster; ++j)
       one_cluster = (means[i] - means[j]).squaredNorm() <= one_kernel_m2;
   }
-  if (one_cluster) return std::vector<int>(means.size(), 0);
-  return meanShiftClustersByIteration(means, weights, h);
+  if (one_cluster)
+    label->assign(means.size(), 0);
+  else
+    *label = meanShiftClustersByIteration(means, weights, h);
 }
+
+}  // namespace
 
 std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
                                               const std::vector<double>& weights, double h) {
@@ -410,86 +468,112 @@ std::vector<double> largestEigenvalues(const std::vector<Ellipsoid>& ellipsoids,
   return lambda_max;
 }
 
-// occludingEllipsoids with lambda_max = largestEigenvalues(ellipsoids).
-std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
-                                      const std::vector<double>& lambda_max, const GlobalMapParams& params) {
-  // Ellipsoid indices and means by keyframe, contiguous, so that each viewpoint streams through
-  // its group's ellipsoids instead of gathering them from the big records.
-  std::vector<int> keyframe_of(ellipsoids.size());
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i) keyframe_of[i] = ellipsoids[i].keyframe;
-  const Buckets by_keyframe = bucketByKey(keyframe_of, graph.size());
-  std::vector<Eigen::Vector3d> mean_by_keyframe(ellipsoids.size());
-  for (std::size_t j = 0; j < ellipsoids.size(); ++j)
-    mean_by_keyframe[j] = ellipsoids[static_cast<std::size_t>(by_keyframe.order[j])].mean;
-  // Per ellipsoid, once: the inverse covariance.
-  std::vector<Eigen::Matrix3d> information(ellipsoids.size());
-  parallelFor(params.threads, ellipsoids.size(), [&](std::size_t i) { information[i] = floored(ellipsoids[i].cov).inverse(); });
+// Occlusion removal (SPEC 6.3) of n world-frame ellipsoids, at(i) being the i-th and lambda_max[i]
+// its largest eigenvalue: removed[i] (resized to n) is 1 when it is removed.
+template <typename At>
+void occludingEllipsoids(const KeyframeGraph& graph, std::size_t n, const At& at, const std::vector<double>& lambda_max,
+                         const GlobalMapParams& params, OcclusionBuffers* buffers, std::vector<char>* removed) {
+  OcclusionBuffers& o = *buffers;
+  // What the viewpoints read, contiguous by keyframe, so that each streams through its group's
+  // ellipsoids instead of gathering them from the big records.
+  o.keyframe_of.resize(n);
+  for (std::size_t i = 0; i < n; ++i) o.keyframe_of[i] = at(i).keyframe;
+  bucketByKey(o.keyframe_of, graph.size(), &o.by_keyframe, &o.fill);
+  o.point.resize(n);
+  o.information.resize(n);
+  parallelFor(params.threads, n, [&](std::size_t j) {
+    const std::size_t i = static_cast<std::size_t>(o.by_keyframe.order[j]);
+    const Ellipsoid& e = at(i);
+    o.point[j] = {e.mean, lambda_max[i]};
+    o.information[j] = floored(e.cov).inverse();
+  });
 
-  std::vector<std::vector<int>> removed_by(graph.size());
-  // What a viewpoint sees, bucketed by cell with a counting sort. Most cells hold one ellipsoid
-  // and are never judged, so an entry carries only what finds its cell's others. The buffers are
-  // per thread and reused across viewpoints (fresh ones cost a page fault per 4 KiB).
-  struct Seen {
-    int cell;
-    int j;  // into by_keyframe.order / mean_by_keyframe
-    double z;
-  };
-  struct Scratch {
-    std::vector<int> start, fill;
-    std::vector<Seen> seen, by_cell;
-    std::vector<ViewItem> items;
-    std::vector<double> finest;
-  };
-  tbb::enumerable_thread_specific<Scratch> scratch_per_thread;
+  o.removed_by.resize(graph.size());
   parallelFor(params.threads, graph.size(), [&](std::size_t v) {
     const Keyframe& K = graph.keyframe(static_cast<int>(v));
     const Transform T_K_W = K.T_W_K.inverse();
     const Eigen::Vector3d centre = K.T_W_K.translation();
-    Scratch& s = scratch_per_thread.local();
+    OcclusionScratch& s = o.scratch.local();
     const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
     const CellOfPixel cellOfPixel(K.container);
-    s.start.assign(cells + 1, 0);
+    s.count.assign(cells, 0);
     s.seen.clear();
     for (int g : occlusionGroup(graph, K, params))
-      for (int j = by_keyframe.start[static_cast<std::size_t>(g)]; j < by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
-        const Eigen::Vector3d p = T_K_W * mean_by_keyframe[static_cast<std::size_t>(j)];
+      for (int j = o.by_keyframe.start[static_cast<std::size_t>(g)]; j < o.by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
+        const Eigen::Vector3d p = T_K_W * o.point[static_cast<std::size_t>(j)].mean;
         if (p.z() <= 0.0) continue;
         const Eigen::Vector2d uv = K.container.camera().project(p);
         const int cell = cellOfPixel(uv.x(), uv.y());
         if (cell < 0) continue;
         s.seen.push_back({cell, j, p.z()});
-        ++s.start[static_cast<std::size_t>(cell) + 1];
+        ++s.count[static_cast<std::size_t>(cell)];
       }
-    std::partial_sum(s.start.begin(), s.start.end(), s.start.begin());
-    s.by_cell.resize(s.seen.size());
+    // The judged cells' points, written cell by cell in one more pass over the group (in order of
+    // j, so the reads stream) rather than gathered cell by cell from anywhere in the map.
+    s.start.resize(cells + 1);
+    s.start[0] = 0;
+    for (std::size_t cell = 0; cell < cells; ++cell)
+      s.start[cell + 1] = s.start[cell] + (s.count[cell] >= 2 ? s.count[cell] : 0);
+    s.items.resize(static_cast<std::size_t>(s.start[cells]));
     s.fill.assign(s.start.begin(), s.start.end() - 1);
-    for (const Seen& e : s.seen) s.by_cell[static_cast<std::size_t>(s.fill[static_cast<std::size_t>(e.cell)]++)] = e;
-    for (std::size_t cell = 0; cell < cells; ++cell) {
-      if (s.start[cell + 1] - s.start[cell] < 2) continue;
-      s.items.clear();
-      for (int k = s.start[cell]; k < s.start[cell + 1]; ++k) {
-        const Seen& e = s.by_cell[static_cast<std::size_t>(k)];
-        const int i = by_keyframe.order[static_cast<std::size_t>(e.j)];
-        s.items.push_back({e.z, lambda_max[static_cast<std::size_t>(i)], mean_by_keyframe[static_cast<std::size_t>(e.j)] - centre, i});
-      }
-      removeOccludersInCell(s.items, information, &s.finest, &removed_by[v]);
+    for (const OcclusionScratch::Seen& e : s.seen) {
+      if (s.count[static_cast<std::size_t>(e.cell)] < 2) continue;
+      const OcclusionBuffers::Point& q = o.point[static_cast<std::size_t>(e.j)];
+      s.items[static_cast<std::size_t>(s.fill[static_cast<std::size_t>(e.cell)]++)] = {
+          e.z, q.lambda_max, q.mean - centre, e.j, o.by_keyframe.order[static_cast<std::size_t>(e.j)]};
     }
+    std::vector<int>& removed_here = o.removed_by[v];
+    removed_here.clear();
+    for (std::size_t cell = 0; cell < cells; ++cell)
+      if (s.count[cell] >= 2)
+        removeOccludersInCell(std::span<ViewItem>(s.items).subspan(static_cast<std::size_t>(s.start[cell]),
+                                                                   static_cast<std::size_t>(s.count[cell])),
+                              o.information, &s.finest, &removed_here);
   });
-  std::vector<bool> removed(ellipsoids.size(), false);
-  for (const std::vector<int>& list : removed_by)
-    for (int i : list) removed[static_cast<std::size_t>(i)] = true;
-  return removed;
+  removed->assign(n, 0);
+  for (const std::vector<int>& list : o.removed_by)
+    for (int i : list) (*removed)[static_cast<std::size_t>(i)] = 1;
 }
 
-// fuseAcrossGroups with lambda_max = largestEigenvalues(ellipsoids).
-std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
-                                        const std::vector<double>& lambda_max, const GlobalMapParams& params);
+// A match of fusion: ellipsoids a and b are copies of one surface at this distance.
+struct FusionMatch {
+  int a, b;
+  double distance;
+};
+
+// Fusion's buffers, reused across builds (names as in fuseAcrossGroups).
+struct FusionBuffers {
+  std::vector<std::pair<std::uint64_t, int>> entries;
+  std::vector<Eigen::Vector3d> mean;
+  std::vector<SymmetricCov> cov;
+  std::vector<double> lambda;
+  std::vector<int> group, index;
+  std::vector<std::size_t> voxel_start, slot;
+  std::vector<std::uint64_t> voxel;
+  std::vector<std::array<int, 13>> neighbour;
+  std::vector<std::vector<FusionMatch>> found;
+  std::vector<int> partner_start, fill, seed_of, member_of;
+  std::vector<std::pair<int, double>> partner, taken;
+  std::vector<std::pair<double, int>> order;
+  Buckets members;
+};
+
+// fuseAcrossGroups of n ellipsoids, at(i) being the i-th, with lambda_max = their largest eigenvalues.
+template <typename At>
+std::vector<Ellipsoid> fuseAcrossGroups(std::size_t n, const At& at, const std::vector<int>& group_of,
+                                        const std::vector<double>& lambda_max, const GlobalMapParams& params,
+                                        FusionBuffers* buffers);
 
 }  // namespace
 
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
                                       const GlobalMapParams& params) {
-  return occludingEllipsoids(graph, ellipsoids, largestEigenvalues(ellipsoids, params.threads), params);
+  OcclusionBuffers buffers;
+  std::vector<char> removed;
+  occludingEllipsoids(
+      graph, ellipsoids.size(), [&](std::size_t i) -> const Ellipsoid& { return ellipsoids[i]; },
+      largestEigenvalues(ellipsoids, params.threads), params, &buffers, &removed);
+  return std::vector<bool>(removed.begin(), removed.end());
 }
 
 double bhattacharyyaDistance(const Ellipsoid& a, const Ellipsoid& b) {
@@ -503,45 +587,54 @@ double fusionHalfWidth(const std::vector<Ellipsoid>& ellipsoids, const GlobalMap
 
 std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
                                         const GlobalMapParams& params) {
-  return fuseAcrossGroups(ellipsoids, group_of, largestEigenvalues(ellipsoids, params.threads), params);
+  FusionBuffers buffers;
+  return fuseAcrossGroups(
+      ellipsoids.size(), [&](std::size_t i) -> const Ellipsoid& { return ellipsoids[i]; }, group_of,
+      largestEigenvalues(ellipsoids, params.threads), params, &buffers);
 }
 
 namespace {
 
-std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids, const std::vector<int>& group_of,
-                                        const std::vector<double>& lambda_max, const GlobalMapParams& params) {
-  const std::size_t n = ellipsoids.size();
+template <typename At>
+std::vector<Ellipsoid> fuseAcrossGroups(std::size_t n, const At& at, const std::vector<int>& group_of,
+                                        const std::vector<double>& lambda_max, const GlobalMapParams& params,
+                                        FusionBuffers* buffers) {
+  FusionBuffers& f = *buffers;
   const double max_distance = params.fusion_max_distance;
   // Voxels of side >= half, so that the cube around a mean lies in the 27 voxels around its own,
   // counted from the map's corner and packed 21 bits per axis into one key that sorts like (x, y,
   // z); a map wider than 2^21 - 2 voxels along an axis gets larger voxels.
   const double half = fusionHalfWidth(lambda_max);
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Ellipsoid& e : ellipsoids) lo = lo.cwiseMin(e.mean), hi = hi.cwiseMax(e.mean);
+  for (std::size_t i = 0; i < n; ++i) lo = lo.cwiseMin(at(i).mean), hi = hi.cwiseMax(at(i).mean);
   constexpr std::int64_t kAxisVoxels = (std::int64_t{1} << 21) - 2;
   const double side = n > 0 ? std::max(half, (hi - lo).maxCoeff() / static_cast<double>(kAxisVoxels - 1)) : half;
   auto key = [](std::int64_t x, std::int64_t y, std::int64_t z) {
     return static_cast<std::uint64_t>(x) << 42 | static_cast<std::uint64_t>(y) << 21 | static_cast<std::uint64_t>(z);
   };
-  std::vector<std::pair<std::uint64_t, int>> entries(n);  // (voxel key, index), sorted
+  auto& entries = f.entries;  // (voxel key, index), sorted
+  entries.resize(n);
   parallelFor(params.threads, n, [&](std::size_t i) {
-    const Eigen::Vector3d c = ((ellipsoids[i].mean - lo) / side).array().floor();
+    const Eigen::Vector3d c = ((at(i).mean - lo) / side).array().floor();
     entries[i] = {key(static_cast<std::int64_t>(c.x()), static_cast<std::int64_t>(c.y()), static_cast<std::int64_t>(c.z())),
                   static_cast<int>(i)};
   });
   parallelSort(params.threads, entries.begin(), entries.end());
   // What the search reads, in that order.
-  std::vector<Eigen::Vector3d> mean(n);
-  std::vector<SymmetricCov> cov(n);
-  std::vector<double> lambda(n);
-  std::vector<int> group(n), index(n);
+  auto& mean = f.mean;
+  auto& cov = f.cov;
+  auto& lambda = f.lambda;
+  auto &group = f.group, &index = f.index;
+  mean.resize(n), cov.resize(n), lambda.resize(n), group.resize(n), index.resize(n);
   parallelFor(params.threads, n, [&](std::size_t k) {
     const std::size_t i = static_cast<std::size_t>(entries[k].second);
-    mean[k] = ellipsoids[i].mean, cov[k] = SymmetricCov::of(ellipsoids[i].cov), lambda[k] = lambda_max[i];
+    const Ellipsoid& e = at(i);
+    mean[k] = e.mean, cov[k] = SymmetricCov::of(e.cov), lambda[k] = lambda_max[i];
     group[k] = group_of[i], index[k] = entries[k].second;
   });
-  std::vector<std::size_t> voxel_start;  // voxel v holds sorted positions voxel_start[v] .. voxel_start[v + 1]
-  std::vector<std::uint64_t> voxel;
+  auto& voxel_start = f.voxel_start;  // voxel v holds sorted positions voxel_start[v] .. voxel_start[v + 1]
+  auto& voxel = f.voxel;
+  voxel_start.clear(), voxel.clear();
   for (std::size_t k = 0; k < n; ++k)
     if (k == 0 || entries[k].first != entries[k - 1].first) {
       voxel_start.push_back(k);
@@ -549,11 +642,11 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
     }
   const std::size_t voxels = voxel.size();
   voxel_start.push_back(n);
-  entries = {};
   // Each pair of neighbouring voxels once: the 13 offsets that are positive in (dz, dy, dx) order.
   // Adding an offset keeps the voxels' order, so one pointer per offset walks the sorted list.
   constexpr int kForward = 13;
-  std::vector<std::array<int, kForward>> neighbour(voxels);  // -1: none
+  auto& neighbour = f.neighbour;  // -1: none
+  neighbour.resize(voxels);
   constexpr std::uint64_t kMask = (std::uint64_t{1} << 21) - 1;
   parallelFor(params.threads, kForward, [&](std::size_t o) {
     const int c = 14 + static_cast<int>(o);  // (dx, dy, dz) = (c % 3, c / 3 % 3, c / 9) - 1
@@ -575,13 +668,11 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
   // lambda_b)): most pairs are rejected before the distance is computed (the margin keeps rounding
   // from rejecting a pair on the boundary), most others after its mean term. Each pair is met
   // once: within a voxel as k < l, across voxels from one side.
-  struct Match {
-    int a, b;
-    double distance;
-  };
   constexpr std::size_t kChunk = 256;  // voxels per task; each task fills its own list
-  std::vector<std::vector<Match>> found((voxels + kChunk - 1) / kChunk);
+  auto& found = f.found;
+  found.resize((voxels + kChunk - 1) / kChunk);
   parallelFor(params.threads, found.size(), [&](std::size_t chunk) {
+    found[chunk].clear();
     for (std::size_t v = chunk * kChunk; v < std::min(voxels, (chunk + 1) * kChunk); ++v)
       for (int o = -1; o < kForward; ++o) {
         const int u = o < 0 ? static_cast<int>(v) : neighbour[v][static_cast<std::size_t>(o)];
@@ -602,28 +693,32 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
       }
   });
   // Both directions of every match, per ellipsoid (partners of i: partner[start[i] .. start[i + 1])).
-  std::vector<int> partner_start(n + 1, 0);
-  for (const std::vector<Match>& list : found)
-    for (const Match& m : list) ++partner_start[static_cast<std::size_t>(m.a) + 1], ++partner_start[static_cast<std::size_t>(m.b) + 1];
+  auto& partner_start = f.partner_start;
+  partner_start.assign(n + 1, 0);
+  for (const std::vector<FusionMatch>& list : found)
+    for (const FusionMatch& m : list) ++partner_start[static_cast<std::size_t>(m.a) + 1], ++partner_start[static_cast<std::size_t>(m.b) + 1];
   std::partial_sum(partner_start.begin(), partner_start.end(), partner_start.begin());
-  std::vector<std::pair<int, double>> partner(static_cast<std::size_t>(partner_start[n]));
+  auto& partner = f.partner;
+  partner.resize(static_cast<std::size_t>(partner_start[n]));
   {
-    std::vector<int> fill(partner_start.begin(), partner_start.end() - 1);
-    for (const std::vector<Match>& list : found)
-      for (const Match& m : list) {
+    std::vector<int>& fill = f.fill;
+    fill.assign(partner_start.begin(), partner_start.end() - 1);
+    for (const std::vector<FusionMatch>& list : found)
+      for (const FusionMatch& m : list) {
         partner[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.a)]++)] = {m.b, m.distance};
         partner[static_cast<std::size_t>(fill[static_cast<std::size_t>(m.b)]++)] = {m.a, m.distance};
       }
   }
-  found = {};
 
   // Greedy, most precise first (ellipsoids without partners stay as they are, in any order).
-  std::vector<std::pair<double, int>> order;
+  auto& order = f.order;
+  order.clear();
   for (std::size_t i = 0; i < n; ++i)
     if (partner_start[i + 1] > partner_start[i]) order.push_back({lambda_max[i], static_cast<int>(i)});
   parallelSort(params.threads, order.begin(), order.end());
-  std::vector<int> seed_of(n, -1);            // the seed whose cluster ellipsoid i joined; -1: alone
-  std::vector<std::pair<int, double>> taken;  // per partner group: its nearest partner so far
+  auto& seed_of = f.seed_of;  // the seed whose cluster ellipsoid i joined; -1: alone
+  seed_of.assign(n, -1);
+  auto& taken = f.taken;  // per partner group: its nearest partner so far
   for (const auto& [lambda_s, s] : order) {
     if (seed_of[static_cast<std::size_t>(s)] >= 0) continue;
     taken.clear();
@@ -644,21 +739,24 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
   }
 
   // One ellipsoid per cluster or lone ellipsoid, in the order of the seeds' indices.
-  std::vector<int> member_of(n);  // the seed an ellipsoid joined, -1 for seeds and lone ones
+  auto& member_of = f.member_of;  // the seed an ellipsoid joined, -1 for seeds and lone ones
+  member_of.resize(n);
   for (std::size_t i = 0; i < n; ++i) member_of[i] = seed_of[i] == static_cast<int>(i) ? -1 : seed_of[i];
-  const Buckets members = bucketByKey(member_of, n);
-  std::vector<std::size_t> slot(n + 1, 0);  // where seed or lone ellipsoid i goes in the output
+  bucketByKey(member_of, n, &f.members, &f.fill);
+  const Buckets& members = f.members;
+  auto& slot = f.slot;  // where seed or lone ellipsoid i goes in the output
+  slot.assign(n + 1, 0);
   for (std::size_t i = 0; i < n; ++i) slot[i + 1] = slot[i] + (member_of[i] < 0 ? 1 : 0);
   std::vector<Ellipsoid> out(slot[n]);
   parallelFor(params.threads, (n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
     std::vector<const Ellipsoid*> cluster;
     for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) {
       if (seed_of[i] < 0) {
-        out[slot[i]] = ellipsoids[i];
+        out[slot[i]] = at(i);
       } else if (seed_of[i] == static_cast<int>(i)) {
-        cluster.assign(1, &ellipsoids[i]);
+        cluster.assign(1, &at(i));
         for (int k = members.start[i]; k < members.start[i + 1]; ++k)
-          cluster.push_back(&ellipsoids[static_cast<std::size_t>(members.order[static_cast<std::size_t>(k)])]);
+          cluster.push_back(&at(static_cast<std::size_t>(members.order[static_cast<std::size_t>(k)])));
         out[slot[i]] = momentMatch(cluster);  // keeps the seed's keyframe and cell
       }
     }
@@ -677,58 +775,129 @@ std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalM
   return local;
 }
 
-GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params) {
+struct GlobalMapWorkspace::Buffers {
+  // Per keyframe id: its kept cells and what they were computed from.
+  struct Kept {
+    std::uint64_t container = 0, revision = 0;
+    FilterParams filter;
+    std::vector<bool> kept;
+  };
+  std::vector<Kept> kept;
+  std::vector<std::vector<Ellipsoid>> merged;  // per merge group
+  tbb::enumerable_thread_specific<MergeScratch> merge_scratch;
+  std::vector<std::size_t> offset, kept_offset;
+  std::vector<int> group_of, kept_group_of;
+  std::vector<double> lambda_max, kept_lambda_max;
+  std::vector<char> removed;
+  std::vector<const Ellipsoid*> survivor;  // into merged: what occlusion removal kept, in order
+  OcclusionBuffers occlusion;
+  FusionBuffers fusion;
+};
+
+GlobalMapWorkspace::GlobalMapWorkspace() : buffers_(std::make_unique<Buffers>()) {}
+GlobalMapWorkspace::~GlobalMapWorkspace() = default;
+
+namespace {
+
+bool sameFilter(const FilterParams& a, const FilterParams& b) {
+  return a.model == b.model && a.filter_sigma_factor == b.filter_sigma_factor && a.min_points == b.min_points;
+}
+
+}  // namespace
+
+GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params, GlobalMapWorkspace* workspace) {
   params.validate();
+  std::unique_ptr<GlobalMapWorkspace> own;  // this build's, without one given
+  if (workspace == nullptr) workspace = (own = std::make_unique<GlobalMapWorkspace>()).get();
+  GlobalMapWorkspace::Buffers& ws = *workspace->buffers_;
   GlobalMap map;
   const auto start = Clock::now();
   map.groups = mergeGroups(graph, params.tau_group);
   map.groups_ms = msSince(start);
 
   const auto merge_start = Clock::now();
+  // The filter's answer depends on a container and the filter parameters only, not on poses: a
+  // rebuild after a loop closure reuses it for every keyframe.
+  ws.kept.resize(graph.size());
+  parallelFor(params.threads, graph.size(), [&](std::size_t k) {
+    const KeyframeContainer& box = graph.keyframe(static_cast<int>(k)).container;
+    GlobalMapWorkspace::Buffers::Kept& cached = ws.kept[k];
+    if (cached.container != box.id() || cached.revision != box.revision() || !sameFilter(cached.filter, params.filter) ||
+        cached.kept.size() != box.size())
+      cached = {box.id(), box.revision(), params.filter, keptCells(box, params.filter)};
+  });
   map.kept.resize(graph.size());
-  parallelFor(params.threads, graph.size(),
-              [&](std::size_t k) { map.kept[k] = keptCells(graph.keyframe(static_cast<int>(k)).container, params.filter); });
-  for (const std::vector<bool>& kept : map.kept) map.sigma_e += static_cast<std::size_t>(std::count(kept.begin(), kept.end(), true));
-  std::vector<std::vector<Ellipsoid>> merged(map.groups.size());
-  parallelFor(params.threads, map.groups.size(),
-              [&](std::size_t g) { merged[g] = mergeGroup(graph, map.groups[g], params, map.kept); });
-  std::vector<std::size_t> offset(merged.size() + 1, 0);  // group g goes to all[offset[g] ..]
-  for (std::size_t g = 0; g < merged.size(); ++g) offset[g + 1] = offset[g] + merged[g].size();
-  std::vector<Ellipsoid> all(offset.back());
-  std::vector<int> group_of(offset.back());
-  parallelFor(params.threads, merged.size(), [&](std::size_t g) {
-    std::copy(merged[g].begin(), merged[g].end(), all.begin() + static_cast<std::ptrdiff_t>(offset[g]));
-    std::fill_n(group_of.begin() + static_cast<std::ptrdiff_t>(offset[g]), merged[g].size(), static_cast<int>(g));
-    merged[g] = {};
+  for (std::size_t k = 0; k < graph.size(); ++k) {
+    map.kept[k] = ws.kept[k].kept;
+    map.sigma_e += static_cast<std::size_t>(std::count(map.kept[k].begin(), map.kept[k].end(), true));
+  }
+  ws.merged.resize(map.groups.size());
+  parallelFor(params.threads, map.groups.size(), [&](std::size_t g) {
+    mergeGroup(graph, map.groups[g], params, map.kept, &ws.merge_scratch.local(), &ws.merged[g]);
+  });
+  // Ellipsoid i of the merge is ws.merged[g][i - offset[g]], g = group_of[i].
+  const std::size_t groups = ws.merged.size();
+  ws.offset.assign(groups + 1, 0);
+  for (std::size_t g = 0; g < groups; ++g) ws.offset[g + 1] = ws.offset[g] + ws.merged[g].size();
+  const std::size_t n = ws.offset.back();
+  map.merged = n;
+  const bool need_lambda = params.occlusion_removal || params.fuse_across_groups;
+  ws.group_of.resize(n);
+  ws.lambda_max.resize(need_lambda ? n : 0);
+  parallelFor(params.threads, groups, [&](std::size_t g) {
+    for (std::size_t l = 0; l < ws.merged[g].size(); ++l) {
+      ws.group_of[ws.offset[g] + l] = static_cast<int>(g);
+      if (need_lambda) ws.lambda_max[ws.offset[g] + l] = largestEigenvalue(ws.merged[g][l].cov);
+    }
   });
   map.merge_ms = msSince(merge_start);
-
-  map.merged = all.size();
 
   // Occlusion removal before fusion: it judges each viewpoint's own group's ellipsoids, and a
   // fused ellipsoid carries only its seed's keyframe, so fusing first would hide copies from the
   // viewpoints whose coarse occluders they remove.
   const auto occlusion_start = Clock::now();
-  std::vector<double> lambda_max;
-  if (params.occlusion_removal || params.fuse_across_groups) lambda_max = largestEigenvalues(all, params.threads);
   if (params.occlusion_removal) {
-    const std::vector<bool> removed = occludingEllipsoids(graph, all, lambda_max, params);
-    std::size_t kept = 0;
-    for (std::size_t i = 0; i < all.size(); ++i)
-      if (!removed[i]) all[kept] = all[i], group_of[kept] = group_of[i], lambda_max[kept] = lambda_max[i], ++kept;
-    all.resize(kept);
-    group_of.resize(kept);
-    lambda_max.resize(kept);
+    auto at = [&](std::size_t i) -> const Ellipsoid& {
+      const std::size_t g = static_cast<std::size_t>(ws.group_of[i]);
+      return ws.merged[g][i - ws.offset[g]];
+    };
+    occludingEllipsoids(graph, n, at, ws.lambda_max, params, &ws.occlusion, &ws.removed);
+  } else {
+    ws.removed.assign(n, 0);
   }
+  // The survivors, in order: their indices, groups and lambda_max.
+  ws.kept_offset.assign(groups + 1, 0);
+  parallelFor(params.threads, groups, [&](std::size_t g) {
+    ws.kept_offset[g + 1] = static_cast<std::size_t>(
+        std::count(ws.removed.begin() + static_cast<std::ptrdiff_t>(ws.offset[g]),
+                   ws.removed.begin() + static_cast<std::ptrdiff_t>(ws.offset[g + 1]), 0));
+  });
+  std::partial_sum(ws.kept_offset.begin(), ws.kept_offset.end(), ws.kept_offset.begin());
+  const std::size_t kept = ws.kept_offset.back();
+  ws.survivor.resize(kept);
+  ws.kept_group_of.resize(kept);
+  ws.kept_lambda_max.resize(need_lambda ? kept : 0);
+  parallelFor(params.threads, groups, [&](std::size_t g) {
+    std::size_t to = ws.kept_offset[g];
+    for (std::size_t i = ws.offset[g]; i < ws.offset[g + 1]; ++i) {
+      if (ws.removed[i]) continue;
+      ws.survivor[to] = ws.merged[g].data() + (i - ws.offset[g]);
+      ws.kept_group_of[to] = static_cast<int>(g);
+      if (need_lambda) ws.kept_lambda_max[to] = ws.lambda_max[i];
+      ++to;
+    }
+  });
   map.occlusion_ms = msSince(occlusion_start);
 
   const auto fusion_start = Clock::now();
+  auto survivor = [&](std::size_t k) -> const Ellipsoid& { return *ws.survivor[k]; };
   if (params.fuse_across_groups) {
-    const std::size_t before = all.size();
-    all = fuseAcrossGroups(all, group_of, lambda_max, params);
-    map.merged_across_groups = before - all.size();
+    map.ellipsoids = fuseAcrossGroups(kept, survivor, ws.kept_group_of, ws.kept_lambda_max, params, &ws.fusion);
+    map.merged_across_groups = kept - map.ellipsoids.size();
+  } else {
+    map.ellipsoids.resize(kept);
+    parallelFor(params.threads, kept, [&](std::size_t k) { map.ellipsoids[k] = survivor(k); });
   }
-  map.ellipsoids = std::move(all);
   map.fusion_ms = msSince(fusion_start);
   map.sigma_e_prime = map.ellipsoids.size();
   map.t_g_s = secondsSince(start);

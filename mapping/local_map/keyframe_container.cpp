@@ -45,6 +45,7 @@ KeyframeContainer::KeyframeContainer(const PinholeCamera& camera, int cell_size_
 }
 
 StoredCell& KeyframeContainer::findOrCreate(int grid_index) {
+  ++revision_;
   std::int32_t& s = slot_[grid_index];
   if (s < 0) {
     s = static_cast<std::int32_t>(cells_.size());

@@ -78,6 +78,9 @@ class KeyframeContainer {
   /// cache of something computed from cells()[i] stays valid while (id(), i, n) are the same
   /// (the dense refinement's cell distributions).
   std::uint64_t id() const { return id_.value; }
+  /// Counts findOrCreate() calls, the only way a cell changes: while (id(), revision()) are the
+  /// same, so are the cells (the global map's workspace keeps each keyframe's filter result by it).
+  std::uint64_t revision() const { return revision_; }
 
  private:
   struct UniqueId {
@@ -96,6 +99,7 @@ class KeyframeContainer {
   std::vector<std::int32_t> slot_;
   std::vector<StoredCell> cells_;
   UniqueId id_;
+  std::uint64_t revision_ = 0;
 };
 
 }  // namespace vdmap
