@@ -100,7 +100,7 @@ void runMap(MapArgs args) {
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
     tracking_ms.push_back(r.ms.tracking_ms);
-  });
+  }, !args.sequence.no_refine);
   const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.params.global);
@@ -177,6 +177,7 @@ void addMapCommand(CLI::App& app) {
   auto args = std::make_shared<MapArgs>();
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
+  addRefineArg(*verb, args->sequence);
   verb->add_option("--out", args->out,
                    "output folder (created if missing): local_maps.ply, keyframes.txt, trajectory.txt, graph.txt, "
                    "global_points.ply, global_ellipsoids.ply, global_gaussians.ply, [global.bt], stats.json")

@@ -252,7 +252,7 @@ void runRender(RenderArgs args) {
     MapperParams params;
     params.poses = poseSource(args.sequence, seq);
     mapper = std::make_unique<Mapper>(seq.camera(), params);
-    mapSequence(seq, *mapper);
+    mapSequence(seq, *mapper, {}, !args.sequence.no_refine);
     addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
              choice, seq.folder().string(), args.view);
     source = {seq.folder().string(), mapper->framesMapped(), &mapper->graph()};
@@ -293,6 +293,7 @@ void addRenderCommand(CLI::App& app) {
   auto args = std::make_shared<RenderArgs>();
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
+  addRefineArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description(
       "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
   verb->add_option("--map", args->map,

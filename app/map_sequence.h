@@ -9,10 +9,10 @@ namespace vdmap::app {
 
 /// Feeds every frame of `seq` to `mapper` in order, decoding the next frame while one is mapped,
 /// with a progress bar on stderr; `on_frame`, when given, sees each frame's report. With tracked
-/// poses the keyframe poses are then refined from the settled local maps
+/// poses and `refine`, the keyframe poses are then refined from the settled local maps
 /// (Mapper::refineKeyframePoses), whose outcome is returned.
 MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
-                                const std::function<void(const FrameReport&)>& on_frame = {});
+                                const std::function<void(const FrameReport&)>& on_frame = {}, bool refine = true);
 
 /// The ground-truth poses of the sequence's frames (those that have one), for trajectory error.
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq);

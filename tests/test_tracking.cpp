@@ -431,6 +431,13 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
   // a frame on the spot and tracks to 7.5 cm ATE (noted as a known weakness in README).
   EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.15);
   for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms"}) EXPECT_TRUE(stats.contains(key)) << key;
+  const nlohmann::json& refinement = stats["map_refinement"];
+  EXPECT_GE(refinement["pairs"].get<int>(), 1) << stats.dump();
+  EXPECT_GE(refinement["rounds"].get<int>(), refinement["edges"].get<int>() > 0 ? 1 : 0) << stats.dump();
+  // --no-refine keeps the keyframe poses as tracked.
+  const test::RunResult kept = test::runVdmap("map " + seq + " --poses track --no-refine --json --out '" + (dir / "k").string() + "'");
+  ASSERT_EQ(kept.exit_code, 0) << kept.err;
+  EXPECT_EQ(nlohmann::json::parse(test::readFile(dir / "k" / "stats.json"))["map_refinement"]["rounds"], 0);
 
   std::filesystem::remove(dir / "seq" / "groundtruth.txt");
   const test::RunResult r = test::runVdmap("map " + seq + " --out '" + (dir / "b").string() + "'");
