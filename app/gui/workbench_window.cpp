@@ -892,10 +892,11 @@ class WorkbenchWindow {
     ImGui::BeginDisabled(!can);
     bool before = ui().show_before_optimisation;
     if (ImGui::Checkbox("show before last optimisation (B)", &before)) bench_.showBeforeOptimisation(before);
-    tip(!can ? "No pose-graph optimisation yet: it runs after a loop closure."
+    tip(!can ? "No pose-graph optimisation yet: it runs after a loop closure, and as the map refinement after the "
+               "sequence's last frame."
              : "The keyframe poses, frustums, trajectory and global map as they were before the last pose-graph "
-               "optimisation (rebuilt from the same local maps); off: after it. Pose edits and exports use the map "
-               "after it.");
+               "optimisation (a loop closure's, or the map refinement's after the last frame; rebuilt from the same "
+               "local maps); off: after it. Pose edits and exports use the map after it.");
     ImGui::EndDisabled();
     checkFits();
     if (mapping_->loops.empty()) return;
