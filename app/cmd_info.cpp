@@ -24,7 +24,6 @@ struct DepthStats {
   double invalid_code_fraction = 0;  ///< raw 65535
 };
 
-// Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
 // The colour camera of an unregistered sequence (null when the colour is registered already).
 nlohmann::json colourJson(const std::optional<ColourCamera>& c) {
   if (!c) return nullptr;
@@ -35,6 +34,7 @@ nlohmann::json colourJson(const std::optional<ColourCamera>& c) {
   return {{"fx", c->fx}, {"fy", c->fy}, {"cx", c->cx}, {"cy", c->cy}, {"T_colour_depth", rows}};
 }
 
+// Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
 DepthStats sampleDepth(const TumSequence& seq, int samples) {
   DepthStats stats;
   std::vector<std::uint16_t> valid;

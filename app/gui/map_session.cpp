@@ -188,10 +188,12 @@ void MapSession::mapOneFrame() {
     std::string refined;
     if (mapper_params_.poses == PoseSource::kTrack && i + 1 == framesTotal()) {
       const MapRefinementResult r = mapper_->refineKeyframePoses();
-      char text[160];
-      std::snprintf(text, sizeof text, "keyframe poses refined from %d of %d covisible pairs' local maps (%.1f mm at most, %.1f s)",
-                    r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
-      if (r.rounds > 0) refined = text;
+      if (r.rounds > 0) {
+        char text[160];
+        std::snprintf(text, sizeof text, "keyframe poses refined from %d of %d covisible pairs' local maps (%.1f mm at "
+                      "most, %.1f s)", r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
+        refined = text;
+      }
     }
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;

@@ -14,10 +14,8 @@
 #include <Eigen/Eigenvalues>
 #include <Eigen/LU>
 #include <tbb/enumerable_thread_specific.h>
-#include <tbb/parallel_for.h>
-#include <tbb/parallel_sort.h>
-#include <tbb/task_arena.h>
 
+#include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/local_map/cell_stats.h"
 
@@ -201,22 +199,6 @@ void mergeGroup(const KeyframeGraph& graph, const MergeGroup& group, const Globa
   }
   for (std::size_t i = 0; i < s.cell_of.size(); ++i)
     if (s.cell_of[i] < 0) out->push_back(transformed(inCentre(static_cast<int>(i)), centre.T_W_K));
-}
-
-// Runs body(i) for i in [0, n) on `threads` threads (0: all). Each i writes only its own slot,
-// so the result is the same for any thread count.
-template <typename Body>
-void parallelFor(int threads, std::size_t n, const Body& body) {
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] { tbb::parallel_for(std::size_t{0}, n, [&](std::size_t i) { body(i); }); });
-}
-
-// Sorts [begin, end) on `threads` threads (0: all). Only for elements without ties (an index in
-// each), so the unstable parallel sort still gives the one sorted order whatever the thread count.
-template <typename Iterator>
-void parallelSort(int threads, Iterator begin, Iterator end) {
-  tbb::task_arena arena(threads > 0 ? threads : tbb::task_arena::automatic);
-  arena.execute([&] { tbb::parallel_sort(begin, end); });
 }
 
 // SPEC 6.3: the keyframes whose ellipsoids viewpoint K judges: K, its covisibility neighbours,
@@ -797,14 +779,6 @@ struct GlobalMapWorkspace::Buffers {
 GlobalMapWorkspace::GlobalMapWorkspace() : buffers_(std::make_unique<Buffers>()) {}
 GlobalMapWorkspace::~GlobalMapWorkspace() = default;
 
-namespace {
-
-bool sameFilter(const FilterParams& a, const FilterParams& b) {
-  return a.model == b.model && a.filter_sigma_factor == b.filter_sigma_factor && a.min_points == b.min_points;
-}
-
-}  // namespace
-
 GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params, GlobalMapWorkspace* workspace) {
   params.validate();
   std::unique_ptr<GlobalMapWorkspace> own;  // this build's, without one given
@@ -822,7 +796,7 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   parallelFor(params.threads, graph.size(), [&](std::size_t k) {
     const KeyframeContainer& box = graph.keyframe(static_cast<int>(k)).container;
     GlobalMapWorkspace::Buffers::Kept& cached = ws.kept[k];
-    if (cached.container != box.id() || cached.revision != box.revision() || !sameFilter(cached.filter, params.filter) ||
+    if (cached.container != box.id() || cached.revision != box.revision() || !(cached.filter == params.filter) ||
         cached.kept.size() != box.size())
       cached = {box.id(), box.revision(), params.filter, keptCells(box, params.filter)};
   });

@@ -19,6 +19,7 @@ struct FilterParams {
   SensorModel model = SensorModel::kNguyen2012;
   double filter_sigma_factor = 3.0;  ///< k
   int min_points = 6;
+  bool operator==(const FilterParams&) const = default;
 };
 
 /// One ellipsoid as the global map, exports and the renderer see it.

@@ -4,21 +4,26 @@
 
 #include <Eigen/Eigenvalues>
 
-#include <tbb/parallel_for.h>
-#include <tbb/task_arena.h>
-
+#include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 
 namespace vdmap {
 
-std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe& B, const MapRefinementParams& params) {
-  // B's ellipsoid means (B's frame). Tried instead: B's map rendered at B's pixels (each pixel's
-  // ray cut with its cell's plane, no grid to line up) with B's keypoints as feature terms
-  // (estimateRelativePose): Replica 0:800 map RMSE 1.99 mm instead of 1.30, 7-Scenes ATE 2.85 cm
-  // instead of 2.48; the means with feature terms: 1.21 mm but 3.39 cm.
+namespace {
+
+// B's ellipsoid means (B's frame), what registerLocalMaps aligns. Tried instead: B's map rendered
+// at B's pixels (each pixel's ray cut with its cell's plane, no grid to line up) with B's
+// keypoints as feature terms (estimateRelativePose): Replica 0:800 map RMSE 1.99 mm instead of
+// 1.30, 7-Scenes ATE 2.85 cm instead of 2.48; the means with feature terms: 1.21 mm but 3.39 cm.
+DensePoints cellMeans(const KeyframeContainer& map, int min_points) {
   DensePoints points;
-  for (const StoredCell& c : B.container.cells())
-    if (c.n >= static_cast<std::uint32_t>(params.min_cell_points)) points.points_C.push_back(c.mean);
+  for (const StoredCell& c : map.cells())
+    if (c.n >= static_cast<std::uint32_t>(min_points)) points.points_C.push_back(c.mean);
+  return points;
+}
+
+std::optional<PoseGraphEdge> registerMeans(const Keyframe& A, const Keyframe& B, const DensePoints& points,
+                                           const MapRefinementParams& params) {
   const Transform start = A.T_W_K.inverse() * B.T_W_K;
   RelativePose estimate;
   estimate.T_K_C = start;
@@ -35,6 +40,12 @@ std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe
   return PoseGraphEdge{A.id, B.id, estimate.T_K_C, edgeInformation(estimate, params.edge_noise), false};
 }
 
+}  // namespace
+
+std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe& B, const MapRefinementParams& params) {
+  return registerMeans(A, B, cellMeans(B.container, params.min_cell_points), params);
+}
+
 MapRefinementResult refineKeyframePoses(KeyframeGraph* graph, KeyframePoseGraph* pose_graph,
                                         const PoseGraphOptions& options, const MapRefinementParams& params) {
   const auto start = std::chrono::steady_clock::now();
@@ -43,13 +54,17 @@ MapRefinementResult refineKeyframePoses(KeyframeGraph* graph, KeyframePoseGraph*
   result.pairs = static_cast<int>(pairs.size());
   std::vector<Transform> initial;
   for (const Keyframe& k : graph->keyframes()) initial.push_back(k.T_W_K);
+  // The local maps do not change, only the poses: each keyframe's means once for every round.
+  std::vector<DensePoints> means(graph->size());
+  if (!pairs.empty())
+    parallelFor(params.threads, means.size(), [&](std::size_t k) {
+      means[k] = cellMeans(graph->keyframe(static_cast<int>(k)).container, params.min_cell_points);
+    });
   for (int round = 0; round < params.max_rounds && !pairs.empty(); ++round) {
     std::vector<std::optional<PoseGraphEdge>> measured(pairs.size());
-    tbb::task_arena arena(params.threads > 0 ? params.threads : tbb::task_arena::automatic);
-    arena.execute([&] {
-      tbb::parallel_for(std::size_t{0}, pairs.size(), [&](std::size_t i) {
-        measured[i] = registerLocalMaps(graph->keyframe(pairs[i].a), graph->keyframe(pairs[i].b), params);
-      });
+    parallelFor(params.threads, pairs.size(), [&](std::size_t i) {
+      const CovisibilityEdge& e = pairs[i];
+      measured[i] = registerMeans(graph->keyframe(e.a), graph->keyframe(e.b), means[static_cast<std::size_t>(e.b)], params);
     });
     std::vector<PoseGraphEdge> edges;
     for (const auto& e : measured)
