@@ -432,8 +432,10 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
   EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.15);
   for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms"}) EXPECT_TRUE(stats.contains(key)) << key;
   const nlohmann::json& refinement = stats["map_refinement"];
+  // (12 turning frames: 4 covisible pairs, 2 of them well enough conditioned to give edges.)
   EXPECT_GE(refinement["pairs"].get<int>(), 1) << stats.dump();
-  EXPECT_GE(refinement["rounds"].get<int>(), refinement["edges"].get<int>() > 0 ? 1 : 0) << stats.dump();
+  EXPECT_GE(refinement["edges"].get<int>(), 1) << stats.dump();
+  EXPECT_GE(refinement["rounds"].get<int>(), 1) << stats.dump();
   // --no-refine keeps the keyframe poses as tracked.
   const test::RunResult kept = test::runVdmap("map " + seq + " --poses track --no-refine --json --out '" + (dir / "k").string() + "'");
   ASSERT_EQ(kept.exit_code, 0) << kept.err;
