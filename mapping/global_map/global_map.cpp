@@ -33,13 +33,6 @@ constexpr double kCovFloor_m2 = 1e-10;
 
 Eigen::Matrix3d floored(const Eigen::Matrix3d& cov) { return cov + kCovFloor_m2 * Eigen::Matrix3d::Identity(); }
 
-// Largest eigenvalue of a floored covariance, m^2.
-double largestEigenvalue(const Eigen::Matrix3d& cov) {
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  eig.computeDirect(floored(cov), Eigen::EigenvaluesOnly);
-  return eig.eigenvalues()(2);
-}
-
 // A floored covariance as its six distinct entries, with the closed forms the Bhattacharyya
 // distance needs (fusion evaluates it for millions of pairs).
 struct SymmetricCov {
@@ -443,10 +436,10 @@ Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
 
 namespace {
 
-// largestEigenvalue of every ellipsoid's covariance (occlusion removal and fusion both rank by it).
+// Largest eigenvalue of every ellipsoid's floored covariance, m^2 (occlusion removal and fusion both rank by it).
 std::vector<double> largestEigenvalues(const std::vector<Ellipsoid>& ellipsoids, int threads) {
   std::vector<double> lambda_max(ellipsoids.size());
-  parallelFor(threads, ellipsoids.size(), [&](std::size_t i) { lambda_max[i] = largestEigenvalue(ellipsoids[i].cov); });
+  parallelFor(threads, ellipsoids.size(), [&](std::size_t i) { lambda_max[i] = largestEigenvalue(floored(ellipsoids[i].cov)); });
   return lambda_max;
 }
 
@@ -821,7 +814,7 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   parallelFor(params.threads, groups, [&](std::size_t g) {
     for (std::size_t l = 0; l < ws.merged[g].size(); ++l) {
       ws.group_of[ws.offset[g] + l] = static_cast<int>(g);
-      if (need_lambda) ws.lambda_max[ws.offset[g] + l] = largestEigenvalue(ws.merged[g][l].cov);
+      if (need_lambda) ws.lambda_max[ws.offset[g] + l] = largestEigenvalue(floored(ws.merged[g][l].cov));
     }
   });
   map.merge_ms = msSince(merge_start);

@@ -7,13 +7,13 @@
 #include <Eigen/Eigenvalues>
 
 namespace vdmap {
-namespace {
-
 double largestEigenvalue(const Eigen::Matrix3d& m) {
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> solver;
   solver.computeDirect(m, Eigen::EigenvaluesOnly);
   return solver.eigenvalues()(2);  // ascending
 }
+
+namespace {
 
 // Bounds on the largest eigenvalue of a symmetric matrix without its trigonometry (the filter runs
 // on every cell of every keyframe at each global-map rebuild): it is at least the largest diagonal

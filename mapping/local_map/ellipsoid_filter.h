@@ -32,6 +32,9 @@ struct Ellipsoid {
   int grid_index = -1;                                 ///< its cell in that keyframe's container
 };
 
+/// The largest eigenvalue of a symmetric 3x3 matrix (closed form).
+double largestEigenvalue(const Eigen::Matrix3d& m);
+
 /// True when `cell` passes the filter: n >= min_points, its mean lies in front of the keyframe,
 /// and sqrt(lambda_max(Sigma)) <= k sqrt(lambda_max(Sigma_expected)), where Sigma_expected is
 /// the sensor model's covariance at the pixel and depth the mean projects to, with the cell
