@@ -240,7 +240,8 @@ std::vector<OdometryRow> odometryPeers(const std::vector<RgbdFrame>& frames, con
 /// vdmap's own tracking (PoseSource::kTrack) on the decoded frames as a row of the odometry
 /// table: the whole pipeline (features, tracking, keyframe decision, loop closure, local-map
 /// update), CPU ms per frame, scored like the peers; its trajectory goes to
-/// trajectory_<key>.txt. Without loop closure it shows what the pose graph adds.
+/// trajectory_<key>.txt. Without loop closure it shows what the pose graph adds. `refinement` (may
+/// be null) receives the map refinement after the last frame, run only when it is given.
 OdometryRow trackVdmap(const std::vector<RgbdFrame>& frames, const PinholeCamera& cam, const BenchArgs& args,
                        bool loops, const std::filesystem::path& out_dir, int* loop_closures,
                        MapRefinementResult* refinement) {
@@ -258,9 +259,9 @@ OdometryRow trackVdmap(const std::vector<RgbdFrame>& frames, const PinholeCamera
     row.run.ms.push_back(cpuTimeMs([&] { mapper.addFrame(frames[i]); }));
     progress.update(i + 1);
   }
-  // With loop closure, the whole pipeline ends as `vdmap map` does: keyframe poses refined from
-  // the settled local maps (once, not per frame: its time is reported beside the table).
-  if (loops) *refinement = mapper.refineKeyframePoses();
+  // With `refinement` (the loop-closure row), the whole pipeline ends as `vdmap map` does: keyframe
+  // poses refined from the settled local maps (once, not per frame: its time is reported beside the table).
+  if (refinement) *refinement = mapper.refineKeyframePoses();
   row.run.trajectory = mapper.trajectory();
   row.run.failures = mapper.framesLost();
   row.run.keyframes = static_cast<int>(mapper.graph().size());
@@ -436,11 +437,11 @@ void runBench(BenchArgs args) {
 
   std::vector<OdometryRow> odometry;
   int loop_closures = 0, no_loops = 0;
-  MapRefinementResult refinement, unused;
+  MapRefinementResult refinement;
   if (args.poses == "track") {
     std::filesystem::create_directories(out_dir);  // the trajectories go there
     odometry.push_back(trackVdmap(decoded, cam, args, true, out_dir, &loop_closures, &refinement));
-    odometry.push_back(trackVdmap(decoded, cam, args, false, out_dir, &no_loops, &unused));
+    odometry.push_back(trackVdmap(decoded, cam, args, false, out_dir, &no_loops, nullptr));
     for (OdometryRow& row : odometryPeers(decoded, cam, args, out_dir)) odometry.push_back(std::move(row));
   }
 

@@ -789,7 +789,7 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   parallelFor(params.threads, graph.size(), [&](std::size_t k) {
     const KeyframeContainer& box = graph.keyframe(static_cast<int>(k)).container;
     GlobalMapWorkspace::Buffers::Kept& cached = ws.kept[k];
-    if (cached.container != box.id() || cached.revision != box.revision() || !(cached.filter == params.filter) ||
+    if (cached.container != box.id() || cached.revision != box.revision() || cached.filter != params.filter ||
         cached.kept.size() != box.size())
       cached = {box.id(), box.revision(), params.filter, keptCells(box, params.filter)};
   });
