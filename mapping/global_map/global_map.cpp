@@ -789,8 +789,9 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   parallelFor(params.threads, graph.size(), [&](std::size_t k) {
     const KeyframeContainer& box = graph.keyframe(static_cast<int>(k)).container;
     GlobalMapWorkspace::Buffers::Kept& cached = ws.kept[k];
-    if (cached.container != box.id() || cached.revision != box.revision() || cached.filter != params.filter ||
-        cached.kept.size() != box.size())
+    // (id, revision) name the container's cells exactly (keyframe_container.h); ids start at 1, so
+    // a new entry (container 0) never matches.
+    if (cached.container != box.id() || cached.revision != box.revision() || cached.filter != params.filter)
       cached = {box.id(), box.revision(), params.filter, keptCells(box, params.filter)};
   });
   map.kept.resize(graph.size());
