@@ -559,11 +559,25 @@ class WorkbenchWindow {
 
     const float image_width = ImGui::GetContentRegionAvail().x;
     if (!mirror_.rgbTexture().empty() && mapped > 0 && !saved) {
+      // The two images take what the panel has left above the depth scale and the timing plot
+      // and table, so the whole panel shows without scrolling (at 1280x720 too); they keep their
+      // aspect and at least a third of the panel's width.
+      const ImGuiStyle& style = ImGui::GetStyle();
+      const float font = ImGui::GetFontSize();
+      const float below = 2 * style.ItemSpacing.y + (0.7f * font + font + 2) + style.ItemSpacing.y + 4.5f * font +
+                          style.ItemSpacing.y + 4 * (ImGui::GetTextLineHeightWithSpacing() + 2 * style.CellPadding.y) + font;
+      const float each_h = (ImGui::GetContentRegionAvail().y - below) / 2;
+      const auto imageSize = [&](const render::Texture2D& t) {  // centred when narrower than the panel
+        const float aspect = static_cast<float>(t.height()) / std::max(1, t.width());
+        const float w = std::clamp(each_h / aspect, image_width / 3, image_width);
+        ImGui::SetCursorPosX(ImGui::GetCursorPosX() + (image_width - w) / 2);
+        return ImVec2{w, w * aspect};
+      };
       const render::Texture2D& rgb = mirror_.rgbTexture();
-      ImGui::Image(textureId(rgb), {image_width, image_width * rgb.height() / std::max(1, rgb.width())});
+      ImGui::Image(textureId(rgb), imageSize(rgb));
       tip("The last mapped frame's colour image.");
       const render::Texture2D& depth = mirror_.depthTexture();
-      ImGui::Image(textureId(depth), {image_width, image_width * depth.height() / std::max(1, depth.width())});
+      ImGui::Image(textureId(depth), imageSize(depth));
       tip("Its depth image: distance along the optical axis, black where the sensor measured nothing.");
       drawDepthScale(image_width);
     }
