@@ -559,14 +559,11 @@ class WorkbenchWindow {
 
     const float image_width = ImGui::GetContentRegionAvail().x;
     if (!mirror_.rgbTexture().empty() && mapped > 0 && !saved) {
-      // The two images take what the panel has left above the depth scale and the timing plot
-      // and table, so the whole panel shows without scrolling (at 1280x720 too); they keep their
-      // aspect and at least a third of the panel's width.
-      const ImGuiStyle& style = ImGui::GetStyle();
-      const float font = ImGui::GetFontSize();
-      const float below = 2 * style.ItemSpacing.y + (0.7f * font + font + 2) + style.ItemSpacing.y + 4.5f * font +
-                          style.ItemSpacing.y + 4 * (ImGui::GetTextLineHeightWithSpacing() + 2 * style.CellPadding.y) + font;
-      const float each_h = (ImGui::GetContentRegionAvail().y - below) / 2;
+      // The two images take what the panel has left above the depth scale and the stage times
+      // (their height as drawn last frame), so the whole panel shows without scrolling (at
+      // 1280x720 too); they keep their aspect and at least a third of the panel's width.
+      const float each_h =
+          (ImGui::GetContentRegionAvail().y - below_images_px_ - 2 * ImGui::GetStyle().ItemSpacing.y) / 2;
       const auto imageSize = [&](const render::Texture2D& t) {  // centred when narrower than the panel
         const float aspect = static_cast<float>(t.height()) / std::max(1, t.width());
         const float w = std::clamp(each_h / aspect, image_width / 3, image_width);
@@ -579,9 +576,13 @@ class WorkbenchWindow {
       const render::Texture2D& depth = mirror_.depthTexture();
       ImGui::Image(textureId(depth), imageSize(depth));
       tip("Its depth image: distance along the optical axis, black where the sensor measured nothing.");
+      const float top = ImGui::GetCursorPosY();
       drawDepthScale(image_width);
+      drawTimes(image_width);
+      below_images_px_ = ImGui::GetCursorPosY() - top;
+    } else {
+      drawTimes(image_width);
     }
-    drawTimes(image_width);
     ImGui::End();
   }
 
@@ -1486,6 +1487,7 @@ class WorkbenchWindow {
   ImVec2 last_size_{0, 0};
   int fb_width_ = 0, fb_height_ = 0;
   int labels_cut_ = 0;
+  float below_images_px_ = 0;  ///< the left panel's depth scale and stage times, as last drawn
   bool drag_in_view_[3] = {false, false, false};
   int scrub_ = 0;
   bool scrubbing_ = false;
