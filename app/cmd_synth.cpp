@@ -1,5 +1,6 @@
 // vdmap synth: renders a coloured mesh along a trajectory into a TUM RGB-D sequence, or writes
 // the built-in scene.
+#include <cstdint>
 #include <cstdio>
 
 #include "app/commands.h"
@@ -16,11 +17,13 @@ struct SynthArgs {
   bool builtin = false;
   int builtin_frames = 0;
   int builtin_laps = 1;
+  std::uint64_t seed = DepthNoiseParams{}.seed;
 };
 
 void runSynth(const SynthArgs& args) {
   render::SynthOptions options;
   options.noise.model = parseDepthNoiseModel(args.noise);
+  options.noise.seed = args.seed;
   if (!args.frames.empty()) {
     const FrameRange range = parseFrameRange(args.frames);
     options.first_frame = range.first;
@@ -38,6 +41,7 @@ void runSynth(const SynthArgs& args) {
     mesh = std::move(scene.mesh);
     trajectory = std::move(scene.trajectory);
     options.camera = args.camera.empty() ? scene.camera : cameraPreset(args.camera);
+    options.write_mesh = true;
   } else {
     if (args.mesh.empty() || args.trajectory.empty() || args.camera.empty())
       throw std::invalid_argument("give --mesh PLY --trajectory TUM_TXT --camera PRESET (or --builtin)");
@@ -75,7 +79,9 @@ void addSynthCommand(CLI::App& app) {
   verb->add_option("--frames", args->frames,
                    "poses A:B of the trajectory (B exclusive; A: or :B; a plain N means 0:N); a range past the end "
                    "is an error");
-  verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk)");
+  verb->add_option("--seed", args->seed, "seed of the depth noise (another seed: another draw of the same noise)")
+      ->capture_default_str();
+  verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk) and its mesh.ply");
   verb->add_option("--builtin-frames", args->builtin_frames, "poses per lap of the built-in walk (default 300)");
   verb->add_option("--builtin-laps", args->builtin_laps,
                    "laps of the built-in walk; each further lap takes new viewpoints (8 laps: 133 keyframes)")

@@ -10,6 +10,7 @@
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_group.h>
 
+#include "mapping/export/ply_writer.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/framebuffer.h"
 #include "render/map_scene.h"
@@ -144,6 +145,7 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     if (!rgb_list || !depth_list) throw std::runtime_error(tmp.string() + ": cannot write the frame lists");
     writeTumTrajectory(tmp / "groundtruth.txt", poses, "ground truth T_W_C (vdmap synth)");
     if (options.write_camera_file) writeCameraYaml(tmp / "camera.yaml", options.camera);
+    if (options.write_mesh) writeMeshPly(tmp / "mesh.ply", mesh);
     if (fs::exists(out_dir)) fs::remove(out_dir);  // an empty folder the caller made
     fs::rename(tmp, out_dir);
   } catch (...) {
@@ -159,6 +161,7 @@ void writeBuiltinSequence(const fs::path& out_dir, const BuiltinSceneParams& par
   SynthOptions options;
   options.camera = scene.camera;
   options.progress = std::move(progress);
+  options.write_mesh = true;
   synthesizeSequence(scene.mesh, scene.trajectory, options, out_dir);
 }
 

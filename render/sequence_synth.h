@@ -44,12 +44,16 @@ struct SynthOptions {
   int last_frame = -1;   ///< -1: to the end
   /// Written into the folder as camera.yaml so the sequence opens with the right intrinsics.
   bool write_camera_file = true;
+  /// Also mesh.ply, the rendered mesh (the built-in scene's is made in code: with it `vdmap eval
+  /// --mesh` scores maps of the sequence).
+  bool write_mesh = false;
   /// Called after each frame with (done, total).
   std::function<void(std::size_t, std::size_t)> progress;
 };
 
 /// Renders `trajectory` (T_W_C with timestamps) into the TUM folder `out_dir`: rgb/NNNNNN.png,
-/// depth/NNNNNN.png (16-bit), rgb.txt, depth.txt, groundtruth.txt, camera.yaml. Everything is
+/// depth/NNNNNN.png (16-bit), rgb.txt, depth.txt, groundtruth.txt, camera.yaml (mesh.ply with
+/// SynthOptions::write_mesh). Everything is
 /// written into a sibling temporary folder first and renamed at the end, so a failure leaves
 /// nothing behind. Throws std::invalid_argument when `out_dir` exists and is not empty or the
 /// frame range selects nothing, std::runtime_error on rendering/IO failures.

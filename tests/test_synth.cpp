@@ -129,6 +129,12 @@ TEST(Synth, BuiltinSceneIsAReadableSequenceThatRevisitsItsStart) {
   cv::Scalar mean, stddev;
   cv::meanStdDev(gray, mean, stddev);
   EXPECT_GT(stddev[0], 20.0);
+  // Its mesh.ply is the scene's mesh, so `vdmap eval --mesh` can score maps of it.
+  const ColoredTriangleMesh mesh = readPlyMesh(tmp / "builtin" / "mesh.ply");
+  ASSERT_EQ(mesh.positions.size(), scene.mesh.positions.size());
+  EXPECT_TRUE(mesh.positions == scene.mesh.positions);
+  EXPECT_TRUE(mesh.colors == scene.mesh.colors);
+  EXPECT_TRUE(mesh.triangles == scene.mesh.triangles);
   // Only the sequence is left: its DIR.tmp-XXXXXX staging folder was renamed, not copied.
   for (const auto& entry : std::filesystem::directory_iterator(tmp.path()))
     EXPECT_EQ(entry.path().filename(), "builtin");
@@ -148,7 +154,7 @@ TEST(Synth, SequenceFilesDoNotDependOnTheThreadCount) {
     ASSERT_TRUE(test::readFile(entry.path()) == test::readFile(tmp / "all" / relative)) << relative;
     ++files;
   }
-  EXPECT_EQ(files, 2 * 20 + 4);  // rgb and depth per frame, rgb.txt, depth.txt, groundtruth.txt, camera.yaml
+  EXPECT_EQ(files, 2 * 20 + 5);  // rgb and depth per frame, rgb.txt, depth.txt, groundtruth.txt, camera.yaml, mesh.ply
 }
 
 TEST(Synth, AFailureMidwayLeavesNothingBehind) {

@@ -72,6 +72,21 @@ void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoi
   writeFileAtomically(file, bytes);
 }
 
+void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh) {
+  std::string bytes = vertexHeader("vdmap mesh", mesh.positions.size(), "");
+  bytes.insert(bytes.size() - std::string("end_header\n").size(),
+               "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\n");
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    for (int k = 0; k < 3; ++k) put(bytes, mesh.positions[i](k));
+    for (int k = 0; k < 3; ++k) put(bytes, i < mesh.colors.size() ? mesh.colors[i][static_cast<std::size_t>(k)] : std::uint8_t{200});
+  }
+  for (const auto& t : mesh.triangles) {
+    put(bytes, std::uint8_t{3});
+    for (std::uint32_t v : t) put(bytes, v);
+  }
+  writeFileAtomically(file, bytes);
+}
+
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
   std::string bytes = vertexHeader("vdmap ellipsoids (SPEC 7)", ellipsoids.size(),
                                    "property float cxx\nproperty float cxy\nproperty float cxz\n"

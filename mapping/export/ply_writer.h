@@ -6,6 +6,7 @@
 
 #include <Eigen/Core>
 
+#include "mapping/io/ply_reader.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap {
@@ -22,6 +23,10 @@ Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov);
 /// temporary name in the same folder and renames it, so an interrupted export leaves no
 /// half-written file. Throws std::runtime_error naming the file on an I/O failure.
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
+
+/// Writes a coloured triangle mesh as readPlyMesh reads it: binary little-endian PLY, vertices x y
+/// z float, red green blue uchar, faces as uint vertex_indices lists. Atomic like writeEllipsoidPly.
+void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh);
 
 /// Writes the ellipsoid means as a coloured point cloud: binary little-endian PLY, x y z float,
 /// red green blue uchar (SPEC section 7). Atomic like writeEllipsoidPly.
