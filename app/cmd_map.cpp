@@ -100,7 +100,7 @@ void runMap(MapArgs args) {
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
     tracking_ms.push_back(r.ms.tracking_ms);
-  }, !args.sequence.no_refine);
+  }, refinement(args.sequence));
   const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
   const KeyframeGraph& graph = mapper.graph();
   const GlobalMap global = buildGlobalMap(graph, args.params.global);

@@ -252,7 +252,7 @@ void runRender(RenderArgs args) {
     MapperParams params;
     params.poses = poseSource(args.sequence, seq);
     mapper = std::make_unique<Mapper>(seq.camera(), params);
-    mapSequence(seq, *mapper, {}, !args.sequence.no_refine);
+    mapSequence(seq, *mapper, {}, refinement(args.sequence));
     addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
              choice, seq.folder().string(), args.view);
     source = {seq.folder().string(), mapper->framesMapped(), &mapper->graph()};

@@ -4,6 +4,7 @@
 
 #include <filesystem>
 #include <functional>
+#include <optional>
 #include <stdexcept>
 #include <string>
 
@@ -57,13 +58,15 @@ struct SequenceArgs {
   std::string camera;
   std::string frames;
   std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
-  bool no_refine = false;  ///< tracked poses: keep them as tracked (no refinement from the local maps after the last frame)
+  std::string refine = "pairwise";  ///< tracked poses: "pairwise", "joint" or "none" (MapRefinementMethod; none: keep them as tracked)
 };
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args);
 /// --poses gt|track, for the verbs that map a sequence.
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args);
-/// --no-refine, for the verbs that map a whole sequence (map, render SEQ).
+/// --refine METHOD and --no-refine, for the verbs that map a whole sequence (map, render SEQ).
 void addRefineArg(CLI::App& verb, SequenceArgs& args);
+/// The refinement --refine names (nullopt: none).
+std::optional<MapRefinementParams> refinement(const SequenceArgs& args);
 /// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
 /// The camera preset names, comma-separated, for --camera help texts.

@@ -6,7 +6,8 @@
 namespace vdmap::app {
 
 MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
-                                const std::function<void(const FrameReport&)>& on_frame, bool refine) {
+                                const std::function<void(const FrameReport&)>& on_frame,
+                                const std::optional<MapRefinementParams>& refine) {
   FramePrefetcher frames(seq, 4, mapper.featuresAhead());
   ProgressBar progress("mapping", seq.size());
   std::size_t done = 0;  // of this sequence (a continued session has mapped others before)
@@ -15,7 +16,7 @@ MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
     if (on_frame) on_frame(report);
     progress.update(++done);
   }
-  return refine && mapper.params().poses == PoseSource::kTrack ? mapper.refineKeyframePoses() : MapRefinementResult{};
+  return refine && mapper.params().poses == PoseSource::kTrack ? mapper.refineKeyframePoses(*refine) : MapRefinementResult{};
 }
 
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {

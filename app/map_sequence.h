@@ -1,6 +1,7 @@
 #pragma once
 // The mapping loop of the verbs that map a whole sequence (vdmap map, vdmap render SEQ).
 #include <functional>
+#include <optional>
 
 #include "mapping/io/tum_sequence.h"
 #include "mapping/keyframe/mapper.h"
@@ -12,7 +13,8 @@ namespace vdmap::app {
 /// poses and `refine`, the keyframe poses are then refined from the settled local maps
 /// (Mapper::refineKeyframePoses), whose outcome is returned.
 MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
-                                const std::function<void(const FrameReport&)>& on_frame = {}, bool refine = true);
+                                const std::function<void(const FrameReport&)>& on_frame = {},
+                                const std::optional<MapRefinementParams>& refine = MapRefinementParams{});
 
 /// The ground-truth poses of the sequence's frames (those that have one), for trajectory error.
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq);

@@ -25,10 +25,20 @@ void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
 }
 
 void addRefineArg(CLI::App& verb, SequenceArgs& args) {
-  verb.add_flag("--no-refine", args.no_refine,
-                "with tracked poses: keep the keyframe poses as tracked and loop-closed instead of refining them "
-                "from the settled local maps after the last frame (on real recordings the refinement lowers the "
-                "error; on the noise-modelled built-in scene it raises it, see README Tracking)");
+  verb.add_option("--refine", args.refine,
+                  "with tracked poses, how the keyframe poses are refined from the settled local maps after the "
+                  "last frame: pairwise (each covisible pair registered, then the pose graph), joint (all keyframe "
+                  "poses at once on every pair's cost) or none (as tracked and loop-closed); see README Tracking")
+      ->check(CLI::IsMember({"pairwise", "joint", "none"}))
+      ->capture_default_str();
+  verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
+}
+
+std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
+  if (args.refine == "none") return std::nullopt;
+  MapRefinementParams params;
+  if (args.refine == "joint") params.method = MapRefinementMethod::kJoint;
+  return params;
 }
 
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {

@@ -17,18 +17,23 @@ Eigen::Matrix3d skew(const Eigen::Vector3d& v) {
 
 }  // namespace
 
+Matrix6d adjoint(const Transform& T) {
+  const Eigen::Matrix3d R = T.linear();
+  Matrix6d Ad = Matrix6d::Zero();
+  Ad.topLeftCorner<3, 3>() = R;
+  Ad.topRightCorner<3, 3>() = skew(T.translation()) * R;
+  Ad.bottomRightCorner<3, 3>() = R;
+  return Ad;
+}
+
 Matrix6d edgeInformation(const RelativePose& estimate, const EdgeNoise& floor) {
   const double st = floor.translation_m, sr = floor.rotation_deg * M_PI / 180.0;
   Matrix6d floor_cov = Matrix6d::Zero();
   floor_cov.diagonal() << st * st, st * st, st * st, sr * sr, sr * sr, sr * sr;
   if (!estimate.dense_trusted) return (9.0 * floor_cov).inverse();
-  // exp(xi_K) T_K_C = T_K_C exp(xi_C) with xi_K = Ad(T_K_C) xi_C, Ad = [[R, [t]x R], [0, R]]
-  // (translation first), so the information of xi_C is Ad^T H Ad.
-  const Eigen::Matrix3d R = estimate.T_K_C.linear();
-  Matrix6d Ad = Matrix6d::Zero();
-  Ad.topLeftCorner<3, 3>() = R;
-  Ad.topRightCorner<3, 3>() = skew(estimate.T_K_C.translation()) * R;
-  Ad.bottomRightCorner<3, 3>() = R;
+  // exp(xi_K) T_K_C = T_K_C exp(xi_C) with xi_K = Ad(T_K_C) xi_C, so the information of xi_C
+  // is Ad^T H Ad.
+  const Matrix6d Ad = adjoint(estimate.T_K_C);
   Matrix6d info = Ad.transpose() * estimate.dense.information * Ad;
   info = 0.5 * (info + info.transpose());
   // The normal matrix can be singular along a direction the surfaces do not constrain (a single
@@ -40,11 +45,7 @@ Matrix6d edgeInformation(const RelativePose& estimate, const EdgeNoise& floor) {
 
 Matrix6d informationInFrame(const Matrix6d& info_B, const Transform& T_B_X) {
   // T_A_B exp(xi_B) T_B_X = T_A_X exp(xi_X) with xi_B = Ad(T_B_X) xi_X.
-  const Eigen::Matrix3d R = T_B_X.linear();
-  Matrix6d Ad = Matrix6d::Zero();
-  Ad.topLeftCorner<3, 3>() = R;
-  Ad.topRightCorner<3, 3>() = skew(T_B_X.translation()) * R;
-  Ad.bottomRightCorner<3, 3>() = R;
+  const Matrix6d Ad = adjoint(T_B_X);
   const Matrix6d out = Ad.transpose() * info_B * Ad;
   return 0.5 * (out + out.transpose());
 }

@@ -37,6 +37,10 @@ struct LoopClosureParams {
   PoseGraphOptions graph;
 };
 
+/// The adjoint of T = (R, t) for perturbations xi = (translation, rotation):
+/// T exp(xi) = exp(Ad(T) xi) T, Ad = [[R, [t]x R], [0, R]].
+Matrix6d adjoint(const Transform& T);
+
 /// The information matrix of an estimate of T_K_C as a pose-graph edge K -> C (pose_graph.h:
 /// right perturbation, translation first): the refinement's normal matrix moved into C's frame,
 /// with `floor` added as covariance. An estimate without a trusted refinement gets 3x the floor.
@@ -72,6 +76,12 @@ class KeyframePoseGraph {
   void replaceMeasuredEdges(std::span<const PoseGraphEdge> edges);
   /// Keyframe poses as they were before the last optimisation (empty before the first).
   const std::vector<Transform>& posesBeforeOptimisation() const { return before_; }
+  /// The graph's current poses become posesBeforeOptimisation() (an optimisation made elsewhere:
+  /// the joint map refinement).
+  void keepPosesBefore(const KeyframeGraph& graph) {
+    before_.clear();
+    for (const Keyframe& k : graph.keyframes()) before_.push_back(k.T_W_K);
+  }
   void recordLoop(const LoopClosure& loop) { loops_.push_back(loop); }
   /// Continues a saved graph (its edges and loops; no poses before an optimisation).
   void restore(std::vector<PoseGraphEdge> edges, std::vector<LoopClosure> loops) {

@@ -16,7 +16,19 @@
 
 namespace vdmap {
 
+enum class MapRefinementMethod {
+  /// Each covisible pair registered on its own, its relative pose an edge of the pose graph,
+  /// which is then optimised; in rounds.
+  kPairwise,
+  /// Every keyframe pose at once on the sum of the covisible pairs' costs (Levenberg-Marquardt):
+  /// a pair's directions its surfaces leave free are held by the other pairs instead of by an
+  /// edge's guessed information. The cells without the sensor's axial noise
+  /// (NdtRefinementParams::axial_noise): the means are averages.
+  kJoint,
+};
+
 struct MapRefinementParams {
+  MapRefinementMethod method = MapRefinementMethod::kPairwise;
   /// The registration's dense refinement (tracking's, with 20 Gauss-Newton steps instead of 6:
   /// Replica office0 0:800, map RMSE against the mesh 1.30 mm with 20, 1.56 with 6), and its
   /// checks: at least min_dense_inliers inlier cells making min_dense_inlier_ratio of those
@@ -38,6 +50,22 @@ struct MapRefinementParams {
   EdgeNoise edge_noise{0.001, 0.05};
   int max_rounds = 5;
   double converged_m = 0.0005;  ///< stop when a round moves no keyframe farther than this
+  /// kJoint: the cost of a pair (B's means against A's cells; the Tukey threshold annealed as
+  /// this refinement's, each level until it converges), and the Levenberg-Marquardt steps at
+  /// most. A step is taken only when it lowers the cost (the pairs' Tukey losses and the pose
+  /// graph's measured edges; a rejected one raises the damping); a level has converged when no
+  /// keyframe moves more than joint_converged_m.
+  NdtRefinementParams joint = [] {
+    NdtRefinementParams p;
+    p.axial_noise = false;
+    // Tried on the built-in 2-lap walk's two noise draws, the 150-frame lap and Replica 0:800
+    // (map RMSE, mm): no annealing 1.37 / 1.55 / 1.26 / 1.12, from 2x 1.36 / 1.34 / 1.20 / 1.14,
+    // from 8x 1.42 / 1.40 / 2.18 / 1.12.
+    p.annealing_factor = 2;
+    return p;
+  }();
+  int joint_iterations = 100;  ///< steps of all annealing levels together
+  double joint_converged_m = 1e-5;
   int threads = 0;              ///< registrations in parallel (0: all cores); the result does not depend on it
 };
 
@@ -49,14 +77,17 @@ std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe
 struct MapRefinementResult {
   int pairs = 0;       ///< covisible keyframe pairs registered (last round)
   int edges = 0;       ///< of those, trusted: map-to-map edges in the graph
-  int rounds = 0;
+  int rounds = 0;      ///< pose-graph rounds (kPairwise) or steps taken (kJoint)
   double moved_m = 0;  ///< the largest keyframe move of the whole refinement
   double ms = 0;       ///< wall time
 };
 
-/// Registers every covisible pair of `graph` (a round), replaces the pose graph's frame-measured
-/// edges of those pairs with the map-to-map ones, optimises the keyframe poses (keyframe 0 fixed)
-/// and repeats until converged. Loop edges stay. Deterministic whatever `threads`.
+/// kPairwise: registers every covisible pair of `graph` (a round), replaces the pose graph's
+/// frame-measured edges of those pairs with the map-to-map ones, optimises the keyframe poses
+/// (keyframe 0 fixed) and repeats until converged. kJoint: optimises the keyframe poses
+/// (keyframe 0 fixed) on all pairs' costs at once, then replaces those pairs' edges with the
+/// relative poses reached, so a later optimisation keeps them. Loop edges stay. Deterministic
+/// whatever `threads`.
 MapRefinementResult refineKeyframePoses(KeyframeGraph* graph, KeyframePoseGraph* pose_graph,
                                         const PoseGraphOptions& options, const MapRefinementParams& params = {});
 

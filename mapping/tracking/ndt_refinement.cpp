@@ -11,6 +11,14 @@
 
 namespace vdmap {
 
+Transform stepTransform(const Eigen::Matrix<double, 6, 1>& xi) {
+  Transform step = Transform::Identity();
+  const Eigen::Vector3d phi = xi.tail<3>();
+  if (phi.norm() > 0) step.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
+  step.translation() = xi.head<3>();
+  return step;
+}
+
 DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
                               int stride_px) {
   DensePoints out;
@@ -47,13 +55,15 @@ struct Scratch {
   std::vector<CellInfo> cells;
   int min_cell_points = -1;
   double min_variance_m2 = -1, in_plane_inflation = -1;
+  bool axial_noise = true;
   void use(const KeyframeContainer& map, const NdtRefinementParams& p) {
     if (cells.size() < map.size()) cells.resize(map.size());
     if (p.min_cell_points == min_cell_points && p.min_variance_m2 == min_variance_m2 &&
-        p.in_plane_inflation == in_plane_inflation)
+        p.in_plane_inflation == in_plane_inflation && p.axial_noise == axial_noise)
       return;
     for (CellInfo& c : cells) c.container = 0;
     min_cell_points = p.min_cell_points, min_variance_m2 = p.min_variance_m2, in_plane_inflation = p.in_plane_inflation;
+    axial_noise = p.axial_noise;
   }
 };
 
@@ -66,15 +76,25 @@ const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint64_t c
   if (!info->usable) return *info;
   info->mean = cell.mean;
   // The cell's covariance plus the sensor's axial noise at its depth (a single frame's points
-  // scatter that much about the surface) and the floor that keeps a noise-free plane invertible.
+  // scatter that much about the surface), or without it (NdtRefinementParams::axial_noise), and
+  // the floor that keeps a noise-free plane invertible.
   const double sd = nguyenAxialSd(cell.mean.z());
-  const double extra = params.min_variance_m2 + sd * sd;
   const std::array<float, 6>& s = cell.scatter;
   const double inv_n1 = 1.0 / (cell.n - 1.0);
   Eigen::Matrix3d sigma;
-  sigma << s[0] * inv_n1 + extra, s[1] * inv_n1, s[2] * inv_n1,  //
-      s[1] * inv_n1, s[3] * inv_n1 + extra, s[4] * inv_n1,      //
-      s[2] * inv_n1, s[4] * inv_n1, s[5] * inv_n1 + extra;
+  sigma << s[0] * inv_n1, s[1] * inv_n1, s[2] * inv_n1,  //
+      s[1] * inv_n1, s[3] * inv_n1, s[4] * inv_n1,      //
+      s[2] * inv_n1, s[4] * inv_n1, s[5] * inv_n1;
+  if (params.axial_noise) {
+    sigma.diagonal().array() += sd * sd;
+  } else {
+    const Eigen::Vector3d ray = cell.mean.cast<double>().normalized();
+    sigma -= sd * sd * ray * ray.transpose();
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> clamp;
+    clamp.computeDirect(sigma);
+    sigma = clamp.eigenvectors() * clamp.eigenvalues().cwiseMax(0.0).asDiagonal() * clamp.eigenvectors().transpose();
+  }
+  sigma.diagonal().array() += params.min_variance_m2;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
   es.computeDirect(sigma);
   Eigen::Vector3d lambda = es.eigenvalues();  // ascending
@@ -194,15 +214,31 @@ void addFeatureTerms(std::span<const FeatureObservation> features, const Pinhole
   }
 }
 
+Scratch& scratchFor(const KeyframeContainer& map, const NdtRefinementParams& params) {
+  static thread_local Scratch scratch;
+  scratch.use(map, params);
+  return scratch;
+}
+
+NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
+  NdtRefinementResult result;
+  result.points = static_cast<int>(points);
+  result.associated = lin.associated;
+  result.inliers = lin.inliers;
+  result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
+  result.support = lin.support;
+  result.information = lin.H;
+  result.gradient = lin.g;
+  return result;
+}
+
 }  // namespace
 
 NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
                                           std::span<const FeatureObservation> features, Transform* T_K_C,
                                           const NdtRefinementParams& params) {
-  NdtRefinementResult result;
-  result.points = static_cast<int>(frame.size());
-  static thread_local Scratch scratch;
-  scratch.use(map, params);
+  Scratch& scratch = scratchFor(map, params);
+  int iterations = 0;
   // Annealing: the first steps take points up to annealing_factor times farther (the basin of
   // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
   // threshold down to robust_k, where the last steps and the final measurement are made.
@@ -218,24 +254,22 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12).all()) break;
     const Eigen::Matrix<double, 6, 1> xi = -ldlt.solve(lin.g);
     if (!xi.allFinite()) break;
-    const Eigen::Vector3d rho = xi.head<3>(), phi = xi.tail<3>();
-    Transform step = Transform::Identity();
-    if (phi.norm() > 0) step.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
-    step.translation() = rho;
-    *T_K_C = step * *T_K_C;
-    ++result.iterations;
-    if (a == 1.0 && rho.norm() < params.converged_m && phi.norm() < params.converged_rad) {
+    *T_K_C = stepTransform(xi) * *T_K_C;
+    ++iterations;
+    if (a == 1.0 && xi.head<3>().norm() < params.converged_m && xi.tail<3>().norm() < params.converged_rad) {
       lin = linearise(map, frame, *T_K_C, params, params.robust_k, &scratch);
       addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
       break;
     }
   }
-  result.associated = lin.associated;
-  result.inliers = lin.inliers;
-  result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
-  result.support = lin.support;
-  result.information = lin.H;
+  NdtRefinementResult result = resultOf(lin, frame.size());
+  result.iterations = iterations;
   return result;
+}
+
+NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
+                                             const Transform& T_K_C, const NdtRefinementParams& params) {
+  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, &scratchFor(map, params)), frame.size());
 }
 
 }  // namespace vdmap

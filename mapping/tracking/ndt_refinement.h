@@ -16,6 +16,10 @@
 
 namespace vdmap {
 
+/// The pose change of a Gauss-Newton step xi = (translation, rotation vector) as the refinements
+/// apply it (exp(xi) to first order: the rotation, then the translation).
+Transform stepTransform(const Eigen::Matrix<double, 6, 1>& xi);
+
 /// A frame's points on a regular pixel grid (camera frame C, metres): what the dense refinement
 /// aligns. Computed once per frame and shared by every keyframe the frame is compared with.
 struct DensePoints {
@@ -55,6 +59,13 @@ struct NdtRefinementParams {
   /// Isotropic variance added to every cell covariance besides the sensor's axial noise at the
   /// cell's depth: keeps a cell of perfectly planar (noise-free, synthetic) points invertible.
   double min_variance_m2 = 1e-6;
+  /// false: the sensor model's axial variance at the cell's depth is taken out of the cell's
+  /// covariance along the keyframe's ray instead of added to it, so the cell has the surface's
+  /// own shape (the noise tilts a cell's thinnest axis towards its keyframe's ray, and the
+  /// projective association's in-cell offsets then pull along it). Right for points that are
+  /// themselves averages (another map's cell means: the joint map refinement); a single frame's
+  /// points carry that noise, so tracking keeps it.
+  bool axial_noise = true;
   /// Weight of the in-plane axes of a cell: its two larger eigenvalues are multiplied by this.
   /// The projective association puts a point in whichever cell it lands in, so its offset
   /// along the surface says little about the pose; at full weight it pulls points towards cell
@@ -85,8 +96,15 @@ struct NdtRefinementResult {
   /// Gauss-Newton normal matrix at the solution for a perturbation T_K_C <- exp(xi) T_K_C,
   /// xi = (translation, rotation) in the keyframe frame: the estimate's information matrix.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
+  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();  ///< of the cost at the solution, same perturbation
   double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
 };
+
+/// The refinement's objective at T_K_C, without moving it (Tukey threshold robust_k, no
+/// annealing, no features): `information` and `gradient` of the Gauss-Newton step for the
+/// perturbation exp(xi) T_K_C, `support` the soft inlier count the step should raise.
+NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
+                                             const Transform& T_K_C, const NdtRefinementParams& params = {});
 
 /// Refines T_K_C (the frame's pose in the keyframe frame) in place: NDT distances of the frame's
 /// points to the local map plus the reprojection errors of `features` (may be empty).

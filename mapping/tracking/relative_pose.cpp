@@ -103,11 +103,7 @@ Transform refineReprojection(const Transform& T_F_K, const Correspondences& c, c
     if (ldlt.info() != Eigen::Success || !(ldlt.vectorD().array() > 1e-12).all()) break;
     const Eigen::Matrix<double, 6, 1> xi = -ldlt.solve(g);
     if (!xi.allFinite()) break;
-    Transform delta = Transform::Identity();
-    const Eigen::Vector3d phi = xi.tail<3>();
-    if (phi.norm() > 0) delta.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
-    delta.translation() = xi.head<3>();
-    T = delta * T;
+    T = stepTransform(xi) * T;
     T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();  // exactly a rotation
     if (xi.norm() < 1e-7) break;
   }
