@@ -129,7 +129,8 @@ TEST(NdtRefinement, NormalEquationsMatchTheReference) {
 }
 
 // lineariseAgainstLocalMap (the joint map refinement's cost) is the reference's, with the
-// sensor's axial noise in the cells and taken out of them.
+// sensor's axial noise in the cells and taken out of them, and with the map's distributions
+// computed once (cellDistributions) it is the per-thread cache's, bit for bit.
 TEST(NdtRefinement, LinearisationMatchesTheReferenceWithAndWithoutTheAxialNoise) {
   Fixture f;
   const RgbdFrame frame = boxWalkFrame(3, 90);
@@ -146,6 +147,11 @@ TEST(NdtRefinement, LinearisationMatchesTheReferenceWithAndWithoutTheAxialNoise)
     EXPECT_GT(lin.inliers, 1000) << "axial noise " << axial_noise;
     EXPECT_LT((lin.information - H).norm(), 1e-5 * H.norm()) << "axial noise " << axial_noise;
     EXPECT_LT((lin.gradient - g).norm(), 1e-4 * g.norm()) << "axial noise " << axial_noise;
+    // The joint refinement's path, the map's distributions computed once: the same, bit for bit.
+    const std::vector<CellDistribution> cells = cellDistributions(f.keyframe().container, params);
+    const NdtRefinementResult table = lineariseAgainstLocalMap(f.keyframe().container, cells, points, T, params);
+    EXPECT_TRUE(table.information == lin.information && table.gradient == lin.gradient && table.support == lin.support)
+        << "axial noise " << axial_noise;
   }
 }
 

@@ -61,14 +61,24 @@ struct JointCost {
   double value = 0;
 };
 
-JointCost jointCost(const KeyframeGraph& graph, const std::vector<CovisibilityEdge>& pairs,
-                    const std::vector<DensePoints>& means, std::span<const PoseGraphEdge> edges,
+// What the joint cost is made of, all unchanged while the poses move: the covisible pairs, each
+// keyframe's means (B's side of a pair) and cell distributions (A's side; empty for a keyframe
+// that is no pair's A).
+struct JointTerms {
+  const std::vector<CovisibilityEdge>& pairs;
+  const std::vector<DensePoints>& means;
+  std::vector<std::vector<CellDistribution>> cells;
+};
+
+JointCost jointCost(const KeyframeGraph& graph, const JointTerms& terms, std::span<const PoseGraphEdge> edges,
                     const std::vector<Transform>& T_W, const NdtRefinementParams& cost, int threads) {
+  const std::vector<CovisibilityEdge>& pairs = terms.pairs;
   JointCost out;
   out.pairs.resize(pairs.size());
   parallelFor(threads, pairs.size(), [&](std::size_t i) {
     const auto a = static_cast<std::size_t>(pairs[i].a), b = static_cast<std::size_t>(pairs[i].b);
-    out.pairs[i] = lineariseAgainstLocalMap(graph.keyframe(pairs[i].a).container, means[b], T_W[a].inverse() * T_W[b], cost);
+    out.pairs[i] = lineariseAgainstLocalMap(graph.keyframe(pairs[i].a).container, terms.cells[a], terms.means[b],
+                                            T_W[a].inverse() * T_W[b], cost);
   });
   double support = 0;
   for (const NdtRefinementResult& p : out.pairs) support += p.support;  // in order: the same sum whatever the threads
@@ -132,6 +142,12 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
                    const std::vector<DensePoints>& means, const MapRefinementParams& params, MapRefinementResult* result) {
   const int n = static_cast<int>(graph->size());
   if (n < 2) return;
+  JointTerms terms{pairs, means, std::vector<std::vector<CellDistribution>>(graph->size())};
+  std::vector<char> is_a(graph->size(), 0);
+  for (const CovisibilityEdge& e : pairs) is_a[static_cast<std::size_t>(e.a)] = 1;
+  parallelFor(params.threads, terms.cells.size(), [&](std::size_t k) {
+    if (is_a[k]) terms.cells[k] = cellDistributions(graph->keyframe(static_cast<int>(k)).container, params.joint);
+  });
   std::vector<Transform> T_W;
   for (const Keyframe& k : graph->keyframes()) T_W.push_back(k.T_W_K);
   pose_graph->keepPosesBefore(*graph);
@@ -141,7 +157,7 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
   double anneal = std::max(1.0, params.joint.annealing_factor);
   NdtRefinementParams level = params.joint;
   level.robust_k = params.joint.robust_k * anneal;
-  JointCost cost = jointCost(*graph, pairs, means, measured, T_W, level, params.threads);
+  JointCost cost = jointCost(*graph, terms, measured, T_W, level, params.threads);
   double lambda = 1e-4;
   for (int it = 0; it < params.joint_iterations; ++it) {
     bool converged = lambda > 1e6;
@@ -160,7 +176,7 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
         T.linear() = Eigen::Quaterniond(T.linear()).normalized().toRotationMatrix();  // exactly a rotation
         largest_m = std::max(largest_m, step.head<3>().norm());
       }
-      JointCost trial_cost = jointCost(*graph, pairs, means, measured, trial, level, params.threads);
+      JointCost trial_cost = jointCost(*graph, terms, measured, trial, level, params.threads);
       if (trial_cost.value >= cost.value) {
         lambda *= 4;
         continue;
@@ -175,11 +191,11 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
       if (anneal == 1.0) break;
       anneal = std::max(1.0, anneal / 2);
       level.robust_k = params.joint.robust_k * anneal;
-      cost = jointCost(*graph, pairs, means, measured, T_W, level, params.threads);
+      cost = jointCost(*graph, terms, measured, T_W, level, params.threads);
       lambda = 1e-4;
     }
   }
-  if (anneal != 1.0) cost = jointCost(*graph, pairs, means, measured, T_W, params.joint, params.threads);  // out of steps
+  if (anneal != 1.0) cost = jointCost(*graph, terms, measured, T_W, params.joint, params.threads);  // out of steps
   for (int k = 1; k < n; ++k) graph->setKeyframePose(k, T_W[static_cast<std::size_t>(k)]);
   // The pose graph keeps what the refinement found: each trusted pair's relative pose as its edge.
   std::vector<PoseGraphEdge> edges;

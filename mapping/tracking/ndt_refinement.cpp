@@ -37,14 +37,12 @@ DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camer
 
 namespace {
 
-// A cell's distribution as the refinement uses it: mean and information matrix (upper triangle
-// xx xy xz yy yz zz), computed on first use and kept while the cell is unchanged.
+// A cell's distribution (CellDistribution), computed on first use and kept while the cell is
+// unchanged.
 struct CellInfo {
   std::uint64_t container = 0;  ///< KeyframeContainer::id() it was computed for (0: never)
   std::uint32_t n = 0;          ///< the cell's count then: a cell changes only by gaining points
-  bool usable = false;          ///< enough points for a distribution
-  Eigen::Vector3f mean;
-  float omega[6];
+  CellDistribution d;
 };
 
 // Per-thread cache, one entry per stored cell (by its index in cells()) of the container last
@@ -67,17 +65,16 @@ struct Scratch {
   }
 };
 
-const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint64_t container,
-                         const NdtRefinementParams& params) {
-  if (info->container == container && info->n == cell.n) return *info;
-  info->container = container;
-  info->n = cell.n;
-  info->usable = cell.n >= static_cast<std::uint32_t>(std::max(params.min_cell_points, 2));
-  if (!info->usable) return *info;
-  info->mean = cell.mean;
+CellDistribution distributionOf(const StoredCell& cell, const NdtRefinementParams& params) {
+  CellDistribution out;
+  out.usable = cell.n >= static_cast<std::uint32_t>(std::max(params.min_cell_points, 2));
+  if (!out.usable) return out;
+  out.mean = cell.mean;
   // The cell's covariance plus the sensor's axial noise at its depth (a single frame's points
-  // scatter that much about the surface), or without it (NdtRefinementParams::axial_noise), and
-  // the floor that keeps a noise-free plane invertible.
+  // scatter that much about the surface), or without it (NdtRefinementParams::axial_noise: taken
+  // out along the ray, negative variances clamped to 0), plus the floor that keeps a noise-free
+  // plane invertible; then the in-plane axes inflated. One eigen-decomposition: adding the
+  // isotropic terms moves every eigenvalue and no eigenvector.
   const double sd = nguyenAxialSd(cell.mean.z());
   const std::array<float, 6>& s = cell.scatter;
   const double inv_n1 = 1.0 / (cell.n - 1.0);
@@ -85,25 +82,32 @@ const CellInfo& cellInfo(const StoredCell& cell, CellInfo* info, std::uint64_t c
   sigma << s[0] * inv_n1, s[1] * inv_n1, s[2] * inv_n1,  //
       s[1] * inv_n1, s[3] * inv_n1, s[4] * inv_n1,      //
       s[2] * inv_n1, s[4] * inv_n1, s[5] * inv_n1;
+  double isotropic = params.min_variance_m2;
   if (params.axial_noise) {
-    sigma.diagonal().array() += sd * sd;
+    isotropic += sd * sd;
   } else {
     const Eigen::Vector3d ray = cell.mean.cast<double>().normalized();
     sigma -= sd * sd * ray * ray.transpose();
-    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> clamp;
-    clamp.computeDirect(sigma);
-    sigma = clamp.eigenvectors() * clamp.eigenvalues().cwiseMax(0.0).asDiagonal() * clamp.eigenvectors().transpose();
   }
-  sigma.diagonal().array() += params.min_variance_m2;
   Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es;
   es.computeDirect(sigma);
-  Eigen::Vector3d lambda = es.eigenvalues();  // ascending
+  Eigen::Vector3d lambda = es.eigenvalues().cwiseMax(0.0).array() + isotropic;  // ascending
   lambda(1) *= params.in_plane_inflation;
   lambda(2) *= params.in_plane_inflation;
   const Eigen::Matrix3d o = es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
   const float values[6] = {float(o(0, 0)), float(o(0, 1)), float(o(0, 2)), float(o(1, 1)), float(o(1, 2)), float(o(2, 2))};
-  std::copy(values, values + 6, info->omega);
-  return *info;
+  std::copy(values, values + 6, out.omega);
+  return out;
+}
+
+const CellDistribution& cellInfo(const StoredCell& cell, CellInfo* info, std::uint64_t container,
+                                 const NdtRefinementParams& params) {
+  if (info->container != container || info->n != cell.n) {
+    info->container = container;
+    info->n = cell.n;
+    info->d = distributionOf(cell, params);
+  }
+  return info->d;
 }
 
 struct Linearisation {
@@ -115,14 +119,15 @@ struct Linearisation {
   double support = 0.0;  ///< sum over the points of 1 - rho / rho_max (Tukey): a soft inlier count
 };
 
+// `distribution(cell)`: the CellDistribution of a stored cell of `map`.
+template <typename Distribution>
 Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, const Transform& T_K_C,
-                        const NdtRefinementParams& params, double robust_k, Scratch* scratch) {
+                        const NdtRefinementParams& params, double robust_k, const Distribution& distribution) {
   const PinholeCamera& cam = map.camera();
   const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
   const Eigen::Vector3f t = T_K_C.translation().cast<float>();
   const float gate2 = static_cast<float>(params.max_distance_m * params.max_distance_m);
   const float inv_k2 = static_cast<float>(1.0 / (robust_k * robust_k));
-  const StoredCell* base = map.cells().data();
   // Float sums of one point's terms are exact enough (1e-7 relative); the frame's sums are double.
   double H[21] = {}, g[6] = {}, inlier_m2 = 0.0, support = 0.0;
   int associated = 0, inliers = 0;
@@ -134,7 +139,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
     if (index < 0) continue;
     const StoredCell* cell = map.find(index);
     if (!cell) continue;
-    const CellInfo& c = cellInfo(*cell, &scratch->cells[static_cast<std::size_t>(cell - base)], map.id(), params);
+    const CellDistribution& c = distribution(cell);
     if (!c.usable) continue;
     const Eigen::Vector3f r = q - c.mean;
     if (r.squaredNorm() > gate2) continue;
@@ -214,10 +219,13 @@ void addFeatureTerms(std::span<const FeatureObservation> features, const Pinhole
   }
 }
 
-Scratch& scratchFor(const KeyframeContainer& map, const NdtRefinementParams& params) {
+// The lookup linearise() takes for `map`: the per-thread cache.
+auto cachedDistributions(const KeyframeContainer& map, const NdtRefinementParams& params) {
   static thread_local Scratch scratch;
   scratch.use(map, params);
-  return scratch;
+  return [&map, &params, base = map.cells().data(), cells = scratch.cells.data()](const StoredCell* cell) -> const CellDistribution& {
+    return cellInfo(*cell, &cells[static_cast<std::size_t>(cell - base)], map.id(), params);
+  };
 }
 
 NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
@@ -237,7 +245,7 @@ NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
 NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
                                           std::span<const FeatureObservation> features, Transform* T_K_C,
                                           const NdtRefinementParams& params) {
-  Scratch& scratch = scratchFor(map, params);
+  const auto distribution = cachedDistributions(map, params);
   int iterations = 0;
   // Annealing: the first steps take points up to annealing_factor times farther (the basin of
   // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
@@ -246,7 +254,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
   Linearisation lin;
   for (int it = 0; it <= params.iterations; ++it) {
     const double a = it == params.iterations ? 1.0 : anneal(it);
-    lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, &scratch);
+    lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, distribution);
     addFeatureTerms(features, map.camera(), *T_K_C, params, a, &lin);
     // The last pass only measures the pose the previous step reached.
     if (it == params.iterations || lin.associated < 6) break;
@@ -257,7 +265,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     *T_K_C = stepTransform(xi) * *T_K_C;
     ++iterations;
     if (a == 1.0 && xi.head<3>().norm() < params.converged_m && xi.tail<3>().norm() < params.converged_rad) {
-      lin = linearise(map, frame, *T_K_C, params, params.robust_k, &scratch);
+      lin = linearise(map, frame, *T_K_C, params, params.robust_k, distribution);
       addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
       break;
     }
@@ -269,7 +277,23 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
 
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
                                              const Transform& T_K_C, const NdtRefinementParams& params) {
-  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, &scratchFor(map, params)), frame.size());
+  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, cachedDistributions(map, params)), frame.size());
+}
+
+NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, std::span<const CellDistribution> cells,
+                                             const DensePoints& frame, const Transform& T_K_C,
+                                             const NdtRefinementParams& params) {
+  const auto distribution = [&cells, base = map.cells().data()](const StoredCell* cell) -> const CellDistribution& {
+    return cells[static_cast<std::size_t>(cell - base)];
+  };
+  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, distribution), frame.size());
+}
+
+std::vector<CellDistribution> cellDistributions(const KeyframeContainer& map, const NdtRefinementParams& params) {
+  std::vector<CellDistribution> out;
+  out.reserve(map.size());
+  for (const StoredCell& c : map.cells()) out.push_back(distributionOf(c, params));
+  return out;
 }
 
 }  // namespace vdmap

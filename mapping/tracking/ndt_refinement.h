@@ -100,11 +100,30 @@ struct NdtRefinementResult {
   double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
 };
 
+/// One cell's distribution as the refinement uses it: the mean and the information matrix (upper
+/// triangle xx xy xz yy yz zz) of the cell's covariance with the sensor noise, floor and in-plane
+/// inflation of NdtRefinementParams; not usable when the cell has too few points.
+struct CellDistribution {
+  bool usable = false;
+  Eigen::Vector3f mean = Eigen::Vector3f::Zero();
+  float omega[6] = {};
+};
+
+/// Every cell's distribution of a local map, computed once for a map that does not change while
+/// it is linearised many times (the joint map refinement evaluates each pair at every step).
+/// Index i is the distribution of map.cells()[i].
+std::vector<CellDistribution> cellDistributions(const KeyframeContainer& local_map, const NdtRefinementParams& params);
+
 /// The refinement's objective at T_K_C, without moving it (Tukey threshold robust_k, no
 /// annealing, no features): `information` and `gradient` of the Gauss-Newton step for the
 /// perturbation exp(xi) T_K_C, `support` the soft inlier count the step should raise.
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
                                              const Transform& T_K_C, const NdtRefinementParams& params = {});
+/// The same with the map's cells taken from `cells` (cellDistributions of local_map with the same
+/// params) instead of computed: the same result, bit for bit.
+NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, std::span<const CellDistribution> cells,
+                                             const DensePoints& frame, const Transform& T_K_C,
+                                             const NdtRefinementParams& params = {});
 
 /// Refines T_K_C (the frame's pose in the keyframe frame) in place: NDT distances of the frame's
 /// points to the local map plus the reprojection errors of `features` (may be empty).
