@@ -136,7 +136,8 @@ void runMap(MapArgs args) {
     options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
     options.run_stats["pose_graph_ms"] = pose_graph_ms;  // all optimisations of the run, wall clock
     options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
-                                           {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)}};
+                                           {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
+                                           {"refused", refined.refused}};
     const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
     if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
       options.run_stats["ate_rmse_m"] = evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse;
@@ -163,8 +164,12 @@ void runMap(MapArgs args) {
   if (tracking) {
     std::printf("tracked poses: %s lost (skipped), %s", counted(mapper.framesLost(), "frame").c_str(),
                 counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
-    std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
-                refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
+    if (refined.refused)
+      std::printf(", keyframe poses kept: the joint refinement of %d local-map pairs ran too far (%.1f s)", refined.pairs,
+                  1e-3 * refined.ms);
+    else
+      std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
+                  refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
     if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
     std::printf("\n");
   }

@@ -32,7 +32,8 @@ struct MapRefinementParams {
   /// The registration's dense refinement (tracking's, with 20 Gauss-Newton steps instead of 6:
   /// Replica office0 0:800, map RMSE against the mesh 1.30 mm with 20, 1.56 with 6), and its
   /// checks: at least min_dense_inliers inlier cells making min_dense_inlier_ratio of those
-  /// associated, a move of at most max_jump from the graph's relative pose.
+  /// associated, a move of at most max_jump from the graph's relative pose (kJoint: no covisible
+  /// pair's relative pose may change more, else the refinement is refused).
   RelativePoseParams relative = [] {
     RelativePoseParams p;
     p.dense.iterations = 20;
@@ -50,21 +51,17 @@ struct MapRefinementParams {
   EdgeNoise edge_noise{0.001, 0.05};
   int max_rounds = 5;
   double converged_m = 0.0005;  ///< stop when a round moves no keyframe farther than this
-  /// kJoint: the cost of a pair (B's means against A's cells; the Tukey threshold annealed as
-  /// this refinement's, each level until it converges), and the Levenberg-Marquardt steps at
-  /// most. A step is taken only when it lowers the cost (the pairs' Tukey losses and the pose
-  /// graph's measured edges; a rejected one raises the damping); a level has converged when no
-  /// keyframe moves more than joint_converged_m.
+  /// kJoint: the cost of a pair (B's means against A's cells, those within robust_k at the
+  /// starting poses; no annealing), and the Levenberg-Marquardt steps at most. A step is taken
+  /// only when it lowers the cost (the pairs' Tukey losses and the pose graph's measured edges;
+  /// a rejected one raises the damping); converged when no keyframe moves more than
+  /// joint_converged_m.
   NdtRefinementParams joint = [] {
     NdtRefinementParams p;
     p.axial_noise = false;
-    // Tried on the built-in 2-lap walk's two noise draws, the 150-frame lap and Replica 0:800
-    // (map RMSE, mm): no annealing 1.37 / 1.55 / 1.26 / 1.12, from 2x 1.36 / 1.34 / 1.20 / 1.14,
-    // from 8x 1.42 / 1.40 / 2.18 / 1.12.
-    p.annealing_factor = 2;
     return p;
   }();
-  int joint_iterations = 100;  ///< steps of all annealing levels together
+  int joint_iterations = 100;
   double joint_converged_m = 1e-5;
   int threads = 0;              ///< registrations in parallel (0: all cores); the result does not depend on it
 };
@@ -80,6 +77,9 @@ struct MapRefinementResult {
   int rounds = 0;      ///< pose-graph rounds (kPairwise) or steps taken (kJoint)
   double moved_m = 0;  ///< the largest keyframe move of the whole refinement
   double ms = 0;       ///< wall time
+  /// kJoint: a covisible pair's relative pose would have changed by more than relative.max_jump,
+  /// so the poses and the pose graph were left as they were.
+  bool refused = false;
 };
 
 /// kPairwise: registers every covisible pair of `graph` (a round), replaces the pose graph's

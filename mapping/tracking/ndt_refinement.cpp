@@ -122,7 +122,8 @@ struct Linearisation {
 // `distribution(cell)`: the CellDistribution of a stored cell of `map`.
 template <typename Distribution>
 Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, const Transform& T_K_C,
-                        const NdtRefinementParams& params, double robust_k, const Distribution& distribution) {
+                        const NdtRefinementParams& params, double robust_k, const Distribution& distribution,
+                        std::uint8_t* inlier_flags = nullptr) {
   const PinholeCamera& cam = map.camera();
   const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
   const Eigen::Vector3f t = T_K_C.translation().cast<float>();
@@ -153,6 +154,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
     // Tukey's biweight (NdtRefinementParams::robust_k).
     const float u = m2 * inv_k2;
     if (u >= 1.0f) continue;
+    if (inlier_flags) inlier_flags[i] = 1;
     ++inliers;
     inlier_m2 += m2;
     const float w = (1.0f - u) * (1.0f - u);
@@ -282,11 +284,13 @@ NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, const
 
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, std::span<const CellDistribution> cells,
                                              const DensePoints& frame, const Transform& T_K_C,
-                                             const NdtRefinementParams& params) {
+                                             const NdtRefinementParams& params, std::vector<std::uint8_t>* inliers) {
   const auto distribution = [&cells, base = map.cells().data()](const StoredCell* cell) -> const CellDistribution& {
     return cells[static_cast<std::size_t>(cell - base)];
   };
-  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, distribution), frame.size());
+  if (inliers) inliers->assign(frame.size(), 0);
+  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, distribution, inliers ? inliers->data() : nullptr),
+                  frame.size());
 }
 
 std::vector<CellDistribution> cellDistributions(const KeyframeContainer& map, const NdtRefinementParams& params) {

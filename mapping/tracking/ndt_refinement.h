@@ -120,10 +120,12 @@ std::vector<CellDistribution> cellDistributions(const KeyframeContainer& local_m
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
                                              const Transform& T_K_C, const NdtRefinementParams& params = {});
 /// The same with the map's cells taken from `cells` (cellDistributions of local_map with the same
-/// params) instead of computed: the same result, bit for bit.
+/// params) instead of computed: the same result, bit for bit. `inliers`, when given, gets a flag
+/// per point of `frame`: set for the points within robust_k (NdtRefinementResult::inliers).
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, std::span<const CellDistribution> cells,
                                              const DensePoints& frame, const Transform& T_K_C,
-                                             const NdtRefinementParams& params = {});
+                                             const NdtRefinementParams& params = {},
+                                             std::vector<std::uint8_t>* inliers = nullptr);
 
 /// Refines T_K_C (the frame's pose in the keyframe frame) in place: NDT distances of the frame's
 /// points to the local map plus the reprojection errors of `features` (may be empty).
