@@ -90,6 +90,12 @@ JointCost jointCost(const KeyframeGraph& graph, const JointTerms& terms, std::sp
   return out;
 }
 
+// 64-bit indices, not Eigen's default int: libceres.a instantiates the same sparse templates for
+// int, and the linker keeps one copy of each for both. In the AddressSanitizer build, where Eigen
+// aligns its allocations by hand (it does not trust ASan's malloc) and uninstrumented Ceres does
+// not, Ceres's Cholesky then freed a matrix our copy had allocated (a bad free in loop closure).
+using SparseIndex = std::int64_t;
+
 // The Levenberg-Marquardt step of every keyframe but 0 (rows 6 (k - 1)) from the linearisation
 // at T_W, damped by lambda; empty when the normal equations cannot be solved. Poses are perturbed
 // on the right, T_W_K exp(d_K): a pair's step xi (T_A_B <- exp(xi) T_A_B) is then -d_A +
@@ -99,7 +105,7 @@ JointCost jointCost(const KeyframeGraph& graph, const JointTerms& terms, std::sp
 Eigen::VectorXd jointStep(const std::vector<CovisibilityEdge>& pairs, const JointCost& cost,
                           std::span<const PoseGraphEdge> edges, const std::vector<Transform>& T_W, double lambda) {
   const int dim = 6 * (static_cast<int>(T_W.size()) - 1);
-  std::vector<Eigen::Triplet<double>> H;  // summed by setFromTriplets
+  std::vector<Eigen::Triplet<double, SparseIndex>> H;  // summed by setFromTriplets
   Eigen::VectorXd diagonal = Eigen::VectorXd::Zero(dim), g = Eigen::VectorXd::Zero(dim);
   const auto add = [&H, &diagonal](int row_kf, int col_kf, const Matrix6d& block) {
     for (int r = 0; r < 6; ++r)
@@ -126,9 +132,9 @@ Eigen::VectorXd jointStep(const std::vector<CovisibilityEdge>& pairs, const Join
   // Marquardt's damping, with a floor so a keyframe nothing constrains stays put.
   const double floor = 1e-9 * std::max(diagonal.maxCoeff(), 1e-12);
   for (int j = 0; j < dim; ++j) H.emplace_back(j, j, lambda * std::max(diagonal(j), floor));
-  Eigen::SparseMatrix<double> normal(dim, dim);
+  Eigen::SparseMatrix<double, Eigen::ColMajor, SparseIndex> normal(dim, dim);
   normal.setFromTriplets(H.begin(), H.end());
-  const Eigen::SimplicialLDLT<Eigen::SparseMatrix<double>> ldlt(normal);
+  const Eigen::SimplicialLDLT<decltype(normal)> ldlt(normal);
   if (ldlt.info() != Eigen::Success) return {};
   Eigen::VectorXd d = -ldlt.solve(g);
   return d.allFinite() ? d : Eigen::VectorXd();
