@@ -277,11 +277,6 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
   return result;
 }
 
-NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
-                                             const Transform& T_K_C, const NdtRefinementParams& params) {
-  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, cachedDistributions(map, params)), frame.size());
-}
-
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, std::span<const CellDistribution> cells,
                                              const DensePoints& frame, const Transform& T_K_C,
                                              const NdtRefinementParams& params, std::vector<std::uint8_t>* inliers) {

@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdint>
 #include <span>
 #include <vector>
 
@@ -115,13 +116,11 @@ struct CellDistribution {
 std::vector<CellDistribution> cellDistributions(const KeyframeContainer& local_map, const NdtRefinementParams& params);
 
 /// The refinement's objective at T_K_C, without moving it (Tukey threshold robust_k, no
-/// annealing, no features): `information` and `gradient` of the Gauss-Newton step for the
-/// perturbation exp(xi) T_K_C, `support` the soft inlier count the step should raise.
-NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
-                                             const Transform& T_K_C, const NdtRefinementParams& params = {});
-/// The same with the map's cells taken from `cells` (cellDistributions of local_map with the same
-/// params) instead of computed: the same result, bit for bit. `inliers`, when given, gets a flag
-/// per point of `frame`: set for the points within robust_k (NdtRefinementResult::inliers).
+/// annealing, no features), the map's cells taken from `cells` (cellDistributions of local_map
+/// with the same params): `information` and `gradient` of the Gauss-Newton step for the
+/// perturbation exp(xi) T_K_C, `support` the soft inlier count the step should raise; what
+/// refineAgainstLocalMap measures with 0 iterations, bit for bit. `inliers`, when given, gets a
+/// flag per point of `frame`: set for the points within robust_k (NdtRefinementResult::inliers).
 NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, std::span<const CellDistribution> cells,
                                              const DensePoints& frame, const Transform& T_K_C,
                                              const NdtRefinementParams& params = {},
