@@ -241,7 +241,7 @@ std::vector<OdometryRow> odometryPeers(const std::vector<RgbdFrame>& frames, con
 /// table: the whole pipeline (features, tracking, keyframe decision, loop closure, local-map
 /// update), CPU ms per frame, scored like the peers; its trajectory goes to
 /// trajectory_<key>.txt. Without loop closure it shows what the pose graph adds. `refinement` (may
-/// be null) receives the map refinement after the last frame, run only when it is given.
+/// be null) receives the map refinement after the last frame (--refine), run only when it is given.
 OdometryRow trackVdmap(const std::vector<RgbdFrame>& frames, const PinholeCamera& cam, const BenchArgs& args,
                        bool loops, const std::filesystem::path& out_dir, int* loop_closures,
                        MapRefinementResult* refinement) {
@@ -261,7 +261,9 @@ OdometryRow trackVdmap(const std::vector<RgbdFrame>& frames, const PinholeCamera
   }
   // With `refinement` (the loop-closure row), the whole pipeline ends as `vdmap map` does: keyframe
   // poses refined from the settled local maps (once, not per frame: its time is reported beside the table).
-  if (refinement) *refinement = mapper.refineKeyframePoses();
+  if (refinement)
+    if (const std::optional<MapRefinementParams> refine = app::refinement(args.sequence))
+      *refinement = mapper.refineKeyframePoses(*refine);
   row.run.trajectory = mapper.trajectory();
   row.run.failures = mapper.framesLost();
   row.run.keyframes = static_cast<int>(mapper.graph().size());
@@ -492,6 +494,7 @@ void runBench(BenchArgs args) {
     // minus the ground-truth pipeline's, on the same frames.
     out["vd_tracking_added_ms"] = odometry.front().ms - median(pipeline_ms);
     out["odometry"]["vdmap_track"]["loop_closures"] = loop_closures;
+    out["odometry"]["vdmap_track"]["map_refinement"] = args.sequence.refine;
     out["odometry"]["vdmap_track"]["map_refinement_ms"] = rounded(refinement.ms);
   }
 
@@ -510,8 +513,8 @@ void runBench(BenchArgs args) {
           "pipeline, which tracking makes " << out["vd_tracking_added_ms"].get<double>() << " ms slower than with "
           "ground-truth poses; the peers: registration only), ATE after the rigid alignment against the sequence's "
           "ground truth. vdmap closed " << loop_closures << " loops; with loop closure its keyframe poses are "
-          "refined from the local maps after the last frame (" << rounded(refinement.ms) << " ms, not in the "
-          "per-frame time).\n\n"
+          "refined from the local maps after the last frame (--refine " << args.sequence.refine << ", "
+       << rounded(refinement.ms) << " ms, not in the per-frame time).\n\n"
        << odometryTable(odometry);
   std::filesystem::create_directories(out_dir);
   writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
@@ -550,8 +553,8 @@ void runBench(BenchArgs args) {
   }
   if (!odometry.empty())
     std::printf("tracking adds %.2f ms per frame to vdmap's pipeline (CPU medians); %d loop closures; keyframe poses "
-                "refined from the local maps after the last frame in %.0f ms (wall)\n",
-                out["vd_tracking_added_ms"].get<double>(), loop_closures, refinement.ms);
+                "refined from the local maps after the last frame (--refine %s) in %.0f ms (wall)\n",
+                out["vd_tracking_added_ms"].get<double>(), loop_closures, args.sequence.refine.c_str(), refinement.ms);
   std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }
 
@@ -585,6 +588,7 @@ void addBenchCommand(CLI::App& app) {
                    "against the ground truth, and trajectory_<method>.txt in --out")
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
+  addRefineArg(*verb, args->sequence);
   verb->add_flag("--long", args->long_run,
                  "the long run instead (issue 16): every frame (or --frames) mapped as `vdmap map` does, the mapping "
                  "thread's CPU time per frame, resident memory, live heap, keyframes and the global map's size into "

@@ -1007,5 +1007,55 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   EXPECT_TRUE(bench.session()->status().error.empty()) << bench.session()->status().error;
 }
 
+// The refinement after the last tracked frame is the one setRefinement (vdmap gui --refine) names:
+// the keyframe poses end as a Mapper refined that way on the same frames ends them; none leaves
+// them as tracked, with nothing to show before.
+TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
+  test::TempDir dir;
+  test::writeBoxRoomSequence(dir / "seq", 8);
+  fs::remove(dir / "seq" / "groundtruth.txt");
+  const auto keyframePoses = [](const Mapper& mapper) {
+    std::vector<Transform> poses;
+    for (const Keyframe& k : mapper.graph().keyframes()) poses.push_back(k.T_W_K);
+    return poses;
+  };
+  MapRefinementParams joint;
+  joint.method = MapRefinementMethod::kJoint;
+  for (const std::optional<MapRefinementParams>& refine : {std::optional(joint), std::optional<MapRefinementParams>()}) {
+    const TumSequence sequence = openSequence({(dir / "seq").string(), "", "", ""});
+    MapperParams params = Settings{}.mapper;
+    params.poses = PoseSource::kTrack;
+    Mapper reference(sequence.camera(), params);
+    for (std::size_t i = 0; i < sequence.size(); ++i) reference.addFrame(sequence.load(i));
+    const std::vector<Transform> tracked = keyframePoses(reference);
+    ASSERT_GE(tracked.size(), 2u);
+    if (refine) reference.refineKeyframePoses(*refine);
+
+    Workbench bench{Settings{}};
+    bench.setRefinement(refine);
+    ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+    bench.session()->play();
+    bench.session()->waitIdle();
+    const std::string message = bench.session()->status().message;  // before withMapper's replaces it
+    std::vector<Transform> shown;
+    bench.session()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
+      shown = keyframePoses(mapper);
+      return std::string();
+    });
+    bench.session()->waitIdle();
+    const std::vector<Transform> expected = keyframePoses(reference);
+    ASSERT_EQ(shown.size(), expected.size());
+    double moved = 0;
+    for (std::size_t k = 0; k < shown.size(); ++k) {
+      EXPECT_TRUE(shown[k].isApprox(expected[k], 1e-12)) << k;
+      moved = std::max(moved, (shown[k].translation() - tracked[k].translation()).norm());
+    }
+    std::printf("%s: keyframes moved %.3f mm; status: %s\n", refine ? "joint" : "none", 1e3 * moved, message.c_str());
+    EXPECT_EQ(moved > 0, refine.has_value());
+    EXPECT_EQ(message.find("refined (joint)") != std::string::npos, refine.has_value()) << message;
+    EXPECT_EQ(bench.canShowBeforeOptimisation(), refine.has_value());
+  }
+}
+
 }  // namespace
 }  // namespace vdmap::app::gui

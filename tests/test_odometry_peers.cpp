@@ -97,12 +97,13 @@ TEST(OdometryPeers, UnregisteredFramesAreCounted) {
   EXPECT_FALSE(run.trajectory[5].T_W_C.isApprox(run.trajectory[4].T_W_C));
 }
 
-// `vdmap bench --poses track` adds every peer's row to bench.json and writes its trajectory.
+// `vdmap bench --poses track` adds every peer's row to bench.json and writes its trajectory; its
+// own row's keyframe poses are refined as --refine says.
 TEST(OdometryPeers, BenchWithTrackedPosesReportsEveryPeer) {
   test::TempDir tmp;
   test::writeTinySequence(tmp / "seq", 4);
   const test::RunResult r = test::runVdmap("bench '" + (tmp / "seq").string() +
-                                           "' --frames 4 --poses track --no-octomap --json --out '" +
+                                           "' --frames 4 --poses track --refine joint --no-octomap --json --out '" +
                                            tmp.path().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   for (const std::string key : {"opencv_rgbd_frame", "opencv_rgbd_keyframe", "opencv_icp_frame", "opencv_icp_keyframe"}) {
@@ -115,6 +116,7 @@ TEST(OdometryPeers, BenchWithTrackedPosesReportsEveryPeer) {
   }
   EXPECT_NE(r.out.find("\"open3d_hybrid_frame\""), std::string::npos);
   EXPECT_NE(r.out.find("\"poses\": \"track\""), std::string::npos);
+  EXPECT_NE(r.out.find("\"map_refinement\": \"joint\""), std::string::npos) << r.out;
 }
 
 TEST(OdometryPeers, NamesAndKeys) {

@@ -129,6 +129,7 @@ void runGui(GuiArgs args, bool builtin) {
   }
   // A failure shows in the window, which stays open.
   if (!prepare.run) {
+    bench.setRefinement(refinement(args.sequence));
     if (!args.map.empty()) bench.openSession(args.map);
     else bench.open(args.sequence);
   }
@@ -175,6 +176,7 @@ void addGuiCommand(CLI::App& app) {
   auto args = std::make_shared<GuiArgs>();
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
+  addRefineArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false);
   verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence (a .vdmap file as SEQ does too)");
   addGuiOptions(*verb, *args);

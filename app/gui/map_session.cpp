@@ -51,17 +51,19 @@ bool MappingSnapshot::hasGroundTruth() const {
   return std::any_of(trajectory.begin(), trajectory.end(), [](const FramePose& f) { return f.T_W_C_truth.has_value(); });
 }
 
-MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds)
+MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+                       std::optional<MapRefinementParams> refine)
     : sequence_(std::move(sequence)), sequence_folder_(sequence_->folder().string()), mapper_params_(mapper),
-      thresholds_(thresholds) {
+      refine_(std::move(refine)), thresholds_(thresholds) {
   thresholds_.validate();
   mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
   start();
 }
 
-MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest)
+MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
+                       std::optional<MapRefinementParams> refine)
     : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
-      thresholds_(thresholds) {
+      refine_(std::move(refine)), thresholds_(thresholds) {
   thresholds_.validate();
   base_frames_ = saved.info.state.frames_mapped;
   if (sequence_) origin_ = std::make_shared<const Session>(saved);  // kept to seek back to
@@ -186,14 +188,17 @@ void MapSession::mapOneFrame() {
     // After the sequence's last frame, tracked keyframe poses are refined from the settled local
     // maps as `vdmap map` does (B shows the map before it); frames follow their keyframes.
     std::string refined;
-    if (mapper_params_.poses == PoseSource::kTrack && i + 1 == framesTotal()) {
-      const MapRefinementResult r = mapper_->refineKeyframePoses();
-      if (r.rounds > 0) {
-        char text[160];
-        std::snprintf(text, sizeof text, "keyframe poses refined from %d of %d covisible pairs' local maps (%.1f mm at "
-                      "most, %.1f s)", r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
-        refined = text;
-      }
+    if (mapper_params_.poses == PoseSource::kTrack && refine_ && i + 1 == framesTotal()) {
+      const MapRefinementResult r = mapper_->refineKeyframePoses(*refine_);
+      const char* method = refine_->method == MapRefinementMethod::kJoint ? "joint" : "pairwise";
+      char text[200] = "";
+      if (r.refused)
+        std::snprintf(text, sizeof text, "keyframe poses kept as tracked: the joint refinement of %d local-map pairs ran "
+                      "too far (%.1f s)", r.pairs, 1e-3 * r.ms);
+      else if (r.rounds > 0)
+        std::snprintf(text, sizeof text, "keyframe poses refined (%s) from %d of %d covisible pairs' local maps (%.1f mm "
+                      "at most, %.1f s)", method, r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
+      refined = text;
     }
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;

@@ -121,12 +121,16 @@ struct PlayerStatus {
 class MapSession {
  public:
   /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
-  MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds);
+  /// With tracked poses, `refine` (nullopt: none) refines the keyframe poses after the last frame
+  /// as `vdmap map --refine` does.
+  MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+             std::optional<MapRefinementParams> refine = MapRefinementParams{});
   /// A saved session (.vdmap): its keyframes are there; thresholds and poses are live as usual.
   /// With `rest`, the frames of its sequence after the session's last one, the player continues
   /// mapping from the session's state (seeking back to before the session's end restores it);
   /// without, the player commands and seek do nothing. Re-run does nothing either way.
-  MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt);
+  MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
+             std::optional<MapRefinementParams> refine = MapRefinementParams{});
   ~MapSession();
   MapSession(const MapSession&) = delete;
   MapSession& operator=(const MapSession&) = delete;
@@ -212,6 +216,7 @@ class MapSession {
   int base_frames_ = 0;                    // frames in the map before sequence_'s first entry
   std::string sequence_folder_;
   MapperParams mapper_params_;
+  std::optional<MapRefinementParams> refine_;
   std::unique_ptr<Mapper> mapper_;     // worker thread only
   // Worker thread only: the global map's buffers and kept cells, reused by every rebuild (after
   // a loop closure it skips the filter and touches no new memory; costs the largest build's

@@ -113,7 +113,7 @@ bool Workbench::open(const SequenceArgs& args) {
     // to the settings; re-runs keep it.
     MapperParams mapper = ui_.settings.mapper;
     mapper.poses = poseSource(absolute_args, sequence);
-    auto session = std::make_unique<MapSession>(std::move(sequence), mapper, ui_.settings.thresholds);
+    auto session = std::make_unique<MapSession>(std::move(sequence), mapper, ui_.settings.thresholds, refine_);
     session->setFps(ui_.settings.play_fps);
     session_ = std::move(session);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
@@ -165,7 +165,7 @@ bool Workbench::openSession(const std::string& file) {
     // The session's own parameters, shown and used; the user's settings stay as they are.
     const MappingParams params{saved.info.mapper, saved.info.global};
     std::optional<TumSequence> rest = framesAfter(saved, &why);
-    session_ = std::make_unique<MapSession>(std::move(saved), params.global, std::move(rest));
+    session_ = std::make_unique<MapSession>(std::move(saved), params.global, std::move(rest), refine_);
     ui_.params = params;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());

@@ -98,7 +98,12 @@ class Workbench {
 
   /// Opens a sequence (replacing the current one). On failure the current one stays, the
   /// message goes to the status line and false is returned: a bad folder never ends the app.
+  /// With tracked poses, its keyframe poses are refined after the last frame as setRefinement says
+  /// (args.refine is not looked at: the command line's holds for every sequence of the run).
   bool open(const SequenceArgs& args);
+  /// The refinement of tracked keyframe poses after the last frame (nullopt: none) for the
+  /// sequences and sessions opened from now on (default: pairwise, as `vdmap map`).
+  void setRefinement(std::optional<MapRefinementParams> refine) { refine_ = std::move(refine); }
   /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
   bool openSession(const std::string& file);
   /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
@@ -193,6 +198,7 @@ class Workbench {
   std::vector<std::pair<int, Transform>> pose_undo_;  // (keyframe, pose before the edit)
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
+  std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::unique_ptr<MapSession> session_;
 };
 
