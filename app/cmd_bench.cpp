@@ -293,12 +293,12 @@ nlohmann::json odometryJson(const OdometryRow& r, std::size_t frames) {
 std::string odometryTable(const std::vector<OdometryRow>& rows) {
   std::ostringstream md;
   md << "| method | t [ms/frame] | ATE RMSE [cm] | frames not registered | keyframes |\n|---|---:|---:|---:|---:|\n";
-  char buf[256], ate[32] = "-", keyframes[32] = "-";
   for (const OdometryRow& r : rows) {
     if (!r.run.note.empty()) {
       md << "| " << r.run.name << " | not run: " << r.run.note << " |\n";
       continue;
     }
+    char buf[256], ate[32] = "-", keyframes[32] = "-";  // per row: a row without them shows "-"
     if (r.error) std::snprintf(ate, sizeof ate, "%.2f", 100 * r.error->ate_m.rmse);
     if (r.run.keyframes > 0) std::snprintf(keyframes, sizeof keyframes, "%d", r.run.keyframes);
     std::snprintf(buf, sizeof buf, "| %s | %.2f | %s | %d | %s |\n", r.run.name.c_str(), r.ms, ate, r.run.failures,

@@ -5,6 +5,7 @@
 #include <dlfcn.h>
 
 #include <cmath>
+#include <fstream>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -117,6 +118,15 @@ TEST(OdometryPeers, BenchWithTrackedPosesReportsEveryPeer) {
   EXPECT_NE(r.out.find("\"open3d_hybrid_frame\""), std::string::npos);
   EXPECT_NE(r.out.find("\"poses\": \"track\""), std::string::npos);
   EXPECT_NE(r.out.find("\"map_refinement\": \"joint\""), std::string::npos) << r.out;
+  // bench.md's table: a frame-to-frame peer has no keyframes (not the previous row's count).
+  std::ifstream md(tmp / "bench.md");
+  int rows = 0;
+  for (std::string line; std::getline(md, line);)
+    if (line.find("frame to frame |") != std::string::npos) {
+      ++rows;
+      EXPECT_TRUE(line.ends_with("| - |")) << line;
+    }
+  EXPECT_GE(rows, 2);
 }
 
 TEST(OdometryPeers, NamesAndKeys) {
