@@ -127,9 +127,9 @@ void runGui(GuiArgs args, bool builtin) {
       prepare = {"rendering the built-in scene", args.sequence,
                  [cache](const std::function<void(std::size_t, std::size_t)>& progress) { return renderBuiltin(cache, progress); }};
   }
+  bench.setRefinement(refinement(args.sequence));
   // A failure shows in the window, which stays open.
   if (!prepare.run) {
-    bench.setRefinement(refinement(args.sequence));
     if (!args.map.empty()) bench.openSession(args.map);
     else bench.open(args.sequence);
   }
