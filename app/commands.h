@@ -58,7 +58,7 @@ struct SequenceArgs {
   std::string camera;
   std::string frames;
   std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
-  std::string refine = "pairwise";  ///< tracked poses: "pairwise", "joint" or "none" (MapRefinementMethod; none: keep them as tracked)
+  std::string refine = "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
 };
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args);
 /// --poses gt|track, for the verbs that map a sequence.

@@ -27,9 +27,10 @@ void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
 void addRefineArg(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("--refine", args.refine,
                   "with tracked poses, how the keyframe poses are refined from the settled local maps after the "
-                  "last frame: pairwise (each covisible pair registered, then the pose graph), joint (all keyframe "
-                  "poses at once on every pair's cost) or none (as tracked and loop-closed); see README Tracking")
-      ->check(CLI::IsMember({"pairwise", "joint", "none"}))
+                  "last frame: joint (all keyframe poses at once on every covisible pair's cost), pairwise (each "
+                  "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see README "
+                  "Tracking")
+      ->check(CLI::IsMember({"joint", "pairwise", "none"}))
       ->capture_default_str();
   verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
 }
@@ -37,7 +38,7 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
 std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
   if (args.refine == "none") return std::nullopt;
   MapRefinementParams params;
-  if (args.refine == "joint") params.method = MapRefinementMethod::kJoint;
+  params.method = args.refine == "pairwise" ? MapRefinementMethod::kPairwise : MapRefinementMethod::kJoint;
   return params;
 }
 

@@ -399,13 +399,14 @@ double keyframeError(const Mapper& m) {
   return std::sqrt(sum / static_cast<double>(m.graph().size()));
 }
 
-// The refinement after the last frame on the 1.15-lap walk: ill-conditioned pairs give no edge,
+// The pairwise refinement after the last frame on the 1.15-lap walk: ill-conditioned pairs give no edge,
 // so keyframe poses that tracking already has within 2 mm stay about as good; the frames follow
 // their keyframes; one thread or two give the same poses.
 TEST(MapRegistration, RefiningATrackedWalkKeepsItsPosesAndIsDeterministic) {
   TrackedWalk walk = trackBoxWalk(104, 90, {});
   const double before = keyframeError(*walk.mapper);
   MapRefinementParams one_thread;
+  one_thread.method = MapRefinementMethod::kPairwise;
   one_thread.threads = 1;
   const MapRefinementResult r = walk.mapper->refineKeyframePoses(one_thread);
   const double after = keyframeError(*walk.mapper);
@@ -420,6 +421,7 @@ TEST(MapRegistration, RefiningATrackedWalkKeepsItsPosesAndIsDeterministic) {
 
   TrackedWalk again = trackBoxWalk(104, 90, {});
   MapRefinementParams two_threads;
+  two_threads.method = MapRefinementMethod::kPairwise;
   two_threads.threads = 2;
   again.mapper->refineKeyframePoses(two_threads);
   for (const Keyframe& k : walk.mapper->graph().keyframes())
