@@ -2,7 +2,6 @@
 
 #include <chrono>
 
-#include <Eigen/Eigenvalues>
 #include <Eigen/SparseCholesky>
 
 #include "mapping/core/parallel.h"
@@ -29,12 +28,11 @@ std::optional<PoseGraphEdge> registerMeans(const Keyframe& A, const Keyframe& B,
   RelativePose estimate;
   estimate.T_K_C = start;
   estimate.dense = refineAgainstLocalMap(A.container, points, {}, &estimate.T_K_C, params.relative.dense);
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(estimate.dense.information.topLeftCorner<3, 3>());
-  const double conditioning = es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-300);
   if (estimate.dense.inliers < params.relative.min_dense_inliers ||
       estimate.dense.inlierRatio() < params.relative.min_dense_inlier_ratio ||
       translationBetween(start, estimate.T_K_C) > params.relative.max_jump_m ||
-      degreesBetween(start, estimate.T_K_C) > params.relative.max_jump_deg || conditioning < params.min_conditioning)
+      degreesBetween(start, estimate.T_K_C) > params.relative.max_jump_deg ||
+      estimate.dense.translationConditioning() < params.min_conditioning)
     return std::nullopt;
   estimate.status = RelativePose::Status::kGood;
   estimate.dense_trusted = true;

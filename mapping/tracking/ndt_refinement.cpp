@@ -11,6 +11,11 @@
 
 namespace vdmap {
 
+double NdtRefinementResult::translationConditioning() const {
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(information.topLeftCorner<3, 3>());
+  return es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-300);
+}
+
 Transform stepTransform(const Eigen::Matrix<double, 6, 1>& xi) {
   Transform step = Transform::Identity();
   const Eigen::Vector3d phi = xi.tail<3>();

@@ -99,6 +99,9 @@ struct NdtRefinementResult {
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();  ///< of the cost at the solution, same perturbation
   double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
+  /// Smallest over largest eigenvalue of `information`'s translation block: near 0 where the
+  /// surfaces leave a direction free (two walls: the pose can slide along their line).
+  double translationConditioning() const;
 };
 
 /// One cell's distribution as the refinement uses it: the mean and the information matrix (upper

@@ -69,8 +69,12 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
     }
   }
   // A weak estimate continues the track; after lost frames, whose prediction is stale, it is
-  // as likely a wrong place that fits (the box-like rooms of the built-in scene): not used.
-  if (out.estimate.usable() && state_.frames_lost == 0) out.keyframe = current;
+  // as likely a wrong place that fits (the box-like rooms of the built-in scene): not used; nor
+  // is the local map's alone when it explains only a patch of the frame or leaves it free to slide.
+  const RelativePose& e = out.estimate;
+  const bool supported = e.pnp_used || (e.dense.inliers >= params_.min_dense_only_share * static_cast<double>(e.dense.points) &&
+                                        e.dense.translationConditioning() >= params_.min_dense_only_conditioning);
+  if (e.usable() && supported && state_.frames_lost == 0) out.keyframe = current;
   return out;
 }
 
