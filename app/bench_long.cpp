@@ -17,6 +17,7 @@
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
+#include "mapping/io/json_text.h"
 
 namespace vdmap::app {
 namespace {
@@ -118,9 +119,9 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
       {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
   writeFileAtomically(out_dir / "long.csv", csv.str());
-  writeFileAtomically(out_dir / "long.json", summary.dump(2) + "\n");
+  writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
   if (options.json) {
-    std::cout << summary.dump(2) << '\n';
+    std::cout << jsonText(summary) << '\n';
     return;
   }
   std::printf("long run: %zu frames, %zu keyframes, %d revisits\n", n, mapper.graph().size(), mapper.revisits());

@@ -32,6 +32,7 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/json_text.h"
 #include "mapping/keyframe/mapper.h"
 #include "mapping/local_map/local_map_integrator.h"
 
@@ -517,10 +518,10 @@ void runBench(BenchArgs args) {
        << rounded(refinement.ms) << " ms, not in the per-frame time).\n\n"
        << odometryTable(odometry);
   std::filesystem::create_directories(out_dir);
-  writeFileAtomically(out_dir / "bench.json", out.dump(2) + "\n");
+  writeFileAtomically(out_dir / "bench.json", jsonText(out) + "\n");
   writeFileAtomically(out_dir / "bench.md", md.str());
   if (args.json) {
-    std::cout << out.dump(2) << "\n";
+    std::cout << jsonText(out) << "\n";
     return;
   }
   std::printf("frames          %zu of %s (%dx%d), keyframe every %d, cell %d px\n", decoded.size(),

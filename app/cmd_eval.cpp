@@ -10,6 +10,7 @@
 #include "app/commands.h"
 #include "app/eval_report.h"
 #include "mapping/core/error.h"
+#include "mapping/io/json_text.h"
 
 namespace vdmap::app {
 namespace {
@@ -30,7 +31,7 @@ void runTrajectoryEval(const EvalArgs& args) {
     nlohmann::json out = toJson(e, args.trajectory_error);
     out["trajectory"] = args.trajectory;
     out["groundtruth"] = args.groundtruth;
-    std::cout << out.dump(2) << "\n";
+    std::cout << jsonText(out) << "\n";
     return;
   }
   std::cout << args.trajectory << " against " << args.groundtruth << ": " << toText(e, args.trajectory_error);
@@ -53,7 +54,7 @@ void runEval(const EvalArgs& args) {
     out["mesh"] = args.mesh;
     out["triangles"] = mesh.triangles.size();
     out["completion_samples"] = args.accuracy.completion_samples;
-    std::cout << out.dump(2) << "\n";
+    std::cout << jsonText(out) << "\n";
     return;
   }
   std::cout << map.string() << " against " << args.mesh << " (" << mesh.triangles.size() << " triangles)\n"

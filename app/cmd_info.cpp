@@ -7,6 +7,7 @@
 #include "app/commands.h"
 #include "app/progress.h"
 #include "mapping/core/timing.h"
+#include "mapping/io/json_text.h"
 
 namespace vdmap::app {
 namespace {
@@ -94,7 +95,7 @@ void runInfo(const SequenceArgs& args, bool json) {
                      {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
         {"dropped", {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}}},
     };
-    std::cout << out.dump(2) << "\n";
+    std::cout << jsonText(out) << "\n";
     return;
   }
   std::printf("sequence   %s\n", seq.folder().c_str());

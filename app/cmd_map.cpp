@@ -21,6 +21,7 @@
 #include "mapping/export/map_export.h"
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/json_text.h"
 #include "mapping/io/session_file.h"
 
 namespace vdmap::app {
@@ -129,18 +130,18 @@ void runMap(MapArgs args) {
   };
   options.trajectory = mapper.trajectory();
   if (tracking) {
-    options.run_stats["tracking_ms"] = median(tracking_ms);
+    options.run_stats["tracking_ms"] = rounded(median(tracking_ms));
     options.run_stats["frames_lost"] = mapper.framesLost();
     double pose_graph_ms = 0;
     for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
     options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
-    options.run_stats["pose_graph_ms"] = pose_graph_ms;  // all optimisations of the run, wall clock
+    options.run_stats["pose_graph_ms"] = rounded(pose_graph_ms);  // all optimisations of the run, wall clock
     options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
                                            {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
                                            {"refused", refined.refused}};
     const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
     if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
-      options.run_stats["ate_rmse_m"] = evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse;
+      options.run_stats["ate_rmse_m"] = rounded(evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse);
   }
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
@@ -152,7 +153,7 @@ void runMap(MapArgs args) {
   // After the export, so a failed export leaves no session file behind.
   if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
   if (args.json) {
-    std::cout << stats.dump(2) << "\n";
+    std::cout << jsonText(stats) << "\n";
     return;
   }
   const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +

@@ -16,6 +16,7 @@
 #include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/io/json_text.h"
 #include "mapping/io/ply_reader.h"
 #include "tests/box_room_keyframes.h"
 
@@ -335,6 +336,28 @@ TEST(Export, OctomapFileHasLiboctomapsBytes) {
   std::ostringstream reference;
   tree.writeBinaryConst(reference);
   EXPECT_EQ(test::readFile(tmp / "a.bt"), reference.str());
+}
+
+// The figures vdmap writes carry no float noise (issue #17) even where nlohmann::json's Grisu2
+// writes a longer text than needed: each number is the shortest that reads back the same double
+// (the reference: the decimal text it was parsed from, trailing zeros dropped); strings, integers
+// and whole doubles keep their form.
+TEST(JsonText, NumbersAreTheShortestTextThatReadsBack) {
+  int noisy = 0;
+  for (int k = 10000; k < 30000; ++k) {
+    std::string text = "0.0" + std::to_string(k);
+    while (text.back() == '0') text.pop_back();
+    const double v = std::strtod(text.c_str(), nullptr);
+    noisy += nlohmann::json(v).dump() != text;
+    EXPECT_EQ(jsonText(nlohmann::json(v)), text);
+  }
+  std::printf("nlohmann::json wrote %d of 20000 such numbers longer than needed\n", noisy);
+  const nlohmann::json mixed = {{"path", "run-0.010102999999999999/x\"1.50\""}, {"count", 7}, {"whole", 3.0},
+                                {"small", -2.5e-07}, {"large", 1e20}, {"list", {0.010103, -1, 0.5}}};
+  const std::string text = jsonText(mixed, -1);
+  EXPECT_EQ(text, "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
+                  "\"small\":-2.5e-07,\"whole\":3.0}");
+  EXPECT_EQ(nlohmann::json::parse(text), mixed);
 }
 
 }  // namespace

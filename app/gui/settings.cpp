@@ -8,6 +8,7 @@
 
 #include "app/parameter_table.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/io/json_text.h"
 #include "render/colormap.h"
 
 namespace vdmap::app::gui {
@@ -157,7 +158,7 @@ Settings loadSettings(const fs::path& file, std::string* warning) {
 
 void saveSettings(const fs::path& file, const Settings& settings) {
   fs::create_directories(file.parent_path());
-  writeFileAtomically(file, toJson(settings).dump(2) + "\n");
+  writeFileAtomically(file, jsonText(toJson(settings)) + "\n");
 }
 
 void saveChangedSettings(const fs::path& file, const Settings& at_start, const Settings& at_end) {
@@ -184,7 +185,7 @@ void saveChangedSettings(const fs::path& file, const Settings& at_start, const S
       if (value != start.at(section).at(key)) saved[section][key] = value;
   }
   fs::create_directories(file.parent_path());
-  writeFileAtomically(file, saved.dump(2) + "\n");
+  writeFileAtomically(file, jsonText(saved) + "\n");
 }
 
 bool rerunParamsDiffer(const Settings& a, const Settings& b) { return toJson(a).at("rerun") != toJson(b).at("rerun"); }

@@ -28,6 +28,7 @@
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
+#include "mapping/io/json_text.h"
 #include "render/colormap.h"
 #include "render/map_mirror.h"
 
@@ -1453,7 +1454,7 @@ class WorkbenchWindow {
       stats["idle_frames"] = idle_frames_;  // UI frames drawn meanwhile
     }
     try {
-      writeFileAtomically(file, stats.dump(2) + "\n");
+      writeFileAtomically(file, jsonText(stats) + "\n");
     } catch (const std::exception& e) {
       bench_.report(StatusLine::Kind::kError, e.what());
     }

@@ -17,6 +17,7 @@
 #include "mapping/core/timing.h"
 #include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"
+#include "mapping/io/json_text.h"
 #include "mapping/io/trajectory_io.h"
 
 namespace vdmap {
@@ -173,7 +174,7 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
                         {"means_occupied", rounded(r.means_occupied)},
                         {"seconds", rounded(r.seconds)}};
   }
-  writeFileAtomically(stage / "stats.json", stats.dump(2) + "\n");
+  writeFileAtomically(stage / "stats.json", jsonText(stats) + "\n");
   stage.commit();
   return stats;
 }
