@@ -1,8 +1,8 @@
 #include "mapping/io/json_text.h"
 
+#include <algorithm>
 #include <cstdio>
 #include <cstdlib>
-#include <algorithm>
 #include <cstring>
 
 namespace vdmap {
