@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <random>
 #include <sstream>
 
 #include <Eigen/Eigenvalues>
@@ -353,11 +354,17 @@ TEST(JsonText, NumbersAreTheShortestTextThatReadsBack) {
   }
   std::printf("nlohmann::json wrote %d of 20000 such numbers longer than needed\n", noisy);
   const nlohmann::json mixed = {{"path", "run-0.010102999999999999/x\"1.50\""}, {"count", 7}, {"whole", 3.0},
-                                {"small", -2.5e-07}, {"large", 1e20}, {"list", {0.010103, -1, 0.5}}};
+                                {"small", -2.5e-07}, {"large", 1e20}, {"list", {0.010103, -1, 0.5, 320.0, 0.00012, 123456.5}}};
   const std::string text = jsonText(mixed, -1);
-  EXPECT_EQ(text, "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
+  EXPECT_EQ(text, "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5,320.0,0.00012,123456.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
                   "\"small\":-2.5e-07,\"whole\":3.0}");
   EXPECT_EQ(nlohmann::json::parse(text), mixed);
+  // Any double reads back as itself, at every magnitude.
+  std::mt19937_64 random(7);
+  for (int i = 0; i < 100000; ++i) {
+    const double v = std::ldexp(std::uniform_real_distribution<double>(-1, 1)(random), static_cast<int>(random() % 120) - 60);
+    ASSERT_EQ(nlohmann::json::parse(jsonText(nlohmann::json(v))).get<double>(), v) << jsonText(nlohmann::json(v));
+  }
 }
 
 }  // namespace

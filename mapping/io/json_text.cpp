@@ -1,6 +1,7 @@
 #include "mapping/io/json_text.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
@@ -8,11 +9,21 @@
 namespace vdmap {
 namespace {
 
+// The fewest significant digits that read back as v; positional between 1e-4 and 1e15 (as
+// nlohmann::json writes, 320.0 rather than %g's 3.2e+02), in exponent form outside.
 std::string shortest(double v) {
-  char text[32];
-  for (int digits = 1; digits <= 17; ++digits) {
+  char text[40];
+  int digits = 1;
+  for (; digits < 17; ++digits) {
     std::snprintf(text, sizeof text, "%.*g", digits, v);
     if (std::strtod(text, nullptr) == v) break;
+  }
+  const double magnitude = std::fabs(v);
+  if (magnitude >= 1e-4 && magnitude < 1e15) {
+    const int exponent = static_cast<int>(std::floor(std::log10(magnitude)));
+    std::snprintf(text, sizeof text, "%.*f", std::max(0, digits - 1 - exponent), v);
+  } else {
+    std::snprintf(text, sizeof text, "%.*g", digits, v);
   }
   std::string out = text;
   if (out.find_first_of(".e") == std::string::npos) out += ".0";
