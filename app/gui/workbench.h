@@ -102,7 +102,7 @@ class Workbench {
   /// (args.refine is not looked at: the command line's holds for every sequence of the run).
   bool open(const SequenceArgs& args);
   /// The refinement of tracked keyframe poses after the last frame (nullopt: none) for the
-  /// sequences and sessions opened from now on (default: pairwise, as `vdmap map`).
+  /// sequences and sessions opened from now on (default: joint, as `vdmap map`).
   void setRefinement(std::optional<MapRefinementParams> refine) { refine_ = std::move(refine); }
   /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
   bool openSession(const std::string& file);
