@@ -28,22 +28,23 @@ inline std::string toText(const AccuracyReport& r) {
 inline nlohmann::json toJson(const RelativePoseError& r) {
   const ErrorStats &t = r.translation_m, &a = r.rotation_deg;
   return {{"pairs", t.count},
-          {"translation_rmse_m", t.rmse}, {"translation_mean_m", t.mean},
-          {"translation_median_m", t.median}, {"translation_max_m", t.max},
-          {"rotation_rmse_deg", a.rmse},  {"rotation_mean_deg", a.mean},
-          {"rotation_median_deg", a.median}, {"rotation_max_deg", a.max}};
+          {"translation_rmse_m", rounded(t.rmse)}, {"translation_mean_m", rounded(t.mean)},
+          {"translation_median_m", rounded(t.median)}, {"translation_max_m", rounded(t.max)},
+          {"rotation_rmse_deg", rounded(a.rmse)},  {"rotation_mean_deg", rounded(a.mean)},
+          {"rotation_median_deg", rounded(a.median)}, {"rotation_max_deg", rounded(a.max)}};
 }
 
-/// Trajectory error: the ATE figures flat (ate_rmse_m as in stats.json), the RPE nested.
+/// Trajectory error: the ATE figures flat (ate_rmse_m as in stats.json), the RPE nested; figures
+/// to 5 significant digits, as the accuracy report's and stats.json's.
 inline nlohmann::json toJson(const TrajectoryError& e, const TrajectoryErrorParams& p) {
   nlohmann::json rpe_second = toJson(e.rpe_per_second);
   rpe_second["delta_s"] = p.rpe_delta_s;
   return {{"estimate_poses", e.estimate_poses}, {"groundtruth_poses", e.groundtruth_poses},
           {"matched", e.matched},               {"max_difference_s", p.max_difference_s},
           {"offset_s", p.offset_s},             {"align_scale", p.align_scale},
-          {"scale", e.scale},                   {"ate_rmse_m", e.ate_m.rmse},
-          {"ate_mean_m", e.ate_m.mean},         {"ate_median_m", e.ate_m.median},
-          {"ate_max_m", e.ate_m.max},           {"rpe_per_frame", toJson(e.rpe_per_frame)},
+          {"scale", rounded(e.scale)},          {"ate_rmse_m", rounded(e.ate_m.rmse)},
+          {"ate_mean_m", rounded(e.ate_m.mean)}, {"ate_median_m", rounded(e.ate_m.median)},
+          {"ate_max_m", rounded(e.ate_m.max)},  {"rpe_per_frame", toJson(e.rpe_per_frame)},
           {"rpe_per_second", rpe_second}};
 }
 

@@ -175,7 +175,7 @@ TEST(TrajectoryError, RefusesTooFewMatchesAndBadParameters) {
   EXPECT_THROW(evaluateTrajectory(still, gt, p), std::invalid_argument);
 }
 
-// `vdmap eval --trajectory` prints the figures, as JSON with --json.
+// `vdmap eval --trajectory` prints the figures, as JSON with --json (rounded as stats.json's).
 TEST(TrajectoryError, EvalCommand) {
   test::TempDir dir;
   const std::vector<StampedPose> gt = circle(2.0);
@@ -187,6 +187,7 @@ TEST(TrajectoryError, EvalCommand) {
   const std::size_t at = r.out.find("\"ate_rmse_m\": ");
   ASSERT_NE(at, std::string::npos) << r.out;
   EXPECT_NEAR(std::stod(r.out.substr(at + 14)), 0.05, 1e-6) << r.out;
+  EXPECT_EQ(r.out.substr(at + 14, 5), "0.05,") << r.out;  // 5 significant digits, as stats.json's figures
   EXPECT_NE(r.out.find("\"matched\": 300"), std::string::npos) << r.out;
   const auto text = test::runVdmap("eval --trajectory '" + (dir / "est.txt").string() + "' --groundtruth '" +
                                    (dir / "gt.txt").string() + "'");
