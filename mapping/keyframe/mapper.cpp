@@ -214,9 +214,9 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
       candidates.emplace_back(-covisibility(K.features, K.T_W_K, N.features, N.T_W_K, camera_, margin), K.id);
     }
     std::sort(candidates.begin(), candidates.end());
-    int tried = 0;
-    for (const auto& [negative_delta, other] : candidates) {
-      if (tried++ >= tracking_.loops.candidates) break;
+    const std::size_t tried = std::min(candidates.size(), static_cast<std::size_t>(std::max(tracking_.loops.candidates, 0)));
+    for (std::size_t i = 0; i < tried; ++i) {
+      const int other = candidates[i].second;
       const Keyframe& K = graph_.keyframe(other);
       const RelativePose estimate =
           estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
