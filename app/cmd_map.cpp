@@ -132,6 +132,8 @@ void runMap(MapArgs args) {
   if (tracking) {
     options.run_stats["tracking_ms"] = rounded(median(tracking_ms));
     options.run_stats["frames_lost"] = mapper.framesLost();
+    options.run_stats["frames_weak"] = mapper.framesWeak();
+    options.run_stats["frames_relocalised"] = mapper.framesRelocalised();
     double pose_graph_ms = 0;
     for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
     options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
@@ -163,7 +165,8 @@ void runMap(MapArgs args) {
               counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(pipeline_ms),
               median(features_ms), median(tracking_ms), median(decision_ms), median(update_ms), out_dir.c_str());
   if (tracking) {
-    std::printf("tracked poses: %s lost (skipped), %s", counted(mapper.framesLost(), "frame").c_str(),
+    std::printf("tracked poses: %s lost (skipped), %d placed on a weak estimate, %d relocalised, %s",
+                counted(mapper.framesLost(), "frame").c_str(), mapper.framesWeak(), mapper.framesRelocalised(),
                 counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
     if (refined.refused)
       std::printf(", keyframe poses kept: the joint refinement of %d local-map pairs ran too far (%.1f s)", refined.pairs,

@@ -309,6 +309,8 @@ TEST(Tracking, FramesThatCannotBePlacedAreCountedNotIntegrated) {
   EXPECT_LT((next.T_W_C.translation() - boxWalkPose(5, 90).translation()).norm(), 0.005);
   EXPECT_EQ(mapper.trajectory().size(), 6u);
   EXPECT_EQ(mapper.framesLost(), 1);
+  EXPECT_EQ(mapper.framesWeak(), 0);  // lost, weak and relocalised frames are disjoint
+  EXPECT_EQ(mapper.framesRelocalised(), 0);
 }
 
 // A frame without texture (no feature: PnP has nothing to match) leaves only the local map to
@@ -363,19 +365,26 @@ TEST(Tracking, AfterAJumpFramesAreRelocalisedNeverPlacedWrong) {
   std::vector<int> walk;
   for (int i = 0; i < 50; ++i) walk.push_back(i);
   for (int i = 15; i < 36; ++i) walk.push_back(i);
-  int placed_after_jump = 0;
+  int placed_after_jump = 0, relocalised = 0, weak = 0;
   for (std::size_t k = 0; k < walk.size(); ++k) {
     RgbdFrame frame = boxWalkFrame(walk[k], 90);
     frame.index = static_cast<int>(k);
     frame.timestamp = k / 30.0;
     const FrameReport r = mapper.addFrame(frame);
     if (r.lost) continue;
+    EXPECT_TRUE(!r.relocalised || k >= 50) << "the steady walk before the jump needs no relocalisation: frame " << k;
+    relocalised += r.relocalised;
+    weak += r.weak && !r.relocalised;
     placed_after_jump += k >= 50;
     EXPECT_LT((r.T_W_C.translation() - frame.T_W_C.translation()).norm(), 0.01) << "frame " << k;
   }
-  std::printf("box walk jumping back 35 frames: %d frames lost, %d of 21 placed after the jump\n",
-              mapper.framesLost(), placed_after_jump);
+  std::printf("box walk jumping back 35 frames: %d frames lost, %d of 21 placed after the jump, %d relocalised, %d weak\n",
+              mapper.framesLost(), placed_after_jump, relocalised, weak);
   EXPECT_GE(placed_after_jump, 18);
+  // The counts stats.json and the workbench report.
+  EXPECT_GE(relocalised, 1);
+  EXPECT_EQ(mapper.framesRelocalised(), relocalised);
+  EXPECT_EQ(mapper.framesWeak(), weak);
 }
 
 TEST(Tracking, ALoopClosureCorrectsTheWalkBackToItsStart) {
@@ -628,7 +637,7 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
   // refinement sampled a fixed 8 px grid (300 points, too few to be trusted) instead of a stride
   // that follows the resolution (NdtRefinementParams::strideFor).
   EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.01);
-  for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms"}) EXPECT_TRUE(stats.contains(key)) << key;
+  for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms", "frames_weak", "frames_relocalised"}) EXPECT_TRUE(stats.contains(key)) << key;
   const nlohmann::json& refinement = stats["map_refinement"];
   // (12 turning frames: 4 covisible pairs, 2 of them well enough conditioned to give edges.)
   EXPECT_GE(refinement["pairs"].get<int>(), 1) << stats.dump();

@@ -163,6 +163,8 @@ void MapSession::publishMapping() {
     snap->keyframes.push_back({k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
   snap->frames_lost = mapper_->framesLost();
+  snap->frames_weak = mapper_->framesWeak();
+  snap->frames_relocalised = mapper_->framesRelocalised();
   for (const LoopClosure& loop : mapper_->poseGraph().loops()) snap->loops.push_back({loop, positionOf(loop.frame_index)});
   snap->keyframes_before = posesBeforeOptimisation();
   {

@@ -65,6 +65,8 @@ struct MappingSnapshot {
   SharedSpan<FramePose> trajectory;    ///< per mapped frame that was placed (lost ones have none)
   int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
   int frames_lost = 0;         ///< frames the tracker could not place (skipped, not integrated)
+  int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (Mapper::framesWeak)
+  int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
   std::vector<LoopEvent> loops;  ///< loop closures so far, oldest first
   /// T_W_K of every keyframe as it was before the last pose-graph optimisation; empty when there
   /// was none. Keyframes made after it are moved by the correction of the newest keyframe that

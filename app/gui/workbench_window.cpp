@@ -892,6 +892,12 @@ class WorkbenchWindow {
     ImGui::Text("tracked: %d frames placed, %d lost", placed, mapping_->frames_lost);
     tip("The camera trajectory vdmap estimated (blue), every placed frame at its pose relative to its keyframe, so "
         "it follows each correction. Lost frames could not be placed and were skipped, never integrated.");
+    if (mapping_->frames_weak + mapping_->frames_relocalised > 0) {
+      ImGui::Text("  %d relocalised, %d on a weak estimate", mapping_->frames_relocalised, mapping_->frames_weak);
+      tip("Of the placed frames (since the session was opened): relocalised ones were placed against another keyframe "
+          "when the current one gave no good estimate (a jump, a place seen again); weak ones on the current keyframe's "
+          "estimate with either the features (PnP) or the dense refinement against its local map not trusted.");
+    }
     swatch(render::kGroundTruthColor);
     ImGui::BeginDisabled(!truth);
     ImGui::Checkbox("ground truth", &s.show_groundtruth);
@@ -1428,6 +1434,8 @@ class WorkbenchWindow {
       stats["cell_size_px"] = mapping_->mapper.local_map.cell_size_px;
       stats["loop_closures"] = mapping_->loops.size();
       stats["frames_lost"] = mapping_->frames_lost;
+      stats["frames_weak"] = mapping_->frames_weak;
+      stats["frames_relocalised"] = mapping_->frames_relocalised;
       stats["has_groundtruth"] = mapping_->hasGroundTruth();
     }
     if (global_) {

@@ -132,6 +132,8 @@ std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed,
     report->lost = true;
     return std::nullopt;
   }
+  if (outcome.relocalised) ++frames_relocalised_;
+  else if (outcome.weak) ++frames_weak_;
   frame->T_W_C = graph_.keyframe(outcome.keyframe).T_W_K * outcome.estimate.T_K_C;
   return outcome;
 }

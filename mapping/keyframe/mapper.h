@@ -140,6 +140,12 @@ class Mapper {
   /// Frames fed to addFrame(), lost ones included.
   int framesMapped() const { return state_.frames_mapped; }
   int framesLost() const { return state_.frames_lost; }
+  /// PoseSource::kTrack, frames fed to this Mapper (not saved with a session: a continued one
+  /// counts from 0): placed on the current keyframe's weak estimate (PnP or the dense refinement
+  /// not trusted), and placed against another keyframe after one (relocalised). Frames lost,
+  /// weak and relocalised are disjoint.
+  int framesWeak() const { return frames_weak_; }
+  int framesRelocalised() const { return frames_relocalised_; }
   /// The state to save: the counters, the tracker's and the pose graph's.
   MapperState state() const;
   /// False for keyframes restored without their current keyframe (a format-1 session): they
@@ -183,6 +189,8 @@ class Mapper {
   KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
   Tracker tracker_;
   KeyframePoseGraph pose_graph_;
+  int frames_weak_ = 0;
+  int frames_relocalised_ = 0;
 };
 
 }  // namespace vdmap
