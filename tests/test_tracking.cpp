@@ -313,6 +313,41 @@ TEST(Tracking, FramesThatCannotBePlacedAreCountedNotIntegrated) {
   EXPECT_EQ(mapper.framesRelocalised(), 0);
 }
 
+// A frame placed on a weak estimate keeps its pose but stays out of the local map: integrated,
+// its error became the map the next frames were aligned to (README Tracking). Here the features
+// place the frame (PnP) while its depth holds only a 40x40 px patch, too little for the dense
+// refinement to be trusted.
+TEST(Tracking, AFramePlacedOnAWeakEstimateIsNotIntegrated) {
+  MapperParams params;
+  params.poses = PoseSource::kTrack;
+  Mapper mapper(boxCamera(), params);
+  for (int i = 0; i < 12; ++i) mapper.addFrame(boxWalkFrame(i, 90));
+  RgbdFrame frame = boxWalkFrame(12, 90);
+  cv::Mat patch = frame.depth(cv::Rect(140, 100, 40, 40)).clone();
+  frame.depth = cv::Mat::zeros(frame.depth.size(), frame.depth.type());
+  patch.copyTo(frame.depth(cv::Rect(140, 100, 40, 40)));
+  const int current = mapper.currentKeyframe();
+  const std::size_t cells = mapper.graph().keyframe(current).container.size();
+  const int integrated = mapper.graph().keyframe(current).frames_integrated;
+  const FrameReport weak = mapper.addFrame(frame);
+  ASSERT_FALSE(weak.lost);
+  EXPECT_TRUE(weak.weak);
+  EXPECT_FALSE(weak.relocalised);
+  EXPECT_EQ(weak.keyframe, current);
+  EXPECT_FALSE(weak.integrated);
+  EXPECT_TRUE(weak.touched_cells.empty());
+  EXPECT_EQ(mapper.graph().keyframe(current).container.size(), cells);
+  EXPECT_EQ(mapper.graph().keyframe(current).frames_integrated, integrated);
+  EXPECT_LT((weak.T_W_C.translation() - frame.T_W_C.translation()).norm(), 0.01);
+  EXPECT_EQ(mapper.framesWeak(), 1);
+  EXPECT_EQ(mapper.trajectory().size(), 13u);
+  // The next frame, whole again, is placed on a good estimate and integrated.
+  const FrameReport next = mapper.addFrame(boxWalkFrame(13, 90));
+  EXPECT_FALSE(next.weak);
+  EXPECT_TRUE(next.integrated);
+  EXPECT_LT((next.T_W_C.translation() - boxWalkPose(13, 90).translation()).norm(), 0.005);
+}
+
 // A frame without texture (no feature: PnP has nothing to match) leaves only the local map to
 // place it, from the prediction. After a jump the prediction did not follow (0.3 m along the
 // room), the box room's walls fit 90 % of the frame's points where the prediction put it, 0.3 m

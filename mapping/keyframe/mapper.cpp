@@ -346,8 +346,18 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
 
   const auto update_start = std::chrono::steady_clock::now();
   Keyframe& keyframe = graph_.keyframe(state_.current_keyframe);
-  integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
-  ++keyframe.frames_integrated;
+  // A frame placed on a weak estimate (the features or the local map alone) keeps its pose but
+  // stays out of the local map it was placed against, unless it starts a keyframe: integrated, its
+  // error became the map the next frames were aligned to. On Replica office0's 2000 poses the
+  // camera looks into a textureless corner for 37 frames (1703-1739, no PnP), and the local map
+  // alone, fed by the frames it placed, carried them 87 mm from the truth (map 2.09 mm RMSE against
+  // the mesh; 1.11 mm with this rule, ATE 4.9 -> 2.4 mm, 9 -> 13 frames lost).
+  report.integrated = !tracking || !tracked.weak || tracked.relocalised ||
+                      report.decision.kind == FrameDecision::Kind::kNewKeyframe;
+  if (report.integrated) {
+    integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
+    ++keyframe.frames_integrated;
+  }
   report.ms.update_ms = msSince(update_start);
   const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
   state_.frame_poses.push_back({frame.index, frame.timestamp, state_.current_keyframe, T_K_C});

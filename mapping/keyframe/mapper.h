@@ -67,6 +67,10 @@ struct FrameReport {
   bool relocalised = false;  ///< placed against another keyframe than the current one
   /// The frame could not be placed: nothing was integrated, `keyframe` is -1.
   bool lost = false;
+  /// The frame's depth went into `keyframe`'s local map. False for a frame placed on a weak
+  /// estimate (weak and not relocalised) that does not start a keyframe: its pose is in the
+  /// trajectory, its depth nowhere.
+  bool integrated = false;
   /// A loop was closed: the keyframe poses were optimised (the global map needs a rebuild).
   bool loop_closed = false;
   double loop_correction_m = 0;  ///< the largest keyframe move of that optimisation
