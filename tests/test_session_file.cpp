@@ -125,6 +125,21 @@ TEST(SessionFile, EmptySessionRoundTrips) {
   EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
 }
 
+// A keyframe that found no features stores 0 descriptor rows of 32 bytes; it loads (the fuzzer
+// found that reading it copied into a null image under UBSan).
+TEST(SessionFile, AKeyframeWithoutFeaturesRoundTrips) {
+  Mapper mapper = test::mapTurningBoxRoom(10);
+  FrameFeatures& f = mapper.graph().keyframe(0).features;
+  f.keypoints.clear();
+  f.depth_m.clear();
+  f.descriptors = cv::Mat(0, 32, CV_8UC1);
+  const std::string bytes = encodeSession(mapper.graph(), sessionInfo(mapper, GlobalMapParams{}));
+  const Session loaded = decodeSession(bytes, "nofeatures.vdmap");
+  EXPECT_EQ(loaded.graph.keyframe(0).features.size(), 0u);
+  EXPECT_EQ(loaded.graph.keyframe(0).features.descriptors.rows, 0);
+  EXPECT_EQ(encodeSession(loaded.graph, loaded.info), bytes);
+}
+
 std::uint64_t u64At(const std::string& bytes, std::size_t at) {
   std::uint64_t v = 0;
   for (int i = 0; i < 8; ++i) v |= std::uint64_t{static_cast<unsigned char>(bytes[at + i])} << (8 * i);

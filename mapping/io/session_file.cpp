@@ -378,6 +378,7 @@ cv::Mat readMat(Reader* r, int type, int rows, int cols, const char* what) {
   r->check(h == rows && (cols < 0 ? w >= 1 && w <= 1024 : w == cols),
            std::string(what) + ": size " + std::to_string(w) + "x" + std::to_string(h) + " does not fit");
   cv::Mat m(h, w, type);
+  if (m.empty()) return m;  // no rows (descriptors of no keypoints): m.data is null
   const std::uint64_t bytes = static_cast<std::uint64_t>(m.total()) * m.elemSize();
   const std::string_view b = r->bytes(bytes, what);
   if (m.depth() == CV_8U) {
