@@ -157,14 +157,30 @@ void eraseInSection(std::string* bytes, std::size_t section, std::size_t at, std
   putU32(bytes, section + 12, crc32(view.substr(payload, length), crc32(view.substr(section, 12))));
 }
 
+std::size_t stateSection(const std::string& bytes) {
+  constexpr std::size_t kParm = 24;
+  const std::size_t msta = kParm + 16 + u64At(bytes, kParm + 4);
+  EXPECT_EQ(bytes.substr(msta, 4), "MSTA");
+  return msta;
+}
+
+// `bytes` as format 4 wrote it: MSTA without the weak and relocalised counts (i32, i32) at its end.
+std::string asFormat4(const std::string& bytes) {
+  std::string old = bytes;
+  const std::size_t msta = stateSection(old);
+  eraseInSection(&old, msta, u64At(old, msta + 4) - 8, 8);
+  putU32(&old, 8, 4);
+  resealHeader(&old);
+  return old;
+}
+
 // `bytes` as format 3 wrote it: PARM without the pose source (u32 after keyframe_every, 133
 // bytes into it) and MSTA without what version 4 added after the sequence folder.
 std::string asFormat3(const std::string& bytes) {
   constexpr std::size_t kParm = 24, kPoseSourceAt = 48 + 85;
   std::string old = bytes;
   eraseInSection(&old, kParm, kPoseSourceAt, 4);
-  const std::size_t msta = kParm + 16 + u64At(old, kParm + 4);
-  EXPECT_EQ(old.substr(msta, 4), "MSTA");
+  const std::size_t msta = stateSection(old);
   std::uint32_t folder = 0;
   for (int i = 0; i < 4; ++i) folder |= std::uint32_t{static_cast<unsigned char>(old[msta + 16 + 16 + i])} << (8 * i);
   const std::size_t kept = 20 + folder;
@@ -183,6 +199,27 @@ std::string asFormat2(const std::string& bytes) {
   putU32(&old, 8, 2);
   resealHeader(&old);
   return old;
+}
+
+// Format 4 had no weak and relocalised counts: they load as 0; re-saved, the file is current.
+TEST(SessionFile, Format4FilesLoadWithoutTheWeakCounts) {
+  const Saved& s = smallSession();
+  SessionInfo counted = s.info;
+  counted.state.frames_weak = 2;
+  counted.state.frames_relocalised = 1;
+  const std::string bytes = encodeSession(s.mapper.graph(), counted);
+  const Session now = decodeSession(bytes, "v5.vdmap");
+  EXPECT_EQ(now.info.state.frames_weak, 2);
+  EXPECT_EQ(now.info.state.frames_relocalised, 1);
+  const Session old = decodeSession(asFormat4(bytes), "v4.vdmap");
+  EXPECT_EQ(old.info.format_version, 4u);
+  EXPECT_EQ(old.info.state.frames_weak, 0);
+  EXPECT_EQ(old.info.state.frames_relocalised, 0);
+  EXPECT_EQ(old.info.state.frame_poses.size(), s.info.state.frame_poses.size());
+  EXPECT_EQ(encodeSession(old.graph, old.info), s.bytes);
+  // More weak and relocalised frames than placed ones is a damaged state.
+  counted.state.frames_weak = static_cast<int>(s.info.state.frame_poses.size());
+  EXPECT_THROW(encodeSession(s.mapper.graph(), counted), std::invalid_argument);
 }
 
 // Format 3 (before tracking): ground-truth poses, no trajectory; re-saved as the current format

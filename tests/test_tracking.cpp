@@ -420,6 +420,11 @@ TEST(Tracking, AfterAJumpFramesAreRelocalisedNeverPlacedWrong) {
   EXPECT_GE(relocalised, 1);
   EXPECT_EQ(mapper.framesRelocalised(), relocalised);
   EXPECT_EQ(mapper.framesWeak(), weak);
+  // A saved session keeps them, so a continued run reports the whole run's (format 5).
+  const Session saved = decodeSession(encodeSession(mapper.graph(), sessionInfo(mapper, {})), "jump.vdmap");
+  const Mapper rest(saved.info.camera, saved.info.mapper, saved.graph, saved.info.state);
+  EXPECT_EQ(rest.framesRelocalised(), relocalised);
+  EXPECT_EQ(rest.framesWeak(), weak);
 }
 
 TEST(Tracking, ALoopClosureCorrectsTheWalkBackToItsStart) {

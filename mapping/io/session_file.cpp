@@ -304,6 +304,8 @@ void writeState(Writer* w, const SessionInfo& info) {
     w->f64(l.correction_m);
     w->f64(l.pose_graph_ms);
   }
+  w->i32(s.frames_weak);
+  w->i32(s.frames_relocalised);
 }
 
 void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_t keyframes) {
@@ -346,6 +348,10 @@ void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_
       l.correction_m = r->f64("loop correction");
       l.pose_graph_ms = r->f64("loop time");
     }
+  }
+  if (version >= 5) {  // the frames placed on a weak estimate, and those relocalised
+    s.frames_weak = r->i32("frames weak");
+    s.frames_relocalised = r->i32("frames relocalised");
   }
   r->checkValid("mapper state", [&] { s.validate(keyframes); });
   r->expectEnd();

@@ -19,7 +19,8 @@ namespace vdmap {
 /// pose source (ground truth or tracked) and, in the mapper state, the lost frames, every mapped
 /// frame's pose in its keyframe (the trajectory), the tracker's motion state and the keyframe
 /// pose graph (edges, loop closures), so a tracked session continues as if it had not stopped.
-inline constexpr std::uint32_t kSessionFormatVersion = 4;
+/// 5 added the counts of frames placed on a weak estimate and relocalised (4 loads them as 0).
+inline constexpr std::uint32_t kSessionFormatVersion = 5;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {

@@ -40,6 +40,9 @@ void MapperState::validate(std::size_t keyframes) const {
   if (frames_lost < 0 || frames_lost + revisits > frames_mapped ||
       frame_poses.size() + static_cast<std::size_t>(frames_lost) > static_cast<std::size_t>(frames_mapped))
     throw std::invalid_argument("frames lost and frame poses must fit the frames mapped");
+  if (frames_weak < 0 || frames_relocalised < 0 ||
+      static_cast<std::size_t>(frames_weak) + static_cast<std::size_t>(frames_relocalised) > frame_poses.size())
+    throw std::invalid_argument("frames weak and relocalised must be counts of placed frames");
   const auto keyframe = [keyframes](int k) { return k >= 0 && k < static_cast<long long>(keyframes); };
   for (const FramePose& f : frame_poses)
     if (!keyframe(f.keyframe) || !isValidTransform(f.T_K_C) || !std::isfinite(f.timestamp))
@@ -132,8 +135,8 @@ std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed,
     report->lost = true;
     return std::nullopt;
   }
-  if (outcome.relocalised) ++frames_relocalised_;
-  else if (outcome.weak) ++frames_weak_;
+  if (outcome.relocalised) ++state_.frames_relocalised;
+  else if (outcome.weak) ++state_.frames_weak;
   frame->T_W_C = graph_.keyframe(outcome.keyframe).T_W_K * outcome.estimate.T_K_C;
   return outcome;
 }

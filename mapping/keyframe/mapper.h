@@ -98,6 +98,8 @@ struct MapperState {
   int last_frame_index = -1;  ///< depth-list index of the last frame mapped (-1: none)
   double last_timestamp = 0;  ///< s, its depth timestamp
   int frames_lost = 0;        ///< frames PoseSource::kTrack could not place (skipped, not integrated)
+  int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (not relocalised)
+  int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
   /// One pose per integrated frame, relative to the keyframe it went into, so the trajectory
   /// follows every keyframe pose correction.
   std::vector<FramePose> frame_poses;
@@ -148,8 +150,8 @@ class Mapper {
   /// counts from 0): placed on the current keyframe's weak estimate (PnP or the dense refinement
   /// not trusted), and placed against another keyframe after one (relocalised). Frames lost,
   /// weak and relocalised are disjoint.
-  int framesWeak() const { return frames_weak_; }
-  int framesRelocalised() const { return frames_relocalised_; }
+  int framesWeak() const { return state_.frames_weak; }
+  int framesRelocalised() const { return state_.frames_relocalised; }
   /// The state to save: the counters, the tracker's and the pose graph's.
   MapperState state() const;
   /// False for keyframes restored without their current keyframe (a format-1 session): they
@@ -193,8 +195,6 @@ class Mapper {
   KeyframeIndex index_;  ///< rebuilt from graph_ by sync(): nothing of it is saved
   Tracker tracker_;
   KeyframePoseGraph pose_graph_;
-  int frames_weak_ = 0;
-  int frames_relocalised_ = 0;
 };
 
 }  // namespace vdmap
