@@ -511,6 +511,51 @@ TEST(BadInputMatrixBaseline, GoodInputsRead) {
   }
 }
 
+// A whole session shrunk to fit the fuzzers' 64 KiB input limit (scripts/fuzz -max_len): no
+// images, a few keypoints and cells per keyframe. A real session is mostly image bytes, so cut to
+// 64 KiB the fuzzer never reaches the keypoints, cells, edges or the tracked state; these can.
+std::string compactSession(bool tracked) {
+  MapperParams params;
+  params.poses = tracked ? PoseSource::kTrack : PoseSource::kGroundTruth;
+  const PinholeCamera camera{160, 120, 131.25, 131.25, 79.5, 59.5, 5000.0};
+  Mapper mapper(camera, params);
+  for (int i = 0; i < 66; ++i) mapper.addFrame(test::turningBoxRoomFrame(camera, i, 6.0));
+  KeyframeGraph& graph = mapper.graph();
+  for (std::size_t k = 0; k < graph.size(); ++k) {
+    Keyframe& kf = graph.keyframe(static_cast<int>(k));
+    kf.rgb_image = CompressedImage();
+    kf.depth_image = CompressedImage();
+    FrameFeatures& f = kf.features;
+    const int keep = static_cast<int>(std::min<std::size_t>(f.size(), 4));
+    f.keypoints.resize(keep);
+    f.depth_m.resize(keep);
+    f.descriptors = f.descriptors.rowRange(0, keep).clone();
+    KeyframeContainer cells(kf.container.camera(), kf.container.cellSizePx());
+    for (std::size_t c = 0; c < kf.container.size(); c += 97) {
+      const StoredCell& cell = kf.container.cells()[c];
+      cells.findOrCreate(cell.grid_index) = cell;
+    }
+    kf.container = std::move(cells);
+  }
+  return encodeSession(graph, sessionInfo(mapper, {}));
+}
+
+TEST(BadInputMatrixBaseline, CompactSessionsSeedTheFuzzerWhole) {
+  const fs::path corpus = fs::path(VDMAP_FUZZ_SEEDS) / "session";
+  fs::create_directories(corpus);
+  for (const bool tracked : {false, true}) {
+    const std::string bytes = compactSession(tracked);
+    EXPECT_LE(bytes.size(), 65536u);
+    const Session s = decodeSession(bytes, "compact.vdmap");
+    EXPECT_GE(s.graph.size(), 3u);
+    EXPECT_EQ(s.info.state.frame_poses.size(), 66u);
+    if (tracked) {
+      EXPECT_GE(s.info.state.pose_graph_edges.size(), 2u);
+    }
+    writeText(corpus / (tracked ? "session-compact-tracked" : "session-compact"), bytes);
+  }
+}
+
 TEST(BadInputMatrixBaseline, EveryInputHasBadCases) {
   for (const Input& input : inputs()) {
     int n = 0;
