@@ -98,10 +98,10 @@ struct MapperState {
   int last_frame_index = -1;  ///< depth-list index of the last frame mapped (-1: none)
   double last_timestamp = 0;  ///< s, its depth timestamp
   int frames_lost = 0;        ///< frames PoseSource::kTrack could not place (skipped, not integrated)
-  int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (not relocalised)
-  int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
-  /// One pose per integrated frame, relative to the keyframe it went into, so the trajectory
-  /// follows every keyframe pose correction.
+  int frames_weak = 0;        ///< placed on the current keyframe's weak estimate (not relocalised)
+  int frames_relocalised = 0; ///< placed against another keyframe after a weak estimate
+  /// One pose per placed frame (integrated or not), relative to the keyframe it was placed in, so
+  /// the trajectory follows every keyframe pose correction.
   std::vector<FramePose> frame_poses;
   // PoseSource::kTrack: the tracker's motion state and the keyframe pose graph (its edges and
   // the loops closed so far); the poses before the last optimisation are not kept.
@@ -146,10 +146,10 @@ class Mapper {
   /// Frames fed to addFrame(), lost ones included.
   int framesMapped() const { return state_.frames_mapped; }
   int framesLost() const { return state_.frames_lost; }
-  /// PoseSource::kTrack, frames fed to this Mapper (not saved with a session: a continued one
-  /// counts from 0): placed on the current keyframe's weak estimate (PnP or the dense refinement
-  /// not trusted), and placed against another keyframe after one (relocalised). Frames lost,
-  /// weak and relocalised are disjoint.
+  /// PoseSource::kTrack, frames of the whole run (saved with a session since format 5): placed
+  /// on the current keyframe's weak estimate (PnP or the dense refinement not trusted), and placed
+  /// against another keyframe after one (relocalised). Frames lost, weak and relocalised are
+  /// disjoint.
   int framesWeak() const { return state_.frames_weak; }
   int framesRelocalised() const { return state_.frames_relocalised; }
   /// The state to save: the counters, the tracker's and the pose graph's.
