@@ -59,7 +59,8 @@ double medianCpu(const std::vector<FrameRow>& rows, std::size_t begin, std::size
 }  // namespace
 
 void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
-                  const std::filesystem::path& out_dir, const LongRunOptions& options) {
+                  const std::filesystem::path& out_dir, const LongRunOptions& options,
+                  const std::optional<MapRefinementParams>& refine) {
   if (options.global_every < 1) throw std::invalid_argument("--global-every must be at least 1");
   Mapper mapper(seq.camera(), mapper_params);
   std::vector<FrameRow> rows;
@@ -83,7 +84,7 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
     if (static_cast<int>(rows.size() + 1) % options.global_every == 0) buildGlobal(row);
     rows.push_back(row);
     last = threadCpuMs();  // a global-map build is not the next frame's cost
-  });
+  }, refine);
   if (!rows.empty() && rows.back().global_ellipsoids < 0) buildGlobal(rows.back());
 
   std::ostringstream csv;
@@ -99,8 +100,10 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
   const double early = medianCpu(rows, n / 6, n / 3), late = medianCpu(rows, n - n / 6, n);
   const double rss_half = n > 0 ? rows[n / 2].rss_mb : 0.0, rss_end = n > 0 ? rows.back().rss_mb : 0.0;
   const double heap_half = n > 0 ? rows[n / 2].heap_mb : 0.0, heap_end = n > 0 ? rows.back().heap_mb : 0.0;
-  const nlohmann::json summary = {
+  const bool tracking = mapper_params.poses == PoseSource::kTrack;
+  nlohmann::json summary = {
       {"frames", n},
+      {"poses", tracking ? "track" : "gt"},
       {"keyframes", mapper.graph().size()},
       {"revisits", mapper.revisits()},
       {"cpu_ms_median_early", rounded(early)},
@@ -118,6 +121,7 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
       {"global_ellipsoids_end", n > 0 ? rows.back().global_ellipsoids : 0},
       {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
+  if (tracking) addTrackingStats(mapper, seq, &summary);
   writeFileAtomically(out_dir / "long.csv", csv.str());
   writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
   if (options.json) {
@@ -131,6 +135,12 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
               rss_half > 0 ? 100.0 * (rss_end / rss_half - 1.0) : 0.0);
   std::printf("live heap: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", heap_half, heap_end,
               heap_half > 0 ? 100.0 * (heap_end / heap_half - 1.0) : 0.0);
+  if (tracking) {
+    std::printf("tracked poses: %d frames lost, %d placed on a weak estimate, %d relocalised, %zu loop closures",
+                mapper.framesLost(), mapper.framesWeak(), mapper.framesRelocalised(), mapper.poseGraph().loops().size());
+    if (summary.contains("ate_rmse_m")) std::printf(", ATE %.2f cm", 100 * summary["ate_rmse_m"].get<double>());
+    std::printf("\n");
+  }
   std::printf("global map at the end: %lld ellipsoids in %.2f s\n", n > 0 ? rows.back().global_ellipsoids : 0LL,
               n > 0 ? rows.back().t_g_s : 0.0);
   std::printf("wrote %s and %s\n", (out_dir / "long.csv").c_str(), (out_dir / "long.json").c_str());

@@ -1,6 +1,7 @@
 #pragma once
 // vdmap bench SEQ --long: the long-run benchmark of issue 16.
 #include <filesystem>
+#include <optional>
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/tum_sequence.h"
@@ -20,7 +21,10 @@ struct LongRunOptions {
 /// t_g. Writes long.csv (one row per frame) and long.json (the summary: median CPU time per frame
 /// over frames [N/6, N/3) and over the last N/6, i.e. 1000-2000 and the last 1000 of 6000, and
 /// the resident memory at half way and at the end) into `out_dir`, which must exist.
+/// With tracked poses (`mapper.poses`) the keyframe poses are refined after the last frame as
+/// `refine` says, as `vdmap map` does, and long.json adds the tracking figures (addTrackingStats).
 void runLongBench(const TumSequence& seq, const MapperParams& mapper, const GlobalMapParams& global,
-                  const std::filesystem::path& out_dir, const LongRunOptions& options);
+                  const std::filesystem::path& out_dir, const LongRunOptions& options,
+                  const std::optional<MapRefinementParams>& refine);
 
 }  // namespace vdmap::app

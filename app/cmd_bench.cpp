@@ -327,8 +327,9 @@ void runBench(BenchArgs args) {
     checkExportFolder(out_dir);
     MapperParams mapper;
     mapper.local_map = args.local_map;
+    mapper.poses = args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
     args.long_options.json = args.json;
-    return runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options);
+    return runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options, refinement(args.sequence));
   }
   // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
   // it is shorter (a range typed past the end is an error, as everywhere).
@@ -593,7 +594,8 @@ void addBenchCommand(CLI::App& app) {
   verb->add_flag("--long", args->long_run,
                  "the long run instead (issue 16): every frame (or --frames) mapped as `vdmap map` does, the mapping "
                  "thread's CPU time per frame, resident memory, live heap, keyframes and the global map's size into "
-                 "long.csv and long.json");
+                 "long.csv and long.json; with --poses track the poses are tracked (and refined as --refine says) "
+                 "and long.json adds frames lost, loop closures and the ATE");
   verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");

@@ -19,7 +19,6 @@
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
-#include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
 #include "mapping/io/session_file.h"
@@ -131,19 +130,10 @@ void runMap(MapArgs args) {
   options.trajectory = mapper.trajectory();
   if (tracking) {
     options.run_stats["tracking_ms"] = rounded(median(tracking_ms));
-    options.run_stats["frames_lost"] = mapper.framesLost();
-    options.run_stats["frames_weak"] = mapper.framesWeak();
-    options.run_stats["frames_relocalised"] = mapper.framesRelocalised();
-    double pose_graph_ms = 0;
-    for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
-    options.run_stats["loop_closures"] = mapper.poseGraph().loops().size();
-    options.run_stats["pose_graph_ms"] = rounded(pose_graph_ms);  // all optimisations of the run, wall clock
+    addTrackingStats(mapper, seq, &options.run_stats);
     options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
                                            {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
                                            {"refused", refined.refused}};
-    const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
-    if (groundtruth.size() >= 3 && options.trajectory.size() >= 3)
-      options.run_stats["ate_rmse_m"] = rounded(evaluateTrajectory(options.trajectory, groundtruth).ate_m.rmse);
   }
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {

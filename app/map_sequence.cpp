@@ -1,6 +1,10 @@
 #include "app/map_sequence.h"
 
+#include <nlohmann/json.hpp>
+
 #include "app/progress.h"
+#include "mapping/core/timing.h"
+#include "mapping/eval/trajectory_error.h"
 #include "mapping/io/frame_prefetcher.h"
 
 namespace vdmap::app {
@@ -24,6 +28,21 @@ std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {
   for (const FrameEntry& e : seq.entries())
     if (e.has_pose) out.push_back({e.t_depth, e.T_W_C});
   return out;
+}
+
+void addTrackingStats(const Mapper& mapper, const TumSequence& seq, nlohmann::json* stats) {
+  nlohmann::json& s = *stats;
+  s["frames_lost"] = mapper.framesLost();
+  s["frames_weak"] = mapper.framesWeak();
+  s["frames_relocalised"] = mapper.framesRelocalised();
+  double pose_graph_ms = 0;
+  for (const LoopClosure& loop : mapper.poseGraph().loops()) pose_graph_ms += loop.pose_graph_ms;
+  s["loop_closures"] = mapper.poseGraph().loops().size();
+  s["pose_graph_ms"] = rounded(pose_graph_ms);
+  const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
+  const std::vector<StampedPose> trajectory = mapper.trajectory();
+  if (groundtruth.size() >= 3 && trajectory.size() >= 3)
+    s["ate_rmse_m"] = rounded(evaluateTrajectory(trajectory, groundtruth).ate_m.rmse);
 }
 
 }  // namespace vdmap::app

@@ -3,6 +3,8 @@
 #include <functional>
 #include <optional>
 
+#include <nlohmann/json_fwd.hpp>
+
 #include "mapping/io/tum_sequence.h"
 #include "mapping/keyframe/mapper.h"
 
@@ -18,5 +20,10 @@ MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
 
 /// The ground-truth poses of the sequence's frames (those that have one), for trajectory error.
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq);
+
+/// A tracked run's figures in `stats` (stats.json, long.json): frames_lost, frames_weak,
+/// frames_relocalised, loop_closures, pose_graph_ms (all optimisations, wall) and, when `seq` has
+/// ground truth, ate_rmse_m of the mapper's trajectory.
+void addTrackingStats(const Mapper& mapper, const TumSequence& seq, nlohmann::json* stats);
 
 }  // namespace vdmap::app

@@ -99,6 +99,25 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
   EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
                 .exit_code,
             1);
+  EXPECT_EQ(j.value("poses", ""), "gt");
+  EXPECT_FALSE(j.contains("loop_closures"));
+}
+
+// The long run with --poses track tracks the poses (it mapped with the ground truth, silently,
+// before) and reports the tracking figures beside the cost per frame.
+TEST(BenchCli, LongRunWithTrackedPosesReportsTheTracking) {
+  TempDir tmp;
+  writeBoxRoomSequence(tmp / "seq", 12);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --long --poses track --global-every 6 --json --out '" +
+                               tmp.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out);
+  EXPECT_EQ(j["frames"], 12);
+  EXPECT_EQ(j.value("poses", ""), "track");
+  for (const char* key : {"frames_lost", "frames_weak", "frames_relocalised", "loop_closures", "pose_graph_ms"})
+    EXPECT_TRUE(j.contains(key)) << key;
+  EXPECT_EQ(j.value("frames_lost", -1), 0);
+  EXPECT_LT(j.value("ate_rmse_m", 1.0), 0.01);  // the same walk as the map verb's tracking test
 }
 
 // Every number in a JSON text has at most `digits` significant digits (issue #17: figures such as
