@@ -121,7 +121,7 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
       {"global_ellipsoids_end", n > 0 ? rows.back().global_ellipsoids : 0},
       {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
-  if (tracking) addTrackingStats(mapper, seq, &summary);
+  if (tracking) addTrackingStats(mapper, mapper.trajectory(), seq, &summary);
   writeFileAtomically(out_dir / "long.csv", csv.str());
   writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
   if (options.json) {

@@ -130,7 +130,7 @@ void runMap(MapArgs args) {
   options.trajectory = mapper.trajectory();
   if (tracking) {
     options.run_stats["tracking_ms"] = rounded(median(tracking_ms));
-    addTrackingStats(mapper, seq, &options.run_stats);
+    addTrackingStats(mapper, options.trajectory, seq, &options.run_stats);
     options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
                                            {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
                                            {"refused", refined.refused}};

@@ -30,7 +30,8 @@ std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {
   return out;
 }
 
-void addTrackingStats(const Mapper& mapper, const TumSequence& seq, nlohmann::json* stats) {
+void addTrackingStats(const Mapper& mapper, const std::vector<StampedPose>& trajectory, const TumSequence& seq,
+                      nlohmann::json* stats) {
   nlohmann::json& s = *stats;
   s["frames_lost"] = mapper.framesLost();
   s["frames_weak"] = mapper.framesWeak();
@@ -40,7 +41,6 @@ void addTrackingStats(const Mapper& mapper, const TumSequence& seq, nlohmann::js
   s["loop_closures"] = mapper.poseGraph().loops().size();
   s["pose_graph_ms"] = rounded(pose_graph_ms);
   const std::vector<StampedPose> groundtruth = groundTruthTrajectory(seq);
-  const std::vector<StampedPose> trajectory = mapper.trajectory();
   if (groundtruth.size() >= 3 && trajectory.size() >= 3)
     s["ate_rmse_m"] = rounded(evaluateTrajectory(trajectory, groundtruth).ate_m.rmse);
 }

@@ -23,7 +23,8 @@ std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq);
 
 /// A tracked run's figures in `stats` (stats.json, long.json): frames_lost, frames_weak,
 /// frames_relocalised, loop_closures, pose_graph_ms (all optimisations, wall) and, when `seq` has
-/// ground truth, ate_rmse_m of the mapper's trajectory.
-void addTrackingStats(const Mapper& mapper, const TumSequence& seq, nlohmann::json* stats);
+/// ground truth, ate_rmse_m of `trajectory` (the mapper's).
+void addTrackingStats(const Mapper& mapper, const std::vector<StampedPose>& trajectory, const TumSequence& seq,
+                      nlohmann::json* stats);
 
 }  // namespace vdmap::app

@@ -894,7 +894,7 @@ class WorkbenchWindow {
         "it follows each correction. Lost frames could not be placed and were skipped, never integrated.");
     if (mapping_->frames_weak + mapping_->frames_relocalised > 0) {
       ImGui::Text("  %d relocalised, %d on a weak estimate", mapping_->frames_relocalised, mapping_->frames_weak);
-      tip("Of the placed frames (since the session was opened): relocalised ones were placed against another keyframe "
+      tip("Of the placed frames (of the whole run, a saved session's included): relocalised ones were placed against another keyframe "
           "when the current one gave no good estimate (a jump, a place seen again); weak ones on the current keyframe's "
           "estimate with either the features (PnP) or the dense refinement against its local map not trusted.");
     }
