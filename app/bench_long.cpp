@@ -122,6 +122,7 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
       {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
   if (tracking) addTrackingStats(mapper, mapper.trajectory(), seq, &summary);
+  std::filesystem::create_directories(out_dir);  // checked before the run (checkExportFolder)
   writeFileAtomically(out_dir / "long.csv", csv.str());
   writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
   if (options.json) {

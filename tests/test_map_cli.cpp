@@ -104,13 +104,15 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
 }
 
 // The long run with --poses track tracks the poses (it mapped with the ground truth, silently,
-// before) and reports the tracking figures beside the cost per frame.
+// before) and reports the tracking figures beside the cost per frame. Its --out folder is made as
+// map's is (the run failed at its end, after all the work, when the folder did not exist).
 TEST(BenchCli, LongRunWithTrackedPosesReportsTheTracking) {
   TempDir tmp;
   writeBoxRoomSequence(tmp / "seq", 12);
   const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --long --poses track --global-every 6 --json --out '" +
-                               tmp.path().string() + "'");
+                               (tmp / "new" / "long").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "new" / "long" / "long.json"));
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["frames"], 12);
   EXPECT_EQ(j.value("poses", ""), "track");
