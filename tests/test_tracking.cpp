@@ -214,6 +214,132 @@ TEST(NdtRefinement, CachedCellDistributionsAreThoseOfAFreshComputation) {
   EXPECT_EQ(cached.second, fresh.second);
 }
 
+// One textured wall seen face on, 0.8 m ahead: a keyframe, and a frame 12 mm along the wall
+// from it, whose pose in the keyframe is `truth`.
+struct WallView {
+  Mapper mapper{boxCamera(), [] {
+                  MapperParams p;
+                  p.keyframe_every = 1000;
+                  return p;
+                }()};
+  RgbdFrame frame = test::renderBoxRoom(boxCamera(), test::lookAt({0.01, 0.006, 1.2}, {0.01, 0.006, 2.0}));
+  Transform truth;
+  WallView() {
+    mapper.addFrame(test::renderBoxRoom(boxCamera(), test::lookAt({0, 0, 1.2}, {0, 0, 2.0})));
+    truth = keyframe().T_W_K.inverse() * frame.T_W_C;
+  }
+  const Keyframe& keyframe() const { return mapper.graph().keyframe(0); }
+};
+
+double bilinearAt(const cv::Mat& image, double x, double y) {
+  const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
+  const double ax = x - x0, ay = y - y0;
+  const auto at = [&](int yy, int xx) { return static_cast<double>(image.at<float>(yy, xx)); };
+  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x0 + 1)) + ay * ((1 - ax) * at(y0 + 1, x0) + ax * at(y0 + 1, x0 + 1));
+}
+
+// The photometric term's normal equations, written out in double with Eigen (the fast path
+// unrolls the Jacobian by hand in float): each point projected into the keyframe's half-
+// resolution image, its grey-level difference less the median, sigma from the median absolute
+// deviation, Tukey at photometric_robust_k, J = grad I (d pi / d q) [I, -[q]x].
+void referencePhotometricEquations(const PhotometricTerm& term, const PinholeCamera& cam, const Transform& T_K_C,
+                                   const NdtRefinementParams& p, Eigen::Matrix<double, 6, 6>* H,
+                                   Eigen::Matrix<double, 6, 1>* g) {
+  struct Sample {
+    Eigen::Vector3d q;
+    double x, y, r;
+  };
+  std::vector<Sample> samples;
+  const double fx = cam.fx / 2, fy = cam.fy / 2, cx = (cam.cx - 0.5) / 2, cy = (cam.cy - 0.5) / 2;
+  const cv::Mat& grey = term.keyframe.grey;
+  for (std::size_t i = 0; i < term.frame.points_C.size(); ++i) {
+    const Eigen::Vector3d q = T_K_C * term.frame.points_C[i].cast<double>();
+    const double x = fx * q.x() / q.z() + cx, y = fy * q.y() / q.z() + cy;
+    if (q.z() <= 0 || x < 0 || y < 0 || x >= grey.cols - 1 || y >= grey.rows - 1) continue;
+    samples.push_back({q, x, y, bilinearAt(grey, x, y) - term.frame.intensity[i]});
+  }
+  std::vector<double> r;
+  for (const Sample& s : samples) r.push_back(s.r);
+  std::sort(r.begin(), r.end());
+  const double offset = r[r.size() / 2];
+  for (double& v : r) v = std::abs(v - offset);
+  std::sort(r.begin(), r.end());
+  const double sigma = std::max(p.photometric_min_sigma, 1.4826 * r[r.size() / 2]);
+  H->setZero();
+  g->setZero();
+  for (const Sample& s : samples) {
+    const double e = s.r - offset;
+    const double u = e * e / (sigma * sigma * p.photometric_robust_k * p.photometric_robust_k);
+    if (u >= 1) continue;
+    const Eigen::RowVector2d grad(bilinearAt(term.keyframe.gx, s.x, s.y), bilinearAt(term.keyframe.gy, s.x, s.y));
+    Eigen::Matrix<double, 2, 3> dpi;
+    dpi << fx / s.q.z(), 0, -fx * s.q.x() / (s.q.z() * s.q.z()), 0, fy / s.q.z(), -fy * s.q.y() / (s.q.z() * s.q.z());
+    Eigen::Matrix<double, 3, 6> dq;
+    dq << Eigen::Matrix3d::Identity(), -skew(s.q);
+    const Eigen::Matrix<double, 1, 6> J = grad * dpi * dq;
+    const double w = (1 - u) * (1 - u) / (sigma * sigma);
+    *H += w * J.transpose() * J;
+    *g += w * e * J.transpose();
+  }
+}
+
+TEST(NdtRefinement, PhotometricNormalEquationsMatchTheReference) {
+  const WallView w;
+  const NdtRefinementParams params;
+  const DensePoints points = sampleDensePoints(w.frame, boxCamera(), {}, params.strideFor(boxCamera()));
+  const PhotometricPoints photometric = samplePhotometricPoints(w.frame, boxCamera(), {}, params.strideFor(boxCamera()));
+  const PhotometricImage image = photometricImage(w.keyframe().rgb());
+  ASSERT_GT(photometric.points_C.size(), 500u);
+  const PhotometricTerm term{photometric, image};
+  Transform T = w.truth;
+  T.translation() += Eigen::Vector3d(0.003, -0.002, 0.001);
+  T.linear() = T.linear() * Eigen::AngleAxisd(0.2 * M_PI / 180, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  NdtRefinementParams measure = params;
+  measure.iterations = 0;
+  Transform unchanged = T;
+  const NdtRefinementResult without = refineAgainstLocalMap(w.keyframe().container, points, {}, &unchanged, measure);
+  const NdtRefinementResult with = refineAgainstLocalMap(w.keyframe().container, points, {}, &unchanged, measure, &term);
+  Eigen::Matrix<double, 6, 6> H;
+  Eigen::Matrix<double, 6, 1> g;
+  referencePhotometricEquations(term, boxCamera(), T, params, &H, &g);
+  EXPECT_GT(with.photometric_points, 500);
+  EXPECT_LT((with.information - without.information - H).norm(), 1e-4 * H.norm());
+  EXPECT_LT((with.gradient - without.gradient - g).norm(), 1e-4 * g.norm());
+  // The surfaces' hold on the position, which the tracker's rules read, leaves the term out.
+  EXPECT_EQ(with.translation_information, without.translation_information);
+}
+
+// The wall pins the distance to it and leaves the pose free along it; the image does not. From
+// 6 mm along the wall, the refinement without the photometric term stays where it started, with
+// it comes back to the truth, also when the frame is 30 grey levels brighter (an exposure change).
+TEST(NdtRefinement, ThePhotometricTermHoldsThePoseTheSurfacesLeaveFree) {
+  const WallView w;
+  const NdtRefinementParams params;
+  const int stride = params.strideFor(boxCamera());
+  const DensePoints points = sampleDensePoints(w.frame, boxCamera(), {}, stride);
+  const PhotometricImage image = photometricImage(w.keyframe().rgb());
+  Transform start = w.truth;
+  start.translation() += Eigen::Vector3d(0.005, -0.003, 0.0);  // the keyframe looks along z, at the wall
+  Transform plain = start;
+  refineAgainstLocalMap(w.keyframe().container, points, {}, &plain, params);
+  RgbdFrame bright = w.frame;
+  bright.rgb = w.frame.rgb + cv::Scalar(30, 30, 30);
+  const RgbdFrame& brighter = bright;
+  for (const RgbdFrame* frame : {&w.frame, &brighter}) {
+    const PhotometricPoints photometric = samplePhotometricPoints(*frame, boxCamera(), {}, stride);
+    const PhotometricTerm term{photometric, image};
+    Transform T = start;
+    const NdtRefinementResult r = refineAgainstLocalMap(w.keyframe().container, points, {}, &T, params, &term);
+    std::printf("6 mm along a wall: %.2f mm from the truth without the photometric term, %.2f mm with it%s\n",
+                1000 * translationBetween(plain, w.truth), 1000 * translationBetween(T, w.truth),
+                frame == &brighter ? " (frame 30 grey levels brighter)" : "");
+    EXPECT_LT(translationBetween(T, w.truth), 0.001);
+    EXPECT_LT(degreesBetween(T, w.truth), 0.05);
+    EXPECT_LT(r.photometric_sigma, 4.0);
+  }
+  EXPECT_GT(translationBetween(plain, w.truth), 0.004);
+}
+
 // The fast path matches the keyframe's keypoints by projection at the prior and refines the
 // prior on them; the reference matches every keypoint by brute force and runs RANSAC. From a
 // prior a few millimetres and a third of a degree off, both give the same relative pose.
@@ -229,9 +355,9 @@ TEST(RelativePose, MatchesByProjectionGiveThePoseBruteForceMatchesGive) {
   Transform prior = truth;
   prior.translation() += Eigen::Vector3d(0.004, -0.002, 0.003);
   prior.linear() = prior.linear() * Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
-  const RelativePose fast = estimateRelativePose(f.keyframe(), {&features, &points}, boxCamera(), prior, params);
+  const RelativePose fast = estimateRelativePose(f.keyframe(), {&features, &points, {}}, boxCamera(), prior, params);
   params.pnp.search_radius_px = 0;
-  const RelativePose reference = estimateRelativePose(f.keyframe(), {&features, &points}, boxCamera(), prior, params);
+  const RelativePose reference = estimateRelativePose(f.keyframe(), {&features, &points, {}}, boxCamera(), prior, params);
   ASSERT_EQ(fast.status, RelativePose::Status::kGood);
   ASSERT_EQ(reference.status, RelativePose::Status::kGood);
   EXPECT_GT(fast.pnp_inliers, 100);
@@ -387,6 +513,46 @@ TEST(Tracking, AWeakEstimateTheLocalMapAloneDoesNotPinIsNotUsed) {
               steady < 0 ? "lost" : "placed", 1000 * steady_before);
   EXPECT_LT(steady, 0.01);
   EXPECT_LT(steady_before, 0.01);
+}
+
+// A walk up and down a corner of two textured walls whose frames have no features after the
+// first three (PnP has nothing, as on a white cabinet front or a blurred painting where ORB finds
+// no corners), the camera slowing down and speeding up: the walls pin the position across the
+// corner but not along it, the constant-velocity prediction is off by the change of speed, and
+// only the photometric term sees the slide.
+TEST(Tracking, WithoutFeaturesThePhotometricTermHoldsTheTrackAlongACorner) {
+  const auto walk = [](bool photometric) {
+    TrackingParams tracking;
+    tracking.tracker.photometric = photometric;
+    MapperParams params;
+    params.poses = PoseSource::kTrack;
+    Mapper mapper(boxCamera(), params, tracking);
+    double worst = 0;
+    int weak = 0;
+    for (int i = 0; i < 30; ++i) {
+      const double y = 0.1 + 0.004 * i + 0.03 * std::sin(2 * M_PI * i / 20);
+      RgbdFrame frame = test::renderBoxRoom(boxCamera(), test::lookAt({1.3, y, 1.3}, {2.0, y, 2.0}));
+      frame.index = i;
+      frame.timestamp = i / 30.0;
+      if (i >= 3) {
+        frame.features = std::make_shared<const FrameFeatures>();
+        frame.features_for = &mapper;
+      }
+      const FrameReport r = mapper.addFrame(frame);
+      if (r.lost) return std::make_pair(-1.0, weak);
+      weak += r.weak;
+      worst = std::max(worst, (r.T_W_C.translation() - frame.T_W_C.translation()).norm());
+    }
+    return std::make_pair(worst, weak);
+  };
+  const auto [with, weak] = walk(true);
+  const auto [without, weak_without] = walk(false);
+  std::printf("along a corner without features: worst frame %.2f mm from the truth with the photometric term, %.2f mm without (%d / %d weak)\n",
+              1000 * with, 1000 * without, weak, weak_without);
+  EXPECT_EQ(weak, 27);
+  EXPECT_GE(with, 0.0);
+  EXPECT_LT(with, 0.002);
+  EXPECT_GT(without, 0.01);
 }
 
 // A jump the motion model cannot follow (after frame 49 the walk is back at frame 15, 130

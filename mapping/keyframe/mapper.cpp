@@ -274,7 +274,13 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
 
   RgbdFrame frame = input;  // shares the images; only the pose may change
   DensePoints points;
-  const TrackingFrame observed{&features, &points};
+  std::optional<PhotometricPoints> photometric;
+  const TrackingFrame observed{&features, &points, [&]() -> const PhotometricPoints& {
+                                 if (!photometric)
+                                   photometric = samplePhotometricPoints(frame, camera_, params_.local_map.depth_range,
+                                                                         tracking_.tracker.relative.dense.strideFor(camera_));
+                                 return *photometric;
+                               }};
   TrackingOutcome tracked;
   if (tracking) {
     const auto track_start = std::chrono::steady_clock::now();
@@ -339,7 +345,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
       for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
       if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report.keyframe, current, 0.0);
       if (tracking && current >= 0)
-        addKeyframeEdges(report.keyframe, current, tracked, edges, {kept, &points}, &frame, &report);
+        addKeyframeEdges(report.keyframe, current, tracked, edges, {kept, &points, {}}, &frame, &report);
       break;
     }
   }

@@ -6,13 +6,14 @@
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
 #include <Eigen/Geometry>
+#include <opencv2/imgproc.hpp>
 
 #include "mapping/local_map/sensor_model.h"
 
 namespace vdmap {
 
 double NdtRefinementResult::translationConditioning() const {
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(information.topLeftCorner<3, 3>());
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(translation_information);
   return es.eigenvalues()(0) / std::max(es.eigenvalues()(2), 1e-300);
 }
 
@@ -22,6 +23,19 @@ Transform stepTransform(const Eigen::Matrix<double, 6, 1>& xi) {
   if (phi.norm() > 0) step.linear() = Eigen::AngleAxisd(phi.norm(), phi.normalized()).toRotationMatrix();
   step.translation() = xi.head<3>();
   return step;
+}
+
+PhotometricImage photometricImage(const cv::Mat& rgb) {
+  PhotometricImage out;
+  if (rgb.empty()) return out;
+  cv::Mat grey, half;
+  cv::cvtColor(rgb, grey, cv::COLOR_RGB2GRAY);
+  cv::resize(grey, half, cv::Size(rgb.cols / 2, rgb.rows / 2), 0, 0, cv::INTER_AREA);
+  half.convertTo(half, CV_32F);
+  cv::GaussianBlur(half, out.grey, cv::Size(5, 5), 1.0, 1.0, cv::BORDER_REPLICATE);
+  cv::Sobel(out.grey, out.gx, CV_32F, 1, 0, 1, 0.5, 0.0, cv::BORDER_REPLICATE);
+  cv::Sobel(out.grey, out.gy, CV_32F, 0, 1, 1, 0.5, 0.0, cv::BORDER_REPLICATE);
+  return out;
 }
 
 DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
@@ -35,6 +49,40 @@ DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camer
       const double d = row[u] * inv_scale;
       if (row[u] == 0 || !range.contains(d)) continue;
       out.points_C.push_back(camera.backProject(u, v, d).cast<float>());
+    }
+  }
+  return out;
+}
+
+PhotometricPoints samplePhotometricPoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
+                                          int stride_px) {
+  PhotometricPoints out;
+  const PhotometricImage image = photometricImage(frame.rgb);
+  if (image.empty() || frame.depth.size() != frame.rgb.size() || stride_px < 1) return out;
+  const int block = std::max(1, stride_px / 2);
+  const float min_g2 = kMinPhotometricGradient * kMinPhotometricGradient;
+  const double inv_scale = 1.0 / camera.depth_scale;
+  for (int by = 0; by + block <= image.grey.rows; by += block) {
+    for (int bx = 0; bx + block <= image.grey.cols; bx += block) {
+      int best_x = -1, best_y = -1;
+      float best = min_g2;
+      for (int y = by; y < by + block; ++y)
+        for (int x = bx; x < bx + block; ++x) {
+          const float gx = image.gx.at<float>(y, x), gy = image.gy.at<float>(y, x);
+          if (gx * gx + gy * gy >= best) best = gx * gx + gy * gy, best_x = x, best_y = y;
+        }
+      if (best_x < 0) continue;
+      double lo = 1e300, hi = 0, sum = 0;
+      for (int dy = 0; dy < 2; ++dy)
+        for (int dx = 0; dx < 2; ++dx) {
+          const std::uint16_t raw = frame.depth.at<std::uint16_t>(2 * best_y + dy, 2 * best_x + dx);
+          const double d = raw * inv_scale;
+          if (raw == 0 || !range.contains(d)) lo = 0;
+          lo = std::min(lo, d), hi = std::max(hi, d), sum += d;
+        }
+      if (lo <= 0 || hi > 1.02 * lo) continue;
+      out.points_C.push_back(camera.backProject(2 * best_x + 0.5, 2 * best_y + 0.5, sum / 4).cast<float>());
+      out.intensity.push_back(image.grey.at<float>(best_y, best_x));
     }
   }
   return out;
@@ -122,6 +170,9 @@ struct Linearisation {
   int inliers = 0;
   double inlier_m2 = 0.0;
   double support = 0.0;  ///< sum over the points of 1 - rho / rho_max (Tukey): a soft inlier count
+  Eigen::Matrix3d H_tt = Eigen::Matrix3d::Zero();  ///< H's translation block before the photometric terms
+  int photometric_points = 0;
+  double photometric_sigma = 0.0;
 };
 
 // `distribution(cell)`: the CellDistribution of a stored cell of `map`.
@@ -189,6 +240,7 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
   for (int row = 0; row < 6; ++row)
     for (int col = row; col < 6; ++col) lin.H(row, col) = lin.H(col, row) = H[k++];
   for (int j = 0; j < 6; ++j) lin.g(j) = g[j];
+  lin.H_tt = lin.H.topLeftCorner<3, 3>();
   lin.associated = associated;
   lin.inliers = inliers;
   lin.inlier_m2 = inlier_m2;
@@ -224,6 +276,77 @@ void addFeatureTerms(std::span<const FeatureObservation> features, const Pinhole
     lin->H.noalias() += w * J.transpose() * J;
     lin->g.noalias() += w * J.transpose() * e;
   }
+  lin->H_tt = lin->H.topLeftCorner<3, 3>();
+}
+
+// Bilinear sample of a CV_32F image at (x, y); false outside the image's inner area.
+bool bilinear(const cv::Mat& image, float x, float y, float* value) {
+  if (!(x >= 0.0f && y >= 0.0f && x < image.cols - 1.0f && y < image.rows - 1.0f)) return false;
+  const int x0 = static_cast<int>(x), y0 = static_cast<int>(y);
+  const float ax = x - x0, ay = y - y0;
+  const float* r0 = image.ptr<float>(y0) + x0;
+  const float* r1 = image.ptr<float>(y0 + 1) + x0;
+  *value = (1 - ay) * ((1 - ax) * r0[0] + ax * r0[1]) + ay * ((1 - ax) * r1[0] + ax * r1[1]);
+  return true;
+}
+
+// Adds the photometric terms of the frame's photometric points to `lin`: r = I_K(pi(q)) - I_C - b
+// with q = T_K_C p, b the median of the differences (an exposure change), weighted by the
+// differences' own spread (NdtRefinementParams::photometric_min_sigma), and for the
+// perturbation exp(xi) T_K_C, dq = [I, -[q]x] xi, so with a = dpi/dq^T grad I_K the Jacobian is
+// (a, q x a).
+void addPhotometricTerms(const PhotometricTerm& term, const PinholeCamera& cam, const Transform& T_K_C,
+                         const NdtRefinementParams& params, double anneal, Linearisation* lin) {
+  const PhotometricPoints& frame = term.frame;
+  const PhotometricImage& image = term.keyframe;
+  const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
+  const Eigen::Vector3f t = T_K_C.translation().cast<float>();
+  // Half-resolution pixel of full-resolution coordinate u: (u - 0.5) / 2.
+  const float fx = static_cast<float>(cam.fx / 2), fy = static_cast<float>(cam.fy / 2);
+  const float cx = static_cast<float>((cam.cx - 0.5) / 2), cy = static_cast<float>((cam.cy - 0.5) / 2);
+  struct Sample {
+    Eigen::Vector3f q;
+    float x, y, r;
+  };
+  std::vector<Sample> samples;
+  samples.reserve(frame.points_C.size());
+  for (std::size_t i = 0; i < frame.points_C.size(); ++i) {
+    const Eigen::Vector3f q = R * frame.points_C[i] + t;
+    if (q.z() <= 0.0f) continue;
+    const float x = fx * q.x() / q.z() + cx, y = fy * q.y() / q.z() + cy;
+    float value;
+    if (!bilinear(image.grey, x, y, &value)) continue;
+    samples.push_back({q, x, y, value - frame.intensity[i]});
+  }
+  if (samples.empty()) return;
+  std::vector<float> r(samples.size());
+  for (std::size_t i = 0; i < samples.size(); ++i) r[i] = samples[i].r;
+  std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+  const float offset = r[r.size() / 2];
+  // The noise: the median absolute deviation of the differences, as a sigma, floored.
+  for (float& v : r) v = std::abs(v - offset);
+  std::nth_element(r.begin(), r.begin() + static_cast<std::ptrdiff_t>(r.size() / 2), r.end());
+  const double sigma = std::max(params.photometric_min_sigma, 1.4826 * r[r.size() / 2]);
+  const double info = 1.0 / (sigma * sigma);
+  lin->photometric_points = static_cast<int>(samples.size());
+  lin->photometric_sigma = sigma;
+  const double inv_k2 = 1.0 / (anneal * anneal * params.photometric_robust_k * params.photometric_robust_k);
+  for (const Sample& p : samples) {
+    const double e = p.r - offset;
+    const double u = e * e * info * inv_k2;
+    if (u >= 1.0) continue;
+    float gx, gy;
+    bilinear(image.gx, p.x, p.y, &gx);
+    bilinear(image.gy, p.x, p.y, &gy);
+    const Eigen::Vector3d q = p.q.cast<double>();
+    const double iz = 1.0 / q.z();
+    const Eigen::Vector3d a(gx * fx * iz, gy * fy * iz, -(gx * fx * q.x() + gy * fy * q.y()) * iz * iz);
+    Eigen::Matrix<double, 6, 1> J;
+    J << a, q.cross(a);
+    const double w = info * (1.0 - u) * (1.0 - u);
+    lin->H.noalias() += w * J * J.transpose();
+    lin->g.noalias() += w * e * J;
+  }
 }
 
 // The lookup linearise() takes for `map`: the per-thread cache.
@@ -243,7 +366,10 @@ NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
   result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
   result.support = lin.support;
   result.information = lin.H;
+  result.translation_information = lin.H_tt;
   result.gradient = lin.g;
+  result.photometric_points = lin.photometric_points;
+  result.photometric_sigma = lin.photometric_sigma;
   return result;
 }
 
@@ -251,7 +377,7 @@ NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
 
 NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const DensePoints& frame,
                                           std::span<const FeatureObservation> features, Transform* T_K_C,
-                                          const NdtRefinementParams& params) {
+                                          const NdtRefinementParams& params, const PhotometricTerm* photometric) {
   const auto distribution = cachedDistributions(map, params);
   int iterations = 0;
   // Annealing: the first steps take points up to annealing_factor times farther (the basin of
@@ -263,6 +389,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     const double a = it == params.iterations ? 1.0 : anneal(it);
     lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, distribution);
     addFeatureTerms(features, map.camera(), *T_K_C, params, a, &lin);
+    if (photometric) addPhotometricTerms(*photometric, map.camera(), *T_K_C, params, a, &lin);
     // The last pass only measures the pose the previous step reached.
     if (it == params.iterations || lin.associated < 6) break;
     const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(lin.H);
@@ -274,6 +401,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     if (a == 1.0 && xi.head<3>().norm() < params.converged_m && xi.tail<3>().norm() < params.converged_rad) {
       lin = linearise(map, frame, *T_K_C, params, params.robust_k, distribution);
       addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
+      if (photometric) addPhotometricTerms(*photometric, map.camera(), *T_K_C, params, 1.0, &lin);
       break;
     }
   }

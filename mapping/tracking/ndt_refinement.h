@@ -32,6 +32,41 @@ struct DensePoints {
 DensePoints sampleDensePoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
                               int stride_px);
 
+/// A colour image as the photometric term reads it: grey (0-255), at half the camera's
+/// resolution (INTER_AREA: half-resolution pixel i covers full-resolution pixels 2i and 2i + 1),
+/// smoothed by a Gaussian of sigma 1, and its central-difference gradients; CV_32F each. At half
+/// resolution and smoothed, a pose a few pixels off still sees the slope towards the right one.
+struct PhotometricImage {
+  cv::Mat grey, gx, gy;
+  bool empty() const { return grey.empty(); }
+};
+/// Of a CV_8UC3 RGB image (empty in, empty out).
+PhotometricImage photometricImage(const cv::Mat& rgb);
+
+/// The photometric term's points of a frame (camera frame C) and their grey levels in the
+/// frame's PhotometricImage.
+struct PhotometricPoints {
+  std::vector<Eigen::Vector3f> points_C;
+  std::vector<float> intensity;
+  bool empty() const { return points_C.empty(); }
+};
+
+/// Grey levels per half-resolution pixel: weaker gradients give the photometric term no point.
+constexpr float kMinPhotometricGradient = 4.0f;
+
+/// In each block of stride_px x stride_px pixels, the half-resolution pixel of the largest
+/// intensity gradient (at least kMinPhotometricGradient) whose four full-resolution depths lie in
+/// `range` within 2 % of each other (not on a depth edge, where the keyframe may see the
+/// background). Empty when the frame has no colour.
+PhotometricPoints samplePhotometricPoints(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range,
+                                          int stride_px);
+
+/// The photometric term's two sides: the frame's points and the keyframe's image.
+struct PhotometricTerm {
+  const PhotometricPoints& frame;
+  const PhotometricImage& keyframe;
+};
+
 /// A feature correspondence the refinement also honours: keyframe point X_K (the keyframe's
 /// keypoint with its depth) observed at frame pixel `pixel` (PnP's inliers).
 struct FeatureObservation {
@@ -79,6 +114,14 @@ struct NdtRefinementParams {
   /// keypoint depths, and the dense terms should decide along the surface normals.
   double feature_sigma_px = 2.0;
   double feature_robust_k = 4.0;
+  /// Photometric term (refineAgainstLocalMap's PhotometricTerm): each photometric point's grey
+  /// level against the keyframe's where the pose projects it, less the median difference over
+  /// the points (an exposure change), Tukey-weighted at photometric_robust_k sigmas (annealed as
+  /// the dense points'), sigma being the differences' own spread (1.4826 times their median
+  /// absolute deviation, at least photometric_min_sigma grey levels), so the term weighs as much
+  /// as the images agree.
+  double photometric_min_sigma = 2.0;
+  double photometric_robust_k = 4.0;
   double converged_m = 1e-5;    ///< stop when a step moves less than this ...
   double converged_rad = 1e-5;  ///< ... and turns less than this
 };
@@ -94,13 +137,23 @@ struct NdtRefinementResult {
   /// points alone favour a pose slid along a wall that puts more of them inside the map.
   double support = 0.0;
   int iterations = 0;   ///< Gauss-Newton steps taken
+  /// The photometric term at the solution (0 without it): its points that project into the
+  /// keyframe's image and the spread of their grey-level differences (sigma, grey levels).
+  int photometric_points = 0;
+  double photometric_sigma = 0.0;
   /// Gauss-Newton normal matrix at the solution for a perturbation T_K_C <- exp(xi) T_K_C,
   /// xi = (translation, rotation) in the keyframe frame: the estimate's information matrix.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
   Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();  ///< of the cost at the solution, same perturbation
   double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
-  /// Smallest over largest eigenvalue of `information`'s translation block: near 0 where the
-  /// surfaces leave a direction free (two walls: the pose can slide along their line).
+  /// The translation block of `information` without the photometric term: the surfaces' and
+  /// the features' hold on the position.
+  Eigen::Matrix3d translation_information = Eigen::Matrix3d::Zero();
+  /// Smallest over largest eigenvalue of translation_information: near 0 where the surfaces
+  /// leave a direction free (two walls: the pose can slide along their line). The photometric
+  /// term is left out: from a prediction 0.3 m off, it settles wherever the image is locally
+  /// similar (the box room's textured walls, tests/test_tracking.cpp), so the frame's pixels
+  /// can tell how well a pose is placed only where the surfaces could.
   double translationConditioning() const;
 };
 
@@ -133,8 +186,10 @@ NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map,
 /// points to the local map plus the reprojection errors of `features` (may be empty).
 /// Deterministic. A step whose normal matrix is singular (too few associations) ends the
 /// refinement with T_K_C unchanged by it.
+/// `photometric`, when not null, adds the photometric term.
 NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& local_map, const DensePoints& frame,
                                           std::span<const FeatureObservation> features, Transform* T_K_C,
-                                          const NdtRefinementParams& params = {});
+                                          const NdtRefinementParams& params = {},
+                                          const PhotometricTerm* photometric = nullptr);
 
 }  // namespace vdmap

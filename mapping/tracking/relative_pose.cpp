@@ -158,6 +158,25 @@ std::optional<Transform> solvePnpRansac(const Correspondences& c, const PinholeC
   return best;
 }
 
+// The keyframe's PhotometricImage, decoded once: a per-thread cache of the last few keyframes
+// (by their container's id, which no other container shares), as tracking compares each frame
+// with the current keyframe and, now and then, a few others.
+const PhotometricImage& keyframeImage(const Keyframe& K) {
+  struct Entry {
+    std::uint64_t id = 0;
+    PhotometricImage image;
+  };
+  static thread_local std::array<Entry, 4> cache;
+  static thread_local std::size_t next = 0;
+  for (const Entry& e : cache)
+    if (e.id == K.container.id()) return e.image;
+  Entry& e = cache[next];
+  next = (next + 1) % cache.size();
+  e.id = K.container.id();
+  e.image = photometricImage(K.rgb());
+  return e.image;
+}
+
 // The rotation made exactly orthonormal again after many composed steps.
 Transform orthonormalised(const Transform& T) {
   Transform out = Transform::Identity();
@@ -231,7 +250,11 @@ RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame,
       if (support(*pnp) >= support(seed)) seed = *pnp;
     }
     Transform refined = seed;
-    out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense);
+    std::optional<PhotometricTerm> photometric;
+    if (params.photometric && !pnp && frame.photometric && !frame.photometric().empty() && !keyframeImage(K).empty())
+      photometric.emplace(PhotometricTerm{frame.photometric(), keyframeImage(K)});
+    out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense,
+                                      photometric ? &*photometric : nullptr);
     out.dense_trusted = out.dense.inlierRatio() >= params.min_dense_inlier_ratio &&
                         out.dense.inliers >= params.min_dense_inliers && near(refined, seed);
     if (out.dense_trusted) out.T_K_C = orthonormalised(refined);

@@ -27,7 +27,9 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
     return K.T_W_K.inverse() * *T_W_pred;
   };
   const Keyframe& K = graph.keyframe(current);
-  out.estimate = estimateRelativePose(K, frame, camera, prior(K), params);
+  RelativePoseParams current_params = params;
+  current_params.photometric = params_.photometric;
+  out.estimate = estimateRelativePose(K, frame, camera, prior(K), current_params);
   if (out.estimate.status == RelativePose::Status::kGood) {
     out.keyframe = current;
     return out;
