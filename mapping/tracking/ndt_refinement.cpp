@@ -2,6 +2,7 @@
 
 #include <algorithm>
 #include <cmath>
+#include <optional>
 
 #include <Eigen/Cholesky>
 #include <Eigen/Eigenvalues>
@@ -170,7 +171,8 @@ struct Linearisation {
   int inliers = 0;
   double inlier_m2 = 0.0;
   double support = 0.0;  ///< sum over the points of 1 - rho / rho_max (Tukey): a soft inlier count
-  Eigen::Matrix3d H_tt = Eigen::Matrix3d::Zero();  ///< H's translation block before the photometric terms
+  /// H's translation block before the photometric terms were added (unset without them).
+  std::optional<Eigen::Matrix3d> H_tt_before_photometric;
   int photometric_points = 0;
   double photometric_sigma = 0.0;
 };
@@ -240,7 +242,6 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
   for (int row = 0; row < 6; ++row)
     for (int col = row; col < 6; ++col) lin.H(row, col) = lin.H(col, row) = H[k++];
   for (int j = 0; j < 6; ++j) lin.g(j) = g[j];
-  lin.H_tt = lin.H.topLeftCorner<3, 3>();
   lin.associated = associated;
   lin.inliers = inliers;
   lin.inlier_m2 = inlier_m2;
@@ -276,7 +277,6 @@ void addFeatureTerms(std::span<const FeatureObservation> features, const Pinhole
     lin->H.noalias() += w * J.transpose() * J;
     lin->g.noalias() += w * J.transpose() * e;
   }
-  lin->H_tt = lin->H.topLeftCorner<3, 3>();
 }
 
 // Bilinear sample of a CV_32F image at (x, y); false outside the image's inner area.
@@ -299,6 +299,7 @@ void addPhotometricTerms(const PhotometricTerm& term, const PinholeCamera& cam, 
                          const NdtRefinementParams& params, double anneal, Linearisation* lin) {
   const PhotometricPoints& frame = term.frame;
   const PhotometricImage& image = term.keyframe;
+  lin->H_tt_before_photometric = lin->H.topLeftCorner<3, 3>();
   const Eigen::Matrix3f R = T_K_C.linear().cast<float>();
   const Eigen::Vector3f t = T_K_C.translation().cast<float>();
   // Half-resolution pixel of full-resolution coordinate u: (u - 0.5) / 2.
@@ -366,7 +367,7 @@ NdtRefinementResult resultOf(const Linearisation& lin, std::size_t points) {
   result.rms_mahalanobis = lin.inliers > 0 ? std::sqrt(lin.inlier_m2 / lin.inliers) : 0.0;
   result.support = lin.support;
   result.information = lin.H;
-  result.translation_information = lin.H_tt;
+  result.translation_information = lin.H_tt_before_photometric.value_or(lin.H.topLeftCorner<3, 3>());
   result.gradient = lin.g;
   result.photometric_points = lin.photometric_points;
   result.photometric_sigma = lin.photometric_sigma;

@@ -250,9 +250,10 @@ RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame,
       if (support(*pnp) >= support(seed)) seed = *pnp;
     }
     Transform refined = seed;
+    const PhotometricPoints* points = params.photometric && !pnp && frame.photometric ? &frame.photometric() : nullptr;
+    const PhotometricImage* image = points && !points->empty() ? &keyframeImage(K) : nullptr;
     std::optional<PhotometricTerm> photometric;
-    if (params.photometric && !pnp && frame.photometric && !frame.photometric().empty() && !keyframeImage(K).empty())
-      photometric.emplace(PhotometricTerm{frame.photometric(), keyframeImage(K)});
+    if (image && !image->empty()) photometric.emplace(PhotometricTerm{*points, *image});
     out.dense = refineAgainstLocalMap(K.container, *frame.points, inliers, &refined, params.dense,
                                       photometric ? &*photometric : nullptr);
     out.dense_trusted = out.dense.inlierRatio() >= params.min_dense_inlier_ratio &&
