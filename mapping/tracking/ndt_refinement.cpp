@@ -385,12 +385,17 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
   // a Tukey weight at robust_k sigmas of a clean surface is millimetres), each step halves the
   // threshold down to robust_k, where the last steps and the final measurement are made.
   const auto anneal = [&params](int it) { return std::max(1.0, params.annealing_factor / std::pow(2.0, it)); };
+  // Every term at the current pose, thresholds scaled by the annealing factor a.
+  const auto measure = [&](double a) {
+    Linearisation out = linearise(map, frame, *T_K_C, params, a * params.robust_k, distribution);
+    addFeatureTerms(features, map.camera(), *T_K_C, params, a, &out);
+    if (photometric) addPhotometricTerms(*photometric, map.camera(), *T_K_C, params, a, &out);
+    return out;
+  };
   Linearisation lin;
   for (int it = 0; it <= params.iterations; ++it) {
     const double a = it == params.iterations ? 1.0 : anneal(it);
-    lin = linearise(map, frame, *T_K_C, params, a * params.robust_k, distribution);
-    addFeatureTerms(features, map.camera(), *T_K_C, params, a, &lin);
-    if (photometric) addPhotometricTerms(*photometric, map.camera(), *T_K_C, params, a, &lin);
+    lin = measure(a);
     // The last pass only measures the pose the previous step reached.
     if (it == params.iterations || lin.associated < 6) break;
     const Eigen::LDLT<Eigen::Matrix<double, 6, 6>> ldlt(lin.H);
@@ -400,9 +405,7 @@ NdtRefinementResult refineAgainstLocalMap(const KeyframeContainer& map, const De
     *T_K_C = stepTransform(xi) * *T_K_C;
     ++iterations;
     if (a == 1.0 && xi.head<3>().norm() < params.converged_m && xi.tail<3>().norm() < params.converged_rad) {
-      lin = linearise(map, frame, *T_K_C, params, params.robust_k, distribution);
-      addFeatureTerms(features, map.camera(), *T_K_C, params, 1.0, &lin);
-      if (photometric) addPhotometricTerms(*photometric, map.camera(), *T_K_C, params, 1.0, &lin);
+      lin = measure(1.0);
       break;
     }
   }
