@@ -5,7 +5,7 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
 

@@ -33,7 +33,7 @@
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap::app {

@@ -21,7 +21,7 @@
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 
 namespace vdmap::app {
 namespace {

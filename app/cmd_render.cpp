@@ -17,7 +17,7 @@
 #include "mapping/global_map/global_map.h"
 #include "mapping/core/error.h"
 #include "mapping/io/ply_reader.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/context.h"

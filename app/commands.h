@@ -47,7 +47,7 @@ inline void checkOutputFile(const std::string& file, const std::string& option) 
 }  // namespace vdmap::app
 
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
 

@@ -6,7 +6,7 @@
 #include <nlohmann/json_fwd.hpp>
 
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
 

@@ -12,7 +12,7 @@
 #include <CLI/CLI.hpp>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
 

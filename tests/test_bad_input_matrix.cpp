@@ -16,7 +16,7 @@
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/ply_reader.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/io/tum_sequence.h"
 #include "tests/test_util.h"

@@ -9,7 +9,7 @@
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/ply_reader.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/test_util.h"
 

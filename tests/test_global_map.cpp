@@ -10,7 +10,7 @@
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "tests/box_room_keyframes.h"
 
 namespace vdmap {

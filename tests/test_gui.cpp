@@ -35,22 +35,22 @@ struct TinyBench {
     s.mapper.keyframe_every = 3;
     return s;
   }
-  MapSession& session() { return *bench.session(); }
+  MappingWorker& worker() { return *bench.worker(); }
 };
 
 // Selects keyframe `id` as the keyframe list does and returns the session's selection once the
 // worker has published it.
 std::shared_ptr<const SelectionSnapshot> selectAndWait(Workbench& bench, int id) {
   bench.selectKeyframe(id);
-  bench.session()->waitIdle();
-  return bench.session()->selection();
+  bench.worker()->waitIdle();
+  return bench.worker()->selection();
 }
 
 // Keyframe `id`'s ellipsoids kept by the current global map's thresholds, filtered in its own
 // frame and moved to the world here (the reference for SelectionSnapshot::local).
-std::vector<Ellipsoid> keptInWorld(MapSession& session, int id) {
+std::vector<Ellipsoid> keptInWorld(MappingWorker& worker, int id) {
   std::vector<Ellipsoid> out;
-  session.withMapper([&](const Mapper& mapper, const GlobalSnapshot& global) {
+  worker.withMapper([&](const Mapper& mapper, const GlobalSnapshot& global) {
     const Keyframe& k = mapper.graph().keyframe(id);
     out = keptEllipsoids(k.container, global.params.filter, Transform::Identity(), id);
     for (Ellipsoid& e : out) {
@@ -59,7 +59,7 @@ std::vector<Ellipsoid> keptInWorld(MapSession& session, int id) {
     }
     return std::string();
   });
-  session.waitIdle();
+  worker.waitIdle();
   return out;
 }
 
@@ -197,16 +197,16 @@ TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   Workbench& bench = t.bench;
   EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
-  ASSERT_NE(bench.session(), nullptr);  // the sequence opened before is still there
-  EXPECT_EQ(bench.session()->sequence()->folder(), t.dir / "seq");
+  ASSERT_NE(bench.worker(), nullptr);  // the sequence opened before is still there
+  EXPECT_EQ(bench.worker()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
   EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", "", ""}));
-  EXPECT_EQ(empty.session(), nullptr);
+  EXPECT_EQ(empty.worker(), nullptr);
 }
 
 TEST(GuiSession, StepStepToKeyframePlayAndSeekBack) {
   TinyBench t;
-  MapSession& s = t.session();
+  MappingWorker& s = t.worker();
   s.step();
   s.waitIdle();
   EXPECT_EQ(s.mapping()->frames_mapped, 1);
@@ -244,9 +244,9 @@ TEST(GuiSession, KeyframesAreAtTheirScrubberPositionWithAFrameRange) {
   test::writeTinySequence(dir / "seq", 10);
   Workbench bench{TinyBench::settings()};
   ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "4:10", ""})) << bench.ui().status.text;
-  bench.session()->play();
-  bench.session()->waitIdle();
-  const auto mapping = bench.session()->mapping();
+  bench.worker()->play();
+  bench.worker()->waitIdle();
+  const auto mapping = bench.worker()->mapping();
   EXPECT_EQ(mapping->frames_total, 6);
   ASSERT_EQ(mapping->keyframes.size(), 2u);
   EXPECT_EQ(mapping->keyframes[0].frame, 0);  // depth frame 4
@@ -258,15 +258,15 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   Workbench& bench = t.bench;
   bench.ui().params.global.filter.min_points = 3;
   bench.applyThresholds();
-  t.session().play();
-  t.session().waitIdle();
-  const auto before = t.session().global();
+  t.worker().play();
+  t.worker().waitIdle();
+  const auto before = t.worker().global();
   // Cells of a 5 px grid over 3 frames of a plane hold ~75 points; 60 keeps only those of
   // keyframes that integrated three frames.
   bench.ui().params.global.filter.min_points = 60;
   bench.applyThresholds();
-  t.session().waitIdle();
-  const auto after = t.session().global();
+  t.worker().waitIdle();
+  const auto after = t.worker().global();
   EXPECT_GT(after->generation, before->generation);
   EXPECT_EQ(after->params.filter.min_points, 60);
   EXPECT_LT(after->map.sigma_e, before->map.sigma_e);
@@ -278,26 +278,26 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   bench.ui().params.global.merge_distance_m = -1;  // refused, shown, map kept
   bench.applyThresholds();
   EXPECT_NE(bench.ui().status.text.find("merge"), std::string::npos) << bench.ui().status.text;
-  t.session().waitIdle();
-  EXPECT_EQ(t.session().global()->generation, after->generation);
+  t.worker().waitIdle();
+  EXPECT_EQ(t.worker().global()->generation, after->generation);
 
   bench.resetToDefaults();
-  t.session().waitIdle();
-  EXPECT_EQ(t.session().global()->params.filter.min_points, FilterParams{}.min_points);
+  t.worker().waitIdle();
+  EXPECT_EQ(t.worker().global()->params.filter.min_points, FilterParams{}.min_points);
   EXPECT_TRUE(bench.ui().reset_layout);
 }
 
 TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
   auto mean_of = [&](int keyframe) {  // selected without touching the edited pose in ui()
-    t.session().selectKeyframe(keyframe);
-    t.session().waitIdle();
-    const auto selection = t.session().selection();
+    t.worker().selectKeyframe(keyframe);
+    t.worker().waitIdle();
+    const auto selection = t.worker().selection();
     EXPECT_EQ(selection->keyframe, keyframe);
-    EXPECT_EQ(selection->generation, t.session().global()->generation);
+    EXPECT_EQ(selection->generation, t.worker().global()->generation);
     Eigen::Vector3d sum = Eigen::Vector3d::Zero();
     for (const Ellipsoid& e : selection->local) sum += e.mean;
     return Eigen::Vector3d(sum / std::max<std::size_t>(selection->local.size(), 1));
@@ -307,15 +307,15 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   EXPECT_NEAR(bench.ui().pose_translation_m.x, 0.03f, 1e-5f);  // frame 3 of the tiny walk
   bench.ui().pose_translation_m.z += 0.2f;
   bench.applyPoseEdit();
-  t.session().waitIdle();
-  EXPECT_NEAR(t.session().mapping()->keyframes[1].T_W_K.translation().z(), 0.2, 1e-6);
+  t.worker().waitIdle();
+  EXPECT_NEAR(t.worker().mapping()->keyframes[1].T_W_K.translation().z(), 0.2, 1e-6);
   EXPECT_NEAR((mean_of(1) - before1).z(), 0.2, 1e-4);
   EXPECT_NEAR((mean_of(0) - before0).norm(), 0.0, 1e-9);
   // Pitch 100 degrees reads back from the rotation as another triple (roll and yaw 180); the fields
   // keep what was typed while the snapshot holds the sent pose, so a drag does not jump.
   bench.ui().pose_rotation_deg.y = 100.f;
   bench.applyPoseEdit();
-  t.session().waitIdle();
+  t.worker().waitIdle();
   const glm::vec3 typed = bench.ui().pose_rotation_deg;
   bench.syncPoseFields();
   EXPECT_EQ(bench.ui().pose_rotation_deg, typed);
@@ -323,7 +323,7 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   // must not be pulled back to that pose every frame.
   std::promise<void> release;
   const std::shared_future<void> released = release.get_future().share();
-  t.session().withMapper([released](const Mapper&, const GlobalSnapshot&) {
+  t.worker().withMapper([released](const Mapper&, const GlobalSnapshot&) {
     released.wait();  // holds the worker
     return std::string();
   });
@@ -333,21 +333,21 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   bench.syncPoseFields();
   EXPECT_EQ(bench.ui().pose_translation_m, dragged);
   release.set_value();
-  t.session().waitIdle();
+  t.worker().waitIdle();
   bench.syncPoseFields();
   EXPECT_EQ(bench.ui().pose_translation_m, dragged);
   // A trajectory file that names no keyframe: the error is reported, the poses stay.
   test::writeText(t.dir / "wrong.txt", "5.0 0 0 0 0 0 0 1\n");
   bench.ui().trajectory_text = (t.dir / "wrong.txt").string();
   bench.loadTrajectory();
-  t.session().waitIdle();
-  EXPECT_NE(t.session().status().error.find("wrong.txt"), std::string::npos) << t.session().status().error;
+  t.worker().waitIdle();
+  EXPECT_NE(t.worker().status().error.find("wrong.txt"), std::string::npos) << t.worker().status().error;
   // The sequence's own ground truth puts keyframe 1 back.
   bench.ui().trajectory_text = (t.dir / "seq" / "groundtruth.txt").string();
   bench.loadTrajectory();
-  t.session().waitIdle();
-  EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
-  EXPECT_NE(t.session().status().message.find("replaced"), std::string::npos);
+  t.worker().waitIdle();
+  EXPECT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+  EXPECT_NE(t.worker().status().message.find("replaced"), std::string::npos);
   EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
   // The pose fields follow the reloaded pose, so a further drag starts from it, not from the edit.
   EXPECT_NEAR(bench.ui().pose_translation_m.z, 0.2f, 1e-5f);
@@ -359,7 +359,7 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
 TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds) {
   TinyBench t;
   Workbench& bench = t.bench;
-  MapSession& s = t.session();
+  MappingWorker& s = t.worker();
   s.selectKeyframe(2);  // not mapped yet (as `vdmap gui --keyframe 2` does): filled once it is
   s.waitIdle();
   EXPECT_TRUE(s.selection()->local.empty());
@@ -392,15 +392,15 @@ TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds
 TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.session().play();
-  t.session().waitIdle();
-  const auto global = t.session().global();
+  t.worker().play();
+  t.worker().waitIdle();
+  const auto global = t.worker().global();
   bench.ui().export_text = (t.dir / "export").string();
   bench.exportMap();
   bench.ui().session_text = (t.dir / "map.vdmap").string();
   bench.saveSession();
-  t.session().waitIdle();
-  EXPECT_TRUE(t.session().status().error.empty()) << t.session().status().error;
+  t.worker().waitIdle();
+  EXPECT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   for (const char* file : {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",
                            "stats.json"})
     EXPECT_TRUE(std::filesystem::exists(t.dir / "export" / file)) << file;
@@ -408,12 +408,12 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   Workbench reopened{Settings{}};
   ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().status.text;
   EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << "a session to the sequence's end is no warning";
-  MapSession& s = *reopened.session();
+  MappingWorker& s = *reopened.worker();
   EXPECT_EQ(s.sequence(), nullptr);
   s.play();  // nothing to play: the map stays as saved
   s.waitIdle();
   EXPECT_EQ(s.mapping()->frames_mapped, 10);
-  EXPECT_EQ(s.mapping()->keyframes.size(), t.session().mapping()->keyframes.size());
+  EXPECT_EQ(s.mapping()->keyframes.size(), t.worker().mapping()->keyframes.size());
   EXPECT_EQ(s.global()->map.sigma_e_prime, global->map.sigma_e_prime);  // the same map, rebuilt
   const auto selection = selectAndWait(reopened, 1);
   EXPECT_EQ(selection->keyframe, 1);
@@ -422,7 +422,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   test::writeText(t.dir / "bad.vdmap", "not a session");
   EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
   EXPECT_NE(reopened.ui().status.text.find("bad.vdmap"), std::string::npos) << reopened.ui().status.text;
-  EXPECT_NE(reopened.session(), nullptr);  // the open session stays
+  EXPECT_NE(reopened.worker(), nullptr);  // the open session stays
 }
 
 // Issue #17: an opened session whose sequence is still there continues in the player from the
@@ -430,19 +430,19 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
 // back than the session.
 TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
   TinyBench t;
-  t.session().seek(4);  // frames 0..4
-  t.session().waitIdle();
+  t.worker().seek(4);  // frames 0..4
+  t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "half.vdmap").string();
   t.bench.saveSession();
-  t.session().waitIdle();
-  ASSERT_TRUE(t.session().status().error.empty()) << t.session().status().error;
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().waitIdle();
+  ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+  t.worker().play();
+  t.worker().waitIdle();
 
   Workbench reopened{Settings{}};
   ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
   EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << reopened.ui().status.text;
-  MapSession& s = *reopened.session();
+  MappingWorker& s = *reopened.worker();
   ASSERT_NE(s.sequence(), nullptr);
   EXPECT_EQ(s.mapping()->frames_mapped, 5);
   EXPECT_EQ(s.mapping()->frames_total, 10);
@@ -450,7 +450,7 @@ TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
   s.play();
   s.waitIdle();
   ASSERT_TRUE(s.status().error.empty()) << s.status().error;
-  const auto whole = t.session().mapping(), continued = s.mapping();
+  const auto whole = t.worker().mapping(), continued = s.mapping();
   EXPECT_EQ(continued->frames_mapped, 10);
   const std::vector<Transform> whole_path = whole->trajectoryWorld(), continued_path = continued->trajectoryWorld();
   ASSERT_EQ(continued_path.size(), whole_path.size());
@@ -462,7 +462,7 @@ TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
     EXPECT_EQ(continued->keyframes[i].ellipsoids, whole->keyframes[i].ellipsoids);
     EXPECT_EQ(continued->keyframes[i].frames_integrated, whole->keyframes[i].frames_integrated);
   }
-  EXPECT_EQ(s.global()->map.sigma_e_prime, t.session().global()->map.sigma_e_prime);
+  EXPECT_EQ(s.global()->map.sigma_e_prime, t.worker().global()->map.sigma_e_prime);
   s.seek(1);  // before the session's end: back to the session as saved, then mapping on
   s.waitIdle();
   EXPECT_EQ(s.mapping()->frames_mapped, 5);
@@ -509,14 +509,14 @@ TEST(GuiWorkbench, PitchStaysWithin90DegreesAndTheRotationIsKept) {
 TEST(GuiSession, TheTrajectoryFollowsAKeyframesPoseEdit) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.session().play();
-  t.session().waitIdle();
-  const auto before = t.session().mapping();
+  t.worker().play();
+  t.worker().waitIdle();
+  const auto before = t.worker().mapping();
   bench.selectKeyframe(1);
   bench.ui().pose_translation_m.z += 0.2f;
   bench.applyPoseEdit();
-  t.session().waitIdle();
-  const auto after = t.session().mapping();
+  t.worker().waitIdle();
+  const auto after = t.worker().mapping();
   ASSERT_EQ(after->trajectory.size(), 10u);
   int moved = 0;
   for (std::size_t i = 0; i < after->trajectory.size(); ++i) {
@@ -540,23 +540,23 @@ TEST(GuiWorkbench, APendingParameterIsNotUsedUntilApplied) {
   ASSERT_TRUE(bench.editParameter(cell, 8));
   EXPECT_TRUE(bench.pending(cell));
   EXPECT_EQ(bench.inUse(cell), 5);
-  t.session().play();
-  t.session().waitIdle();
-  EXPECT_EQ(t.session().mapping()->mapper.local_map.cell_size_px, 5) << "a pending value was used";
+  t.worker().play();
+  t.worker().waitIdle();
+  EXPECT_EQ(t.worker().mapping()->mapper.local_map.cell_size_px, 5) << "a pending value was used";
   EXPECT_TRUE(bench.pending(cell));
   EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 5) << "not applied: not the user's setting yet";
-  const std::size_t cells_at_5 = t.session().mapping()->keyframes[0].ellipsoids;
+  const std::size_t cells_at_5 = t.worker().mapping()->keyframes[0].ellipsoids;
   bench.rerun();
-  t.session().waitIdle();
-  EXPECT_EQ(t.session().mapping()->mapper.local_map.cell_size_px, 8);
-  EXPECT_LT(t.session().mapping()->keyframes[0].ellipsoids, cells_at_5);
+  t.worker().waitIdle();
+  EXPECT_EQ(t.worker().mapping()->mapper.local_map.cell_size_px, 8);
+  EXPECT_LT(t.worker().mapping()->keyframes[0].ellipsoids, cells_at_5);
   EXPECT_FALSE(bench.pending(cell));
   EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 8);
   // A live threshold applies at once; it is pending only until its map arrives.
   const Parameter& min_points = *findParameter("min_points");
   ASSERT_TRUE(bench.editParameter(min_points, 60));
-  t.session().waitIdle();
-  EXPECT_EQ(t.session().global()->params.filter.min_points, 60);
+  t.worker().waitIdle();
+  EXPECT_EQ(t.worker().global()->params.filter.min_points, 60);
   EXPECT_FALSE(bench.pending(min_points));
   // A refused value changes nothing.
   EXPECT_FALSE(bench.editParameter(min_points, -1));
@@ -568,11 +568,11 @@ TEST(GuiWorkbench, APendingParameterIsNotUsedUntilApplied) {
 TEST(GuiWorkbench, ASavedSessionShowsItsOwnParametersAndLeavesTheUsersSettingsAlone) {
   TinyBench t;
   ASSERT_TRUE(t.bench.editParameter(*findParameter("merge_distance"), 0.4));
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "s.vdmap").string();
   t.bench.saveSession();
-  t.session().waitIdle();
+  t.worker().waitIdle();
   Settings user;
   user.thresholds.filter.min_points = 9;
   Workbench other{user};
@@ -582,16 +582,16 @@ TEST(GuiWorkbench, ASavedSessionShowsItsOwnParametersAndLeavesTheUsersSettingsAl
   EXPECT_EQ(other.ui().params.global.filter.min_points, 6);
   EXPECT_EQ(other.ui().params.mapper.keyframe_every, 3);
   EXPECT_TRUE(other.editParameter(*findParameter("tau_group"), 0.5));
-  other.session()->waitIdle();
-  EXPECT_DOUBLE_EQ(other.session()->global()->params.tau_group, 0.5);
+  other.worker()->waitIdle();
+  EXPECT_DOUBLE_EQ(other.worker()->global()->params.tau_group, 0.5);
   EXPECT_DOUBLE_EQ(other.ui().settings.thresholds.tau_group, Settings{}.thresholds.tau_group) << "the user's settings changed";
   EXPECT_EQ(other.ui().settings.thresholds.filter.min_points, 9);
   EXPECT_FALSE(other.pending(*findParameter("cell_size")));
   other.rerun();  // nothing to re-map
-  other.session()->waitIdle();
-  EXPECT_EQ(other.session()->mapping()->frames_mapped, 10);
+  other.worker()->waitIdle();
+  EXPECT_EQ(other.worker()->mapping()->frames_mapped, 10);
   // Paths in messages are absolute.
-  EXPECT_NE(t.session().status().message.find((t.dir / "s.vdmap").string()), std::string::npos);
+  EXPECT_NE(t.worker().status().message.find((t.dir / "s.vdmap").string()), std::string::npos);
   EXPECT_EQ(other.ui().status.text, "opened " + (t.dir / "s.vdmap").string());
 }
 
@@ -626,7 +626,7 @@ TEST(GuiSettings, OnlyWhatTheUserChangedIsSavedAndACorruptFileIsKept) {
 TEST(GuiWorkbench, KeysDriveThePlayerAndTheViewFollowsTheMapUntilMoved) {
   TinyBench t;
   Workbench& bench = t.bench;
-  MapSession& s = t.session();
+  MappingWorker& s = t.worker();
   bench.key(KeyAction::kStepForward);
   s.waitIdle();
   EXPECT_EQ(s.mapping()->frames_mapped, 1);
@@ -673,10 +673,10 @@ TEST(GuiWorkbench, TheReadmeListsEveryKeyOfTheHelpOverlay) {
 TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
   bench.sync();
-  const auto global = t.session().global();
+  const auto global = t.worker().global();
   const ViewportView v = bench.view(640, 480);
   const Eigen::Vector3d& m = global->map.ellipsoids[global->map.ellipsoids.size() / 2].mean;
   const glm::vec4 p = v.camera.T_C_W * glm::vec4(m.x(), m.y(), m.z(), 1.f);
@@ -686,7 +686,7 @@ TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {
   bench.sync();
   EXPECT_TRUE(bench.ui().picked) << "the same map: the pick stays";
   ASSERT_TRUE(bench.editParameter(*findParameter("merge_distance"), 0.1));
-  t.session().waitIdle();
+  t.worker().waitIdle();
   bench.sync();
   EXPECT_FALSE(bench.ui().picked) << "a new map: the old pick may not exist in it";
 }
@@ -694,8 +694,8 @@ TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {
 TEST(GuiWorkbench, UndoPutsBackThePoseFromBeforeTheEdit) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
   bench.selectKeyframe(2);
   const glm::vec3 start = bench.ui().pose_translation_m;
   EXPECT_FALSE(bench.canUndoPoseEdit());
@@ -704,11 +704,11 @@ TEST(GuiWorkbench, UndoPutsBackThePoseFromBeforeTheEdit) {
     bench.ui().pose_translation_m.y += 0.05f;
     bench.applyPoseEdit();
   }
-  t.session().waitIdle();
-  EXPECT_NEAR(t.session().mapping()->keyframes[2].T_W_K.translation().y(), start.y + 0.25, 1e-6);
+  t.worker().waitIdle();
+  EXPECT_NEAR(t.worker().mapping()->keyframes[2].T_W_K.translation().y(), start.y + 0.25, 1e-6);
   EXPECT_TRUE(bench.undoPoseEdit());
-  t.session().waitIdle();
-  EXPECT_NEAR(t.session().mapping()->keyframes[2].T_W_K.translation().y(), start.y, 1e-6);
+  t.worker().waitIdle();
+  EXPECT_NEAR(t.worker().mapping()->keyframes[2].T_W_K.translation().y(), start.y, 1e-6);
   EXPECT_NEAR(bench.ui().pose_translation_m.y, start.y, 1e-6);
   EXPECT_FALSE(bench.undoPoseEdit());
 }
@@ -717,11 +717,11 @@ TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
   EXPECT_EQ(render::letterbox(1000, 500, 640, 480), (render::PixelRect{166, 0, 667, 500}));
   EXPECT_EQ(render::letterbox(600, 900, 640, 480), (render::PixelRect{0, 225, 600, 450}));
   TinyBench t;
-  t.session().play();
-  t.session().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
   t.bench.ui().view_from_keyframe = 1;
   const ViewportView v = t.bench.view(1000, 500);
-  const PinholeCamera& c = t.session().mapping()->camera;
+  const PinholeCamera& c = t.worker().mapping()->camera;
   EXPECT_EQ(v.image.height, 500);
   EXPECT_NEAR(static_cast<double>(v.image.width) / v.image.height, static_cast<double>(c.width) / c.height, 0.01);
   // The image scaled alike along both axes (to the rounding of the letterbox to whole pixels).
@@ -798,14 +798,14 @@ Floor findFloor(const std::vector<Ellipsoid>& map, const std::vector<Transform>&
 void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   Workbench bench{Settings{}};
   ASSERT_TRUE(bench.open({folder.string(), "", frames, ""})) << bench.ui().status.text;
-  bench.session()->play();
-  bench.session()->waitIdle();
+  bench.worker()->play();
+  bench.worker()->waitIdle();
   constexpr int kWidth = 602, kHeight = 685;  // the 3-D viewport of a 1280x720 window
   bench.ui().view_width = kWidth;
   bench.ui().view_height = kHeight;
   bench.sync();  // the first map: the default view about the estimated up axis
-  const auto global = bench.session()->global();
-  const std::vector<Transform> cameras = bench.session()->mapping()->trajectoryWorld();
+  const auto global = bench.worker()->global();
+  const std::vector<Transform> cameras = bench.worker()->mapping()->trajectoryWorld();
   const Floor floor = findFloor(global->map.ellipsoids, cameras);
   ASSERT_GT(floor.inliers, 0u) << "no floor found";
   const glm::vec3 up = bench.upVector();
@@ -825,7 +825,7 @@ void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   // Every keyframe's frustum and every camera of the trajectory lie in the view whole: they are few
   // beside the map's ellipsoids and off its surfaces, and framing them with the map's trimmed
   // outliers cut them at the viewport's edge.
-  const auto mapping = bench.session()->mapping();
+  const auto mapping = bench.worker()->mapping();
   render::ColoredLines frustums;
   for (const KeyframeInfo& k : mapping->keyframes)
     render::addFrustum(frustums, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
@@ -870,14 +870,14 @@ struct TrackedLoopBench {
   TrackedLoopBench() {
     test::writeBoxRoomSequence(dir / "seq", kFrames);
     EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", "track"})) << bench.ui().status.text;
-    while (session().mapping()->loops.empty() && session().mapping()->frames_mapped < kFrames) {
-      session().step();
-      session().waitIdle();
+    while (worker().mapping()->loops.empty() && worker().mapping()->frames_mapped < kFrames) {
+      worker().step();
+      worker().waitIdle();
     }
     bench.sync();
   }
   static constexpr int kFrames = 90;
-  MapSession& session() { return *bench.session(); }
+  MappingWorker& worker() { return *bench.worker(); }
 };
 
 double largestMove(std::span<const Transform> a, std::span<const Transform> b) {
@@ -890,7 +890,7 @@ double largestMove(std::span<const Transform> a, std::span<const Transform> b) {
 TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisationCanBeShown) {
   TrackedLoopBench t;
   Workbench& bench = t.bench;
-  const auto mapping = t.session().mapping();
+  const auto mapping = t.worker().mapping();
   ASSERT_GE(mapping->loops.size(), 1u) << "the turn past its start closes a loop";
   const LoopEvent& loop = mapping->loops.back();
   EXPECT_EQ(loop.position, mapping->frames_mapped - 1);  // closed by the frame just mapped
@@ -898,23 +898,23 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
   EXPECT_GT(loop.loop.from, loop.loop.to);
   ASSERT_EQ(mapping->keyframes_before.size(), mapping->keyframes.size());
   // The 3-D view: a loop edge per loop, the ground truth beside the tracked trajectory.
-  const render::GraphScene after = bench.graphScene(*bench.session()->mapping());
+  const render::GraphScene after = bench.graphScene(*bench.worker()->mapping());
   ASSERT_EQ(after.loops.size(), mapping->loops.size());
   EXPECT_EQ(after.loops.back().a, mapping->loops.back().loop.from);
   EXPECT_EQ(after.loops.back().b, mapping->loops.back().loop.to);
   EXPECT_EQ(after.groundtruth.size(), after.trajectory.size());
   bench.ui().settings.show_groundtruth = false;
-  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
+  EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
 
   // Before the last optimisation: other keyframe poses and trajectory, and a global map rebuilt
   // with them; after it again: the same map as before, bit for bit (the mapper's poses were
   // swapped for the build and put back).
-  const auto map_after = t.session().global();
+  const auto map_after = t.worker().global();
   ASSERT_FALSE(map_after->before_optimisation);
   ASSERT_TRUE(bench.canShowBeforeOptimisation());
   ASSERT_TRUE(bench.showBeforeOptimisation(true));
-  t.session().waitIdle();
-  const render::GraphScene before = bench.graphScene(*bench.session()->mapping());
+  t.worker().waitIdle();
+  const render::GraphScene before = bench.graphScene(*bench.worker()->mapping());
   const double moved = largestMove(before.keyframes, after.keyframes);
   std::printf("loop closed at frame %d (K%d -> K%d, correction %.2f mm); keyframes before it moved up to %.2f mm\n",
               loop.position, loop.loop.from, loop.loop.to, 1e3 * loop.loop.correction_m, 1e3 * moved);
@@ -926,7 +926,7 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
   const auto selection = selectAndWait(bench, from);
   EXPECT_TRUE(selection->T_W_K.isApprox(before.keyframes[static_cast<std::size_t>(from)], 1e-12));
   EXPECT_FALSE(selection->T_W_K.isApprox(after.keyframes[static_cast<std::size_t>(from)], 1e-6));
-  const auto map_before = t.session().global();
+  const auto map_before = t.worker().global();
   ASSERT_TRUE(map_before->before_optimisation);
   ASSERT_EQ(map_before->frames_mapped, mapping->frames_mapped);
   double mean_moved = 0;
@@ -937,16 +937,16 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
       << "the global map follows the keyframe poses";
   // Exports take the map as it is, whatever is shown.
   bool exported_before = true;
-  t.session().withMapper([&](const Mapper&, const GlobalSnapshot& global) {
+  t.worker().withMapper([&](const Mapper&, const GlobalSnapshot& global) {
     exported_before = global.before_optimisation;
     return std::string();
   });
-  t.session().waitIdle();
+  t.worker().waitIdle();
   EXPECT_FALSE(exported_before);
   bench.key(KeyAction::kBeforeOptimisation);  // B: after again
-  t.session().waitIdle();
+  t.worker().waitIdle();
   EXPECT_FALSE(bench.ui().show_before_optimisation);
-  const auto map_again = t.session().global();
+  const auto map_again = t.worker().global();
   EXPECT_FALSE(map_again->before_optimisation);
   ASSERT_EQ(map_again->map.ellipsoids.size(), map_after->map.ellipsoids.size());
   for (std::size_t i = 0; i < map_again->map.ellipsoids.size(); ++i)
@@ -954,10 +954,10 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
 
   // Seeking back before the loops forgets them: the toggle goes off and is refused.
   ASSERT_TRUE(bench.showBeforeOptimisation(true));
-  t.session().seek(5);
-  t.session().waitIdle();
+  t.worker().seek(5);
+  t.worker().waitIdle();
   bench.sync();
-  EXPECT_TRUE(t.session().mapping()->loops.empty());
+  EXPECT_TRUE(t.worker().mapping()->loops.empty());
   EXPECT_FALSE(bench.ui().show_before_optimisation);
   EXPECT_FALSE(bench.showBeforeOptimisation(true));
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kWarning);
@@ -971,40 +971,40 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   for (const char* poses : {"track", "gt"}) {
     Workbench bench{Settings{}};
     ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", poses})) << bench.ui().status.text;
-    bench.session()->play();
-    bench.session()->waitIdle();
-    const auto mapping = bench.session()->mapping();
+    bench.worker()->play();
+    bench.worker()->waitIdle();
+    const auto mapping = bench.worker()->mapping();
     ASSERT_EQ(mapping->frames_mapped, 8);
     std::vector<StampedPose> estimated;
-    bench.session()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
+    bench.worker()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
       estimated = mapper.trajectory();
       return std::string();
     });
-    bench.session()->waitIdle();
+    bench.worker()->waitIdle();
     const std::vector<Transform> shown = mapping->trajectoryWorld();
     ASSERT_EQ(shown.size(), estimated.size()) << poses;
     for (std::size_t i = 0; i < shown.size(); ++i)
       EXPECT_TRUE(shown[i].isApprox(estimated[i].T_W_C, 1e-12)) << poses << " " << i;
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
-    EXPECT_EQ(bench.graphScene(*bench.session()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
+    EXPECT_EQ(bench.graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
   Workbench bench{Settings{}};
   ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
-  bench.session()->play();
-  bench.session()->waitIdle();
-  EXPECT_EQ(bench.session()->mapping()->mapper.poses, PoseSource::kTrack);
-  EXPECT_EQ(bench.session()->mapping()->frames_mapped, 8);
-  EXPECT_FALSE(bench.session()->mapping()->hasGroundTruth());
-  EXPECT_TRUE(bench.graphScene(*bench.session()->mapping()).groundtruth.empty());
+  bench.worker()->play();
+  bench.worker()->waitIdle();
+  EXPECT_EQ(bench.worker()->mapping()->mapper.poses, PoseSource::kTrack);
+  EXPECT_EQ(bench.worker()->mapping()->frames_mapped, 8);
+  EXPECT_FALSE(bench.worker()->mapping()->hasGroundTruth());
+  EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
   // No loop closed, but after the last frame the keyframe poses were refined from the local
   // maps (the status says so): B shows the map before that.
-  const std::string message = bench.session()->status().message;
+  const std::string message = bench.worker()->status().message;
   std::printf("status after the last tracked frame: %s\n", message.c_str());
   EXPECT_EQ(bench.canShowBeforeOptimisation(), message.find("keyframe poses refined") != std::string::npos) << message;
   EXPECT_TRUE(bench.canShowBeforeOptimisation());
-  EXPECT_TRUE(bench.session()->status().error.empty()) << bench.session()->status().error;
+  EXPECT_TRUE(bench.worker()->status().error.empty()) << bench.worker()->status().error;
 }
 
 // The refinement after the last tracked frame is the one setRefinement (vdmap gui --refine) names:
@@ -1034,15 +1034,15 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
     Workbench bench{Settings{}};
     bench.setRefinement(refine);
     ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
-    bench.session()->play();
-    bench.session()->waitIdle();
-    const std::string message = bench.session()->status().message;  // before withMapper's replaces it
+    bench.worker()->play();
+    bench.worker()->waitIdle();
+    const std::string message = bench.worker()->status().message;  // before withMapper's replaces it
     std::vector<Transform> shown;
-    bench.session()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
+    bench.worker()->withMapper([&](const Mapper& mapper, const GlobalSnapshot&) {
       shown = keyframePoses(mapper);
       return std::string();
     });
-    bench.session()->waitIdle();
+    bench.worker()->waitIdle();
     const std::vector<Transform> expected = keyframePoses(reference);
     ASSERT_EQ(shown.size(), expected.size());
     double moved = 0;

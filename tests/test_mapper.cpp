@@ -7,7 +7,7 @@
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "tests/test_util.h"
 

@@ -12,7 +12,7 @@
 #include <gtest/gtest.h>
 
 #include "mapping/core/error.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "tests/test_util.h"
 
 namespace vdmap {

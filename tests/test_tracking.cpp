@@ -11,9 +11,9 @@
 
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/sensor_model.h"
 #include "mapping/tracking/map_registration.h"
 #include "mapping/tracking/ndt_refinement.h"

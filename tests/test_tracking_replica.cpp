@@ -7,7 +7,7 @@
 #include "mapping/io/camera_config.h"
 #include "mapping/io/ply_reader.h"
 #include "mapping/io/trajectory_io.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/test_util.h"
 

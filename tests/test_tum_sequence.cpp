@@ -5,12 +5,12 @@
 #include <opencv2/imgproc.hpp>
 
 #include "mapping/core/colour_registration.h"
-#include "mapping/core/compressed_image.h"
+#include "mapping/io/compressed_image.h"
 #include "mapping/core/error.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/image_decode.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "tests/test_util.h"
 
 namespace vdmap {

@@ -8,7 +8,7 @@
 #include <opencv2/core.hpp>
 
 #include "mapping/core/rgbd_frame.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::test {
 

@@ -11,7 +11,7 @@
 #include "app/gui/workbench_window.h"
 #include "app/progress.h"
 #include "mapping/core/error.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 

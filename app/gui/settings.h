@@ -6,7 +6,7 @@
 #include <string>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "render/scene_types.h"
 
 namespace vdmap::app::gui {

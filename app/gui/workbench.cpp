@@ -113,9 +113,9 @@ bool Workbench::open(const SequenceArgs& args) {
     // to the settings; re-runs keep it.
     MapperParams mapper = ui_.settings.mapper;
     mapper.poses = poseSource(absolute_args, sequence);
-    auto session = std::make_unique<MapSession>(std::move(sequence), mapper, ui_.settings.thresholds, refine_);
-    session->setFps(ui_.settings.play_fps);
-    session_ = std::move(session);  // the old session (if any) stops here
+    auto worker = std::make_unique<MappingWorker>(std::move(sequence), mapper, ui_.settings.thresholds, refine_);
+    worker->setFps(ui_.settings.play_fps);
+    worker_ = std::move(worker);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
@@ -165,7 +165,7 @@ bool Workbench::openSession(const std::string& file) {
     // The session's own parameters, shown and used; the user's settings stay as they are.
     const MappingParams params{saved.info.mapper, saved.info.global};
     std::optional<TumSequence> rest = framesAfter(saved, &why);
-    session_ = std::make_unique<MapSession>(std::move(saved), params.global, std::move(rest), refine_);
+    worker_ = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
     ui_.params = params;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
@@ -198,9 +198,9 @@ void Workbench::opened(const std::string& path) {
 }
 
 void Workbench::exportMap() {
-  if (!session_) return;
+  if (!worker_) return;
   const std::string dir = absolute(ui_.export_text);
-  session_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
+  worker_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
     MapExportOptions options;
     options.run_stats = {{"frames", mapper.framesMapped()}, {"source", "vdmap workbench"}};
     vdmap::exportMap(dir, mapper.graph(), global.map, options);
@@ -209,20 +209,20 @@ void Workbench::exportMap() {
 }
 
 void Workbench::saveSession() {
-  if (!session_) return;
+  if (!worker_) return;
   const std::string file = absolute(ui_.session_text);
   // The session remembers its sequence, so that it can be continued (vdmap map --load, Open).
-  const std::string folder = session_->sequenceFolder();
-  session_->withMapper([file, folder](const Mapper& mapper, const GlobalSnapshot& global) {
+  const std::string folder = worker_->sequenceFolder();
+  worker_->withMapper([file, folder](const Mapper& mapper, const GlobalSnapshot& global) {
     vdmap::saveSession(file, mapper.graph(), sessionInfo(mapper, global.params, folder));
     return "saved the session to " + file;
   });
 }
 
 void Workbench::applyThresholds() {
-  if (!session_) return;
+  if (!worker_) return;
   try {
-    session_->setThresholds(ui_.params.global);
+    worker_->setThresholds(ui_.params.global);
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return;
@@ -231,14 +231,14 @@ void Workbench::applyThresholds() {
 }
 
 void Workbench::rerun() {
-  if (!session_ || savedSession()) return;
+  if (!worker_ || savedSession()) return;
   try {
     ui_.params.mapper.validate();
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return;
   }
-  session_->rerun(ui_.params.mapper);
+  worker_->rerun(ui_.params.mapper);
   ui_.settings.mapper = ui_.params.mapper;
 }
 
@@ -258,14 +258,14 @@ bool Workbench::editParameter(const Parameter& p, double value) {
 }
 
 double Workbench::inUse(const Parameter& p) const {
-  if (!session_) return p.get(ui_.params);
+  if (!worker_) return p.get(ui_.params);
   MappingParams used = ui_.params;
   if (p.live) {
-    const auto global = session_->global();
+    const auto global = worker_->global();
     if (!global) return p.get(ui_.params);
     used.global = global->params;
   } else {
-    used.mapper = session_->mapping()->mapper;
+    used.mapper = worker_->mapping()->mapper;
   }
   return p.get(used);
 }
@@ -277,7 +277,7 @@ void Workbench::resetToDefaults() {
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
-  const bool rerun_needed = session_ && !savedSession() && !(MappingParams{session_->mapping()->mapper, {}} ==
+  const bool rerun_needed = worker_ && !savedSession() && !(MappingParams{worker_->mapping()->mapper, {}} ==
                                                               MappingParams{defaults.mapper, {}});
   ui_.settings = defaults;
   ui_.params.global = defaults.thresholds;
@@ -288,16 +288,16 @@ void Workbench::resetToDefaults() {
   }
   ui_.reset_layout = true;
   applyThresholds();
-  if (session_) session_->setFps(ui_.settings.play_fps);
+  if (worker_) worker_->setFps(ui_.settings.play_fps);
   if (rerun_needed) rerun();
 }
 
 void Workbench::selectKeyframe(int id) {
   ui_.selected_keyframe = id;
-  if (!session_) return;
-  const auto mapping = session_->mapping();
+  if (!worker_) return;
+  const auto mapping = worker_->mapping();
   if (id < 0 || id >= static_cast<int>(mapping->keyframes.size())) ui_.selected_keyframe = -1;
-  session_->selectKeyframe(ui_.selected_keyframe);
+  worker_->selectKeyframe(ui_.selected_keyframe);
   if (ui_.selected_keyframe >= 0) showPose(mapping->keyframes[static_cast<std::size_t>(id)].T_W_K);
 }
 
@@ -310,8 +310,8 @@ void Workbench::showPose(const Transform& T_W_K) {
 
 void Workbench::syncPoseFields() {
   const int id = ui_.selected_keyframe;
-  if (!session_ || id < 0) return;
-  const auto mapping = session_->mapping();
+  if (!worker_ || id < 0) return;
+  const auto mapping = worker_->mapping();
   if (id >= static_cast<int>(mapping->keyframes.size())) return;  // not (yet) mapped: no inspector
   if (mapping->pose_edits < pose_edits_sent_) return;  // an edit is on its way: the snapshot is older than the fields
   const Transform& T = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K;
@@ -319,13 +319,13 @@ void Workbench::syncPoseFields() {
 }
 
 void Workbench::sendPose(int id, const Transform& T_W_K) {
-  session_->setKeyframePose(id, T_W_K);
+  worker_->setKeyframePose(id, T_W_K);
   ++pose_edits_sent_;
 }
 
 void Workbench::applyPoseEdit() {
   // Poses are edited on the map as it is, not on the one before the last optimisation.
-  if (!session_ || ui_.selected_keyframe < 0 || ui_.show_before_optimisation) return;
+  if (!worker_ || ui_.selected_keyframe < 0 || ui_.show_before_optimisation) return;
   Transform T = Transform::Identity();
   T.linear() = eulerDegToRotation(ui_.pose_rotation_deg);
   T.translation() = Eigen::Vector3d(ui_.pose_translation_m.x, ui_.pose_translation_m.y, ui_.pose_translation_m.z);
@@ -334,12 +334,12 @@ void Workbench::applyPoseEdit() {
 }
 
 void Workbench::beginPoseEdit() {
-  if (!session_ || ui_.selected_keyframe < 0) return;
+  if (!worker_ || ui_.selected_keyframe < 0) return;
   pose_undo_.emplace_back(ui_.selected_keyframe, pose_shown_);
 }
 
 bool Workbench::undoPoseEdit() {
-  if (!session_ || pose_undo_.empty()) return false;
+  if (!worker_ || pose_undo_.empty()) return false;
   const auto [id, T] = pose_undo_.back();
   pose_undo_.pop_back();
   sendPose(id, T);
@@ -349,11 +349,11 @@ bool Workbench::undoPoseEdit() {
 }
 
 void Workbench::loadTrajectory() {
-  if (session_) session_->loadTrajectory(absolute(ui_.trajectory_text));
+  if (worker_) worker_->loadTrajectory(absolute(ui_.trajectory_text));
 }
 
 bool Workbench::canShowBeforeOptimisation() const {
-  return session_ && !session_->mapping()->keyframes_before.empty();
+  return worker_ && !worker_->mapping()->keyframes_before.empty();
 }
 
 bool Workbench::showBeforeOptimisation(bool before) {
@@ -363,7 +363,7 @@ bool Workbench::showBeforeOptimisation(bool before) {
     return false;
   }
   ui_.show_before_optimisation = before;
-  if (session_) session_->showBeforeOptimisation(before);
+  if (worker_) worker_->showBeforeOptimisation(before);
   return true;
 }
 
@@ -382,11 +382,11 @@ render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
 }
 
 void Workbench::sync() {
-  if (!session_) return;
+  if (!worker_) return;
   // Seeking back or re-running forgets the optimisation: show the map as it is again.
   if (ui_.show_before_optimisation && !canShowBeforeOptimisation()) showBeforeOptimisation(false);
   syncPoseFields();
-  const PlayerStatus st = session_->status();
+  const PlayerStatus st = worker_->status();
   if (st.error != shown_error_) {
     shown_error_ = st.error;
     if (!st.error.empty()) report(StatusLine::Kind::kError, st.error);
@@ -395,7 +395,7 @@ void Workbench::sync() {
     shown_message_ = st.message;
     if (!st.message.empty()) report(StatusLine::Kind::kSuccess, st.message);
   }
-  const auto global = session_->global();
+  const auto global = worker_->global();
   const int generation = global ? global->generation : 0;
   if (ui_.picked && ui_.picked_generation != generation) ui_.picked.reset();  // it may not exist in the new map
   if (ui_.follow_map && ui_.view_from_keyframe < 0 && generation != framed_generation_ && global &&
@@ -406,14 +406,14 @@ void Workbench::sync() {
 }
 
 std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
-  if (!session_) return render::robustBounds({});
+  if (!worker_) return render::robustBounds({});
   std::vector<glm::vec3> means;
-  if (const auto global = session_->global())
+  if (const auto global = worker_->global())
     for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
   // The cameras are few beside the map's ellipsoids and lie off its surfaces: trimmed with them,
   // they would be the first to go and their frustums would be cut at the viewport's edge.
   render::ColoredLines cameras;
-  const auto mapping = session_->mapping();  // held: the worker may replace it meanwhile
+  const auto mapping = worker_->mapping();  // held: the worker may replace it meanwhile
   for (const KeyframeInfo& k : mapping->keyframes)
     render::addFrustum(cameras, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
   for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
@@ -430,7 +430,7 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
 }
 
 void Workbench::frameMap() {
-  const auto global = session_ ? session_->global() : nullptr;
+  const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const auto [lo, hi] = frameBounds();
   ui_.camera.up = upVector();
@@ -440,7 +440,7 @@ void Workbench::frameMap() {
 }
 
 void Workbench::resetView() {
-  const auto global = session_ ? session_->global() : nullptr;
+  const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const auto [lo, hi] = frameBounds();
   ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
@@ -476,16 +476,16 @@ glm::vec3 Workbench::upVector() const {
     case UpAxis::kMinusY: return {0.f, -1.f, 0.f};
     case UpAxis::kData: break;
   }
-  if (!session_) return {0.f, 0.f, 1.f};
-  const auto mapping = session_->mapping();
-  const auto global = session_->global();
+  if (!worker_) return {0.f, 0.f, 1.f};
+  const auto mapping = worker_->mapping();
+  const auto global = worker_->global();
   const std::vector<Transform> cameras = mapping->trajectoryWorld();
   return render::estimateUp(cameras, global ? std::span<const Ellipsoid>(global->map.ellipsoids)
                                             : std::span<const Ellipsoid>());
 }
 
 void Workbench::key(KeyAction action) {
-  MapSession* s = session_.get();
+  MappingWorker* s = worker_.get();
   switch (action) {
     case KeyAction::kPlayPause:
       if (s) s->status().playing ? s->pause() : s->play();
@@ -517,8 +517,8 @@ void Workbench::key(KeyAction action) {
 }
 
 ViewportView Workbench::view(int width, int height) const {
-  if (session_ && ui_.view_from_keyframe >= 0) {
-    const auto mapping = session_->mapping();
+  if (worker_ && ui_.view_from_keyframe >= 0) {
+    const auto mapping = worker_->mapping();
     if (ui_.view_from_keyframe < static_cast<int>(mapping->keyframes.size())) {
       const PinholeCamera& c = mapping->camera;
       const render::PixelRect r = render::letterbox(width, height, c.width, c.height);
@@ -531,7 +531,7 @@ ViewportView Workbench::view(int width, int height) const {
 
 void Workbench::pick(float x_px, float y_px, int width, int height) {
   ui_.picked.reset();
-  const auto global = session_ ? session_->global() : nullptr;
+  const auto global = worker_ ? worker_->global() : nullptr;
   if (!global) return;
   const ViewportView v = view(width, height);
   const int i = pickEllipsoid(global->map.ellipsoids, v.camera, x_px - v.image.x, y_px - v.image.y);

@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "app/commands.h"
-#include "app/gui/map_session.h"
+#include "app/gui/mapping_worker.h"
 #include "app/gui/settings.h"
 #include "app/parameter_table.h"
 #include "render/map_mirror.h"
@@ -89,7 +89,7 @@ class Workbench {
   UiState& ui() { return ui_; }
   const UiState& ui() const { return ui_; }
   /// Null while no sequence is open.
-  MapSession* session() { return session_.get(); }
+  MappingWorker* worker() { return worker_.get(); }
 
   /// Shows `text` in the status area (errors stay until the next report).
   void report(StatusLine::Kind kind, std::string text);
@@ -129,7 +129,7 @@ class Workbench {
   /// The value of `p` the shown map was made with (the slider's value when nothing is pending).
   double inUse(const Parameter& p) const;
   /// True while a saved session (no sequence) is open: nothing to play or re-run.
-  bool savedSession() const { return session_ && !session_->sequence(); }
+  bool savedSession() const { return worker_ && !worker_->sequence(); }
   /// Thresholds, re-run parameters and view options back to their defaults (window size and
   /// last sequence kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
@@ -199,7 +199,7 @@ class Workbench {
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
-  std::unique_ptr<MapSession> session_;
+  std::unique_ptr<MappingWorker> worker_;
 };
 
 }  // namespace vdmap::app::gui

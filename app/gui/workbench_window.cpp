@@ -157,7 +157,7 @@ class WorkbenchWindow {
 
   ~WorkbenchWindow() {
     if (preparing_.valid()) preparing_.wait();
-    if (bench_.session()) bench_.session()->setOnChange(nullptr);
+    if (bench_.worker()) bench_.worker()->setOnChange(nullptr);
   }
 
   // Waits for input, news from the worker or a deadline, and draws a frame only when something
@@ -181,16 +181,16 @@ class WorkbenchWindow {
   bool scripted() const { return !script_.screenshot.empty() || !script_.stats_json.empty() || script_.exit; }
 
   void startScript() {
-    if (script_.play_to_end && bench_.session()) bench_.session()->play();
-    if (script_.keyframe >= 0 && bench_.session()) {  // selected before it is mapped, unlike Workbench::selectKeyframe
+    if (script_.play_to_end && bench_.worker()) bench_.worker()->play();
+    if (script_.keyframe >= 0 && bench_.worker()) {  // selected before it is mapped, unlike Workbench::selectKeyframe
       ui().selected_keyframe = script_.keyframe;
-      bench_.session()->selectKeyframe(script_.keyframe);
+      bench_.worker()->selectKeyframe(script_.keyframe);
     }
   }
 
   // What the newest snapshots are, to notice news without drawing.
   struct Seen {
-    const void *session = nullptr, *mapping = nullptr, *global = nullptr, *selection = nullptr;
+    const void *worker = nullptr, *mapping = nullptr, *global = nullptr, *selection = nullptr;
     int status = -1;
     bool busy = false;
     bool operator==(const Seen&) const = default;
@@ -198,12 +198,12 @@ class WorkbenchWindow {
   Seen seen() {
     Seen s;
     s.status = ui().status.serial;
-    if (MapSession* session = bench_.session()) {
-      s.session = session;
-      s.mapping = session->mapping().get();
-      s.global = session->global().get();
-      s.selection = session->selection().get();
-      s.busy = session->status().busy;
+    if (MappingWorker* worker = bench_.worker()) {
+      s.worker = worker;
+      s.mapping = worker->mapping().get();
+      s.global = worker->global().get();
+      s.selection = worker->selection().get();
+      s.busy = worker->status().busy;
     }
     return s;
   }
@@ -223,7 +223,7 @@ class WorkbenchWindow {
   double waitSeconds() const {
     if (script_phase_ == Phase::kIdle) return std::max(0.0, std::chrono::duration<double>(idle_until_ - Clock::now()).count());
     if (preparing_.valid()) return 0.2;
-    // The worker wakes the loop itself (MapSession::setOnChange); the timeout is a safety net.
+    // The worker wakes the loop itself (MappingWorker::setOnChange); the timeout is a safety net.
     return 2.0;
   }
 
@@ -235,9 +235,9 @@ class WorkbenchWindow {
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
     keys_.events = 0;
     if (preparing_.valid() && preparing_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) finishPreparation();
-    if (MapSession* session = bench_.session(); session && session != hooked_session_) {
-      session->setOnChange([] { glfwPostEmptyEvent(); });
-      hooked_session_ = session;
+    if (MappingWorker* worker = bench_.worker(); worker && worker != hooked_worker_) {
+      worker->setOnChange([] { glfwPostEmptyEvent(); });
+      hooked_worker_ = worker;
     }
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
@@ -246,8 +246,8 @@ class WorkbenchWindow {
     layout();
     handleKeys();
     bench_.sync();
-    mapping_ = bench_.session() ? bench_.session()->mapping() : nullptr;
-    global_ = bench_.session() ? bench_.session()->global() : nullptr;
+    mapping_ = bench_.worker() ? bench_.worker()->mapping() : nullptr;
+    global_ = bench_.worker() ? bench_.worker()->global() : nullptr;
     syncMirror();
     labels_cut_ = 0;
     drawSequencePanel();
@@ -279,7 +279,7 @@ class WorkbenchWindow {
     }
     frame_times_.push_back(frame_ms_);
     if (frame_times_.size() > 30) frame_times_.pop_front();
-    if (bench_.session() && bench_.session()->status().busy) busy_frame_ms_.push_back(frame_ms_);
+    if (bench_.worker() && bench_.worker()->status().busy) busy_frame_ms_.push_back(frame_ms_);
   }
 
   void finishPreparation() {
@@ -378,10 +378,10 @@ class WorkbenchWindow {
                       .graph = s.show_graph,
                       .trajectory = s.show_trajectory,
                       .groundtruth = s.show_groundtruth});
-    MapSession* session = bench_.session();
-    if (!session) return;
-    if (session != mirrored_session_) {  // generations restart with every session
-      mirrored_session_ = session;
+    MappingWorker* worker = bench_.worker();
+    if (!worker) return;
+    if (worker != mirrored_worker_) {  // generations restart with every session
+      mirrored_worker_ = worker;
       session_base_ += 1 << 20;
     }
     if (global_) mirror_.setMap(session_base_ + global_->generation, global_->map.ellipsoids);
@@ -391,7 +391,7 @@ class WorkbenchWindow {
     const auto scene = [&] { return bench_.graphScene(*mapping); };
     mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, scene, ui().show_before_optimisation);
     mirror_.setHighlight(ui().picked);
-    const auto selection = session->selection();
+    const auto selection = worker->selection();
     if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
       const int id = selection->keyframe;
       const render::ContainerStyle style{.sigma = 2.f, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
@@ -416,7 +416,7 @@ class WorkbenchWindow {
     gl_.ClearColor(kBackground[0], kBackground[1], kBackground[2], 1.f);
     gl_.ClearDepth(1.0);
     gl_.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (!bench_.session() || fb_width_ <= 0 || fb_height_ <= 0) return;
+    if (!bench_.worker() || fb_width_ <= 0 || fb_height_ <= 0) return;
     const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
     const int vx = static_cast<int>(view_.x * scale.x), vw = ui().view_width, vh = ui().view_height;
     const int vy = fb_height_ - static_cast<int>(view_.y * scale.y) - vh;  // GL counts rows from the bottom
@@ -448,7 +448,7 @@ class WorkbenchWindow {
 
   void handleMouse() {
     const ImGuiIO& io = ImGui::GetIO();
-    if (!bench_.session()) return;
+    if (!bench_.worker()) return;
     const bool over_view = view_.contains(io.MousePos) && !io.WantCaptureMouse;
     for (int b = 0; b < 3; ++b)
       if (ImGui::IsMouseClicked(b)) drag_in_view_[b] = over_view;
@@ -483,16 +483,16 @@ class WorkbenchWindow {
     tip(ui().sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
                                    : "Opens the folder or session typed on the left; errors show in the status line below.");
     ImGui::EndDisabled();
-    MapSession* session = bench_.session();
-    if (!session) {
+    MappingWorker* worker = bench_.worker();
+    if (!worker) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
       ImGui::End();
       return;
     }
-    const PlayerStatus status = session->status();
+    const PlayerStatus status = worker->status();
     const int total = mapping_->frames_total, mapped = mapping_->frames_mapped;
     const bool saved = bench_.savedSession();
-    if (const TumSequence* sequence = session->sequence()) {
+    if (const TumSequence* sequence = worker->sequence()) {
       ImGui::TextWrapped("%s", sequence->folder().c_str());
       ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping_->camera.width,
                          mapping_->camera.height, total);
@@ -534,7 +534,7 @@ class WorkbenchWindow {
     if (beginRows("player")) {
       label("fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
       if (ImGui::SliderFloat("##fps", &ui().settings.play_fps, 0.f, 60.f, ui().settings.play_fps > 0 ? "%.0f" : "max"))
-        session->setFps(ui().settings.play_fps);
+        worker->setFps(ui().settings.play_fps);
       ImGui::EndTable();
     }
     if (mapping_->mapper.poses == PoseSource::kTrack) drawLoopStrip(total);
@@ -543,7 +543,7 @@ class WorkbenchWindow {
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::SliderInt("##frame", &scrub_, 0, std::max(0, total - 1), "frame %d");
     scrubbing_ = ImGui::IsItemActive();
-    if (ImGui::IsItemDeactivatedAfterEdit()) session->seek(scrub_);
+    if (ImGui::IsItemDeactivatedAfterEdit()) worker->seek(scrub_);
     tip(saved ? why_saved : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
     ImDrawList* draw = ImGui::GetWindowDrawList();
@@ -675,7 +675,7 @@ class WorkbenchWindow {
 
   void drawMapPanel() {
     beginPanel("Map", right_, right_w_);
-    if (bench_.session()) {
+    if (bench_.worker()) {
       if (section("Thresholds (live)", true)) drawThresholds();
       if (section("Re-run parameters")) drawRerun();
       if (mapping_->mapper.poses == PoseSource::kTrack && section("Tracking and loop closures", true)) drawTracking();
@@ -785,7 +785,7 @@ class WorkbenchWindow {
       row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
           m.occlusion_ms);
       row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
-          "%d frames%s", global_->frames_mapped, bench_.session()->status().busy ? ", rebuilding" : "");
+          "%d frames%s", global_->frames_mapped, bench_.worker()->status().busy ? ", rebuilding" : "");
       ImGui::EndTable();
     }
     if (stored > 0 && m.sigma_e * 20 < stored) {
@@ -1120,7 +1120,7 @@ class WorkbenchWindow {
       draw->AddRect({x, y}, {x + w, y + font}, dim);
       return;
     }
-    if (!bench_.session()) {
+    if (!bench_.worker()) {
       draw->AddText({view_.x + pad, view_.y + pad}, dim, "Open a TUM RGB-D folder or a .vdmap session (left panel).");
       return;
     }
@@ -1302,11 +1302,11 @@ class WorkbenchWindow {
 
   void advanceScript() {
     if (!scripted() || script_phase_ == Phase::kDone || preparing_.valid()) return;
-    MapSession* session = bench_.session();
+    MappingWorker* worker = bench_.worker();
     switch (script_phase_) {
       case Phase::kWaitDone: {
-        if (session) {
-          const PlayerStatus st = session->status();
+        if (worker) {
+          const PlayerStatus st = worker->status();
           const bool done = !st.busy && (st.target >= mapping_->frames_total || !script_.play_to_end || !st.error.empty());
           if (!done) return;
         }
@@ -1318,7 +1318,7 @@ class WorkbenchWindow {
         return;
       }
       case Phase::kSettle:
-        if (session && session->status().busy) return;  // a key pressed above may have asked for a rebuild
+        if (worker && worker->status().busy) return;  // a key pressed above may have asked for a rebuild
         if (--countdown_ > 0) return;
         recordLayout();
         if (!script_.screenshot.empty() && !failedRun()) {
@@ -1344,7 +1344,7 @@ class WorkbenchWindow {
           orbit_cpu_start_ = cpu;
           return;
         }
-        if ((session && session->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
+        if ((worker && worker->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
         script_phase_ = Phase::kIdle;  // starts once this frame is on screen (frame())
         idle_until_ = Clock::time_point::max();
         return;
@@ -1371,10 +1371,10 @@ class WorkbenchWindow {
   // One slider change at a time (merge distance, alternating): from the edit until the frame
   // that shows the map built with it. Returns true while runs remain.
   bool measureLatency() {
-    MapSession* session = bench_.session();
-    if (!session || !global_) return false;
+    MappingWorker* worker = bench_.worker();
+    if (!worker || !global_) return false;
     if (latency_generation_ >= 0) {
-      if (global_->generation <= latency_generation_ || session->status().busy) return true;
+      if (global_->generation <= latency_generation_ || worker->status().busy) return true;
       latency_ms_.push_back(msSince(latency_start_));  // this frame draws the new map
       latency_generation_ = -1;
     }
@@ -1477,8 +1477,8 @@ class WorkbenchWindow {
   render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
-  const MapSession* mirrored_session_ = nullptr;
-  const MapSession* hooked_session_ = nullptr;
+  const MappingWorker* mirrored_worker_ = nullptr;
+  const MappingWorker* hooked_worker_ = nullptr;
   int session_base_ = 0;
   int decoded_rgb_for_ = -1;  // the container generation decoded_rgb_ was decoded for
   cv::Mat decoded_rgb_;

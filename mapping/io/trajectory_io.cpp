@@ -5,7 +5,6 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/text_list.h"
-#include "mapping/keyframe/keyframe_graph.h"
 
 namespace vdmap {
 
@@ -25,15 +24,6 @@ std::vector<StampedPose> readTumTrajectory(const std::filesystem::path& file) {
     poses.push_back(pose);
   }
   return poses;
-}
-
-TrajectoryMatch applyTrajectoryFile(KeyframeGraph& graph, const std::filesystem::path& file) {
-  const std::vector<StampedPose> poses = readTumTrajectory(file);
-  try {
-    return graph.applyTrajectory(poses);
-  } catch (const std::invalid_argument& e) {
-    throw InputError(file.string(), e.what());
-  }
 }
 
 void writeTumTrajectory(const std::filesystem::path& file, const std::vector<StampedPose>& poses,

@@ -7,9 +7,6 @@
 
 namespace vdmap {
 
-class KeyframeGraph;
-struct TrajectoryMatch;
-
 /// A pose with its timestamp (T_W_C, camera-to-world).
 struct StampedPose {
   double t = 0.0;
@@ -20,11 +17,6 @@ struct StampedPose {
 /// strictly increasing. Quaternions are normalised. Throws InputError naming the file and line for
 /// a malformed line, a non-finite value, a zero-norm quaternion or a timestamp out of order.
 std::vector<StampedPose> readTumTrajectory(const std::filesystem::path& file);
-
-/// Reads a corrected TUM trajectory and applies it to the graph's keyframes by timestamp
-/// (KeyframeGraph::applyTrajectory). Throws InputError naming the file for a malformed file or
-/// one that matches no keyframe (the graph is then unchanged).
-TrajectoryMatch applyTrajectoryFile(KeyframeGraph& graph, const std::filesystem::path& file);
 
 /// Writes a TUM trajectory with `header` as a comment line (atomically: temp file + rename).
 void writeTumTrajectory(const std::filesystem::path& file, const std::vector<StampedPose>& poses,

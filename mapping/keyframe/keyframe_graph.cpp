@@ -4,6 +4,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mapping/core/error.h"
 
 namespace vdmap {
 
@@ -58,6 +59,15 @@ TrajectoryMatch KeyframeGraph::applyTrajectory(std::span<const StampedPose> pose
     throw std::invalid_argument("no pose matches a keyframe timestamp (" + std::to_string(poses.size()) + " poses, " +
                                 std::to_string(keyframes_.size()) + " keyframes)");
   return match;
+}
+
+TrajectoryMatch applyTrajectoryFile(KeyframeGraph& graph, const std::filesystem::path& file) {
+  const std::vector<StampedPose> poses = readTumTrajectory(file);
+  try {
+    return graph.applyTrajectory(poses);
+  } catch (const std::invalid_argument& e) {
+    throw InputError(file.string(), e.what());
+  }
 }
 
 }  // namespace vdmap

@@ -1,15 +1,16 @@
 #pragma once
 #include <deque>
+#include <filesystem>
 #include <span>
 #include <vector>
 
 #include <opencv2/core.hpp>
 
-#include "mapping/core/compressed_image.h"
+#include "mapping/io/compressed_image.h"
+#include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/covisibility_graph.h"
 #include "mapping/keyframe/frame_features.h"
 #include "mapping/keyframe/keyframe_selector.h"
-#include "mapping/io/trajectory_io.h"
 #include "mapping/local_map/keyframe_container.h"
 
 namespace vdmap {
@@ -72,12 +73,17 @@ class KeyframeGraph {
   /// within `tolerance_s`; timestamps increasing). Poses at unknown timestamps are ignored and
   /// counted; keyframes not named keep their pose. Throws std::invalid_argument, changing
   /// nothing, when no pose matches a keyframe (almost surely the wrong trajectory). Reading a
-  /// file is applyTrajectoryFile's job (mapping/io).
+  /// file is applyTrajectoryFile's job (below).
   TrajectoryMatch applyTrajectory(std::span<const StampedPose> poses, double tolerance_s = 1e-3);
 
  private:
   std::deque<Keyframe> keyframes_;
   CovisibilityGraph edges_;
 };
+
+/// Reads a corrected TUM trajectory and applies it to the graph's keyframes by timestamp
+/// (KeyframeGraph::applyTrajectory). Throws InputError naming the file for a malformed file or
+/// one that matches no keyframe (the graph is then unchanged).
+TrajectoryMatch applyTrajectoryFile(KeyframeGraph& graph, const std::filesystem::path& file);
 
 }  // namespace vdmap

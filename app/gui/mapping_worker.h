@@ -17,9 +17,9 @@
 
 #include "app/gui/append_log.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app::gui {
 
@@ -35,7 +35,7 @@ struct KeyframeInfo {
 
 /// Where one mapped frame was: relative to the keyframe it went into, so that the trajectory
 /// follows a keyframe's pose when it is corrected.
-struct FramePose {
+struct TrajectoryPoint {
   int keyframe = 0;
   Transform T_K_C = Transform::Identity();
   /// With tracked poses (PoseSource::kTrack): the sequence's ground-truth T_W_C of the frame,
@@ -62,7 +62,7 @@ struct MappingSnapshot {
   SharedSpan<StageTimes> times;        ///< per mapped frame
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
-  SharedSpan<FramePose> trajectory;    ///< per mapped frame that was placed (lost ones have none)
+  SharedSpan<TrajectoryPoint> trajectory;    ///< per mapped frame that was placed (lost ones have none)
   int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
   int frames_lost = 0;         ///< frames the tracker could not place (skipped, not integrated)
   int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (Mapper::framesWeak)
@@ -94,7 +94,7 @@ struct GlobalSnapshot {
   int frames_mapped = 0;         ///< the mapping state it was built from
   int generation = 0;            ///< 1, 2, ... per build
   /// Built with the keyframe poses before the last pose-graph optimisation
-  /// (MapSession::showBeforeOptimisation).
+  /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;
 };
 
@@ -120,22 +120,22 @@ struct PlayerStatus {
   std::string message; ///< the last command's outcome, e.g. "12 keyframe poses replaced"
 };
 
-class MapSession {
+class MappingWorker {
  public:
   /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
   /// With tracked poses, `refine` (nullopt: none) refines the keyframe poses after the last frame
   /// as `vdmap map --refine` does.
-  MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+  MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
              std::optional<MapRefinementParams> refine = MapRefinementParams{});
   /// A saved session (.vdmap): its keyframes are there; thresholds and poses are live as usual.
   /// With `rest`, the frames of its sequence after the session's last one, the player continues
   /// mapping from the session's state (seeking back to before the session's end restores it);
   /// without, the player commands and seek do nothing. Re-run does nothing either way.
-  MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
+  MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
              std::optional<MapRefinementParams> refine = MapRefinementParams{});
-  ~MapSession();
-  MapSession(const MapSession&) = delete;
-  MapSession& operator=(const MapSession&) = delete;
+  ~MappingWorker();
+  MappingWorker(const MappingWorker&) = delete;
+  MappingWorker& operator=(const MappingWorker&) = delete;
 
   /// Null for a saved session without its sequence; for one with, the frames after the session's.
   const TumSequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
@@ -225,7 +225,7 @@ class MapSession {
   // buffers in resident memory, ~0.45 GB at 100 keyframes of the built-in scene).
   GlobalMapWorkspace global_workspace_;
   AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
-  AppendLog<FramePose> trajectory_;    // worker thread only (snapshots share it)
+  AppendLog<TrajectoryPoint> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
   int pose_edits_ = 0;                 // worker thread only
   int mapping_generation_ = 0, selection_serial_ = 0;  // worker thread only

@@ -13,7 +13,7 @@
 
 #include "app/timing.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 
 namespace {
 

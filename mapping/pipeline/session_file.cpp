@@ -1,4 +1,4 @@
-#include "mapping/io/session_file.h"
+#include "mapping/pipeline/session_file.h"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 #include <algorithm>
 #include <chrono>

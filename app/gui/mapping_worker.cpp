@@ -1,4 +1,4 @@
-#include "app/gui/map_session.h"
+#include "app/gui/mapping_worker.h"
 
 #include <algorithm>
 
@@ -27,7 +27,7 @@ std::vector<Transform> MappingSnapshot::keyframePoses(bool before_optimisation) 
 }
 
 Transform MappingSnapshot::framePose(std::size_t i, bool before_optimisation) const {
-  const FramePose& f = trajectory[i];
+  const TrajectoryPoint& f = trajectory[i];
   const auto k = static_cast<std::size_t>(f.keyframe);
   const bool before = before_optimisation && k < keyframes_before.size();
   return (before ? keyframes_before[k] : keyframes[k].T_W_K) * f.T_K_C;
@@ -42,16 +42,16 @@ std::vector<Transform> MappingSnapshot::trajectoryWorld(bool before_optimisation
 
 std::vector<Transform> MappingSnapshot::groundTruthWorld() const {
   std::vector<Transform> out;
-  for (const FramePose& f : trajectory)
+  for (const TrajectoryPoint& f : trajectory)
     if (f.T_W_C_truth) out.push_back(*f.T_W_C_truth);
   return out;
 }
 
 bool MappingSnapshot::hasGroundTruth() const {
-  return std::any_of(trajectory.begin(), trajectory.end(), [](const FramePose& f) { return f.T_W_C_truth.has_value(); });
+  return std::any_of(trajectory.begin(), trajectory.end(), [](const TrajectoryPoint& f) { return f.T_W_C_truth.has_value(); });
 }
 
-MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
                        std::optional<MapRefinementParams> refine)
     : sequence_(std::move(sequence)), sequence_folder_(sequence_->folder().string()), mapper_params_(mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
@@ -60,7 +60,7 @@ MapSession::MapSession(TumSequence sequence, const MapperParams& mapper, const G
   start();
 }
 
-MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
+MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
                        std::optional<MapRefinementParams> refine)
     : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
@@ -74,7 +74,7 @@ MapSession::MapSession(Session saved, const GlobalMapParams& thresholds, std::op
   start();
 }
 
-void MapSession::trajectoryOfSession() {
+void MappingWorker::trajectoryOfSession() {
   // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
   if (!mapper_->framePoses().empty()) {
     for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.T_K_C, std::nullopt});
@@ -83,12 +83,12 @@ void MapSession::trajectoryOfSession() {
   for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
 }
 
-void MapSession::start() {
+void MappingWorker::start() {
   publishMapping();
   worker_ = std::thread([this] { run(); });
 }
 
-MapSession::~MapSession() {
+MappingWorker::~MappingWorker() {
   {
     std::lock_guard lock(mutex_);
     stop_ = true;
@@ -97,11 +97,11 @@ MapSession::~MapSession() {
   worker_.join();
 }
 
-bool MapSession::workLeft() const {
+bool MappingWorker::workLeft() const {
   return working_ || !commands_.empty() || selection_dirty_ || mapped_ < target_ || global_dirty_;
 }
 
-void MapSession::run() {
+void MappingWorker::run() {
   std::unique_lock lock(mutex_);
   while (!stop_) {
     std::function<void()> job;
@@ -143,7 +143,7 @@ void MapSession::run() {
   }
 }
 
-void MapSession::publishMapping() {
+void MappingWorker::publishMapping() {
   auto snap = std::make_shared<MappingSnapshot>();
   snap->generation = ++mapping_generation_;
   snap->camera = mapper_->camera();
@@ -174,7 +174,7 @@ void MapSession::publishMapping() {
   notifyChange();
 }
 
-void MapSession::mapOneFrame() {
+void MappingWorker::mapOneFrame() {
   const int i = mapper_->framesMapped();
   try {
     const RgbdFrame frame = sequence_->load(static_cast<std::size_t>(i - base_frames_));
@@ -182,7 +182,7 @@ void MapSession::mapOneFrame() {
     times_.push_back(report.ms);
     if (!report.lost) {  // a frame the tracker could not place has no pose
       const vdmap::FramePose& placed = mapper_->framePoses().back();
-      FramePose pose{placed.keyframe, placed.T_K_C, std::nullopt};
+      TrajectoryPoint pose{placed.keyframe, placed.T_K_C, std::nullopt};
       const FrameEntry& entry = sequence_->entries()[static_cast<std::size_t>(i - base_frames_)];
       if (mapper_params_.poses == PoseSource::kTrack && entry.has_pose) pose.T_W_C_truth = entry.T_W_C;
       trajectory_.push_back(pose);
@@ -221,7 +221,7 @@ void MapSession::mapOneFrame() {
   }
 }
 
-std::vector<Transform> MapSession::posesBeforeOptimisation() const {
+std::vector<Transform> MappingWorker::posesBeforeOptimisation() const {
   const KeyframeGraph& graph = mapper_->graph();
   const std::vector<Transform>& before = mapper_->poseGraph().posesBeforeOptimisation();
   const std::size_t n = std::min(before.size(), graph.size());
@@ -232,7 +232,7 @@ std::vector<Transform> MapSession::posesBeforeOptimisation() const {
   return out;
 }
 
-int MapSession::positionOf(int frame_index) const {
+int MappingWorker::positionOf(int frame_index) const {
   if (!sequence_) return frame_index;
   const std::vector<FrameEntry>& entries = sequence_->entries();
   const auto it = std::lower_bound(entries.begin(), entries.end(), frame_index,
@@ -241,7 +241,7 @@ int MapSession::positionOf(int frame_index) const {
   return base_frames_ + static_cast<int>(it - entries.begin());
 }
 
-std::shared_ptr<GlobalSnapshot> MapSession::buildGlobal(const GlobalMapParams& params, bool before_optimisation) {
+std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(const GlobalMapParams& params, bool before_optimisation) {
   auto snap = std::make_shared<GlobalSnapshot>();
   snap->params = params;
   const std::vector<Transform> before = before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
@@ -266,7 +266,7 @@ std::shared_ptr<GlobalSnapshot> MapSession::buildGlobal(const GlobalMapParams& p
   return snap;
 }
 
-void MapSession::rebuildGlobal() {
+void MappingWorker::rebuildGlobal() {
   GlobalMapParams params;
   bool before = false;
   {
@@ -297,7 +297,7 @@ void MapSession::rebuildGlobal() {
   notifyChange();
 }
 
-void MapSession::publishSelection() {
+void MappingWorker::publishSelection() {
   auto snap = std::make_shared<SelectionSnapshot>();
   snap->serial = ++selection_serial_;
   std::shared_ptr<const GlobalSnapshot> global;
@@ -325,7 +325,7 @@ void MapSession::publishSelection() {
   notifyChange();
 }
 
-void MapSession::restartMapper() {
+void MappingWorker::restartMapper() {
   times_.clear();
   trajectory_.clear();
   if (origin_) {  // back to the saved session, whose frames are not in the sequence
@@ -342,7 +342,7 @@ void MapSession::restartMapper() {
   global_dirty_ = true;
 }
 
-void MapSession::post(std::function<void()> command) {
+void MappingWorker::post(std::function<void()> command) {
   {
     std::lock_guard lock(mutex_);
     commands_.push_back(std::move(command));
@@ -351,7 +351,7 @@ void MapSession::post(std::function<void()> command) {
   wake_.notify_all();
 }
 
-void MapSession::update(const std::function<void()>& change) {
+void MappingWorker::update(const std::function<void()>& change) {
   {
     std::lock_guard lock(mutex_);
     error_.clear();
@@ -360,7 +360,7 @@ void MapSession::update(const std::function<void()>& change) {
   wake_.notify_all();
 }
 
-void MapSession::play() {
+void MappingWorker::play() {
   update([this] {
     playing_ = true;
     target_ = framesTotal();
@@ -368,7 +368,7 @@ void MapSession::play() {
   });
 }
 
-void MapSession::pause() {
+void MappingWorker::pause() {
   update([this] {
     playing_ = false;
     stop_at_keyframe_ = false;
@@ -376,18 +376,18 @@ void MapSession::pause() {
   });
 }
 
-void MapSession::setFps(float fps) {
+void MappingWorker::setFps(float fps) {
   update([this, fps] { fps_ = std::max(0.f, fps); });
 }
 
-void MapSession::step() {
+void MappingWorker::step() {
   update([this] {
     playing_ = false;
     target_ = std::min(std::max(target_, mapped_) + 1, framesTotal());  // taps add up before they are mapped
   });
 }
 
-void MapSession::stepToKeyframe() {
+void MappingWorker::stepToKeyframe() {
   update([this] {
     playing_ = false;
     stop_at_keyframe_ = true;
@@ -395,7 +395,7 @@ void MapSession::stepToKeyframe() {
   });
 }
 
-void MapSession::seek(int frame) {
+void MappingWorker::seek(int frame) {
   if (!sequence_) return;
   frame = std::clamp(frame, std::max(0, base_frames_ - 1), framesTotal() - 1);
   bool restart = false;
@@ -411,7 +411,7 @@ void MapSession::seek(int frame) {
   wake_.notify_all();
 }
 
-void MapSession::setThresholds(const GlobalMapParams& thresholds) {
+void MappingWorker::setThresholds(const GlobalMapParams& thresholds) {
   thresholds.validate();
   {
     std::lock_guard lock(mutex_);
@@ -421,7 +421,7 @@ void MapSession::setThresholds(const GlobalMapParams& thresholds) {
   wake_.notify_all();
 }
 
-void MapSession::rerun(const MapperParams& mapper) {
+void MappingWorker::rerun(const MapperParams& mapper) {
   if (!sequence_ || origin_) return;
   {
     std::lock_guard lock(mutex_);
@@ -433,7 +433,7 @@ void MapSession::rerun(const MapperParams& mapper) {
   });
 }
 
-void MapSession::setKeyframePose(int id, const Transform& T_W_K) {
+void MappingWorker::setKeyframePose(int id, const Transform& T_W_K) {
   post([this, id, T_W_K] {
     ++pose_edits_;  // counted even when refused, so the UI does not wait for it
     try {
@@ -448,7 +448,7 @@ void MapSession::setKeyframePose(int id, const Transform& T_W_K) {
   });
 }
 
-void MapSession::loadTrajectory(const std::string& file) {
+void MappingWorker::loadTrajectory(const std::string& file) {
   post([this, file] {
     const TrajectoryMatch m = applyTrajectoryFile(mapper_->graph(), file);
     publishMapping();
@@ -459,7 +459,7 @@ void MapSession::loadTrajectory(const std::string& file) {
   });
 }
 
-void MapSession::withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f) {
+void MappingWorker::withMapper(std::function<std::string(const Mapper&, const GlobalSnapshot&)> f) {
   post([this, f] {
     bool dirty = false;
     {
@@ -478,18 +478,18 @@ void MapSession::withMapper(std::function<std::string(const Mapper&, const Globa
   });
 }
 
-std::shared_ptr<const MappingSnapshot> MapSession::mapping() const {
+std::shared_ptr<const MappingSnapshot> MappingWorker::mapping() const {
   std::lock_guard lock(mutex_);
   return mapping_;
 }
 
-std::shared_ptr<const GlobalSnapshot> MapSession::global() const {
+std::shared_ptr<const GlobalSnapshot> MappingWorker::global() const {
   std::lock_guard lock(mutex_);
   return global_;
 }
 
 template <class T>
-void MapSession::setAndWake(T* field, T value, bool* dirty) {
+void MappingWorker::setAndWake(T* field, T value, bool* dirty) {
   {
     std::lock_guard lock(mutex_);
     if (*field == value) return;
@@ -499,21 +499,21 @@ void MapSession::setAndWake(T* field, T value, bool* dirty) {
   wake_.notify_all();
 }
 
-void MapSession::showBeforeOptimisation(bool before) { setAndWake(&before_optimisation_, before, &global_dirty_); }
+void MappingWorker::showBeforeOptimisation(bool before) { setAndWake(&before_optimisation_, before, &global_dirty_); }
 
-void MapSession::selectKeyframe(int id) { setAndWake(&selected_keyframe_, id, &selection_dirty_); }
+void MappingWorker::selectKeyframe(int id) { setAndWake(&selected_keyframe_, id, &selection_dirty_); }
 
-std::shared_ptr<const SelectionSnapshot> MapSession::selection() const {
+std::shared_ptr<const SelectionSnapshot> MappingWorker::selection() const {
   std::lock_guard lock(mutex_);
   return selection_;
 }
 
-PlayerStatus MapSession::status() const {
+PlayerStatus MappingWorker::status() const {
   std::lock_guard lock(mutex_);
   return {playing_, workLeft(), target_, error_, message_};
 }
 
-void MapSession::notifyChange() const {
+void MappingWorker::notifyChange() const {
   std::function<void()> on_change;
   {
     std::lock_guard lock(mutex_);
@@ -522,12 +522,12 @@ void MapSession::notifyChange() const {
   if (on_change) on_change();
 }
 
-void MapSession::setOnChange(std::function<void()> on_change) {
+void MappingWorker::setOnChange(std::function<void()> on_change) {
   std::lock_guard lock(mutex_);  // the worker reads it after taking the lock once
   on_change_ = std::move(on_change);
 }
 
-void MapSession::waitIdle() {
+void MappingWorker::waitIdle() {
   std::unique_lock lock(mutex_);
   idle_.wait(lock, [this] { return !workLeft() || stop_; });
 }

@@ -1,4 +1,4 @@
-#include "mapping/core/compressed_image.h"
+#include "mapping/io/compressed_image.h"
 
 #include <cassert>
 #include <stdexcept>

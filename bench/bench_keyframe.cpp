@@ -25,7 +25,7 @@
 #include "app/timing.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/keyframe/keyframe_index.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/test_util.h"
 

@@ -8,7 +8,7 @@
 #include <string_view>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/keyframe/mapper.h"
+#include "mapping/pipeline/mapper.h"
 
 namespace vdmap {
 

@@ -1,0 +1,112 @@
+// The code's layering, read from the sources: mapping/'s folders include each other in one
+// direction (docs/dev/architecture.md gives the order), and the libraries include nothing of the
+// layers above them (mapping: no GL, GLFW, ImGui, render/ or app/; render: no GLFW, ImGui or app/).
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <filesystem>
+#include <fstream>
+#include <map>
+#include <regex>
+#include <set>
+#include <string>
+#include <vector>
+
+namespace {
+
+namespace fs = std::filesystem;
+using FolderGraph = std::map<std::string, std::set<std::string>>;
+
+struct Include {
+  fs::path file;
+  std::string target;  ///< what is between the quotes or angle brackets
+};
+
+std::vector<Include> includesUnder(const fs::path& dir) {
+  static const std::regex kInclude(R"(^\s*#\s*include\s*[<"]([^">]+)[">])");
+  std::vector<Include> out;
+  for (const auto& entry : fs::recursive_directory_iterator(dir)) {
+    const std::string ext = entry.path().extension().string();
+    if (ext != ".h" && ext != ".cpp" && ext != ".inc") continue;
+    std::ifstream in(entry.path());
+    std::smatch m;
+    for (std::string line; std::getline(in, line);)
+      if (std::regex_search(line, m, kInclude)) out.push_back({entry.path(), m[1]});
+  }
+  return out;
+}
+
+// Folder of mapping/ that `file` lives in, or of an include "mapping/FOLDER/...".
+std::string folderOf(const fs::path& relative_to_mapping) { return relative_to_mapping.begin()->string(); }
+
+FolderGraph mappingFolderGraph() {
+  const fs::path mapping = fs::path(VDMAP_SOURCE_DIR) / "mapping";
+  FolderGraph graph;
+  for (const Include& inc : includesUnder(mapping)) {
+    const std::string from = folderOf(fs::relative(inc.file, mapping));
+    graph[from];
+    if (inc.target.rfind("mapping/", 0) != 0) continue;
+    const std::string to = folderOf(fs::path(inc.target.substr(8)));
+    if (to != from) graph[from].insert(to);
+  }
+  return graph;
+}
+
+// A cycle of `graph` as "a -> b -> a", or "" when it has none (depth-first search).
+std::string findCycle(const FolderGraph& graph) {
+  std::map<std::string, int> state;  // 0 unseen, 1 on the path, 2 done
+  std::vector<std::string> path;
+  std::string cycle;
+  auto visit = [&](auto&& self, const std::string& node) -> bool {
+    state[node] = 1;
+    path.push_back(node);
+    const auto it = graph.find(node);
+    if (it != graph.end())
+      for (const std::string& next : it->second) {
+        if (state[next] == 1) {
+          auto start = std::find(path.begin(), path.end(), next);
+          for (auto p = start; p != path.end(); ++p) cycle += *p + " -> ";
+          cycle += next;
+          return true;
+        }
+        if (state[next] == 0 && self(self, next)) return true;
+      }
+    path.pop_back();
+    state[node] = 2;
+    return false;
+  };
+  for (const auto& [node, edges] : graph)
+    if (state[node] == 0 && visit(visit, node)) return cycle;
+  return "";
+}
+
+TEST(Layering, TheCycleSearchFindsACycleAndPassesAnOrder) {
+  EXPECT_EQ(findCycle({{"a", {"b"}}, {"b", {"c"}}, {"c", {}}}), "");
+  EXPECT_EQ(findCycle({{"a", {"b"}}, {"b", {"c"}}, {"c", {"a"}}}), "a -> b -> c -> a");
+  EXPECT_EQ(findCycle({{"a", {"b", "c"}}, {"b", {"c"}}, {"c", {"b"}}}), "b -> c -> b");
+}
+
+TEST(Layering, MappingFoldersIncludeEachOtherInOneDirection) {
+  const FolderGraph graph = mappingFolderGraph();
+  ASSERT_GE(graph.size(), 8u) << "mapping/ not found under " << VDMAP_SOURCE_DIR;
+  EXPECT_EQ(findCycle(graph), "") << "mapping/'s folders include each other in a cycle";
+}
+
+// Files under `dir` that include a header whose path starts with one of `banned`.
+std::vector<std::string> bannedIncludes(const std::string& dir, const std::vector<std::string>& banned) {
+  std::vector<std::string> out;
+  for (const Include& inc : includesUnder(fs::path(VDMAP_SOURCE_DIR) / dir))
+    for (const std::string& prefix : banned)
+      if (inc.target.rfind(prefix, 0) == 0) out.push_back(inc.file.string() + ": " + inc.target);
+  return out;
+}
+
+TEST(Layering, TheMappingLibraryIncludesNoGlWindowOrLayerAbove) {
+  EXPECT_EQ(bannedIncludes("mapping", {"GL/", "GLFW/", "glm/", "imgui", "render/", "app/"}), std::vector<std::string>{});
+}
+
+TEST(Layering, TheRendererIncludesNoWindowToolkitOrApp) {
+  EXPECT_EQ(bannedIncludes("render", {"GLFW/", "imgui", "app/"}), std::vector<std::string>{});
+}
+
+}  // namespace
