@@ -32,7 +32,7 @@ struct MapArgs {
   std::string save;
   std::string load;
   bool json = false;
-  MappingParams params;  // every parameter of the table (app/parameter_table.h)
+  ParameterValues params;  // every parameter of the table (app/parameter_table.h)
   double octomap_resolution_m = 0.0;
   bool octomap_given = false;
 };

@@ -14,8 +14,8 @@ using K = Parameter::Kind;
 
 // Accessors: one captureless lambda pair per parameter.
 #define ACCESS(member)                                                            \
-  .get = [](const MappingParams& p) { return static_cast<double>(p.member); },   \
-  .set = [](MappingParams& p, double v) { p.member = static_cast<decltype(p.member)>(v); }
+  .get = [](const ParameterValues& p) { return static_cast<double>(p.member); },   \
+  .set = [](ParameterValues& p, double v) { p.member = static_cast<decltype(p.member)>(v); }
 
 const Parameter kTable[] = {
     // Live: the global map (SPEC sections 4 and 6).
@@ -24,8 +24,8 @@ const Parameter kTable[] = {
              "model of Nguyen et al. 2012; belter2018, the authors' feature-point model. The filter compares "
              "every ellipsoid with it.",
      .kind = K::kChoice, .live = true, .lo = 0, .hi = 1, .slider_lo = 0, .slider_hi = 1,
-     .get = [](const MappingParams& p) { return static_cast<double>(p.global.filter.model); },
-     .set = [](MappingParams& p, double v) { p.global.filter.model = static_cast<SensorModel>(static_cast<int>(v)); },
+     .get = [](const ParameterValues& p) { return static_cast<double>(p.global.filter.model); },
+     .set = [](ParameterValues& p, double v) { p.global.filter.model = static_cast<SensorModel>(static_cast<int>(v)); },
      .choices = kSensorModels},
     {.key = "filter_sigma_factor", .flag = "--filter-sigma-factor", .label = "filter sigma factor k", .unit = "",
      .help = "k (SPEC 4): an ellipsoid is kept when its largest standard deviation is at most k times the one the "
@@ -114,7 +114,7 @@ std::string number(double v) {
 
 }  // namespace
 
-bool MappingParams::operator==(const MappingParams& other) const {
+bool ParameterValues::operator==(const ParameterValues& other) const {
   for (const Parameter& p : parameterTable())
     if (p.get(*this) != p.get(other)) return false;
   return true;
@@ -194,19 +194,19 @@ void checkValue(const Parameter& p, double value) {
     throw std::invalid_argument(std::string(p.key) + " must be " + validityText(p) + ", got " + formatValue(p, value));
 }
 
-void setFromText(const Parameter& p, MappingParams& params, std::string_view text) {
+void setFromText(const Parameter& p, ParameterValues& params, std::string_view text) {
   const double v = parseValue(p, text);
   checkValue(p, v);
   p.set(params, v);
 }
 
-void validate(const MappingParams& params) {
+void validate(const ParameterValues& params) {
   params.mapper.validate();
   params.global.validate();
 }
 
-void addParameterOptions(CLI::App& verb, MappingParams& params) {
-  const MappingParams defaults = params;
+void addParameterOptions(CLI::App& verb, ParameterValues& params) {
+  const ParameterValues defaults = params;
   for (const Parameter& p : kTable) {
     if (p.flag.empty()) continue;
     const std::string flag(p.flag);

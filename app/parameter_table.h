@@ -18,10 +18,10 @@ namespace vdmap::app {
 
 /// Every parameter of the table: the re-run ones shape the keyframes and local maps, the live
 /// ones only the global map built from them.
-struct MappingParams {
+struct ParameterValues {
   MapperParams mapper;
   GlobalMapParams global;
-  bool operator==(const MappingParams& other) const;
+  bool operator==(const ParameterValues& other) const;
 };
 
 struct Parameter {
@@ -36,8 +36,8 @@ struct Parameter {
   double lo = 0, hi = 0;   ///< valid range (+-inf: unbounded)
   bool lo_open = false, hi_open = false;
   double slider_lo = 0, slider_hi = 0;  ///< the slider's span (within the valid range; typing reaches the rest)
-  double (*get)(const MappingParams&) = nullptr;
-  void (*set)(MappingParams&, double) = nullptr;
+  double (*get)(const ParameterValues&) = nullptr;
+  void (*set)(ParameterValues&, double) = nullptr;
   /// kChoice: the names of values 0, 1, ...
   std::span<const char* const> choices = {};
 };
@@ -58,13 +58,13 @@ double parseValue(const Parameter& p, std::string_view text);
 /// (or not an integer for an integer parameter).
 void checkValue(const Parameter& p, double value);
 /// parseValue, checkValue and set in one step (the path of --set, settings.json and the CLI).
-void setFromText(const Parameter& p, MappingParams& params, std::string_view text);
+void setFromText(const Parameter& p, ParameterValues& params, std::string_view text);
 /// Both structs' validate() (cross-parameter rules, such as min depth < max depth).
-void validate(const MappingParams& params);
+void validate(const ParameterValues& params);
 
 /// Registers every parameter that has a flag as an option of `verb` writing into `params`
 /// (which must outlive the parse): a value is parsed and range-checked as everywhere else and a
 /// bad one fails the parse with "--FLAG: KEY must be ...".
-void addParameterOptions(CLI::App& verb, MappingParams& params);
+void addParameterOptions(CLI::App& verb, ParameterValues& params);
 
 }  // namespace vdmap::app

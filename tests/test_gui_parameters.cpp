@@ -22,10 +22,10 @@ using gui::Settings;
 std::string text(const Parameter& p, double v) { return formatValue(p, v); }
 
 // The value `p` has in `settings`.
-double valueIn(const Parameter& p, const Settings& s) { return p.get(MappingParams{s.mapper, s.thresholds}); }
+double valueIn(const Parameter& p, const Settings& s) { return p.get(ParameterValues{s.mapper, s.thresholds}); }
 
 bool acceptedByValidate(const Parameter& p, double v) {
-  MappingParams params;
+  ParameterValues params;
   p.set(params, v);
   try {
     validate(params);
@@ -39,7 +39,7 @@ bool acceptedByValidate(const Parameter& p, double v) {
 // work; returns whether the value was taken (and checks it landed in the parameters).
 bool acceptedByCli(const Parameter& p, const std::string& value) {
   CLI::App app;
-  MappingParams params;
+  ParameterValues params;
   addParameterOptions(app, params);
   try {
     std::vector<std::string> args = {value, std::string(p.flag)};  // CLI11 takes them reversed
@@ -95,7 +95,7 @@ TEST(ParameterTable, EveryValueIsAcceptedOrRefusedAlikeByCliSettingsSetAndSlider
   test::TempDir dir;
   for (const Parameter& p : parameterTable()) {
     SCOPED_TRACE(std::string(p.key));
-    std::vector<double> probes = {p.slider_lo, p.slider_hi, p.get(MappingParams{})};
+    std::vector<double> probes = {p.slider_lo, p.slider_hi, p.get(ParameterValues{})};
     const double step = p.kind == Parameter::Kind::kInt ? 1.0 : 1e-3;
     for (double bound : {p.lo, p.hi})
       if (std::isfinite(bound)) probes.insert(probes.end(), {bound, bound - step, bound + step});
@@ -132,7 +132,7 @@ TEST(ParameterTable, BoundsAreThoseOfValidateAndSlidersLieWithinThem) {
     EXPECT_GE(p.hi, p.slider_hi);
     EXPECT_TRUE(acceptedByValidate(p, p.slider_lo));
     EXPECT_TRUE(acceptedByValidate(p, p.slider_hi));
-    EXPECT_NO_THROW(checkValue(p, p.get(MappingParams{}))) << "the default is valid";
+    EXPECT_NO_THROW(checkValue(p, p.get(ParameterValues{}))) << "the default is valid";
     if (p.kind == Parameter::Kind::kBool || p.kind == Parameter::Kind::kChoice) continue;
     // Just outside a finite bound validate() refuses; at a closed bound it accepts.
     const double step = p.kind == Parameter::Kind::kInt ? 1.0 : 1e-9;
@@ -173,7 +173,7 @@ TEST(ParameterTable, BadTextGivesAClearMessage) {
 
 TEST(ParameterTable, CliFlagsOfBooleansFlipTheDefault) {
   CLI::App app;
-  MappingParams params;
+  ParameterValues params;
   addParameterOptions(app, params);
   std::vector<std::string> args = {"0.3", "--merge-distance", "--no-occlusion-removal", "--no-prefilter"};
   app.parse(args);

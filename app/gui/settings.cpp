@@ -19,10 +19,10 @@ namespace {
 
 // The settings file's sections whose keys --set takes.
 constexpr const char* kSetSections[] = {"thresholds", "rerun", "view"};
-using app::MappingParams;
+using app::ParameterValues;
 using app::Parameter;
 
-MappingParams paramsOf(const Settings& s) { return {s.mapper, s.thresholds}; }
+ParameterValues paramsOf(const Settings& s) { return {s.mapper, s.thresholds}; }
 
 const char* sectionOf(const Parameter& p) { return p.live ? "thresholds" : "rerun"; }
 
@@ -50,7 +50,7 @@ std::string valueText(const Parameter& p, const json& v) {
 }
 
 json toJson(const Settings& s) {
-  const MappingParams params = paramsOf(s);
+  const ParameterValues params = paramsOf(s);
   json j = {
       {"thresholds", json::object()},
       {"rerun", json::object()},
@@ -91,7 +91,7 @@ Settings fromJson(const json& j) {
   if (!j.is_object()) throw std::invalid_argument("expected a JSON object");
   // The mapping parameters, each read and checked by the parameter table (as --set and the
   // command line do); keys the table does not know are left alone.
-  MappingParams params = paramsOf(s);
+  ParameterValues params = paramsOf(s);
   for (const Parameter& p : parameterTable()) {
     const char* section = sectionOf(p);
     if (!j.contains(section) || !j.at(section).contains(p.key)) continue;
@@ -207,7 +207,7 @@ void applySetting(Settings& settings, const std::string& key_value) {
   const std::string key = key_value.substr(0, eq), value = key_value.substr(eq + 1);
   try {
     if (const Parameter* p = findParameter(key)) {  // a mapping parameter: the table's check
-      MappingParams params = paramsOf(settings);
+      ParameterValues params = paramsOf(settings);
       setFromText(*p, params, value);
       validate(params);
       settings.mapper = params.mapper;

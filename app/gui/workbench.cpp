@@ -163,7 +163,7 @@ bool Workbench::openSession(const std::string& file) {
   try {
     Session saved = loadSession(path);
     // The session's own parameters, shown and used; the user's settings stay as they are.
-    const MappingParams params{saved.info.mapper, saved.info.global};
+    const ParameterValues params{saved.info.mapper, saved.info.global};
     std::optional<TumSequence> rest = framesAfter(saved, &why);
     worker_ = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
     ui_.params = params;
@@ -243,7 +243,7 @@ void Workbench::rerun() {
 }
 
 bool Workbench::editParameter(const Parameter& p, double value) {
-  MappingParams edited = ui_.params;
+  ParameterValues edited = ui_.params;
   try {
     checkValue(p, value);
     p.set(edited, value);
@@ -259,7 +259,7 @@ bool Workbench::editParameter(const Parameter& p, double value) {
 
 double Workbench::inUse(const Parameter& p) const {
   if (!worker_) return p.get(ui_.params);
-  MappingParams used = ui_.params;
+  ParameterValues used = ui_.params;
   if (p.live) {
     const auto global = worker_->global();
     if (!global) return p.get(ui_.params);
@@ -277,8 +277,8 @@ void Workbench::resetToDefaults() {
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
-  const bool rerun_needed = worker_ && !savedSession() && !(MappingParams{worker_->mapping()->mapper, {}} ==
-                                                              MappingParams{defaults.mapper, {}});
+  const bool rerun_needed = worker_ && !savedSession() && !(ParameterValues{worker_->mapping()->mapper, {}} ==
+                                                              ParameterValues{defaults.mapper, {}});
   ui_.settings = defaults;
   ui_.params.global = defaults.thresholds;
   if (!savedSession()) {  // a saved session keeps the parameters it was mapped with

@@ -30,7 +30,7 @@ struct UiState {
   Settings settings;
   /// The mapping parameters the sliders show: the open session's, as edited. A live one is sent
   /// at once (editParameter); a re-run one waits for rerun().
-  MappingParams params;
+  ParameterValues params;
   render::OrbitCamera camera;
   /// The view frames the map whenever it grows, until the user orbits, pans or zooms;
   /// F (frame) and R (reset) turn it back on.
