@@ -1,5 +1,5 @@
 // vdmap eval --map DIR_or_PLY --mesh PLY: reconstruction accuracy against a reference mesh
-// (SPEC section 8). The map is any PLY with vertex positions: vdmap's ellipsoid or point
+// (docs/method.md 12). The map is any PLY with vertex positions: vdmap's ellipsoid or point
 // exports, OctoMap voxel centres, the NDT-OM baseline's cell means, a TSDF's point cloud.
 // vdmap eval --trajectory EST --groundtruth GT: trajectory error as the TUM benchmark's tools
 // (mapping/eval/trajectory_error.h).
@@ -65,7 +65,7 @@ void runEval(const EvalArgs& args) {
 
 void addEvalCommand(CLI::App& app) {
   auto* verb = app.add_subcommand(
-      "eval", "Reconstruction accuracy against a reference mesh (SPEC section 8), or trajectory error against "
+      "eval", "Reconstruction accuracy against a reference mesh (docs/method.md 12), or trajectory error against "
               "ground truth (ATE after rigid alignment, RPE; TUM benchmark definitions)");
   auto args = std::make_shared<EvalArgs>();
   auto* map = verb->add_option("--map", args->map,

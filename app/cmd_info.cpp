@@ -12,7 +12,7 @@
 namespace vdmap::app {
 namespace {
 
-// Raw depth codes that are not measurements: 0 (no return, SPEC 1) and 65535, the largest
+// Raw depth codes that are not measurements: 0 (no return, docs/method.md 1) and 65535, the largest
 // 16-bit value, which 7-Scenes writes for invalid pixels (65.535 m at its scale of 1000) and
 // other sensors for saturation; no real reading lands exactly on it.
 constexpr std::uint16_t kNoDepth = 0, kInvalidDepthCode = 65535;

@@ -1,5 +1,5 @@
 #pragma once
-// The accuracy figures of SPEC section 8 as JSON and as a text line, shared by eval and bench.
+// The accuracy figures of docs/method.md 12 as JSON and as a text line, shared by eval and bench.
 #include <cstdio>
 #include <string>
 

@@ -7,7 +7,7 @@
 
 int main(int argc, char** argv) {
   using namespace vdmap::app;
-  // An interrupted export or save removes its temporary files and folders (issue #17).
+  // An interrupted export or save removes its temporary files and folders.
   vdmap::installTemporaryPathCleanup();
   CLI::App app{"vdmap: keyframe-based dense mapping with view-dependent local maps (RGB-D)\n"
                "With no verb, opens the workbench on the built-in scene."};

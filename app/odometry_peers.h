@@ -1,5 +1,5 @@
 #pragma once
-// The odometry peers of `vdmap bench --poses track` (issue 15): OpenCV's cv::rgbd::RgbdOdometry
+// The odometry peers of `vdmap bench --poses track`: OpenCV's cv::rgbd::RgbdOdometry
 // (photometric + depth) and cv::rgbd::ICPOdometry (point-to-plane ICP) from opencv_contrib, each
 // frame to frame and against the last keyframe, and Open3D's hybrid RGB-D odometry frame to frame
 // through the optional plugin (peers/odometry_peer_abi.h). They run on the bench's decoded frames,

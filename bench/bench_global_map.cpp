@@ -119,7 +119,7 @@ int main(int argc, char** argv) {
   }
   std::printf(" (cold, warm per thread count)\n");
   if (only_threads > 0) return same ? 0 : 1;
-  // What fusion across groups (SPEC 6.5) costs and saves: the same build without it.
+  // What fusion across groups (docs/method.md 7) costs and saves: the same build without it.
   params.threads = 1;
   params.fuse_across_groups = false;
   std::vector<double> cpu_apart;

@@ -186,7 +186,7 @@ BENCHMARK(BM_IndexQueryDense)
     ->ArgNames({"keyframes"})->Arg(10)->Arg(100)->Arg(1000)
     ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
 
-// The edges of a new keyframe (SPEC section 5): the other search that visits every keyframe.
+// The edges of a new keyframe (docs/method.md 5): the other search that visits every keyframe.
 void BM_NewKeyframeEdgesDense(benchmark::State& state) {
   const Recording& rec = *g_recording;
   const SearchSetup s = searchSetup(state, rec, true);

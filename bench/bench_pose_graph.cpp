@@ -1,4 +1,4 @@
-// Pose-graph optimisation speed (issue 15's target: ~100 ms for 1000 nodes / 3000 edges). Not a
+// Pose-graph optimisation speed (the target: ~100 ms for 1000 nodes / 3000 edges). Not a
 // test (ctest does not run it): build/bin/bench_pose_graph [--benchmark_repetitions=N ...].
 //
 // Two graphs of N nodes and 3N edges; odometry edges are biased (0.1 degrees of yaw per step) and

@@ -1,6 +1,6 @@
 #pragma once
 // The container view (paper Fig. 1): a keyframe's image in the middle of its 2W x 2H container
-// (SPEC section 2) with the keyframe's ellipsoids projected onto the image plane as filled 2-D
+// (docs/method.md 2) with the keyframe's ellipsoids projected onto the image plane as filled 2-D
 // ellipses, optionally with the cell grid.
 #include <memory>
 #include <optional>
@@ -34,7 +34,7 @@ std::optional<ProjectedEllipse> projectEllipsoid(const EllipsoidInstance& e, con
 struct ContainerStyle {
   float sigma = 2.f;        ///< ellipses drawn out to this Mahalanobis radius
   ColorMode color = ColorMode::kRgb;
-  int cell_size_px = 5;     ///< grid spacing (SPEC default s = 5)
+  int cell_size_px = 5;     ///< grid spacing (default s = 5 px)
   bool show_grid = false;
   bool operator==(const ContainerStyle&) const = default;
 };

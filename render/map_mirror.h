@@ -1,5 +1,6 @@
 #pragma once
-// The workbench's GPU mirror (STYLE 11): what the window shows of the model, in GPU buffers and
+// The workbench's GPU mirror (the third kind of state, beside the model and the UI state;
+// docs/dev/architecture.md): what the window shows of the model, in GPU buffers and
 // textures, re-uploaded only when the model's snapshot generations say it changed. The window
 // hands it the newest snapshots every UI frame; a generation it has already uploaded costs
 // nothing. It owns the renderers, the container view's framebuffer and the image textures;

@@ -14,7 +14,7 @@ namespace vdmap::render {
 
 /// Mapping ellipsoids as render instances (same frame; colour rounded and clamped to 0..255).
 std::vector<EllipsoidInstance> toInstances(std::span<const Ellipsoid> ellipsoids);
-/// Ellipsoids read from a map PLY (SPEC section 7) as render instances.
+/// Ellipsoids read from a map PLY (docs/method.md 11) as render instances.
 std::vector<EllipsoidInstance> toInstances(std::span<const EllipsoidRecord> records);
 /// A mesh read from a PLY as the mesh renderer's input.
 ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);

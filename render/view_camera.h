@@ -1,5 +1,5 @@
 #pragma once
-// Cameras for drawing. Every view uses the pinhole convention of SPEC section 1 (camera x right,
+// Cameras for drawing. Every view uses the pinhole convention of docs/method.md 1 (camera x right,
 // y down, z forward; pixel (u, v) with the origin at the centre of the top-left pixel), so "view
 // from keyframe K" with the keyframe's intrinsics reproduces its image pixel for pixel.
 #include <utility>

@@ -2,7 +2,7 @@
 # Reproduces the README "Results": the speed comparison on 7-Scenes (3 runs; the README quotes
 # the median of the runs' per-frame medians) and the accuracy comparison on a noisy render of
 # the Replica office0 mesh (the paper's Table III, extended with Open3D's TSDF), then the plots.
-# Then the odometry peers of `bench --poses track` (issue 15).
+# Then the odometry peers of `bench --poses track`.
 # Usage: scripts/results.sh [OUT_DIR]   (from the checkout, after building; ~60 min)
 set -euo pipefail
 VDMAP=${VDMAP:-build/bin/vdmap}
@@ -38,7 +38,7 @@ accuracy() {
 # `wait PID` passes the speed runs' failure on (a bare `wait` returns 0).
 if [ -n "${SEQUENTIAL:-}" ]; then speed; accuracy; else speed & speed_pid=$!; accuracy; wait "$speed_pid"; fi
 
-# Tracking peers (issue 15): the odometry peers of `bench --poses track` on 7-Scenes frames
+# Tracking peers: the odometry peers of `bench --poses track` on 7-Scenes frames
 # 0:500, 3 runs for the time medians (~7 CPU minutes each, most of it Open3D's odometry; OctoMap
 # is skipped, it is timed in the speed runs). Alone, so the times are not disturbed.
 for run in 1 2 3; do

@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""How much of a vdmap global map is repeated between merge groups (README "Results", issue #8).
+"""How much of a vdmap global map is repeated between merge groups (docs/results.md).
 
 Usage: scripts/voxel_overlap.py OUT/global_ellipsoids.ply [VOXEL_M ...]   (default 0.02 0.01)
 
@@ -18,7 +18,7 @@ data = open(path, 'rb').read()
 end = data.find(b'end_header\n') + len(b'end_header\n')
 header = data[:end].decode('ascii', 'replace')
 if end < len(b'end_header\n') or 'property int keyframe' not in header or 'format binary_little_endian' not in header:
-    sys.exit(f'{path}: not a vdmap ellipsoid PLY (SPEC 7)')
+    sys.exit(f'{path}: not a vdmap ellipsoid PLY (docs/method.md 11)')
 n = int(header.split('element vertex ')[1].split()[0])
 record = struct.Struct('<3f3B6fIi')  # x y z, rgb, 6 covariance entries, count, keyframe
 means = [(x, y, z, keyframe) for x, y, z, *_, keyframe in record.iter_unpack(data[end:end + n * record.size])]

@@ -1,4 +1,4 @@
-// The bad-input matrix (issue #9): every input vdmap reads, each way it can be bad, and the exact
+// The bad-input matrix: every input vdmap reads, each way it can be bad, and the exact
 // error class expected. One row is one test. Library readers must throw InputError with a one-line
 // message; the command line must exit 1 with a one-line "vdmap VERB: error: ..." (or CLI11's usage
 // error for unparsable options) and leave no output behind. The good input of every reader is
@@ -239,7 +239,7 @@ const std::vector<BadCase>& badCases() {
        image("seq/depth/000000.png", cv::Mat(24, 32, CV_16UC1, cv::Scalar(1000)))},
       {"sequence", "rgb_wrong_size", E::kInputError, "colour image is",
        image("seq/rgb/000000.png", cv::Mat(10, 10, CV_8UC3, cv::Scalar(1, 2, 3)))},
-      // Damaged images are one error naming the file (issue #17: a JPEG cut to 2/3 was mapped
+      // Damaged images are one error naming the file (a JPEG cut to 2/3 was once mapped
       // with libjpeg's grey fill and an anonymous warning; a cut PNG printed a libpng line).
       {"sequence", "rgb_jpeg_cut", E::kInputError,
        "rgb/000000.png: cannot decode colour image: Premature end of JPEG file",
@@ -409,7 +409,7 @@ const std::vector<BadCase>& badCases() {
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --max-difference 0")},
       {"command_line", "bench_unknown_pose_source", E::kCliUsage, "--poses", args("bench {dir}/seq --poses imu")},
       {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
-      // Issue #17's smaller items.
+      // Smaller items.
       {"command_line", "octomap_zero", E::kCliError, "--octomap must be > 0 m", args("map {dir}/seq --out {dir}/out --octomap 0")},
       {"command_line", "octomap_negative", E::kCliError, "--octomap must be > 0 m",
        args("map {dir}/seq --out {dir}/out --octomap -1")},
@@ -429,7 +429,7 @@ const std::vector<BadCase>& badCases() {
        args("render --map {dir}/seq --out {dir}/o.png")},
       {"command_line", "synth_frames_past_the_trajectory", E::kCliError, "ends past the trajectory: it has 3 poses (0:3)",
        args("synth --builtin --builtin-frames 3 --frames 0:5 --out {dir}/out")},
-      // Damaged images through the command line: the one line is vdmap's, no library's (issue #17).
+      // Damaged images through the command line: the one line is vdmap's, no library's.
       {"command_line", "map_rgb_jpeg_cut", E::kCliError, "rgb/000000.png: cannot decode colour image",
        then(cutImage("seq/rgb/000000.png", texture(), ".jpg", 2.0 / 3), "map {dir}/seq --out {dir}/out")},
       {"command_line", "map_depth_png_cut", E::kCliError, "depth/000001.png: cannot decode depth image",

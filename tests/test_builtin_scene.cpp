@@ -1,5 +1,5 @@
 // The built-in scene's walk: the default stays the one the golden images and tests were made
-// with, and further laps take new viewpoints (a long run for the loop-closure cost, issue #5).
+// with, and further laps take new viewpoints (a long run for the loop-closure cost).
 #include <cmath>
 
 #include <gtest/gtest.h>

@@ -58,7 +58,7 @@ TEST(Cli, InfoOnSevenScenes) {
   EXPECT_NE(r.out.find("colour     fx 525.000 fy 525.000 cx 320.000 cy 240.000, 25.6 mm"), std::string::npos) << r.out;
 }
 
-// Issue #17: render without --out is a command-line error with CLI11's code, as map's is.
+// render without --out is a command-line error with CLI11's code, as map's is.
 TEST(Cli, AMissingOutHasTheSameCodeInEveryVerb) {
   test::TempDir dir;
   test::writeTinySequence(dir / "seq", 2);
@@ -69,14 +69,14 @@ TEST(Cli, AMissingOutHasTheSameCodeInEveryVerb) {
   EXPECT_EQ(render.err, "vdmap render: error: --out is required (see --help)\n");
 }
 
-// Issue #17: the help says that the edge to the previous keyframe is always kept (SPEC 5).
+// The help says that the edge to the previous keyframe is always kept (docs/method.md 5).
 TEST(Cli, MapHelpSaysTheEdgeToThePreviousKeyframeIsKept) {
   const auto r = runVdmap("map --help");
   EXPECT_EQ(r.exit_code, 0);
   EXPECT_NE(r.out.find("the edge to the previous keyframe is always kept"), std::string::npos) << r.out;
 }
 
-// Issue #17: vdmap info reports the range of valid depth and the share of invalid pixels;
+// vdmap info reports the range of valid depth and the share of invalid pixels;
 // 65535 (7-Scenes' invalid code, 65.535 m there) is not a depth.
 TEST(Cli, InfoReportsValidDepthAndTheShareOfInvalidPixels) {
   test::TempDir dir;

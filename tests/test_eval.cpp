@@ -1,4 +1,4 @@
-// Accuracy against a reference mesh (SPEC section 8): the tree-accelerated distances equal the
+// Accuracy against a reference mesh (docs/method.md 12): the tree-accelerated distances equal the
 // brute-force ones, and known offsets give known errors.
 #include <fstream>
 #include <random>

@@ -1,4 +1,4 @@
-// Map exports (SPEC section 7) through exportMap: every file written into one folder, each PLY
+// Map exports (docs/method.md 11) through exportMap: every file written into one folder, each PLY
 // reads back to the values written, and a folder that cannot be written fails cleanly.
 #include <signal.h>
 #include <sys/wait.h>
@@ -120,7 +120,7 @@ TEST(Export, GaussianScaleAndRotationReproduceTheCovariance) {
   const PlyVertexTable t = readPlyVertices(tmp / "g.ply");
   ASSERT_EQ(t.count, ellipsoids.size());
   // The reference 3DGS loader's full property list, in its order: it asserts 45 f_rest at its
-  // default degree 3 (issue #17: it refused the file with none).
+  // default degree 3 (it refused a file with none).
   std::vector<std::string> names = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"};
   for (int k = 0; k < 45; ++k) names.push_back("f_rest_" + std::to_string(k));
   for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"}) names.push_back(n);
@@ -223,8 +223,8 @@ TEST(Export, AFolderThatCannotBeWrittenFailsClearlyAndWritesNothing) {
   EXPECT_EQ(test::readFile(tmp / "out" / "graph.txt"), "old\n");
 }
 
-// A flat cell whose smallest eigenvalue float accumulation left at -3e-12 m^2 (issue #17 found
-// 132 of 88,940 so in a real map) is stored positive semi-definite, changed by no more than its
+// A flat cell whose smallest eigenvalue float accumulation left at -3e-12 m^2 (132 of 88,940
+// were so in a real map) is stored positive semi-definite, changed by no more than its
 // clamp; a well-conditioned one is only rounded.
 TEST(Export, StoredCovariancesArePositiveSemiDefinite) {
   const Eigen::Matrix3d R = Eigen::AngleAxisd(0.9, Eigen::Vector3d(3, -1, 2).normalized()).toRotationMatrix();
@@ -339,7 +339,7 @@ TEST(Export, OctomapFileHasLiboctomapsBytes) {
   EXPECT_EQ(test::readFile(tmp / "a.bt"), reference.str());
 }
 
-// The figures vdmap writes carry no float noise (issue #17) even where nlohmann::json's Grisu2
+// The figures vdmap writes carry no float noise even where nlohmann::json's Grisu2
 // writes a longer text than needed: each number is the shortest that reads back the same double
 // (the reference: the decimal text it was parsed from, trailing zeros dropped); strings, integers
 // and whole doubles keep their form.

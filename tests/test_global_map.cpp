@@ -1,4 +1,4 @@
-// The global map (SPEC section 6): grouping, mean-shift merging, moment matching, occlusion
+// The global map (docs/method.md 6): grouping, mean-shift merging, moment matching, occlusion
 // removal, determinism across thread counts, parameter checks.
 #include <map>
 #include <numeric>
@@ -153,7 +153,7 @@ TEST(GlobalMap, OcclusionRemovalKeepsTheCloseViewAndDropsCoarseEllipsoidsInFront
   EXPECT_GT(count(on, 1), count(off, 1) * 95 / 100) << "the precise view stays";
 }
 
-// The obviously-correct occlusion removal (SPEC 6 step 3), the oracle of occludingEllipsoids:
+// The obviously-correct occlusion removal (docs/method.md 6.3), the oracle of occludingEllipsoids:
 // for every viewpoint K, every pair of its group's ellipsoids in one of K's cells, with no
 // sorting and no skipping. The numerics are the fast path's (same regularised covariance, same
 // expressions), so the two agree exactly.
@@ -258,7 +258,7 @@ TEST(GlobalMap, SameResultWithOneAndTwoThreads) {
   expectSameMap(a, buildGlobalMap(graph, params));
 }
 
-// Fusion across groups (SPEC 6.5) written out plainly, the oracle of fuseAcrossGroups: every pair
+// Fusion across groups (docs/method.md 7) written out plainly, the oracle of fuseAcrossGroups: every pair
 // of ellipsoids of different groups, no spatial hash, no pre-filter, the same greedy choice.
 std::vector<Ellipsoid> fuseAcrossGroupsReference(const std::vector<Ellipsoid>& e, const std::vector<int>& group,
                                                  const GlobalMapParams& params) {
@@ -460,7 +460,7 @@ TEST(GlobalMap, EmptyGraphAndBadParameters) {
 }
 
 // 7-Scenes RedKitchen, every 2nd of the first 120 frames (a few keyframes; the test stays short).
-// The paper's Sigma_e'/Sigma_e on its three sequences is 0.23-0.47 (SPEC 10) and the whole 500
+// The paper's Sigma_e'/Sigma_e on its three sequences is 0.23-0.47 (docs/results.md) and the whole 500
 // frames here give 0.22: a few keyframes overlap less, so less is merged and occluded; the
 // band 0.15-0.8 catches both failure modes (nothing merged/occluded, or most of the map gone).
 TEST(GlobalMapRealData, KitchenRatioInRangeAndSameWithOneAndTwoThreads) {

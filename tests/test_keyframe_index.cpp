@@ -84,7 +84,7 @@ Walk renderWalk(int laps, int stride) {
 
 // The walk's keyframe decisions as the exhaustive search makes them; at every frame that
 // searches, the same search over the index's candidates must decide alike, and every new
-// keyframe's edges must be the same. Issue 16: the goal is no difference at all.
+// keyframe's edges must be the same: the goal is no difference at all.
 TEST(KeyframeIndex, CandidatesDecideAsTheExhaustiveSearchOnTheEightLapWalk) {
   // Every 6th frame of the 2400 keeps the test short; bench_keyframe checks all frames.
   constexpr int kStride = 6;

@@ -1,4 +1,4 @@
-// Covisibility (SPEC section 5) and the per-frame keyframe decision, on an analytic textured
+// Covisibility (docs/method.md 5) and the per-frame keyframe decision, on an analytic textured
 // room whose frames are ray-cast exactly, so poses and depths are known.
 #include <random>
 

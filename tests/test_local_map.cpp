@@ -257,7 +257,7 @@ TEST(LocalMap, FilterRemovesDiscontinuityEllipsoidsAndIsAView) {
 }
 
 // keepCell decides most cells from cheap bounds on the eigenvalues; it must decide every cell as
-// SPEC 4 written out with the eigenvalues does, most of all those near the threshold.
+// docs/method.md 4 written out with the eigenvalues does, most of all those near the threshold.
 TEST(LocalMap, FilterBoundsDecideAsTheEigenvalues) {
   const PinholeCamera cam = sceneCamera();
   const KeyframeContainer container(cam, 5);

@@ -122,7 +122,7 @@ TEST(BenchCli, LongRunWithTrackedPosesReportsTheTracking) {
   EXPECT_LT(j.value("ate_rmse_m", 1.0), 0.01);  // the same walk as the map verb's tracking test
 }
 
-// Every number in a JSON text has at most `digits` significant digits (issue #17: figures such as
+// Every number in a JSON text has at most `digits` significant digits (figures such as
 // 0.37278400000000003 are noise, not precision).
 void expectTidyNumbers(const std::string& json, int digits) {
   static const std::regex number(R"((-?)(\d+)\.(\d+)(?:[eE][-+]?\d+)?)");
@@ -133,7 +133,7 @@ void expectTidyNumbers(const std::string& json, int digits) {
   }
 }
 
-// Issue #17's small map items: counts in the singular, no bare " done." from liboctomap on stderr,
+// Small things of a map run: counts in the singular, no bare " done." from liboctomap on stderr,
 // figures without float noise, the effective frame range in stats.json.
 TEST(MapCli, OneFrameOneKeyframeAndAQuietOctomapExport) {
   TempDir tmp;

@@ -1,4 +1,4 @@
-// The per-frame mapping path (SPEC section 5): keyframe decisions on a path that returns to its
+// The per-frame mapping path (docs/method.md 5): keyframe decisions on a path that returns to its
 // start, pose correction, corrected trajectories, determinism, and the 7-Scenes run.
 #include <cmath>
 
@@ -120,7 +120,7 @@ TEST(Mapper, RefusesParametersOutOfRange) {
   EXPECT_NO_THROW(Mapper(camera, MapperParams{}));
 }
 
-// Issue #5 bad input: a textureless stretch (ORB finds nothing) cannot be judged by
+// Bad input: a textureless stretch (ORB finds nothing) cannot be judged by
 // covisibility; while the pose pre-filter accepts the current keyframe the frames update it,
 // so a blank wall never spawns a keyframe per frame, and its depth still reaches the map.
 TEST(Mapper, TexturelessFramesUpdateTheCurrentKeyframe) {
@@ -207,7 +207,7 @@ TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
     return mapper;
   };
   const Mapper a = run(false);
-  // 500 frames (16.6 s) of a hand-held Kinect sweeping a kitchen. SPEC: re-observation falls to
+  // 500 frames (16.6 s) of a hand-held Kinect sweeping a kitchen. ORB re-observation falls to
   // ~0.3 after 10 frames and ~0.2 after 15, so with tau = 0.25 a keyframe lasts roughly 10-15
   // frames of steady motion: 500 / 15 = 33 to 500 / 10 = 50 keyframes; revisits of earlier
   // keyframes when the camera slows or turns back lower that, and fast turns raise it. Hence
@@ -229,7 +229,7 @@ TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
   for (std::size_t i = 0; i < ea.size(); ++i) EXPECT_EQ(ea[i].weight, eb[i].weight);
   std::printf("7-Scenes 500 frames: %d keyframes, %d revisits, %zu edges\n", keyframes, a.revisits(), ea.size());
 
-  // Issue 16 asks for at most 0.5 MB per keyframe beyond its local map's ellipsoids; the raw
+  // The budget is at most 0.5 MB per keyframe beyond its local map's ellipsoids; the raw
   // images alone were 1.5 MB, re-compressed as PNG 0.495 MB (the colour image is a JPEG, so
   // lossless PNG kept its noise). Holding the source files' bytes: measured images 0.13 MB,
   // features 0.078, slot grid 0.188, so ~0.39 MB. The colour registered to the depth is

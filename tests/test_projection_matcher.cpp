@@ -135,7 +135,7 @@ TEST_F(ProjectionMatcher, CovisibilityStaysCloseToTheBruteForceOracle) {
 
 // Real Kinect frames: the decision of every frame of 7-Scenes 0:200 with the projection delta
 // and with the brute-force oracle, both from the oracle's state (its keyframes so far), so one
-// disagreement does not carry over to the frames after it. Issue 16: >= 95 % agreement.
+// disagreement does not carry over to the frames after it. The target: >= 95 % agreement.
 TEST(ProjectionMatcherRealData, KeyframeDecisionsAgreeWithTheOracleOn7Scenes) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
   SequenceOptions options;

@@ -17,7 +17,7 @@ using test::runVdmap;
 using test::TempDir;
 using test::writeText;
 
-// Two ellipsoids in the SPEC section 7 binary layout.
+// Two ellipsoids in the docs/method.md 11 binary layout.
 void writeEllipsoidPly(const std::filesystem::path& file) {
   std::ofstream out(file, std::ios::binary);
   out << "ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
@@ -194,7 +194,7 @@ TEST_F(RenderSequenceCli, AnUnknownKeyframeNamesTheValidRange) {
   EXPECT_FALSE(std::filesystem::exists(out("none.png")));
 }
 
-// Issue #17: render draws a saved session (every view, from its keyframes and graph) without
+// render draws a saved session (every view, from its keyframes and graph) without
 // mapping again, pixel for pixel what mapping the sequence draws, and a `vdmap map` folder.
 TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
   const auto saved = runVdmap("map " + seq() + " --out '" + out("map") + "' --save '" + out("s.vdmap") + "'");

@@ -1,4 +1,4 @@
-// Tracking (SPEC section 11): the dense refinement against a keyframe's local map, frame-to-
+// Tracking (docs/method.md 8): the dense refinement against a keyframe's local map, frame-to-
 // keyframe tracking with loop closure on scenes whose true poses are known, lost frames.
 #include <gtest/gtest.h>
 

@@ -79,7 +79,7 @@ TEST(TumSequence, FrameRangeSelectsDepthListIndices) {
   EXPECT_THROW(TumSequence::open(dir.path(), options), InputError);
 }
 
-// One meaning of --frames everywhere (issue #17): a plain N is the first N frames, 0:N (it was
+// One meaning of --frames everywhere: a plain N is the first N frames, 0:N (it was
 // frame N alone in info/map/render/gui and 0:N in bench); frame K alone is K:K+1.
 TEST(TumSequence, APlainFrameCountMeansTheFirstFrames) {
   EXPECT_EQ(parseFrameRange("4").first, 0);
@@ -230,7 +230,7 @@ TEST(ImageDecode, GivesOpenCvsPixels) {
   EXPECT_THROW(readDepthImage(dir / "depth.png", {52, 37}), InputError);
 }
 
-// A keyframe holds the files a frame was read from (issue 16: 7-Scenes' JPEG and PNG are ~0.13 MB
+// A keyframe holds the files a frame was read from (7-Scenes' JPEG and PNG are ~0.13 MB
 // where re-compressing the pixels as PNG took ~0.5 MB) and gets back exactly the frame's pixels;
 // pixels that came from no file are PNG-compressed, losslessly too.
 TEST(CompressedImage, HoldsTheSourceFilesAndDecodesThemToTheFramesPixels) {

@@ -1,8 +1,8 @@
 #pragma once
 // BASELINE, not part of vdmap's method: an NDT-OM-style map (Saarinen et al. 2013) for the
-// comparisons of SPEC section 8 and the paper's Table I. A sparse 3-D grid of NDT cells at one
-// fixed resolution in the world frame, each updated with vdmap's own cell statistics (SPEC
-// section 2, cell_stats.h), so the comparison is of the map layout, not of the arithmetic.
+// comparisons of docs/method.md 12 and the paper's Table I. A sparse 3-D grid of NDT cells at one
+// fixed resolution in the world frame, each updated with vdmap's own cell statistics
+// (docs/method.md 2, cell_stats.h), so the comparison is of the map layout, not of the arithmetic.
 // Only the NDT statistics are kept: no occupancy and no ray casting of free space, so this is
 // a lower bound on NDT-OM's update time and the timing comparison favours the baseline.
 #include <array>
@@ -33,7 +33,7 @@ class NdtOmBaseline {
 
   /// Adds every pixel of `frame` with depth in range, back-projected with `camera` and moved
   /// to the world frame by frame.T_W_C. Points are grouped by cell and each group merges into
-  /// its cell as one batch, exactly as the local map does (SPEC section 2 step 4).
+  /// its cell as one batch, exactly as the local map does (docs/method.md 2, step 4).
   void integrateFrame(const RgbdFrame& frame, const PinholeCamera& camera);
   /// The same for points already in the world frame (metres) with colours (0..255).
   void integratePoints(const std::vector<Eigen::Vector3f>& points_W,

@@ -25,7 +25,7 @@ struct PinholeCamera {
   Eigen::Vector3d backProject(double u, double v, double depth_m) const {
     return {(u - cx) * depth_m / fx, (v - cy) * depth_m / fy, depth_m};
   }
-  /// d backProject / d(u, v, d) (SPEC section 3).
+  /// d backProject / d(u, v, d) (docs/method.md 3).
   Eigen::Matrix3d backProjectJacobian(double u, double v, double depth_m) const;
   /// True when (u, v) rounds to a pixel inside the image grown by margin_px on every side.
   bool inImage(double u, double v, double margin_px = 0.0) const {

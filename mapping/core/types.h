@@ -10,7 +10,7 @@ namespace vdmap {
 /// A rigid transform in SE(3), double precision.
 using Transform = Eigen::Isometry3d;
 
-/// Valid depth interval in metres (SPEC section 1: [0.1, 8.0] by default).
+/// Valid depth interval in metres (docs/method.md 1: [0.1, 8.0] by default).
 struct DepthRange {
   double min_m = 0.1;
   double max_m = 8.0;

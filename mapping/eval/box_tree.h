@@ -1,6 +1,6 @@
 #pragma once
 // A bounding-volume hierarchy over axis-aligned boxes for exact nearest-item queries
-// (SPEC section 8). Nodes split at the median of their longest axis; a query descends the
+// (docs/method.md 12). Nodes split at the median of their longest axis; a query descends the
 // nearer child first and prunes every node whose box is farther than the best item so far.
 // Exact whenever an item's distance is at least the distance to its box (triangles, points),
 // and logarithmic even for queries far from everything, where a uniform grid has to sweep

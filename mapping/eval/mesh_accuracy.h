@@ -1,5 +1,5 @@
 #pragma once
-// Reconstruction accuracy against a reference mesh (SPEC section 8, paper Table III): exact
+// Reconstruction accuracy against a reference mesh (docs/method.md 12, paper Table III): exact
 // point-to-triangle distances of the map's element centres, and completion of the mesh surface.
 #include <cstdint>
 #include <vector>
@@ -31,13 +31,13 @@ std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, 
                                                std::uint32_t seed);
 
 struct AccuracyParams {
-  std::size_t completion_samples = 200000;  ///< mesh samples for completion (SPEC section 8)
+  std::size_t completion_samples = 200000;  ///< mesh samples for completion (docs/method.md 12)
   static constexpr std::size_t kMaxCompletionSamples = 100'000'000;  ///< what --samples accepts
   std::uint32_t seed = 8;                   ///< fixed, so the same map always scores the same
   double completion_within_m = 0.05;        ///< "complete" when a map element is this close
 };
 
-/// SPEC section 8 figures. Distances in millimetres.
+/// docs/method.md 12 figures. Distances in millimetres.
 struct AccuracyReport {
   std::size_t elements = 0;   ///< map elements evaluated
   double rmse_mm = 0.0;       ///< of element-centre to mesh distances

@@ -1,5 +1,5 @@
 #pragma once
-// Everything a mapping run exports (SPEC section 7), written into one folder: the same code for
+// Everything a mapping run exports (docs/method.md 11), written into one folder: the same code for
 // `vdmap map --out DIR` and the workbench's Export button.
 #include <filesystem>
 
@@ -26,13 +26,13 @@ struct MapExportOptions {
 };
 
 /// Writes into `dir` (created if missing):
-///   local_maps.ply        localEllipsoids(graph, map): the local maps, world frame (SPEC 7 ellipsoid PLY)
+///   local_maps.ply        localEllipsoids(graph, map): the local maps, world frame (docs/method.md 11 ellipsoid PLY)
 ///   keyframes.txt         keyframe poses T_W_K, TUM format, line i = keyframe i
 ///   trajectory.txt        only with options.trajectory: every mapped frame's T_W_C, TUM format
 ///   graph.txt             covisibility edges `a b weight`
 ///   global_points.ply     global-map ellipsoid means with colour
-///   global_ellipsoids.ply global-map ellipsoids (SPEC 7)
-///   global_gaussians.ply  global-map ellipsoids as 3-D Gaussian splats (SPEC 7)
+///   global_ellipsoids.ply global-map ellipsoids (docs/method.md 11)
+///   global_gaussians.ply  global-map ellipsoids as 3-D Gaussian splats (docs/method.md 11)
 ///   global.bt             only with options.octomap_resolution_m > 0 (octomap_export.h)
 ///   stats.json            options.run_stats + the global-map and export figures
 /// All files are first written into a staging folder inside `dir` (.vdmap-export-PID) and then

@@ -1,5 +1,5 @@
 #pragma once
-// OctoMap export of the global map (SPEC section 7), through liboctomap.
+// OctoMap export of the global map (docs/method.md 11), through liboctomap.
 #include <cstddef>
 #include <filesystem>
 #include <functional>
@@ -41,7 +41,7 @@ void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, con
 /// Builds an OctoMap (octomap::OcTree, default sensor model) of `resolution_m` from world-frame
 /// `ellipsoids`: their sample points are inserted as one scan per keyframe (Ellipsoid::keyframe)
 /// with that keyframe's centre as the sensor origin, so free space is carved along the rays
-/// (SPEC section 7). Writes the binary .bt atomically. Throws std::invalid_argument for a
+/// (docs/method.md 11). Writes the binary .bt atomically. Throws std::invalid_argument for a
 /// resolution checkOctomapResolution refuses, std::runtime_error naming `file` when it cannot
 /// be written.
 /// `progress`, when given, is called after each keyframe's scan with (done, total) scans.

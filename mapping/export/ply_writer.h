@@ -1,5 +1,5 @@
 #pragma once
-// Binary little-endian PLY exports (SPEC section 7).
+// Binary little-endian PLY exports (docs/method.md 11).
 
 #include <filesystem>
 #include <vector>
@@ -19,7 +19,7 @@ namespace vdmap {
 Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov);
 
 /// Writes ellipsoids as binary little-endian PLY: x y z float, red green blue uchar,
-/// cxx cxy cxz cyy cyz czz float (storedCovariance), count uint, keyframe int (SPEC section 7). Writes to a
+/// cxx cxy cxz cyy cyz czz float (storedCovariance), count uint, keyframe int (docs/method.md 11). Writes to a
 /// temporary name in the same folder and renames it, so an interrupted export leaves no
 /// half-written file. Throws std::runtime_error naming the file on an I/O failure.
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
@@ -29,10 +29,10 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
 void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh);
 
 /// Writes the ellipsoid means as a coloured point cloud: binary little-endian PLY, x y z float,
-/// red green blue uchar (SPEC section 7). Atomic like writeEllipsoidPly.
+/// red green blue uchar (docs/method.md 11). Atomic like writeEllipsoidPly.
 void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
 
-/// Opacity written into the Gaussian PLY before the viewers' sigmoid: alpha = 0.9. SPEC 7 is
+/// Opacity written into the Gaussian PLY before the viewers' sigmoid: alpha = 0.9. docs/method.md 11 is
 /// silent; nearly opaque splats show the surface, 0.9 rather than 1 lets overlaps blend.
 inline constexpr float kGaussianOpacityLogit = 2.1972246f;  // log(0.9 / 0.1)
 /// Smallest principal standard deviation written (m): a perfectly flat cell would give log(0).
@@ -42,7 +42,7 @@ inline constexpr double kGaussianMinSigma = 1e-5;
 inline constexpr int kGaussianRestCoefficients = 45;
 
 /// Writes ellipsoids as 3-D Gaussian splats in the layout Gaussian-splatting viewers read
-/// (SPEC section 7): binary little-endian PLY, all float: x y z, nx ny nz (the axis of least
+/// (docs/method.md 11): binary little-endian PLY, all float: x y z, nx ny nz (the axis of least
 /// spread, the surface normal up to sign), f_dc_0..2 = (rgb/255 - 0.5) / 0.28209479,
 /// f_rest_0..44 = 0 (kGaussianRestCoefficients), opacity
 /// (kGaussianOpacityLogit), scale_0..2 = log(sigma) per principal axis (sigma clamped to

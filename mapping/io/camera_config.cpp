@@ -34,7 +34,7 @@ ColourCamera sevenScenesColour() {
   return c;
 }
 
-// SPEC section 1. Sizes are those of the data sets the presets are named after.
+// The presets of docs/method.md 1. Sizes are those of the data sets the presets are named after.
 const std::vector<Preset>& presets() {
   static const std::vector<Preset> kPresets = {
       {"tum-fr1", {640, 480, 517.306, 516.469, 318.643, 255.314, 5000.0}},

@@ -10,7 +10,7 @@
 
 namespace vdmap {
 
-/// The named camera presets of SPEC section 1, in a stable order.
+/// The named camera presets of docs/method.md 1, in a stable order.
 const std::vector<std::string>& cameraPresetNames();
 
 /// The preset's intrinsics and depth scale. Throws std::invalid_argument listing the valid

@@ -283,7 +283,7 @@ std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file
   const std::vector<Eigen::Vector3f> means = readPositions(file, v);
   const auto colors = readColors(file, v);
   const std::vector<int> c = columns(file, v, {"cxx", "cxy", "cxz", "cyy", "cyz", "czz"},
-                                     "an ellipsoid PLY needs the covariance (SPEC section 7)");
+                                     "an ellipsoid PLY needs the covariance (docs/method.md 11)");
   const int count_col = v.scalarIndex("count"), kf_col = v.scalarIndex("keyframe");
   const int stride = v.scalarCount();
   std::vector<EllipsoidRecord> out(v.count);

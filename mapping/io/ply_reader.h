@@ -1,6 +1,6 @@
 #pragma once
 // PLY input: triangle meshes with vertex colours (ascii or binary, either endianness) and the
-// ellipsoid layout of SPEC section 7.
+// ellipsoid layout of docs/method.md 11.
 #include <array>
 #include <cstdint>
 #include <filesystem>
@@ -18,7 +18,7 @@ struct ColoredTriangleMesh {
   std::vector<std::array<std::uint32_t, 3>> triangles;
 };
 
-/// One ellipsoid as exported (SPEC section 7): mean, colour, covariance, point count, keyframe.
+/// One ellipsoid as exported (docs/method.md 11): mean, colour, covariance, point count, keyframe.
 struct EllipsoidRecord {
   Eigen::Vector3f mean = Eigen::Vector3f::Zero();
   std::array<std::uint8_t, 3> rgb{};

@@ -31,7 +31,7 @@ struct SequenceOptions {
   /// A range that ends past the last listed frame is an error (it names the sequence's range);
   /// true cuts it there instead (for a verb's default range, such as bench's 0:30).
   bool cut_range_at_end = false;
-  double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (SPEC section 1)
+  double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (docs/method.md 1)
   double max_pose_dt_s = 0.1;     ///< pose interpolation window
   /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
   /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
@@ -57,7 +57,7 @@ struct DropCounts {
   int outside_range = 0;    ///< outside --frames
 };
 
-/// A TUM RGB-D layout sequence (SPEC section 1). Opening parses the lists, associates and
+/// A TUM RGB-D layout sequence (docs/method.md 1). Opening parses the lists, associates and
 /// interpolates poses and checks that every image file exists; images are decoded lazily by
 /// load(), which is const and safe to call from several threads.
 class TumSequence {

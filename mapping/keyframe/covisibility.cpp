@@ -15,7 +15,7 @@ Eigen::Vector3d predictInFrame(const FrameFeatures& K, std::size_t i, const Tran
 }
 
 // The neighbourhood of a projected keypoint whose best and second-best descriptor the ratio
-// test compares (the best must also lie within max_reprojection_px). SPEC section 5 takes both
+// test compares (the best must also lie within max_reprojection_px). docs/method.md 5 takes both
 // from the whole image; a window of 8 px made delta 0.05 higher on average (fewer rivals, so
 // more ratio tests pass) and agreed with the brute-force decision on 94 % of 7-Scenes frames
 // 0:200; 24 px 96.5 %, 32 px 97.0 %, 48 px 97.5 % (mean +0.020, max +0.049), 64 px 97.5 %

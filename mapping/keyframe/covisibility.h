@@ -4,14 +4,14 @@
 
 namespace vdmap {
 
-/// SPEC section 5: when a keyframe's feature counts as re-observed in a frame.
+/// docs/method.md 5: when a keyframe's feature counts as re-observed in a frame.
 struct CovisibilityParams {
   int max_hamming = 64;             ///< descriptor distance limit
   double lowe_ratio = 0.8;          ///< best / second-best distance must be below this
   double max_reprojection_px = 8.0; ///< pose-consistency check for keypoints with depth
 };
 
-/// Pose pre-filter of the loop-closure and edge search (SPEC section 5).
+/// Pose pre-filter of the loop-closure and edge search (docs/method.md 5).
 struct PosePrefilter {
   bool enabled = true;
   double max_distance_m = 3.0;
@@ -23,20 +23,20 @@ struct PosePrefilter {
 /// delta(F, K): the fraction of K's features re-observed in F (0 when K has none). A keypoint
 /// with depth is matched by projection (matchByProjection(): the best descriptor within 48 px
 /// of where the poses put it must lie within max_reprojection_px and pass the ratio test against
-/// the second best of those 48 px); one without depth against all of F's descriptors. SPEC
-/// section 5's criteria keep their meaning; only the rivals of the ratio test come from 48 px
+/// the second best of those 48 px); one without depth against all of F's descriptors. The
+/// criteria of docs/method.md 5 keep their meaning; only the rivals of the ratio test come from 48 px
 /// instead of the whole image, so delta is slightly above covisibilityBruteForce()'s (7-Scenes
 /// 0:200: +0.020 on average, the same decision on 97.5 % of frames; test_projection_matcher).
 double covisibility(const FrameFeatures& keyframe, const Transform& T_W_K, const FrameFeatures& frame,
                     const Transform& T_W_F, const PinholeCamera& camera, const CovisibilityParams& params = {});
 
-/// delta(F, K) as SPEC section 5 words it, kept as the tests' oracle: cv::BFMatcher 2-NN of every
+/// delta(F, K) as docs/method.md 5 words it, kept as the tests' oracle: cv::BFMatcher 2-NN of every
 /// K descriptor over all of F's, ratio test, then the 8 px pose check. ~20x slower.
 double covisibilityBruteForce(const FrameFeatures& keyframe, const Transform& T_W_K, const FrameFeatures& frame,
                               const Transform& T_W_F, const PinholeCamera& camera,
                               const CovisibilityParams& params = {});
 
-/// The brute-force matches of SPEC section 5: for each of K's descriptors its nearest of F's
+/// The brute-force matches of docs/method.md 5: for each of K's descriptors its nearest of F's
 /// (cv::BFMatcher 2-NN, Hamming) when within `max_hamming` and below `lowe_ratio` times the
 /// second nearest; queryIdx indexes K, trainIdx F. Shared by covisibilityBruteForce() and the
 /// tracker's PnP matches.

@@ -8,7 +8,7 @@
 
 namespace vdmap {
 
-/// ORB keypoints of one frame with the depth measured at each (SPEC section 5).
+/// ORB keypoints of one frame with the depth measured at each (docs/method.md 5).
 struct FrameFeatures {
   std::vector<cv::KeyPoint> keypoints;
   cv::Mat descriptors;           ///< CV_8U, one 32-byte row per keypoint
@@ -17,7 +17,7 @@ struct FrameFeatures {
 };
 
 struct FeatureParams {
-  int orb_features = 1000;  ///< SPEC section 9
+  int orb_features = 1000;  ///< docs/parameters.md
 };
 
 /// Detects ORB features in the frame's colour image. Deterministic for a given image. Not

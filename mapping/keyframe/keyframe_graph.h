@@ -23,7 +23,7 @@ struct KeyframeMemory {
   std::size_t ellipsoids = 0;  ///< the local map's stored cells
 };
 
-/// A keyframe (SPEC section 2): its pose, its own images and features, and its local map.
+/// A keyframe (docs/method.md 2): its pose, its own images and features, and its local map.
 /// The images are held PNG-compressed (~1/3 of their raw 1.5 MB at 640x480) and decoded by
 /// rgb() / depth() when shown or saved; nothing on the per-frame path reads them.
 struct Keyframe {

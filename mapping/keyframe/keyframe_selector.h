@@ -7,7 +7,7 @@
 
 namespace vdmap {
 
-/// SPEC section 5 thresholds of the per-frame keyframe decision.
+/// docs/method.md 5 thresholds of the per-frame keyframe decision.
 struct KeyframeParams {
   double tau = 0.25;       ///< update the current keyframe when delta(F, K_current) >= tau
   double tau_edge = 0.1;   ///< a new keyframe gets an edge to K when delta >= tau_edge
@@ -37,7 +37,7 @@ struct FrameDecision {
   int pruned = 0;             ///< keyframes skipped by the pre-filter or the covisibility bound
 };
 
-/// Decides what frame F does (SPEC section 5): update `current` when delta >= tau; otherwise
+/// Decides what frame F does (docs/method.md 5): update `current` when delta >= tau; otherwise
 /// the keyframe with the best delta >= tau becomes current (a revisit, ties to the lower id);
 /// otherwise F starts a new keyframe. `current` < 0 means there is none yet. The loop-closure
 /// search prunes with covisibilityBound(), which never changes the result. `keyframes` are the
@@ -47,7 +47,7 @@ FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F,
                              std::span<const KeyframeView> keyframes, const PinholeCamera& camera,
                              const KeyframeParams& params, CovisibilityMeasure measure = covisibility);
 
-/// Edges of a newly created keyframe N to the existing `keyframes` (SPEC section 5): weight
+/// Edges of a newly created keyframe N to the existing `keyframes` (docs/method.md 5): weight
 /// delta(N, K) where it is >= tau_edge, plus the edge to `previous` (if >= 0) whatever its
 /// weight. Sorted by keyframe id.
 std::vector<std::pair<int, double>> edgesOfNewKeyframe(const FrameFeatures& features, const Transform& T_W_N,

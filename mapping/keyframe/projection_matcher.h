@@ -28,7 +28,7 @@ struct BestTwo {
   int best = -1;  ///< row of the best descriptor, -1 when the set is empty
   int best_distance = kNoDistance;
   int second_distance = kNoDistance;
-  /// SPEC section 5 descriptor test: best <= max_hamming and, when there is a second, best <
+  /// docs/method.md 5 descriptor test: best <= max_hamming and, when there is a second, best <
   /// ratio * second.
   bool passes(int max_hamming, double ratio) const {
     return best >= 0 && best_distance <= max_hamming &&
@@ -69,12 +69,12 @@ class KeypointGrid {
   std::vector<int> index_;    ///< keypoint indices, bucket by bucket, ascending in each
 };
 
-/// How a projected keypoint is matched (SPEC section 5 criteria by default).
+/// How a projected keypoint is matched (docs/method.md 5 criteria by default).
 struct ProjectionSearchParams {
   double radius_px = 8.0;   ///< the match must lie this close to the predicted pixel
   /// The neighbourhood the best and second-best descriptor are taken from (>= radius_px): the
   /// best there must lie within radius_px and pass the ratio test against the second. Equal to
-  /// radius_px it is ORB-SLAM's window search; the whole image is SPEC section 5's brute-force
+  /// radius_px it is ORB-SLAM's window search; the whole image is docs/method.md 5's brute-force
   /// 2-NN. Wider costs more candidates and rejects more ambiguous matches.
   double context_radius_px = 8.0;
   int max_hamming = 64;

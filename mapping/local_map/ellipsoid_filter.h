@@ -1,5 +1,5 @@
 #pragma once
-// Ellipsoid filtering (SPEC section 4) as a view over a container: nothing is deleted, so the
+// Ellipsoid filtering (docs/method.md 4) as a view over a container: nothing is deleted, so the
 // thresholds can change live and be undone.
 
 #include <cstdint>
@@ -14,7 +14,7 @@
 
 namespace vdmap {
 
-/// Live parameters of the filter (SPEC section 9).
+/// Live parameters of the filter (docs/parameters.md).
 struct FilterParams {
   SensorModel model = SensorModel::kNguyen2012;
   double filter_sigma_factor = 3.0;  ///< k
@@ -38,7 +38,7 @@ double largestEigenvalue(const Eigen::Matrix3d& m);
 /// True when `cell` passes the filter: n >= min_points, its mean lies in front of the keyframe,
 /// and sqrt(lambda_max(Sigma)) <= k sqrt(lambda_max(Sigma_expected)), where Sigma_expected is
 /// the sensor model's covariance at the pixel and depth the mean projects to, with the cell
-/// footprint s^2/12 added (SPEC sections 3-4).
+/// footprint s^2/12 added (docs/method.md 3-4).
 bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const FilterParams& filter);
 
 /// keepCell for every cell of `container`, in container order.

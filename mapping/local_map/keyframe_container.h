@@ -1,5 +1,5 @@
 #pragma once
-// The view-dependent container of one keyframe (SPEC section 2): a grid of cells over a
+// The view-dependent container of one keyframe (docs/method.md 2): a grid of cells over a
 // 2W x 2H image plane with the keyframe image in its centre, at most one NDT ellipsoid per cell.
 
 #include <array>
@@ -15,8 +15,8 @@ namespace vdmap {
 
 /// One stored ellipsoid. Statistics are accumulated in double (the integrator's scratch and
 /// mergeBatch) and stored in float: float keeps a mean at 8 m to ~0.5 um and the scatter to 1e-7
-/// relative, far below sensor noise, and halves the memory (SPEC: "store in float where memory
-/// matters"). Keyframe frame K, metres.
+/// relative, far below sensor noise, and halves the memory (docs/method.md 2: accumulated in
+/// double, stored in float). Keyframe frame K, metres.
 struct StoredCell {
   Eigen::Vector3f mean = Eigen::Vector3f::Zero();
   std::array<float, 6> scatter{};  ///< S: xx xy xz yy yz zz
@@ -27,7 +27,7 @@ struct StoredCell {
   CellStats toStats() const;
   void fromStats(const CellStats& stats);
 };
-static_assert(sizeof(StoredCell) <= 64, "an ellipsoid must take at most 64 bytes (issue #3)");
+static_assert(sizeof(StoredCell) <= 64, "an ellipsoid must take at most 64 bytes (one cache line)");
 
 /// Storage: sparse. An int32 slot per grid cell (-1 = empty) points into a vector of the cells
 /// that hold an ellipsoid. A 640x480 keyframe has 49152 cells of which a typical 7-Scenes

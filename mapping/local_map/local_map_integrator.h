@@ -1,5 +1,5 @@
 #pragma once
-// Integrates RGB-D frames into a keyframe's view-dependent container (SPEC section 2).
+// Integrates RGB-D frames into a keyframe's view-dependent container (docs/method.md 2).
 
 #include <cstdint>
 #include <vector>
@@ -9,7 +9,7 @@
 
 namespace vdmap {
 
-/// Parameters of the local maps (SPEC section 9). Changing them means rebuilding local maps.
+/// Parameters of the local maps (docs/parameters.md). Changing them means rebuilding local maps.
 struct LocalMapParams {
   int cell_size_px = 5;
   DepthRange depth_range;

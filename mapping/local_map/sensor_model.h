@@ -1,5 +1,5 @@
 #pragma once
-// Depth-sensor uncertainty models (SPEC section 3).
+// Depth-sensor uncertainty models (docs/method.md 3).
 
 #include <string>
 
@@ -26,7 +26,7 @@ struct PixelVariance {
 };
 PixelVariance pixelVariance(SensorModel model, double depth_m);
 
-/// Axial (depth) standard deviation of Nguyen et al. 2012 (SPEC section 3), metres.
+/// Axial (depth) standard deviation of Nguyen et al. 2012 (docs/method.md 3), metres.
 inline double nguyenAxialSd(double depth_m) { return 0.0012 + 0.0019 * (depth_m - 0.4) * (depth_m - 0.4); }
 
 /// Covariance (camera frame, m^2) of the point back-projected from pixel (u, v) at depth d:
@@ -36,7 +36,7 @@ Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, 
 
 /// Expected covariance of a cell of `cell_size_px` whose ellipsoid centre projects to (u, v)
 /// at depth d in its keyframe: the point covariance with the cell footprint s^2/12 added to
-/// both pixel variances (SPEC section 3).
+/// both pixel variances (docs/method.md 3).
 inline Eigen::Matrix3d expectedCellCovariance(SensorModel model, const PinholeCamera& camera,
                                               double u, double v, double depth_m,
                                               int cell_size_px) {

@@ -1,5 +1,5 @@
 #pragma once
-// Pose-graph optimisation of keyframe poses with Ceres (issue 15): nodes are poses T_W_K, edges
+// Pose-graph optimisation of keyframe poses with Ceres (docs/method.md 9): nodes are poses T_W_K, edges
 // are measured relative poses with an information matrix. Used after a loop closure to correct
 // the keyframe poses; the global map is then rebuilt from the unchanged local maps.
 

@@ -12,7 +12,7 @@ namespace vdmap {
 
 enum class DepthNoiseModel {
   kNone,        ///< exact depth, quantised to the depth scale; only the range limit applies
-  kNguyen2012,  ///< Kinect v1 (SPEC section 3): axial sd(d), lateral jitter, range and angle cuts
+  kNguyen2012,  ///< Kinect v1 (docs/method.md 3): axial sd(d), lateral jitter, range and angle cuts
 };
 
 /// Parses "none" or "nguyen2012" (throws std::invalid_argument otherwise).
@@ -28,7 +28,7 @@ struct DepthNoiseParams {
   /// No return where the viewing ray meets the surface at more than this angle from its normal.
   double max_incidence_deg = 80.0;
   /// Lateral noise: each pixel reads the depth of a pixel displaced by N(0, sd) in u and v
-  /// (rounded), which frays depth edges like a structured-light sensor. SPEC su = sv = 0.8 px.
+  /// (rounded), which frays depth edges like a structured-light sensor; the sensor model's su = sv = 0.8 px (docs/method.md 3).
   double lateral_sd_px = 0.8;
   /// Base of the per-frame seed: frame i uses seed ^ hash(i), so frames are reproducible.
   std::uint64_t seed = 0x76646d6170ull;

@@ -1,5 +1,5 @@
 #pragma once
-// The keyframe pose graph of tracked sequences (SPEC section 11): nodes are the keyframe poses,
+// The keyframe pose graph of tracked sequences (docs/method.md 9): nodes are the keyframe poses,
 // edges the relative poses measured between keyframes (consecutive keyframes, covisibility
 // edges, loop edges with a robust loss). After each accepted loop it is optimised and the
 // keyframe poses are replaced; the local maps never change, so the global map is rebuilt from

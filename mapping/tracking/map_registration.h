@@ -3,7 +3,7 @@
 // measured when a keyframe was created compares one frame with a map; the settled maps average
 // every frame of both keyframes. kJoint (the default) optimises every keyframe pose at once on
 // the sum of the covisible pairs' map-to-map costs (one keyframe's ellipsoid means against the
-// other's distributions, SPEC section 11's dense objective); kPairwise registers each pair on its
+// other's distributions, docs/method.md 10's dense objective); kPairwise registers each pair on its
 // own, those relative poses replace the pair's frame-measured pose-graph edges, and the graph is
 // optimised, in rounds. Measured (map RMSE against the mesh with tracked poses; README Tracking):
 // the built-in 2-lap walk 2.15 mm unrefined, 1.30 joint, 4.19 pairwise (0.93 with the true

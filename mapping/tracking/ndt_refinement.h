@@ -1,5 +1,5 @@
 #pragma once
-// Dense refinement of a frame's pose against one keyframe's local map (SPEC section 11): frame
+// Dense refinement of a frame's pose against one keyframe's local map (docs/method.md 8): frame
 // points are projected into the keyframe's container, associated with the ellipsoid of the cell
 // they land in (the container's projective association, no search), and the point-to-distribution
 // (NDT) distances are minimised by Gauss-Newton.
@@ -83,7 +83,7 @@ struct NdtRefinementParams {
     return std::max(1, static_cast<int>(std::lround(std::sqrt(double(camera.width) * camera.height / std::max(points, 1)))));
   }
   int iterations = 6;           ///< Gauss-Newton steps at most
-  int min_cell_points = 6;      ///< cells with fewer points give no distribution (SPEC 4 min_points)
+  int min_cell_points = 6;      ///< cells with fewer points give no distribution (min_points, docs/method.md 4)
   double max_distance_m = 0.1;  ///< a point farther than this from its cell's mean is not associated
   /// Tukey biweight threshold on the Mahalanobis distance: a point beyond it has no weight, so
   /// the far side of an occluding edge cannot pull the pose (a Huber tail, whose pull never

@@ -1,5 +1,5 @@
 #pragma once
-// The pose of a frame relative to one keyframe (SPEC section 11): PnP RANSAC on the frame's ORB
+// The pose of a frame relative to one keyframe (docs/method.md 8): PnP RANSAC on the frame's ORB
 // matches to the keyframe's keypoints (which have depth), checked against a prediction, then
 // refined densely against the keyframe's own local map. Tracking, relocalisation, loop closure
 // and the pose-graph edges of new keyframes all measure relative poses with this one function.
@@ -13,7 +13,7 @@
 namespace vdmap {
 
 struct PnpParams {
-  int max_hamming = 64;          ///< descriptor distance limit (SPEC 5)
+  int max_hamming = 64;          ///< descriptor distance limit (docs/method.md 5)
   double lowe_ratio = 0.8;       ///< best / second-best distance must be below this
   int min_matches = 12;          ///< fewer matches with depth: no PnP
   int ransac_iterations = 100;

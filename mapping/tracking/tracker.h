@@ -1,5 +1,5 @@
 #pragma once
-// Frame-to-keyframe tracking with a constant-velocity motion model (SPEC section 11).
+// Frame-to-keyframe tracking with a constant-velocity motion model (docs/method.md 8).
 
 #include <optional>
 #include <span>
