@@ -10,7 +10,7 @@
 namespace vdmap {
 namespace {
 
-// docs/method.md 2, step 5: the merge must equal batch statistics to 1e-9 relative in double.
+// docs/method.md 2: the merge must equal batch statistics to 1e-9 relative in double.
 // Chan's update is backward stable; with <= 40 batches of <= 50 points the rounding error is a
 // few hundred ulps (~1e-13), so 1e-9 leaves margin without hiding a wrong formula (a missing
 // M N / (M + N) term is off by O(1)).

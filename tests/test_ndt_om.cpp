@@ -1,5 +1,5 @@
 // The NDT-OM baseline (mapping/baseline): its cells equal the batch statistics of every point
-// ever assigned to them, as the local map's do (docs/method.md 2, step 5).
+// ever assigned to them, as the local map's do (docs/method.md 2).
 #include <array>
 #include <cmath>
 #include <map>
@@ -51,7 +51,7 @@ TEST(NdtOm, CellsEqualBatchStatisticsOfAllTheirPoints) {
     ASSERT_NE(it, map.cells().end());
     const CellStats& got = it->second;
     ASSERT_EQ(got.n, expected.n);
-    // 1e-9 relative (docs/method.md 2, step 5), on coordinates of ~1.5 m and spreads of ~1 cm.
+    // 1e-9 relative (docs/method.md 2), on coordinates of ~1.5 m and spreads of ~1 cm.
     EXPECT_LT((got.mean - expected.mean).norm(), 1e-9 * 2.0);
     EXPECT_LT((got.covariance() - expected.covariance()).norm(), 1e-9 * std::max(1e-4, expected.covariance().norm()));
     EXPECT_LT((got.color - expected.color).norm(), 1e-9 * 255);

@@ -33,7 +33,7 @@ class NdtOmBaseline {
 
   /// Adds every pixel of `frame` with depth in range, back-projected with `camera` and moved
   /// to the world frame by frame.T_W_C. Points are grouped by cell and each group merges into
-  /// its cell as one batch, exactly as the local map does (docs/method.md 2, step 4).
+  /// its cell as one batch, exactly as the local map does (docs/method.md 2, the batch merge).
   void integrateFrame(const RgbdFrame& frame, const PinholeCamera& camera);
   /// The same for points already in the world frame (metres) with colours (0..255).
   void integratePoints(const std::vector<Eigen::Vector3f>& points_W,

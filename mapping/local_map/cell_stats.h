@@ -1,6 +1,6 @@
 #pragma once
 // NDT cell statistics and the merge of a batch of points into a cell (docs/method.md 2, paper
-// eqs. 3-6 in Chan's parallel form). Everything here is double precision: this is the
+// eqs. 3-5 in Chan's parallel form). Everything here is double precision: this is the
 // arithmetic the tests check to 1e-9 relative; the container stores a compact float copy.
 
 #include <cstdint>
@@ -32,7 +32,7 @@ struct PointBatch {
   Eigen::Vector3d color_sum = Eigen::Vector3d::Zero();
 };
 
-/// Merges `batch` into `cell` exactly as docs/method.md 2, step 4 writes it:
+/// Merges `batch` into `cell` exactly as docs/method.md 2 writes it:
 ///   delta = s_N / N - mean_M;  mean = (M mean_M + s_N) / (M + N);
 ///   S = S_M + S_N + delta delta^T M N / (M + N);  c = (M c_M + sum c) / (M + N);  n = M + N.
 /// The mean is evaluated as mean_M + delta N / (M + N), the same quantity with less

@@ -185,8 +185,8 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
             sums, &used_cells_);
   }
 
-  // Merge each cell's batch into the container (docs/method.md 2, step 4, the arithmetic of
-  // mergeBatch written out on the float storage: this loop runs for every touched cell).
+  // Merge each cell's batch into the container (docs/method.md 2: the arithmetic of mergeBatch
+  // written out on the float storage: this loop runs for every touched cell).
   for (std::size_t i = 0; i < used_cells_.size(); ++i) {
     const int cell = used_cells_[i];
     const FrameSums& f = sums_[i];
