@@ -28,8 +28,8 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("--refine", args.refine,
                   "with tracked poses, how the keyframe poses are refined from the settled local maps after the "
                   "last frame: joint (all keyframe poses at once on every covisible pair's cost), pairwise (each "
-                  "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see README "
-                  "Tracking")
+                  "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see "
+                  "docs/method.md 10")
       ->check(CLI::IsMember({"joint", "pairwise", "none"}))
       ->capture_default_str();
   verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");

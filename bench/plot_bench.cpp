@@ -1,4 +1,4 @@
-// plot_bench: the README "Results" tables and plots from `vdmap bench` outputs (scripts/results.sh).
+// plot_bench: the tables and plots of docs/results.md from `vdmap bench` outputs (scripts/results.sh).
 // Speed: the median over runs of each method's per-frame median, as a markdown table and a
 // log-scale bar chart. Accuracy: a markdown table and RMSE against element count (log x).
 // Tracking (`vdmap bench --poses track`): the odometry peers' table, median time over the runs.

@@ -19,7 +19,7 @@ struct EllipsoidStyle {
   /// pixels is drawn as a flat-shaded splat of its exact projected ellipse instead of the mesh
   /// (0: always the mesh). Decided per instance and per frame in the shaders. At 4 px the
   /// mesh's shading gradient is a few pixels wide and hardly visible; 1 M ellipsoids in view
-  /// render ~20x faster under llvmpipe (README, Rendering).
+  /// render ~20x faster under llvmpipe (docs/performance.md).
   float point_below_px = 4.f;
 };
 

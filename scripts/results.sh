@@ -1,5 +1,5 @@
 #!/usr/bin/env bash
-# Reproduces the README "Results": the speed comparison on 7-Scenes (3 runs; the README quotes
+# Reproduces docs/results.md: the speed comparison on 7-Scenes (3 runs; the docs quote
 # the median of the runs' per-frame medians) and the accuracy comparison on a noisy render of
 # the Replica office0 mesh (the paper's Table III, extended with Open3D's TSDF), then the plots.
 # Then the odometry peers of `bench --poses track`.

@@ -662,12 +662,12 @@ TEST(GuiWorkbench, KeysDriveThePlayerAndTheViewFollowsTheMapUntilMoved) {
   EXPECT_EQ(bench.ui().camera.yaw, framed.yaw);
 }
 
-// The README's key table is the help overlay's list, row for row, so neither drifts.
-TEST(GuiWorkbench, TheReadmeListsEveryKeyOfTheHelpOverlay) {
-  const std::string readme = test::readFile(fs::path(VDMAP_SOURCE_DIR) / "README.md");
+// The key table of docs/workbench.md is the help overlay's list, row for row, so neither drifts.
+TEST(GuiWorkbench, TheWorkbenchDocsListEveryKeyOfTheHelpOverlay) {
+  const std::string readme = test::readFile(fs::path(VDMAP_SOURCE_DIR) / "docs" / "workbench.md");
   std::string table = "| key | action |\n|---|---|\n";
   for (const auto& [keys, what] : keyHelp()) table += "| " + std::string(keys) + " | " + what + " |\n";
-  EXPECT_NE(readme.find(table), std::string::npos) << "README.md should hold this table:\n" << table;
+  EXPECT_NE(readme.find(table), std::string::npos) << "docs/workbench.md should hold this table:\n" << table;
 }
 
 TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {

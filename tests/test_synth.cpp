@@ -20,8 +20,8 @@ namespace vdmap {
 namespace {
 
 // The replica reference frames are noise-free renders of the full-resolution Replica mesh; our
-// mesh is its 50k-face decimation, whose surface lies a median 3.7 mm from those depths (data
-// README). So the synthetic depth should agree to within that: median |dz| under 6 mm.
+// mesh is its 50k-face decimation, whose surface lies a median 3.7 mm from those depths (the data
+// set's README). So the synthetic depth should agree to within that: median |dz| under 6 mm.
 constexpr double kReplicaMedianDzTolerance_m = 0.006;
 
 // |dz| in metres where both depth images (16-bit at `depth_scale`) have a value, and the pixels

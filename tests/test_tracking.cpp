@@ -440,7 +440,7 @@ TEST(Tracking, FramesThatCannotBePlacedAreCountedNotIntegrated) {
 }
 
 // A frame placed on a weak estimate keeps its pose but stays out of the local map: integrated,
-// its error became the map the next frames were aligned to (README Tracking). Here the features
+// its error became the map the next frames were aligned to (docs/notes/tracking.md). Here the features
 // place the frame (PnP) while its depth holds only a 40x40 px patch, too little for the dense
 // refinement to be trusted.
 TEST(Tracking, AFramePlacedOnAWeakEstimateIsNotIntegrated) {

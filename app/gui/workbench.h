@@ -61,7 +61,7 @@ enum class KeyAction {
   kEscape, kUndo, kBeforeOptimisation
 };
 
-/// The keys and mouse actions, for the help overlay and the README: {keys, what they do}.
+/// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
 const std::vector<std::pair<const char*, const char*>>& keyHelp();
 
 /// Picks the ellipsoid whose mean projects nearest to pixel (x, y) of `view` within

@@ -33,7 +33,7 @@ static_assert(sizeof(StoredCell) <= 64, "an ellipsoid must take at most 64 bytes
 /// that hold an ellipsoid. A 640x480 keyframe has 49152 cells of which a typical 7-Scenes
 /// keyframe of 10 frames fills ~45%; dense storage would cost 56 B per grid cell (2.7 MB per
 /// keyframe), sparse costs 4 B per grid cell plus 56 B per ellipsoid (~1.4 MB), and the extra
-/// indirection happens once per run of pixels, not per pixel (see README "Performance").
+/// indirection happens once per run of pixels, not per pixel (docs/performance.md).
 /// Not thread-safe for writing; concurrent const access is fine.
 class KeyframeContainer {
  public:

@@ -5,7 +5,7 @@
 // the sum of the covisible pairs' map-to-map costs (one keyframe's ellipsoid means against the
 // other's distributions, docs/method.md 10's dense objective); kPairwise registers each pair on its
 // own, those relative poses replace the pair's frame-measured pose-graph edges, and the graph is
-// optimised, in rounds. Measured (map RMSE against the mesh with tracked poses; README Tracking):
+// optimised, in rounds. Measured (map RMSE against the mesh with tracked poses; docs/results.md):
 // the built-in 2-lap walk 2.15 mm unrefined, 1.30 joint, 4.19 pairwise (0.93 with the true
 // poses); a single pair's registration is no better than tracking there, only summed in one cost
 // do the pairs' errors average out.
