@@ -1,7 +1,8 @@
 // The parameter table (mapping/pipeline/parameters.h): what is derived from its declarations (the
-// structs' validate(), equality, enable rules) sees every parameter.
+// structs' validate(), equality, enable rules, the session file's fields) sees every parameter.
 #include <cctype>
 #include <cmath>
+#include <set>
 #include <string>
 
 #include <gtest/gtest.h>
@@ -93,6 +94,25 @@ TEST(Parameters, ValidateChecksTheTablesRanges) {
   values = {};
   values.global.threads = -1;
   EXPECT_EQ(message(values), "threads must be >= 0");
+}
+
+// Each parameter is stored once in a session's PARM section, with a storage type that holds it.
+TEST(Parameters, TheSessionFileStoresEveryParameterOnce) {
+  std::set<const Parameter*> stored;
+  for (const bool live : {false, true})
+    for (const StoredParameter& s : storedParameters(live)) {
+      SCOPED_TRACE(s.name);
+      EXPECT_TRUE(stored.insert(s.parameter).second) << "stored twice";
+      EXPECT_EQ(s.parameter->live, live);
+      using Type = StoredParameter::Type;
+      switch (s.parameter->kind) {
+        case Parameter::Kind::kInt: EXPECT_EQ(s.type, Type::kI32); break;
+        case Parameter::Kind::kReal: EXPECT_EQ(s.type, Type::kF64); break;
+        case Parameter::Kind::kBool: EXPECT_EQ(s.type, Type::kBool); break;
+        case Parameter::Kind::kChoice: EXPECT_EQ(s.type, Type::kU32); break;
+      }
+    }
+  EXPECT_EQ(stored.size(), parameters().size()) << "a parameter of the table is not stored in sessions";
 }
 
 // Help texts are the users': they cite docs/method.md, never the internal specification.

@@ -6,6 +6,8 @@
 // and settings.json (app/parameter_table.h, app/gui/settings.cpp), the workbench's sliders, the
 // session file's PARM section (session_file.cpp) and docs/parameters.md (`vdmap params
 // --markdown`). The pose source is no parameter of the table: it belongs to the input (--poses).
+#include <cstdint>
+#include <optional>
 #include <span>
 #include <string>
 #include <string_view>
@@ -51,5 +53,21 @@ std::string whyDisabled(const Parameter& p, const ParameterValues& values);
 /// Both structs' validate(): every range of the table and the rules between parameters (such as
 /// min depth < max depth). Throws std::invalid_argument naming the first value that is wrong.
 void validate(const ParameterValues& values);
+
+/// How a parameter is stored in the PARM section of a session file (docs/vdmap-format.md).
+struct StoredParameter {
+  enum class Type { kI32, kU32, kF64, kBool };  ///< little-endian; kU32 stores a choice's index
+  const Parameter* parameter = nullptr;
+  Type type = Type::kF64;
+  const char* name = "";           ///< what a read error calls the field
+  std::uint32_t since_version = 1;  ///< the format version that added it
+  /// Its value in files older than since_version; none: the struct's default.
+  std::optional<double> older = std::nullopt;
+};
+
+/// The PARM section's parameter fields, in file order: the MapperParams ones (`live` false; the
+/// pose source follows them) or the GlobalMapParams ones (`live` true). Every parameter of the
+/// table is in exactly one of them; their order is the file format's, not the table's.
+std::span<const StoredParameter> storedParameters(bool live);
 
 }  // namespace vdmap
