@@ -1,5 +1,6 @@
 // The parameter table (mapping/pipeline/parameters.h): what is derived from its declarations (the
-// structs' validate(), equality, enable rules, the session file's fields) sees every parameter.
+// structs' validate(), equality, enable rules, the session file's fields, docs/parameters.md) sees
+// every parameter, and the generated page is the one committed.
 #include <cctype>
 #include <cmath>
 #include <set>
@@ -121,6 +122,25 @@ TEST(Parameters, HelpTextsCiteTheMethod) {
     EXPECT_EQ(p.help.find("SPEC"), std::string_view::npos) << p.key;
     EXPECT_FALSE(p.help.empty()) << p.key;
     EXPECT_TRUE(std::islower(static_cast<unsigned char>(p.key[0]))) << p.key;
+  }
+}
+
+TEST(Parameters, DocsPageIsTheGeneratedOne) {
+  const auto r = test::runVdmap("params --markdown");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const std::string committed = test::readFile(std::string(VDMAP_SOURCE_DIR) + "/docs/parameters.md");
+  EXPECT_TRUE(r.out == committed) << "docs/parameters.md is not what the parameter table gives; regenerate it with\n  "
+                                  << VDMAP_BINARY << " params --markdown > " << VDMAP_SOURCE_DIR
+                                  << "/docs/parameters.md";
+  for (const Parameter& p : parameters()) {
+    EXPECT_NE(r.out.find("| `" + std::string(p.key) + "` | `" + std::string(p.flag) + "` |"), std::string::npos)
+        << p.key;
+  }
+  const auto plain = test::runVdmap("params");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  for (const Parameter& p : parameters()) {
+    EXPECT_NE(plain.out.find("  " + std::string(p.key) + " = "), std::string::npos) << p.key;
+    EXPECT_NE(plain.out.find(std::string(p.flag)), std::string::npos) << p.key;
   }
 }
 
