@@ -32,10 +32,18 @@ struct MapArgs {
   std::string save;
   std::string load;
   bool json = false;
-  ParameterValues params;  // every parameter of the table (app/parameter_table.h)
+  ParameterValues params;  // every parameter of the table (mapping/pipeline/parameters.h)
   double octomap_resolution_m = 0.0;
   bool octomap_given = false;
 };
+
+// The flags of the re-run parameters, "--cell-size, --min-depth, ...".
+std::string rerunFlags() {
+  std::string flags;
+  for (const Parameter& p : parameters())
+    if (!p.live) flags += (flags.empty() ? "" : ", ") + std::string(p.flag);
+  return flags;
+}
 
 void runMap(MapArgs args) {
   namespace fs = std::filesystem;
@@ -66,8 +74,7 @@ void runMap(MapArgs args) {
                                       "can still be rendered or opened)");
     if (!sameMapperParams(args.params.mapper, MapperParams{}) && !sameMapperParams(args.params.mapper, info.mapper))
       throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
-                                  "them (cell size, depth range, ORB features, tau, tau-edge, keyframe-every, "
-                                  "prefilter)");
+                                  "them (" + rerunFlags() + ")");
     args.params.mapper = info.mapper;
     // The pose source is the session's too (its keyframes were placed that way).
     const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";

@@ -19,6 +19,8 @@ void addMapCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addGuiCommand(CLI::App& app);
+/// `vdmap params [--markdown]`: the parameter table for users, or docs/parameters.md.
+void addParamsCommand(CLI::App& app);
 /// The workbench options of `vdmap` without a verb; the returned function opens the workbench
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);

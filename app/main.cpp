@@ -19,6 +19,7 @@ int main(int argc, char** argv) {
   addBenchCommand(app);
   addEvalCommand(app);
   addGuiCommand(app);
+  addParamsCommand(app);
   const auto workbench = addBuiltinWorkbenchOptions(app);
   const auto error = [&app](const std::string& what) {
     const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();

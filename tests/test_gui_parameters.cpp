@@ -1,7 +1,8 @@
-// The parameter table (app/parameter_table.h) and the four ways a value reaches it: `vdmap map`
-// options (CLI11), settings.json, `vdmap gui --set` and the workbench's sliders. For every
-// parameter, values at and beyond its bounds are accepted or refused by all four alike, the
-// bounds are those its validate() enforces, and the slider's span lies within them.
+// The parameter table (mapping/pipeline/parameters.h, app/parameter_table.h) and the four ways a
+// value reaches it: `vdmap map` options (CLI11), settings.json, `vdmap gui --set` and the
+// workbench's sliders. For every parameter, values at and beyond its bounds are accepted or
+// refused by all four alike, the bounds are those its validate() enforces, and the slider's span
+// lies within them.
 #include <cmath>
 #include <limits>
 
@@ -93,7 +94,7 @@ bool acceptedBySlider(const Parameter& p, double v) {
 
 TEST(ParameterTable, EveryValueIsAcceptedOrRefusedAlikeByCliSettingsSetAndSlider) {
   test::TempDir dir;
-  for (const Parameter& p : parameterTable()) {
+  for (const Parameter& p : parameters()) {
     SCOPED_TRACE(std::string(p.key));
     std::vector<double> probes = {p.slider_lo, p.slider_hi, p.get(ParameterValues{})};
     const double step = p.kind == Parameter::Kind::kInt ? 1.0 : 1e-3;
@@ -123,15 +124,17 @@ TEST(ParameterTable, EveryValueIsAcceptedOrRefusedAlikeByCliSettingsSetAndSlider
 }
 
 TEST(ParameterTable, BoundsAreThoseOfValidateAndSlidersLieWithinThem) {
-  for (const Parameter& p : parameterTable()) {
+  for (const Parameter& p : parameters()) {
     SCOPED_TRACE(std::string(p.key));
     EXPECT_FALSE(p.help.empty());
     EXPECT_FALSE(p.label.empty());
     EXPECT_FALSE(p.flag.empty());
-    EXPECT_LE(p.lo, p.slider_lo);
-    EXPECT_GE(p.hi, p.slider_hi);
-    EXPECT_TRUE(acceptedByValidate(p, p.slider_lo));
-    EXPECT_TRUE(acceptedByValidate(p, p.slider_hi));
+    if (p.slider) {  // an advanced parameter has no slider, so no span
+      EXPECT_LE(p.lo, p.slider_lo);
+      EXPECT_GE(p.hi, p.slider_hi);
+      EXPECT_TRUE(acceptedByValidate(p, p.slider_lo));
+      EXPECT_TRUE(acceptedByValidate(p, p.slider_hi));
+    }
     EXPECT_NO_THROW(checkValue(p, p.get(ParameterValues{}))) << "the default is valid";
     if (p.kind == Parameter::Kind::kBool || p.kind == Parameter::Kind::kChoice) continue;
     // Just outside a finite bound validate() refuses; at a closed bound it accepts.
@@ -168,7 +171,31 @@ TEST(ParameterTable, BadTextGivesAClearMessage) {
     EXPECT_EQ(std::string(e.what()), "tau must be within 0..1, got 2");
   }
   // Every settings key is a key of the table or of the view section (none is spelled twice).
-  for (const Parameter& p : parameterTable()) EXPECT_EQ(findParameter(p.key), &p);
+  for (const Parameter& p : parameters()) EXPECT_EQ(findParameter(p.key), &p);
+}
+
+// The workbench's sliders are every parameter but the advanced ones, in the table's order; the
+// advanced ones still reach the settings file, --set and `vdmap map`.
+TEST(ParameterTable, TheWorkbenchShowsEveryParameterButTheAdvancedOnes) {
+  std::vector<const Parameter*> sliders;
+  for (const Parameter& p : parameters())
+    if (p.slider) sliders.push_back(&p);
+  ASSERT_EQ(parameterTable().size(), sliders.size()) << "an advanced parameter comes before a slider";
+  for (std::size_t i = 0; i < sliders.size(); ++i) EXPECT_EQ(&parameterTable()[i], sliders[i]);
+  EXPECT_LT(parameterTable().size(), parameters().size());
+
+  Settings s;
+  gui::applySetting(s, "lowe_ratio=0.7");
+  EXPECT_EQ(s.mapper.keyframes.covisibility.lowe_ratio, 0.7);
+  EXPECT_TRUE(gui::rerunParamsDiffer(s, Settings{}));
+  EXPECT_NE(gui::settingKeyList().find("prefilter_max_distance"), std::string::npos) << gui::settingKeyList();
+  CLI::App app;
+  ParameterValues params;
+  addParameterOptions(app, params);
+  std::vector<std::string> args = {"12", "--max-hamming", "0", "--min-frame-features"};
+  app.parse(args);
+  EXPECT_EQ(params.mapper.keyframes.covisibility.max_hamming, 12);
+  EXPECT_EQ(params.mapper.keyframes.min_frame_features, 0);
 }
 
 TEST(ParameterTable, CliFlagsOfBooleansFlipTheDefault) {

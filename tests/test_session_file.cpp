@@ -5,6 +5,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <bit>
 #include <chrono>
 #include <random>
 #include <thread>
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 
 #include "mapping/core/error.h"
+#include "mapping/pipeline/parameters.h"
 #include "mapping/pipeline/session_file.h"
 #include "tests/test_util.h"
 
@@ -518,6 +520,59 @@ TEST(SessionFile, MapVerbContinuesASavedSession) {
   EXPECT_EQ(old.exit_code, 1);
   EXPECT_NE(old.err.find("does not store the mapper's state"), std::string::npos) << old.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+}
+
+// The PARM section is read and written from the parameter table: its bytes are still those
+// docs/vdmap-format.md lays out, field by field, and every value comes back.
+TEST(SessionFile, ParmSectionIsTheDocumentedLayout) {
+  SessionInfo info;
+  info.camera = smallSession().info.camera;
+  MapperParams& m = info.mapper;
+  m.local_map = {7, {0.25, 6.5}};
+  m.features.orb_features = 900;
+  m.keyframes.tau = 0.3;
+  m.keyframes.tau_edge = 0.15;
+  m.keyframes.prefilter = {false, 2.5, 75.0};
+  m.keyframes.min_frame_features = 11;
+  m.keyframes.covisibility = {50, 0.7, 6.0};
+  m.keyframe_every = 4;
+  m.poses = PoseSource::kTrack;
+  GlobalMapParams& g = info.global;
+  g.filter = {SensorModel::kBelter2018, 2.5, 9};
+  g.tau_group = 0.2;
+  g.merge_distance_m = 0.3;
+  g.occlusion_removal = false;
+  g.occlusion_distance_m = 0.75;
+  g.occlusion_angle_deg = 40;
+  g.fuse_across_groups = false;
+  g.fusion_max_distance = 2.0;
+
+  std::string expected;
+  const auto little = [&expected](auto v, int bytes) {
+    std::uint64_t u = 0;
+    if constexpr (std::is_same_v<decltype(v), double>)
+      u = std::bit_cast<std::uint64_t>(v);
+    else
+      u = static_cast<std::uint64_t>(v);
+    for (int i = 0; i < bytes; ++i) expected.push_back(static_cast<char>(u >> (8 * i)));
+  };
+  const auto i32 = [&](int v) { little(static_cast<std::uint32_t>(v), 4); };
+  const auto f64 = [&](double v) { little(v, 8); };
+  const auto boolean = [&](bool v) { little(v ? 1 : 0, 1); };
+  const PinholeCamera& c = info.camera;
+  i32(c.width), i32(c.height), f64(c.fx), f64(c.fy), f64(c.cx), f64(c.cy), f64(c.depth_scale);
+  i32(7), f64(0.25), f64(6.5), i32(900), f64(0.3), f64(0.15), boolean(false), f64(2.5), f64(75.0), i32(11), i32(50),
+      f64(0.7), f64(6.0), i32(4), i32(1);
+  i32(1), f64(2.5), i32(9), f64(0.2), f64(0.3), boolean(false), f64(0.75), f64(40), boolean(false), f64(2.0);
+  i32(0), i32(0), i32(0);  // frames mapped, revisits, keyframes
+
+  const std::string bytes = encodeSession(KeyframeGraph{}, info);
+  ASSERT_EQ(bytes.substr(24, 4), "PARM");
+  EXPECT_EQ(bytes.substr(24 + 16, u64At(bytes, 24 + 4)), expected);
+  const Session loaded = decodeSession(bytes, "parm.vdmap");
+  EXPECT_TRUE(sameMapperParams(loaded.info.mapper, m));
+  EXPECT_TRUE((ParameterValues{loaded.info.mapper, loaded.info.global} == ParameterValues{m, g}));
+  EXPECT_EQ(loaded.info.mapper.poses, PoseSource::kTrack);
 }
 
 }  // namespace

@@ -19,8 +19,6 @@ namespace {
 
 // The settings file's sections whose keys --set takes.
 constexpr const char* kSetSections[] = {"thresholds", "rerun", "view"};
-using app::ParameterValues;
-using app::Parameter;
 
 ParameterValues paramsOf(const Settings& s) { return {s.mapper, s.thresholds}; }
 
@@ -69,7 +67,7 @@ json toJson(const Settings& s) {
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
   };
-  for (const Parameter& p : parameterTable()) j[sectionOf(p)][std::string(p.key)] = valueJson(p, p.get(params));
+  for (const Parameter& p : parameters()) j[sectionOf(p)][std::string(p.key)] = valueJson(p, p.get(params));
   return j;
 }
 
@@ -92,7 +90,7 @@ Settings fromJson(const json& j) {
   // The mapping parameters, each read and checked by the parameter table (as --set and the
   // command line do); keys the table does not know are left alone.
   ParameterValues params = paramsOf(s);
-  for (const Parameter& p : parameterTable()) {
+  for (const Parameter& p : parameters()) {
     const char* section = sectionOf(p);
     if (!j.contains(section) || !j.at(section).contains(p.key)) continue;
     try {

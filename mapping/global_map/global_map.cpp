@@ -307,18 +307,6 @@ struct OcclusionBuffers {
 
 }  // namespace
 
-void GlobalMapParams::validate() const {
-  auto fail = [](const std::string& what) { throw std::invalid_argument(what); };
-  if (!(filter.filter_sigma_factor > 0.0)) fail("filter_sigma_factor must be > 0");
-  if (filter.min_points < 0) fail("min_points must be >= 0");
-  if (!(tau_group >= 0.0 && tau_group <= 1.0)) fail("tau_group must be within 0..1");
-  if (!(merge_distance_m >= 0.0) || !std::isfinite(merge_distance_m)) fail("merge_distance must be >= 0 m");
-  if (!(occlusion_distance_m >= 0.0) || !std::isfinite(occlusion_distance_m)) fail("occlusion_distance must be >= 0 m");
-  if (!(occlusion_angle_deg >= 0.0 && occlusion_angle_deg <= 180.0)) fail("occlusion_angle must be within 0..180 degrees");
-  if (!(fusion_max_distance >= 0.0 && fusion_max_distance <= 10.0)) fail("fusion_max_distance must be within 0..10");
-  if (threads < 0) fail("threads must be >= 0");
-}
-
 std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group) {
   const int n = static_cast<int>(graph.size());
   std::vector<bool> assigned(static_cast<std::size_t>(n), false);

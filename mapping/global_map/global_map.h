@@ -10,7 +10,8 @@
 
 namespace vdmap {
 
-/// The live parameters of the global map (SPEC section 9).
+/// The live parameters of the global map (SPEC section 9). Their ranges, units and help texts are
+/// rows of the parameter table (global_map_parameters.cpp, docs/parameters.md).
 struct GlobalMapParams {
   FilterParams filter;                 ///< which local-map ellipsoids are kept
   double tau_group = 0.1;              ///< edge weight that puts a neighbour in a merge group
@@ -22,10 +23,11 @@ struct GlobalMapParams {
   /// that describe the same surface, so the map grows with the area seen rather than with revisits.
   bool fuse_across_groups = true;
   /// Two ellipsoids of different groups are the same surface when their Bhattacharyya distance
-  /// (bhattacharyyaDistance) is at most this; 0..10.
+  /// (bhattacharyyaDistance) is at most this.
   double fusion_max_distance = 1.0;
   int threads = 0;                     ///< 0: all cores. The result does not depend on it.
-  /// Throws std::invalid_argument naming the first parameter out of range.
+  /// Throws std::invalid_argument naming the first parameter out of range (the table's ranges,
+  /// and threads >= 0).
   void validate() const;
 };
 

@@ -12,24 +12,6 @@
 
 namespace vdmap {
 
-void MapperParams::validate() const {
-  auto check = [](bool ok, const char* what) {
-    if (!ok) throw std::invalid_argument(what);
-  };
-  check(local_map.cell_size_px >= 1, "cell_size must be >= 1 px");
-  const DepthRange& d = local_map.depth_range;
-  check(d.min_m >= 0 && d.min_m < d.max_m && std::isfinite(d.max_m), "depth range must satisfy 0 <= min < max");
-  check(features.orb_features >= 1, "orb_features must be >= 1");
-  const KeyframeParams& k = keyframes;
-  check(k.tau >= 0 && k.tau <= 1 && k.tau_edge >= 0 && k.tau_edge <= 1, "tau and tau_edge must be within 0..1");
-  check(k.prefilter.max_distance_m >= 0 && k.prefilter.max_angle_deg >= 0, "prefilter limits must be >= 0");
-  check(k.min_frame_features >= 0, "min_frame_features must be >= 0");
-  check(k.covisibility.max_hamming >= 0 && k.covisibility.lowe_ratio > 0 && k.covisibility.lowe_ratio <= 1 &&
-            k.covisibility.max_reprojection_px >= 0,
-        "covisibility parameters out of range");
-  check(keyframe_every >= 0, "keyframe_every must be >= 0");
-}
-
 void MapperState::validate(std::size_t keyframes) const {
   if (current_keyframe < -1 || current_keyframe >= static_cast<long long>(keyframes))
     throw std::invalid_argument("current keyframe " + std::to_string(current_keyframe) + " is not one of the " +

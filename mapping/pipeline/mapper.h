@@ -33,7 +33,7 @@ struct MapperParams {
   PoseSource poses = PoseSource::kGroundTruth;
 
   /// Throws std::invalid_argument naming the first value out of range (the cell size is checked
-  /// against the camera by Mapper).
+  /// against the camera by Mapper). The ranges are the parameter table's (mapper_parameters.cpp).
   void validate() const;
 };
 

@@ -11,6 +11,7 @@
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
+#include "mapping/pipeline/parameters.h"
 
 namespace vdmap {
 namespace {
@@ -154,23 +155,24 @@ void appendSection(Writer* file, const std::array<char, 4>& tag, const std::stri
 }
 
 // --- parameters -------------------------------------------------------------------------------
+// The parameter fields come from the parameter table (storedParameters(), in the file's order);
+// the camera before them, the pose source after the mapper's, the counts at the end are this
+// file's own.
+
+void writeStored(Writer* w, const ParameterValues& values, bool live) {
+  for (const StoredParameter& s : storedParameters(live)) {
+    const double v = s.parameter->get(values);
+    switch (s.type) {
+      case StoredParameter::Type::kI32: w->i32(static_cast<std::int32_t>(v)); break;
+      case StoredParameter::Type::kU32: w->u32(static_cast<std::uint32_t>(v)); break;
+      case StoredParameter::Type::kF64: w->f64(v); break;
+      case StoredParameter::Type::kBool: w->boolean(v != 0); break;
+    }
+  }
+}
 
 void writeMapperParams(Writer* w, const MapperParams& m) {
-  w->i32(m.local_map.cell_size_px);
-  w->f64(m.local_map.depth_range.min_m);
-  w->f64(m.local_map.depth_range.max_m);
-  w->i32(m.features.orb_features);
-  const KeyframeParams& k = m.keyframes;
-  w->f64(k.tau);
-  w->f64(k.tau_edge);
-  w->boolean(k.prefilter.enabled);
-  w->f64(k.prefilter.max_distance_m);
-  w->f64(k.prefilter.max_angle_deg);
-  w->i32(k.min_frame_features);
-  w->i32(k.covisibility.max_hamming);
-  w->f64(k.covisibility.lowe_ratio);
-  w->f64(k.covisibility.max_reprojection_px);
-  w->i32(m.keyframe_every);
+  writeStored(w, {m, {}}, /*live=*/false);
   w->u32(static_cast<std::uint32_t>(m.poses));
 }
 
@@ -180,20 +182,38 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->i32(c.height);
   for (double v : {c.fx, c.fy, c.cx, c.cy, c.depth_scale}) w->f64(v);
   writeMapperParams(w, info.mapper);
-  const GlobalMapParams& g = info.global;
-  w->u32(static_cast<std::uint32_t>(g.filter.model));
-  w->f64(g.filter.filter_sigma_factor);
-  w->i32(g.filter.min_points);
-  w->f64(g.tau_group);
-  w->f64(g.merge_distance_m);
-  w->boolean(g.occlusion_removal);
-  w->f64(g.occlusion_distance_m);
-  w->f64(g.occlusion_angle_deg);
-  w->boolean(g.fuse_across_groups);
-  w->f64(g.fusion_max_distance);
+  writeStored(w, {{}, info.global}, /*live=*/true);
   w->i32(info.state.frames_mapped);
   w->i32(info.state.revisits);
   w->u32(static_cast<std::uint32_t>(keyframes));
+}
+
+double readField(Reader* r, const StoredParameter& s) {
+  switch (s.type) {
+    case StoredParameter::Type::kI32: return r->i32(s.name);
+    case StoredParameter::Type::kU32: {
+      const std::uint32_t v = r->u32(s.name);
+      r->check(v < s.parameter->choices.size(), "unknown " + std::string(s.name) + " " + std::to_string(v));
+      return v;
+    }
+    case StoredParameter::Type::kF64: return r->f64(s.name);
+    case StoredParameter::Type::kBool: return r->boolean(s.name);
+  }
+  return 0;
+}
+
+// Reads the fields of storedParameters(live) into `values`; a field newer than the file gets the
+// value such files were made with. `after_each` checks a field as soon as it is read.
+template <typename Check>
+void readStored(Reader* r, std::uint32_t version, bool live, ParameterValues* values, Check after_each) {
+  for (const StoredParameter& s : storedParameters(live)) {
+    if (version < s.since_version) {
+      if (s.older) s.parameter->set(*values, *s.older);
+      continue;
+    }
+    s.parameter->set(*values, readField(r, s));
+    after_each(*s.parameter);
+  }
 }
 
 std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
@@ -206,45 +226,28 @@ std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
   c.cy = r->f64("cy");
   c.depth_scale = r->f64("depth_scale");
   r->checkValid("camera", [&c] { c.validate(); });  // also bounds the image size
-  MapperParams& m = info->mapper;
-  m.local_map.cell_size_px = r->i32("cell_size_px");
-  r->check(m.local_map.cell_size_px >= 1 && m.local_map.cell_size_px <= std::min(c.width, c.height),
-           "cell_size_px must be within 1..min(width, height)");
-  m.local_map.depth_range.min_m = r->f64("min_depth");
-  m.local_map.depth_range.max_m = r->f64("max_depth");
-  m.features.orb_features = r->i32("orb_features");
-  KeyframeParams& k = m.keyframes;
-  k.tau = r->f64("tau");
-  k.tau_edge = r->f64("tau_edge");
-  k.prefilter.enabled = r->boolean("prefilter enabled");
-  k.prefilter.max_distance_m = r->f64("prefilter max_distance");
-  k.prefilter.max_angle_deg = r->f64("prefilter max_angle");
-  k.min_frame_features = r->i32("min_frame_features");
-  k.covisibility.max_hamming = r->i32("max_hamming");
-  k.covisibility.lowe_ratio = r->f64("lowe_ratio");
-  k.covisibility.max_reprojection_px = r->f64("max_reprojection");
-  m.keyframe_every = r->i32("keyframe_every");
+  ParameterValues values{info->mapper, info->global};
+  const Parameter* cell_size = findParameter("cell_size");
+  readStored(r, version, /*live=*/false, &values, [&](const Parameter& p) {
+    // The one field bounded by a value outside the table (the camera's image): checked as soon as
+    // it is read, so a file with a bad one says so whatever follows it.
+    if (&p == cell_size)
+      r->check(values.mapper.local_map.cell_size_px >= 1 &&
+                   values.mapper.local_map.cell_size_px <= std::min(c.width, c.height),
+               "cell_size_px must be within 1..min(width, height)");
+  });
+  MapperParams& m = values.mapper;
   if (version >= 4) {  // sessions before version 4 were all mapped with ground-truth poses
     const std::uint32_t poses = r->u32("pose source");
     r->check(poses <= static_cast<std::uint32_t>(PoseSource::kTrack), "unknown pose source " + std::to_string(poses));
     m.poses = static_cast<PoseSource>(poses);
   }
   r->checkValid("mapper parameters", [&m] { m.validate(); });
-  GlobalMapParams& g = info->global;
-  const std::uint32_t model = r->u32("sensor model");
-  r->check(model <= static_cast<std::uint32_t>(SensorModel::kBelter2018), "unknown sensor model " + std::to_string(model));
-  g.filter.model = static_cast<SensorModel>(model);
-  g.filter.filter_sigma_factor = r->f64("filter_sigma_factor");
-  g.filter.min_points = r->i32("min_points");
-  g.tau_group = r->f64("tau_group");
-  g.merge_distance_m = r->f64("merge_distance");
-  g.occlusion_removal = r->boolean("occlusion_removal");
-  g.occlusion_distance_m = r->f64("occlusion_distance");
-  g.occlusion_angle_deg = r->f64("occlusion_angle");
-  // Versions 1 and 2 predate fusion across groups: their maps were built without it.
-  g.fuse_across_groups = version >= 3 ? r->boolean("fuse_across_groups") : false;
-  if (version >= 3) g.fusion_max_distance = r->f64("fusion_max_distance");
+  readStored(r, version, /*live=*/true, &values, [](const Parameter&) {});
+  const GlobalMapParams& g = values.global;
   r->checkValid("global map", [&g] { g.validate(); });
+  info->mapper = values.mapper;
+  info->global = values.global;
   info->state.frames_mapped = r->i32("frames_mapped");
   info->state.revisits = r->i32("revisits");
   r->check(info->state.frames_mapped >= 0 && info->state.revisits >= 0, "frame and revisit counts must be >= 0");
