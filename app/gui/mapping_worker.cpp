@@ -510,7 +510,7 @@ std::shared_ptr<const SelectionSnapshot> MappingWorker::selection() const {
 
 PlayerStatus MappingWorker::status() const {
   std::lock_guard lock(mutex_);
-  return {playing_, workLeft(), target_, error_, message_};
+  return {playing_, workLeft(), target_, error_, message_, fps_};
 }
 
 void MappingWorker::notifyChange() const {

@@ -118,6 +118,7 @@ struct PlayerStatus {
   int target = 0;      ///< frames the worker maps up to
   std::string error;   ///< the last failure (a bad frame, a pose file), empty when none
   std::string message; ///< the last command's outcome, e.g. "12 keyframe poses replaced"
+  float fps = 0.f;     ///< the playback limit (setFps) in frames per second; 0: none
 };
 
 class MappingWorker {

@@ -114,6 +114,7 @@ bool Workbench::open(const SequenceArgs& args) {
     MapperParams mapper = ui_.settings.mapper;
     mapper.poses = poseSource(absolute_args, sequence);
     auto worker = std::make_unique<MappingWorker>(std::move(sequence), mapper, ui_.settings.thresholds, refine_);
+    worker->setOnChange(on_change_);
     worker->setFps(ui_.settings.play_fps);
     worker_ = std::move(worker);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
@@ -165,7 +166,9 @@ bool Workbench::openSession(const std::string& file) {
     // The session's own parameters, shown and used; the user's settings stay as they are.
     const ParameterValues params{saved.info.mapper, saved.info.global};
     std::optional<TumSequence> rest = framesAfter(saved, &why);
-    worker_ = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
+    auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
+    worker->setOnChange(on_change_);
+    worker_ = std::move(worker);
     ui_.params = params;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
@@ -183,6 +186,7 @@ bool Workbench::openPath(const std::string& path) {
 }
 
 void Workbench::opened(const std::string& path) {
+  ++session_serial_;
   ui_.settings.last_sequence = path;
   ui_.sequence_text = path;
   report(StatusLine::Kind::kSuccess, "opened " + path);
@@ -288,8 +292,46 @@ void Workbench::resetToDefaults() {
   }
   ui_.reset_layout = true;
   applyThresholds();
-  if (worker_) worker_->setFps(ui_.settings.play_fps);
+  setFps(ui_.settings.play_fps);
   if (rerun_needed) rerun();
+}
+
+std::shared_ptr<const MappingSnapshot> Workbench::mapping() const { return worker_ ? worker_->mapping() : nullptr; }
+
+std::shared_ptr<const GlobalSnapshot> Workbench::global() const { return worker_ ? worker_->global() : nullptr; }
+
+std::shared_ptr<const SelectionSnapshot> Workbench::selection() const {
+  return worker_ ? worker_->selection() : nullptr;
+}
+
+PlayerStatus Workbench::player() const { return worker_ ? worker_->status() : PlayerStatus{}; }
+
+void Workbench::play() {
+  if (worker_) worker_->play();
+}
+
+void Workbench::pause() {
+  if (worker_) worker_->pause();
+}
+
+void Workbench::seek(int frame) {
+  if (worker_) worker_->seek(frame);
+}
+
+void Workbench::setFps(float fps) {
+  ui_.settings.play_fps = fps;
+  if (worker_) worker_->setFps(fps);
+}
+
+void Workbench::preselectKeyframe(int id) {
+  if (!worker_) return;
+  ui_.selected_keyframe = id;
+  worker_->selectKeyframe(id);
+}
+
+void Workbench::setOnChange(std::function<void()> on_change) {
+  on_change_ = std::move(on_change);
+  if (worker_) worker_->setOnChange(on_change_);
 }
 
 void Workbench::selectKeyframe(int id) {
@@ -488,14 +530,14 @@ void Workbench::key(KeyAction action) {
   MappingWorker* s = worker_.get();
   switch (action) {
     case KeyAction::kPlayPause:
-      if (s) s->status().playing ? s->pause() : s->play();
+      player().playing ? pause() : play();
       break;
     case KeyAction::kStepForward:
       if (s) s->step();
       break;
     case KeyAction::kStepBack:
       // From the frame asked for (not the one mapped yet), so quick taps add up.
-      if (s && s->status().target >= 2) s->seek(s->status().target - 2);
+      if (const int target = player().target; target >= 2) seek(target - 2);
       break;
     case KeyAction::kNextKeyframe:
       if (s) s->stepToKeyframe();

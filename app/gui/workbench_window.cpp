@@ -139,6 +139,7 @@ class WorkbenchWindow {
   WorkbenchWindow(Workbench& bench, GlfwWindowContext& context, const ScriptOptions& script, Preparation prepare,
                   KeyQueue& keys)
       : bench_(bench), context_(context), gl_(context.gl()), script_(script), keys_(keys), mirror_(gl_) {
+    bench_.setOnChange([] { glfwPostEmptyEvent(); });
     if (prepare.run) {
       prepare_what_ = prepare.what;
       prepare_args_ = prepare.args;
@@ -157,7 +158,7 @@ class WorkbenchWindow {
 
   ~WorkbenchWindow() {
     if (preparing_.valid()) preparing_.wait();
-    if (bench_.worker()) bench_.worker()->setOnChange(nullptr);
+    bench_.setOnChange(nullptr);
   }
 
   // Waits for input, news from the worker or a deadline, and draws a frame only when something
@@ -181,16 +182,14 @@ class WorkbenchWindow {
   bool scripted() const { return !script_.screenshot.empty() || !script_.stats_json.empty() || script_.exit; }
 
   void startScript() {
-    if (script_.play_to_end && bench_.worker()) bench_.worker()->play();
-    if (script_.keyframe >= 0 && bench_.worker()) {  // selected before it is mapped, unlike Workbench::selectKeyframe
-      ui().selected_keyframe = script_.keyframe;
-      bench_.worker()->selectKeyframe(script_.keyframe);
-    }
+    if (script_.play_to_end) bench_.play();
+    if (script_.keyframe >= 0) bench_.preselectKeyframe(script_.keyframe);
   }
 
   // What the newest snapshots are, to notice news without drawing.
   struct Seen {
-    const void *worker = nullptr, *mapping = nullptr, *global = nullptr, *selection = nullptr;
+    int session = 0;
+    const void *mapping = nullptr, *global = nullptr, *selection = nullptr;
     int status = -1;
     bool busy = false;
     bool operator==(const Seen&) const = default;
@@ -198,12 +197,12 @@ class WorkbenchWindow {
   Seen seen() {
     Seen s;
     s.status = ui().status.serial;
-    if (MappingWorker* worker = bench_.worker()) {
-      s.worker = worker;
-      s.mapping = worker->mapping().get();
-      s.global = worker->global().get();
-      s.selection = worker->selection().get();
-      s.busy = worker->status().busy;
+    if (bench_.isOpen()) {
+      s.session = bench_.sessionSerial();
+      s.mapping = bench_.mapping().get();
+      s.global = bench_.global().get();
+      s.selection = bench_.selection().get();
+      s.busy = bench_.player().busy;
     }
     return s;
   }
@@ -223,7 +222,7 @@ class WorkbenchWindow {
   double waitSeconds() const {
     if (script_phase_ == Phase::kIdle) return std::max(0.0, std::chrono::duration<double>(idle_until_ - Clock::now()).count());
     if (preparing_.valid()) return 0.2;
-    // The worker wakes the loop itself (MappingWorker::setOnChange); the timeout is a safety net.
+    // The worker wakes the loop itself (Workbench::setOnChange); the timeout is a safety net.
     return 2.0;
   }
 
@@ -235,10 +234,6 @@ class WorkbenchWindow {
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
     keys_.events = 0;
     if (preparing_.valid() && preparing_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) finishPreparation();
-    if (MappingWorker* worker = bench_.worker(); worker && worker != hooked_worker_) {
-      worker->setOnChange([] { glfwPostEmptyEvent(); });
-      hooked_worker_ = worker;
-    }
     ImGui_ImplOpenGL3_NewFrame();
     ImGui_ImplGlfw_NewFrame();
     ImGui::NewFrame();
@@ -246,8 +241,8 @@ class WorkbenchWindow {
     layout();
     handleKeys();
     bench_.sync();
-    mapping_ = bench_.worker() ? bench_.worker()->mapping() : nullptr;
-    global_ = bench_.worker() ? bench_.worker()->global() : nullptr;
+    mapping_ = bench_.mapping();
+    global_ = bench_.global();
     syncMirror();
     labels_cut_ = 0;
     drawSequencePanel();
@@ -279,7 +274,7 @@ class WorkbenchWindow {
     }
     frame_times_.push_back(frame_ms_);
     if (frame_times_.size() > 30) frame_times_.pop_front();
-    if (bench_.worker() && bench_.worker()->status().busy) busy_frame_ms_.push_back(frame_ms_);
+    if (bench_.player().busy) busy_frame_ms_.push_back(frame_ms_);
   }
 
   void finishPreparation() {
@@ -378,10 +373,9 @@ class WorkbenchWindow {
                       .graph = s.show_graph,
                       .trajectory = s.show_trajectory,
                       .groundtruth = s.show_groundtruth});
-    MappingWorker* worker = bench_.worker();
-    if (!worker) return;
-    if (worker != mirrored_worker_) {  // generations restart with every session
-      mirrored_worker_ = worker;
+    if (!bench_.isOpen()) return;
+    if (bench_.sessionSerial() != mirrored_session_) {  // generations restart with every session
+      mirrored_session_ = bench_.sessionSerial();
       session_base_ += 1 << 20;
     }
     if (global_) mirror_.setMap(session_base_ + global_->generation, global_->map.ellipsoids);
@@ -391,7 +385,7 @@ class WorkbenchWindow {
     const auto scene = [&] { return bench_.graphScene(*mapping); };
     mirror_.setGraph(session_base_ + mapping->generation, ui().selected_keyframe, scene, ui().show_before_optimisation);
     mirror_.setHighlight(ui().picked);
-    const auto selection = worker->selection();
+    const auto selection = bench_.selection();
     if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
       const int id = selection->keyframe;
       const render::ContainerStyle style{.sigma = 2.f, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
@@ -416,7 +410,7 @@ class WorkbenchWindow {
     gl_.ClearColor(kBackground[0], kBackground[1], kBackground[2], 1.f);
     gl_.ClearDepth(1.0);
     gl_.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
-    if (!bench_.worker() || fb_width_ <= 0 || fb_height_ <= 0) return;
+    if (!bench_.isOpen() || fb_width_ <= 0 || fb_height_ <= 0) return;
     const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
     const int vx = static_cast<int>(view_.x * scale.x), vw = ui().view_width, vh = ui().view_height;
     const int vy = fb_height_ - static_cast<int>(view_.y * scale.y) - vh;  // GL counts rows from the bottom
@@ -448,7 +442,7 @@ class WorkbenchWindow {
 
   void handleMouse() {
     const ImGuiIO& io = ImGui::GetIO();
-    if (!bench_.worker()) return;
+    if (!bench_.isOpen()) return;
     const bool over_view = view_.contains(io.MousePos) && !io.WantCaptureMouse;
     for (int b = 0; b < 3; ++b)
       if (ImGui::IsMouseClicked(b)) drag_in_view_[b] = over_view;
@@ -483,16 +477,15 @@ class WorkbenchWindow {
     tip(ui().sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
                                    : "Opens the folder or session typed on the left; errors show in the status line below.");
     ImGui::EndDisabled();
-    MappingWorker* worker = bench_.worker();
-    if (!worker) {
+    if (!bench_.isOpen()) {
       ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
       ImGui::End();
       return;
     }
-    const PlayerStatus status = worker->status();
+    const PlayerStatus status = bench_.player();
     const int total = mapping_->frames_total, mapped = mapping_->frames_mapped;
     const bool saved = bench_.savedSession();
-    if (const TumSequence* sequence = worker->sequence()) {
+    if (const TumSequence* sequence = bench_.sequence()) {
       ImGui::TextWrapped("%s", sequence->folder().c_str());
       ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping_->camera.width,
                          mapping_->camera.height, total);
@@ -534,7 +527,7 @@ class WorkbenchWindow {
     if (beginRows("player")) {
       label("fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
       if (ImGui::SliderFloat("##fps", &ui().settings.play_fps, 0.f, 60.f, ui().settings.play_fps > 0 ? "%.0f" : "max"))
-        worker->setFps(ui().settings.play_fps);
+        bench_.setFps(ui().settings.play_fps);
       ImGui::EndTable();
     }
     if (mapping_->mapper.poses == PoseSource::kTrack) drawLoopStrip(total);
@@ -543,7 +536,7 @@ class WorkbenchWindow {
     ImGui::SetNextItemWidth(-FLT_MIN);
     ImGui::SliderInt("##frame", &scrub_, 0, std::max(0, total - 1), "frame %d");
     scrubbing_ = ImGui::IsItemActive();
-    if (ImGui::IsItemDeactivatedAfterEdit()) worker->seek(scrub_);
+    if (ImGui::IsItemDeactivatedAfterEdit()) bench_.seek(scrub_);
     tip(saved ? why_saved : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
     const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
     ImDrawList* draw = ImGui::GetWindowDrawList();
@@ -675,7 +668,7 @@ class WorkbenchWindow {
 
   void drawMapPanel() {
     beginPanel("Map", right_, right_w_);
-    if (bench_.worker()) {
+    if (bench_.isOpen()) {
       if (section("Thresholds (live)", true)) drawThresholds();
       if (section("Re-run parameters")) drawRerun();
       if (mapping_->mapper.poses == PoseSource::kTrack && section("Tracking and loop closures", true)) drawTracking();
@@ -785,7 +778,7 @@ class WorkbenchWindow {
       row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
           m.occlusion_ms);
       row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
-          "%d frames%s", global_->frames_mapped, bench_.worker()->status().busy ? ", rebuilding" : "");
+          "%d frames%s", global_->frames_mapped, bench_.player().busy ? ", rebuilding" : "");
       ImGui::EndTable();
     }
     if (stored > 0 && m.sigma_e * 20 < stored) {
@@ -1120,7 +1113,7 @@ class WorkbenchWindow {
       draw->AddRect({x, y}, {x + w, y + font}, dim);
       return;
     }
-    if (!bench_.worker()) {
+    if (!bench_.isOpen()) {
       draw->AddText({view_.x + pad, view_.y + pad}, dim, "Open a TUM RGB-D folder or a .vdmap session (left panel).");
       return;
     }
@@ -1302,11 +1295,10 @@ class WorkbenchWindow {
 
   void advanceScript() {
     if (!scripted() || script_phase_ == Phase::kDone || preparing_.valid()) return;
-    MappingWorker* worker = bench_.worker();
     switch (script_phase_) {
       case Phase::kWaitDone: {
-        if (worker) {
-          const PlayerStatus st = worker->status();
+        if (bench_.isOpen()) {
+          const PlayerStatus st = bench_.player();
           const bool done = !st.busy && (st.target >= mapping_->frames_total || !script_.play_to_end || !st.error.empty());
           if (!done) return;
         }
@@ -1318,7 +1310,7 @@ class WorkbenchWindow {
         return;
       }
       case Phase::kSettle:
-        if (worker && worker->status().busy) return;  // a key pressed above may have asked for a rebuild
+        if (bench_.player().busy) return;  // a key pressed above may have asked for a rebuild
         if (--countdown_ > 0) return;
         recordLayout();
         if (!script_.screenshot.empty() && !failedRun()) {
@@ -1344,7 +1336,7 @@ class WorkbenchWindow {
           orbit_cpu_start_ = cpu;
           return;
         }
-        if ((worker && worker->status().busy) || settle_frames_ > 0) return;  // idle: the worker and the UI
+        if (bench_.player().busy || settle_frames_ > 0) return;  // idle: the worker and the UI
         script_phase_ = Phase::kIdle;  // starts once this frame is on screen (frame())
         idle_until_ = Clock::time_point::max();
         return;
@@ -1371,10 +1363,9 @@ class WorkbenchWindow {
   // One slider change at a time (merge distance, alternating): from the edit until the frame
   // that shows the map built with it. Returns true while runs remain.
   bool measureLatency() {
-    MappingWorker* worker = bench_.worker();
-    if (!worker || !global_) return false;
+    if (!bench_.isOpen() || !global_) return false;
     if (latency_generation_ >= 0) {
-      if (global_->generation <= latency_generation_ || worker->status().busy) return true;
+      if (global_->generation <= latency_generation_ || bench_.player().busy) return true;
       latency_ms_.push_back(msSince(latency_start_));  // this frame draws the new map
       latency_generation_ = -1;
     }
@@ -1477,8 +1468,7 @@ class WorkbenchWindow {
   render::MapMirror mirror_;
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
-  const MappingWorker* mirrored_worker_ = nullptr;
-  const MappingWorker* hooked_worker_ = nullptr;
+  int mirrored_session_ = 0;
   int session_base_ = 0;
   int decoded_rgb_for_ = -1;  // the container generation decoded_rgb_ was decoded for
   cv::Mat decoded_rgb_;
