@@ -5,6 +5,7 @@
 // pointers (no other lock, so no lock order to keep); mapping and map building run unlocked.
 // What only the inspector needs (one keyframe's local map) is computed by the worker for the
 // selected keyframe alone and published apart, so a selection change copies no global map.
+// The worker's thread lives in mapping_worker.cpp, the UI thread's side in mapping_worker_commands.cpp.
 #include <chrono>
 #include <condition_variable>
 #include <deque>
