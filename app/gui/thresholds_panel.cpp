@@ -13,8 +13,10 @@
 namespace vdmap::app::gui {
 namespace {
 
-// One parameter of the table as a slider, combo or checkbox.
-void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, bool disabled, const std::string& why_disabled) {
+// One parameter of the table as a slider, combo or checkbox; disabled, saying why, unless
+// why_disabled is "".
+void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const std::string& why_disabled) {
+  const bool disabled = !why_disabled.empty();
   const bool pending = bench.pending(p);
   std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
                      "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
@@ -100,19 +102,18 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
 
 }  // namespace
 
+std::string disabledReason(const Parameter& p, const ParameterValues& values) {
+  if (p.key == "fusion_max_distance" && !values.global.fuse_across_groups)
+    return "Fusion across groups is off: this has no effect.";
+  const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
+  if (occlusion_param && !values.global.occlusion_removal) return "Occlusion removal is off: this has no effect.";
+  return "";
+}
+
 void drawThresholds(Workbench& bench, WindowState& win) {
-  const bool occlusion_off = !bench.ui().params.global.occlusion_removal;
-  const bool fusion_off = !bench.ui().params.global.fuse_across_groups;
   if (beginRows("thresholds")) {
-    for (const Parameter& p : parameterTable()) {
-      if (!p.live) continue;
-      if (p.key == "fusion_max_distance") {
-        parameterRow(bench, win, p, fusion_off, "Fusion across groups is off: this has no effect.");
-        continue;
-      }
-      const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
-      parameterRow(bench, win, p, occlusion_param && occlusion_off, "Occlusion removal is off: this has no effect.");
-    }
+    for (const Parameter& p : parameterTable())
+      if (p.live) parameterRow(bench, win, p, disabledReason(p, bench.ui().params));
     ImGui::EndTable();
   }
   if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
@@ -124,7 +125,7 @@ void drawRerun(Workbench& bench, WindowState& win) {
   const std::string why = "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
   if (beginRows("rerun")) {
     for (const Parameter& p : parameterTable())
-      if (!p.live) parameterRow(bench, win, p, saved, why);
+      if (!p.live) parameterRow(bench, win, p, saved ? why : "");
     ImGui::EndTable();
   }
   bool any_pending = false;
