@@ -43,6 +43,7 @@ struct Mirrored {
   cv::Mat decoded_rgb;        ///< the selected keyframe's image, decoded once per selection
 };
 
+/// The window's own state (see the top of this file); the UI thread alone uses it.
 struct WindowState {
   /// The snapshots this frame draws, taken once after Workbench::sync (the worker may publish
   /// newer ones meanwhile; the frame stays consistent). Null while nothing is open.
