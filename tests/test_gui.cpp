@@ -1,5 +1,6 @@
 // The workbench without a window: settings persistence, the mapping session (play, step, seek,
 // live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
+#include <atomic>
 #include <future>
 #include <random>
 #include <regex>
@@ -660,6 +661,110 @@ TEST(GuiWorkbench, KeysDriveThePlayerAndTheViewFollowsTheMapUntilMoved) {
   EXPECT_EQ(bench.ui().camera.yaw, moved.yaw);
   bench.key(KeyAction::kResetView);  // R: the default direction
   EXPECT_EQ(bench.ui().camera.yaw, framed.yaw);
+}
+
+// The player as the window drives it, through the Workbench alone: play, pause, the fps limit
+// and the scrubber's seek, with the snapshots the panels read.
+TEST(GuiWorkbench, PlayPauseFpsAndSeekGoThroughTheWorkbench) {
+  Workbench closed{Settings{}};
+  EXPECT_FALSE(closed.isOpen());
+  EXPECT_EQ(closed.sessionSerial(), 0);
+  closed.play();
+  closed.seek(3);
+  closed.setFps(7.f);  // nothing to play: only the setting changes
+  EXPECT_FALSE(closed.player().playing);
+  EXPECT_EQ(closed.player().target, 0);
+  EXPECT_EQ(closed.mapping(), nullptr);
+  EXPECT_EQ(closed.global(), nullptr);
+  EXPECT_EQ(closed.selection(), nullptr);
+  EXPECT_EQ(closed.sequence(), nullptr);
+  EXPECT_FLOAT_EQ(closed.ui().settings.play_fps, 7.f);
+
+  TinyBench t;
+  Workbench& bench = t.bench;
+  ASSERT_TRUE(bench.isOpen());
+  EXPECT_EQ(bench.sessionSerial(), 1);
+  ASSERT_NE(bench.sequence(), nullptr);
+  EXPECT_EQ(bench.sequence()->folder(), t.dir / "seq");
+  bench.setFps(12.f);
+  EXPECT_FLOAT_EQ(bench.player().fps, 12.f) << "the fps limit did not reach the player";
+  EXPECT_FLOAT_EQ(bench.ui().settings.play_fps, 12.f);
+  bench.setFps(0.f);
+  EXPECT_FLOAT_EQ(bench.player().fps, 0.f);
+  bench.play();
+  EXPECT_EQ(bench.player().target, 10);
+  t.worker().waitIdle();
+  EXPECT_EQ(bench.mapping()->frames_mapped, 10);
+  ASSERT_NE(bench.global(), nullptr);
+  EXPECT_EQ(bench.global()->frames_mapped, 10);
+  EXPECT_FALSE(bench.player().playing) << "the player stops at the end";
+
+  bench.seek(4);  // backwards: re-mapped from the first frame up to frame 4
+  EXPECT_EQ(bench.player().target, 5);
+  t.worker().waitIdle();
+  EXPECT_EQ(bench.mapping()->frames_mapped, 5);
+  EXPECT_EQ(bench.global()->frames_mapped, 5);
+  bench.seek(7);  // forwards: maps up to frame 7
+  t.worker().waitIdle();
+  EXPECT_EQ(bench.mapping()->frames_mapped, 8);
+  EXPECT_TRUE(bench.player().error.empty()) << bench.player().error;
+
+  // The limit is a setting: a sequence opened later plays at it. Slow enough that play, then
+  // pause, finds the player still playing.
+  bench.setFps(2.f);
+  ASSERT_TRUE(bench.open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  EXPECT_EQ(bench.sessionSerial(), 2);
+  EXPECT_FLOAT_EQ(bench.player().fps, 2.f);
+  bench.play();
+  EXPECT_TRUE(bench.player().playing);
+  EXPECT_EQ(bench.player().target, 10);
+  bench.pause();
+  EXPECT_FALSE(bench.player().playing);
+  t.worker().waitIdle();
+  EXPECT_LT(bench.mapping()->frames_mapped, 10) << "paused, yet mapped to the end";
+  bench.resetToDefaults();
+  EXPECT_FLOAT_EQ(bench.player().fps, Settings{}.play_fps);
+}
+
+// The scripted run's --keyframe selects a keyframe before it is mapped; the inspector shows it once
+// it is (selectKeyframe would drop an id not mapped yet).
+TEST(GuiWorkbench, APreselectedKeyframeIsShownOnceItIsMapped) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  bench.selectKeyframe(2);
+  EXPECT_EQ(bench.ui().selected_keyframe, -1) << "not mapped yet: no selection";
+  bench.preselectKeyframe(2);
+  EXPECT_EQ(bench.ui().selected_keyframe, 2);
+  bench.play();
+  t.worker().waitIdle();
+  const auto selection = bench.selection();
+  ASSERT_NE(selection, nullptr);
+  EXPECT_EQ(selection->keyframe, 2);
+  EXPECT_FALSE(selection->local.empty());
+}
+
+// The window wakes its event loop with the on-change hook: it is called for the open session's
+// news and handed to every session opened later.
+TEST(GuiWorkbench, TheOnChangeHookFollowsEverySessionOpened) {
+  std::atomic<int> calls{0};  // outlives the worker, which may call the hook until it stops
+  TinyBench t;
+  Workbench& bench = t.bench;
+  bench.setOnChange([&calls] { ++calls; });
+  bench.key(KeyAction::kStepForward);
+  t.worker().waitIdle();
+  EXPECT_GT(calls.load(), 0);
+  ASSERT_TRUE(bench.open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  t.worker().waitIdle();
+  calls = 0;
+  bench.key(KeyAction::kStepForward);
+  t.worker().waitIdle();
+  EXPECT_GT(calls.load(), 0) << "the new session does not call the hook";
+  bench.setOnChange(nullptr);
+  t.worker().waitIdle();
+  calls = 0;
+  bench.key(KeyAction::kStepForward);
+  t.worker().waitIdle();
+  EXPECT_EQ(calls.load(), 0) << "the hook was removed";
 }
 
 // The key table of docs/workbench.md is the help overlay's list, row for row, so neither drifts.

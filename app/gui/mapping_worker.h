@@ -5,6 +5,7 @@
 // pointers (no other lock, so no lock order to keep); mapping and map building run unlocked.
 // What only the inspector needs (one keyframe's local map) is computed by the worker for the
 // selected keyframe alone and published apart, so a selection change copies no global map.
+// The worker's thread lives in mapping_worker.cpp, the UI thread's side in mapping_worker_commands.cpp.
 #include <chrono>
 #include <condition_variable>
 #include <deque>
@@ -118,6 +119,7 @@ struct PlayerStatus {
   int target = 0;      ///< frames the worker maps up to
   std::string error;   ///< the last failure (a bad frame, a pose file), empty when none
   std::string message; ///< the last command's outcome, e.g. "12 keyframe poses replaced"
+  float fps = 0.f;     ///< the playback limit (setFps) in frames per second; 0: none
 };
 
 class MappingWorker {

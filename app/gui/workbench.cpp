@@ -8,9 +8,6 @@
 #include <Eigen/Geometry>
 
 #include "mapping/export/map_export.h"
-#include "render/map_mirror.h"
-#include "render/map_scene.h"
-#include "render/scene_lines.h"
 
 namespace vdmap::app::gui {
 namespace fs = std::filesystem;
@@ -45,29 +42,6 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"container view: wheel, drag", "zoom, pan"},
   };
   return keys;
-}
-
-int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px, float y_px,
-                  float radius_px) {
-  const glm::mat4 T_C_W = view.T_C_W;
-  int best = -1;
-  float best_d2 = radius_px * radius_px, best_z = 0.f;
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
-    const Eigen::Vector3d& m = ellipsoids[i].mean;
-    const glm::vec4 p = T_C_W * glm::vec4(m.x(), m.y(), m.z(), 1.f);
-    if (p.z <= view.near_m || p.z >= view.far_m) continue;
-    const float du = view.fx * p.x / p.z + view.cx - x_px, dv = view.fy * p.y / p.z + view.cy - y_px;
-    const float d2 = du * du + dv * dv;
-    if (d2 > radius_px * radius_px) continue;
-    // Within a pixel of the best, the nearer one wins (the one drawn in front).
-    const bool closer = best < 0 || d2 + 1.f < best_d2 || (d2 <= best_d2 + 1.f && p.z < best_z);
-    if (closer) {
-      best = static_cast<int>(i);
-      best_d2 = std::min(d2, best_d2);
-      best_z = p.z;
-    }
-  }
-  return best;
 }
 
 glm::vec3 rotationToEulerDeg(const Eigen::Matrix3d& R) {
@@ -114,6 +88,7 @@ bool Workbench::open(const SequenceArgs& args) {
     MapperParams mapper = ui_.settings.mapper;
     mapper.poses = poseSource(absolute_args, sequence);
     auto worker = std::make_unique<MappingWorker>(std::move(sequence), mapper, ui_.settings.thresholds, refine_);
+    worker->setOnChange(on_change_);
     worker->setFps(ui_.settings.play_fps);
     worker_ = std::move(worker);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
@@ -165,7 +140,9 @@ bool Workbench::openSession(const std::string& file) {
     // The session's own parameters, shown and used; the user's settings stay as they are.
     const ParameterValues params{saved.info.mapper, saved.info.global};
     std::optional<TumSequence> rest = framesAfter(saved, &why);
-    worker_ = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
+    auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
+    worker->setOnChange(on_change_);
+    worker_ = std::move(worker);
     ui_.params = params;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
@@ -183,6 +160,7 @@ bool Workbench::openPath(const std::string& path) {
 }
 
 void Workbench::opened(const std::string& path) {
+  ++session_serial_;
   ui_.settings.last_sequence = path;
   ui_.sequence_text = path;
   report(StatusLine::Kind::kSuccess, "opened " + path);
@@ -288,8 +266,46 @@ void Workbench::resetToDefaults() {
   }
   ui_.reset_layout = true;
   applyThresholds();
-  if (worker_) worker_->setFps(ui_.settings.play_fps);
+  setFps(ui_.settings.play_fps);
   if (rerun_needed) rerun();
+}
+
+std::shared_ptr<const MappingSnapshot> Workbench::mapping() const { return worker_ ? worker_->mapping() : nullptr; }
+
+std::shared_ptr<const GlobalSnapshot> Workbench::global() const { return worker_ ? worker_->global() : nullptr; }
+
+std::shared_ptr<const SelectionSnapshot> Workbench::selection() const {
+  return worker_ ? worker_->selection() : nullptr;
+}
+
+PlayerStatus Workbench::player() const { return worker_ ? worker_->status() : PlayerStatus{}; }
+
+void Workbench::play() {
+  if (worker_) worker_->play();
+}
+
+void Workbench::pause() {
+  if (worker_) worker_->pause();
+}
+
+void Workbench::seek(int frame) {
+  if (worker_) worker_->seek(frame);
+}
+
+void Workbench::setFps(float fps) {
+  ui_.settings.play_fps = fps;
+  if (worker_) worker_->setFps(fps);
+}
+
+void Workbench::preselectKeyframe(int id) {
+  if (!worker_) return;
+  ui_.selected_keyframe = id;
+  worker_->selectKeyframe(id);
+}
+
+void Workbench::setOnChange(std::function<void()> on_change) {
+  on_change_ = std::move(on_change);
+  if (worker_) worker_->setOnChange(on_change_);
 }
 
 void Workbench::selectKeyframe(int id) {
@@ -367,20 +383,6 @@ bool Workbench::showBeforeOptimisation(bool before) {
   return true;
 }
 
-render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
-  render::GraphScene scene;
-  const bool before = ui_.show_before_optimisation;
-  scene.camera = mapping.camera;
-  scene.keyframes = mapping.keyframePoses(before);
-  for (const CovisibilityEdge& e : mapping.edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
-  for (const LoopEvent& e : mapping.loops) scene.loops.push_back({e.loop.from, e.loop.to, 1.f});
-  scene.trajectory = mapping.trajectoryWorld(before);
-  if (ui_.settings.show_groundtruth) scene.groundtruth = mapping.groundTruthWorld();
-  scene.current_keyframe = mapping.current_keyframe;
-  scene.selected_keyframe = ui_.selected_keyframe;
-  return scene;
-}
-
 void Workbench::sync() {
   if (!worker_) return;
   // Seeking back or re-running forgets the optimisation: show the map as it is again.
@@ -405,97 +407,18 @@ void Workbench::sync() {
   }
 }
 
-std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
-  if (!worker_) return render::robustBounds({});
-  std::vector<glm::vec3> means;
-  if (const auto global = worker_->global())
-    for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  // The cameras are few beside the map's ellipsoids and lie off its surfaces: trimmed with them,
-  // they would be the first to go and their frustums would be cut at the viewport's edge.
-  render::ColoredLines cameras;
-  const auto mapping = worker_->mapping();  // held: the worker may replace it meanwhile
-  for (const KeyframeInfo& k : mapping->keyframes)
-    render::addFrustum(cameras, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
-  for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
-    const Eigen::Vector3d t = mapping->framePose(i).translation();
-    cameras.positions.emplace_back(t.x(), t.y(), t.z());
-  }
-  if (ui_.settings.show_groundtruth)
-    for (const Transform& T : mapping->groundTruthWorld())
-      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
-  if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
-  auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
-  for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  return {lo, hi};
-}
-
-void Workbench::frameMap() {
-  const auto global = worker_ ? worker_->global() : nullptr;
-  framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds();
-  ui_.camera.up = upVector();
-  ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
-  ui_.follow_map = true;
-  ui_.view_from_keyframe = -1;
-}
-
-void Workbench::resetView() {
-  const auto global = worker_ ? worker_->global() : nullptr;
-  framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds();
-  ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
-  ui_.follow_map = true;
-  ui_.view_from_keyframe = -1;
-}
-
-void Workbench::orbit(float d_yaw, float d_pitch) {
-  ui_.follow_map = false;
-  ui_.view_from_keyframe = -1;
-  ui_.camera.orbit(d_yaw, d_pitch);
-}
-
-void Workbench::pan(float dx_px, float dy_px) {
-  ui_.follow_map = false;
-  ui_.view_from_keyframe = -1;
-  // Metres per pixel at the target's distance, so the point under the cursor follows it.
-  const float m_per_px = 2.f * ui_.camera.distance_m * std::tan(glm::radians(ui_.camera.fov_y_deg) * 0.5f) /
-                         static_cast<float>(std::max(1, ui_.view_height));
-  ui_.camera.pan(-dx_px * m_per_px, dy_px * m_per_px);
-}
-
-void Workbench::zoom(float wheel_steps) {
-  ui_.follow_map = false;
-  ui_.view_from_keyframe = -1;
-  ui_.camera.dolly(std::pow(0.9f, wheel_steps));
-}
-
-glm::vec3 Workbench::upVector() const {
-  switch (ui_.settings.up_axis) {
-    case UpAxis::kPlusZ: return {0.f, 0.f, 1.f};
-    case UpAxis::kPlusY: return {0.f, 1.f, 0.f};
-    case UpAxis::kMinusY: return {0.f, -1.f, 0.f};
-    case UpAxis::kData: break;
-  }
-  if (!worker_) return {0.f, 0.f, 1.f};
-  const auto mapping = worker_->mapping();
-  const auto global = worker_->global();
-  const std::vector<Transform> cameras = mapping->trajectoryWorld();
-  return render::estimateUp(cameras, global ? std::span<const Ellipsoid>(global->map.ellipsoids)
-                                            : std::span<const Ellipsoid>());
-}
-
 void Workbench::key(KeyAction action) {
   MappingWorker* s = worker_.get();
   switch (action) {
     case KeyAction::kPlayPause:
-      if (s) s->status().playing ? s->pause() : s->play();
+      player().playing ? pause() : play();
       break;
     case KeyAction::kStepForward:
       if (s) s->step();
       break;
     case KeyAction::kStepBack:
       // From the frame asked for (not the one mapped yet), so quick taps add up.
-      if (s && s->status().target >= 2) s->seek(s->status().target - 2);
+      if (const int target = player().target; target >= 2) seek(target - 2);
       break;
     case KeyAction::kNextKeyframe:
       if (s) s->stepToKeyframe();
@@ -514,31 +437,6 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kUndo: undoPoseEdit(); break;
     case KeyAction::kBeforeOptimisation: showBeforeOptimisation(!ui_.show_before_optimisation); break;
   }
-}
-
-ViewportView Workbench::view(int width, int height) const {
-  if (worker_ && ui_.view_from_keyframe >= 0) {
-    const auto mapping = worker_->mapping();
-    if (ui_.view_from_keyframe < static_cast<int>(mapping->keyframes.size())) {
-      const PinholeCamera& c = mapping->camera;
-      const render::PixelRect r = render::letterbox(width, height, c.width, c.height);
-      const Transform& T_W_K = mapping->keyframes[static_cast<std::size_t>(ui_.view_from_keyframe)].T_W_K;
-      return {render::ViewCamera::fromPinhole(c, T_W_K, r.width, r.height), r};
-    }
-  }
-  return {ui_.camera.view(width, height), {0, 0, width, height}};
-}
-
-void Workbench::pick(float x_px, float y_px, int width, int height) {
-  ui_.picked.reset();
-  const auto global = worker_ ? worker_->global() : nullptr;
-  if (!global) return;
-  const ViewportView v = view(width, height);
-  const int i = pickEllipsoid(global->map.ellipsoids, v.camera, x_px - v.image.x, y_px - v.image.y);
-  if (i < 0) return;
-  ui_.picked = global->map.ellipsoids[static_cast<std::size_t>(i)];
-  ui_.picked_generation = global->generation;
-  selectKeyframe(ui_.picked->keyframe);
 }
 
 }  // namespace vdmap::app::gui

@@ -1,6 +1,8 @@
 #pragma once
-// The workbench's UI state and the actions it triggers, without a window: ImGui code
-// (workbench_window.cpp) only edits UiState and calls these actions, so tests drive the same paths.
+// The workbench's UI state and the actions it triggers, without a window: the ImGui code
+// (workbench_window.cpp and the panels it draws) only edits UiState, calls these actions and reads
+// the model through them, never the MappingWorker itself, so tests drive the same paths.
+#include <functional>
 #include <memory>
 #include <optional>
 #include <string>
@@ -88,8 +90,40 @@ class Workbench {
 
   UiState& ui() { return ui_; }
   const UiState& ui() const { return ui_; }
-  /// Null while no sequence is open.
+  /// Null while no sequence is open. The window does not use it (it goes through the methods
+  /// below); tests reach the model with it.
   MappingWorker* worker() { return worker_.get(); }
+
+  /// Whether a sequence or saved session is open.
+  bool isOpen() const { return worker_ != nullptr; }
+  /// 1, 2, ... per sequence or session opened (0 while none): snapshots' generations restart with
+  /// each, so what mirrors them keys on this too.
+  int sessionSerial() const { return session_serial_; }
+  /// The open sequence (null while none is open, and for a saved session without its frames).
+  const TumSequence* sequence() const { return worker_ ? worker_->sequence() : nullptr; }
+  /// The newest snapshots of the open session (null while none is open; global() and selection()
+  /// also until the first build). Thread-safe; each holds its snapshot while it is used.
+  std::shared_ptr<const MappingSnapshot> mapping() const;
+  std::shared_ptr<const GlobalSnapshot> global() const;
+  std::shared_ptr<const SelectionSnapshot> selection() const;
+  /// The player's state (all default while nothing is open).
+  PlayerStatus player() const;
+  /// Plays to the end at the fps limit / pauses (nothing while nothing is open).
+  void play();
+  void pause();
+  /// Moves the player to frame `frame` (0-based): forward maps up to it, backward re-maps from
+  /// the first frame (MappingWorker::seek).
+  void seek(int frame);
+  /// Sets the playback limit in frames per second (0: as fast as mapping goes) for the open
+  /// sequence and the ones opened later (it is a setting).
+  void setFps(float fps);
+  /// Selects keyframe `id` even when it is not mapped yet (the scripted run's --keyframe): the
+  /// inspector shows it once it is. Unlike selectKeyframe, the pose fields are not filled here.
+  void preselectKeyframe(int id);
+  /// Called on the worker's thread whenever the open session (and any opened later) publishes
+  /// news or falls idle; the window wakes its event loop with it. Must be cheap and thread-safe;
+  /// nullptr removes it.
+  void setOnChange(std::function<void()> on_change);
 
   /// Shows `text` in the status area (errors stay until the next report).
   void report(StatusLine::Kind kind, std::string text);
@@ -199,6 +233,8 @@ class Workbench {
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
+  std::function<void()> on_change_;                // setOnChange's, given to every new worker
+  int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;
 };
 

@@ -1,0 +1,301 @@
+#include "app/gui/scene_view.h"
+
+#include <algorithm>
+#include <cstdio>
+
+#include "app/gui/widgets.h"
+#include "app/timing.h"
+#include "render/colormap.h"
+
+namespace vdmap::app::gui {
+namespace {
+
+constexpr float kBackground[3] = {0.13f, 0.13f, 0.15f};
+constexpr float kLetterbox[3] = {0.05f, 0.05f, 0.06f};
+
+constexpr ImU32 kOverlayText = IM_COL32(230, 230, 230, 255), kOverlayDim = IM_COL32(170, 170, 170, 255);
+
+// The preparation's progress bar, in the middle of the view.
+void drawPreparation(ImDrawList* draw, const WindowState& win) {
+  const float font = ImGui::GetFontSize();
+  const std::size_t done = win.prepare_done, total = win.prepare_total;
+  const Rect& view = win.layout.view;
+  const float w = std::min(view.w * 0.6f, 30.f * font), x = view.x + (view.w - w) / 2, y = view.y + view.h / 2;
+  const float share = total > 0 ? static_cast<float>(done) / static_cast<float>(total) : 0.f;
+  char text[128];
+  std::snprintf(text, sizeof text, "%s: %zu / %zu frames (first start only)", win.prepare_what.c_str(), done, total);
+  draw->AddText({x, y - 1.6f * font}, kOverlayText, text);
+  draw->AddRectFilled({x, y}, {x + w * share, y + font}, IM_COL32(90, 160, 230, 255));
+  draw->AddRect({x, y}, {x + w, y + font}, kOverlayDim);
+}
+
+// Top left: what the view does (follows the map, looks through a keyframe), the tracking lines'
+// colours, and a banner while the map before the last optimisation shows.
+void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping, const Rect& view) {
+  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+  const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
+                     : ui.follow_map            ? "following the map (a drag stops it, F resumes)"
+                                                : "F: frame the map, R: reset, H: help";
+  draw->AddText({view.x + pad, view.y + pad}, kOverlayDim, mode);
+  float line_y = view.y + pad + 1.3f * font;
+  if (ui.view_from_keyframe >= 0) {
+    char text[64];
+    std::snprintf(text, sizeof text, "K%d, its own intrinsics", ui.view_from_keyframe);
+    draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
+    line_y += 1.3f * font;
+  }
+  if (mapping.mapper.poses == PoseSource::kTrack && ui.view_from_keyframe < 0) {
+    // The line colours of tracking, under the mode line.
+    float x = view.x + pad;
+    const auto key = [&](const glm::u8vec3& color, const char* text) {
+      draw->AddLine({x, line_y + 0.55f * font}, {x + 1.4f * font, line_y + 0.55f * font}, rgbColor(color), 3.f);
+      x += 1.8f * font;
+      draw->AddText({x, line_y}, kOverlayText, text);
+      x += ImGui::CalcTextSize(text).x + font;
+    };
+    key(render::kTrajectoryColor, "tracked");
+    if (mapping.hasGroundTruth() && ui.settings.show_groundtruth) key(render::kGroundTruthColor, "ground truth");
+    if (!mapping.loops.empty()) key(render::kLoopEdgeColor, "loop closure");
+    line_y += 1.3f * font;
+  }
+  if (ui.show_before_optimisation && !mapping.loops.empty()) {
+    const LoopEvent& last = mapping.loops.back();
+    char text[160];
+    std::snprintf(text, sizeof text, "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)",
+                  last.position, metres(last.loop.correction_m).c_str());
+    draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), text, nullptr,
+                  view.w - 2 * pad);  // wrapped in a narrow view
+  }
+}
+
+// Bottom left: the colour ramp of the uncertainty and count modes, the keyframes' colours of the
+// keyframe mode.
+void drawColourLegend(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping,
+                      const render::MapMirror& mirror, const Rect& view) {
+  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+  const float bar_w = std::min(16.f * font, view.w - 2 * pad), bar_h = 0.8f * font;
+  float y = view.y + view.h - pad - bar_h - 1.4f * font;
+  const render::ColorMode color = ui.settings.color;
+  if (const auto range = mirror.mapColorRange()) {
+    const bool uncertainty = color == render::ColorMode::kUncertainty;
+    draw->AddText({view.x + pad, y - 1.4f * font}, kOverlayText,
+                  uncertainty ? "largest std. deviation (log scale)" : "points per ellipsoid (log scale)");
+    drawRamp(draw, {view.x + pad, y}, bar_w, bar_h);
+    char lo[32], hi[32];
+    if (uncertainty) {
+      std::snprintf(lo, sizeof lo, "%s", metres(range->lo).c_str());
+      std::snprintf(hi, sizeof hi, "%s", metres(range->hi).c_str());
+    } else {
+      std::snprintf(lo, sizeof lo, "%.0f", range->lo);
+      std::snprintf(hi, sizeof hi, "%.0f", range->hi);
+    }
+    draw->AddText({view.x + pad, y + bar_h + 2}, kOverlayText, lo);
+    draw->AddText({view.x + pad + bar_w - ImGui::CalcTextSize(hi).x, y + bar_h + 2}, kOverlayText, hi);
+  } else if (color == render::ColorMode::kKeyframe && !mapping.keyframes.empty()) {
+    // A swatch per keyframe, as many as fit in two rows.
+    const float cell = 3.2f * font;
+    const int per_row = std::max(1, static_cast<int>((view.w - 2 * pad) / cell));
+    const int n = static_cast<int>(mapping.keyframes.size()), rows = std::min(2, (n + per_row - 1) / per_row);
+    float top = view.y + view.h - pad - rows * 1.3f * font;
+    draw->AddText({view.x + pad, top - 1.4f * font}, kOverlayText, "keyframe colours");
+    for (int i = 0; i < std::min(n, 2 * per_row); ++i) {
+      const float x = view.x + pad + (i % per_row) * cell, yy = top + (i / per_row) * 1.3f * font;
+      draw->AddRectFilled({x, yy + 2}, {x + 0.9f * font, yy + font}, rgbColor(render::keyframeColor(i)));
+      char text[16];
+      std::snprintf(text, sizeof text, i + 1 == 2 * per_row && n > 2 * per_row ? "K%d.." : "K%d", i);
+      draw->AddText({x + 1.1f * font, yy}, kOverlayText, text);
+    }
+  }
+}
+
+// Bottom right: the up axis.
+void drawUpAxis(ImDrawList* draw, const UiState& ui, const Rect& view) {
+  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+  const glm::vec3 up = ui.camera.up;
+  char text[96];
+  std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui.settings.up_axis)], up.x,
+                up.y, up.z);
+  const ImVec2 size = ImGui::CalcTextSize(text);
+  draw->AddText({view.x + view.w - pad - size.x, view.y + view.h - pad - size.y}, kOverlayDim, text);
+}
+
+}  // namespace
+
+void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
+  Mirrored& mirrored = win.mirrored;
+  UiState& ui = bench.ui();
+  const Settings& s = ui.settings;
+  mirror.setStyle({.color = s.color,
+                   .sigma = s.ellipsoid_sigma,
+                   .ellipsoids = s.show_ellipsoids,
+                   .frustums = s.show_frustums,
+                   .graph = s.show_graph,
+                   .trajectory = s.show_trajectory,
+                   .groundtruth = s.show_groundtruth});
+  if (!bench.isOpen()) return;
+  if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session
+    mirrored.session = bench.sessionSerial();
+    mirrored.session_base += 1 << 20;
+  }
+  if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
+  else mirror.setMap(mirrored.session_base, {});
+  const auto mapping = win.mapping;
+  mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
+  const auto scene = [&] { return bench.graphScene(*mapping); };
+  mirror.setGraph(mirrored.session_base + mapping->generation, ui.selected_keyframe, scene, ui.show_before_optimisation);
+  mirror.setHighlight(ui.picked);
+  const auto selection = bench.selection();
+  if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
+    const int id = selection->keyframe;
+    const render::ContainerStyle style{.sigma = 2.f, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
+    if (id >= 0) {
+      const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
+      // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
+      // container, which lives in the keyframe frame, but the ellipsoids are in the world).
+      // The keyframe image is held compressed: decode it once per selection, not per UI frame.
+      const int generation = mirrored.session_base + selection->serial;
+      if (mirrored.decoded_rgb_for != generation) {
+        mirrored.decoded_rgb = k.rgb.decode();
+        mirrored.decoded_rgb_for = generation;
+      }
+      mirror.setContainer(generation, id, mirrored.decoded_rgb, mapping->camera, selection->T_W_K, selection->local, style);
+    } else {
+      mirror.setContainer(mirrored.session_base + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {},
+                          style);
+    }
+  }
+}
+
+void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& mirror, const WindowState& win) {
+  const Rect& view = win.layout.view;
+  UiState& ui = bench.ui();
+  gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+  gl.Disable(GL_SCISSOR_TEST);
+  gl.Viewport(0, 0, win.layout.fb_width, win.layout.fb_height);
+  gl.ClearColor(kBackground[0], kBackground[1], kBackground[2], 1.f);
+  gl.ClearDepth(1.0);
+  gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+  if (!bench.isOpen() || win.layout.fb_width <= 0 || win.layout.fb_height <= 0) return;
+  const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+  const int vx = static_cast<int>(view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
+  const int vy = win.layout.fb_height - static_cast<int>(view.y * scale.y) - vh;  // GL counts rows from the bottom
+  const ViewportView v = bench.view(vw, vh);
+  const bool from_keyframe = ui.view_from_keyframe >= 0;
+  if (from_keyframe) {  // the letterbox's bars
+    gl.Enable(GL_SCISSOR_TEST);
+    gl.Scissor(vx, vy, vw, vh);
+    gl.ClearColor(kLetterbox[0], kLetterbox[1], kLetterbox[2], 1.f);
+    gl.Clear(GL_COLOR_BUFFER_BIT);
+    gl.Disable(GL_SCISSOR_TEST);
+  }
+  gl.Viewport(vx + v.image.x, vy + (vh - v.image.y - v.image.height), v.image.width, v.image.height);
+  mirror.draw(v.camera, !from_keyframe);
+  gl.Viewport(0, 0, win.layout.fb_width, win.layout.fb_height);
+}
+
+void handleMouse(Workbench& bench, WindowState& win) {
+  const Rect& view = win.layout.view;
+  UiState& ui = bench.ui();
+  const ImGuiIO& io = ImGui::GetIO();
+  if (!bench.isOpen()) return;
+  const bool over_view = view.contains(io.MousePos) && !io.WantCaptureMouse;
+  for (int b = 0; b < 3; ++b)
+    if (ImGui::IsMouseClicked(b)) win.drag_in_view[b] = over_view;
+  const ImVec2 scale = io.DisplayFramebufferScale;
+  if (win.drag_in_view[0] && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
+    if (io.KeyShift) bench.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+    else if (io.MouseDelta.x != 0 || io.MouseDelta.y != 0) bench.orbit(-io.MouseDelta.x * 0.006f, io.MouseDelta.y * 0.006f);
+  }
+  for (int b : {1, 2})
+    if (win.drag_in_view[b] && ImGui::IsMouseDragging(b) && (io.MouseDelta.x != 0 || io.MouseDelta.y != 0))
+      bench.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+  if (over_view && io.MouseWheel != 0.f) bench.zoom(io.MouseWheel);
+  if (win.drag_in_view[0] && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
+    const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
+    if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view)
+      bench.pick((io.MousePos.x - view.x) * scale.x, (io.MousePos.y - view.y) * scale.y, ui.view_width,
+                 ui.view_height);
+  }
+}
+
+void drawStatusBar(Workbench& bench, const WindowState& win) {
+  const Rect& status = win.layout.status;
+  UiState& ui = bench.ui();
+  ImGui::SetNextWindowPos({status.x, status.y}, ImGuiCond_Always);
+  ImGui::SetNextWindowSize({status.w, status.h}, ImGuiCond_Always);
+  ImGui::Begin("##status", nullptr,
+               ImGuiWindowFlags_NoDecoration | ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoSavedSettings |
+                   ImGuiWindowFlags_NoBringToFrontOnFocus);
+  char right[160];
+  const std::size_t shown = win.global ? win.global->map.ellipsoids.size() : 0;
+  std::snprintf(right, sizeof right, "%zu ellipsoids | frame %.0f ms | H: help", shown,
+                median({win.frame_times.begin(), win.frame_times.end()}));
+  const float right_w = ImGui::CalcTextSize(right).x;
+  const StatusLine& st = ui.status;
+  ImGui::AlignTextToFramePadding();
+  if (!st.text.empty()) {
+    ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[static_cast<int>(st.kind)]);
+    const float avail = ImGui::GetContentRegionAvail().x - right_w - 3 * ImGui::GetFontSize();
+    ImGui::PushClipRect(ImGui::GetCursorScreenPos(), {ImGui::GetCursorScreenPos().x + avail, status.y + status.h}, true);
+    ImGui::TextUnformatted(st.text.c_str());
+    ImGui::PopClipRect();
+    ImGui::PopStyleColor();
+    tip(st.text);  // the whole message, wrapped, when it is longer than the bar
+    ImGui::SameLine(std::max(0.f, avail) + ImGui::GetStyle().WindowPadding.x);
+    if (ImGui::SmallButton("x")) ui.status = {StatusLine::Kind::kInfo, "", st.serial + 1};
+    tip("Clear the message.");
+  }
+  ImGui::SameLine(status.w - right_w - ImGui::GetStyle().WindowPadding.x);
+  ImGui::TextUnformatted(right);
+  tip("Ellipsoids in the global map shown; the median time of the last 30 UI frames (the window draws only when "
+      "something changes, so an idle window costs nothing).");
+  ImGui::End();
+}
+
+// Legends and hints over the 3-D view (drawn in front of it, behind the panels).
+void drawViewOverlay(Workbench& bench, const render::MapMirror& mirror, const WindowState& win) {
+  ImDrawList* draw = ImGui::GetBackgroundDrawList();
+  if (win.preparing) return drawPreparation(draw, win);
+  const Rect& view = win.layout.view;
+  if (!bench.isOpen()) {
+    const float pad = 0.6f * ImGui::GetFontSize();
+    draw->AddText({view.x + pad, view.y + pad}, kOverlayDim, "Open a TUM RGB-D folder or a .vdmap session (left panel).");
+    return;
+  }
+  const UiState& ui = bench.ui();
+  drawViewHints(draw, ui, *win.mapping, view);
+  drawColourLegend(draw, ui, *win.mapping, mirror, view);
+  drawUpAxis(draw, ui, view);
+}
+
+void drawHelp(Workbench& bench, WindowState& win) {
+  const Rect& view = win.layout.view;
+  UiState& ui = bench.ui();
+  win.layout.help = {};
+  if (!ui.show_help) return;
+  // Over the 3-D view, as wide as it (wrapping the descriptions) but at least 40 characters.
+  const ImVec2 display = ImGui::GetIO().DisplaySize;
+  const float font = ImGui::GetFontSize();
+  const float width = std::min(display.x * 0.95f, std::max(view.w - 2.f * font, 40.f * font));
+  ImGui::SetNextWindowPos({view.x + view.w / 2, view.y + view.h / 2}, ImGuiCond_Always, {0.5f, 0.5f});
+  ImGui::SetNextWindowSize({width, 0.f}, ImGuiCond_Always);  // 0: the height fits the content
+  ImGui::Begin("Keys and mouse (H, F1 or Esc closes)", &ui.show_help,
+               ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoResize);
+  if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_RowBg)) {
+    ImGui::TableSetupColumn("keys", ImGuiTableColumnFlags_WidthFixed);
+    ImGui::TableSetupColumn("what", ImGuiTableColumnFlags_WidthStretch);
+    for (const auto& [keys, what] : keyHelp()) {
+      ImGui::TableNextRow();
+      ImGui::TableSetColumnIndex(0);
+      ImGui::TextColored({1.f, 0.86f, 0.4f, 1.f}, "%s", keys);
+      ImGui::TableSetColumnIndex(1);
+      ImGui::TextWrapped("%s", what);
+    }
+    ImGui::EndTable();
+  }
+  ImGui::TextDisabled("Hover over any control or figure for what it means.");
+  win.layout.help = {ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowWidth(), ImGui::GetWindowHeight()};
+  ImGui::End();
+}
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,55 @@
+#pragma once
+// The scripted run (--play-to-end, --screenshot, --stats, --exit ...): once mapping and map
+// building are done, reset the view, draw a few frames, take the screenshot, then the
+// measurements asked for (slider-to-map latency, orbit frame time, idle CPU), then write the
+// figures. The window calls advanceScript once per drawn frame.
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "app/gui/window_state.h"
+#include "app/gui/workbench_window.h"
+
+namespace vdmap::app::gui {
+
+enum class ScriptPhase { kWaitDone, kSettle, kLatency, kOrbit, kIdle, kFinish, kDone };
+
+/// The script's options and its progress through them.
+struct ScriptRun {
+  using Clock = std::chrono::steady_clock;
+  ScriptOptions options;
+  ScriptPhase phase = ScriptPhase::kWaitDone;
+  int countdown = 0;               ///< frames to draw before the screenshot
+  bool finished = false;           ///< done, and the window should close (options.exit)
+  bool screenshot_taken = false;   ///< by the script, so a failure removes it (and no older file)
+  nlohmann::json layout = nlohmann::json::object();  ///< recordLayout's figures
+  int latency_generation = -1;     ///< the global map an edit waits to replace (-1: no edit pending)
+  Clock::time_point latency_start, orbit_frame_start, idle_until;
+  std::vector<double> latency_ms, orbit_ms, orbit_cpu_ms;
+  double orbit_cpu_start = 0;
+  bool orbit_started = false;
+  double idle_cpu_start = 0, idle_cpu_s = 0;
+  int idle_frames = 0;
+  std::vector<double> busy_frame_ms;  ///< UI frame times while the worker was busy
+};
+
+/// Whether there is a script at all (a screenshot, figures or --exit asked for).
+bool scripted(const ScriptRun& run);
+/// A scripted run (--exit) fails on an error shown during the run; a user closing the window never does.
+bool failedRun(const ScriptRun& run, const Workbench& bench);
+/// The process's CPU time (all threads), seconds.
+double processCpuSeconds();
+/// The UI frame starting at t0 / whose image is now on screen: the idle measurement's bookkeeping.
+void scriptFrameStarts(ScriptRun& run, ScriptRun::Clock::time_point t0);
+void scriptFrameShown(ScriptRun& run, ScriptRun::Clock::time_point t0);
+/// One step of the script, after the frame is drawn (before it is swapped to the screen).
+/// `keys`: the --press keys go there, as if typed; `settle_frames`: frames ImGui still needs
+/// after input.
+void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const WindowState& win, KeyQueue& keys,
+                   int settle_frames);
+/// Writes the window's back buffer as a PNG to `file`; the outcome goes to the status line.
+void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& win, const std::string& file);
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,203 @@
+#include "app/gui/thresholds_panel.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <vector>
+
+#include <imgui_stdlib.h>
+
+#include "app/gui/widgets.h"
+#include "render/colormap.h"
+
+namespace vdmap::app::gui {
+namespace {
+
+// One parameter of the table as a slider, combo or checkbox; disabled, saying why, unless
+// why_disabled is "".
+void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const std::string& why_disabled) {
+  const bool disabled = !why_disabled.empty();
+  const bool pending = bench.pending(p);
+  std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
+                     "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
+  if (pending)
+    help += "\n\nPending: the map shown was made with " + formatValue(p, bench.inUse(p)) +
+            (p.live ? " (rebuilding)." : "; Re-run applies the edited value.");
+  if (disabled) help = why_disabled + "\n\n" + help;
+  const std::string text =
+      std::string(p.label) + (p.unit.empty() ? "" : " (" + std::string(p.unit) + ")") + (pending ? " *" : "");
+  label(win.check, text.c_str(), help, pending);
+  ImGui::BeginDisabled(disabled);
+  double v = p.get(bench.ui().params);
+  bool changed = false;
+  const std::string id = "##" + std::string(p.key);
+  switch (p.kind) {
+    case Parameter::Kind::kBool: {
+      bool b = v != 0;
+      changed = ImGui::Checkbox(id.c_str(), &b);
+      v = b;
+      break;
+    }
+    case Parameter::Kind::kChoice: {
+      int i = static_cast<int>(v);
+      std::vector<const char*> names(p.choices.begin(), p.choices.end());
+      changed = ImGui::Combo(id.c_str(), &i, names.data(), static_cast<int>(names.size()));
+      v = i;
+      break;
+    }
+    case Parameter::Kind::kInt:
+    case Parameter::Kind::kReal: {
+      const char* format = p.kind == Parameter::Kind::kInt ? "%.0f" : "%.3g";
+      changed = ImGui::SliderScalar(id.c_str(), ImGuiDataType_Double, &v, &p.slider_lo, &p.slider_hi, format);
+      if (p.kind == Parameter::Kind::kInt) v = std::round(v);
+      break;
+    }
+  }
+  tip(help);
+  ImGui::EndDisabled();
+  if (changed) bench.editParameter(p, v);
+}
+
+// The global map's figures (docs/method.md 6.4) under the thresholds, and a warning when the filter keeps
+// few of the local maps' ellipsoids.
+void drawMapFigures(Workbench& bench, WindowState& win) {
+  const GlobalMap& m = win.global->map;
+  std::size_t stored = 0;
+  for (const KeyframeInfo& k : win.mapping->keyframes) stored += k.ellipsoids;
+  if (beginRows("stats")) {
+    const auto row = [&](const char* name, const std::string& help, const char* format, auto... values) {
+      label(win.check, name, help);
+      ImGui::Text(format, values...);
+    };
+    row("local maps", "Ellipsoids stored in all keyframes' containers (one per touched cell), before filtering.", "%zu",
+        stored);
+    row("Sigma_e", "Sigma_e (SPEC 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
+                   "than k times the sensor model's expectation).",
+        "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
+    row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
+        m.merged);
+    row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (SPEC 6.5).", "%zu",
+        m.merged_across_groups);
+    row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+                    "fusion across groups.",
+        "%zu", m.sigma_e_prime);
+    row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
+        "%zu", m.groups.size());
+    row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
+        "%.3f s", m.t_g_s);
+    row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
+        m.occlusion_ms);
+    row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
+        "%d frames%s", win.global->frames_mapped, bench.player().busy ? ", rebuilding" : "");
+    ImGui::EndTable();
+  }
+  if (stored > 0 && m.sigma_e * 20 < stored) {
+    ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[2]);
+    ImGui::TextWrapped("The filter keeps only %.1f%% of the local maps' ellipsoids: raise the filter sigma factor k or "
+                       "lower min points to keep more.",
+                       100.0 * m.sigma_e / stored);
+    ImGui::PopStyleColor();
+  }
+}
+
+}  // namespace
+
+std::string disabledReason(const Parameter& p, const ParameterValues& values) {
+  if (p.key == "fusion_max_distance" && !values.global.fuse_across_groups)
+    return "Fusion across groups is off: this has no effect.";
+  const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
+  if (occlusion_param && !values.global.occlusion_removal) return "Occlusion removal is off: this has no effect.";
+  return "";
+}
+
+void drawThresholds(Workbench& bench, WindowState& win) {
+  if (beginRows("thresholds")) {
+    for (const Parameter& p : parameterTable())
+      if (p.live) parameterRow(bench, win, p, disabledReason(p, bench.ui().params));
+    ImGui::EndTable();
+  }
+  if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
+  drawMapFigures(bench, win);
+}
+
+void drawRerun(Workbench& bench, WindowState& win) {
+  const bool saved = bench.savedSession();
+  const std::string why = "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
+  if (beginRows("rerun")) {
+    for (const Parameter& p : parameterTable())
+      if (!p.live) parameterRow(bench, win, p, saved ? why : "");
+    ImGui::EndTable();
+  }
+  bool any_pending = false;
+  for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench.pending(p);
+  ImGui::BeginDisabled(saved || !any_pending);
+  if (ImGui::Button("Re-run")) bench.rerun();
+  tip(saved ? why
+            : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
+                          : "Nothing to apply: the sliders show the parameters the map was made with.");
+  ImGui::SameLine();
+  if (ImGui::Button("Revert")) bench.ui().params.mapper = win.mapping->mapper;
+  tip("Puts the sliders back to the parameters the map was made with.");
+  ImGui::EndDisabled();
+  if (any_pending) {
+    ImGui::SameLine();
+    ImGui::TextColored(kPendingColor, "* pending");
+  }
+}
+
+void drawView(Workbench& bench, WindowState& win) {
+  Settings& s = bench.ui().settings;
+  if (beginRows("view")) {
+    label(win.check, "colour",
+          "rgb: the surface colour; keyframe: the keyframe each ellipsoid came from (the key in the view); "
+          "uncertainty: the largest standard deviation; count: points merged into it (colour bars in the view).");
+    int color = static_cast<int>(s.color);
+    if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
+      s.color = static_cast<render::ColorMode>(color);
+    label(win.check, "draw", "Ellipsoids as surfaces at sigma standard deviations, or their centres as points (faster).");
+    int shape = s.show_ellipsoids ? 0 : 1;
+    const char* shapes[] = {"ellipsoids", "centres"};
+    if (ImGui::Combo("##shape", &shape, shapes, 2)) s.show_ellipsoids = shape == 0;
+    label(win.check, "sigma", "Ellipsoid surfaces drawn at this many standard deviations.");
+    ImGui::BeginDisabled(!s.show_ellipsoids);
+    ImGui::SliderFloat("##sigma", &s.ellipsoid_sigma, 0.5f, 4.f, "%.1f");
+    tip(s.show_ellipsoids ? "" : "Only the centres are drawn.");
+    ImGui::EndDisabled();
+    label(win.check, "up axis",
+          "The world direction kept up on screen, the one the view orbits about. data: estimated from the "
+          "cameras (their mean image-up direction) refined by the floor's normals.");
+    int up = static_cast<int>(s.up_axis);
+    if (ImGui::Combo("##up", &up, kUpAxisNames, 4)) {
+      s.up_axis = static_cast<UpAxis>(up);
+      bench.resetView();
+    }
+    label(win.check, "show",
+          "Keyframe frustums (yellow: current, white: selected, red: the camera now), covisibility edges "
+          "(viridis by weight) and the camera trajectory (blue).");
+    ImGui::Checkbox("frustums", &s.show_frustums);
+    ImGui::SameLine();
+    ImGui::Checkbox("graph", &s.show_graph);
+    ImGui::SameLine();
+    ImGui::Checkbox("trajectory", &s.show_trajectory);
+    checkFits(win.check);
+    ImGui::EndTable();
+  }
+  if (ImGui::Button("Frame map (F)")) bench.frameMap();
+  tip("Fits the map in the view, keeping the direction; the view follows the map again as it grows.");
+  ImGui::SameLine();
+  if (ImGui::Button("Reset view (R)")) bench.resetView();
+  tip("The default view of the whole map from above, about the up axis; follows the map again.");
+  ImGui::SameLine();
+  if (ImGui::Button("Help (H)")) bench.key(KeyAction::kHelp);
+  checkFits(win.check);
+  ImGui::BeginDisabled(win.screenshot_text.empty());
+  if (ImGui::Button("Screenshot")) win.screenshot_request = win.screenshot_text;
+  tip(win.screenshot_text.empty() ? "Type a file name on the right first."
+                                  : "Writes the whole window as a PNG to the file named on the right.");
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  ImGui::InputText("##shot", &win.screenshot_text);
+}
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,155 @@
+// The Workbench's 3-D view: the camera actions (frame, reset, orbit, pan, zoom), the view through a
+// keyframe, picking, and the keyframe graph the view draws.
+#include "app/gui/workbench.h"
+
+#include <algorithm>
+#include <cmath>
+
+#include "render/map_mirror.h"
+#include "render/map_scene.h"
+#include "render/scene_lines.h"
+
+namespace vdmap::app::gui {
+
+int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px, float y_px,
+                  float radius_px) {
+  const glm::mat4 T_C_W = view.T_C_W;
+  int best = -1;
+  float best_d2 = radius_px * radius_px, best_z = 0.f;
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+    const Eigen::Vector3d& m = ellipsoids[i].mean;
+    const glm::vec4 p = T_C_W * glm::vec4(m.x(), m.y(), m.z(), 1.f);
+    if (p.z <= view.near_m || p.z >= view.far_m) continue;
+    const float du = view.fx * p.x / p.z + view.cx - x_px, dv = view.fy * p.y / p.z + view.cy - y_px;
+    const float d2 = du * du + dv * dv;
+    if (d2 > radius_px * radius_px) continue;
+    // Within a pixel of the best, the nearer one wins (the one drawn in front).
+    const bool closer = best < 0 || d2 + 1.f < best_d2 || (d2 <= best_d2 + 1.f && p.z < best_z);
+    if (closer) {
+      best = static_cast<int>(i);
+      best_d2 = std::min(d2, best_d2);
+      best_z = p.z;
+    }
+  }
+  return best;
+}
+
+render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
+  render::GraphScene scene;
+  const bool before = ui_.show_before_optimisation;
+  scene.camera = mapping.camera;
+  scene.keyframes = mapping.keyframePoses(before);
+  for (const CovisibilityEdge& e : mapping.edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  for (const LoopEvent& e : mapping.loops) scene.loops.push_back({e.loop.from, e.loop.to, 1.f});
+  scene.trajectory = mapping.trajectoryWorld(before);
+  if (ui_.settings.show_groundtruth) scene.groundtruth = mapping.groundTruthWorld();
+  scene.current_keyframe = mapping.current_keyframe;
+  scene.selected_keyframe = ui_.selected_keyframe;
+  return scene;
+}
+
+std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
+  if (!worker_) return render::robustBounds({});
+  std::vector<glm::vec3> means;
+  if (const auto global = worker_->global())
+    for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  // The cameras are few beside the map's ellipsoids and lie off its surfaces: trimmed with them,
+  // they would be the first to go and their frustums would be cut at the viewport's edge.
+  render::ColoredLines cameras;
+  const auto mapping = worker_->mapping();  // held: the worker may replace it meanwhile
+  for (const KeyframeInfo& k : mapping->keyframes)
+    render::addFrustum(cameras, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
+  for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
+    const Eigen::Vector3d t = mapping->framePose(i).translation();
+    cameras.positions.emplace_back(t.x(), t.y(), t.z());
+  }
+  if (ui_.settings.show_groundtruth)
+    for (const Transform& T : mapping->groundTruthWorld())
+      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
+  if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
+  auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
+  for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return {lo, hi};
+}
+
+void Workbench::frameMap() {
+  const auto global = worker_ ? worker_->global() : nullptr;
+  framed_generation_ = global ? global->generation : 0;
+  const auto [lo, hi] = frameBounds();
+  ui_.camera.up = upVector();
+  ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.follow_map = true;
+  ui_.view_from_keyframe = -1;
+}
+
+void Workbench::resetView() {
+  const auto global = worker_ ? worker_->global() : nullptr;
+  framed_generation_ = global ? global->generation : 0;
+  const auto [lo, hi] = frameBounds();
+  ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.follow_map = true;
+  ui_.view_from_keyframe = -1;
+}
+
+void Workbench::orbit(float d_yaw, float d_pitch) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  ui_.camera.orbit(d_yaw, d_pitch);
+}
+
+void Workbench::pan(float dx_px, float dy_px) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  // Metres per pixel at the target's distance, so the point under the cursor follows it.
+  const float m_per_px = 2.f * ui_.camera.distance_m * std::tan(glm::radians(ui_.camera.fov_y_deg) * 0.5f) /
+                         static_cast<float>(std::max(1, ui_.view_height));
+  ui_.camera.pan(-dx_px * m_per_px, dy_px * m_per_px);
+}
+
+void Workbench::zoom(float wheel_steps) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  ui_.camera.dolly(std::pow(0.9f, wheel_steps));
+}
+
+glm::vec3 Workbench::upVector() const {
+  switch (ui_.settings.up_axis) {
+    case UpAxis::kPlusZ: return {0.f, 0.f, 1.f};
+    case UpAxis::kPlusY: return {0.f, 1.f, 0.f};
+    case UpAxis::kMinusY: return {0.f, -1.f, 0.f};
+    case UpAxis::kData: break;
+  }
+  if (!worker_) return {0.f, 0.f, 1.f};
+  const auto mapping = worker_->mapping();
+  const auto global = worker_->global();
+  const std::vector<Transform> cameras = mapping->trajectoryWorld();
+  return render::estimateUp(cameras, global ? std::span<const Ellipsoid>(global->map.ellipsoids)
+                                            : std::span<const Ellipsoid>());
+}
+
+ViewportView Workbench::view(int width, int height) const {
+  if (worker_ && ui_.view_from_keyframe >= 0) {
+    const auto mapping = worker_->mapping();
+    if (ui_.view_from_keyframe < static_cast<int>(mapping->keyframes.size())) {
+      const PinholeCamera& c = mapping->camera;
+      const render::PixelRect r = render::letterbox(width, height, c.width, c.height);
+      const Transform& T_W_K = mapping->keyframes[static_cast<std::size_t>(ui_.view_from_keyframe)].T_W_K;
+      return {render::ViewCamera::fromPinhole(c, T_W_K, r.width, r.height), r};
+    }
+  }
+  return {ui_.camera.view(width, height), {0, 0, width, height}};
+}
+
+void Workbench::pick(float x_px, float y_px, int width, int height) {
+  ui_.picked.reset();
+  const auto global = worker_ ? worker_->global() : nullptr;
+  if (!global) return;
+  const ViewportView v = view(width, height);
+  const int i = pickEllipsoid(global->map.ellipsoids, v.camera, x_px - v.image.x, y_px - v.image.y);
+  if (i < 0) return;
+  ui_.picked = global->map.ellipsoids[static_cast<std::size_t>(i)];
+  ui_.picked_generation = global->generation;
+  selectKeyframe(ui_.picked->keyframe);
+}
+
+}  // namespace vdmap::app::gui
