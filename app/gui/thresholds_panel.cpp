@@ -102,18 +102,10 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
 
 }  // namespace
 
-std::string disabledReason(const Parameter& p, const ParameterValues& values) {
-  if (p.key == "fusion_max_distance" && !values.global.fuse_across_groups)
-    return "Fusion across groups is off: this has no effect.";
-  const bool occlusion_param = p.key == "occlusion_distance" || p.key == "occlusion_angle";
-  if (occlusion_param && !values.global.occlusion_removal) return "Occlusion removal is off: this has no effect.";
-  return "";
-}
-
 void drawThresholds(Workbench& bench, WindowState& win) {
   if (beginRows("thresholds")) {
     for (const Parameter& p : parameterTable())
-      if (p.live) parameterRow(bench, win, p, disabledReason(p, bench.ui().params));
+      if (p.live) parameterRow(bench, win, p, whyDisabled(p, bench.ui().params));
     ImGui::EndTable();
   }
   if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");

@@ -1,15 +1,9 @@
 #pragma once
 // The right panel's parameter sections (live thresholds with the global map's figures, re-run
 // parameters) and its view options.
-#include <string>
-
 #include "app/gui/window_state.h"
 
 namespace vdmap::app::gui {
-
-/// Why parameter `p` has no effect with the other values as `values` has them ("" when it has):
-/// its slider is disabled with this as the reason.
-std::string disabledReason(const Parameter& p, const ParameterValues& values);
 
 /// The "Thresholds (live)" section: the live parameters, then the global map's figures.
 void drawThresholds(Workbench& bench, WindowState& win);
