@@ -76,23 +76,13 @@ void meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vec
     *label = meanShiftClustersByIteration(means, weights, h);
 }
 
-// The kept ellipsoids in centre cell c, sources order[begin .. end) (two or more): one ellipsoid
-// per mean-shift cluster, moment matched, appended to `out` in the world frame.
-void mergeCell(const KeyframeGraph& graph, const MergeGroup& group, double h, std::size_t c, int begin, int end,
-               MergeScratch* scratch, std::vector<Ellipsoid>* out) {
+// The kept ellipsoids of centre cell c (s->in_cell, s->means, s->weights; two or more): one
+// ellipsoid per mean-shift cluster of radius h, moment matched, appended to `out` in the world frame.
+void mergeCell(const MergeGroup& group, std::size_t c, double h, const Transform& T_W_C, MergeScratch* scratch,
+               std::vector<Ellipsoid>* out) {
   MergeScratch& s = *scratch;
-  const std::vector<int>& order = s.by_cell.order;
-  s.in_cell.clear();
-  s.means.clear();
-  s.weights.clear();
-  for (int i = begin; i < end; ++i) {
-    s.in_cell.push_back(inCentre(graph, group, s, order[i]));
-    s.means.push_back(s.in_cell.back().mean);
-    s.weights.push_back(s.in_cell.back().count);
-  }
   meanShiftClusters(s.means, s.weights, h, &s.label);
   const int clusters = *std::max_element(s.label.begin(), s.label.end()) + 1;
-  const Transform& T_W_C = graph.keyframe(group.centre).T_W_K;
   for (int k = 0; k < clusters; ++k) {
     s.cluster.clear();
     for (std::size_t i = 0; i < s.in_cell.size(); ++i)
@@ -115,12 +105,22 @@ void mergeGroup(const KeyframeGraph& graph, const MergeGroup& group, const Globa
   const std::size_t cells = static_cast<std::size_t>(centre.container.cols()) * centre.container.rows();
   bucketByKey(s.cell_of, cells, &s.by_cell, &s.fill);
   const std::vector<int>& start = s.by_cell.start;
+  const std::vector<int>& order = s.by_cell.order;
   out->clear();
   out->reserve(s.sources.size());
   for (std::size_t c = 0; c < cells; ++c) {
     const int begin = start[c], end = start[c + 1];
-    if (end - begin == 1) out->push_back(transformed(inCentre(graph, group, s, s.by_cell.order[begin]), centre.T_W_K));
-    if (end - begin > 1) mergeCell(graph, group, params.merge_distance_m, c, begin, end, &s, out);
+    if (end - begin == 1) out->push_back(transformed(inCentre(graph, group, s, order[begin]), centre.T_W_K));
+    if (end - begin <= 1) continue;
+    s.in_cell.clear();
+    s.means.clear();
+    s.weights.clear();
+    for (int i = begin; i < end; ++i) {
+      s.in_cell.push_back(inCentre(graph, group, s, order[i]));
+      s.means.push_back(s.in_cell.back().mean);
+      s.weights.push_back(s.in_cell.back().count);
+    }
+    mergeCell(group, c, params.merge_distance_m, centre.T_W_K, &s, out);
   }
   for (std::size_t i = 0; i < s.cell_of.size(); ++i)
     if (s.cell_of[i] < 0) out->push_back(transformed(inCentre(graph, group, s, static_cast<int>(i)), centre.T_W_K));
@@ -134,7 +134,6 @@ std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, co
   global_map_detail::meanShiftClusters(means, weights, h, &label);
   return label;
 }
-
 
 std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
                                               const std::vector<double>& weights, double h) {

@@ -107,27 +107,6 @@ void gatherByKeyframe(const KeyframeGraph& graph, std::span<const Ellipsoid* con
   });
 }
 
-// The points of K's occlusion group that fall into one of K's `cells` cells: s->seen, and
-// s->count per cell.
-void seenFrom(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapParams& params, std::size_t cells,
-              const OcclusionBuffers& o, OcclusionScratch* scratch) {
-  OcclusionScratch& s = *scratch;
-  const Transform T_K_W = K.T_W_K.inverse();
-  const CellOfPixel cellOfPixel(K.container);
-  s.count.assign(cells, 0);
-  s.seen.clear();
-  for (int g : occlusionGroup(graph, K, params))
-    for (int j = o.by_keyframe.start[static_cast<std::size_t>(g)]; j < o.by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
-      const Eigen::Vector3d p = T_K_W * o.point[static_cast<std::size_t>(j)].mean;
-      if (p.z() <= 0.0) continue;
-      const Eigen::Vector2d uv = K.container.camera().project(p);
-      const int cell = cellOfPixel(uv.x(), uv.y());
-      if (cell < 0) continue;
-      s.seen.push_back({cell, j, p.z()});
-      ++s.count[static_cast<std::size_t>(cell)];
-    }
-}
-
 // The judged cells' points (cells seen with two or more) as ViewItems from viewpoint `centre`:
 // s->items, cell by cell from s->start[cell]. Written in one more pass over the group (in order of
 // j, so the reads stream) rather than gathered cell by cell from anywhere in the map.
@@ -153,7 +132,21 @@ void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapPar
                OcclusionScratch* scratch, std::vector<int>* removed) {
   OcclusionScratch& s = *scratch;
   const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
-  seenFrom(graph, K, params, cells, o, &s);
+  // The points of K's occlusion group that fall into one of K's cells, and the count per cell.
+  const Transform T_K_W = K.T_W_K.inverse();
+  const CellOfPixel cellOfPixel(K.container);
+  s.count.assign(cells, 0);
+  s.seen.clear();
+  for (int g : occlusionGroup(graph, K, params))
+    for (int j = o.by_keyframe.start[static_cast<std::size_t>(g)]; j < o.by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
+      const Eigen::Vector3d p = T_K_W * o.point[static_cast<std::size_t>(j)].mean;
+      if (p.z() <= 0.0) continue;
+      const Eigen::Vector2d uv = K.container.camera().project(p);
+      const int cell = cellOfPixel(uv.x(), uv.y());
+      if (cell < 0) continue;
+      s.seen.push_back({cell, j, p.z()});
+      ++s.count[static_cast<std::size_t>(cell)];
+    }
   itemsOfJudgedCells(K.T_W_K.translation(), cells, o, &s);
   removed->clear();
   for (std::size_t cell = 0; cell < cells; ++cell)
