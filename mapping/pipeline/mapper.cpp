@@ -361,12 +361,16 @@ void Mapper::countFrame(const RgbdFrame& frame) {
   state_.last_timestamp = frame.timestamp;
 }
 
-FrameReport Mapper::addFrame(const RgbdFrame& input) {
+void Mapper::checkCanMap(const RgbdFrame& input) const {
   if (!canContinue())
     throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
                                 "so mapping cannot continue from it; it can still be rendered, exported or opened");
   if (!isValidTransform(input.T_W_C))
     throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
+}
+
+FrameReport Mapper::addFrame(const RgbdFrame& input) {
+  checkCanMap(input);
   const auto start = std::chrono::steady_clock::now();
   FrameReport report;
   report.frame_index = input.index;

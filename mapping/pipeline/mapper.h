@@ -180,6 +180,8 @@ class Mapper {
   };
 
   bool tracksPoses() const { return params_.poses == PoseSource::kTrack; }
+  // Throws std::invalid_argument when the mapper cannot continue or the frame's pose is not rigid.
+  void checkCanMap(const RgbdFrame& input) const;
   // addFrame's steps, in order. The frame's features: computed ahead (featuresAhead) or here,
   // timed from `start`.
   FrameFeatures frameFeatures(const RgbdFrame& input, std::chrono::steady_clock::time_point start, FrameReport* report);
