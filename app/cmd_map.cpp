@@ -37,6 +37,21 @@ struct MapArgs {
   bool octomap_given = false;
 };
 
+// Fails before any work on options that cannot work together or outputs that cannot be written.
+void checkMapArgs(const MapArgs& args) {
+  validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
+  // 0 is refused like -1 (it used to mean "no OctoMap" silently); the map's extent is checked
+  // against OctoMap's keys once the map exists (exportMap).
+  if (args.octomap_given && !(args.octomap_resolution_m > 0.0 && std::isfinite(args.octomap_resolution_m)))
+    throw std::invalid_argument("--octomap must be > 0 m");
+  // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
+  checkExportFolder(args.out);
+  if (!args.save.empty()) checkOutputFile(args.save, "--save");
+  if (!args.load.empty() && !isSessionFile(args.load))
+    throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
+                                                                   : "no such session file (--load)");
+}
+
 // The flags of the re-run parameters, "--cell-size, --min-depth, ...".
 std::string rerunFlags() {
   std::string flags;
@@ -45,103 +60,91 @@ std::string rerunFlags() {
   return flags;
 }
 
-void runMap(MapArgs args) {
-  namespace fs = std::filesystem;
-  validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
-  // 0 is refused like -1 (it used to mean "no OctoMap" silently); the map's extent is checked
-  // against OctoMap's keys once the map exists (exportMap).
-  if (args.octomap_given && !(args.octomap_resolution_m > 0.0 && std::isfinite(args.octomap_resolution_m)))
-    throw std::invalid_argument("--octomap must be > 0 m");
-  const fs::path out_dir = args.out;
-  // Fail before any work when DIR cannot be written; it is created only when there is a map to
-  // write, so a failed run leaves nothing behind.
-  checkExportFolder(out_dir);
-  if (!args.save.empty()) checkOutputFile(args.save, "--save");
-  if (!args.load.empty() && !isSessionFile(args.load))
-    throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
-                                                                   : "no such session file (--load)");
+// --load: continue a saved session where it stopped. The mapping parameters are the session's
+// (they shaped its local maps; an option that would change them is refused), the frames
+// default to those after its last one, and the global-map options apply as given.
+Session loadSessionToContinue(MapArgs* args) {
+  Session loaded = loadSession(args->load);
+  const SessionInfo& info = loaded.info;
+  if (info.state.current_keyframe < 0 && loaded.graph.size() > 0)
+    throw InputError(args->load, "session format " + std::to_string(info.format_version) +
+                                     " does not store the mapper's state, so mapping cannot continue from it (it "
+                                     "can still be rendered or opened)");
+  if (!sameMapperParams(args->params.mapper, MapperParams{}) && !sameMapperParams(args->params.mapper, info.mapper))
+    throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
+                                "them (" + rerunFlags() + ")");
+  args->params.mapper = info.mapper;
+  // The pose source is the session's too (its keyframes were placed that way).
+  const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";
+  if (!args->sequence.poses.empty() && args->sequence.poses != session_poses)
+    throw std::invalid_argument("--poses " + args->sequence.poses + ": " + args->load + " was mapped with --poses " +
+                                session_poses + "; drop --poses to continue it");
+  args->sequence.poses = session_poses;
+  if (args->sequence.frames.empty()) args->sequence.frames = std::to_string(info.state.last_frame_index + 1) + ":";
+  return loaded;
+}
 
-  // --load: continue a saved session where it stopped. The mapping parameters are the session's
-  // (they shaped its local maps; an option that would change them is refused), the frames
-  // default to those after its last one, and the global-map options apply as given.
-  std::optional<Session> loaded;
-  if (!args.load.empty()) {
-    loaded.emplace(loadSession(args.load));
-    const SessionInfo& info = loaded->info;
-    if (info.state.current_keyframe < 0 && loaded->graph.size() > 0)
-      throw InputError(args.load, "session format " + std::to_string(info.format_version) +
-                                      " does not store the mapper's state, so mapping cannot continue from it (it "
-                                      "can still be rendered or opened)");
-    if (!sameMapperParams(args.params.mapper, MapperParams{}) && !sameMapperParams(args.params.mapper, info.mapper))
-      throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
-                                  "them (" + rerunFlags() + ")");
-    args.params.mapper = info.mapper;
-    // The pose source is the session's too (its keyframes were placed that way).
-    const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";
-    if (!args.sequence.poses.empty() && args.sequence.poses != session_poses)
-      throw std::invalid_argument("--poses " + args.sequence.poses + ": " + args.load + " was mapped with --poses " +
-                                  session_poses + "; drop --poses to continue it");
-    args.sequence.poses = session_poses;
-    if (args.sequence.frames.empty()) args.sequence.frames = std::to_string(info.state.last_frame_index + 1) + ":";
-  }
-  const TumSequence seq = openSequence(args.sequence);
-  if (loaded) {
-    const MapperState& state = loaded->info.state;
-    if (seq.frameRange().first <= state.last_frame_index)
-      throw std::invalid_argument("--frames " + frameRangeText(seq.frameRange()) + ": " + args.load +
-                                  " has mapped frames up to " + std::to_string(state.last_frame_index) +
-                                  "; continue from " + std::to_string(state.last_frame_index + 1));
-    if (!(seq.camera() == loaded->info.camera))
-      throw InputError(seq.folder().string(), "its camera (" + seq.cameraSource() + ") is not the one of " + args.load +
-                                                  " (give --camera to match it)");
-  } else {
-    args.params.mapper.poses = poseSource(args.sequence, seq);
-  }
-  Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
-                         : Mapper(seq.camera(), args.params.mapper);
-  const int frames_loaded = mapper.framesMapped();
+// The sequence must go on where the loaded session stopped, with its camera.
+void checkContinues(const TumSequence& seq, const Session& loaded, const std::string& load) {
+  const MapperState& state = loaded.info.state;
+  if (seq.frameRange().first <= state.last_frame_index)
+    throw std::invalid_argument("--frames " + frameRangeText(seq.frameRange()) + ": " + load +
+                                " has mapped frames up to " + std::to_string(state.last_frame_index) +
+                                "; continue from " + std::to_string(state.last_frame_index + 1));
+  if (!(seq.camera() == loaded.info.camera))
+    throw InputError(seq.folder().string(), "its camera (" + seq.cameraSource() + ") is not the one of " + load +
+                                                " (give --camera to match it)");
+}
+
+// Each frame's stage times (FrameReport::ms), ms.
+struct FrameTimes {
   std::vector<double> update_ms, pipeline_ms, features_ms, decision_ms, tracking_ms;
-  const MapRefinementResult refined = mapSequence(seq, mapper, [&](const FrameReport& r) {
+  void add(const FrameReport& r) {
     update_ms.push_back(r.ms.update_ms);
     pipeline_ms.push_back(r.ms.total_ms);
     features_ms.push_back(r.ms.features_ms);
     decision_ms.push_back(r.ms.decision_ms);
     tracking_ms.push_back(r.ms.tracking_ms);
-  }, refinement(args.sequence));
-  const bool tracking = args.params.mapper.poses == PoseSource::kTrack;
-  const KeyframeGraph& graph = mapper.graph();
-  const GlobalMap global = buildGlobalMap(graph, args.params.global);
-
-  if (!args.json) {
-    std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
-    for (const Keyframe& k : graph.keyframes()) {
-      const std::vector<bool>& kept = global.kept[static_cast<std::size_t>(k.id)];
-      std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
-                  k.container.size(), std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
-    }
   }
-  MapExportOptions options;
-  options.octomap_resolution_m = args.octomap_resolution_m;
-  options.run_stats = {
+};
+
+void printKeyframeTable(const KeyframeGraph& graph, const GlobalMap& global) {
+  std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
+  for (const Keyframe& k : graph.keyframes()) {
+    const std::vector<bool>& kept = global.kept[static_cast<std::size_t>(k.id)];
+    std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
+                k.container.size(), std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
+  }
+}
+
+// The run's figures for stats.json (exportMap adds the map's).
+nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames_loaded, const FrameTimes& t,
+                        const MapRefinementResult& refined, const std::vector<StampedPose>& trajectory) {
+  const bool tracking = mapper.params().poses == PoseSource::kTrack;
+  nlohmann::json stats = {
       {"frames", mapper.framesMapped()},
       {"frame_range", frameRangeText(seq.frameRange())},
       {"frames_loaded", frames_loaded},
       {"revisits", mapper.revisits()},
-      {"update_ms", rounded(median(update_ms))},
-      {"pipeline_ms", rounded(median(pipeline_ms))},
-      {"features_ms", rounded(median(features_ms))},
-      {"decision_ms", rounded(median(decision_ms))},
+      {"update_ms", rounded(median(t.update_ms))},
+      {"pipeline_ms", rounded(median(t.pipeline_ms))},
+      {"features_ms", rounded(median(t.features_ms))},
+      {"decision_ms", rounded(median(t.decision_ms))},
       {"camera", seq.cameraSource()},
       {"poses", tracking ? "track" : "gt"},
   };
-  options.trajectory = mapper.trajectory();
-  if (tracking) {
-    options.run_stats["tracking_ms"] = rounded(median(tracking_ms));
-    addTrackingStats(mapper, options.trajectory, seq, &options.run_stats);
-    options.run_stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
-                                           {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
-                                           {"refused", refined.refused}};
-  }
+  if (!tracking) return stats;
+  stats["tracking_ms"] = rounded(median(t.tracking_ms));
+  addTrackingStats(mapper, trajectory, seq, &stats);
+  stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
+                             {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
+                             {"refused", refined.refused}};
+  return stats;
+}
+
+// exportMap with a progress bar for the OctoMap export; returns stats.json.
+nlohmann::json exportWithProgress(const std::filesystem::path& out_dir, const KeyframeGraph& graph,
+                                  const GlobalMap& global, MapExportOptions options) {
   std::unique_ptr<ProgressBar> octomap_bar;
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
@@ -149,31 +152,65 @@ void runMap(MapArgs args) {
   };
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   octomap_bar.reset();  // its last line before the summary, not after it
+  return stats;
+}
+
+void printTrackingSummary(const Mapper& mapper, const MapRefinementResult& refined, const nlohmann::json& stats) {
+  std::printf("tracked poses: %s lost (skipped), %d placed on a weak estimate, %d relocalised, %s",
+              counted(mapper.framesLost(), "frame").c_str(), mapper.framesWeak(), mapper.framesRelocalised(),
+              counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
+  if (refined.refused)
+    std::printf(", keyframe poses kept: the joint refinement of %d local-map pairs ran too far (%.1f s)", refined.pairs,
+                1e-3 * refined.ms);
+  else
+    std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
+                refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
+  if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
+  std::printf("\n");
+}
+
+void printSummary(const Mapper& mapper, const GlobalMap& global, const FrameTimes& t, const std::filesystem::path& out_dir) {
+  const KeyframeGraph& graph = mapper.graph();
+  const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
+                             counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
+  std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: mapping thread "
+              "%.2f ms (ORB %.2f on the prefetch thread, tracking %.2f, decision %.2f, update %.2f) -> %s\n",
+              counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(t.pipeline_ms),
+              median(t.features_ms), median(t.tracking_ms), median(t.decision_ms), median(t.update_ms), out_dir.c_str());
+}
+
+void runMap(MapArgs args) {
+  checkMapArgs(args);
+  std::optional<Session> loaded;
+  if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
+  const TumSequence seq = openSequence(args.sequence);
+  if (loaded)
+    checkContinues(seq, *loaded, args.load);
+  else
+    args.params.mapper.poses = poseSource(args.sequence, seq);
+  Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
+                         : Mapper(seq.camera(), args.params.mapper);
+  const int frames_loaded = mapper.framesMapped();
+  FrameTimes times;
+  const MapRefinementResult refined =
+      mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
+  const KeyframeGraph& graph = mapper.graph();
+  const GlobalMap global = buildGlobalMap(graph, args.params.global);
+
+  if (!args.json) printKeyframeTable(graph, global);
+  MapExportOptions options;
+  options.octomap_resolution_m = args.octomap_resolution_m;
+  options.trajectory = mapper.trajectory();
+  options.run_stats = runStats(mapper, seq, frames_loaded, times, refined, options.trajectory);
+  const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   // After the export, so a failed export leaves no session file behind.
   if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;
   }
-  const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
-                             counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
-  std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: mapping thread "
-              "%.2f ms (ORB %.2f on the prefetch thread, tracking %.2f, decision %.2f, update %.2f) -> %s\n",
-              counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(pipeline_ms),
-              median(features_ms), median(tracking_ms), median(decision_ms), median(update_ms), out_dir.c_str());
-  if (tracking) {
-    std::printf("tracked poses: %s lost (skipped), %d placed on a weak estimate, %d relocalised, %s",
-                counted(mapper.framesLost(), "frame").c_str(), mapper.framesWeak(), mapper.framesRelocalised(),
-                counted(mapper.poseGraph().loops().size(), "loop closure").c_str());
-    if (refined.refused)
-      std::printf(", keyframe poses kept: the joint refinement of %d local-map pairs ran too far (%.1f s)", refined.pairs,
-                  1e-3 * refined.ms);
-    else
-      std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
-                  refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
-    if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
-    std::printf("\n");
-  }
+  printSummary(mapper, global, times, args.out);
+  if (mapper.params().poses == PoseSource::kTrack) printTrackingSummary(mapper, refined, stats);
 }
 
 }  // namespace

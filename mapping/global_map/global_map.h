@@ -1,6 +1,7 @@
 #pragma once
 // The global map (SPEC section 6): a pure function of the local maps, their poses and the
-// parameters, rebuilt whenever a threshold or a keyframe pose changes.
+// parameters, rebuilt whenever a threshold or a keyframe pose changes. One file per stage
+// (global_map.cpp, which runs them, says which).
 #include <cstddef>
 #include <memory>
 #include <vector>

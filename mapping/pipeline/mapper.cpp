@@ -158,71 +158,78 @@ bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* 
   return true;
 }
 
-void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
-                              std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
-                              RgbdFrame* frame, FrameReport* report) {
-  if (tracked.keyframe >= 0)
-    pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
-                     edgeInformation(tracked.estimate, tracking_.loops.edge_noise), false});
-  bool loop = false;
-  int loop_inliers = 0, loop_to = -1;
+Mapper::LoopEdge Mapper::addCovisibleEdges(int created, int previous, const TrackingOutcome& tracked,
+                                           std::span<const std::pair<int, double>> covisible,
+                                           const TrackingFrame& observed, const RgbdFrame& frame) {
+  LoopEdge loop;
   for (const auto& [other, weight] : covisible) {
     if (other == tracked.keyframe) continue;
     // A keyframe the previous one is not linked to is a place seen again: a loop edge.
     const bool is_loop = other != previous && !graph_.edges().hasEdge(previous, other);
     if (is_loop && !tracking_.loops.enabled) continue;
     const Keyframe& K = graph_.keyframe(other);
-    const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C,
+    const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame.T_W_C,
                                                        is_loop ? loopEstimateParams() : tracking_.tracker.relative);
     if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < tracking_.loops.min_inliers))
       continue;
     pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), is_loop});
-    if (is_loop && estimate.pnp_inliers > loop_inliers) loop_inliers = estimate.pnp_inliers, loop_to = other;
-    loop = loop || is_loop;
+    if (is_loop && estimate.pnp_inliers > loop.inliers) loop.inliers = estimate.pnp_inliers, loop.to = other;
+    loop.closed = loop.closed || is_loop;
   }
-  if (!loop && tracking_.loops.enabled) {
-    // Drift may have moved the place seen again beyond the covisibility test's 8 px: candidates
-    // are the keyframes the previous one is not linked to whose keypoints could project into
-    // this frame at all (covisibilityBound, with a drift-sized margin), ranked by the share of
-    // their features re-observed within that margin (delta at the margin; ties to the lower id),
-    // the first few verified by a relative-pose estimate (descriptor matching, PnP, dense
-    // refinement). Ranked by the bound, which saturates at 1 near a place seen again, the end of
-    // 7-Scenes RedKitchen 0:500 tried two keyframes PnP could not verify while keyframes 25 and 21
-    // could (31 and 39 inliers): two loops missed.
-    CovisibilityParams margin = params_.keyframes.covisibility;
-    margin.max_reprojection_px = tracking_.loops.candidate_margin_px;
-    const Keyframe& N = graph_.keyframe(created);
-    std::vector<std::pair<double, int>> candidates;
-    for (const Keyframe& K : graph_.keyframes()) {
-      if (K.id == created || K.id == previous || graph_.edges().hasEdge(previous, K.id) ||
-          graph_.edges().hasEdge(created, K.id) || !params_.keyframes.prefilter.accepts(K.T_W_K, frame->T_W_C) ||
-          covisibilityBound(K.features, K.T_W_K, frame->T_W_C, camera_, margin) < params_.keyframes.tau)
-        continue;
-      candidates.emplace_back(-covisibility(K.features, K.T_W_K, N.features, N.T_W_K, camera_, margin), K.id);
-    }
-    std::sort(candidates.begin(), candidates.end());
-    const std::size_t tried = std::min(candidates.size(), static_cast<std::size_t>(std::max(tracking_.loops.candidates, 0)));
-    for (std::size_t i = 0; i < tried; ++i) {
-      const int other = candidates[i].second;
-      const Keyframe& K = graph_.keyframe(other);
-      const RelativePose estimate =
-          estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
-      if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) continue;
-      pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), true});
-      loop = true;
-      loop_inliers = estimate.pnp_inliers;
-      loop_to = other;
-      break;
-    }
+  return loop;
+}
+
+Mapper::LoopEdge Mapper::addLoopEdgeBeyondCovisibility(int created, int previous, const TrackingFrame& observed,
+                                                       const RgbdFrame& frame) {
+  // Drift may have moved the place seen again beyond the covisibility test's 8 px: candidates
+  // are the keyframes the previous one is not linked to whose keypoints could project into
+  // this frame at all (covisibilityBound, with a drift-sized margin), ranked by the share of
+  // their features re-observed within that margin (delta at the margin; ties to the lower id),
+  // the first few verified by a relative-pose estimate (descriptor matching, PnP, dense
+  // refinement). Ranked by the bound, which saturates at 1 near a place seen again, the end of
+  // 7-Scenes RedKitchen 0:500 tried two keyframes PnP could not verify while keyframes 25 and 21
+  // could (31 and 39 inliers): two loops missed.
+  CovisibilityParams margin = params_.keyframes.covisibility;
+  margin.max_reprojection_px = tracking_.loops.candidate_margin_px;
+  const Keyframe& N = graph_.keyframe(created);
+  std::vector<std::pair<double, int>> candidates;
+  for (const Keyframe& K : graph_.keyframes()) {
+    if (K.id == created || K.id == previous || graph_.edges().hasEdge(previous, K.id) ||
+        graph_.edges().hasEdge(created, K.id) || !params_.keyframes.prefilter.accepts(K.T_W_K, frame.T_W_C) ||
+        covisibilityBound(K.features, K.T_W_K, frame.T_W_C, camera_, margin) < params_.keyframes.tau)
+      continue;
+    candidates.emplace_back(-covisibility(K.features, K.T_W_K, N.features, N.T_W_K, camera_, margin), K.id);
   }
-  if (!loop) return;
+  std::sort(candidates.begin(), candidates.end());
+  const std::size_t tried = std::min(candidates.size(), static_cast<std::size_t>(std::max(tracking_.loops.candidates, 0)));
+  for (std::size_t i = 0; i < tried; ++i) {
+    const int other = candidates[i].second;
+    const Keyframe& K = graph_.keyframe(other);
+    const RelativePose estimate =
+        estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame.T_W_C, loopEstimateParams());
+    if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) continue;
+    pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), true});
+    return {true, other, estimate.pnp_inliers};
+  }
+  return {};
+}
+
+void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
+                              std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
+                              RgbdFrame* frame, FrameReport* report) {
+  if (tracked.keyframe >= 0)
+    pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
+                     edgeInformation(tracked.estimate, tracking_.loops.edge_noise), false});
+  LoopEdge loop = addCovisibleEdges(created, previous, tracked, covisible, observed, *frame);
+  if (!loop.closed && tracking_.loops.enabled) loop = addLoopEdgeBeyondCovisibility(created, previous, observed, *frame);
+  if (!loop.closed) return;
   optimisePoseGraph(frame, created, Transform::Identity(), report);
   // The covisibility edge of the loop, weighted by delta at the corrected poses.
   const Keyframe& N = graph_.keyframe(created);
-  const Keyframe& L = graph_.keyframe(loop_to);
-  graph_.edges().strengthen(created, loop_to,
+  const Keyframe& L = graph_.keyframe(loop.to);
+  graph_.edges().strengthen(created, loop.to,
                             covisibility(L.features, L.T_W_K, N.features, N.T_W_K, camera_, params_.keyframes.covisibility));
-  pose_graph_.recordLoop({frame->index, previous, loop_to, loop_inliers, report->loop_correction_m,
+  pose_graph_.recordLoop({frame->index, previous, loop.to, loop.inliers, report->loop_correction_m,
                           report->ms.pose_graph_ms});
 }
 
@@ -237,22 +244,119 @@ std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
   };
 }
 
-FrameReport Mapper::addFrame(const RgbdFrame& input) {
-  if (!canContinue())
-    throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
-                                "so mapping cannot continue from it; it can still be rendered, exported or opened");
-  const bool tracking = params_.poses == PoseSource::kTrack;
-  if (!isValidTransform(input.T_W_C))
-    throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
-  const auto start = std::chrono::steady_clock::now();
-  FrameReport report;
-  report.frame_index = input.index;
-
+FrameFeatures Mapper::frameFeatures(const RgbdFrame& input, std::chrono::steady_clock::time_point start,
+                                    FrameReport* report) {
   const bool features_ahead = input.features && input.features_for == this;
   FrameFeatures features =
       features_ahead ? *input.features : extractor_.extract(input, camera_, params_.local_map.depth_range);
-  report.features = features.size();
-  report.ms.features_ms = features_ahead ? input.features_ms : msSince(start);
+  report->features = features.size();
+  report->ms.features_ms = features_ahead ? input.features_ms : msSince(start);
+  return features;
+}
+
+std::optional<TrackingOutcome> Mapper::placeFrame(const TrackingFrame& observed, DensePoints* points, RgbdFrame* frame,
+                                                  FrameReport* report) {
+  const auto track_start = std::chrono::steady_clock::now();
+  *points = sampleDensePoints(*frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.strideFor(camera_));
+  const std::optional<TrackingOutcome> outcome = trackFrame(observed, frame, report);
+  report->ms.tracking_ms = msSince(track_start);
+  return outcome;
+}
+
+FrameDecision Mapper::decideFrame(const FrameFeatures& features, const Transform& T_W_C,
+                                  const std::vector<KeyframeView>& views) {
+  const int current = state_.current_keyframe;
+  if (params_.keyframe_every > 0) {
+    const bool start_new = current < 0 || state_.frames_mapped % params_.keyframe_every == 0;
+    FrameDecision decision;
+    decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
+    decision.keyframe = start_new ? -1 : current;
+    return decision;
+  }
+  // The current keyframe first; only a frame that lost it asks the index for candidates
+  // (the loop-closure search and, for a new keyframe, its edges).
+  const std::span<const KeyframeView> current_view =
+      current >= 0 ? std::span<const KeyframeView>(&views[current], 1) : std::span<const KeyframeView>();
+  const FrameDecision decision = decideKeyframe(features, T_W_C, current, current_view, camera_, params_.keyframes);
+  if (decision.kind == FrameDecision::Kind::kUpdate) return decision;
+  index_.sync(views);
+  const std::vector<KeyframeView> candidates =
+      index_.candidates(features, T_W_C, views, params_.keyframes.prefilter, {current});
+  return decideKeyframe(features, T_W_C, current, candidates, camera_, params_.keyframes);
+}
+
+void Mapper::revisitKeyframe(const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report) {
+  const int current = state_.current_keyframe;
+  ++state_.revisits;
+  report->keyframe = report->decision.keyframe;
+  // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
+  if (tracksPoses() && tracking_.loops.enabled && current >= 0 && !graph_.edges().hasEdge(current, report->keyframe))
+    closeLoop(report->keyframe, observed, frame, report);
+  // The frame links the place it left to the place it recognised.
+  if (current >= 0) graph_.edges().strengthen(current, report->keyframe, report->decision.delta_current);
+}
+
+void Mapper::startKeyframe(FrameFeatures features, const DensePoints& points, const TrackingOutcome& tracked,
+                           const std::vector<KeyframeView>& views, RgbdFrame* frame, FrameReport* report) {
+  const int current = state_.current_keyframe;
+  const auto edges = params_.keyframe_every > 0
+                         ? std::vector<std::pair<int, double>>{}
+                         : edgesOfNewKeyframe(features, frame->T_W_C, current,
+                                              index_.candidates(features, frame->T_W_C, views,
+                                                                params_.keyframes.prefilter, {current},
+                                                                index_.params().max_edge_candidates),
+                                              camera_, params_.keyframes);
+  // The keyframe keeps the features (the estimates below only read them through `kept`).
+  report->keyframe = newKeyframe(*frame, std::move(features));
+  const FrameFeatures* kept = &graph_.keyframe(report->keyframe).features;
+  for (const auto& [other, weight] : edges) graph_.edges().strengthen(report->keyframe, other, weight);
+  if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report->keyframe, current, 0.0);
+  if (tracksPoses() && current >= 0)
+    addKeyframeEdges(report->keyframe, current, tracked, edges, {kept, &points, {}}, frame, report);
+}
+
+void Mapper::updateLocalMap(const RgbdFrame& frame, const TrackingOutcome& tracked, FrameReport* report) {
+  Keyframe& keyframe = graph_.keyframe(state_.current_keyframe);
+  // A frame placed on a weak estimate (the features or the local map alone) keeps its pose but
+  // stays out of the local map it was placed against, unless it starts a keyframe: integrated, its
+  // error became the map the next frames were aligned to. On Replica office0's 2000 poses the
+  // camera looks into a textureless corner for 37 frames (1703-1739, no PnP), and the local map
+  // alone, fed by the frames it placed, carried them 87 mm from the truth (map 2.09 mm RMSE against
+  // the mesh; 1.11 mm with this rule, ATE 4.9 -> 2.4 mm, 9 -> 13 frames lost).
+  report->integrated = !tracksPoses() || !tracked.weak || tracked.relocalised ||
+                       report->decision.kind == FrameDecision::Kind::kNewKeyframe;
+  if (report->integrated) {
+    integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report->touched_cells);
+    ++keyframe.frames_integrated;
+  }
+}
+
+void Mapper::recordPose(const RgbdFrame& frame) {
+  const Transform T_K_C = graph_.keyframe(state_.current_keyframe).T_W_K.inverse() * frame.T_W_C;
+  state_.frame_poses.push_back({frame.index, frame.timestamp, state_.current_keyframe, T_K_C});
+  if (tracksPoses()) tracker_.accept(graph_, state_.current_keyframe, T_K_C);
+}
+
+void Mapper::countFrame(const RgbdFrame& frame) {
+  ++state_.frames_mapped;
+  state_.last_frame_index = frame.index;
+  state_.last_timestamp = frame.timestamp;
+}
+
+void Mapper::checkCanMap(const RgbdFrame& input) const {
+  if (!canContinue())
+    throw std::invalid_argument("the session does not store its current keyframe (vdmap session format 1 did not), "
+                                "so mapping cannot continue from it; it can still be rendered, exported or opened");
+  if (!isValidTransform(input.T_W_C))
+    throw std::invalid_argument("frame " + std::to_string(input.index) + ": pose is not a finite rigid transform");
+}
+
+FrameReport Mapper::addFrame(const RgbdFrame& input) {
+  checkCanMap(input);
+  const auto start = std::chrono::steady_clock::now();
+  FrameReport report;
+  report.frame_index = input.index;
+  FrameFeatures features = frameFeatures(input, start, &report);
 
   RgbdFrame frame = input;  // shares the images; only the pose may change
   DensePoints points;
@@ -264,15 +368,10 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
                                  return *photometric;
                                }};
   TrackingOutcome tracked;
-  if (tracking) {
-    const auto track_start = std::chrono::steady_clock::now();
-    points = sampleDensePoints(frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.strideFor(camera_));
-    const std::optional<TrackingOutcome> outcome = trackFrame(observed, &frame, &report);
-    report.ms.tracking_ms = msSince(track_start);
+  if (tracksPoses()) {
+    const std::optional<TrackingOutcome> outcome = placeFrame(observed, &points, &frame, &report);
     if (!outcome) {
-      ++state_.frames_mapped;
-      state_.last_frame_index = input.index;
-      state_.last_timestamp = input.timestamp;
+      countFrame(input);
       report.ms.total_ms = msSince(start);
       return report;
     }
@@ -281,82 +380,22 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
 
   const auto decide_start = std::chrono::steady_clock::now();
   const std::vector<KeyframeView> views = graph_.views();
-  const int current = state_.current_keyframe;
-  if (params_.keyframe_every > 0) {
-    const bool start_new = current < 0 || state_.frames_mapped % params_.keyframe_every == 0;
-    report.decision.kind = start_new ? FrameDecision::Kind::kNewKeyframe : FrameDecision::Kind::kUpdate;
-    report.decision.keyframe = start_new ? -1 : current;
-  } else {
-    // The current keyframe first; only a frame that lost it asks the index for candidates
-    // (the loop-closure search and, for a new keyframe, its edges).
-    const std::span<const KeyframeView> current_view =
-        current >= 0 ? std::span<const KeyframeView>(&views[current], 1) : std::span<const KeyframeView>();
-    report.decision = decideKeyframe(features, frame.T_W_C, current, current_view, camera_, params_.keyframes);
-    if (report.decision.kind != FrameDecision::Kind::kUpdate) {
-      index_.sync(views);
-      const std::vector<KeyframeView> candidates =
-          index_.candidates(features, frame.T_W_C, views, params_.keyframes.prefilter, {current});
-      report.decision = decideKeyframe(features, frame.T_W_C, current, candidates, camera_, params_.keyframes);
-    }
-  }
+  report.decision = decideFrame(features, frame.T_W_C, views);
   switch (report.decision.kind) {
-    case FrameDecision::Kind::kUpdate:
-      report.keyframe = report.decision.keyframe;
-      break;
-    case FrameDecision::Kind::kRevisit:
-      ++state_.revisits;
-      report.keyframe = report.decision.keyframe;
-      // A revisit of a keyframe the current one is not linked to closes a loop (tracked poses).
-      if (tracking && tracking_.loops.enabled && state_.current_keyframe >= 0 && !graph_.edges().hasEdge(state_.current_keyframe, report.keyframe))
-        closeLoop(report.keyframe, observed, &frame, &report);
-      // The frame links the place it left to the place it recognised.
-      if (current >= 0) graph_.edges().strengthen(current, report.keyframe, report.decision.delta_current);
-      break;
-    case FrameDecision::Kind::kNewKeyframe: {
-      const auto edges = params_.keyframe_every > 0
-                             ? std::vector<std::pair<int, double>>{}
-                             : edgesOfNewKeyframe(features, frame.T_W_C, current,
-                                                  index_.candidates(features, frame.T_W_C, views,
-                                                                    params_.keyframes.prefilter, {current},
-                                                                    index_.params().max_edge_candidates),
-                                                  camera_, params_.keyframes);
-      // The keyframe keeps the features (the estimates below only read them through `observed`).
-      const FrameFeatures* kept = nullptr;
-      report.keyframe = newKeyframe(frame, std::move(features));
-      kept = &graph_.keyframe(report.keyframe).features;
-      for (const auto& [other, weight] : edges) graph_.edges().strengthen(report.keyframe, other, weight);
-      if (params_.keyframe_every > 0 && current >= 0) graph_.edges().strengthen(report.keyframe, current, 0.0);
-      if (tracking && current >= 0)
-        addKeyframeEdges(report.keyframe, current, tracked, edges, {kept, &points, {}}, &frame, &report);
-      break;
-    }
+    case FrameDecision::Kind::kUpdate: report.keyframe = report.decision.keyframe; break;
+    case FrameDecision::Kind::kRevisit: revisitKeyframe(observed, &frame, &report); break;
+    case FrameDecision::Kind::kNewKeyframe: startKeyframe(std::move(features), points, tracked, views, &frame, &report); break;
   }
   report.T_W_C = frame.T_W_C;
   state_.current_keyframe = report.keyframe;
   report.ms.decision_ms = msSince(decide_start);
 
   const auto update_start = std::chrono::steady_clock::now();
-  Keyframe& keyframe = graph_.keyframe(state_.current_keyframe);
-  // A frame placed on a weak estimate (the features or the local map alone) keeps its pose but
-  // stays out of the local map it was placed against, unless it starts a keyframe: integrated, its
-  // error became the map the next frames were aligned to. On Replica office0's 2000 poses the
-  // camera looks into a textureless corner for 37 frames (1703-1739, no PnP), and the local map
-  // alone, fed by the frames it placed, carried them 87 mm from the truth (map 2.09 mm RMSE against
-  // the mesh; 1.11 mm with this rule, ATE 4.9 -> 2.4 mm, 9 -> 13 frames lost).
-  report.integrated = !tracking || !tracked.weak || tracked.relocalised ||
-                      report.decision.kind == FrameDecision::Kind::kNewKeyframe;
-  if (report.integrated) {
-    integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report.touched_cells);
-    ++keyframe.frames_integrated;
-  }
+  updateLocalMap(frame, tracked, &report);
   report.ms.update_ms = msSince(update_start);
-  const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
-  state_.frame_poses.push_back({frame.index, frame.timestamp, state_.current_keyframe, T_K_C});
-  if (tracking) tracker_.accept(graph_, state_.current_keyframe, T_K_C);
+  recordPose(frame);
   report.ms.total_ms = msSince(start);
-  ++state_.frames_mapped;
-  state_.last_frame_index = frame.index;
-  state_.last_timestamp = frame.timestamp;
+  countFrame(frame);
   return report;
 }
 

@@ -1,4 +1,5 @@
 #pragma once
+#include <chrono>
 #include <functional>
 #include <optional>
 #include <span>
@@ -170,6 +171,40 @@ class Mapper {
   MapRefinementResult refineKeyframePoses(const MapRefinementParams& params = {});
 
  private:
+  // A loop edge added to the pose graph for a new keyframe: the keyframe it reaches with the most
+  // PnP inliers (`closed` may hold with `to` -1 when no loop edge had an inlier).
+  struct LoopEdge {
+    bool closed = false;
+    int to = -1;
+    int inliers = 0;
+  };
+
+  bool tracksPoses() const { return params_.poses == PoseSource::kTrack; }
+  // Throws std::invalid_argument when the mapper cannot continue or the frame's pose is not rigid.
+  void checkCanMap(const RgbdFrame& input) const;
+  // addFrame's steps, in order. The frame's features: computed ahead (featuresAhead) or here,
+  // timed from `start`.
+  FrameFeatures frameFeatures(const RgbdFrame& input, std::chrono::steady_clock::time_point start, FrameReport* report);
+  // PoseSource::kTrack: samples the frame's dense points into `points` (`observed` reads them) and
+  // places the frame (trackFrame), timed.
+  std::optional<TrackingOutcome> placeFrame(const TrackingFrame& observed, DensePoints* points, RgbdFrame* frame,
+                                            FrameReport* report);
+  // Update, revisit or new keyframe: the fixed schedule (keyframe_every), else covisibility with
+  // the current keyframe and, when that fails, with the index's candidates.
+  FrameDecision decideFrame(const FrameFeatures& features, const Transform& T_W_C, const std::vector<KeyframeView>& views);
+  // FrameDecision::Kind::kRevisit: counts it, closes a loop when the place is not linked to the
+  // current keyframe, and links the two.
+  void revisitKeyframe(const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report);
+  // FrameDecision::Kind::kNewKeyframe: the keyframe (keeping `features`), its covisibility edges
+  // and, with tracked poses, its pose-graph edges.
+  void startKeyframe(FrameFeatures features, const DensePoints& points, const TrackingOutcome& tracked,
+                     const std::vector<KeyframeView>& views, RgbdFrame* frame, FrameReport* report);
+  // The frame's depth into the current keyframe's local map, unless it was placed on a weak estimate.
+  void updateLocalMap(const RgbdFrame& frame, const TrackingOutcome& tracked, FrameReport* report);
+  // The frame's pose in the current keyframe, for the trajectory and the tracker.
+  void recordPose(const RgbdFrame& frame);
+  void countFrame(const RgbdFrame& frame);
+
   int newKeyframe(const RgbdFrame& frame, FrameFeatures features);
   // PoseSource::kTrack: sets frame->T_W_C (nullopt: the frame cannot be placed).
   std::optional<TrackingOutcome> trackFrame(const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report);
@@ -184,6 +219,13 @@ class Mapper {
   void addKeyframeEdges(int created, int previous, const TrackingOutcome& tracked,
                         std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
                         RgbdFrame* frame, FrameReport* report);
+  // addKeyframeEdges' measured edges to the covisible keyframes.
+  LoopEdge addCovisibleEdges(int created, int previous, const TrackingOutcome& tracked,
+                             std::span<const std::pair<int, double>> covisible, const TrackingFrame& observed,
+                             const RgbdFrame& frame);
+  // addKeyframeEdges when no covisible keyframe closed a loop: the first verified of the keyframes
+  // whose features could project into the frame with a drift-sized margin.
+  LoopEdge addLoopEdgeBeyondCovisibility(int created, int previous, const TrackingFrame& observed, const RgbdFrame& frame);
 
   PinholeCamera camera_;
   MapperParams params_;

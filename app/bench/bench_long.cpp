@@ -1,4 +1,4 @@
-#include "app/bench_long.h"
+#include "app/bench/bench_long.h"
 
 #include <malloc.h>
 #include <unistd.h>
@@ -56,13 +56,10 @@ double medianCpu(const std::vector<FrameRow>& rows, std::size_t begin, std::size
   return median(std::move(v));
 }
 
-}  // namespace
-
-void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
-                  const std::filesystem::path& out_dir, const LongRunOptions& options,
-                  const std::optional<MapRefinementParams>& refine) {
-  if (options.global_every < 1) throw std::invalid_argument("--global-every must be at least 1");
-  Mapper mapper(seq.camera(), mapper_params);
+// Maps every frame of `seq` with `mapper`, one row per frame; a global map every `global_every`
+// frames and after the last frame.
+std::vector<FrameRow> mapAndRecord(const TumSequence& seq, Mapper& mapper, const GlobalMapParams& global,
+                                   int global_every, const std::optional<MapRefinementParams>& refine) {
   std::vector<FrameRow> rows;
   rows.reserve(seq.size());
   auto buildGlobal = [&](FrameRow& row) {
@@ -81,12 +78,15 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
     row.rss_mb = residentMb();
     row.heap_mb = liveHeapMb();
     row.keyframes = mapper.graph().size();
-    if (static_cast<int>(rows.size() + 1) % options.global_every == 0) buildGlobal(row);
+    if (static_cast<int>(rows.size() + 1) % global_every == 0) buildGlobal(row);
     rows.push_back(row);
     last = threadCpuMs();  // a global-map build is not the next frame's cost
   }, refine);
   if (!rows.empty() && rows.back().global_ellipsoids < 0) buildGlobal(rows.back());
+  return rows;
+}
 
+std::string longCsv(const std::vector<FrameRow>& rows) {
   std::ostringstream csv;
   csv << "frame,cpu_ms,wall_ms,rss_mb,keyframes,global_ellipsoids,t_g_s,heap_mb\n";
   for (std::size_t i = 0; i < rows.size(); ++i) {
@@ -96,47 +96,63 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
     else csv << ',';
     csv << ',' << r.heap_mb << '\n';
   }
-  const std::size_t n = rows.size();
-  const double early = medianCpu(rows, n / 6, n / 3), late = medianCpu(rows, n - n / 6, n);
-  const double rss_half = n > 0 ? rows[n / 2].rss_mb : 0.0, rss_end = n > 0 ? rows.back().rss_mb : 0.0;
-  const double heap_half = n > 0 ? rows[n / 2].heap_mb : 0.0, heap_end = n > 0 ? rows.back().heap_mb : 0.0;
-  const bool tracking = mapper_params.poses == PoseSource::kTrack;
+  return csv.str();
+}
+
+// The summary's figures: CPU medians early and late, memory half way and at the end.
+struct LongFigures {
+  std::size_t n = 0;
+  double early = 0, late = 0, rss_half = 0, rss_end = 0, heap_half = 0, heap_end = 0;
+};
+
+LongFigures longFigures(const std::vector<FrameRow>& rows) {
+  LongFigures f;
+  const std::size_t n = f.n = rows.size();
+  f.early = medianCpu(rows, n / 6, n / 3), f.late = medianCpu(rows, n - n / 6, n);
+  f.rss_half = n > 0 ? rows[n / 2].rss_mb : 0.0, f.rss_end = n > 0 ? rows.back().rss_mb : 0.0;
+  f.heap_half = n > 0 ? rows[n / 2].heap_mb : 0.0, f.heap_end = n > 0 ? rows.back().heap_mb : 0.0;
+  return f;
+}
+
+nlohmann::json longSummary(const std::vector<FrameRow>& rows, const LongFigures& f, const Mapper& mapper,
+                           const TumSequence& seq) {
+  const std::size_t n = f.n;
+  const bool tracking = mapper.params().poses == PoseSource::kTrack;
   nlohmann::json summary = {
       {"frames", n},
       {"poses", tracking ? "track" : "gt"},
       {"keyframes", mapper.graph().size()},
       {"revisits", mapper.revisits()},
-      {"cpu_ms_median_early", rounded(early)},
+      {"cpu_ms_median_early", rounded(f.early)},
       {"early_frames", {n / 6, n / 3}},
-      {"cpu_ms_median_late", rounded(late)},
+      {"cpu_ms_median_late", rounded(f.late)},
       {"late_frames", {n - n / 6, n}},
-      {"cpu_ratio_late_to_early", rounded(early > 0 ? late / early : 0.0)},
+      {"cpu_ratio_late_to_early", rounded(f.early > 0 ? f.late / f.early : 0.0)},
       {"cpu_ms_median_all", rounded(medianCpu(rows, 0, n))},
-      {"rss_mb_half", rounded(rss_half)},
-      {"rss_mb_end", rounded(rss_end)},
-      {"rss_growth_last_half", rounded(rss_half > 0 ? rss_end / rss_half - 1.0 : 0.0)},
-      {"heap_mb_half", rounded(heap_half)},
-      {"heap_mb_end", rounded(heap_end)},
-      {"heap_growth_last_half", rounded(heap_half > 0 ? heap_end / heap_half - 1.0 : 0.0)},
+      {"rss_mb_half", rounded(f.rss_half)},
+      {"rss_mb_end", rounded(f.rss_end)},
+      {"rss_growth_last_half", rounded(f.rss_half > 0 ? f.rss_end / f.rss_half - 1.0 : 0.0)},
+      {"heap_mb_half", rounded(f.heap_half)},
+      {"heap_mb_end", rounded(f.heap_end)},
+      {"heap_growth_last_half", rounded(f.heap_half > 0 ? f.heap_end / f.heap_half - 1.0 : 0.0)},
       {"global_ellipsoids_end", n > 0 ? rows.back().global_ellipsoids : 0},
       {"t_g_s_end", rounded(n > 0 ? rows.back().t_g_s : 0.0)},
   };
   if (tracking) addTrackingStats(mapper, mapper.trajectory(), seq, &summary);
-  std::filesystem::create_directories(out_dir);  // checked before the run (checkExportFolder)
-  writeFileAtomically(out_dir / "long.csv", csv.str());
-  writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
-  if (options.json) {
-    std::cout << jsonText(summary) << '\n';
-    return;
-  }
+  return summary;
+}
+
+void printLongSummary(const std::vector<FrameRow>& rows, const LongFigures& f, const Mapper& mapper,
+                      const nlohmann::json& summary) {
+  const std::size_t n = f.n;
   std::printf("long run: %zu frames, %zu keyframes, %d revisits\n", n, mapper.graph().size(), mapper.revisits());
-  std::printf("CPU per frame, median: frames %zu-%zu %.2f ms, last %zu frames %.2f ms (x%.2f)\n", n / 6, n / 3, early,
-              n / 6, late, early > 0 ? late / early : 0.0);
-  std::printf("resident memory: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", rss_half, rss_end,
-              rss_half > 0 ? 100.0 * (rss_end / rss_half - 1.0) : 0.0);
-  std::printf("live heap: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", heap_half, heap_end,
-              heap_half > 0 ? 100.0 * (heap_end / heap_half - 1.0) : 0.0);
-  if (tracking) {
+  std::printf("CPU per frame, median: frames %zu-%zu %.2f ms, last %zu frames %.2f ms (x%.2f)\n", n / 6, n / 3, f.early,
+              n / 6, f.late, f.early > 0 ? f.late / f.early : 0.0);
+  std::printf("resident memory: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", f.rss_half, f.rss_end,
+              f.rss_half > 0 ? 100.0 * (f.rss_end / f.rss_half - 1.0) : 0.0);
+  std::printf("live heap: %.0f MB half way, %.0f MB at the end (%+.1f%%)\n", f.heap_half, f.heap_end,
+              f.heap_half > 0 ? 100.0 * (f.heap_end / f.heap_half - 1.0) : 0.0);
+  if (mapper.params().poses == PoseSource::kTrack) {
     std::printf("tracked poses: %d frames lost, %d placed on a weak estimate, %d relocalised, %zu loop closures",
                 mapper.framesLost(), mapper.framesWeak(), mapper.framesRelocalised(), mapper.poseGraph().loops().size());
     if (summary.contains("ate_rmse_m")) std::printf(", ATE %.2f cm", 100 * summary["ate_rmse_m"].get<double>());
@@ -144,6 +160,26 @@ void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, con
   }
   std::printf("global map at the end: %lld ellipsoids in %.2f s\n", n > 0 ? rows.back().global_ellipsoids : 0LL,
               n > 0 ? rows.back().t_g_s : 0.0);
+}
+
+}  // namespace
+
+void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
+                  const std::filesystem::path& out_dir, const LongRunOptions& options,
+                  const std::optional<MapRefinementParams>& refine) {
+  if (options.global_every < 1) throw std::invalid_argument("--global-every must be at least 1");
+  Mapper mapper(seq.camera(), mapper_params);
+  const std::vector<FrameRow> rows = mapAndRecord(seq, mapper, global, options.global_every, refine);
+  const LongFigures figures = longFigures(rows);
+  const nlohmann::json summary = longSummary(rows, figures, mapper, seq);
+  std::filesystem::create_directories(out_dir);  // checked before the run (checkExportFolder)
+  writeFileAtomically(out_dir / "long.csv", longCsv(rows));
+  writeFileAtomically(out_dir / "long.json", jsonText(summary) + "\n");
+  if (options.json) {
+    std::cout << jsonText(summary) << '\n';
+    return;
+  }
+  printLongSummary(rows, figures, mapper, summary);
   std::printf("wrote %s and %s\n", (out_dir / "long.csv").c_str(), (out_dir / "long.json").c_str());
 }
 

@@ -1,0 +1,63 @@
+#pragma once
+// What the methods of `vdmap bench` share: the command's arguments, the frames they all run on,
+// and one row of the comparison (docs/method.md 12).
+#include <cstddef>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "app/bench/bench_long.h"
+#include "app/commands.h"
+#include "mapping/eval/mesh_accuracy.h"
+#include "mapping/local_map/local_map_integrator.h"
+
+namespace vdmap::app {
+
+/// The options of `vdmap bench`.
+struct BenchArgs {
+  SequenceArgs sequence;
+  int keyframe_every = 10;
+  LocalMapParams local_map;
+  std::string mesh;
+  std::vector<int> accuracy_cell_sizes;
+  std::string out = ".";
+  bool json = false;
+  bool no_octomap = false;
+  bool no_open3d = false;
+  std::string poses = "gt";
+  bool long_run = false;
+  LongRunOptions long_options;
+  std::size_t completion_samples = AccuracyParams{}.completion_samples;
+};
+
+/// One row of the comparison.
+struct MethodResult {
+  std::string name;   ///< e.g. "OctoMap 0.05 m"
+  std::string key;    ///< JSON prefix, e.g. "octomap_005"
+  double ms = 0.0;    ///< median update time per frame
+  std::size_t elements = 0;
+  std::optional<AccuracyReport> accuracy;
+  std::string note;   ///< why a peer did not run
+
+  MethodResult(std::string n, std::string k, double t = 0.0, std::string why = "")
+      : name(std::move(n)), key(std::move(k)), ms(t), note(std::move(why)) {}
+};
+
+/// The row of a peer at a resolution: "OctoMap 0.05 m" and "octomap_005" for name "OctoMap",
+/// key "octomap" and 0.05 m; `note` says why it did not run (empty: it ran).
+MethodResult peerRow(const std::string& name, const std::string& key, double res_m, const std::string& note = "");
+
+/// What every method runs on: the decoded frames (poses in the world frame), their camera and
+/// the arguments, and the reference mesh (null: no accuracy). Borrowed, not owned.
+struct BenchInput {
+  const std::vector<RgbdFrame>& frames;
+  const PinholeCamera& cam;
+  const BenchArgs& args;
+  const ColoredTriangleMesh* mesh;
+
+  /// Sets r->elements to the number of a method's map points (world frame) and, with a mesh,
+  /// r->accuracy to their accuracy against it.
+  void score(MethodResult* r, const std::vector<Eigen::Vector3f>& points) const;
+};
+
+}  // namespace vdmap::app

@@ -1,0 +1,13 @@
+#pragma once
+// The OctoMap peer of `vdmap bench` (docs/method.md 12).
+#include "app/bench/bench_method.h"
+
+namespace vdmap::app {
+
+/// OctoMap at `res_m`: every frame's points (those the integrator uses, in the world frame)
+/// inserted with a ray from the camera centre, each insertion's CPU time; the row's figure is
+/// their median and its elements the occupied voxels at the finest resolution, scored by their
+/// centres.
+MethodResult timeOctomap(const BenchInput& in, double res_m);
+
+}  // namespace vdmap::app
