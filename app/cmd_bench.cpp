@@ -1,4 +1,4 @@
-// vdmap bench SEQ: the paper's comparison (SPEC section 8, issue #8) on the same frames in one
+// vdmap bench SEQ: the paper's comparison (docs/method.md 12) on the same frames in one
 // process: vdmap's local-map update and whole pipeline, OctoMap at 0.10/0.05/0.02 m, the NDT-OM
 // baseline at 0.10 m and Open3D's TSDF at 0.02/0.01 m (when its plugin is built). Frames are
 // decoded once, before any timing; each method runs over all frames in its own pass, so none
@@ -6,7 +6,7 @@
 // so a busy machine does not skew the ratios; the pipeline's stage split is the Mapper's own
 // wall-clock report. Single-threaded throughout (liboctomap on Debian has no
 // OpenMP, the integrator is sequential, the Open3D plugin pins OpenMP to one thread).
-// With --mesh every method's map is also scored against the reference (SPEC section 8).
+// With --mesh every method's map is also scored against the reference (docs/method.md 12).
 // With --poses track the odometry peers (app/odometry_peers.h) estimate the poses of the same
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
@@ -143,7 +143,7 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::IsMember({"gt", "track"}));
   addRefineArg(*verb, args->sequence);
   verb->add_flag("--long", args->long_run,
-                 "the long run instead (issue 16): every frame (or --frames) mapped as `vdmap map` does, the mapping "
+                 "the long run instead: every frame (or --frames) mapped as `vdmap map` does, the mapping "
                  "thread's CPU time per frame, resident memory, live heap, keyframes and the global map's size into "
                  "long.csv and long.json; with --poses track the poses are tracked (and refined as --refine says) "
                  "and long.json adds frames lost, loop closures and the ATE");

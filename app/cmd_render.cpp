@@ -298,7 +298,7 @@ void addRenderCommand(CLI::App& app) {
       "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
   verb->add_option("--map", args->map,
                    "instead of SEQ: a saved session (.vdmap: every view, with its keyframes and graph), or an "
-                   "ellipsoid PLY (SPEC section 7) or `vdmap map` folder (its global_ellipsoids.ply; global view only)");
+                   "ellipsoid PLY (docs/method.md 11) or `vdmap map` folder (its global_ellipsoids.ply; global view only)");
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
   verb->add_option("--view", args->view,
                    "global (map, frustums, covisibility edges coloured by weight) | keyframe:K (the map from "

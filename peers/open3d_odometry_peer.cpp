@@ -1,4 +1,4 @@
-// The Open3D odometry peer of `vdmap bench --poses track` (issue 15): Open3D 0.16's RGB-D
+// The Open3D odometry peer of `vdmap bench --poses track`: Open3D 0.16's RGB-D
 // odometry with the hybrid (photometric + geometric) Jacobian, frame to frame as in Open3D's
 // own examples, with its default options (pyramid iterations 20/10/5, depth 0-4 m, depth
 // difference 0.03 m).

@@ -1,4 +1,4 @@
-// The Open3D peer of `vdmap bench` (issue #8): Open3D 0.16's ScalableTSDFVolume, built as a
+// The Open3D peer of `vdmap bench` (the TSDF rows): Open3D 0.16's ScalableTSDFVolume, built as a
 // plugin only when Open3D is installed (see peers/tsdf_peer_abi.h for why it is a plugin).
 #include <cstdlib>
 #include <cstring>

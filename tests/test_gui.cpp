@@ -426,7 +426,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   EXPECT_NE(reopened.worker(), nullptr);  // the open session stays
 }
 
-// Issue #17: an opened session whose sequence is still there continues in the player from the
+// An opened session whose sequence is still there continues in the player from the
 // session's state, to the same map as one run over all frames; seeking back goes no further
 // back than the session.
 TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {

@@ -213,7 +213,7 @@ TEST(GuiCli, NoDisplayFailsBeforeRenderingTheBuiltinScene) {
   EXPECT_TRUE(fs::is_empty(home / "cache")) << "the built-in scene was rendered before the display was checked";
 }
 
-// A failed scripted run writes neither the screenshot nor the stats (issue #17: a bad session
+// A failed scripted run writes neither the screenshot nor the stats (a bad session once
 // exited 1 but wrote a screenshot of the error dialog and its stats).
 TEST(GuiCli, AFailedScriptedRunWritesNeitherFile) {
   REQUIRE_XVFB();

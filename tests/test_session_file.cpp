@@ -444,7 +444,7 @@ TEST(SessionFile, Format1FilesLoadAndCannotContinue) {
   EXPECT_EQ(encodeSession(resaved.graph, resaved.info), encodeSession(old.graph, old.info));
 }
 
-// Issue #17: a saved session continues mapping where it stopped. Frames 0:70 in one run and
+// A saved session continues mapping where it stopped. Frames 0:70 in one run and
 // 0:35 then 35:70 from the saved session give the same keyframes, graph, local maps and state,
 // byte for byte, so the same global map (the walk revisits its start past frame 60).
 TEST(SessionFile, ASavedSessionContinuesAsIfItHadNotStopped) {
@@ -492,7 +492,7 @@ TEST(SessionFile, AStateThatDoesNotFitTheGraphIsRejected) {
   EXPECT_NE(decodeError(bad).find(expected), std::string::npos) << decodeError(bad);
 }
 
-// vdmap map --load continues a saved session on the sequence (issue #17), byte-identical to one
+// vdmap map --load continues a saved session on the sequence, byte-identical to one
 // run over all the frames; a run on frames the session has mapped, other mapping parameters or a
 // format-1 session are clear errors.
 TEST(SessionFile, MapVerbContinuesASavedSession) {

@@ -1,5 +1,5 @@
 #pragma once
-// vdmap bench SEQ --long: the long-run benchmark of issue 16.
+// vdmap bench SEQ --long: the long-run benchmark (docs/performance.md).
 #include <filesystem>
 #include <optional>
 

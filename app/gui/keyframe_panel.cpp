@@ -50,8 +50,8 @@ void drawInspector(Workbench& bench, const render::MapMirror& mirror, WindowStat
   }
   ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
                      k.frames_integrated);
-  tip("Its local map: one ellipsoid per touched container cell (SPEC 2); of those, the ones the filter keeps with "
-      "the live thresholds (min points, k; SPEC 4); and the frames whose depth went into it.");
+  tip("Its local map: one ellipsoid per touched container cell (docs/method.md 2); of those, the ones the filter keeps with "
+      "the live thresholds (min points, k; docs/method.md 4); and the frames whose depth went into it.");
   const render::Texture2D& container = mirror.containerTexture();
   if (!mirror.containerImage().empty()) {
     const float w = ImGui::GetContentRegionAvail().x;
@@ -68,7 +68,7 @@ void drawInspector(Workbench& bench, const render::MapMirror& mirror, WindowStat
       neighbours += item;
     }
   ImGui::TextWrapped("neighbours (edge weight): %s", neighbours.empty() ? "none" : neighbours.c_str());
-  tip("Covisibility edges: the share of features one keyframe re-observes of the other (SPEC 5).");
+  tip("Covisibility edges: the share of features one keyframe re-observes of the other (docs/method.md 5).");
   if (ImGui::Button("View from keyframe")) ui.view_from_keyframe = id;
   tip("Looks through the keyframe with its own intrinsics (its image's aspect kept; Esc or a drag leaves).");
   ImGui::SameLine();

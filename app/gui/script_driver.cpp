@@ -196,7 +196,7 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
       return;
     case ScriptPhase::kFinish:
       // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file:
-      // a screenshot of the error would pass for a result (issue #17). One taken before a
+      // a screenshot of the error would pass for a result. One taken before a
       // later failure is removed.
       if (!failedRun(run, bench) && !run.options.stats_json.empty()) writeStats(run, bench, win, run.options.stats_json);
       if (failedRun(run, bench) && run.screenshot_taken) {

@@ -87,14 +87,14 @@ void drawTimes(WindowState& win, float width) {
       label(win.check, name, help);
       ImGui::Text("%.1f ms", ms);
     };
-    row("features", "ORB detection and the depth under each keypoint, median per frame (SPEC 5).", median(features));
+    row("features", "ORB detection and the depth under each keypoint, median per frame (docs/method.md 5).", median(features));
     if (win.mapping->mapper.poses == PoseSource::kTrack)
       row("tracking", "The frame's pose against the current keyframe: matches by projection (or brute force and PnP "
           "RANSAC), then the dense refinement against its local map; relocalisation when weak. Median per frame.",
           median(tracking));
     row("keyframe decision", "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
         median(decision));
-    row("local-map update", "Integrating the frame's depth into the keyframe's container (SPEC 2), median per frame.",
+    row("local-map update", "Integrating the frame's depth into the keyframe's container (docs/method.md 2), median per frame.",
         median(update));
     ImGui::EndTable();
   }
@@ -241,7 +241,7 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
               status.busy ? " (working)" : "");
   checkFits(win.check);
   tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "
-      "keyframes they made (SPEC 5: a new one when a frame re-observes under tau of the current one's features).");
+      "keyframes they made (docs/method.md 5: a new one when a frame re-observes under tau of the current one's features).");
   drawFrameImages(mirror, win, !mirror.rgbTexture().empty() && mapped > 0 && !saved);
   ImGui::End();
 }

@@ -71,19 +71,19 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
     };
     row("local maps", "Ellipsoids stored in all keyframes' containers (one per touched cell), before filtering.", "%zu",
         stored);
-    row("Sigma_e", "Sigma_e (SPEC 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
+    row("Sigma_e", "Sigma_e (docs/method.md 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
                    "than k times the sensor model's expectation).",
         "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
-    row("merged", "After mean-shift merging within each merge group (SPEC 6.2), before occlusion removal.", "%zu",
+    row("merged", "After mean-shift merging within each merge group (docs/method.md 6.2), before occlusion removal.", "%zu",
         m.merged);
-    row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (SPEC 6.5).", "%zu",
+    row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (docs/method.md 7).", "%zu",
         m.merged_across_groups);
-    row("Sigma_e'", "Sigma_e' (SPEC 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+    row("Sigma_e'", "Sigma_e' (docs/method.md 6.4): ellipsoids of the global map, after merging, occlusion removal and "
                     "fusion across groups.",
         "%zu", m.sigma_e_prime);
-    row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (SPEC 6.1).",
+    row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (docs/method.md 6.1).",
         "%zu", m.groups.size());
-    row("t_g", "t_g (SPEC 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
+    row("t_g", "t_g (docs/method.md 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
         "%.3f s", m.t_g_s);
     row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
         m.occlusion_ms);

@@ -66,7 +66,7 @@ Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov) {
 }
 
 void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
-  std::string bytes = vertexHeader("vdmap ellipsoid means (SPEC 7)", ellipsoids.size(), "");
+  std::string bytes = vertexHeader("vdmap ellipsoid means", ellipsoids.size(), "");
   bytes.reserve(bytes.size() + ellipsoids.size() * 15);
   for (const Ellipsoid& e : ellipsoids) putPointAndColor(bytes, e);
   writeFileAtomically(file, bytes);
@@ -88,7 +88,7 @@ void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& 
 }
 
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
-  std::string bytes = vertexHeader("vdmap ellipsoids (SPEC 7)", ellipsoids.size(),
+  std::string bytes = vertexHeader("vdmap ellipsoids", ellipsoids.size(),
                                    "property float cxx\nproperty float cxy\nproperty float cxz\n"
                                    "property float cyy\nproperty float cyz\nproperty float czz\n"
                                    "property uint count\nproperty int keyframe\n");
@@ -105,7 +105,7 @@ void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Elli
 
 void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
   constexpr double kSh0 = 0.28209479177387814;  // the degree-0 spherical harmonic, 1 / (2 sqrt(pi))
-  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians (SPEC 7)\nelement vertex " +
+  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians\nelement vertex " +
                       std::to_string(ellipsoids.size()) + "\n";
   // The reference 3DGS loader's order; it asserts 3 * ((degree + 1)^2 - 1) = 45 f_rest at its
   // default degree 3, so all 45 are written, zero: the colour has no view dependence.

@@ -1,5 +1,5 @@
 #pragma once
-// The global map (SPEC section 6): a pure function of the local maps, their poses and the
+// The global map (docs/method.md 6): a pure function of the local maps, their poses and the
 // parameters, rebuilt whenever a threshold or a keyframe pose changes. One file per stage
 // (global_map.cpp, which runs them, says which).
 #include <cstddef>
@@ -11,7 +11,7 @@
 
 namespace vdmap {
 
-/// The live parameters of the global map (SPEC section 9). Their ranges, units and help texts are
+/// The live parameters of the global map (docs/parameters.md). Their ranges, units and help texts are
 /// rows of the parameter table (global_map_parameters.cpp, docs/parameters.md).
 struct GlobalMapParams {
   FilterParams filter;                 ///< which local-map ellipsoids are kept
@@ -20,7 +20,7 @@ struct GlobalMapParams {
   bool occlusion_removal = true;
   double occlusion_distance_m = 0.5;
   double occlusion_angle_deg = 30.0;
-  /// SPEC 6.5: after merging and occlusion removal, fuse ellipsoids of different merge groups
+  /// docs/method.md 7: after merging and occlusion removal, fuse ellipsoids of different merge groups
   /// that describe the same surface, so the map grows with the area seen rather than with revisits.
   bool fuse_across_groups = true;
   /// Two ellipsoids of different groups are the same surface when their Bhattacharyya distance
@@ -47,22 +47,22 @@ struct GlobalMap {
   std::vector<std::vector<bool>> kept;
   std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
   std::size_t merged = 0;             ///< after merging within groups, before occlusion removal and fusion
-  std::size_t merged_across_groups = 0;  ///< ellipsoids fused into one of another group (SPEC 6.5)
+  std::size_t merged_across_groups = 0;  ///< ellipsoids fused into one of another group (docs/method.md 7)
   std::size_t sigma_e_prime = 0;      ///< after merging, occlusion removal and fusion
   double t_g_s = 0;                   ///< wall time of grouping, merging, occlusion removal and fusion
   double groups_ms = 0, merge_ms = 0, fusion_ms = 0, occlusion_ms = 0;
 };
 
-/// Greedy merge groups of SPEC section 6 step 1 (deterministic: ties go to the lower id).
+/// Greedy merge groups of docs/method.md 6.1 (deterministic: ties go to the lower id).
 std::vector<MergeGroup> mergeGroups(const KeyframeGraph& graph, double tau_group);
 
-/// Mean-shift with a flat kernel of radius h on count-weighted means (SPEC section 6 step 2):
+/// Mean-shift with a flat kernel of radius h on count-weighted means (docs/method.md 6.2):
 /// returns, for each input, the index of its cluster (0..clusters-1, in order of first member).
 /// Means that all lie within h of each other form one cluster without iterating.
 std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vector<double>& weights,
                                    double h);
 
-/// meanShiftClusters by the SPEC's iteration from every seed, always (its reference in tests).
+/// meanShiftClusters by the plain iteration of docs/method.md 6.2 from every seed, always (its reference in tests).
 std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
                                               const std::vector<double>& weights, double h);
 
@@ -82,7 +82,7 @@ double bhattacharyyaDistance(const Ellipsoid& a, const Ellipsoid& b);
 /// at least 10 um.
 double fusionHalfWidth(const std::vector<Ellipsoid>& ellipsoids, const GlobalMapParams& params);
 
-/// Fusion across groups (SPEC 6.5) of world-frame ellipsoids, `group_of[i]` being the merge group
+/// Fusion across groups (docs/method.md 7) of world-frame ellipsoids, `group_of[i]` being the merge group
 /// ellipsoid i came from. Two ellipsoids are copies of one surface when they come from different
 /// groups, their means lie within fusionHalfWidth() of each other along every axis, and their
 /// bhattacharyyaDistance() is at most fusion_max_distance. Most precise first (smallest
@@ -123,7 +123,7 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
 /// frame, keyframes in id order.
 std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map);
 
-/// Occlusion removal (SPEC section 6 step 3) over ellipsoids in the world frame; returns, for each,
+/// Occlusion removal (docs/method.md 6.3) over ellipsoids in the world frame; returns, for each,
 /// whether it is removed. Exposed for tests.
 std::vector<bool> occludingEllipsoids(const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids,
                                       const GlobalMapParams& params);

@@ -137,7 +137,7 @@ std::vector<int> meanShiftClusters(const std::vector<Eigen::Vector3d>& means, co
 
 std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>& means,
                                               const std::vector<double>& weights, double h) {
-  constexpr double kConverged = 1e-4;  // m (SPEC)
+  constexpr double kConverged = 1e-4;  // m (docs/method.md 6.2)
   constexpr int kMaxSteps = 50;
   const double h2 = h * h;
   std::vector<Eigen::Vector3d> modes;
@@ -167,7 +167,7 @@ std::vector<int> meanShiftClustersByIteration(const std::vector<Eigen::Vector3d>
 }
 
 Ellipsoid momentMatch(const std::vector<const Ellipsoid*>& cluster) {
-  // SPEC writes Sigma = sum n_i (Sigma_i + d_i d_i^T) / n with population covariances. Ellipsoids
+  // Moment matching (docs/method.md 6.2) is Sigma = sum n_i (Sigma_i + d_i d_i^T) / n with population covariances. Ellipsoids
   // carry sample covariances S_i / (n_i - 1), so the scatters are combined instead:
   // S = sum (S_i + n_i d_i d_i^T), Sigma = S / (n - 1): exactly the statistics of the union.
   CellStats u;  // the statistics of the union

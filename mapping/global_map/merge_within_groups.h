@@ -26,7 +26,7 @@ struct MergeScratch {
   std::vector<const Ellipsoid*> cluster;
 };
 
-/// SPEC section 6 step 2 for one group: the members' kept ellipsoids (`kept`, per keyframe id)
+/// docs/method.md 6.2 for one group: the members' kept ellipsoids (`kept`, per keyframe id)
 /// re-projected into the centre's container and merged cell by cell, into `out` (replacing what it
 /// held), in the world frame. Output order: cells ascending, then the ellipsoids that fall into no
 /// cell of the centre, which pass through. Reads the graph only; one call per scratch at a time.

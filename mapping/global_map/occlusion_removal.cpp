@@ -12,11 +12,11 @@ namespace vdmap {
 namespace global_map_detail {
 namespace {
 
-// Occlusion test of SPEC 6.3: A occludes B when the ray to B passes within Mahalanobis distance 2
+// Occlusion test of docs/method.md 6.3: A occludes B when the ray to B passes within Mahalanobis distance 2
 // of A, i.e. a squared distance of at most 4.
 constexpr double kOcclusionGate2 = 4.0;
 
-// SPEC 6.3: the keyframes whose ellipsoids viewpoint K judges: K, its covisibility neighbours,
+// docs/method.md 6.3: the keyframes whose ellipsoids viewpoint K judges: K, its covisibility neighbours,
 // and every keyframe within occlusion_distance whose optical axis is within occlusion_angle of
 // K's. Ascending ids.
 std::vector<int> occlusionGroup(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapParams& params) {
@@ -59,7 +59,7 @@ class CellOfPixel {
 };
 
 // The ellipsoids of one viewpoint cell: appends to `removed` every A that occludes a more precise
-// B behind it (SPEC 6.3). `cell` is reordered near to far (ties by index; the result does not
+// B behind it (docs/method.md 6.3). `cell` is reordered near to far (ties by index; the result does not
 // depend on their order, as only a B strictly farther than A counts); `finest_behind` is scratch.
 void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Matrix3d>& information,
                            std::vector<double>* finest_behind, std::vector<int>* removed) {

@@ -51,7 +51,7 @@ struct OcclusionBuffers {
   tbb::enumerable_thread_specific<OcclusionScratch> scratch;
 };
 
-/// Occlusion removal (SPEC 6.3) of world-frame ellipsoids, lambda_max[i] being the largest
+/// Occlusion removal (docs/method.md 6.3) of world-frame ellipsoids, lambda_max[i] being the largest
 /// eigenvalue of ellipsoid i's floored covariance: removed[i] (resized to their number) is 1 when
 /// ellipsoid i is removed. Every keyframe of `graph` is a viewpoint. The same answer for any
 /// params.threads; one call per `buffers` at a time.

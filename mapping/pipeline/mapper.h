@@ -18,18 +18,18 @@ namespace vdmap {
 /// Where frame poses come from.
 enum class PoseSource {
   kGroundTruth,  ///< each frame's T_W_C as given (the sequence's groundtruth.txt)
-  kTrack,        ///< estimated by the Tracker (SPEC section 11); the given T_W_C is ignored
+  kTrack,        ///< estimated by the Tracker (docs/method.md 8); the given T_W_C is ignored
                  ///< except the first frame's, which anchors the world frame
 };
 
 /// Everything that shapes the local maps and the graph; changing any of it means re-running
-/// the sequence (SPEC section 9, "no" in the live column).
+/// the sequence (docs/parameters.md, "no" in the live column).
 struct MapperParams {
   LocalMapParams local_map;
   FeatureParams features;
   KeyframeParams keyframes;
   /// > 0: every N-th frame starts a keyframe and covisibility is not consulted (a fixed
-  /// schedule, for comparisons); 0: the covisibility decision of SPEC section 5.
+  /// schedule, for comparisons); 0: the covisibility decision of docs/method.md 5.
   int keyframe_every = 0;
   PoseSource poses = PoseSource::kGroundTruth;
 
@@ -134,7 +134,7 @@ class Mapper {
   FrameReport addFrame(const RgbdFrame& frame);
 
   /// A function that computes a frame's features exactly as addFrame() would, for another
-  /// thread (a FramePrefetcher's: ORB then overlaps mapping, issue 16). It holds its own
+  /// thread (a FramePrefetcher's: ORB then overlaps mapping). It holds its own
   /// extractor, so it may run beside addFrame(); the Mapper must outlive it.
   std::function<void(RgbdFrame&)> featuresAhead() const;
 
