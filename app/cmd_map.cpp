@@ -142,10 +142,15 @@ nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames
   return stats;
 }
 
-// exportMap with a progress bar for the OctoMap export; returns stats.json.
+// exportMap with progress bars for the files and the OctoMap export; returns stats.json.
 nlohmann::json exportWithProgress(const std::filesystem::path& out_dir, const KeyframeGraph& graph,
                                   const GlobalMap& global, MapExportOptions options) {
-  std::unique_ptr<ProgressBar> octomap_bar;
+  std::unique_ptr<ProgressBar> files_bar, octomap_bar;
+  options.progress = [&files_bar](std::size_t done, std::size_t total) {
+    if (!files_bar) files_bar = std::make_unique<ProgressBar>("export", total);
+    files_bar->update(done);
+    if (done == total) files_bar.reset();  // its line ends before the OctoMap's starts
+  };
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
     octomap_bar->update(done);
@@ -195,7 +200,7 @@ void runMap(MapArgs args) {
   const MapRefinementResult refined =
       mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
   const KeyframeGraph& graph = mapper.graph();
-  const GlobalMap global = buildGlobalMap(graph, args.params.global);
+  const GlobalMap global = withStageBar("global map", [&] { return buildGlobalMap(graph, args.params.global); });
 
   if (!args.json) printKeyframeTable(graph, global);
   MapExportOptions options;
@@ -204,7 +209,8 @@ void runMap(MapArgs args) {
   options.run_stats = runStats(mapper, seq, frames_loaded, times, refined, options.trajectory);
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
+  if (!args.save.empty())
+    withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;
