@@ -15,6 +15,7 @@
 #include "app/map_sequence.h"
 #include "app/parameter_table.h"
 #include "app/progress.h"
+#include "app/provenance.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
@@ -130,8 +131,6 @@ nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames
       {"pipeline_ms", rounded(median(t.pipeline_ms))},
       {"features_ms", rounded(median(t.features_ms))},
       {"decision_ms", rounded(median(t.decision_ms))},
-      {"camera", seq.cameraSource()},
-      {"poses", tracking ? "track" : "gt"},
   };
   if (!tracking) return stats;
   stats["tracking_ms"] = rounded(median(t.tracking_ms));
@@ -189,6 +188,8 @@ void runMap(MapArgs args) {
   std::optional<Session> loaded;
   if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
   const TumSequence seq = openSequence(args.sequence);
+  if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
+    std::cerr << "vdmap map: warning: " << dropped << "\n";
   if (loaded)
     checkContinues(seq, *loaded, args.load);
   else
@@ -207,6 +208,9 @@ void runMap(MapArgs args) {
   options.octomap_resolution_m = args.octomap_resolution_m;
   options.trajectory = mapper.trajectory();
   options.run_stats = runStats(mapper, seq, frames_loaded, times, refined, options.trajectory);
+  options.run_stats.update(frameCounts(seq));
+  options.run_stats.update(provenanceStats({seq.folder().string(), seq.cameraSource(), seq.camera(),
+                                            mapper.params().poses, refinement(args.sequence), args.params}));
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   // After the export, so a failed export leaves no session file behind.
   if (!args.save.empty())
