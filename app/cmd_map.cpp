@@ -15,6 +15,7 @@
 #include "app/map_sequence.h"
 #include "app/parameter_table.h"
 #include "app/progress.h"
+#include "app/provenance.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
@@ -130,8 +131,6 @@ nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames
       {"pipeline_ms", rounded(median(t.pipeline_ms))},
       {"features_ms", rounded(median(t.features_ms))},
       {"decision_ms", rounded(median(t.decision_ms))},
-      {"camera", seq.cameraSource()},
-      {"poses", tracking ? "track" : "gt"},
   };
   if (!tracking) return stats;
   stats["tracking_ms"] = rounded(median(t.tracking_ms));
@@ -142,10 +141,15 @@ nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames
   return stats;
 }
 
-// exportMap with a progress bar for the OctoMap export; returns stats.json.
+// exportMap with progress bars for the files and the OctoMap export; returns stats.json.
 nlohmann::json exportWithProgress(const std::filesystem::path& out_dir, const KeyframeGraph& graph,
                                   const GlobalMap& global, MapExportOptions options) {
-  std::unique_ptr<ProgressBar> octomap_bar;
+  std::unique_ptr<ProgressBar> files_bar, octomap_bar;
+  options.progress = [&files_bar](std::size_t done, std::size_t total) {
+    if (!files_bar) files_bar = std::make_unique<ProgressBar>("export", total);
+    files_bar->update(done);
+    if (done == total) files_bar.reset();  // its line ends before the OctoMap's starts
+  };
   options.octomap_progress = [&octomap_bar](std::size_t done, std::size_t total) {
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
     octomap_bar->update(done);
@@ -184,6 +188,8 @@ void runMap(MapArgs args) {
   std::optional<Session> loaded;
   if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
   const TumSequence seq = openSequence(args.sequence);
+  if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
+    std::cerr << "vdmap map: warning: " << dropped << "\n";
   if (loaded)
     checkContinues(seq, *loaded, args.load);
   else
@@ -195,16 +201,20 @@ void runMap(MapArgs args) {
   const MapRefinementResult refined =
       mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
   const KeyframeGraph& graph = mapper.graph();
-  const GlobalMap global = buildGlobalMap(graph, args.params.global);
+  const GlobalMap global = withStageBar("global map", [&] { return buildGlobalMap(graph, args.params.global); });
 
   if (!args.json) printKeyframeTable(graph, global);
   MapExportOptions options;
   options.octomap_resolution_m = args.octomap_resolution_m;
   options.trajectory = mapper.trajectory();
   options.run_stats = runStats(mapper, seq, frames_loaded, times, refined, options.trajectory);
+  options.run_stats.update(frameCounts(seq));
+  options.run_stats.update(provenanceStats({seq.folder().string(), seq.cameraSource(), seq.camera(),
+                                            mapper.params().poses, refinement(args.sequence), args.params}));
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
+  if (!args.save.empty())
+    withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;

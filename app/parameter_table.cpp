@@ -6,6 +6,8 @@
 #include <stdexcept>
 #include <string>
 
+#include <nlohmann/json.hpp>
+
 namespace vdmap::app {
 namespace {
 
@@ -88,6 +90,16 @@ void addParameterOptions(CLI::App& verb, ParameterValues& params) {
         ->default_str(formatValue(p, p.get(defaults)))
         ->type_name(p.kind == K::kChoice ? "NAME" : p.kind == K::kInt ? "INT" : "NUMBER");
   }
+}
+
+nlohmann::json valueJson(const Parameter& p, double value) {
+  switch (p.kind) {
+    case K::kBool: return value != 0;
+    case K::kChoice: return formatValue(p, value);
+    case K::kInt: return static_cast<long long>(value);
+    case K::kReal: return value;
+  }
+  return value;
 }
 
 }  // namespace vdmap::app

@@ -6,6 +6,7 @@
 #include <string_view>
 
 #include <CLI/CLI.hpp>
+#include <nlohmann/json_fwd.hpp>
 
 #include "mapping/pipeline/parameters.h"
 
@@ -27,5 +28,9 @@ void setFromText(const Parameter& p, ParameterValues& params, std::string_view t
 /// is parsed and range-checked as everywhere else and a bad one fails the parse with
 /// "--FLAG: KEY must be ...".
 void addParameterOptions(CLI::App& verb, ParameterValues& params);
+
+/// `value` of `p` as JSON, the way settings.json and stats.json write it: a bool, an integer, a
+/// number or a choice's name.
+nlohmann::json valueJson(const Parameter& p, double value);
 
 }  // namespace vdmap::app

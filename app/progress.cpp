@@ -4,15 +4,17 @@
 
 #include <algorithm>
 #include <cstdio>
+#include <exception>
 
 namespace vdmap::app {
 
 ProgressBar::ProgressBar(std::string label, std::size_t total)
-    : label_(std::move(label)), total_(total), enabled_(isatty(STDERR_FILENO) != 0) {}
+    : label_(std::move(label)), total_(total), enabled_(isatty(STDERR_FILENO) != 0),
+      exceptions_(std::uncaught_exceptions()) {}
 
 ProgressBar::~ProgressBar() {
   if (!enabled_) return;
-  draw(total_);
+  if (std::uncaught_exceptions() == exceptions_) draw(total_);
   std::fputc('\n', stderr);
 }
 

@@ -2,6 +2,7 @@
 #include <chrono>
 #include <cstddef>
 #include <string>
+#include <utility>
 
 namespace vdmap::app {
 
@@ -20,6 +21,17 @@ class ProgressBar {
   std::size_t total_;
   bool enabled_;
   std::chrono::steady_clock::time_point last_draw_{};
+  int exceptions_ = 0;  // std::uncaught_exceptions() when made: a bar unwound by an error is not completed
 };
+
+/// Runs `work` under a one-step bar named `label`, drawn when it starts and completed when it
+/// ends: for a long stage that does not report its own progress (the global-map build, a session
+/// save). Returns what `work` returns.
+template <typename Work>
+auto withStageBar(std::string label, Work&& work) {
+  ProgressBar bar(std::move(label), 1);
+  bar.update(0);
+  return work();
+}
 
 }  // namespace vdmap::app

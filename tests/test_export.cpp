@@ -245,6 +245,23 @@ TEST(Export, StoredCovariancesArePositiveSemiDefinite) {
 
 // A second export into the same folder leaves one run there: global.bt of an earlier export with
 // an OctoMap goes when the new one has none; files that are not the export's stay.
+// The progress of an export: one call after each file before global.bt, counting to their number
+// (7 with a trajectory, 6 without).
+TEST(Export, ReportsProgressAfterEachFile) {
+  const TwoViews scene;
+  test::TempDir tmp;
+  for (const bool with_trajectory : {false, true}) {
+    MapExportOptions options;
+    if (with_trajectory) options.trajectory = {{0.0, Transform::Identity()}, {0.1, Transform::Identity()}};
+    std::vector<std::pair<std::size_t, std::size_t>> calls;
+    options.progress = [&calls](std::size_t done, std::size_t total) { calls.emplace_back(done, total); };
+    exportMap(tmp / "out", scene.graph, scene.map, options);
+    const std::size_t files = with_trajectory ? 7 : 6;
+    ASSERT_EQ(calls.size(), files);
+    for (std::size_t i = 0; i < files; ++i) EXPECT_EQ(calls[i], std::make_pair(i + 1, files));
+  }
+}
+
 TEST(Export, AnExportRemovesTheFilesOfAnOlderOneItDoesNotWrite) {
   const TwoViews scene;
   test::TempDir tmp;

@@ -6,6 +6,7 @@
 #include <regex>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 
 #include <Eigen/Eigenvalues>
 #include <glm/gtc/matrix_transform.hpp>
@@ -424,6 +425,41 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
   EXPECT_NE(reopened.ui().status.text.find("bad.vdmap"), std::string::npos) << reopened.ui().status.text;
   EXPECT_NE(reopened.worker(), nullptr);  // the open session stays
+}
+
+// The Export writes what `vdmap map` writes: trajectory.txt (the same, byte for byte, for the same
+// frames and parameters) and the same provenance in stats.json; part-way, the range played.
+TEST(GuiWorkbench, ExportWritesTheTrajectoryAndProvenanceOfMap) {
+  TinyBench t;
+  t.worker().seek(4);  // frames 0..4
+  t.worker().waitIdle();
+  t.bench.ui().export_text = (t.dir / "part").string();
+  t.bench.exportMap();
+  t.worker().waitIdle();
+  ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+  const auto part = nlohmann::json::parse(test::readFile(t.dir / "part" / "stats.json"));
+  EXPECT_EQ(part["frame_range"], "0:5");
+  EXPECT_EQ(part["frames"], 5);
+
+  t.worker().play();
+  t.worker().waitIdle();
+  t.bench.ui().export_text = (t.dir / "gui").string();
+  t.bench.exportMap();
+  t.worker().waitIdle();
+  ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+  const test::RunResult r = test::runVdmap("map '" + (t.dir / "seq").string() + "' --keyframe-every 3 --out '" +
+                                           (t.dir / "cli").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  ASSERT_TRUE(std::filesystem::exists(t.dir / "gui" / "trajectory.txt"));
+  EXPECT_EQ(test::readFile(t.dir / "gui" / "trajectory.txt"), test::readFile(t.dir / "cli" / "trajectory.txt"));
+  const auto gui = nlohmann::json::parse(test::readFile(t.dir / "gui" / "stats.json"));
+  const auto cli = nlohmann::json::parse(test::readFile(t.dir / "cli" / "stats.json"));
+  for (const char* key : {"vdmap_version", "sequence", "frame_range", "camera", "camera_source", "camera_intrinsics",
+                          "poses", "refine", "parameters", "frames", "frames_listed", "frames_in_range",
+                          "frames_dropped_no_rgb", "frames_dropped_no_pose"}) {
+    ASSERT_TRUE(gui.contains(key)) << key;
+    EXPECT_EQ(gui[key], cli[key]) << key;
+  }
 }
 
 // An opened session whose sequence is still there continues in the player from the

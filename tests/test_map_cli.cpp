@@ -1,4 +1,5 @@
 // vdmap map / vdmap bench end to end on a tiny generated sequence.
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <regex>
@@ -7,6 +8,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "mapping/pipeline/parameters.h"
 #include "tests/test_util.h"
 
 namespace vdmap::test {
@@ -34,6 +36,88 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
                           "sigma_e_prime", "t_g_s", "t_g_us_per_ellipsoid", "global_stage_ms", "octomap"})
     EXPECT_TRUE(stats.contains(key)) << key;
   EXPECT_EQ(stats["keyframes"], 2);
+}
+
+// Frames without a ground-truth pose within 0.1 s are dropped (--poses gt); map says so in one
+// line on stderr, loudly when most of the range goes, and stats.json counts them.
+TEST(MapCli, DroppedFramesAreReportedAndCounted) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 5);
+  // Poses for frames 0 and 1 only (t = 0, 1/30 s): frames 2-4 come after the last pose, and a
+  // pose is interpolated between poses on both sides within 0.1 s.
+  writeText(tmp / "seq" / "groundtruth.txt", "0.0 0 0 0 0 0 0 1\n0.033333 0.01 0 0 0 0 0 1\n");
+  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --out '" + (tmp / "out").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_EQ(r.err.rfind("vdmap map: warning: MOST FRAMES DROPPED: 3 of the 5 frames of 0:5 dropped, 2 mapped: 3 "
+                        "without a ground-truth pose within 0.1 s", 0), 0u) << r.err;
+  std::ifstream stats_file(tmp / "out" / "stats.json");
+  const auto stats = nlohmann::json::parse(stats_file);
+  EXPECT_EQ(stats["frames_listed"], 5);
+  EXPECT_EQ(stats["frames_in_range"], 5);
+  EXPECT_EQ(stats["frames_dropped_no_pose"], 3);
+  EXPECT_EQ(stats["frames_dropped_no_rgb"], 0);
+  EXPECT_EQ(stats["frames_mapped"], 2);
+  EXPECT_EQ(stats["frames"], 2);
+
+  // Every frame with a pose: no line, and the counts say nothing was dropped.
+  writeTinySequence(tmp / "full", 3);
+  const RunResult full = runVdmap("map '" + (tmp / "full").string() + "' --frames 1: --out '" + (tmp / "out2").string() + "'");
+  ASSERT_EQ(full.exit_code, 0) << full.err;
+  EXPECT_EQ(full.err, "");
+  std::ifstream full_file(tmp / "out2" / "stats.json");
+  const auto full_stats = nlohmann::json::parse(full_file);
+  EXPECT_EQ(full_stats["frames_listed"], 3);
+  EXPECT_EQ(full_stats["frames_in_range"], 2);
+  EXPECT_EQ(full_stats["frames_dropped_no_pose"], 0);
+  EXPECT_EQ(full_stats["frames_mapped"], 2);
+}
+
+// stats.json says how the folder was made: vdmap's version, the sequence, the camera and its
+// source, the pose source and its refinement, and every mapping parameter with its value.
+TEST(MapCli, StatsRecordTheProvenance) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 4);
+  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --tau-group 0.3 --out '" +
+                               (tmp / "out").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::ifstream stats_file(tmp / "out" / "stats.json");
+  const auto stats = nlohmann::json::parse(stats_file);
+  const std::string version = runVdmap("--version").out;  // "vdmap VERSION (git COMMIT)\n"
+  ASSERT_GT(version.size(), 7u);
+  EXPECT_EQ(stats["vdmap_version"], version.substr(6, version.size() - 7));
+  EXPECT_EQ(stats["sequence"], fs::absolute(tmp / "seq").lexically_normal().string());
+  EXPECT_EQ(stats["frame_range"], "0:4");
+  EXPECT_EQ(stats["camera"], "file camera.yaml");
+  EXPECT_EQ(stats["camera_source"], "file");
+  EXPECT_EQ(stats["camera_intrinsics"], nlohmann::json({{"width", 64}, {"height", 48}, {"fx", 50.0}, {"fy", 50.0},
+                                                        {"cx", 31.5}, {"cy", 23.5}, {"depth_scale", 5000.0}}));
+  EXPECT_EQ(stats["poses"], "gt");
+  EXPECT_EQ(stats["refine"], "none");
+  // Every parameter of the table, the given ones with their values.
+  ASSERT_TRUE(stats["parameters"].is_object());
+  EXPECT_EQ(stats["parameters"].size(), parameters().size());
+  for (const Parameter& p : parameters()) EXPECT_TRUE(stats["parameters"].contains(std::string(p.key))) << p.key;
+  EXPECT_EQ(stats["parameters"]["keyframe_every"], 2);
+  EXPECT_EQ(stats["parameters"]["tau_group"], 0.3);
+  EXPECT_EQ(stats["parameters"]["occlusion_removal"], true);
+
+  const RunResult tracked = runVdmap("map '" + (tmp / "seq").string() + "' --poses track --refine pairwise --json --out '" +
+                                     (tmp / "out").string() + "'");
+  ASSERT_EQ(tracked.exit_code, 0) << tracked.err;
+  const auto t = nlohmann::json::parse(tracked.out);
+  EXPECT_EQ(t["poses"], "track");
+  EXPECT_EQ(t["refine"], "pairwise");
+
+  // A preset given with --camera, and one guessed from the folder (tum-default): the source says which.
+  writeTinySequence(tmp / "vga", 2, 640, 480);
+  fs::remove(tmp / "vga" / "camera.yaml");
+  for (const auto& [option, kind] : {std::pair{"", "guessed"}, std::pair{"--camera tum-fr1", "preset"}}) {
+    const RunResult r2 = runVdmap("map '" + (tmp / "vga").string() + "' " + option + " --json --out '" +
+                                  (tmp / "out").string() + "'");
+    ASSERT_EQ(r2.exit_code, 0) << r2.err;
+    EXPECT_EQ(nlohmann::json::parse(r2.out)["camera_source"], kind) << option;
+  }
 }
 
 TEST(MapCli, BadCellSizeFailsWithoutOutput) {

@@ -24,16 +24,6 @@ ParameterValues paramsOf(const Settings& s) { return {s.mapper, s.thresholds}; }
 
 const char* sectionOf(const Parameter& p) { return p.live ? "thresholds" : "rerun"; }
 
-json valueJson(const Parameter& p, double v) {
-  switch (p.kind) {
-    case Parameter::Kind::kBool: return v != 0;
-    case Parameter::Kind::kChoice: return formatValue(p, v);
-    case Parameter::Kind::kInt: return static_cast<long long>(v);
-    case Parameter::Kind::kReal: return v;
-  }
-  return v;
-}
-
 // A settings-file value as the text parseValue reads (numbers, booleans and names as they are);
 // anything else (an array, an object, null) is refused naming the key.
 std::string valueText(const Parameter& p, const json& v) {

@@ -7,6 +7,7 @@
 
 #include <Eigen/Geometry>
 
+#include "app/provenance.h"
 #include "mapping/export/map_export.h"
 
 namespace vdmap::app::gui {
@@ -178,9 +179,24 @@ void Workbench::opened(const std::string& path) {
 void Workbench::exportMap() {
   if (!worker_) return;
   const std::string dir = absolute(ui_.export_text);
-  worker_->withMapper([dir](const Mapper& mapper, const GlobalSnapshot& global) {
+  // What `vdmap map` writes, for the frames mapped so far: the trajectory and how the map was
+  // made (provenance.h). The sequence outlives the worker's commands.
+  const TumSequence* seq = worker_->sequence();
+  const std::string session = seq ? "" : ui_.settings.last_sequence;  // the .vdmap file opened
+  worker_->withMapper([dir, seq, session, refine = refine_](const Mapper& mapper, const GlobalSnapshot& global) {
     MapExportOptions options;
+    options.trajectory = mapper.trajectory();
     options.run_stats = {{"frames", mapper.framesMapped()}, {"source", "vdmap workbench"}};
+    if (seq) {
+      // The range the player has reached: from the sequence's first frame to the last one mapped.
+      const int last = mapper.state().last_frame_index;
+      options.run_stats["frame_range"] = frameRangeText({seq->frameRange().first, std::max(last + 1, seq->frameRange().first)});
+      options.run_stats.update(frameCounts(*seq));
+      options.run_stats.erase("frames_mapped");  // of the whole range, which the player may not have reached
+    }
+    options.run_stats.update(provenanceStats({seq ? seq->folder().string() : std::string(),
+                                              seq ? seq->cameraSource() : "session " + session, mapper.camera(),
+                                              mapper.params().poses, refine, {mapper.params(), global.params}}));
     vdmap::exportMap(dir, mapper.graph(), global.map, options);
     return "exported the map into " + dir;
   });

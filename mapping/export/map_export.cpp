@@ -152,16 +152,29 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   StagingFolder stage(dir);
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
+  const std::size_t files = options.trajectory.empty() ? 6 : 7;
+  std::size_t written = 0;
+  const auto wrote = [&] {
+    if (options.progress) options.progress(++written, files);
+  };
   writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
+  wrote();
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
-  if (!options.trajectory.empty())
+  wrote();
+  if (!options.trajectory.empty()) {
     writeTumTrajectory(stage / "trajectory.txt", options.trajectory,
                        "vdmap frame poses T_W_C (camera-to-world), every mapped frame");
+    wrote();
+  }
   graph.edges().writeEdgeList(stage / "graph.txt");
+  wrote();
   writePointPly(stage / "global_points.ply", map.ellipsoids);
+  wrote();
   writeEllipsoidPly(stage / "global_ellipsoids.ply", map.ellipsoids);
+  wrote();
   writeGaussianPly(stage / "global_gaussians.ply", map.ellipsoids);
+  wrote();
 
   nlohmann::json stats = options.run_stats.is_object() ? options.run_stats : nlohmann::json::object();
   stats.update(globalMapStats(graph, map));

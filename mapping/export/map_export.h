@@ -16,6 +16,8 @@ namespace vdmap {
 struct MapExportOptions {
   /// > 0: also write global.bt, an OctoMap of this resolution (m) sampled from the global map.
   double octomap_resolution_m = 0.0;
+  /// Files written of the files before global.bt (the PLYs and text files), after each.
+  ExportProgress progress;
   /// Progress of the OctoMap export, its slow part (~20 s at 0.02 m for 300k ellipsoids).
   ExportProgress octomap_progress;
   /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
