@@ -152,7 +152,8 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   StagingFolder stage(dir);
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
-  writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
+  writeEllipsoidPly(stage / "local_maps.ply", map.sigma_e,
+                    [&](const EllipsoidVisitor& visit) { forEachLocalEllipsoid(graph, map, visit); });
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
   if (!options.trajectory.empty())
