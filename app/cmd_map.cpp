@@ -15,6 +15,7 @@
 #include "app/map_sequence.h"
 #include "app/parameter_table.h"
 #include "app/progress.h"
+#include "app/release_memory.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
@@ -195,6 +196,7 @@ void runMap(MapArgs args) {
   const MapRefinementResult refined =
       mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
   const KeyframeGraph& graph = mapper.graph();
+  releaseFreedMemory();  // the frames' freed buffers, before the build's peak
   const GlobalMap global = buildGlobalMap(graph, args.params.global);
 
   if (!args.json) printKeyframeTable(graph, global);
