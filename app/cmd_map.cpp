@@ -16,6 +16,7 @@
 #include "app/parameter_table.h"
 #include "app/progress.h"
 #include "app/provenance.h"
+#include "app/release_memory.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
@@ -201,6 +202,7 @@ void runMap(MapArgs args) {
   const MapRefinementResult refined =
       mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
   const KeyframeGraph& graph = mapper.graph();
+  releaseFreedMemory();  // the frames' freed buffers, before the build's peak
   const GlobalMap global = withStageBar("global map", [&] { return buildGlobalMap(graph, args.params.global); });
 
   if (!args.json) printKeyframeTable(graph, global);

@@ -6,6 +6,7 @@
 #include <unistd.h>
 
 #include <bit>
+#include <cstring>
 #include <chrono>
 #include <random>
 #include <thread>
@@ -166,9 +167,103 @@ std::size_t stateSection(const std::string& bytes) {
   return msta;
 }
 
+// Little-endian appends, as the format writes its fields.
+template <typename T>
+void putLe(std::string* out, T value) {
+  char raw[sizeof(T)];
+  std::memcpy(raw, &value, sizeof(T));
+  out->append(raw, sizeof(T));
+}
+
+// An image as format 5 stored it: rows, cols, type, then the pixels row by row.
+void putMat(std::string* out, const cv::Mat& m) {
+  putLe(out, m.rows), putLe(out, m.cols), putLe(out, m.type());
+  const cv::Mat c = m.isContinuous() ? m : m.clone();
+  if (!c.empty()) out->append(reinterpret_cast<const char*>(c.data), c.total() * c.elemSize());
+}
+
+// `bytes` (the current format) as format 5 wrote it: each loop closure with its optimisation's
+// wall time after its correction (here 12.5 ms), and each KFRM with the images' pixels and the records
+// as they are rather than the image files and the packed records.
+std::string asFormat5(const std::string& bytes) {
+  const Session s = decodeSession(bytes, "v6.vdmap");
+  std::string old = bytes.substr(0, 24);
+  putU32(&old, 8, 5);
+  resealHeader(&old);
+  std::size_t at = 24;
+  for (int section = 0; at < bytes.size(); ++section) {
+    const std::string tag = bytes.substr(at, 4);
+    const std::uint64_t length = u64At(bytes, at + 4);
+    std::string payload = bytes.substr(at + 16, length);
+    if (tag == "MSTA") {  // the loops (24 bytes each) end 8 bytes before the payload's end
+      const std::size_t loops = s.info.state.loops.size(), first = payload.size() - 8 - 24 * loops;
+      std::string time;
+      putLe(&time, 12.5);
+      for (std::size_t l = loops; l-- > 0;) payload.insert(first + 24 * l + 24, time);
+    } else if (tag == "KFRM") {
+      const Keyframe& k = s.graph.keyframe(section - 2);
+      std::string kf = payload.substr(0, 4 + 4 + 8 + 12 * 8 + 4);  // id .. frames_integrated, unchanged
+      putMat(&kf, k.rgb());
+      putMat(&kf, k.depth());
+      putLe(&kf, static_cast<std::uint32_t>(k.features.keypoints.size()));
+      for (std::size_t i = 0; i < k.features.keypoints.size(); ++i) {
+        const cv::KeyPoint& p = k.features.keypoints[i];
+        for (float v : {p.pt.x, p.pt.y, p.size, p.angle, p.response}) putLe(&kf, v);
+        putLe(&kf, p.octave), putLe(&kf, p.class_id), putLe(&kf, k.features.depth_m[i]);
+      }
+      putMat(&kf, k.features.descriptors);
+      putLe(&kf, static_cast<std::uint32_t>(k.container.size()));
+      for (const StoredCell& c : k.container.cells()) {
+        for (float v : c.mean) putLe(&kf, v);
+        for (float v : c.scatter) putLe(&kf, v);
+        for (float v : c.color) putLe(&kf, v);
+        putLe(&kf, c.n), putLe(&kf, c.grid_index);
+      }
+      payload = kf;
+    }
+    std::string head = tag;
+    putLe(&head, static_cast<std::uint64_t>(payload.size()));
+    putLe(&head, crc32(payload, crc32(head)));
+    old += head + payload;
+    at += 16 + length;
+  }
+  return old;
+}
+
+// Format 5 stored the pixels and the records as they are, and the loop closures' wall times:
+// such a file loads as the same session (the times dropped) and re-saves as the current format.
+TEST(SessionFile, Format5FilesLoadAsTheSameSession) {
+  const Saved& s = smallSession();
+  SessionInfo info = s.info;
+  info.state.loops.push_back({8, 1, 0, 40, 0.01, 0.0});
+  const std::string bytes = encodeSession(s.mapper.graph(), info);
+  const std::string v5 = asFormat5(bytes);
+  EXPECT_GT(v5.size(), bytes.size());
+  const Session old = decodeSession(v5, "v5.vdmap");
+  EXPECT_EQ(old.info.format_version, 5u);
+  ASSERT_EQ(old.info.state.loops.size(), 1u);
+  EXPECT_EQ(old.info.state.loops[0].correction_m, 0.01);
+  EXPECT_EQ(old.info.state.loops[0].pose_graph_ms, 0.0) << "a wall time is not part of the session";
+  EXPECT_EQ(encodeSession(old.graph, old.info), bytes);
+  for (std::size_t k = 0; k < old.graph.size(); ++k) {
+    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).rgb(), s.mapper.graph().keyframe(static_cast<int>(k)).rgb(), cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).depth(), s.mapper.graph().keyframe(static_cast<int>(k)).depth(), cv::NORM_INF), 0);
+  }
+}
+
+// The session holds no wall-clock time: runs that differ only in how long the loop closures'
+// optimisations took give the same bytes (docs/vdmap-format.md, MSTA).
+TEST(SessionFile, LoopClosureTimesAreNotStored) {
+  const Saved& s = smallSession();
+  SessionInfo fast = s.info, slow = s.info;
+  fast.state.loops.push_back({8, 1, 0, 40, 0.01, 1.5});
+  slow.state.loops.push_back({8, 1, 0, 40, 0.01, 250.0});
+  EXPECT_EQ(encodeSession(s.mapper.graph(), fast), encodeSession(s.mapper.graph(), slow));
+}
+
 // `bytes` as format 4 wrote it: MSTA without the weak and relocalised counts (i32, i32) at its end.
-std::string asFormat4(const std::string& bytes) {
-  std::string old = bytes;
+std::string asFormat4(const std::string& current) {
+  std::string old = asFormat5(current);
   const std::size_t msta = stateSection(old);
   eraseInSection(&old, msta, u64At(old, msta + 4) - 8, 8);
   putU32(&old, 8, 4);
@@ -180,7 +275,7 @@ std::string asFormat4(const std::string& bytes) {
 // bytes into it) and MSTA without what version 4 added after the sequence folder.
 std::string asFormat3(const std::string& bytes) {
   constexpr std::size_t kParm = 24, kPoseSourceAt = 48 + 85;
-  std::string old = bytes;
+  std::string old = asFormat5(bytes);
   eraseInSection(&old, kParm, kPoseSourceAt, 4);
   const std::size_t msta = stateSection(old);
   std::uint32_t folder = 0;
@@ -520,6 +615,26 @@ TEST(SessionFile, MapVerbContinuesASavedSession) {
   EXPECT_EQ(old.exit_code, 1);
   EXPECT_NE(old.err.find("does not store the mapper's state"), std::string::npos) << old.err;
   EXPECT_FALSE(std::filesystem::exists(dir / "c"));
+}
+
+// Tracked runs save the same session byte for byte, run after run and whatever the thread count:
+// the session stores what was computed, never how long it took (the loop closures'
+// optimisation times stay in stats.json).
+TEST(SessionFile, TrackedRunsSaveTheSameBytesWhateverTheThreadCount) {
+  TempDir dir;
+  test::writeBoxRoomSequence(dir / "seq", 70);
+  const auto run = [&](const std::string& name, int threads) {
+    const test::RunResult r = test::runVdmap("map '" + (dir / "seq").string() + "' --poses track --threads " +
+                                             std::to_string(threads) + " --out '" + (dir / name).string() +
+                                             "' --save '" + (dir / (name + ".vdmap")).string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return readFile(dir / (name + ".vdmap"));
+  };
+  const std::string first = run("a", 1);
+  ASSERT_FALSE(first.empty());
+  ASSERT_GE(decodeSession(first, "a.vdmap").info.state.loops.size(), 1u) << "the walk closes a loop (timed)";
+  EXPECT_EQ(run("b", 1), first);
+  EXPECT_EQ(run("c", 2), first);
 }
 
 // The PARM section is read and written from the parameter table: its bytes are still those

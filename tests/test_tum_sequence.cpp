@@ -255,6 +255,16 @@ TEST(CompressedImage, HoldsTheSourceFilesAndDecodesThemToTheFramesPixels) {
   const CompressedImage png(rgb);
   EXPECT_GT(png.compressedBytes(), 0u);
   EXPECT_EQ(cv::norm(png.decode(), rgb, cv::NORM_INF), 0.0);
+  // A JPEG of resampled pixels decodes to the pixels OpenCV's decoder gives it (as keyframes
+  // always have), and the bytes a session stores (encoded(), swappedRedBlue()) give them back.
+  const CompressedImage jpeg(rgb, 90);
+  const std::vector<std::uint8_t> jpeg_bytes(jpeg.encoded().begin(), jpeg.encoded().end());
+  EXPECT_EQ(cv::norm(jpeg.decode(), cv::imdecode(jpeg_bytes, cv::IMREAD_UNCHANGED), cv::NORM_INF), 0.0);
+  for (const CompressedImage* image : {&png, &jpeg, &held_rgb}) {
+    const CompressedImage copy = CompressedImage::fromEncoded(image->rows(), image->cols(), image->type(),
+                                                              std::string(image->encoded()), image->swappedRedBlue());
+    EXPECT_EQ(cv::norm(copy.decode(), image->decode(), cv::NORM_INF), 0.0);
+  }
   // Through the sequence and the mapper: the keyframe keeps the loaded frame's files.
   test::writeTinySequence(dir / "seq", 2);
   const TumSequence seq = TumSequence::open(dir / "seq");

@@ -34,14 +34,36 @@ void syncFolder(const std::filesystem::path& folder) {
 }  // namespace
 
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
+  writeFileAtomically(file, [bytes](const ByteSink& sink) { sink(bytes); });
+}
+
+void writeFileAtomically(const std::filesystem::path& file, const std::function<void(const ByteSink&)>& produce) {
   const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
   const TemporaryPath interrupt_cleanup(tmp);
   // The data reaches the disk before the rename publishes it, so a crash or power loss at any
   // moment leaves the old file or the complete new one.
   const int fd = ::open(tmp.c_str(), O_WRONLY | O_CREAT | O_TRUNC | O_CLOEXEC, 0644);
-  bool written = fd >= 0 && writeAll(fd, bytes) && ::fsync(fd) == 0;
-  if (fd >= 0 && ::close(fd) != 0) written = false;
-  const int error = errno;
+  bool written = fd >= 0;
+  int error = errno;
+  struct WriteFailed {};  // stops `produce` at the first piece that cannot be written
+  try {
+    if (written)
+      produce([&](std::string_view piece) {
+        if (!writeAll(fd, piece)) {
+          error = errno;
+          throw WriteFailed{};
+        }
+      });
+  } catch (const WriteFailed&) {
+    written = false;
+  } catch (...) {
+    ::close(fd);
+    std::error_code ignored;
+    std::filesystem::remove(tmp, ignored);
+    throw;
+  }
+  if (written && ::fsync(fd) != 0) written = false, error = errno;
+  if (fd >= 0 && ::close(fd) != 0 && written) written = false, error = errno;
   std::error_code ec;
   if (written) std::filesystem::rename(tmp, file, ec);
   if (!written || ec) {

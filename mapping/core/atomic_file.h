@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <functional>
 #include <string_view>
 
 namespace vdmap {
@@ -10,5 +11,13 @@ namespace vdmap {
 /// reason when it cannot be written; no temporary is left behind (an interrupt removes it too when
 /// installTemporaryPathCleanup() is in place; a SIGKILL leaves it).
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes);
+
+/// Receives a file's bytes piece by piece, in order.
+using ByteSink = std::function<void(std::string_view)>;
+
+/// writeFileAtomically of the bytes `produce` hands to its sink, written as they come, so a large
+/// file (a session) is never held whole in memory. An exception from `produce` removes the
+/// temporary file and propagates; the old file stays.
+void writeFileAtomically(const std::filesystem::path& file, const std::function<void(const ByteSink&)>& produce);
 
 }  // namespace vdmap

@@ -157,7 +157,8 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   const auto wrote = [&] {
     if (options.progress) options.progress(++written, files);
   };
-  writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
+  writeEllipsoidPly(stage / "local_maps.ply", map.sigma_e,
+                    [&](const EllipsoidVisitor& visit) { forEachLocalEllipsoid(graph, map, visit); });
   wrote();
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");

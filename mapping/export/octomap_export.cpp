@@ -3,6 +3,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdio>
+#include <numeric>
 #include <sstream>
 #include <stdexcept>
 
@@ -58,21 +59,33 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
   checkOctomapResolution(resolution_m, graph, ellipsoids);
   const auto start = std::chrono::steady_clock::now();
   OctomapExportReport report;
-  std::vector<octomap::Pointcloud> scans(graph.size());
-  for (const Ellipsoid& e : ellipsoids)
-    for (const Eigen::Vector3d& p : ellipsoidSamplePoints(e)) {
-      scans.at(static_cast<std::size_t>(e.keyframe)).push_back(static_cast<float>(p.x()), static_cast<float>(p.y()),
-                                                              static_cast<float>(p.z()));
-      ++report.points;
-    }
+  // The ellipsoids of each keyframe, in map order (a counting sort): its scan is made when it is
+  // inserted, so only one scan's points are held at a time.
+  const std::size_t keyframes = graph.size();
+  std::vector<std::size_t> first(keyframes + 1, 0), order(ellipsoids.size());
+  for (const Ellipsoid& e : ellipsoids) {
+    if (e.keyframe < 0 || static_cast<std::size_t>(e.keyframe) >= keyframes)
+      throw std::logic_error("an ellipsoid of the map names no keyframe of the graph");
+    ++first[static_cast<std::size_t>(e.keyframe) + 1];
+  }
+  std::partial_sum(first.begin(), first.end(), first.begin());
+  std::vector<std::size_t> fill(first.begin(), first.end() - 1);
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i) order[fill[static_cast<std::size_t>(ellipsoids[i].keyframe)]++] = i;
   octomap::OcTree tree(resolution_m);
-  for (std::size_t k = 0; k < scans.size(); ++k) {
-    if (scans[k].size() > 0) {
+  octomap::Pointcloud scan;
+  for (std::size_t k = 0; k < keyframes; ++k) {
+    scan.clear();
+    for (std::size_t j = first[k]; j < first[k + 1]; ++j)
+      for (const Eigen::Vector3d& p : ellipsoidSamplePoints(ellipsoids[order[j]])) {
+        scan.push_back(static_cast<float>(p.x()), static_cast<float>(p.y()), static_cast<float>(p.z()));
+        ++report.points;
+      }
+    if (scan.size() > 0) {
       const Eigen::Vector3d o = graph.keyframe(static_cast<int>(k)).T_W_K.translation();
       // discretize: one ray per end voxel, which is what the map resolves anyway.
-      tree.insertPointCloud(scans[k], octomap::point3d(o.x(), o.y(), o.z()), -1.0, false, true);
+      tree.insertPointCloud(scan, octomap::point3d(o.x(), o.y(), o.z()), -1.0, false, true);
     }
-    if (progress) progress(k + 1, scans.size());
+    if (progress) progress(k + 1, keyframes);
   }
   tree.toMaxLikelihood();
   tree.prune();

@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstdint>
 #include <cstring>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -24,6 +25,36 @@ void put(std::string& buffer, T value) {
   char bytes[sizeof(T)];
   std::memcpy(bytes, &value, sizeof(T));
   buffer.append(bytes, sizeof(T));
+}
+
+// A file's bytes built in pieces of about kPieceBytes, each handed to the sink when full: an
+// export of a million ellipsoids is never held whole (local_maps.ply alone is ~40 MB).
+class Pieces {
+ public:
+  explicit Pieces(const ByteSink& sink) : sink_(sink) { bytes.reserve(kPieceBytes + 512); }
+  /// Hands the bytes on when a piece is full (call between records).
+  void next() {
+    if (bytes.size() >= kPieceBytes) flush();
+  }
+  void flush() {
+    sink_(bytes);
+    bytes.clear();
+  }
+  std::string bytes;
+
+ private:
+  static constexpr std::size_t kPieceBytes = 1 << 16;
+  const ByteSink& sink_;
+};
+
+// writeFileAtomically of the file `write` puts into its Pieces.
+template <typename Write>
+void writeInPieces(const std::filesystem::path& file, const Write& write) {
+  writeFileAtomically(file, [&write](const ByteSink& sink) {
+    Pieces pieces(sink);
+    write(pieces);
+    pieces.flush();
+  });
 }
 
 std::uint8_t toByte(float c) {
@@ -66,10 +97,13 @@ Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov) {
 }
 
 void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
-  std::string bytes = vertexHeader("vdmap ellipsoid means", ellipsoids.size(), "");
-  bytes.reserve(bytes.size() + ellipsoids.size() * 15);
-  for (const Ellipsoid& e : ellipsoids) putPointAndColor(bytes, e);
-  writeFileAtomically(file, bytes);
+  writeInPieces(file, [&](Pieces& out) {
+    out.bytes = vertexHeader("vdmap ellipsoid means", ellipsoids.size(), "");
+    for (const Ellipsoid& e : ellipsoids) {
+      putPointAndColor(out.bytes, e);
+      out.next();
+    }
+  });
 }
 
 void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh) {
@@ -88,50 +122,63 @@ void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& 
 }
 
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
-  std::string bytes = vertexHeader("vdmap ellipsoids", ellipsoids.size(),
-                                   "property float cxx\nproperty float cxy\nproperty float cxz\n"
-                                   "property float cyy\nproperty float cyz\nproperty float czz\n"
-                                   "property uint count\nproperty int keyframe\n");
-  bytes.reserve(bytes.size() + ellipsoids.size() * (12 + 3 + 24 + 8));
-  for (const Ellipsoid& e : ellipsoids) {
-    putPointAndColor(bytes, e);
-    const Eigen::Matrix3f c = storedCovariance(e.cov);
-    for (float v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)}) put(bytes, v);
-    put(bytes, static_cast<std::uint32_t>(e.count));
-    put(bytes, static_cast<std::int32_t>(e.keyframe));
-  }
-  writeFileAtomically(file, bytes);
+  writeEllipsoidPly(file, ellipsoids.size(), [&ellipsoids](const EllipsoidVisitor& visit) {
+    for (const Ellipsoid& e : ellipsoids) visit(e);
+  });
+}
+
+void writeEllipsoidPly(const std::filesystem::path& file, std::size_t count, const EllipsoidSource& source) {
+  writeInPieces(file, [&](Pieces& out) {
+    out.bytes = vertexHeader("vdmap ellipsoids", count,
+                             "property float cxx\nproperty float cxy\nproperty float cxz\n"
+                             "property float cyy\nproperty float cyz\nproperty float czz\n"
+                             "property uint count\nproperty int keyframe\n");
+    std::size_t written = 0;
+    source([&](const Ellipsoid& e) {
+      putPointAndColor(out.bytes, e);
+      const Eigen::Matrix3f c = storedCovariance(e.cov);
+      for (float v : {c(0, 0), c(0, 1), c(0, 2), c(1, 1), c(1, 2), c(2, 2)}) put(out.bytes, v);
+      put(out.bytes, static_cast<std::uint32_t>(e.count));
+      put(out.bytes, static_cast<std::int32_t>(e.keyframe));
+      out.next();
+      ++written;
+    });
+    if (written != count) throw std::logic_error("an ellipsoid PLY's source gave another count than its header's");
+  });
 }
 
 void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {
   constexpr double kSh0 = 0.28209479177387814;  // the degree-0 spherical harmonic, 1 / (2 sqrt(pi))
-  std::string bytes = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians\nelement vertex " +
-                      std::to_string(ellipsoids.size()) + "\n";
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment vdmap 3-D Gaussians\nelement vertex " +
+                       std::to_string(ellipsoids.size()) + "\n";
   // The reference 3DGS loader's order; it asserts 3 * ((degree + 1)^2 - 1) = 45 f_rest at its
   // default degree 3, so all 45 are written, zero: the colour has no view dependence.
   std::vector<std::string> names = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"};
   for (int k = 0; k < kGaussianRestCoefficients; ++k) names.push_back("f_rest_" + std::to_string(k));
   for (const char* name : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
     names.emplace_back(name);
-  for (const std::string& name : names) bytes += "property float " + name + "\n";
-  bytes += "end_header\n";
-  bytes.reserve(bytes.size() + ellipsoids.size() * names.size() * 4);
-  Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
-  for (const Ellipsoid& e : ellipsoids) {
-    eig.compute(e.cov);  // ascending eigenvalues, orthonormal eigenvectors
-    Eigen::Matrix3d R = eig.eigenvectors();
-    if (R.determinant() < 0) R.col(0) = -R.col(0);  // a proper rotation
-    const Eigen::Quaterniond q(R);
-    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
-    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(R(k, 0)));
-    for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>((e.color(k) / 255.0 - 0.5) / kSh0));
-    for (int k = 0; k < kGaussianRestCoefficients; ++k) put(bytes, 0.f);
-    put(bytes, kGaussianOpacityLogit);
-    for (int k = 0; k < 3; ++k)
-      put(bytes, static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));
-    for (double v : {q.w(), q.x(), q.y(), q.z()}) put(bytes, static_cast<float>(v));
-  }
-  writeFileAtomically(file, bytes);
+  for (const std::string& name : names) header += "property float " + name + "\n";
+  header += "end_header\n";
+  writeInPieces(file, [&](Pieces& out) {
+    out.bytes = header;
+    std::string& bytes = out.bytes;
+    Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig;
+    for (const Ellipsoid& e : ellipsoids) {
+      eig.compute(e.cov);  // ascending eigenvalues, orthonormal eigenvectors
+      Eigen::Matrix3d R = eig.eigenvectors();
+      if (R.determinant() < 0) R.col(0) = -R.col(0);  // a proper rotation
+      const Eigen::Quaterniond q(R);
+      for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(e.mean(k)));
+      for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>(R(k, 0)));
+      for (int k = 0; k < 3; ++k) put(bytes, static_cast<float>((e.color(k) / 255.0 - 0.5) / kSh0));
+      for (int k = 0; k < kGaussianRestCoefficients; ++k) put(bytes, 0.f);
+      put(bytes, kGaussianOpacityLogit);
+      for (int k = 0; k < 3; ++k)
+        put(bytes, static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));
+      for (double v : {q.w(), q.x(), q.y(), q.z()}) put(bytes, static_cast<float>(v));
+      out.next();
+    }
+  });
 }
 
 }  // namespace vdmap

@@ -2,6 +2,7 @@
 // Binary little-endian PLY exports (docs/method.md 11).
 
 #include <filesystem>
+#include <functional>
 #include <vector>
 
 #include <Eigen/Core>
@@ -23,6 +24,15 @@ Eigen::Matrix3f storedCovariance(const Eigen::Matrix3d& cov);
 /// temporary name in the same folder and renames it, so an interrupted export leaves no
 /// half-written file. Throws std::runtime_error naming the file on an I/O failure.
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids);
+
+using EllipsoidVisitor = std::function<void(const Ellipsoid&)>;
+/// Calls its argument with each ellipsoid in order.
+using EllipsoidSource = std::function<void(const EllipsoidVisitor&)>;
+
+/// writeEllipsoidPly of the `count` ellipsoids `source` visits, written as they come (the local
+/// maps need not be gathered into one vector first). Throws std::logic_error when the source
+/// visits another number.
+void writeEllipsoidPly(const std::filesystem::path& file, std::size_t count, const EllipsoidSource& source);
 
 /// Writes a coloured triangle mesh as readPlyMesh reads it: binary little-endian PLY, vertices x y
 /// z float, red green blue uchar, faces as uint vertex_indices lists. Atomic like writeEllipsoidPly.

@@ -180,8 +180,16 @@ std::vector<Ellipsoid> fuseAcrossGroups(std::span<const Ellipsoid* const> ellips
       params.threads);
   gatherInGridOrder(ellipsoids, group_of, lambda_max, params.threads, buffers);
   findCopies(half, params.fusion_max_distance, params.threads, buffers);
+  FusionBuffers& f = *buffers;
+  if (!f.keep) {  // the search's copies of the ellipsoids, in grid order
+    f.grid.release();
+    releaseVector(&f.mean), releaseVector(&f.cov), releaseVector(&f.lambda), releaseVector(&f.group);
+    releaseVector(&f.index);
+  }
   partnersOf(ellipsoids.size(), buffers);
+  if (!f.keep) releaseVector(&f.found);
   clusterGreedily(ellipsoids.size(), group_of, lambda_max, params.threads, buffers);
+  if (!f.keep) releaseVector(&f.partner_start), releaseVector(&f.partner), releaseVector(&f.taken), releaseVector(&f.order);
   return fuseClusters(ellipsoids, params.threads, buffers);
 }
 

@@ -42,6 +42,8 @@ struct FusionMatch {
 /// Fusion's buffers, reused across builds. The search reads the ellipsoids in the grid's sorted
 /// order (position k: mean, cov, lambda, group and index of the ellipsoid at grid position k).
 struct FusionBuffers {
+  /// False: each step frees what the later ones no longer read (a build that is not repeated).
+  bool keep = true;
   SortedVoxelGrid grid;
   std::vector<Eigen::Vector3d> mean;
   std::vector<SymmetricCov> cov;

@@ -24,6 +24,9 @@ namespace global_map_detail {
 
 // What a build keeps in a GlobalMapWorkspace (names as in buildGlobalMap's steps).
 struct WorkspaceBuffers {
+  // False for a build's own buffers (no workspace given): each step then frees what the later
+  // ones no longer read and keeps only its output, so a one-off build (vdmap map) peaks lower.
+  bool keep = true;
   // Per keyframe id: its kept cells and what they were computed from.
   struct Kept {
     std::uint64_t container = 0, revision = 0;
@@ -78,7 +81,9 @@ void mergeWithinGroups(const KeyframeGraph& graph, const GlobalMapParams& params
   ws->merged.resize(map->groups.size());
   parallelFor(params.threads, map->groups.size(), [&](std::size_t g) {
     mergeGroup(graph, map->groups[g], params, map->kept, &ws->merge_scratch.local(), &ws->merged[g]);
+    if (!ws->keep) ws->merged[g].shrink_to_fit();  // reserved for all of the group's inputs
   });
+  if (!ws->keep) ws->merge_scratch.clear();
   const std::size_t groups = ws->merged.size();
   ws->offset.assign(groups + 1, 0);
   for (std::size_t g = 0; g < groups; ++g) ws->offset[g + 1] = ws->offset[g] + ws->merged[g].size();
@@ -98,13 +103,15 @@ void mergeWithinGroups(const KeyframeGraph& graph, const GlobalMapParams& params
 }
 
 // Occlusion removal over the merged ellipsoids (or none), then the survivors in order: survivor,
-// kept_group_of and kept_lambda_max.
+// kept_group_of and kept_lambda_max. Without ws->keep the survivors move to the front of their
+// group's vector, which then lets the removed go.
 void removeOccluded(const KeyframeGraph& graph, const GlobalMapParams& params, WorkspaceBuffers* ws) {
   const std::size_t n = ws->merged_at.size(), groups = ws->merged.size();
   if (params.occlusion_removal)
     occludingEllipsoids(graph, ws->merged_at, ws->lambda_max, params, &ws->occlusion, &ws->removed);
   else
     ws->removed.assign(n, 0);
+  if (!ws->keep) releaseOcclusionBuffers(&ws->occlusion);
   ws->kept_offset.assign(groups + 1, 0);
   parallelFor(params.threads, groups, [&](std::size_t g) {
     ws->kept_offset[g + 1] = static_cast<std::size_t>(
@@ -119,14 +126,27 @@ void removeOccluded(const KeyframeGraph& graph, const GlobalMapParams& params, W
   ws->kept_lambda_max.resize(need_lambda ? kept : 0);
   parallelFor(params.threads, groups, [&](std::size_t g) {
     std::size_t to = ws->kept_offset[g];
+    std::vector<Ellipsoid>& merged = ws->merged[g];
     for (std::size_t i = ws->offset[g]; i < ws->offset[g + 1]; ++i) {
       if (ws->removed[i]) continue;
-      ws->survivor[to] = ws->merged_at[i];
+      if (ws->keep)
+        ws->survivor[to] = ws->merged_at[i];
+      else
+        merged[to - ws->kept_offset[g]] = merged[i - ws->offset[g]];  // forward: never overwrites one still to move
       ws->kept_group_of[to] = static_cast<int>(g);
       if (need_lambda) ws->kept_lambda_max[to] = ws->lambda_max[i];
       ++to;
     }
+    if (ws->keep) return;
+    merged.resize(to - ws->kept_offset[g]);
+    merged.shrink_to_fit();
+    for (std::size_t l = 0; l < merged.size(); ++l) ws->survivor[ws->kept_offset[g] + l] = &merged[l];
   });
+  if (ws->keep) return;
+  releaseVector(&ws->merged_at);  // into the groups' vectors before they were compacted
+  releaseVector(&ws->group_of);
+  releaseVector(&ws->lambda_max);
+  releaseVector(&ws->removed);
 }
 
 // map->ellipsoids: the survivors fused across groups, or as they are.
@@ -147,10 +167,14 @@ void fuseSurvivors(const GlobalMapParams& params, WorkspaceBuffers* ws, GlobalMa
 std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map) {
   std::vector<Ellipsoid> local;
   local.reserve(map.sigma_e);
-  for (const Keyframe& k : graph.keyframes())
-    forEachKeptEllipsoid(k.container, map.kept.at(static_cast<std::size_t>(k.id)), k.T_W_K, k.id,
-                         [&local](const Ellipsoid& e) { local.push_back(e); });
+  forEachLocalEllipsoid(graph, map, [&local](const Ellipsoid& e) { local.push_back(e); });
   return local;
+}
+
+void forEachLocalEllipsoid(const KeyframeGraph& graph, const GlobalMap& map,
+                           const std::function<void(const Ellipsoid&)>& visit) {
+  for (const Keyframe& k : graph.keyframes())
+    forEachKeptEllipsoid(k.container, map.kept.at(static_cast<std::size_t>(k.id)), k.T_W_K, k.id, visit);
 }
 
 struct GlobalMapWorkspace::Buffers : global_map_detail::WorkspaceBuffers {};
@@ -164,6 +188,8 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
   std::unique_ptr<GlobalMapWorkspace> own;  // this build's, without one given
   if (workspace == nullptr) workspace = (own = std::make_unique<GlobalMapWorkspace>()).get();
   WorkspaceBuffers& ws = *workspace->buffers_;
+  ws.keep = own == nullptr;
+  ws.fusion.keep = ws.keep;
   GlobalMap map;
   const auto start = Clock::now();
   map.groups = mergeGroups(graph, params.tau_group);

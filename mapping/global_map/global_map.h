@@ -3,6 +3,7 @@
 // parameters, rebuilt whenever a threshold or a keyframe pose changes. One file per stage
 // (global_map.cpp, which runs them, says which).
 #include <cstddef>
+#include <functional>
 #include <memory>
 #include <vector>
 
@@ -120,8 +121,12 @@ GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& para
                          GlobalMapWorkspace* workspace = nullptr);
 
 /// The local maps `map` was built from: every keyframe's kept ellipsoids (map.kept) in the world
-/// frame, keyframes in id order.
+/// frame, keyframes in id order (map.sigma_e of them).
 std::vector<Ellipsoid> localEllipsoids(const KeyframeGraph& graph, const GlobalMap& map);
+
+/// Calls `visit` with each of localEllipsoids(graph, map) in turn, without gathering them.
+void forEachLocalEllipsoid(const KeyframeGraph& graph, const GlobalMap& map,
+                           const std::function<void(const Ellipsoid&)>& visit);
 
 /// Occlusion removal (docs/method.md 6.3) over ellipsoids in the world frame; returns, for each,
 /// whether it is removed. Exposed for tests.

@@ -26,6 +26,12 @@ std::vector<double> largestEigenvalues(const std::vector<Ellipsoid>& ellipsoids,
 /// such a list, so the build can hand them ellipsoids spread over its groups' vectors.
 std::vector<const Ellipsoid*> addressesOf(const std::vector<Ellipsoid>& ellipsoids);
 
+/// Empties `v` and gives its memory back (clear() keeps the capacity).
+template <typename T>
+void releaseVector(std::vector<T>* v) {
+  std::vector<T>().swap(*v);
+}
+
 /// Indices 0..keys.size()-1 grouped by key (a stable counting sort); negative keys are left out.
 /// Bucket b holds order[start[b] .. start[b + 1]).
 struct Buckets {

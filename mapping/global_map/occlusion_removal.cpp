@@ -61,7 +61,7 @@ class CellOfPixel {
 // The ellipsoids of one viewpoint cell: appends to `removed` every A that occludes a more precise
 // B behind it (docs/method.md 6.3). `cell` is reordered near to far (ties by index; the result does not
 // depend on their order, as only a B strictly farther than A counts); `finest_behind` is scratch.
-void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Matrix3d>& information,
+void removeOccludersInCell(std::span<ViewItem> cell, std::span<const Ellipsoid* const> ellipsoids,
                            std::vector<double>* finest_behind, std::vector<int>* removed) {
   std::sort(cell.begin(), cell.end(),
             [](const ViewItem& a, const ViewItem& b) { return a.z != b.z ? a.z < b.z : a.index < b.index; });
@@ -71,7 +71,9 @@ void removeOccludersInCell(std::span<ViewItem> cell, const std::vector<Eigen::Ma
   for (std::size_t j = cell.size(); j-- > 0;) finest[j] = std::min(finest[j + 1], cell[j].lambda_max);
   for (std::size_t a = 0; a + 1 < cell.size(); ++a) {
     if (!(finest[a + 1] < cell[a].lambda_max)) continue;  // nothing more precise behind A
-    const Eigen::Matrix3d& P = information[static_cast<std::size_t>(cell[a].j)];
+    // A's information matrix, computed where it is needed rather than kept for every ellipsoid
+    // (72 bytes each, the largest buffer of a build): only an A with something finer behind it needs one.
+    const Eigen::Matrix3d P = floored(ellipsoids[static_cast<std::size_t>(cell[a].index)]->cov).inverse();
     const Eigen::Vector3d& mu = cell[a].ray;
     const Eigen::Vector3d P_mu = P * mu;
     const double mu_P_mu = mu.dot(P_mu);
@@ -98,12 +100,9 @@ void gatherByKeyframe(const KeyframeGraph& graph, std::span<const Ellipsoid* con
   for (std::size_t i = 0; i < n; ++i) o.keyframe_of[i] = ellipsoids[i]->keyframe;
   bucketByKey(o.keyframe_of, graph.size(), &o.by_keyframe, &o.fill);
   o.point.resize(n);
-  o.information.resize(n);
   parallelFor(threads, n, [&](std::size_t j) {
     const std::size_t i = static_cast<std::size_t>(o.by_keyframe.order[j]);
-    const Ellipsoid& e = *ellipsoids[i];
-    o.point[j] = {e.mean, lambda_max[i]};
-    o.information[j] = floored(e.cov).inverse();
+    o.point[j] = {ellipsoids[i]->mean, lambda_max[i]};
   });
 }
 
@@ -123,12 +122,13 @@ void itemsOfJudgedCells(const Eigen::Vector3d& centre, std::size_t cells, const 
     if (s.count[static_cast<std::size_t>(e.cell)] < 2) continue;
     const OcclusionBuffers::Point& q = o.point[static_cast<std::size_t>(e.j)];
     s.items[static_cast<std::size_t>(s.fill[static_cast<std::size_t>(e.cell)]++)] = {
-        e.z, q.lambda_max, q.mean - centre, e.j, o.by_keyframe.order[static_cast<std::size_t>(e.j)]};
+        e.z, q.lambda_max, q.mean - centre, o.by_keyframe.order[static_cast<std::size_t>(e.j)]};
   }
 }
 
 // Viewpoint K's judgement: the ellipsoids it removes, into `removed` (replacing what it held).
-void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapParams& params, const OcclusionBuffers& o,
+void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, std::span<const Ellipsoid* const> ellipsoids,
+               const GlobalMapParams& params, const OcclusionBuffers& o,
                OcclusionScratch* scratch, std::vector<int>* removed) {
   OcclusionScratch& s = *scratch;
   const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
@@ -153,10 +153,17 @@ void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, const GlobalMapPar
     if (s.count[cell] >= 2)
       removeOccludersInCell(std::span<ViewItem>(s.items).subspan(static_cast<std::size_t>(s.start[cell]),
                                                                  static_cast<std::size_t>(s.count[cell])),
-                            o.information, &s.finest, removed);
+                            ellipsoids, &s.finest, removed);
 }
 
 }  // namespace
+
+void releaseOcclusionBuffers(OcclusionBuffers* buffers) {
+  OcclusionBuffers& o = *buffers;
+  releaseVector(&o.keyframe_of), releaseVector(&o.fill), releaseVector(&o.point);
+  releaseVector(&o.by_keyframe.start), releaseVector(&o.by_keyframe.order), releaseVector(&o.removed_by);
+  o.scratch.clear();
+}
 
 void occludingEllipsoids(const KeyframeGraph& graph, std::span<const Ellipsoid* const> ellipsoids,
                          const std::vector<double>& lambda_max, const GlobalMapParams& params, OcclusionBuffers* buffers,
@@ -165,7 +172,7 @@ void occludingEllipsoids(const KeyframeGraph& graph, std::span<const Ellipsoid* 
   gatherByKeyframe(graph, ellipsoids, lambda_max, params.threads, &o);
   o.removed_by.resize(graph.size());
   parallelFor(params.threads, graph.size(), [&](std::size_t v) {
-    judgeFrom(graph, graph.keyframe(static_cast<int>(v)), params, o, &o.scratch.local(), &o.removed_by[v]);
+    judgeFrom(graph, graph.keyframe(static_cast<int>(v)), ellipsoids, params, o, &o.scratch.local(), &o.removed_by[v]);
   });
   removed->assign(ellipsoids.size(), 0);
   for (const std::vector<int>& list : o.removed_by)

@@ -17,7 +17,6 @@ struct ViewItem {
   double z;             ///< depth in the viewpoint's camera
   double lambda_max;    ///< largest eigenvalue of its covariance: smaller is more precise
   Eigen::Vector3d ray;  ///< mean - viewpoint centre, world frame
-  int j;                ///< into OcclusionBuffers' by-keyframe arrays (its information matrix)
   int index;            ///< into the ellipsoids
 };
 
@@ -46,10 +45,12 @@ struct OcclusionBuffers {
     double lambda_max;
   };
   std::vector<Point> point;                  ///< by j
-  std::vector<Eigen::Matrix3d> information;  ///< by j: the floored covariance's inverse
   std::vector<std::vector<int>> removed_by;  ///< per viewpoint, ellipsoid indices
   tbb::enumerable_thread_specific<OcclusionScratch> scratch;
 };
+
+/// Gives back the memory of `buffers` (a build that is not repeated).
+void releaseOcclusionBuffers(OcclusionBuffers* buffers);
 
 /// Occlusion removal (docs/method.md 6.3) of world-frame ellipsoids, lambda_max[i] being the largest
 /// eigenvalue of ellipsoid i's floored covariance: removed[i] (resized to their number) is 1 when

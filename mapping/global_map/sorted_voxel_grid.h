@@ -52,6 +52,9 @@ class SortedVoxelGrid {
   template <typename PointAt>
   void build(std::size_t n, const PointAt& point, double min_side_m, int threads);
 
+  /// Empties the grid and gives its memory back.
+  void release() { *this = SortedVoxelGrid(); }
+
   std::size_t voxelCount() const { return voxel_.size(); }
   /// Voxel v's points are those at sorted positions voxelBegin(v) .. voxelEnd(v) - 1; voxels in
   /// key order, points within a voxel in ascending index.

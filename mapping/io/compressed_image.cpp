@@ -2,8 +2,10 @@
 
 #include <cassert>
 #include <stdexcept>
+#include <vector>
 
 #include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "mapping/io/image_decode.h"
 
@@ -14,16 +16,18 @@ namespace vdmap {
 CompressedImage::CompressedImage(const cv::Mat& image, int jpeg_quality)
     : rows_(image.rows), cols_(image.cols), type_(image.type()) {
   if (image.empty()) return;
-  assert(type_ == CV_8UC1 || type_ == CV_8UC3 || type_ == CV_16UC1);
+  assert(type_ == CV_8UC3 || type_ == CV_16UC1);
   assert(jpeg_quality >= 0 && jpeg_quality <= 100 && (jpeg_quality == 0 || type_ != CV_16UC1));
-  // imencode takes 3 channels as BGR and imdecode returns them as BGR: the order round-trips.
-  std::vector<std::uint8_t> png;
+  // imencode takes 3 channels as BGR: the file holds the image's blue as its red
+  // (swapped_red_blue_), which decode() undoes. Kept so, as keyframes of older versions did, so
+  // a JPEG's pixels stay those it has always given.
+  std::vector<std::uint8_t> encoded;
   const bool jpeg = jpeg_quality > 0;
-  if (!cv::imencode(jpeg ? ".jpg" : ".png", image, png,
+  if (!cv::imencode(jpeg ? ".jpg" : ".png", image, encoded,
                     {jpeg ? cv::IMWRITE_JPEG_QUALITY : cv::IMWRITE_PNG_COMPRESSION, jpeg ? jpeg_quality : 1}))
     throw std::runtime_error("encoding of a keyframe image failed");
-  png.shrink_to_fit();
-  png_ = std::make_shared<const std::vector<std::uint8_t>>(std::move(png));
+  bytes_ = std::make_shared<const std::string>(encoded.begin(), encoded.end());
+  swapped_red_blue_ = type_ == CV_8UC3;
 }
 
 CompressedImage::CompressedImage(const cv::Mat& image, std::shared_ptr<const std::string> file)
@@ -31,19 +35,29 @@ CompressedImage::CompressedImage(const cv::Mat& image, std::shared_ptr<const std
   if (!file) return;
   assert(image.type() == CV_8UC3 || image.type() == CV_16UC1);
   rows_ = image.rows, cols_ = image.cols, type_ = image.type();
-  file_ = std::move(file);
+  bytes_ = std::move(file);
+}
+
+CompressedImage CompressedImage::fromEncoded(int rows, int cols, int type, std::string bytes, bool swapped_red_blue) {
+  CompressedImage out;
+  out.rows_ = rows, out.cols_ = cols, out.type_ = type;
+  if (out.empty()) return out;
+  assert(type == CV_8UC3 || type == CV_16UC1);
+  out.bytes_ = std::make_shared<const std::string>(std::move(bytes));
+  out.swapped_red_blue_ = swapped_red_blue && type == CV_8UC3;
+  return out;
 }
 
 cv::Mat CompressedImage::decode() const {
-  if (file_) {
-    const cv::Size size(cols_, rows_);
-    return type_ == CV_16UC1 ? decodeDepthImage(*file_, size, "a keyframe's depth file")
-                             : decodeColorImage(*file_, size, "a keyframe's colour file");
-  }
-  if (!png_) return cv::Mat(rows_, cols_, type_);
-  cv::Mat out = cv::imdecode(*png_, cv::IMREAD_UNCHANGED);
-  if (out.rows != rows_ || out.cols != cols_ || out.type() != type_)
-    throw std::runtime_error("a keyframe image did not decode to its own size and type");
+  return decode(type_ == CV_16UC1 ? "a keyframe's depth file" : "a keyframe's colour file");
+}
+
+cv::Mat CompressedImage::decode(const std::string& name) const {
+  if (!bytes_) return cv::Mat(rows_, cols_, type_);
+  const cv::Size size(cols_, rows_);
+  if (type_ == CV_16UC1) return decodeDepthImage(*bytes_, size, name);
+  cv::Mat out = decodeColorImage(*bytes_, size, name);
+  if (swapped_red_blue_) cv::cvtColor(out, out, cv::COLOR_RGB2BGR);
   return out;
 }
 

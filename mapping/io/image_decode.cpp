@@ -180,6 +180,7 @@ std::string readBytes(const std::filesystem::path& file, const std::string& what
   std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(file.string(), "cannot decode " + what + ": cannot read the file");
   if (bytes.empty()) throw InputError(file.string(), "cannot decode " + what + ": the file is empty");
+  bytes.shrink_to_fit();  // grown by doubling while read; a keyframe keeps these bytes
   return bytes;
 }
 

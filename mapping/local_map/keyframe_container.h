@@ -70,6 +70,9 @@ class KeyframeContainer {
   /// All stored cells (those with n >= 1), in order of creation.
   const std::vector<StoredCell>& cells() const { return cells_; }
   std::size_t size() const { return cells_.size(); }
+  /// Gives back the cells' unused capacity (a keyframe that stopped growing). The cells, id() and
+  /// revision() stay; pointers into cells() do not.
+  void shrinkToFit() { cells_.shrink_to_fit(); }
   /// Heap bytes held: the slot grid plus the cells.
   std::size_t memoryBytes() const;
 

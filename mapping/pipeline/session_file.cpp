@@ -7,7 +7,10 @@
 #include <cstring>
 #include <fstream>
 #include <iterator>
+#include <limits>
 #include <stdexcept>
+
+#include <zlib.h>
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
@@ -22,6 +25,7 @@ static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new 
 static_assert(sizeof(GlobalMapParams) == 88, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
 static_assert(sizeof(MapperState) == 400, "MapperState changed: store the new field in the .vdmap file");
+static_assert(sizeof(LoopClosure) == 32, "LoopClosure changed: store the new field in the .vdmap file (not a wall time)");
 
 constexpr char kMagic[8] = {'V', 'D', 'M', 'A', 'P', 'S', 'E', 'S'};
 constexpr std::uint32_t kEndianMark = 0x01020304;  // written little-endian: 04 03 02 01
@@ -76,6 +80,10 @@ class Reader {
   [[noreturn]] void fail(const std::string& what) const { throw InputError(file_, where_ + ": " + what); }
   std::size_t left() const { return data_.size() - pos_; }
   void setWhere(std::string where) { where_ = std::move(where); }
+  /// A reader of other bytes (unpacked from this region) that names the same file and region.
+  Reader over(std::string_view data) const { return Reader(data, file_, where_); }
+  /// "FILE: WHERE", to name this region in another reader's errors.
+  std::string context() const { return file_ + ": " + where_; }
   void need(std::uint64_t n, const char* what) const {
     if (n > left())
       fail(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
@@ -144,14 +152,14 @@ class Reader {
   std::string where_;
 };
 
-void appendSection(Writer* file, const std::array<char, 4>& tag, const std::string& payload) {
+void writeSection(const ByteSink& sink, const std::array<char, 4>& tag, const std::string& payload) {
   Writer head;
   head.bytes({tag.data(), tag.size()});
   head.u64(payload.size());
   const std::uint32_t crc = crc32(payload, crc32(head.str()));
   head.u32(crc);
-  file->bytes(head.str());
-  file->bytes(payload);
+  sink(head.str());
+  sink(payload);
 }
 
 // --- parameters -------------------------------------------------------------------------------
@@ -304,8 +312,7 @@ void writeState(Writer* w, const SessionInfo& info) {
   w->u32(static_cast<std::uint32_t>(s.loops.size()));
   for (const LoopClosure& l : s.loops) {
     for (int v : {l.frame_index, l.from, l.to, l.inliers}) w->i32(v);
-    w->f64(l.correction_m);
-    w->f64(l.pose_graph_ms);
+    w->f64(l.correction_m);  // not pose_graph_ms: a wall-clock time would make equal runs differ
   }
   w->i32(s.frames_weak);
   w->i32(s.frames_relocalised);
@@ -344,12 +351,15 @@ void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_
         for (int col = row; col < 6; ++col) e.information(row, col) = e.information(col, row) = r->f64("edge information");
       e.robust = r->boolean("edge robust");
     }
-    const std::uint32_t loops = r->count(4 * 4 + 2 * 8, "loop closures");
+    // Versions 4 and 5 stored each optimisation's wall time: read and dropped, as version 6
+    // stores none (a session is the same for the same input, whatever the machine's speed).
+    const bool timed = version <= 5;
+    const std::uint32_t loops = r->count(4 * 4 + (timed ? 2 : 1) * 8, "loop closures");
     s.loops.resize(loops);
     for (LoopClosure& l : s.loops) {
       for (int* v : {&l.frame_index, &l.from, &l.to, &l.inliers}) *v = r->i32("loop closure");
       l.correction_m = r->f64("loop correction");
-      l.pose_graph_ms = r->f64("loop time");
+      if (timed) r->f64("loop time");
     }
   }
   if (version >= 5) {  // the frames placed on a weak estimate, and those relocalised
@@ -361,31 +371,102 @@ void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_
 }
 
 // --- keyframes --------------------------------------------------------------------------------
+// Version 6 keeps each image as the PNG or JPEG file the keyframe holds, and packs the keypoints,
+// descriptors and cells with zlib, their records split into byte planes; versions 1-5 stored
+// the pixels and the records as they are.
 
-void writeMat(Writer* w, const cv::Mat& m) {
-  w->i32(m.rows);
-  w->i32(m.cols);
-  w->i32(m.type());
-  if (m.empty()) return;
-  const cv::Mat c = m.isContinuous() ? m : m.clone();
-  if (c.depth() == CV_8U) {
-    w->bytes({reinterpret_cast<const char*>(c.data), c.total() * c.elemSize()});
-  } else {  // CV_16U, the only other type a keyframe holds
-    const auto* p = reinterpret_cast<const std::uint16_t*>(c.data);
-    for (std::size_t i = 0; i < c.total() * c.channels(); ++i) w->u16(p[i]);
-  }
+constexpr std::size_t kKeypointBytes = 32;  // one record: f32 x, y, size, angle, response, i32 octave, class, f32 depth
+constexpr std::size_t kCellBytes = 56;      // f32 mean[3], scatter[6], colour[3], u32 n, i32 grid index
+// zlib's level for the packed records: 9 packs ~1 % tighter than 6 and takes twice as long.
+constexpr int kPackLevel = 6;
+// Deflate never packs more than 1032 bytes into one, so a packed length bounds what a
+// damaged count may make the reader allocate.
+constexpr std::uint64_t kMaxInflation = 1032;
+
+/// The records of a table, `record_bytes` each, by byte planes: byte b of record i goes to
+/// b * n + i. Fields of neighbouring records share their high bytes (exponents, signs, small
+/// counts), which zlib then finds next to each other.
+std::string toPlanes(std::string_view records, std::size_t record_bytes) {
+  const std::size_t n = records.size() / record_bytes;
+  std::string planes(records.size(), '\0');
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t b = 0; b < record_bytes; ++b) planes[b * n + i] = records[i * record_bytes + b];
+  return planes;
 }
 
-/// An image of `type` that is either empty or rows x cols (cols -1: any column count).
+std::string fromPlanes(std::string_view planes, std::size_t record_bytes) {
+  const std::size_t n = planes.size() / record_bytes;
+  std::string records(planes.size(), '\0');
+  for (std::size_t i = 0; i < n; ++i)
+    for (std::size_t b = 0; b < record_bytes; ++b) records[i * record_bytes + b] = planes[b * n + i];
+  return records;
+}
+
+std::string pack(std::string_view raw) {
+  uLongf packed_bytes = compressBound(raw.size());
+  std::string packed(packed_bytes, '\0');
+  if (compress2(reinterpret_cast<Bytef*>(packed.data()), &packed_bytes, reinterpret_cast<const Bytef*>(raw.data()),
+                raw.size(), kPackLevel) != Z_OK)
+    throw std::runtime_error("zlib could not pack a keyframe's features and cells");
+  packed.resize(packed_bytes);
+  return packed;
+}
+
+/// The `raw_bytes` bytes the zlib stream `packed` holds, which must be all of it.
+std::string unpack(const Reader& r, std::string_view packed, std::uint64_t raw_bytes, const char* what) {
+  r.check(raw_bytes <= kMaxInflation * packed.size() + 64, std::string(what) + ": " + std::to_string(packed.size()) +
+                                                              " packed bytes cannot hold " + std::to_string(raw_bytes));
+  std::string raw(static_cast<std::size_t>(raw_bytes), '\0');
+  uLongf out = raw.size();
+  uLong in = packed.size();
+  const int rc = uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out, reinterpret_cast<const Bytef*>(packed.data()), &in);
+  r.check(rc == Z_OK && out == raw.size() && in == packed.size(),
+          std::string(what) + ": not a zlib stream of " + std::to_string(raw_bytes) + " bytes (" +
+              (rc == Z_OK ? "other length" : zError(rc)) + ")");
+  return raw;
+}
+
+void writeImage(Writer* w, const CompressedImage& image) {
+  w->i32(image.rows());
+  w->i32(image.cols());
+  w->i32(image.type());
+  if (image.empty()) return;
+  w->u8(image.swappedRedBlue() ? 1 : 0);
+  w->u32(static_cast<std::uint32_t>(image.encoded().size()));
+  w->bytes(image.encoded());
+}
+
+/// Checks an image's header (h, w, t): either empty (0 x 0, of `type` or CV_8UC1) or of `type`
+/// and rows x cols (cols -1: any column count in 1..1024). True when it is not empty.
+bool checkImageHeader(const Reader& r, int h, int w, int t, int type, int rows, int cols, const char* what) {
+  if (h == 0 && w == 0) {
+    r.check(t == type || t == CV_8UC1, std::string(what) + ": unexpected type of an empty image");
+    return false;
+  }
+  r.check(t == type, std::string(what) + ": type " + std::to_string(t) + ", expected " + std::to_string(type));
+  r.check(h == rows && (cols < 0 ? w >= 1 && w <= 1024 : w == cols),
+          std::string(what) + ": size " + std::to_string(w) + "x" + std::to_string(h) + " does not fit");
+  return true;
+}
+
+/// Version 6: an image's file, decoded here once so that a session that loads never fails to show one.
+CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, const char* what) {
+  const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
+  if (!checkImageHeader(*r, h, w, t, type, camera.height, camera.width, what))
+    return CompressedImage::fromEncoded(0, 0, t, {}, false);
+  const std::uint8_t swapped = r->u8(what);
+  r->check(swapped <= (type == CV_8UC3 ? 1 : 0),
+           std::string(what) + ": red and blue swapped must be " + (type == CV_8UC3 ? "0 or 1" : "0"));
+  const std::uint32_t n = r->count(1, what);
+  CompressedImage image = CompressedImage::fromEncoded(h, w, t, std::string(r->bytes(n, what)), swapped == 1);
+  image.decode(r->context() + ": " + what);
+  return image;
+}
+
+/// Versions 1-5: an image of `type` that is either empty or rows x cols (cols -1: any column count).
 cv::Mat readMat(Reader* r, int type, int rows, int cols, const char* what) {
   const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
-  if (h == 0 && w == 0) {
-    r->check(t == type || t == CV_8UC1, std::string(what) + ": unexpected type of an empty image");
-    return cv::Mat(0, 0, t);
-  }
-  r->check(t == type, std::string(what) + ": type " + std::to_string(t) + ", expected " + std::to_string(type));
-  r->check(h == rows && (cols < 0 ? w >= 1 && w <= 1024 : w == cols),
-           std::string(what) + ": size " + std::to_string(w) + "x" + std::to_string(h) + " does not fit");
+  if (!checkImageHeader(*r, h, w, t, type, rows, cols, what)) return cv::Mat(0, 0, t);
   cv::Mat m(h, w, type);
   if (m.empty()) return m;  // no rows (descriptors of no keypoints): m.data is null
   const std::uint64_t bytes = static_cast<std::uint64_t>(m.total()) * m.elemSize();
@@ -401,17 +482,7 @@ cv::Mat readMat(Reader* r, int type, int rows, int cols, const char* what) {
   return m;
 }
 
-void writeKeyframe(Writer* w, const Keyframe& k) {
-  w->i32(k.id);
-  w->i32(k.frame_index);
-  w->f64(k.timestamp);
-  for (int row = 0; row < 3; ++row)
-    for (int col = 0; col < 4; ++col) w->f64(k.T_W_K.matrix()(row, col));
-  w->i32(k.frames_integrated);
-  writeMat(w, k.rgb());
-  writeMat(w, k.depth());
-  const FrameFeatures& f = k.features;
-  w->u32(static_cast<std::uint32_t>(f.keypoints.size()));
+void writeKeypoints(Writer* w, const FrameFeatures& f) {
   for (std::size_t i = 0; i < f.keypoints.size(); ++i) {
     const cv::KeyPoint& p = f.keypoints[i];
     for (float v : {p.pt.x, p.pt.y, p.size, p.angle, p.response}) w->f32(v);
@@ -419,9 +490,27 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
     w->i32(p.class_id);
     w->f32(f.depth_m[i]);
   }
-  writeMat(w, f.descriptors);
-  w->u32(static_cast<std::uint32_t>(k.container.size()));
-  for (const StoredCell& c : k.container.cells()) {
+}
+
+void readKeypoints(Reader* r, std::uint32_t n, FrameFeatures* f) {
+  f->keypoints.resize(n);
+  f->depth_m.resize(n);
+  for (std::uint32_t i = 0; i < n; ++i) {
+    cv::KeyPoint& p = f->keypoints[i];
+    p.pt.x = r->f32("keypoint x");
+    p.pt.y = r->f32("keypoint y");
+    p.size = r->f32("keypoint size");
+    p.angle = r->f32("keypoint angle");
+    p.response = r->f32("keypoint response");
+    p.octave = r->i32("keypoint octave");
+    p.class_id = r->i32("keypoint class");
+    f->depth_m[i] = r->f32("keypoint depth");
+    r->check(f->depth_m[i] >= 0, "keypoint depth must be >= 0");
+  }
+}
+
+void writeCells(Writer* w, const KeyframeContainer& container) {
+  for (const StoredCell& c : container.cells()) {
     for (float v : c.mean) w->f32(v);
     for (float v : c.scatter) w->f32(v);
     for (float v : c.color) w->f32(v);
@@ -430,7 +519,51 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   }
 }
 
-Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info) {
+void readCells(Reader* r, std::uint32_t cells, KeyframeContainer* container) {
+  const int grid = container->cols() * container->rows();
+  for (std::uint32_t i = 0; i < cells; ++i) {
+    StoredCell c;
+    for (float& v : c.mean) v = r->f32("cell mean");
+    for (float& v : c.scatter) v = r->f32("cell scatter");
+    for (float& v : c.color) v = r->f32("cell colour");
+    c.n = r->u32("cell count");
+    c.grid_index = r->i32("cell index");
+    r->check(c.n >= 1, "a stored cell must hold at least one point");
+    r->check(c.grid_index >= 0 && c.grid_index < grid,
+             "cell index " + std::to_string(c.grid_index) + " outside the container's " + std::to_string(grid));
+    r->check(container->find(c.grid_index) == nullptr, "cell " + std::to_string(c.grid_index) + " stored twice");
+    container->findOrCreate(c.grid_index) = c;
+  }
+}
+
+void writeKeyframe(Writer* w, const Keyframe& k) {
+  w->i32(k.id);
+  w->i32(k.frame_index);
+  w->f64(k.timestamp);
+  for (int row = 0; row < 3; ++row)
+    for (int col = 0; col < 4; ++col) w->f64(k.T_W_K.matrix()(row, col));
+  w->i32(k.frames_integrated);
+  writeImage(w, k.rgb_image);
+  writeImage(w, k.depth_image);
+  const FrameFeatures& f = k.features;
+  const cv::Mat descriptors = f.descriptors.isContinuous() ? f.descriptors : f.descriptors.clone();
+  w->u32(static_cast<std::uint32_t>(f.keypoints.size()));
+  w->i32(descriptors.rows);
+  w->i32(descriptors.cols);
+  w->i32(descriptors.type());
+  w->u32(static_cast<std::uint32_t>(k.container.size()));
+  Writer keypoints, cells;
+  writeKeypoints(&keypoints, f);
+  writeCells(&cells, k.container);
+  std::string raw = toPlanes(keypoints.str(), kKeypointBytes);
+  if (!descriptors.empty()) raw.append(reinterpret_cast<const char*>(descriptors.data), descriptors.total() * descriptors.elemSize());
+  raw += toPlanes(cells.str(), kCellBytes);
+  const std::string packed = pack(raw);
+  w->u32(static_cast<std::uint32_t>(packed.size()));
+  w->bytes(packed);
+}
+
+Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t version) {
   const PinholeCamera& camera = info.camera;
   Keyframe k{id, 0, 0.0, Transform::Identity(), {}, {}, {},
              KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
@@ -443,43 +576,41 @@ Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info) {
   r->check(isValidTransform(k.T_W_K), "pose is not a rigid transform");
   k.frames_integrated = r->i32("frames integrated");
   r->check(k.frames_integrated >= 0, "frames integrated must be >= 0");
-  k.rgb_image = CompressedImage(readMat(r, CV_8UC3, camera.height, camera.width, "rgb image"));
-  k.depth_image = CompressedImage(readMat(r, CV_16UC1, camera.height, camera.width, "depth image"));
-
   FrameFeatures& f = k.features;
-  const std::uint32_t n = r->count(32, "keypoints");
-  f.keypoints.resize(n);
-  f.depth_m.resize(n);
-  for (std::uint32_t i = 0; i < n; ++i) {
-    cv::KeyPoint& p = f.keypoints[i];
-    p.pt.x = r->f32("keypoint x");
-    p.pt.y = r->f32("keypoint y");
-    p.size = r->f32("keypoint size");
-    p.angle = r->f32("keypoint angle");
-    p.response = r->f32("keypoint response");
-    p.octave = r->i32("keypoint octave");
-    p.class_id = r->i32("keypoint class");
-    f.depth_m[i] = r->f32("keypoint depth");
-    r->check(f.depth_m[i] >= 0, "keypoint depth must be >= 0");
+  if (version >= 6) {
+    k.rgb_image = readImage(r, CV_8UC3, camera, "rgb image");
+    k.depth_image = readImage(r, CV_16UC1, camera, "depth image");
+    const std::uint32_t n = r->u32("keypoint count");
+    r->check(n <= static_cast<std::uint32_t>(std::numeric_limits<int>::max()), "keypoint count " + std::to_string(n) + " is too large");
+    const int h = r->i32("descriptors"), w = r->i32("descriptors"), t = r->i32("descriptors");
+    const bool described = checkImageHeader(*r, h, w, t, CV_8UC1, static_cast<int>(n), -1, "descriptors");
+    const std::uint32_t cells = r->u32("cell count");
+    const int grid = k.container.cols() * k.container.rows();
+    r->check(cells <= static_cast<std::uint32_t>(grid),
+             std::to_string(cells) + " cells in a container of " + std::to_string(grid));
+    const std::uint64_t keypoint_bytes = std::uint64_t{n} * kKeypointBytes,
+                        descriptor_bytes = described ? std::uint64_t(h) * static_cast<std::uint64_t>(w) : 0;
+    const std::uint32_t packed_bytes = r->count(1, "packed features and cells");
+    const std::string raw = unpack(*r, r->bytes(packed_bytes, "packed features and cells"),
+                                   keypoint_bytes + descriptor_bytes + std::uint64_t{cells} * kCellBytes,
+                                   "packed features and cells");
+    const std::string_view rest(raw);
+    const std::string keypoints = fromPlanes(rest.substr(0, keypoint_bytes), kKeypointBytes);
+    Reader keypoint_reader = r->over(keypoints);
+    readKeypoints(&keypoint_reader, n, &f);
+    f.descriptors = cv::Mat(described ? h : 0, described ? w : 0, t);
+    if (!f.descriptors.empty()) std::memcpy(f.descriptors.data, rest.data() + keypoint_bytes, descriptor_bytes);
+    const std::string cell_records = fromPlanes(rest.substr(keypoint_bytes + descriptor_bytes), kCellBytes);
+    Reader cell_reader = r->over(cell_records);
+    readCells(&cell_reader, cells, &k.container);
+  } else {
+    k.rgb_image = CompressedImage(readMat(r, CV_8UC3, camera.height, camera.width, "rgb image"));
+    k.depth_image = CompressedImage(readMat(r, CV_16UC1, camera.height, camera.width, "depth image"));
+    readKeypoints(r, r->count(kKeypointBytes, "keypoints"), &f);
+    f.descriptors = readMat(r, CV_8UC1, static_cast<int>(f.keypoints.size()), -1, "descriptors");
+    readCells(r, r->count(kCellBytes, "cells"), &k.container);
   }
-  f.descriptors = readMat(r, CV_8UC1, static_cast<int>(n), -1, "descriptors");
-  r->check(n == 0 || !f.descriptors.empty(), "keypoints without descriptors");
-
-  const std::uint32_t cells = r->count(56, "cells");
-  const int grid = k.container.cols() * k.container.rows();
-  for (std::uint32_t i = 0; i < cells; ++i) {
-    StoredCell c;
-    for (float& v : c.mean) v = r->f32("cell mean");
-    for (float& v : c.scatter) v = r->f32("cell scatter");
-    for (float& v : c.color) v = r->f32("cell colour");
-    c.n = r->u32("cell count");
-    c.grid_index = r->i32("cell index");
-    r->check(c.n >= 1, "a stored cell must hold at least one point");
-    r->check(c.grid_index >= 0 && c.grid_index < grid,
-             "cell index " + std::to_string(c.grid_index) + " outside the container's " + std::to_string(grid));
-    r->check(k.container.find(c.grid_index) == nullptr, "cell " + std::to_string(c.grid_index) + " stored twice");
-    k.container.findOrCreate(c.grid_index) = c;
-  }
+  r->check(f.keypoints.empty() || !f.descriptors.empty(), "keypoints without descriptors");
   r->expectEnd();
   return k;
 }
@@ -535,22 +666,24 @@ bool sameMapperParams(const MapperParams& a, const MapperParams& b) {
   return wa.str() == wb.str();
 }
 
-std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
-  Writer file;
-  file.bytes({kMagic, sizeof(kMagic)});
-  file.u32(kSessionFormatVersion);
-  file.u32(kEndianMark);
-  file.u32(static_cast<std::uint32_t>(graph.size() + 3));
-  file.u32(crc32(file.str()));
+void encodeSession(const KeyframeGraph& graph, const SessionInfo& info, const ByteSink& sink) {
+  Writer header;
+  header.bytes({kMagic, sizeof(kMagic)});
+  header.u32(kSessionFormatVersion);
+  header.u32(kEndianMark);
+  header.u32(static_cast<std::uint32_t>(graph.size() + 3));
+  header.u32(crc32(header.str()));
+  sink(header.str());
 
   Writer params;
   writeParams(&params, info, graph.size());
-  appendSection(&file, kParams, params.str());
+  writeSection(sink, kParams, params.str());
   info.state.validate(graph.size());  // a programming error otherwise: the reader would refuse the file
   if (info.sequence.size() > kMaxSequencePathBytes) throw std::invalid_argument("sequence folder path too long");
   Writer state;
   writeState(&state, info);
-  appendSection(&file, kState, state.str());
+  writeSection(sink, kState, state.str());
+  // One section at a time: the file is never held whole.
   for (const Keyframe& k : graph.keyframes()) {
     const PinholeCamera& c = k.container.camera();
     if (k.container.cellSizePx() != info.mapper.local_map.cell_size_px || c.width != info.camera.width ||
@@ -560,16 +693,21 @@ std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
                                   ": its container does not use the session's camera and cell size");
     Writer w;
     writeKeyframe(&w, k);
-    appendSection(&file, kKeyframe, w.str());
+    writeSection(sink, kKeyframe, w.str());
   }
   Writer edges;
   writeEdges(&edges, graph.edges());
-  appendSection(&file, kEdges, edges.str());
-  return std::move(file.str());
+  writeSection(sink, kEdges, edges.str());
+}
+
+std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info) {
+  std::string file;
+  encodeSession(graph, info, [&file](std::string_view piece) { file.append(piece); });
+  return file;
 }
 
 void saveSession(const std::filesystem::path& file, const KeyframeGraph& graph, const SessionInfo& info) {
-  writeFileAtomically(file, encodeSession(graph, info));
+  writeFileAtomically(file, [&](const ByteSink& sink) { encodeSession(graph, info, sink); });
 }
 
 Session decodeSession(std::string_view bytes, const std::string& name, const SessionDecodeOptions& options) {
@@ -631,7 +769,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     } else if (s < first_keyframe) {
       readState(&r, version, &session.info, keyframes);
     } else {
-      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info));
+      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version));
     }
   }
   body.setWhere("file");

@@ -7,6 +7,7 @@
 #include <string>
 #include <string_view>
 
+#include "mapping/core/atomic_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/mapper.h"
 
@@ -20,7 +21,11 @@ namespace vdmap {
 /// frame's pose in its keyframe (the trajectory), the tracker's motion state and the keyframe
 /// pose graph (edges, loop closures), so a tracked session continues as if it had not stopped.
 /// 5 added the counts of frames placed on a weak estimate and relocalised (4 loads them as 0).
-inline constexpr std::uint32_t kSessionFormatVersion = 5;
+/// 6 stores each keyframe image as the PNG or JPEG file the keyframe holds and packs the
+/// keypoints, descriptors and cells with zlib (a third of the size), and no longer stores the
+/// loop closures' wall-clock optimisation times, so equal runs give equal files (4 and 5 load
+/// with those times dropped).
+inline constexpr std::uint32_t kSessionFormatVersion = 6;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {
@@ -50,8 +55,13 @@ bool sameMapperParams(const MapperParams& a, const MapperParams& b);
 /// the same bytes, and encodeSession(decodeSession(b)) == b for a file of the current format.
 std::string encodeSession(const KeyframeGraph& graph, const SessionInfo& info);
 
+/// encodeSession handing the bytes to `sink` a section at a time (a header, then each section
+/// whole), so that the file is never held in memory at once.
+void encodeSession(const KeyframeGraph& graph, const SessionInfo& info, const ByteSink& sink);
+
 /// Writes the session atomically (temporary file, fsync, rename, fsync of the folder): an
-/// interrupted save leaves the previous file or the new one. Throws std::runtime_error naming
+/// interrupted save leaves the previous file or the new one. Section by section: memory holds one
+/// keyframe's section at a time, not the file. Throws std::runtime_error naming
 /// the file when it cannot be written.
 void saveSession(const std::filesystem::path& file, const KeyframeGraph& graph, const SessionInfo& info);
 
