@@ -435,6 +435,23 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "map_depth_png_cut", E::kCliError, "depth/000001.png: cannot decode depth image",
        then(cutImage("seq/depth/000001.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(7000)), ".png", 0.5),
             "map {dir}/seq --out {dir}/out")},
+      // Poses out of range.
+      {"trajectory", "translation_too_far", E::kInputError, "poses.txt:1: tx is '1e300' m: a pose must lie within 10000 m",
+       write("poses.txt", "0.5 1e300 2 3 0 0 0 1\n")},
+      {"trajectory", "translation_just_too_far", E::kInputError, "poses.txt:2: tz is '-10000.5' m",
+       write("poses.txt", "0.5 1 2 3 0 0 0 1\n0.6 1 2 -10000.5 0 0 0 1\n")},
+      {"trajectory", "quaternion_overflows", E::kInputError, "poses.txt:1: quaternion (qx qy qz qw) is too large to normalise",
+       write("poses.txt", "0.5 1 2 3 0 0 1e300 1e300\n")},
+      {"trajectory", "timestamp_too_large", E::kInputError, "poses.txt:1: timestamp 1e+300 is out of range",
+       write("poses.txt", "1e300 1 2 3 0 0 0 1\n")},
+      {"sequence", "associations_rgb_timestamp_in_nanoseconds", E::kInputError,
+       "associations.txt:1: timestamp 1.7e+18 is out of range",
+       write("seq/associations.txt", "1.7e18 rgb/000000.png 0.0 depth/000000.png\n")},
+      {"sequence", "groundtruth_far_away", E::kInputError, "groundtruth.txt:2: ty is '1e300' m",
+       write("seq/groundtruth.txt", "0.000000 0 0 0 0 0 0 1\n0.033333 0 1e300 0 0 0 0 1\n0.066667 0 0 0 0 0 0 1\n")},
+      {"command_line", "map_groundtruth_far_away", E::kCliError, "groundtruth.txt:2: tx is '1e300' m",
+       then(write("seq/groundtruth.txt", "0.000000 0 0 0 0 0 0 1\n0.033333 1e300 0 0 0 0 0 1\n0.066667 0 0 0 0 0 0 1\n"),
+            "map {dir}/seq --out {dir}/out")},
   };
   return all;
 }

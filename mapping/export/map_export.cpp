@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -45,6 +46,31 @@ void removeStaleStagingFolders(const fs::path& dir) {
     std::error_code ignored;
     fs::remove_all(entry.path(), ignored);
   }
+}
+
+// Every value the export writes must read back: vdmap's readers refuse non-finite values, and the
+// PLYs' float32 fields turn values beyond 3.4e38 into inf. Maps of valid input never fail this
+// (input poses lie within kMaxPoseDistanceM); if one does, the run fails rather than write
+// files that its own readers refuse.
+void checkWritable(const fs::path& dir, const char* which, const std::vector<Ellipsoid>& ellipsoids) {
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+    const Ellipsoid& e = ellipsoids[i];
+    if ((e.mean.array().abs() <= kFloatMax).all() && (e.cov.array().abs() <= kFloatMax).all() &&
+        e.color.allFinite())
+      continue;
+    throw std::runtime_error(dir.string() + ": nothing exported: " + which + " ellipsoid " + std::to_string(i) +
+                             " (keyframe " + std::to_string(e.keyframe) + ") has a mean or covariance that is not a "
+                             "finite float (mean " + std::to_string(e.mean.x()) + " " + std::to_string(e.mean.y()) +
+                             " " + std::to_string(e.mean.z()) + ")");
+  }
+}
+
+void checkWritable(const fs::path& dir, const char* which, const std::vector<StampedPose>& poses) {
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    if (!std::isfinite(poses[i].t) || !poses[i].T_W_C.matrix().allFinite())
+      throw std::runtime_error(dir.string() + ": nothing exported: " + which + " pose " + std::to_string(i) +
+                               " is not finite");
 }
 
 // A folder inside the export folder that receives every file first; commit() renames them into
@@ -149,10 +175,15 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
   if (options.octomap_resolution_m > 0.0) checkOctomapResolution(options.octomap_resolution_m, graph, map.ellipsoids);
-  StagingFolder stage(dir);
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
-  writeEllipsoidPly(stage / "local_maps.ply", localEllipsoids(graph, map));
+  const std::vector<Ellipsoid> local = localEllipsoids(graph, map);
+  checkWritable(dir, "keyframe", poses);
+  checkWritable(dir, "trajectory", options.trajectory);
+  checkWritable(dir, "local-map", local);
+  checkWritable(dir, "global-map", map.ellipsoids);
+  StagingFolder stage(dir);
+  writeEllipsoidPly(stage / "local_maps.ply", local);
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
   if (!options.trajectory.empty())

@@ -127,6 +127,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     for (const ListLine& line : readListFile(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
       const double t_rgb = parseListNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
       const double t_depth = parseListNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
+      checkTimestamp(t_rgb, assoc_file, line.number);
       checkIncreasing(t_depth, &previous, assoc_file, line.number);
       pairs.push_back({{t_depth, folder / line.tokens[3], assoc_file, line.number},
                        Stamped{t_rgb, folder / line.tokens[1], assoc_file, line.number}});
