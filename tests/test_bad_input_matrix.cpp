@@ -452,6 +452,14 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "map_groundtruth_far_away", E::kCliError, "groundtruth.txt:2: tx is '1e300' m",
        then(write("seq/groundtruth.txt", "0.000000 0 0 0 0 0 0 1\n0.033333 1e300 0 0 0 0 0 1\n0.066667 0 0 0 0 0 0 1\n"),
             "map {dir}/seq --out {dir}/out")},
+      // Sequence messages that named the wrong thing.
+      {"sequence", "depth_image_is_a_folder", E::kInputError, "depth.txt:3: image 'depth/000001.png' is a folder, not an image file",
+       [](const fs::path& d) {
+         fs::remove(d / "seq/depth/000001.png");
+         fs::create_directory(d / "seq/depth/000001.png");
+         return std::string();
+       }},
+      {"sequence", "empty_rgb_list", E::kInputError, "seq/rgb.txt: lists no frames", write("seq/rgb.txt", "# none\n")},
   };
   return all;
 }

@@ -62,10 +62,13 @@ void checkImage(const Stamped& image, const fs::path& folder) {
   std::error_code ec;
   if (fs::is_regular_file(image.path, ec)) return;
   const bool missing = !ec || ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory;
+  std::string what = missing ? "does not exist" : "cannot be read: " + ec.message();
+  const fs::file_type type = fs::status(image.path, ec).type();
+  if (type == fs::file_type::directory) what = "is a folder, not an image file";
+  else if (!ec && type != fs::file_type::not_found) what = "is not a regular file";
   std::string name = image.path.lexically_relative(folder).string();
   if (name.size() > 80) name = name.substr(0, 77) + "...";
-  throw InputError(image.list.string(), image.line,
-                   "image '" + name + "' " + (missing ? std::string("does not exist") : "cannot be read: " + ec.message()));
+  throw InputError(image.list.string(), image.line, "image '" + name + "' " + what);
 }
 
 }  // namespace
@@ -134,6 +137,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     }
   } else {
     const std::vector<Stamped> rgb = readImageList(folder, "rgb.txt");
+    if (rgb.empty()) throw InputError((folder / "rgb.txt").string(), "lists no frames");
     for (const Stamped& depth : readImageList(folder, "depth.txt")) {
       auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t,
                                  [](const Stamped& s, double t) { return s.t < t; });
