@@ -183,7 +183,11 @@ void runMap(MapArgs args) {
   checkMapArgs(args);
   std::optional<Session> loaded;
   if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
-  const TumSequence seq = openSequence(args.sequence);
+  std::optional<SequenceContinuation> continues;
+  if (loaded)
+    continues = SequenceContinuation{args.load, loaded->info.sequence, loaded->info.state.last_frame_index,
+                                     loaded->info.state.last_timestamp};
+  const TumSequence seq = openSequence(args.sequence, false, continues);
   if (loaded)
     checkContinues(seq, *loaded, args.load);
   else

@@ -76,7 +76,8 @@ std::string cameraPresetList();
 /// Opens the sequence the arguments name (throws InputError / std::invalid_argument). With
 /// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
-/// instead of refused.
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false);
+/// instead of refused. `continues`: the session the sequence continues (SequenceOptions::continues).
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
+                         std::optional<SequenceContinuation> continues = std::nullopt);
 
 }  // namespace vdmap::app

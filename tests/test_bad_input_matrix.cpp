@@ -6,7 +6,9 @@
 //
 // Side effect: each file-reading row's bad file and the good file are copied into the fuzzers'
 // seed corpus (VDMAP_FUZZ_SEEDS/<target>/), so the fuzzers start from every known bad case.
+#include <cstdio>
 #include <functional>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -181,6 +183,35 @@ std::function<std::string(const fs::path&)> session(std::function<void(std::stri
     std::string bytes = goodSession();
     edit(&bytes);
     writeText(d / "s.vdmap", bytes);
+    return std::string();
+  };
+}
+// Maps frames `frames` of seq and saves the session as s.vdmap; then writes `other`, a copy of
+// the tiny sequence with `frames_other` frames and timestamps `shift_s` later ("": none).
+std::function<std::string(const fs::path&)> savedSession(std::string frames, std::string other, double shift_s = 0.0,
+                                                         int frames_other = 3) {
+  return [=](const fs::path& d) {
+    const test::RunResult r = test::runVdmap("map '" + (d / "seq").string() + "' --frames " + frames + " --out '" +
+                                             (d / "first").string() + "' --save '" + (d / "s.vdmap").string() + "'");
+    if (r.exit_code != 0) throw std::runtime_error("the session to continue was not made: " + r.err);
+    if (other.empty()) return std::string();
+    test::writeTinySequence(d / other, frames_other);
+    for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
+      std::string text;
+      std::istringstream lines(readFile(d / other / list));
+      for (std::string line; std::getline(lines, line);) {
+        double t = 0;
+        char rest[256];
+        if (line[0] != '#' && std::sscanf(line.c_str(), "%lf %255[^\n]", &t, rest) == 2) {
+          char shifted[300];
+          std::snprintf(shifted, sizeof shifted, "%.6f %s", t + shift_s, rest);
+          text += std::string(shifted) + "\n";
+        } else {
+          text += line + "\n";
+        }
+      }
+      writeText(d / other / list, text);
+    }
     return std::string();
   };
 }
@@ -460,6 +491,16 @@ const std::vector<BadCase>& badCases() {
          return std::string();
        }},
       {"sequence", "empty_rgb_list", E::kInputError, "seq/rgb.txt: lists no frames", write("seq/rgb.txt", "# none\n")},
+      // --load on a sequence that is not where the session stopped.
+      {"command_line", "load_on_another_folder", E::kCliError, "other: is not the recording",
+       then(savedSession("0:2", "other"), "map {dir}/other --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_on_another_recording_of_that_name", E::kCliError,
+       "depth frame 1 is at t = 10.033333 s, but",
+       then(savedSession("0:2", "b/seq", 10.0), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_on_a_shorter_recording", E::kCliError, "lists 1 depth frames, but",
+       then(savedSession("0:2", "b/seq", 0.0, 1), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_a_finished_session", E::kCliError, "s.vdmap already covers the whole sequence",
+       then(savedSession("0:3", ""), "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
   };
   return all;
 }

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 
@@ -69,6 +70,45 @@ void checkImage(const Stamped& image, const fs::path& folder) {
   std::string name = image.path.lexically_relative(folder).string();
   if (name.size() > 80) name = name.substr(0, 77) + "...";
   throw InputError(image.list.string(), image.line, "image '" + name + "' " + what);
+}
+
+// The last part of a folder's path, "seq" for "/data/seq/" too.
+std::string folderName(const fs::path& folder) {
+  std::error_code ec;
+  fs::path p = fs::absolute(folder, ec).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  return p.filename().string();
+}
+
+std::string seconds(double t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6f s", t);
+  return text;
+}
+
+// The sequence must be the recording the session was mapped on: the same folder name (its full
+// path may have changed: a moved or copied recording continues) and, at the session's last
+// frame, the same depth timestamp; timestamps increase, so the frames after it follow in time.
+// `t_last`: the sequence's depth timestamp at that frame, none when it lists fewer frames.
+void checkContinuation(const fs::path& folder, int listed, std::optional<double> t_last, int first,
+                       const SequenceContinuation& c) {
+  if (c.last_frame_index < 0) return;
+  const std::string frame = "frame " + std::to_string(c.last_frame_index);
+  const std::string mapped_on = c.folder.empty() ? std::string() : " (mapped on " + c.folder.string() + ")";
+  if (!c.folder.empty() && folderName(c.folder) != folderName(folder))
+    throw InputError(folder.string(), "is not the recording " + c.session + " was mapped on (" + c.folder.string() +
+                                          "); continue it on that folder");
+  if (!t_last)
+    throw InputError(folder.string(), "lists " + std::to_string(listed) + " depth frames, but " + c.session +
+                                          " stopped at its " + frame + " (t = " + seconds(c.last_timestamp) + ")" +
+                                          mapped_on + ": not the recording it was mapped on");
+  if (std::abs(*t_last - c.last_timestamp) > 1e-6)
+    throw InputError(folder.string(), "depth " + frame + " is at t = " + seconds(*t_last) + ", but " + c.session +
+                                          " stopped at its " + frame + " at t = " + seconds(c.last_timestamp) +
+                                          mapped_on + ": not the recording it was mapped on");
+  if (first >= listed && c.last_frame_index + 1 == listed)
+    throw InputError(folder.string(), c.session + " already covers the whole sequence (its " + std::to_string(listed) +
+                                          " depth frames): there is nothing left to continue");
 }
 
 }  // namespace
@@ -158,6 +198,12 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   seq.listed_ = static_cast<int>(pairs.size());
   if (pairs.empty())
     throw InputError((fs::exists(assoc_file) ? assoc_file : folder / "depth.txt").string(), "lists no frames");
+  if (options.continues) {
+    const int k = options.continues->last_frame_index;
+    checkContinuation(folder, seq.listed_,
+                      k >= 0 && k < seq.listed_ ? std::optional<double>(pairs[k].depth.t) : std::nullopt,
+                      options.frames.first, *options.continues);
+  }
   if (options.frames.first >= seq.listed_)
     throw InputError(folder.string(), "--frames starts at " + std::to_string(options.frames.first) +
                                           " but the sequence lists only " + std::to_string(seq.listed_) +
