@@ -47,7 +47,7 @@ void checkMapArgs(const MapArgs& args) {
   // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
   checkExportFolder(args.out);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
-  if (!args.load.empty() && !isSessionFile(args.load))
+  if (!args.load.empty() && !isSessionPath(args.load))
     throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
                                                                    : "no such session file (--load)");
 }
@@ -206,9 +206,10 @@ void runMap(MapArgs args) {
   options.octomap_resolution_m = args.octomap_resolution_m;
   options.trajectory = mapper.trajectory();
   options.run_stats = runStats(mapper, seq, frames_loaded, times, refined, options.trajectory);
+  // Once the export is staged and before it is put in place: a run that fails keeps neither.
+  if (!args.save.empty())
+    options.before_commit = [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); };
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
-  // After the export, so a failed export leaves no session file behind.
-  if (!args.save.empty()) saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder()));
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;

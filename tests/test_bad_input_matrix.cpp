@@ -491,6 +491,14 @@ const std::vector<BadCase>& badCases() {
          return std::string();
        }},
       {"sequence", "empty_rgb_list", E::kInputError, "seq/rgb.txt: lists no frames", write("seq/rgb.txt", "# none\n")},
+      // A damaged session where a session is one of the things a verb takes: named as one.
+      {"command_line", "render_session_first_byte_flipped", E::kCliError, "s.vdmap: a damaged session file: it does not start",
+       then(session([](std::string* b) { (*b)[0] ^= 0x01; }), "render {dir}/s.vdmap --out {dir}/o.png")},
+      {"command_line", "render_map_session_empty", E::kCliError, "s.vdmap: a damaged session file: it is empty",
+       then(session([](std::string* b) { b->clear(); }), "render --map {dir}/s.vdmap --out {dir}/o.png")},
+      {"command_line", "load_session_wrong_magic", E::kCliError, "s.vdmap: a damaged session file",
+       then(session([](std::string* b) { b->replace(0, 8, "VDMAPXXX"); }),
+            "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
       // --load on a sequence that is not where the session stopped.
       {"command_line", "load_on_another_folder", E::kCliError, "other: is not the recording",
        then(savedSession("0:2", "other"), "map {dir}/other --out {dir}/out --load {dir}/s.vdmap")},

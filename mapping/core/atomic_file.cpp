@@ -31,9 +31,22 @@ void syncFolder(const std::filesystem::path& folder) {
   ::close(fd);
 }
 
+// Removes FILE.tmp-PID files that runs killed while writing `file` left (a session can be tens of
+// MB); those of live processes are theirs.
+void removeStaleTemporaries(const std::filesystem::path& file) {
+  const std::string prefix = file.filename().string() + ".tmp-";
+  const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : ".";
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code ignored;
+    if (isStaleTemporaryName(it->path().filename().string(), prefix)) std::filesystem::remove(it->path(), ignored);
+  }
+}
+
 }  // namespace
 
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
+  removeStaleTemporaries(file);
   const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
   const TemporaryPath interrupt_cleanup(tmp);
   // The data reaches the disk before the rename publishes it, so a crash or power loss at any

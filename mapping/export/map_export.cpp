@@ -1,6 +1,5 @@
 #include "mapping/export/map_export.h"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
@@ -37,12 +36,7 @@ constexpr char kStagingPrefix[] = ".vdmap-export-";
 void removeStaleStagingFolders(const fs::path& dir) {
   std::error_code ec;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(kStagingPrefix, 0) != 0) continue;
-    const std::string digits = name.substr(sizeof(kStagingPrefix) - 1);
-    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(digits));
-    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    if (!isStaleTemporaryName(entry.path().filename().string(), kStagingPrefix)) continue;
     std::error_code ignored;
     fs::remove_all(entry.path(), ignored);
   }
@@ -206,6 +200,7 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
                         {"seconds", rounded(r.seconds)}};
   }
   writeFileAtomically(stage / "stats.json", jsonText(stats) + "\n");
+  if (options.before_commit) options.before_commit();
   stage.commit();
   return stats;
 }
