@@ -49,7 +49,7 @@ void checkMapArgs(const MapArgs& args) {
   // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
   checkExportFolder(args.out);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
-  if (!args.load.empty() && !isSessionFile(args.load))
+  if (!args.load.empty() && !isSessionPath(args.load))
     throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
                                                                    : "no such session file (--load)");
 }
@@ -155,6 +155,11 @@ nlohmann::json exportWithProgress(const std::filesystem::path& out_dir, const Ke
     if (!octomap_bar) octomap_bar = std::make_unique<ProgressBar>("OctoMap export", total);
     octomap_bar->update(done);
   };
+  if (options.before_commit)  // the session save's bar follows the OctoMap's
+    options.before_commit = [&octomap_bar, save = options.before_commit] {
+      octomap_bar.reset();
+      save();
+    };
   const nlohmann::json stats = exportMap(out_dir, graph, global, options);
   octomap_bar.reset();  // its last line before the summary, not after it
   return stats;
@@ -188,7 +193,11 @@ void runMap(MapArgs args) {
   checkMapArgs(args);
   std::optional<Session> loaded;
   if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
-  const TumSequence seq = openSequence(args.sequence);
+  std::optional<SequenceContinuation> continues;
+  if (loaded)
+    continues = SequenceContinuation{args.load, loaded->info.sequence, loaded->info.state.last_frame_index,
+                                     loaded->info.state.last_timestamp};
+  const TumSequence seq = openSequence(args.sequence, false, continues);
   if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
     std::cerr << "vdmap map: warning: " << dropped << "\n";
   if (loaded)
@@ -213,10 +222,12 @@ void runMap(MapArgs args) {
   options.run_stats.update(frameCounts(seq));
   options.run_stats.update(provenanceStats({seq.folder().string(), seq.cameraSource(), seq.camera(),
                                             mapper.params().poses, refinement(args.sequence), args.params}));
-  const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
-  // After the export, so a failed export leaves no session file behind.
+  // Once the export is staged and before it is put in place: a run that fails keeps neither.
   if (!args.save.empty())
-    withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
+    options.before_commit = [&] {
+      withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
+    };
+  const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;

@@ -213,12 +213,12 @@ void runRender(RenderArgs args) {
   if (args.out.empty()) throw CLI::RequiredError("--out");
   checkOutputFile(args.out, "--out");
   // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map.
-  if (!args.sequence.folder.empty() && isSessionFile(args.sequence.folder)) {
+  if (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder)) {
     if (!args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
     std::swap(args.map, args.sequence.folder);
   }
   const bool from_sequence = !args.sequence.folder.empty();
-  const bool from_session = !args.map.empty() && isSessionFile(args.map);
+  const bool from_session = !args.map.empty() && isSessionPath(args.map);
   const ViewChoice choice = parseView(args.view);
   if (from_sequence && !args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
   if (!from_sequence && !from_session && choice.kind != ViewChoice::Kind::kGlobal)

@@ -2,6 +2,10 @@
 // Each verb of the vdmap command registers itself on the top-level CLI11 app. A verb's callback
 // throws std::exception on failure; main() turns that into a one-line error and exit code 1.
 
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
 #include <filesystem>
 #include <functional>
 #include <optional>
@@ -31,13 +35,19 @@ inline std::string counted(long long n, const std::string& noun) {
 }
 
 /// Fails before any work when `file`, given as `option`, cannot become an output file: it is a
-/// folder, its folder does not exist, or a file stands where a folder of its path should be
-/// (throws std::invalid_argument).
+/// folder, its folder does not exist or cannot be written (permissions, a read-only file
+/// system), or a file stands where a folder of its path should be (throws std::invalid_argument).
 inline void checkOutputFile(const std::string& file, const std::string& option) {
   namespace fs = std::filesystem;
   if (fs::is_directory(file)) throw std::invalid_argument(file + ": is a folder (" + option + " wants a file)");
   const fs::path folder = fs::absolute(file).parent_path();
-  if (fs::is_directory(folder)) return;
+  if (fs::is_directory(folder)) {
+    // The file is written beside itself and renamed into place: the folder must take new files.
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+      throw std::invalid_argument(file + ": cannot write into " + folder.string() + " (" + std::strerror(errno) + ", " +
+                                  option + ")");
+    return;
+  }
   fs::path existing = folder;  // the nearest part of the path that exists
   while (!fs::exists(existing) && existing.has_parent_path() && existing.parent_path() != existing)
     existing = existing.parent_path();
@@ -76,7 +86,8 @@ std::string cameraPresetList();
 /// Opens the sequence the arguments name (throws InputError / std::invalid_argument). With
 /// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
-/// instead of refused.
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false);
+/// instead of refused. `continues`: the session the sequence continues (SequenceOptions::continues).
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
+                         std::optional<SequenceContinuation> continues = std::nullopt);
 
 }  // namespace vdmap::app

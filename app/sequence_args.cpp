@@ -47,8 +47,9 @@ PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
   return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
 }
 
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end) {
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::optional<SequenceContinuation> continues) {
   SequenceOptions options;
+  options.continues = std::move(continues);
   options.camera_preset = args.camera;
   options.cut_range_at_end = cut_range_at_end;
   // No --poses: ground truth when there is some (frames without a pose are then dropped, as with

@@ -6,7 +6,9 @@
 //
 // Side effect: each file-reading row's bad file and the good file are copied into the fuzzers'
 // seed corpus (VDMAP_FUZZ_SEEDS/<target>/), so the fuzzers start from every known bad case.
+#include <cstdio>
 #include <functional>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
@@ -181,6 +183,35 @@ std::function<std::string(const fs::path&)> session(std::function<void(std::stri
     std::string bytes = goodSession();
     edit(&bytes);
     writeText(d / "s.vdmap", bytes);
+    return std::string();
+  };
+}
+// Maps frames `frames` of seq and saves the session as s.vdmap; then writes `other`, a copy of
+// the tiny sequence with `frames_other` frames and timestamps `shift_s` later ("": none).
+std::function<std::string(const fs::path&)> savedSession(std::string frames, std::string other, double shift_s = 0.0,
+                                                         int frames_other = 3) {
+  return [=](const fs::path& d) {
+    const test::RunResult r = test::runVdmap("map '" + (d / "seq").string() + "' --frames " + frames + " --out '" +
+                                             (d / "first").string() + "' --save '" + (d / "s.vdmap").string() + "'");
+    if (r.exit_code != 0) throw std::runtime_error("the session to continue was not made: " + r.err);
+    if (other.empty()) return std::string();
+    test::writeTinySequence(d / other, frames_other);
+    for (const char* list : {"rgb.txt", "depth.txt", "groundtruth.txt"}) {
+      std::string text;
+      std::istringstream lines(readFile(d / other / list));
+      for (std::string line; std::getline(lines, line);) {
+        double t = 0;
+        char rest[256];
+        if (line[0] != '#' && std::sscanf(line.c_str(), "%lf %255[^\n]", &t, rest) == 2) {
+          char shifted[300];
+          std::snprintf(shifted, sizeof shifted, "%.6f %s", t + shift_s, rest);
+          text += std::string(shifted) + "\n";
+        } else {
+          text += line + "\n";
+        }
+      }
+      writeText(d / other / list, text);
+    }
     return std::string();
   };
 }
@@ -435,6 +466,49 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "map_depth_png_cut", E::kCliError, "depth/000001.png: cannot decode depth image",
        then(cutImage("seq/depth/000001.png", cv::Mat(48, 64, CV_16UC1, cv::Scalar(7000)), ".png", 0.5),
             "map {dir}/seq --out {dir}/out")},
+      // Poses out of range.
+      {"trajectory", "translation_too_far", E::kInputError, "poses.txt:1: tx is '1e300' m: a pose must lie within 10000 m",
+       write("poses.txt", "0.5 1e300 2 3 0 0 0 1\n")},
+      {"trajectory", "translation_just_too_far", E::kInputError, "poses.txt:2: tz is '-10000.5' m",
+       write("poses.txt", "0.5 1 2 3 0 0 0 1\n0.6 1 2 -10000.5 0 0 0 1\n")},
+      {"trajectory", "quaternion_overflows", E::kInputError, "poses.txt:1: quaternion (qx qy qz qw) is too large to normalise",
+       write("poses.txt", "0.5 1 2 3 0 0 1e300 1e300\n")},
+      {"trajectory", "timestamp_too_large", E::kInputError, "poses.txt:1: timestamp 1e+300 is out of range",
+       write("poses.txt", "1e300 1 2 3 0 0 0 1\n")},
+      {"sequence", "associations_rgb_timestamp_in_nanoseconds", E::kInputError,
+       "associations.txt:1: timestamp 1.7e+18 is out of range",
+       write("seq/associations.txt", "1.7e18 rgb/000000.png 0.0 depth/000000.png\n")},
+      {"sequence", "groundtruth_far_away", E::kInputError, "groundtruth.txt:2: ty is '1e300' m",
+       write("seq/groundtruth.txt", "0.000000 0 0 0 0 0 0 1\n0.033333 0 1e300 0 0 0 0 1\n0.066667 0 0 0 0 0 0 1\n")},
+      {"command_line", "map_groundtruth_far_away", E::kCliError, "groundtruth.txt:2: tx is '1e300' m",
+       then(write("seq/groundtruth.txt", "0.000000 0 0 0 0 0 0 1\n0.033333 1e300 0 0 0 0 0 1\n0.066667 0 0 0 0 0 0 1\n"),
+            "map {dir}/seq --out {dir}/out")},
+      // Sequence messages that named the wrong thing.
+      {"sequence", "depth_image_is_a_folder", E::kInputError, "depth.txt:3: image 'depth/000001.png' is a folder, not an image file",
+       [](const fs::path& d) {
+         fs::remove(d / "seq/depth/000001.png");
+         fs::create_directory(d / "seq/depth/000001.png");
+         return std::string();
+       }},
+      {"sequence", "empty_rgb_list", E::kInputError, "seq/rgb.txt: lists no frames", write("seq/rgb.txt", "# none\n")},
+      // A damaged session where a session is one of the things a verb takes: named as one.
+      {"command_line", "render_session_first_byte_flipped", E::kCliError, "s.vdmap: a damaged session file: it does not start",
+       then(session([](std::string* b) { (*b)[0] ^= 0x01; }), "render {dir}/s.vdmap --out {dir}/o.png")},
+      {"command_line", "render_map_session_empty", E::kCliError, "s.vdmap: a damaged session file: it is empty",
+       then(session([](std::string* b) { b->clear(); }), "render --map {dir}/s.vdmap --out {dir}/o.png")},
+      {"command_line", "load_session_wrong_magic", E::kCliError, "s.vdmap: a damaged session file",
+       then(session([](std::string* b) { b->replace(0, 8, "VDMAPXXX"); }),
+            "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
+      // --load on a sequence that is not where the session stopped.
+      {"command_line", "load_on_another_folder", E::kCliError, "other: is not the recording",
+       then(savedSession("0:2", "other"), "map {dir}/other --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_on_another_recording_of_that_name", E::kCliError,
+       "depth frame 1 is at t = 10.033333 s, but",
+       then(savedSession("0:2", "b/seq", 10.0), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_on_a_shorter_recording", E::kCliError, "lists 1 depth frames, but",
+       then(savedSession("0:2", "b/seq", 0.0, 1), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
+      {"command_line", "load_a_finished_session", E::kCliError, "s.vdmap already covers the whole sequence",
+       then(savedSession("0:3", ""), "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
   };
   return all;
 }

@@ -4,6 +4,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include <cmath>
 #include <random>
 #include <sstream>
 
@@ -12,6 +13,7 @@
 #include <gtest/gtest.h>
 #include <octomap/OcTree.h>
 
+#include "mapping/core/atomic_file.h"
 #include "mapping/core/temporary_paths.h"
 #include "mapping/export/map_export.h"
 #include "mapping/export/octomap_export.h"
@@ -223,6 +225,116 @@ TEST(Export, AFolderThatCannotBeWrittenFailsClearlyAndWritesNothing) {
   EXPECT_EQ(test::readFile(tmp / "out" / "graph.txt"), "old\n");
 }
 
+// A value the files cannot hold (inf, NaN, or a double beyond float32's range) fails the export
+// before anything is written: vdmap's own readers would refuse the files. Valid input never gets
+// here (input poses are bounded), so the maps are made so by hand.
+TEST(Export, AMapWithAValueTheFilesCannotHoldIsNotExported) {
+  const TwoViews scene;
+  test::TempDir tmp;
+  GlobalMap far = scene.map;
+  ASSERT_GT(far.ellipsoids.size(), 3u);
+  far.ellipsoids[3].mean.x() = 1e39;  // finite as a double, inf as a float
+  try {
+    exportMap(tmp / "out", scene.graph, far);
+    ADD_FAILURE() << "exported a map with a mean beyond float range";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("out: nothing exported: global-map ellipsoid 3 (keyframe"), std::string::npos)
+        << e.what();
+  }
+  GlobalMap nan = scene.map;
+  nan.ellipsoids[0].cov(1, 2) = std::nan("");
+  EXPECT_THROW(exportMap(tmp / "out", scene.graph, nan), std::runtime_error);
+  MapExportOptions options;
+  options.trajectory = {{0.0, Transform::Identity()}, {0.1, Transform::Identity()}};
+  options.trajectory[1].T_W_C.translation().y() = INFINITY;
+  try {
+    exportMap(tmp / "out", scene.graph, scene.map, options);
+    ADD_FAILURE() << "exported a non-finite trajectory";
+  } catch (const std::runtime_error& e) {
+    EXPECT_NE(std::string(e.what()).find("nothing exported: trajectory pose 1 is not finite"), std::string::npos) << e.what();
+  }
+  EXPECT_FALSE(fs::exists(tmp / "out")) << "a refused export creates nothing";
+  // The trajectory writer refuses on its own too (bench writes trajectories directly).
+  EXPECT_THROW(writeTumTrajectory(tmp / "t.txt", options.trajectory, "test"), std::runtime_error);
+  EXPECT_TRUE(fs::is_empty(tmp.path()));
+}
+
+// What the caller does before the export is put in place (vdmap map saves its session there)
+// can fail the export: nothing of it appears and earlier files stay as they were.
+TEST(Export, AFailureBeforeTheCommitLeavesNoExport) {
+  const TwoViews scene;
+  test::TempDir tmp;
+  MapExportOptions options;
+  options.before_commit = [] { throw std::runtime_error("s.vdmap: cannot write (No space left on device)"); };
+  EXPECT_THROW(exportMap(tmp / "new", scene.graph, scene.map, options), std::runtime_error);
+  EXPECT_FALSE(fs::exists(tmp / "new"));
+  test::writeText(tmp / "old" / "graph.txt", "old\n");
+  EXPECT_THROW(exportMap(tmp / "old", scene.graph, scene.map, options), std::runtime_error);
+  EXPECT_EQ(filesIn(tmp / "old"), std::vector<std::string>{"graph.txt"});
+  EXPECT_EQ(test::readFile(tmp / "old" / "graph.txt"), "old\n");
+}
+
+// vdmap map --save on a disk that fills up while the session is written (a file-size limit
+// stands in for the full disk): the run fails and keeps no export of its own.
+TEST(Export, MapWhoseSessionSaveFailsKeepsNoExport) {
+  test::TempDir tmp;
+  // Noise images (incompressible, in the session) of a flat wall in large cells (few ellipsoids,
+  // in the export): the session is the largest file the run writes.
+  test::writeTinySequence(tmp / "seq", 6, 160, 120);
+  const std::string map = "map '" + (tmp / "seq").string() + "' --cell-size 16 --save '" + (tmp / "s.vdmap").string() +
+                          "' --out ";
+  ASSERT_EQ(test::runVdmap(map + "'" + (tmp / "whole").string() + "'").exit_code, 0);
+  std::uintmax_t largest_export = 0;
+  for (const auto& entry : fs::directory_iterator(tmp / "whole")) largest_export = std::max(largest_export, entry.file_size());
+  const std::uintmax_t session = fs::file_size(tmp / "s.vdmap");
+  ASSERT_LT(largest_export + 1024, session) << "the limit must fall between the export files and the session";
+  fs::remove(tmp / "s.vdmap");
+  // dash's ulimit -f counts 512-byte blocks; with SIGXFSZ ignored a write past it fails (EFBIG).
+  const std::string limit = "trap '' XFSZ; ulimit -f " + std::to_string((largest_export + session) / 2 / 512) + ";";
+  const test::RunResult r = test::runVdmap(map + "'" + (tmp / "out").string() + "'", limit);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("s.vdmap: cannot write"), std::string::npos) << r.err;
+  EXPECT_FALSE(fs::exists(tmp / "out")) << "a run whose save failed keeps no export";
+  EXPECT_FALSE(fs::exists(tmp / "s.vdmap"));
+}
+
+// info --json on a folder whose name is not UTF-8 (Latin-1 'é') prints JSON, the name's byte as U+FFFD.
+TEST(Export, InfoJsonOnAFolderWhoseNameIsNotUtf8) {
+  test::TempDir tmp;
+  const fs::path seq = tmp / "caf\xe9";
+  test::writeTinySequence(seq, 3);
+  const test::RunResult r = test::runVdmap("info --json '" + seq.string() + "'");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_NE(r.out.find("caf\xef\xbf\xbd"), std::string::npos) << r.out;
+}
+
+// --save into a folder that cannot be written fails before any mapping, as --out does. As root
+// (who may write anywhere) vdmap runs as nobody through setpriv.
+TEST(Export, MapSaveIntoAFolderThatCannotBeWrittenFailsAtOnce) {
+  test::TempDir tmp;
+  std::string as_user;
+  if (::geteuid() == 0) {
+    if (std::system("setpriv --help >/dev/null 2>&1") != 0) GTEST_SKIP() << "running as root without setpriv";
+    as_user = "setpriv --reuid=65534 --regid=65534 --clear-groups";
+  }
+  fs::permissions(tmp.path(), fs::perms::owner_all | fs::perms::group_read | fs::perms::group_exec |
+                                  fs::perms::others_read | fs::perms::others_exec);
+  test::writeTinySequence(tmp / "seq", 3);
+  fs::create_directory(tmp / "writable");
+  fs::permissions(tmp / "writable", fs::perms::all);
+  fs::create_directory(tmp / "readonly");
+  fs::permissions(tmp / "readonly", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
+                                        fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
+  const test::RunResult r = test::runVdmap("map '" + (tmp / "seq").string() + "' --out '" + (tmp / "writable" / "out").string() +
+                                               "' --save '" + (tmp / "readonly" / "s.vdmap").string() + "'",
+                                           as_user);
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("readonly/s.vdmap: cannot write into " + (tmp / "readonly").string()), std::string::npos) << r.err;
+  EXPECT_EQ(r.err.find("mapping"), std::string::npos) << "fails before mapping: " << r.err;
+  EXPECT_FALSE(fs::exists(tmp / "writable" / "out"));
+}
+
 // A flat cell whose smallest eigenvalue float accumulation left at -3e-12 m^2 (132 of 88,940
 // were so in a real map) is stored positive semi-definite, changed by no more than its
 // clamp; a well-conditioned one is only rounded.
@@ -288,6 +400,21 @@ TEST(Export, StaleStagingFoldersOfDeadProcessesAreRemoved) {
   exportMap(tmp / "out", scene.graph, scene.map);
   EXPECT_FALSE(fs::exists(dead));
   EXPECT_TRUE(fs::exists(alive));
+}
+
+// A FILE.tmp-PID that a killed save left (a session: tens of MB) is removed by the next write
+// of FILE; one of a live process is its own.
+TEST(Export, StaleTemporaryFilesOfDeadProcessesAreRemoved) {
+  test::TempDir tmp;
+  const fs::path dead = tmp / "s.vdmap.tmp-999999999";  // above any pid_max
+  const fs::path alive = tmp / ("s.vdmap.tmp-" + std::to_string(::getppid()));
+  const fs::path other = tmp / "t.vdmap.tmp-999999999";  // another file's: left to its own next write
+  for (const fs::path& f : {dead, alive, other}) test::writeText(f, "partial");
+  writeFileAtomically(tmp / "s.vdmap", "new");
+  EXPECT_FALSE(fs::exists(dead));
+  EXPECT_TRUE(fs::exists(alive));
+  EXPECT_TRUE(fs::exists(other));
+  EXPECT_EQ(test::readFile(tmp / "s.vdmap"), "new");
 }
 
 // SIGTERM in the middle of an export (here from the OctoMap progress callback, so the moment is
@@ -376,6 +503,8 @@ TEST(JsonText, NumbersAreTheShortestTextThatReadsBack) {
   EXPECT_EQ(text, "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5,320.0,0.00012,123456.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
                   "\"small\":-2.5e-07,\"whole\":3.0}");
   EXPECT_EQ(nlohmann::json::parse(text), mixed);
+  // JSON is UTF-8: a path in another encoding is written with U+FFFD, not an exception.
+  EXPECT_EQ(jsonText(nlohmann::json{{"folder", "/data/caf\xe9"}}, -1), "{\"folder\":\"/data/caf\xef\xbf\xbd\"}");
   // Any double reads back as itself, at every magnitude.
   std::mt19937_64 random(7);
   for (int i = 0; i < 100000; ++i) {

@@ -113,7 +113,7 @@ void runGui(GuiArgs args, bool builtin) {
   }
   // A missing sequence or session is named before the display is looked at (without a display,
   // `gui /nope` named the display); a damaged session still opens the window with its error.
-  if (!builtin && !args.map.empty() && !isSessionFile(args.map))
+  if (!builtin && !args.map.empty() && !isSessionPath(args.map))
     throw InputError(args.map, fs::exists(args.map) ? "not a vdmap session file" : "no such session file");
   if (!builtin && args.map.empty()) openSequence(args.sequence);
   // Without a display, say so now rather than after rendering the built-in scene (a minute).

@@ -31,6 +31,18 @@ void syncFolder(const std::filesystem::path& folder) {
   ::close(fd);
 }
 
+// Removes FILE.tmp-PID files that runs killed while writing `file` left (a session can be tens of
+// MB); those of live processes are theirs.
+void removeStaleTemporaries(const std::filesystem::path& file) {
+  const std::string prefix = file.filename().string() + ".tmp-";
+  const std::filesystem::path folder = file.has_parent_path() ? file.parent_path() : ".";
+  std::error_code ec;
+  for (std::filesystem::directory_iterator it(folder, ec), end; !ec && it != end; it.increment(ec)) {
+    std::error_code ignored;
+    if (isStaleTemporaryName(it->path().filename().string(), prefix)) std::filesystem::remove(it->path(), ignored);
+  }
+}
+
 }  // namespace
 
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes) {
@@ -38,6 +50,7 @@ void writeFileAtomically(const std::filesystem::path& file, std::string_view byt
 }
 
 void writeFileAtomically(const std::filesystem::path& file, const std::function<void(const ByteSink&)>& produce) {
+  removeStaleTemporaries(file);
   const std::filesystem::path tmp = file.string() + ".tmp-" + std::to_string(::getpid());
   const TemporaryPath interrupt_cleanup(tmp);
   // The data reaches the disk before the rename publishes it, so a crash or power loss at any

@@ -9,7 +9,8 @@ namespace vdmap {
 /// on POSIX within a folder; the folder is fsynced after), so a reader, an interrupted run or a
 /// power cut never sees a half-written file. Throws std::runtime_error naming `file` and the
 /// reason when it cannot be written; no temporary is left behind (an interrupt removes it too when
-/// installTemporaryPathCleanup() is in place; a SIGKILL leaves it).
+/// installTemporaryPathCleanup() is in place; a SIGKILL leaves it, and the next write of `file`
+/// removes it once its process is gone).
 void writeFileAtomically(const std::filesystem::path& file, std::string_view bytes);
 
 /// Receives a file's bytes piece by piece, in order.

@@ -1,8 +1,10 @@
 #include "mapping/core/temporary_paths.h"
 
+#include <cerrno>
 #include <climits>
 #include <csignal>
 #include <cstring>
+#include <signal.h>
 #include <unistd.h>
 
 #include <atomic>
@@ -47,6 +49,14 @@ TemporaryPath::TemporaryPath(const std::filesystem::path& path, bool folder) {
 
 TemporaryPath::~TemporaryPath() {
   if (slot_ >= 0) g_slots[slot_].state.store(kFree, std::memory_order_release);
+}
+
+bool isStaleTemporaryName(const std::string& name, const std::string& prefix) {
+  if (name.rfind(prefix, 0) != 0) return false;
+  const std::string digits = name.substr(prefix.size());
+  if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) return false;
+  const pid_t pid = static_cast<pid_t>(std::stol(digits));
+  return pid != ::getpid() && ::kill(pid, 0) != 0 && errno == ESRCH;
 }
 
 void removeTemporaryPaths() {

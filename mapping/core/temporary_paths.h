@@ -6,6 +6,7 @@
 // signal end the process as it would have. A SIGKILL or a power cut still leaves them: those are
 // found by name on the next run (map_export.cpp's stale staging folders).
 #include <filesystem>
+#include <string>
 
 namespace vdmap {
 
@@ -23,6 +24,10 @@ class TemporaryPath {
  private:
   int slot_ = -1;
 };
+
+/// True when `name` is `prefix` followed by the id of a process that no longer exists (not this
+/// one): a temporary that a killed run (SIGKILL, a power cut) left, which a later run may remove.
+bool isStaleTemporaryName(const std::string& name, const std::string& prefix);
 
 /// Unlinks every registered file, then removes every registered folder. Async-signal-safe.
 void removeTemporaryPaths();

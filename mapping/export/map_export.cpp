@@ -1,11 +1,11 @@
 #include "mapping/export/map_export.h"
 
-#include <signal.h>
 #include <unistd.h>
 
 #include <algorithm>
 #include <cerrno>
 #include <cmath>
+#include <limits>
 #include <memory>
 #include <stdexcept>
 #include <string>
@@ -36,15 +36,36 @@ constexpr char kStagingPrefix[] = ".vdmap-export-";
 void removeStaleStagingFolders(const fs::path& dir) {
   std::error_code ec;
   for (const fs::directory_entry& entry : fs::directory_iterator(dir, ec)) {
-    const std::string name = entry.path().filename().string();
-    if (name.rfind(kStagingPrefix, 0) != 0) continue;
-    const std::string digits = name.substr(sizeof(kStagingPrefix) - 1);
-    if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) continue;
-    const pid_t pid = static_cast<pid_t>(std::stol(digits));
-    if (pid == ::getpid() || ::kill(pid, 0) == 0 || errno != ESRCH) continue;
+    if (!isStaleTemporaryName(entry.path().filename().string(), kStagingPrefix)) continue;
     std::error_code ignored;
     fs::remove_all(entry.path(), ignored);
   }
+}
+
+// Every value the export writes must read back: vdmap's readers refuse non-finite values, and the
+// PLYs' float32 fields turn values beyond 3.4e38 into inf. Maps of valid input never fail this
+// (input poses lie within kMaxPoseDistanceM); if one does, the run fails rather than write
+// files that its own readers refuse.
+void checkWritable(const fs::path& dir, const char* which, const EllipsoidSource& ellipsoids) {
+  constexpr double kFloatMax = std::numeric_limits<float>::max();
+  std::size_t i = 0;
+  ellipsoids([&](const Ellipsoid& e) {
+    if ((e.mean.array().abs() <= kFloatMax).all() && (e.cov.array().abs() <= kFloatMax).all() && e.color.allFinite()) {
+      ++i;
+      return;
+    }
+    throw std::runtime_error(dir.string() + ": nothing exported: " + which + " ellipsoid " + std::to_string(i) +
+                             " (keyframe " + std::to_string(e.keyframe) + ") has a mean or covariance that is not a "
+                             "finite float (mean " + std::to_string(e.mean.x()) + " " + std::to_string(e.mean.y()) +
+                             " " + std::to_string(e.mean.z()) + ")");
+  });
+}
+
+void checkWritable(const fs::path& dir, const char* which, const std::vector<StampedPose>& poses) {
+  for (std::size_t i = 0; i < poses.size(); ++i)
+    if (!std::isfinite(poses[i].t) || !poses[i].T_W_C.matrix().allFinite())
+      throw std::runtime_error(dir.string() + ": nothing exported: " + which + " pose " + std::to_string(i) +
+                               " is not finite");
 }
 
 // A folder inside the export folder that receives every file first; commit() renames them into
@@ -149,16 +170,22 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   if (!(options.octomap_resolution_m >= 0.0) || !std::isfinite(options.octomap_resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m (0: no OctoMap)");
   if (options.octomap_resolution_m > 0.0) checkOctomapResolution(options.octomap_resolution_m, graph, map.ellipsoids);
-  StagingFolder stage(dir);
   std::vector<StampedPose> poses;
   for (const Keyframe& k : graph.keyframes()) poses.push_back({k.timestamp, k.T_W_K});
+  const EllipsoidSource local = [&](const EllipsoidVisitor& visit) { forEachLocalEllipsoid(graph, map, visit); };
+  checkWritable(dir, "keyframe", poses);
+  checkWritable(dir, "trajectory", options.trajectory);
+  checkWritable(dir, "local-map", local);
+  checkWritable(dir, "global-map", [&](const EllipsoidVisitor& visit) {
+    for (const Ellipsoid& e : map.ellipsoids) visit(e);
+  });
+  StagingFolder stage(dir);
   const std::size_t files = options.trajectory.empty() ? 6 : 7;
   std::size_t written = 0;
   const auto wrote = [&] {
     if (options.progress) options.progress(++written, files);
   };
-  writeEllipsoidPly(stage / "local_maps.ply", map.sigma_e,
-                    [&](const EllipsoidVisitor& visit) { forEachLocalEllipsoid(graph, map, visit); });
+  writeEllipsoidPly(stage / "local_maps.ply", map.sigma_e, local);
   wrote();
   writeTumTrajectory(stage / "keyframes.txt", poses,
                      "vdmap keyframe poses T_W_K (camera-to-world); line i is keyframe id i");
@@ -189,6 +216,7 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
                         {"seconds", rounded(r.seconds)}};
   }
   writeFileAtomically(stage / "stats.json", jsonText(stats) + "\n");
+  if (options.before_commit) options.before_commit();
   stage.commit();
   return stats;
 }

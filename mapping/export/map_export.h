@@ -2,6 +2,7 @@
 // Everything a mapping run exports (docs/method.md 11), written into one folder: the same code for
 // `vdmap map --out DIR` and the workbench's Export button.
 #include <filesystem>
+#include <functional>
 
 #include <nlohmann/json.hpp>
 
@@ -25,6 +26,11 @@ struct MapExportOptions {
   nlohmann::json run_stats = nlohmann::json::object();
   /// Non-empty: also write trajectory.txt, the pose of every mapped frame (Mapper::trajectory()).
   std::vector<StampedPose> trajectory;
+  /// Set: called once every file is staged, before any is put in place; what it throws fails
+  /// the export, which then leaves nothing. `vdmap map --save` saves its session here, so that a
+  /// run whose save fails (a full disk) keeps no new export, and one whose export fails no new
+  /// session.
+  std::function<void()> before_commit;
 };
 
 /// Writes into `dir` (created if missing):

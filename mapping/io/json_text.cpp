@@ -35,7 +35,9 @@ bool isDigit(char c) { return c >= '0' && c <= '9'; }
 }  // namespace
 
 std::string jsonText(const nlohmann::json& value, int indent) {
-  const std::string in = value.dump(indent);
+  // JSON text is UTF-8: a string that is not (a path of a non-UTF-8 folder) gets U+FFFD for each
+  // invalid byte rather than nlohmann::json's exception.
+  const std::string in = value.dump(indent, ' ', false, nlohmann::json::error_handler_t::replace);
   std::string out;
   out.reserve(in.size());
   for (std::size_t i = 0; i < in.size();) {

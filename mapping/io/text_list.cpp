@@ -2,6 +2,7 @@
 
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <fstream>
 #include <sstream>
 
@@ -41,7 +42,16 @@ double parseListNumber(const std::string& token, const std::filesystem::path& fi
   return value;
 }
 
+void checkTimestamp(double t, const std::filesystem::path& file, int line) {
+  if (std::abs(t) <= kMaxTimestampS) return;
+  char text[32];
+  std::snprintf(text, sizeof text, "%g", t);
+  throw InputError(file.string(), line,
+                   std::string("timestamp ") + text + " is out of range: timestamps are seconds within 1e11 of 0");
+}
+
 void checkIncreasing(double t, double* previous, const std::filesystem::path& file, int line) {
+  checkTimestamp(t, file, line);
   if (t <= *previous)
     throw InputError(file.string(), line,
                      "timestamp " + std::to_string(t) + " is not after the previous one (" +

@@ -20,7 +20,15 @@ std::vector<ListLine> readListFile(const std::filesystem::path& file, int column
 /// or is not finite.
 double parseListNumber(const std::string& token, const std::filesystem::path& file, int line, const char* what);
 
-/// Throws InputError unless t > *previous; then sets *previous = t.
+/// The largest timestamp magnitude, s. Doubles keep 15 us steps up to it, fine for the 0.02 s
+/// association window and the microseconds written back; Unix time is 1.7e9 s, while timestamps
+/// in nanoseconds (1.7e18) are refused instead of matching nothing.
+inline constexpr double kMaxTimestampS = 1e11;
+
+/// Throws InputError unless |t| <= kMaxTimestampS.
+void checkTimestamp(double t, const std::filesystem::path& file, int line);
+
+/// Throws InputError unless |t| <= kMaxTimestampS and t > *previous; then sets *previous = t.
 void checkIncreasing(double t, double* previous, const std::filesystem::path& file, int line);
 
 }  // namespace vdmap

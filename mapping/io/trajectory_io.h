@@ -7,6 +7,13 @@
 
 namespace vdmap {
 
+/// How far from the world origin a pose may lie, m. The exports store coordinates as float32,
+/// whose spacing is 0.98 mm up to 16 km: within 10 km every exported point keeps a millimetre, as
+/// fine as the depth sensors measure; farther out the maps lose resolution silently, and far
+/// enough (1e39 m) they turn into inf. RGB-D recordings span rooms to buildings; a trajectory in
+/// geographic coordinates (UTM: 1e5 to 1e7 m) is to be moved near the origin first.
+inline constexpr double kMaxPoseDistanceM = 1e4;
+
 /// A pose with its timestamp (T_W_C, camera-to-world).
 struct StampedPose {
   double t = 0.0;
@@ -15,10 +22,12 @@ struct StampedPose {
 
 /// Reads a TUM trajectory (`timestamp tx ty tz qx qy qz qw` per line, '#' comments), timestamps
 /// strictly increasing. Quaternions are normalised. Throws InputError naming the file and line for
-/// a malformed line, a non-finite value, a zero-norm quaternion or a timestamp out of order.
+/// a malformed line, a non-finite value, a translation component beyond kMaxPoseDistanceM, a
+/// quaternion whose norm is zero or overflows, or a timestamp out of order.
 std::vector<StampedPose> readTumTrajectory(const std::filesystem::path& file);
 
 /// Writes a TUM trajectory with `header` as a comment line (atomically: temp file + rename).
+/// Throws std::runtime_error naming the file, and writes nothing, when a pose is not finite.
 void writeTumTrajectory(const std::filesystem::path& file, const std::vector<StampedPose>& poses,
                         const std::string& header);
 

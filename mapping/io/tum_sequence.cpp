@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <cstdio>
 #include <optional>
 #include <stdexcept>
 
@@ -62,10 +63,52 @@ void checkImage(const Stamped& image, const fs::path& folder) {
   std::error_code ec;
   if (fs::is_regular_file(image.path, ec)) return;
   const bool missing = !ec || ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory;
+  std::string what = missing ? "does not exist" : "cannot be read: " + ec.message();
+  const fs::file_type type = fs::status(image.path, ec).type();
+  if (type == fs::file_type::directory) what = "is a folder, not an image file";
+  else if (!ec && type != fs::file_type::not_found) what = "is not a regular file";
   std::string name = image.path.lexically_relative(folder).string();
   if (name.size() > 80) name = name.substr(0, 77) + "...";
-  throw InputError(image.list.string(), image.line,
-                   "image '" + name + "' " + (missing ? std::string("does not exist") : "cannot be read: " + ec.message()));
+  throw InputError(image.list.string(), image.line, "image '" + name + "' " + what);
+}
+
+// The last part of a folder's path, "seq" for "/data/seq/" too.
+std::string folderName(const fs::path& folder) {
+  std::error_code ec;
+  fs::path p = fs::absolute(folder, ec).lexically_normal();
+  if (!p.has_filename()) p = p.parent_path();
+  return p.filename().string();
+}
+
+std::string seconds(double t) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.6f s", t);
+  return text;
+}
+
+// The sequence must be the recording the session was mapped on: the same folder name (its full
+// path may have changed: a moved or copied recording continues) and, at the session's last
+// frame, the same depth timestamp; timestamps increase, so the frames after it follow in time.
+// `t_last`: the sequence's depth timestamp at that frame, none when it lists fewer frames.
+void checkContinuation(const fs::path& folder, int listed, std::optional<double> t_last, int first,
+                       const SequenceContinuation& c) {
+  if (c.last_frame_index < 0) return;
+  const std::string frame = "frame " + std::to_string(c.last_frame_index);
+  const std::string mapped_on = c.folder.empty() ? std::string() : " (mapped on " + c.folder.string() + ")";
+  if (!c.folder.empty() && folderName(c.folder) != folderName(folder))
+    throw InputError(folder.string(), "is not the recording " + c.session + " was mapped on (" + c.folder.string() +
+                                          "); continue it on that folder");
+  if (!t_last)
+    throw InputError(folder.string(), "lists " + std::to_string(listed) + " depth frames, but " + c.session +
+                                          " stopped at its " + frame + " (t = " + seconds(c.last_timestamp) + ")" +
+                                          mapped_on + ": not the recording it was mapped on");
+  if (std::abs(*t_last - c.last_timestamp) > 1e-6)
+    throw InputError(folder.string(), "depth " + frame + " is at t = " + seconds(*t_last) + ", but " + c.session +
+                                          " stopped at its " + frame + " at t = " + seconds(c.last_timestamp) +
+                                          mapped_on + ": not the recording it was mapped on");
+  if (first >= listed && c.last_frame_index + 1 == listed)
+    throw InputError(folder.string(), c.session + " already covers the whole sequence (its " + std::to_string(listed) +
+                                          " depth frames): there is nothing left to continue");
 }
 
 }  // namespace
@@ -127,12 +170,14 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     for (const ListLine& line : readListFile(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
       const double t_rgb = parseListNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
       const double t_depth = parseListNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
+      checkTimestamp(t_rgb, assoc_file, line.number);
       checkIncreasing(t_depth, &previous, assoc_file, line.number);
       pairs.push_back({{t_depth, folder / line.tokens[3], assoc_file, line.number},
                        Stamped{t_rgb, folder / line.tokens[1], assoc_file, line.number}});
     }
   } else {
     const std::vector<Stamped> rgb = readImageList(folder, "rgb.txt");
+    if (rgb.empty()) throw InputError((folder / "rgb.txt").string(), "lists no frames");
     for (const Stamped& depth : readImageList(folder, "depth.txt")) {
       auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t,
                                  [](const Stamped& s, double t) { return s.t < t; });
@@ -153,6 +198,12 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   seq.listed_ = static_cast<int>(pairs.size());
   if (pairs.empty())
     throw InputError((fs::exists(assoc_file) ? assoc_file : folder / "depth.txt").string(), "lists no frames");
+  if (options.continues) {
+    const int k = options.continues->last_frame_index;
+    checkContinuation(folder, seq.listed_,
+                      k >= 0 && k < seq.listed_ ? std::optional<double>(pairs[k].depth.t) : std::nullopt,
+                      options.frames.first, *options.continues);
+  }
   if (options.frames.first >= seq.listed_)
     throw InputError(folder.string(), "--frames starts at " + std::to_string(options.frames.first) +
                                           " but the sequence lists only " + std::to_string(seq.listed_) +

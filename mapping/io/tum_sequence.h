@@ -25,6 +25,15 @@ FrameRange parseFrameRange(const std::string& text);
 /// "A:B", or "A:" for a range to the end.
 std::string frameRangeText(const FrameRange& range);
 
+/// Where a saved mapping session stopped, for a sequence that is to continue it: the sequence
+/// must be the recording the session was mapped on.
+struct SequenceContinuation {
+  std::string session;           ///< what stopped there (the session file), for messages
+  std::filesystem::path folder;  ///< the folder the session was mapped on ("": unknown)
+  int last_frame_index = -1;     ///< depth-list index of the last frame mapped (-1: none)
+  double last_timestamp = 0.0;   ///< s, its depth timestamp
+};
+
 struct SequenceOptions {
   std::string camera_preset;      ///< empty: choose from the folder (chooseCamera)
   FrameRange frames;              ///< which depth frames to keep
@@ -37,6 +46,10 @@ struct SequenceOptions {
   /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
   /// ground-truth pose with has_pose = false and the identity.
   bool require_poses = true;
+  /// Set: the sequence continues a session, so its folder must have the session's folder name
+  /// (a moved recording continues) and its depth frame last_frame_index the session's
+  /// last_timestamp; else open() throws InputError saying what differs.
+  std::optional<SequenceContinuation> continues;
 };
 
 /// One usable frame: an rgb/depth pair with an interpolated pose. Paths are absolute.
@@ -62,8 +75,9 @@ struct DropCounts {
 /// load(), which is const and safe to call from several threads.
 class TumSequence {
  public:
-  /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input, and
-  /// ("FOLDER: --frames ...") for a range outside the listed frames.
+  /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input,
+  /// ("FOLDER: --frames ...") for a range outside the listed frames, and ("FOLDER: ...") for a
+  /// sequence that is not the one options.continues stopped on, or that it already covers.
   static TumSequence open(const std::filesystem::path& folder, const SequenceOptions& options = {});
 
   const std::filesystem::path& folder() const { return folder_; }

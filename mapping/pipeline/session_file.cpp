@@ -785,11 +785,19 @@ bool isSessionFile(const std::filesystem::path& file) {
   return in.read(magic, sizeof magic) && std::equal(magic, magic + sizeof magic, kMagic);
 }
 
+bool isSessionPath(const std::filesystem::path& file) {
+  std::error_code ec;
+  return isSessionFile(file) || (file.extension() == ".vdmap" && std::filesystem::is_regular_file(file, ec));
+}
+
 Session loadSession(const std::filesystem::path& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "cannot open the session file");
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(file.string(), "cannot read the session file");
+  if (file.extension() == ".vdmap" && bytes.compare(0, sizeof(kMagic), std::string_view(kMagic, sizeof(kMagic))) != 0)
+    throw InputError(file.string(), bytes.empty() ? "a damaged session file: it is empty (wrong magic)"
+                                                  : "a damaged session file: it does not start with 'VDMAPSES' (wrong magic)");
   return decodeSession(bytes, file.string());
 }
 

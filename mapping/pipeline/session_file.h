@@ -80,7 +80,13 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
 /// verb can take a session where it takes a sequence folder or a map. Reads 8 bytes.
 bool isSessionFile(const std::filesystem::path& file);
 
-/// Reads and decodes a session file (InputError as decodeSession, or when it cannot be read).
+/// True when `file` is a regular file that starts with the session magic or is named *.vdmap:
+/// what a verb that takes a session besides other things reads as a session, so that a damaged
+/// session (empty, its magic overwritten) is reported as one by loadSession().
+bool isSessionPath(const std::filesystem::path& file);
+
+/// Reads and decodes a session file (InputError as decodeSession, or when it cannot be read; a
+/// file named *.vdmap without the session magic is "a damaged session file").
 Session loadSession(const std::filesystem::path& file);
 
 /// CRC-32 (IEEE 802.3, the zlib polynomial) of `bytes`, continuing from `crc`.
