@@ -4,6 +4,7 @@
 
 #include "app/commands.h"
 #include "mapping/core/temporary_paths.h"
+#include "vdmap_version.h"
 
 int main(int argc, char** argv) {
   using namespace vdmap::app;
@@ -12,6 +13,11 @@ int main(int argc, char** argv) {
   CLI::App app{"vdmap: keyframe-based dense mapping with view-dependent local maps (RGB-D)\n"
                "With no verb, opens the workbench on the built-in scene."};
   app.require_subcommand(0, 1);
+  // The project version, and the commit when the build was configured from a git checkout
+  // (cmake/version.cmake); nothing is looked up at run time.
+  const std::string commit = vdmap::kGitDescribe[0] ? std::string(" (git ") + vdmap::kGitDescribe + ")" : "";
+  app.set_version_flag("--version", std::string("vdmap ") + vdmap::kVersion + commit,
+                       "print vdmap's version (and the git commit it was built from) and exit");
   addInfoCommand(app);
   addMapCommand(app);
   addRenderCommand(app);
@@ -29,7 +35,7 @@ int main(int argc, char** argv) {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help
+    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
     // One line like every other error (CLI11's own adds "Run with --help ...").
     error(std::string(e.what()) + " (see --help)");
     return e.get_exit_code();

@@ -1,11 +1,13 @@
 // End-to-end tests of the vdmap command line: exit codes and one-line errors.
 #include <algorithm>
+#include <regex>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
 #include "tests/test_util.h"
+#include "vdmap_version.h"
 
 namespace vdmap {
 namespace {
@@ -99,6 +101,17 @@ TEST(Cli, InfoReportsValidDepthAndTheShareOfInvalidPixels) {
   const auto text = runVdmap("info '" + (dir / "seq").string() + "'");
   EXPECT_NE(text.out.find("1.500 .. 2.000 m"), std::string::npos) << text.out;
   EXPECT_NE(text.out.find("50% invalid (25% 0 = no measurement, 25% 65535 = invalid code)"), std::string::npos) << text.out;
+}
+
+// `vdmap --version`: the CMake project version and, when the build was configured from a git
+// checkout, its commit; exit 0 (it was CLI11's "argument not expected", 109).
+TEST(Cli, VersionPrintsTheProjectVersionAndCommit) {
+  const auto r = runVdmap("--version");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(std::regex_match(r.out, std::regex(R"(vdmap \d+\.\d+\.\d+( \(git [0-9A-Za-z.+-]+\))?\n)"))) << r.out;
+  const std::string commit = kGitDescribe[0] ? std::string(" (git ") + kGitDescribe + ")" : "";
+  EXPECT_EQ(r.out, std::string("vdmap ") + kVersion + commit + "\n");
 }
 
 }  // namespace
