@@ -11,10 +11,12 @@ std::string cameraPresetList() {
 
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
-  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList());
+  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList())
+      ->check(cameraPresetCheck());
   verb.add_option("--frames", args.frames,
                   "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
-                  "a range past the end is an error");
+                  "a range past the end is an error")
+      ->check(frameRangeCheck());
 }
 
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {

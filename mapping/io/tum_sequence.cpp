@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <charconv>
 #include <cmath>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -74,6 +75,10 @@ FrameRange parseFrameRange(const std::string& text) {
   auto number = [&](const std::string& s) {
     int value = 0;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+    // A number that does not fit an int is well-formed but past any sequence.
+    if (ec == std::errc::result_out_of_range && ptr == s.data() + s.size() && s[0] != '-')
+      throw std::invalid_argument("--frames '" + text + "': frame number " + s + " is out of range (0.." +
+                                  std::to_string(std::numeric_limits<int>::max()) + ")");
     if (ec != std::errc() || ptr != s.data() + s.size() || value < 0)
       throw std::invalid_argument("--frames '" + text + "': expected A:B (or N for 0:N) with frame numbers >= 0");
     return value;
