@@ -18,6 +18,7 @@
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
+#include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
@@ -252,7 +253,10 @@ void addMapCommand(CLI::App& app) {
       ->check(octomapResolutionCheck());
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   addParameterOptions(*verb, args->params);
-  verb->add_option("--threads", args->params.global.threads, "global-map threads (0: all); the map does not depend on it")
+  verb->add_option("--threads", args->params.global.threads,
+                   "global-map threads, 0.." + std::to_string(kMaxThreads) +
+                       " (0: all; more than the machine has run as many as it has); the map does not depend on it")
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
   verb->callback([args] { runMap(*args); });
 }

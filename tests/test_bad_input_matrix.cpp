@@ -466,6 +466,11 @@ const std::vector<BadCase>& badCases() {
        args("bench {dir}/seq --out {dir}/out --keyframe-every 0")},
       {"command_line", "eval_mesh_missing", E::kCliError, "none.ply: cannot open the file",
        then(write("p.ply", kMeshPly), "eval --map {dir}/p.ply --mesh {dir}/none.ply")},
+      // Thread counts, camera files and --refine: none is taken silently or printed on by a library.
+      {"command_line", "threads_65537", E::kCliUsage, "--threads: Value 65537 not in range 0 to 256",
+       args("map {dir}/seq --out {dir}/out --threads 65537")},
+      {"command_line", "threads_negative", E::kCliUsage, "--threads: Value -1 not in range 0 to 256",
+       args("map {dir}/seq --out {dir}/out --threads -1")},
   };
   return all;
 }

@@ -1,8 +1,11 @@
 // vdmap map / vdmap bench end to end on a tiny generated sequence.
+#include <algorithm>
 #include <fstream>
 #include <sstream>
 #include <regex>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -34,6 +37,28 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
                           "sigma_e_prime", "t_g_s", "t_g_us_per_ellipsoid", "global_stage_ms", "octomap"})
     EXPECT_TRUE(stats.contains(key)) << key;
   EXPECT_EQ(stats["keyframes"], 2);
+}
+
+// More threads than the machine has: the same map, and nothing on stderr (TBB warned that it
+// ignores the extra workers); 256 is the most --threads takes (65537 crashed in TBB's allocator).
+TEST(MapCli, ThreadsBeyondTheCoresPrintNothingAndAreBounded) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const std::string seq = "map '" + (tmp / "seq").string() + "' --out '";
+  const RunResult one = runVdmap(seq + (tmp / "one").string() + "' --threads 1");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const unsigned more = std::max(2u, std::thread::hardware_concurrency() + 1);
+  for (const unsigned threads : {more, 256u}) {
+    const fs::path out = tmp / ("t" + std::to_string(threads));
+    const RunResult r = runVdmap(seq + out.string() + "' --threads " + std::to_string(threads));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "") << threads << " threads";
+    EXPECT_EQ(readFile(out / "global_ellipsoids.ply"), readFile(tmp / "one" / "global_ellipsoids.ply"));
+  }
+  const RunResult too_many = runVdmap(seq + (tmp / "x").string() + "' --threads 65537");
+  EXPECT_EQ(too_many.exit_code, 105) << too_many.err;
+  EXPECT_NE(too_many.err.find("--threads: Value 65537 not in range 0 to 256"), std::string::npos) << too_many.err;
+  EXPECT_FALSE(fs::exists(tmp / "x"));
 }
 
 TEST(MapCli, BadCellSizeFailsWithoutOutput) {
