@@ -91,6 +91,21 @@ TEST(BenchCli, JsonHasTheContractKeys) {
   EXPECT_TRUE(fs::exists(tmp / "bench.md"));
 }
 
+// The text report keeps its two keyframe rules apart: the update row's --keyframe-every and the
+// pipeline's keyframes, which the global map is built from (it said "keyframe every 1" and then
+// "global map 1 keyframe" for 3 frames).
+TEST(BenchCli, TextSaysWhoseKeyframesItCounts) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --keyframe-every 1 --out '" +
+                               tmp.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("keyframes       the update row starts one every frame; the pipeline made "), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("global map      of the pipeline's "), std::string::npos) << r.out;
+  EXPECT_NE(readFile(tmp / "bench.md").find("Global map of the pipeline's "), std::string::npos);
+}
+
 // The long run: a row per frame, a global map every --global-every frames and after the last,
 // and the summary's windows (frames [N/6, N/3) and the last N/6).
 TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
