@@ -40,6 +40,7 @@ void runLongRun(BenchArgs args) {
   MapperParams mapper;
   mapper.local_map = args.local_map;
   mapper.poses = args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+  checkRefinementApplies(args.sequence, mapper.poses);
   args.long_options.json = args.json;
   runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options, refinement(args.sequence));
 }
@@ -87,6 +88,7 @@ void measure(const BenchInput& in, const std::filesystem::path& out_dir, BenchFi
 
 void runBench(BenchArgs args) {
   if (args.long_run) return runLongRun(std::move(args));
+  checkRefinementApplies(args.sequence, args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth);
   // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
   // it is shorter (a range typed past the end is an error, as everywhere).
   const bool default_range = args.sequence.frames.empty();

@@ -206,6 +206,7 @@ void runMap(MapArgs args) {
     checkContinues(seq, *loaded, args.load);
   else
     args.params.mapper.poses = poseSource(args.sequence, seq);
+  checkRefinementApplies(args.sequence, args.params.mapper.poses);
   Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
                          : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();

@@ -274,6 +274,7 @@ void runRender(RenderArgs args) {
     const TumSequence seq = openSequence(args.sequence);
     MapperParams params;
     params.poses = poseSource(args.sequence, seq);
+    checkRefinementApplies(args.sequence, params.poses);
     mapper = std::make_unique<Mapper>(seq.camera(), params);
     mapSequence(seq, *mapper, {}, refinement(args.sequence));
     addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},

@@ -89,6 +89,7 @@ struct SequenceArgs {
   std::string frames;
   std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
   std::string refine = "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
+  bool refine_given = false;     ///< --refine was on the command line
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
 /// parsing; whether the sequence has those frames when it is opened).
@@ -99,6 +100,9 @@ void addPoseSourceArg(CLI::App& verb, SequenceArgs& args);
 void addRefineArg(CLI::App& verb, SequenceArgs& args);
 /// The refinement --refine names (nullopt: none).
 std::optional<MapRefinementParams> refinement(const SequenceArgs& args);
+/// Refuses a --refine joint|pairwise given for a run of ground-truth poses, which it would not
+/// change (refinement corrects tracked poses, docs/method.md 10): throws std::invalid_argument.
+void checkRefinementApplies(const SequenceArgs& args, PoseSource poses);
 /// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
 /// The camera preset names, comma-separated, for --camera help texts.

@@ -33,6 +33,7 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
                   "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see "
                   "docs/method.md 10")
       ->check(CLI::IsMember({"joint", "pairwise", "none"}))
+      ->each([&args](const std::string&) { args.refine_given = true; })
       ->capture_default_str();
   verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
 }
@@ -42,6 +43,13 @@ std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
   MapRefinementParams params;
   params.method = args.refine == "pairwise" ? MapRefinementMethod::kPairwise : MapRefinementMethod::kJoint;
   return params;
+}
+
+void checkRefinementApplies(const SequenceArgs& args, PoseSource poses) {
+  if (poses == PoseSource::kTrack || !args.refine_given || args.refine == "none") return;
+  throw std::invalid_argument("--refine " + args.refine +
+                              " refines tracked poses (--poses track); this run maps the ground-truth poses of "
+                              "groundtruth.txt, which it would leave as they are");
 }
 
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {

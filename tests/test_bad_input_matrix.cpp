@@ -471,6 +471,15 @@ const std::vector<BadCase>& badCases() {
        args("map {dir}/seq --out {dir}/out --threads 65537")},
       {"command_line", "threads_negative", E::kCliUsage, "--threads: Value -1 not in range 0 to 256",
        args("map {dir}/seq --out {dir}/out --threads -1")},
+      {"command_line", "refine_with_ground_truth_poses", E::kCliError,
+       "--refine pairwise refines tracked poses (--poses track); this run maps the ground-truth poses",
+       args("map {dir}/seq --out {dir}/out --refine pairwise")},
+      {"command_line", "refine_with_explicit_gt_poses", E::kCliError, "--refine joint refines tracked poses",
+       args("map {dir}/seq --out {dir}/out --poses gt --refine joint")},
+      {"command_line", "render_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
+       args("render {dir}/seq --out {dir}/o.png --refine pairwise")},
+      {"command_line", "bench_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
+       args("bench {dir}/seq --out {dir}/out --refine pairwise")},
   };
   return all;
 }
