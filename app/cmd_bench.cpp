@@ -42,7 +42,9 @@ void runLongRun(BenchArgs args) {
   mapper.poses = args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
   checkRefinementApplies(args.sequence, mapper.poses);
   args.long_options.json = args.json;
-  runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options, refinement(args.sequence));
+  const TumSequence seq = openSequence(args.sequence);
+  noteCameraGuess(seq, "bench");
+  runLongBench(seq, mapper, {}, out_dir, args.long_options, refinement(args.sequence));
 }
 
 // Decoded on this thread, each frame timed (into `decode_ms`): decoding is the prefetch thread's
@@ -99,6 +101,7 @@ void runBench(BenchArgs args) {
   std::optional<ColoredTriangleMesh> mesh;
   if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
   const TumSequence seq = openSequence(args.sequence, default_range);
+  noteCameraGuess(seq, "bench");
   const PinholeCamera& cam = seq.camera();
   for (const int s : args.accuracy_cell_sizes)
     if (s > std::min(cam.width, cam.height))

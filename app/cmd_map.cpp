@@ -202,6 +202,7 @@ void runMap(MapArgs args) {
   std::optional<Session> loaded;
   if (!args.load.empty()) loaded.emplace(loadSessionToContinue(&args));
   const TumSequence seq = openSequence(args.sequence);
+  noteCameraGuess(seq, "map");
   if (loaded)
     checkContinues(seq, *loaded, args.load);
   else

@@ -272,6 +272,7 @@ void runRender(RenderArgs args) {
   SceneSource source;
   if (from_sequence) {
     const TumSequence seq = openSequence(args.sequence);
+    noteCameraGuess(seq, "render");
     MapperParams params;
     params.poses = poseSource(args.sequence, seq);
     checkRefinementApplies(args.sequence, params.poses);

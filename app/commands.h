@@ -113,5 +113,8 @@ std::string cameraPresetList();
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
 /// instead of refused.
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false);
+/// When no --camera or camera file chose the sequence's camera, says on stderr, in one line,
+/// which preset was guessed and why ("vdmap VERB: note: ..."): a wrong guess maps without error.
+void noteCameraGuess(const TumSequence& sequence, const std::string& verb);
 
 }  // namespace vdmap::app

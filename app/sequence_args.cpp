@@ -1,3 +1,5 @@
+#include <cstdio>
+
 #include "app/commands.h"
 #include "mapping/io/camera_config.h"
 
@@ -55,6 +57,16 @@ void checkRefinementApplies(const SequenceArgs& args, PoseSource poses) {
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
   if (args.poses.empty()) return sequence.hasGroundTruth() ? PoseSource::kGroundTruth : PoseSource::kTrack;
   return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+}
+
+void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
+  if (!sequence.cameraGuessed()) return;
+  const PinholeCamera& c = sequence.camera();
+  std::fprintf(stderr,
+               "vdmap %s: note: %s: no camera given, guessed %s: fx %g fy %g cx %g cy %g, depth scale %g; "
+               "--camera PRESET or a camera.yaml in the folder sets it\n",
+               verb.c_str(), sequence.folder().string().c_str(), sequence.cameraSource().c_str(), c.fx, c.fy, c.cx,
+               c.cy, c.depth_scale);
 }
 
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end) {

@@ -313,6 +313,14 @@ const std::vector<BadCase>& badCases() {
       {"camera_yaml", "empty", E::kInputError, "camera.yaml", write("camera.yaml", "")},
       {"camera_yaml", "fractional_width", E::kInputError, "width",
        write("camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640.5\nheight: 480\n")},
+      {"camera_yaml", "unknown_key", E::kInputError, "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx,",
+       write("camera.yaml", "preset: tum-fr1\nfocal: 500\n")},
+      {"camera_yaml", "colour_unknown_key", E::kInputError, "camera.yaml:1: unknown key 'k1' in 'colour' (valid keys: fx,",
+       write("camera.yaml", "colour: {fx: 525, fy: 525, cx: 320, cy: 240, k1: 0.1}\npreset: 7scenes\n")},
+      {"camera_yaml", "principal_point_outside", E::kInputError, "principal point (cx 5000, cy 240) must lie within the 640x480 image",
+       write("camera.yaml", "preset: tum-fr1\ncx: 5000\ncy: 240\n")},
+      {"camera_json", "unknown_key_in_camera_block", E::kInputError, "unknown key 'focal' in 'camera'",
+       write("camera.json", "{\"camera\": {\"preset\": \"replica\", \"focal\": 500}, \"mapping\": {\"any\": 1}}")},
       {"camera_json", "syntax_error", E::kInputError, "not valid YAML/JSON", write("camera.json", "{\"fx\": [1, 2")},
       // PLY meshes (vdmap synth --mesh, vdmap eval) and ellipsoid maps (vdmap render --map).
       {"ply_mesh", "missing_file", E::kInputError, "cannot open the file", removeFile("m.ply")},
@@ -480,6 +488,13 @@ const std::vector<BadCase>& badCases() {
        args("render {dir}/seq --out {dir}/o.png --refine pairwise")},
       {"command_line", "bench_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
        args("bench {dir}/seq --out {dir}/out --refine pairwise")},
+      {"sequence", "camera_file_unknown_key", E::kInputError,
+       "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
+       "colour)",
+       write("seq/camera.yaml", "preset: tum-fr1\nfocal: 500\n")},
+      {"sequence", "camera_file_principal_point_outside", E::kInputError,
+       "camera.yaml: camera: principal point (cx 5000, cy 23.5) must lie within the 64x48 image",
+       write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 5000\ncy: 23.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
   };
   return all;
 }

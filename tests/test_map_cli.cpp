@@ -61,6 +61,35 @@ TEST(MapCli, ThreadsBeyondTheCoresPrintNothingAndAreBounded) {
   EXPECT_FALSE(fs::exists(tmp / "x"));
 }
 
+// A camera guessed from the folder (its name, or the default) is said in one line on stderr: an
+// ICL-NUIM copy in a folder named b0 mapped with tum-default's focal length without a word.
+TEST(MapCli, SaysWhichCameraItGuessedAndWhy) {
+  TempDir tmp;
+  struct Case {
+    const char* folder;
+    std::string note;  // empty: the camera was given, nothing to say
+    const char* option = "";
+  };
+  const std::vector<Case> cases = {
+      {"b0", "no camera given, guessed preset tum-default (no camera file or hint in the folder): fx 525 fy 525"},
+      {"icl_b1", "no camera given, guessed preset icl-nuim (folder name 'icl_b1'): fx 481.2 fy 480"},
+      {"b2", "", " --camera tum-default"},
+  };
+  for (const Case& c : cases) {
+    writeTinySequence(tmp / c.folder, 2, 640, 480);
+    fs::remove(tmp / c.folder / "camera.yaml");
+    const RunResult r = runVdmap("map '" + (tmp / c.folder).string() + "' --out '" + (tmp / c.folder).string() +
+                                 "_out'" + c.option);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    if (c.note.empty()) {
+      EXPECT_EQ(r.err, "") << c.folder;
+      continue;
+    }
+    EXPECT_EQ(r.err.rfind("vdmap map: note: " + (tmp / c.folder).string() + ": " + c.note, 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  }
+}
+
 TEST(MapCli, BadCellSizeFailsWithoutOutput) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 2);

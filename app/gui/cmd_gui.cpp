@@ -116,7 +116,7 @@ void runGui(GuiArgs args, bool builtin) {
   // `gui /nope` named the display); a damaged session still opens the window with its error.
   if (!builtin && !args.map.empty() && !isSessionFile(args.map))
     throw InputError(args.map, fs::exists(args.map) ? "not a vdmap session file" : "no such session file");
-  if (!builtin && args.map.empty()) openSequence(args.sequence);
+  if (!builtin && args.map.empty()) noteCameraGuess(openSequence(args.sequence), "gui");
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
   gui::Workbench bench(settings, warning);

@@ -114,6 +114,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     CameraChoice choice = chooseCamera(folder, options.camera_preset);
     seq.camera_ = choice.camera;
     seq.camera_source_ = choice.source;
+    seq.camera_guessed_ = choice.guessed;
     seq.colour_ = choice.colour;
     if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
   } catch (const std::invalid_argument& e) {
