@@ -237,9 +237,9 @@ TEST(BenchCli, CreatesItsOutFolderAndSkippedPeersAreNull) {
   EXPECT_EQ(j["frame_range"], "0:3") << "the default 0:30, cut at the end of a shorter sequence";
   expectTidyNumbers(readFile(out / "bench.json"), 6);
   const std::string md = readFile(out / "bench.md");
-  EXPECT_NE(md.find("frames 0:3,"), std::string::npos) << md;
-  EXPECT_NE(md.find("Global map: "), std::string::npos) << md;
-  EXPECT_EQ(md.find("Global map: 1 keyframes"), std::string::npos) << md;
+  EXPECT_NE(md.find("frames 0:3;"), std::string::npos) << md;
+  EXPECT_NE(md.find("Global map of the pipeline's "), std::string::npos) << md;
+  EXPECT_EQ(md.find("1 keyframes"), std::string::npos) << md;
 }
 
 }  // namespace
