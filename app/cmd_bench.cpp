@@ -12,6 +12,7 @@
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
 #include <algorithm>
 #include <filesystem>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -39,8 +40,11 @@ void runLongRun(BenchArgs args) {
   MapperParams mapper;
   mapper.local_map = args.local_map;
   mapper.poses = args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+  checkRefinementApplies(args.sequence, mapper.poses);
   args.long_options.json = args.json;
-  runLongBench(openSequence(args.sequence), mapper, {}, out_dir, args.long_options, refinement(args.sequence));
+  const TumSequence seq = openSequence(args.sequence);
+  noteCameraGuess(seq, "bench");
+  runLongBench(seq, mapper, {}, out_dir, args.long_options, refinement(args.sequence));
 }
 
 // Decoded on this thread, each frame timed (into `decode_ms`): decoding is the prefetch thread's
@@ -86,20 +90,23 @@ void measure(const BenchInput& in, const std::filesystem::path& out_dir, BenchFi
 
 void runBench(BenchArgs args) {
   if (args.long_run) return runLongRun(std::move(args));
+  checkRefinementApplies(args.sequence, args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth);
   // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
   // it is shorter (a range typed past the end is an error, as everywhere).
   const bool default_range = args.sequence.frames.empty();
   if (default_range) args.sequence.frames = "0:30";
-  if (args.keyframe_every < 1) throw std::invalid_argument("--keyframe-every must be at least 1");
   // Like map --out: created if missing (checked now, before any work).
   const std::filesystem::path out_dir = args.out;
   checkExportFolder(out_dir);
   std::optional<ColoredTriangleMesh> mesh;
   if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
   const TumSequence seq = openSequence(args.sequence, default_range);
+  noteCameraGuess(seq, "bench");
   const PinholeCamera& cam = seq.camera();
   for (const int s : args.accuracy_cell_sizes)
-    if (s < 1 || s > std::min(cam.width, cam.height)) throw std::invalid_argument("--accuracy-cell-sizes: bad cell size " + std::to_string(s));
+    if (s > std::min(cam.width, cam.height))
+      throw std::invalid_argument("--accuracy-cell-sizes: cell size " + std::to_string(s) + " px is larger than the " +
+                                  std::to_string(cam.width) + "x" + std::to_string(cam.height) + " image");
 
   BenchFigures figures;
   figures.frame_range = frameRangeText(seq.frameRange());
@@ -120,14 +127,21 @@ void addBenchCommand(CLI::App& app) {
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
       "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
-  verb->add_option("--keyframe-every", args->keyframe_every, "every N-th frame starts a keyframe (update timing)")
+  verb->add_option("--keyframe-every", args->keyframe_every,
+                   "the update row starts a keyframe every N frames (the pipeline row decides its own keyframes)")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
       ->capture_default_str();
-  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")->capture_default_str();
-  verb->add_option("--mesh", args->mesh, "reference mesh PLY (world frame of the poses): adds every method's accuracy")
-      ->check(CLI::ExistingFile);
+  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->capture_default_str();
+  // Whether the mesh exists is a question about a file: read (and refused) before any work.
+  auto* mesh = verb->add_option("--mesh", args->mesh,
+                                "reference mesh PLY (world frame of the poses): adds every method's accuracy");
   verb->add_option("--accuracy-cell-sizes", args->accuracy_cell_sizes,
                    "with --mesh, also score vdmap at these cell sizes, px (e.g. 3,5,9,15)")
-      ->delimiter(',');
+      ->delimiter(',')
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->needs(mesh);
   verb->add_option("--samples", args->completion_samples, "mesh samples for completion")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
@@ -142,12 +156,15 @@ void addBenchCommand(CLI::App& app) {
       ->capture_default_str()
       ->check(CLI::IsMember({"gt", "track"}));
   addRefineArg(*verb, args->sequence);
-  verb->add_flag("--long", args->long_run,
-                 "the long run instead: every frame (or --frames) mapped as `vdmap map` does, the mapping "
-                 "thread's CPU time per frame, resident memory, live heap, keyframes and the global map's size into "
-                 "long.csv and long.json; with --poses track the poses are tracked (and refined as --refine says) "
-                 "and long.json adds frames lost, loop closures and the ATE");
+  auto* long_run = verb->add_flag(
+      "--long", args->long_run,
+      "the long run instead: every frame (or --frames) mapped as `vdmap map` does, the mapping thread's CPU time per "
+      "frame, resident memory, live heap, keyframes and the global map's size into long.csv and long.json; with "
+      "--poses track the poses are tracked (and refined as --refine says) and long.json adds frames lost, loop "
+      "closures and the ATE");
   verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->needs(long_run)
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });

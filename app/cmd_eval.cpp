@@ -39,7 +39,9 @@ void runTrajectoryEval(const EvalArgs& args) {
 
 void runEval(const EvalArgs& args) {
   if (!args.trajectory.empty()) return runTrajectoryEval(args);
-  if (args.map.empty()) throw std::invalid_argument("nothing to evaluate: give --map and --mesh, or --trajectory and --groundtruth");
+  if (args.map.empty())
+    throw CLI::RequiredError("nothing to evaluate: give --map and --mesh, or --trajectory and --groundtruth",
+                             CLI::ExitCodes::RequiredError);
   namespace fs = std::filesystem;
   fs::path map = args.map;
   // A `vdmap map` output folder is scored by its global map's ellipsoid means.
@@ -70,8 +72,8 @@ void addEvalCommand(CLI::App& app) {
   auto args = std::make_shared<EvalArgs>();
   auto* map = verb->add_option("--map", args->map,
                                "map to score: a PLY with vertex x y z (ellipsoids, points) or a `vdmap map` output folder");
-  auto* mesh = verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)")
-                   ->check(CLI::ExistingFile);
+  // A missing mesh is a file's error (exit 1), read before any work.
+  auto* mesh = verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)");
   verb->add_option("--samples", args->accuracy.completion_samples, "mesh samples for completion")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
@@ -86,11 +88,14 @@ void addEvalCommand(CLI::App& app) {
   TrajectoryErrorParams& te = args->trajectory_error;
   verb->add_option("--max-difference", te.max_difference_s,
                    "seconds: poses match when their timestamps differ by less (associate.py)")
+      ->check(positiveFiniteCheck())
       ->capture_default_str();
   verb->add_option("--offset", te.offset_s, "seconds added to the trajectory's timestamps before matching")
+      ->check(finiteCheck())
       ->capture_default_str();
   verb->add_flag("--align-scale", te.align_scale, "align with a similarity (fit a scale, e.g. monocular) instead of rigidly");
   verb->add_option("--delta", te.rpe_delta_s, "seconds between the poses of the per-second relative pose error")
+      ->check(positiveFiniteCheck())
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runEval(*args); });

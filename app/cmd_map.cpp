@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -19,6 +20,7 @@
 #include "app/release_memory.h"
 #include "app/timing.h"
 #include "mapping/core/error.h"
+#include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/global_map/global_map.h"
@@ -35,17 +37,33 @@ struct MapArgs {
   std::string load;
   bool json = false;
   ParameterValues params;  // every parameter of the table (mapping/pipeline/parameters.h)
-  double octomap_resolution_m = 0.0;
-  bool octomap_given = false;
+  double octomap_resolution_m = 0.0;  // 0: no OctoMap (a given value is checked by octomapResolutionCheck)
 };
+
+// OctoMap carves free space along each ray from the camera to a surface it measured. vdmap maps
+// RGB-D data, depth 0.1-8 m (--min-depth, --max-depth): with voxels coarser than a metre the
+// camera and the surfaces it sees share voxels, nothing is carved and a room is a few blocks.
+// Published OctoMaps of RGB-D data use 0.01-0.2 m. The finest resolution is bounded by the
+// map's extent (checkOctomapResolution), known only once it is mapped.
+constexpr double kMaxOctomapResolutionM = 1.0;
+
+CLI::Validator octomapResolutionCheck() {
+  return parsedBy(
+      [](const std::string& text) {
+        char* end = nullptr;
+        const double v = std::strtod(text.c_str(), &end);
+        if (text.empty() || *end != '\0')
+          throw std::invalid_argument("expected a resolution in metres, got '" + text + "'");
+        if (!(v > 0.0 && v <= kMaxOctomapResolutionM))
+          throw std::invalid_argument("the resolution must be > 0 and at most 1 m (OctoMap needs voxels finer than "
+                                      "the camera's depth range to carve free space), got " + text);
+      },
+      "RES in (0, 1]");
+}
 
 // Fails before any work on options that cannot work together or outputs that cannot be written.
 void checkMapArgs(const MapArgs& args) {
   validate(args.params);  // each value was checked when parsed; this checks them together (depth range)
-  // 0 is refused like -1 (it used to mean "no OctoMap" silently); the map's extent is checked
-  // against OctoMap's keys once the map exists (exportMap).
-  if (args.octomap_given && !(args.octomap_resolution_m > 0.0 && std::isfinite(args.octomap_resolution_m)))
-    throw std::invalid_argument("--octomap must be > 0 m");
   // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
   checkExportFolder(args.out);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
@@ -198,12 +216,14 @@ void runMap(MapArgs args) {
     continues = SequenceContinuation{args.load, loaded->info.sequence, loaded->info.state.last_frame_index,
                                      loaded->info.state.last_timestamp};
   const TumSequence seq = openSequence(args.sequence, false, continues);
+  noteCameraGuess(seq, "map");
   if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
     std::cerr << "vdmap map: warning: " << dropped << "\n";
   if (loaded)
     checkContinues(seq, *loaded, args.load);
   else
     args.params.mapper.poses = poseSource(args.sequence, seq);
+  checkRefinementApplies(args.sequence, args.params.mapper.poses);
   Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
                          : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();
@@ -252,17 +272,18 @@ void addMapCommand(CLI::App& app) {
   verb->add_option("--load", args->load,
                    "continue a saved session (.vdmap) on SEQ where it stopped: its keyframes, graph, parameters and "
                    "state; --frames defaults to the frames after its last one (save the result with --save)");
-  CLI::Option* octomap = verb->add_option("--octomap", args->octomap_resolution_m,
-                   "also write global.bt, an OctoMap of this resolution (m, > 0) sampled from the global map; "
-                   "the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)");
+  verb->add_option("--octomap", args->octomap_resolution_m,
+                   "also write global.bt, an OctoMap of this resolution (m, > 0 and at most 1) sampled from the "
+                   "global map; the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)")
+      ->check(octomapResolutionCheck());
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   addParameterOptions(*verb, args->params);
-  verb->add_option("--threads", args->params.global.threads, "global-map threads (0: all); the map does not depend on it")
+  verb->add_option("--threads", args->params.global.threads,
+                   "global-map threads, 0.." + std::to_string(kMaxThreads) +
+                       " (0: all; more than the machine has run as many as it has); the map does not depend on it")
+      ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();
-  verb->callback([args, octomap] {
-    args->octomap_given = octomap->count() > 0;
-    runMap(*args);
-  });
+  verb->callback([args] { runMap(*args); });
 }
 
 }  // namespace vdmap::app

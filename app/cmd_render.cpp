@@ -5,14 +5,18 @@
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
+#include <limits>
 #include <random>
 #include <regex>
 
 #include <glm/gtc/matrix_transform.hpp>
+#include <opencv2/imgcodecs.hpp>
+#include <opencv2/imgproc.hpp>
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
 #include "app/timing.h"
+#include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/core/error.h"
@@ -44,11 +48,34 @@ std::pair<int, int> parseSize(const std::string& text) {
   std::smatch m;
   static const std::regex pattern(R"((\d{1,9})x(\d{1,9}))");
   if (!std::regex_match(text, m, pattern))
-    throw std::invalid_argument("--size '" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
+    throw std::invalid_argument("'" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
   const int w = std::stoi(m[1]), h = std::stoi(m[2]);
   if (w < 1 || h < 1 || w > render::kMaxImageSide || h > render::kMaxImageSide)
-    throw std::invalid_argument("--size '" + text + "': each side must be in 1.." + std::to_string(render::kMaxImageSide));
+    throw std::invalid_argument("'" + text + "': each side must be in 1.." + std::to_string(render::kMaxImageSide));
   return {w, h};
+}
+
+// The image formats --out may name, by extension: PNG (lossless, what the goldens are) and JPEG.
+enum class ImageFormat { kPng, kJpeg };
+
+ImageFormat imageFormat(const std::filesystem::path& file) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(), [](unsigned char c) { return std::tolower(c); });
+  if (ext == ".png") return ImageFormat::kPng;
+  if (ext == ".jpg" || ext == ".jpeg") return ImageFormat::kJpeg;
+  throw std::invalid_argument("'" + file.string() +
+                              "': the image format follows the extension: .png, or .jpg / .jpeg for JPEG");
+}
+
+// Writes the image in the format its name says (atomically, as writePng does).
+void writeImage(const std::filesystem::path& file, const cv::Mat& rgb) {
+  if (imageFormat(file) == ImageFormat::kPng) return render::writePng(file, rgb);
+  cv::Mat bgr;
+  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
+  std::vector<unsigned char> jpeg;
+  if (!cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}))
+    throw std::runtime_error(file.string() + ": cannot encode the JPEG");
+  writeFileAtomically(file, std::string_view(reinterpret_cast<const char*>(jpeg.data()), jpeg.size()));
 }
 
 void runBench(const RenderArgs& args) {
@@ -90,7 +117,7 @@ void runBench(const RenderArgs& args) {
   std::printf("upload       %.1f ms (eigen-decomposition + buffer upload)\n", upload_ms);
   std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", median(times), times.size(),
               *std::min_element(times.begin(), times.end()));
-  if (!args.out.empty()) render::writePng(args.out, fb.readRgb());
+  if (!args.out.empty()) writeImage(args.out, fb.readRgb());
 }
 
 // --view: global, keyframe:K or container:K.
@@ -103,7 +130,7 @@ ViewChoice parseView(const std::string& text) {
   std::smatch m;
   static const std::regex pattern(R"((global)|(keyframe|container):(\d{1,9}))");
   if (!std::regex_match(text, m, pattern))
-    throw std::invalid_argument("--view '" + text + "': expected global, keyframe:K or container:K");
+    throw std::invalid_argument("'" + text + "': expected global, keyframe:K or container:K");
   if (m[1].matched) return {};
   return {m[2] == "keyframe" ? ViewChoice::Kind::kKeyframe : ViewChoice::Kind::kContainer, std::stoi(m[3])};
 }
@@ -207,27 +234,23 @@ void addGraph(RenderScene* scene, const KeyframeGraph& graph, const PinholeCamer
 
 void runRender(RenderArgs args) {
   namespace fs = std::filesystem;
-  if (!(args.sigma > 0.f && std::isfinite(args.sigma))) throw std::invalid_argument("--sigma must be a positive number");
   if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
   if (args.out.empty()) throw CLI::RequiredError("--out");
+  if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
+    throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
+                             "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
   checkOutputFile(args.out, "--out");
-  // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map.
-  if (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder)) {
-    if (!args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
-    std::swap(args.map, args.sequence.folder);
-  }
+  // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map (SEQ and
+  // --map exclude each other).
+  if (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder)) std::swap(args.map, args.sequence.folder);
   const bool from_sequence = !args.sequence.folder.empty();
   const bool from_session = !args.map.empty() && isSessionPath(args.map);
   const ViewChoice choice = parseView(args.view);
-  if (from_sequence && !args.map.empty()) throw std::invalid_argument("give SEQ or --map FILE, not both");
   if (!from_sequence && !from_session && choice.kind != ViewChoice::Kind::kGlobal)
     throw std::invalid_argument("--view " + args.view +
                                 " needs keyframes: give a sequence (SEQ) or a session (.vdmap); a --map PLY or map "
                                 "folder has none");
-  if (!from_sequence && args.map.empty() && args.mesh.empty())
-    throw std::invalid_argument("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
-                                "--mesh PLY, or --map and --mesh");
   const std::pair<int, int> size = args.size.empty() ? std::pair{0, 0} : parseSize(args.size);  // 0: default
   const render::ColorMode color = render::parseColorMode(args.color);
 
@@ -249,8 +272,10 @@ void runRender(RenderArgs args) {
   SceneSource source;
   if (from_sequence) {
     const TumSequence seq = openSequence(args.sequence);
+    noteCameraGuess(seq, "render");
     MapperParams params;
     params.poses = poseSource(args.sequence, seq);
+    checkRefinementApplies(args.sequence, params.poses);
     mapper = std::make_unique<Mapper>(seq.camera(), params);
     mapSequence(seq, *mapper, {}, refinement(args.sequence));
     addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
@@ -272,7 +297,7 @@ void runRender(RenderArgs args) {
                          ? std::pair{1280, 720}
                          : std::pair{scale * scene.camera.width, scale * scene.camera.height};
   }
-  render::writePng(args.out, draw(context->gl(), scene, choice, w, h, args, color));
+  writeImage(args.out, draw(context->gl(), scene, choice, w, h, args, color));
   const std::size_t drawn =
       choice.kind == ViewChoice::Kind::kContainer ? scene.container_ellipsoids.size() : scene.ellipsoids.size();
   std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), w, h, args.view.c_str(),
@@ -294,27 +319,36 @@ void addRenderCommand(CLI::App& app) {
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
   addRefineArg(*verb, args->sequence);
-  verb->get_option("SEQ")->required(false)->description(
+  CLI::Option* seq = verb->get_option("SEQ")->required(false)->description(
       "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
   verb->add_option("--map", args->map,
                    "instead of SEQ: a saved session (.vdmap: every view, with its keyframes and graph), or an "
-                   "ellipsoid PLY (docs/method.md 11) or `vdmap map` folder (its global_ellipsoids.ply; global view only)");
+                   "ellipsoid PLY (docs/method.md 11) or `vdmap map` folder (its global_ellipsoids.ply; global view only)")
+      ->excludes(seq);
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
   verb->add_option("--view", args->view,
                    "global (map, frustums, covisibility edges coloured by weight) | keyframe:K (the map from "
                    "keyframe K with its intrinsics) | container:K (K's image with its ellipses)")
+      ->check(parsedBy(parseView, "VIEW"))
       ->capture_default_str();
-  verb->add_option("--out", args->out, "PNG to write");
+  verb->add_option("--out", args->out, "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says")
+      ->check(parsedBy(imageFormat, "FILE.png|.jpg"));
   verb->add_option("--size", args->size,
                    "image size WIDTHxHEIGHT (default: 1280x720 global, the camera's for keyframe:K, the "
-                   "container's 2W x 2H for container:K)");
+                   "container's 2W x 2H for container:K)")
+      ->check(parsedBy(parseSize, "WxH"));
   std::string color_modes;  // "rgb | keyframe | ..."
   for (const char* name : render::kColorModeNames) color_modes += (color_modes.empty() ? "" : " | ") + std::string(name);
-  verb->add_option("--color", args->color, color_modes)->capture_default_str();
+  verb->add_option("--color", args->color, color_modes)
+      ->check(parsedBy(render::parseColorMode, "MODE"))
+      ->capture_default_str();
   verb->add_flag("--grid", args->grid, "container view: draw the cell grid");
-  verb->add_option("--sigma", args->sigma, "ellipsoid surface at this many standard deviations")->capture_default_str();
+  verb->add_option("--sigma", args->sigma, "ellipsoid surface at this many standard deviations (> 0)")
+      ->check(positiveFiniteCheck())
+      ->capture_default_str();
   verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,
-                   "time N random instanced ellipsoids at --size instead of rendering a map");
+                   "time N random instanced ellipsoids at --size instead of rendering a map")
+      ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   verb->add_option("--sphere-level", args->sphere_subdivisions, "icosphere subdivisions of one ellipsoid (0..3)")
       ->check(CLI::Range(0, 3))->capture_default_str();
   verb->add_option("--points-below", args->point_below_px,

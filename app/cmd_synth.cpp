@@ -15,10 +15,15 @@ namespace {
 struct SynthArgs {
   std::string mesh, trajectory, camera, noise = "nguyen2012", frames, out;
   bool builtin = false;
-  int builtin_frames = 0;
-  int builtin_laps = 1;
+  int builtin_frames = BuiltinSceneParams{}.frames;
+  int builtin_laps = BuiltinSceneParams{}.laps;
   std::uint64_t seed = DepthNoiseParams{}.seed;
 };
+
+// The built-in walk's bounds: a lap needs 2 poses (its first and last are neighbours); a million
+// poses a lap (9 hours at 30 fps) and 1000 laps keep every pose's index within an int.
+constexpr int kMaxBuiltinFrames = 1'000'000;
+constexpr int kMaxBuiltinLaps = 1000;
 
 void runSynth(const SynthArgs& args) {
   render::SynthOptions options;
@@ -32,10 +37,8 @@ void runSynth(const SynthArgs& args) {
   ColoredTriangleMesh mesh;
   std::vector<StampedPose> trajectory;
   if (args.builtin) {
-    if (!args.mesh.empty() || !args.trajectory.empty())
-      throw std::invalid_argument("--builtin replaces --mesh and --trajectory; give one or the other");
     BuiltinSceneParams params;
-    if (args.builtin_frames > 0) params.frames = args.builtin_frames;
+    params.frames = args.builtin_frames;
     params.laps = args.builtin_laps;
     BuiltinScene scene = makeBuiltinScene(params);
     mesh = std::move(scene.mesh);
@@ -44,7 +47,8 @@ void runSynth(const SynthArgs& args) {
     options.write_mesh = true;
   } else {
     if (args.mesh.empty() || args.trajectory.empty() || args.camera.empty())
-      throw std::invalid_argument("give --mesh PLY --trajectory TUM_TXT --camera PRESET (or --builtin)");
+      throw CLI::RequiredError("give --mesh PLY --trajectory TUM_TXT --camera PRESET (or --builtin)",
+                               CLI::ExitCodes::RequiredError);
     options.camera = cameraPreset(args.camera);
     mesh = readPlyMesh(args.mesh);
     trajectory = readTumTrajectory(args.trajectory);
@@ -72,19 +76,41 @@ void runSynth(const SynthArgs& args) {
 void addSynthCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("synth", "Render a coloured mesh along a trajectory into a TUM RGB-D sequence");
   auto args = std::make_shared<SynthArgs>();
-  verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours");
-  verb->add_option("--trajectory", args->trajectory, "TUM trajectory (timestamp tx ty tz qx qy qz qw, T_W_C)");
-  verb->add_option("--camera", args->camera, "camera preset: " + cameraPresetList());
-  verb->add_option("--noise", args->noise, "depth sensor model: none | nguyen2012")->capture_default_str();
+  CLI::Option* mesh = verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours");
+  CLI::Option* trajectory =
+      verb->add_option("--trajectory", args->trajectory, "TUM trajectory (timestamp tx ty tz qx qy qz qw, T_W_C)");
+  verb->add_option("--camera", args->camera, "camera preset: " + cameraPresetList())->check(cameraPresetCheck());
+  verb->add_option("--noise", args->noise, "depth sensor model: none | nguyen2012")
+      ->check(CLI::IsMember({"none", "nguyen2012"}))
+      ->capture_default_str();
   verb->add_option("--frames", args->frames,
                    "poses A:B of the trajectory (B exclusive; A: or :B; a plain N means 0:N); a range past the end "
-                   "is an error");
-  verb->add_option("--seed", args->seed, "seed of the depth noise (another seed: another draw of the same noise)")
+                   "is an error")
+      ->check(frameRangeCheck());
+  // CLI11 would take -1 as 2^64 - 1 (it wraps when converting to an unsigned integer).
+  verb->add_option("--seed", args->seed,
+                   "seed of the depth noise, 0..2^64-1 (another seed: another draw of the same noise)")
+      ->check(parsedBy(
+          [](const std::string& text) {
+            if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos)
+              throw std::invalid_argument("expected a whole number 0..2^64-1, got '" + text + "'");
+          },
+          "N >= 0"))
       ->capture_default_str();
-  verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk) and its mesh.ply");
-  verb->add_option("--builtin-frames", args->builtin_frames, "poses per lap of the built-in walk (default 300)");
+  CLI::Option* builtin =
+      verb->add_flag("--builtin", args->builtin, "write the built-in scene (procedural room and walk) and its mesh.ply")
+          ->excludes(mesh)
+          ->excludes(trajectory);
+  verb->add_option("--builtin-frames", args->builtin_frames,
+                   "poses per lap of the built-in walk, 2.." + std::to_string(kMaxBuiltinFrames))
+      ->check(CLI::Range(2, kMaxBuiltinFrames))
+      ->needs(builtin)
+      ->capture_default_str();
   verb->add_option("--builtin-laps", args->builtin_laps,
-                   "laps of the built-in walk; each further lap takes new viewpoints (8 laps: 133 keyframes)")
+                   "laps of the built-in walk, 1.." + std::to_string(kMaxBuiltinLaps) +
+                       "; each further lap takes new viewpoints (8 laps: 133 keyframes)")
+      ->check(CLI::Range(1, kMaxBuiltinLaps))
+      ->needs(builtin)
       ->capture_default_str();
   verb->add_option("--out", args->out, "output folder (must not exist or be empty)")->required();
   verb->callback([args] { runSynth(*args); });

@@ -34,6 +34,34 @@ inline std::string counted(long long n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
 }
 
+// CLI11 checks of an option's value by itself, while the command line is parsed: a value that is
+// wrong whatever the files hold gets CLI11's error and code (docs/cli.md "Exit codes and
+// errors"); what needs a file or the data is checked by the verb (exit 1).
+
+/// A camera preset name (cameraPresetNames).
+CLI::Validator cameraPresetCheck();
+/// A --frames range's syntax (A:B, A:, :B or N; numbers within an int; B after A).
+CLI::Validator frameRangeCheck();
+/// A finite number > 0.
+CLI::Validator positiveFiniteCheck();
+/// A finite number.
+CLI::Validator finiteCheck();
+/// Accepts a value when `parse(value)` does not throw std::invalid_argument, whose message is
+/// then the error (CLI11 puts the option's name before it).
+template <typename Parse>
+CLI::Validator parsedBy(Parse parse, const std::string& description) {
+  return CLI::Validator(
+      [parse](std::string& text) -> std::string {
+        try {
+          parse(text);
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      description);
+}
+
 /// Fails before any work when `file`, given as `option`, cannot become an output file: it is a
 /// folder, its folder does not exist or cannot be written (permissions, a read-only file
 /// system), or a file stands where a folder of its path should be (throws std::invalid_argument).
@@ -71,7 +99,10 @@ struct SequenceArgs {
   std::string frames;
   std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
   std::string refine = "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
+  bool refine_given = false;     ///< --refine was on the command line
 };
+/// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
+/// parsing; whether the sequence has those frames when it is opened).
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args);
 /// --poses gt|track, for the verbs that map a sequence.
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args);
@@ -79,15 +110,22 @@ void addPoseSourceArg(CLI::App& verb, SequenceArgs& args);
 void addRefineArg(CLI::App& verb, SequenceArgs& args);
 /// The refinement --refine names (nullopt: none).
 std::optional<MapRefinementParams> refinement(const SequenceArgs& args);
+/// Refuses a --refine joint|pairwise given for a run of ground-truth poses, which it would not
+/// change (refinement corrects tracked poses, docs/method.md 10): throws std::invalid_argument.
+void checkRefinementApplies(const SequenceArgs& args, PoseSource poses);
 /// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
 /// The camera preset names, comma-separated, for --camera help texts.
 std::string cameraPresetList();
+
 /// Opens the sequence the arguments name (throws InputError / std::invalid_argument). With
 /// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
 /// instead of refused. `continues`: the session the sequence continues (SequenceOptions::continues).
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
                          std::optional<SequenceContinuation> continues = std::nullopt);
+/// When no --camera or camera file chose the sequence's camera, says on stderr, in one line,
+/// which preset was guessed and why ("vdmap VERB: note: ..."): a wrong guess maps without error.
+void noteCameraGuess(const TumSequence& sequence, const std::string& verb);
 
 }  // namespace vdmap::app

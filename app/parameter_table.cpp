@@ -80,10 +80,12 @@ void addParameterOptions(CLI::App& verb, ParameterValues& params) {
     verb.add_option_function<std::string>(
             flag,
             [&params, &p, flag](const std::string& text) {
+              // A value outside its range is wrong whatever the data: CLI11's error and code
+              // (docs/cli.md "Exit codes and errors").
               try {
                 setFromText(p, params, text);
               } catch (const std::invalid_argument& e) {
-                throw std::invalid_argument(flag + ": " + e.what());
+                throw CLI::ValidationError(flag, e.what());
               }
             },
             help)

@@ -1,3 +1,5 @@
+#include <cstdio>
+
 #include "app/commands.h"
 #include "mapping/io/camera_config.h"
 
@@ -11,10 +13,12 @@ std::string cameraPresetList() {
 
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
   verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
-  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList());
+  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList())
+      ->check(cameraPresetCheck());
   verb.add_option("--frames", args.frames,
                   "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
-                  "a range past the end is an error");
+                  "a range past the end is an error")
+      ->check(frameRangeCheck());
 }
 
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
@@ -31,6 +35,7 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
                   "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see "
                   "docs/method.md 10")
       ->check(CLI::IsMember({"joint", "pairwise", "none"}))
+      ->each([&args](const std::string&) { args.refine_given = true; })
       ->capture_default_str();
   verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
 }
@@ -42,9 +47,26 @@ std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
   return params;
 }
 
+void checkRefinementApplies(const SequenceArgs& args, PoseSource poses) {
+  if (poses == PoseSource::kTrack || !args.refine_given || args.refine == "none") return;
+  throw std::invalid_argument("--refine " + args.refine +
+                              " refines tracked poses (--poses track); this run maps the ground-truth poses of "
+                              "groundtruth.txt, which it would leave as they are");
+}
+
 PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
   if (args.poses.empty()) return sequence.hasGroundTruth() ? PoseSource::kGroundTruth : PoseSource::kTrack;
   return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+}
+
+void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
+  if (!sequence.cameraGuessed()) return;
+  const PinholeCamera& c = sequence.camera();
+  std::fprintf(stderr,
+               "vdmap %s: note: %s: no camera given, guessed %s: fx %g fy %g cx %g cy %g, depth scale %g; "
+               "--camera PRESET or a camera.yaml in the folder sets it\n",
+               verb.c_str(), sequence.folder().string().c_str(), sequence.cameraSource().c_str(), c.fx, c.fy, c.cx,
+               c.cy, c.depth_scale);
 }
 
 TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::optional<SequenceContinuation> continues) {

@@ -32,8 +32,9 @@ using test::writeText;
 
 enum class Expect {
   kInputError,  ///< vdmap::InputError, message "FILE[:LINE]: ..."
-  kCliError,    ///< `vdmap ...` exits 1 with one line "vdmap VERB: error: ..."
-  kCliUsage,    ///< `vdmap ...` exits non-zero with CLI11's usage message
+  kCliError,    ///< `vdmap ...` exits 1 with one line "vdmap VERB: error: ..." (a value against files or data)
+  kCliUsage,    ///< `vdmap ...` exits with CLI11's code (100-114) and one line ending "(see --help)": the
+                ///< command line is wrong by itself (docs/cli.md "Exit codes and errors")
 };
 
 /// One input vdmap reads: how to make a good one in a folder, and how vdmap reads it. The command
@@ -343,6 +344,14 @@ const std::vector<BadCase>& badCases() {
       {"camera_yaml", "empty", E::kInputError, "camera.yaml", write("camera.yaml", "")},
       {"camera_yaml", "fractional_width", E::kInputError, "width",
        write("camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640.5\nheight: 480\n")},
+      {"camera_yaml", "unknown_key", E::kInputError, "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx,",
+       write("camera.yaml", "preset: tum-fr1\nfocal: 500\n")},
+      {"camera_yaml", "colour_unknown_key", E::kInputError, "camera.yaml:1: unknown key 'k1' in 'colour' (valid keys: fx,",
+       write("camera.yaml", "colour: {fx: 525, fy: 525, cx: 320, cy: 240, k1: 0.1}\npreset: 7scenes\n")},
+      {"camera_yaml", "principal_point_outside", E::kInputError, "principal point (cx 5000, cy 240) must lie within the 640x480 image",
+       write("camera.yaml", "preset: tum-fr1\ncx: 5000\ncy: 240\n")},
+      {"camera_json", "unknown_key_in_camera_block", E::kInputError, "unknown key 'focal' in 'camera'",
+       write("camera.json", "{\"camera\": {\"preset\": \"replica\", \"focal\": 500}, \"mapping\": {\"any\": 1}}")},
       {"camera_json", "syntax_error", E::kInputError, "not valid YAML/JSON", write("camera.json", "{\"fx\": [1, 2")},
       // PLY meshes (vdmap synth --mesh, vdmap eval) and ellipsoid maps (vdmap render --map).
       {"ply_mesh", "missing_file", E::kInputError, "cannot open the file", removeFile("m.ply")},
@@ -403,28 +412,28 @@ const std::vector<BadCase>& badCases() {
        })},
       {"session", "trailing_bytes", E::kInputError, "unexpected bytes at the end", session([](std::string* b) { *b += "x"; })},
       // Command-line values.
-      {"command_line", "frames_reversed", E::kCliError, "--frames", args("map {dir}/seq --out {dir}/out --frames 5:2")},
+      {"command_line", "frames_reversed", E::kCliUsage, "--frames: '5:2': the end must be after the start", args("map {dir}/seq --out {dir}/out --frames 5:2")},
       {"command_line", "frames_past_the_end", E::kCliError, "--frames starts at 9", args("map {dir}/seq --out {dir}/out --frames 9:")},
-      {"command_line", "unknown_camera_preset", E::kCliError, "unknown camera preset 'nope'",
+      {"command_line", "unknown_camera_preset", E::kCliUsage, "--camera: unknown camera preset 'nope'",
        args("map {dir}/seq --out {dir}/out --camera nope")},
-      {"command_line", "cell_size_zero", E::kCliError, "cell_size must be >= 1 px", args("map {dir}/seq --out {dir}/out --cell-size 0")},
-      {"command_line", "negative_keyframe_every", E::kCliError, "--keyframe-every: keyframe_every must be >= 0",
+      {"command_line", "cell_size_zero", E::kCliUsage, "cell_size must be >= 1 px", args("map {dir}/seq --out {dir}/out --cell-size 0")},
+      {"command_line", "negative_keyframe_every", E::kCliUsage, "--keyframe-every: keyframe_every must be >= 0",
        args("map {dir}/seq --out {dir}/out --keyframe-every -1")},
-      {"command_line", "negative_merge_distance", E::kCliError, "merge_distance must be >= 0",
+      {"command_line", "negative_merge_distance", E::kCliUsage, "merge_distance must be >= 0",
        args("map {dir}/seq --out {dir}/out --merge-distance -1")},
       {"command_line", "depth_range_reversed", E::kCliError, "depth range must satisfy 0 <= min < max",
        args("map {dir}/seq --out {dir}/out --min-depth 5 --max-depth 1")},
-      {"command_line", "tau_above_one", E::kCliError, "--tau: tau must be within 0..1",
+      {"command_line", "tau_above_one", E::kCliUsage, "--tau: tau must be within 0..1",
        args("map {dir}/seq --out {dir}/out --tau 2")},
       {"command_line", "samples_negative", E::kCliUsage, "--samples", args("bench {dir}/seq --samples -5")},
-      {"command_line", "unknown_sensor_model", E::kCliError, "foo", args("map {dir}/seq --out {dir}/out --sensor-model foo")},
+      {"command_line", "unknown_sensor_model", E::kCliUsage, "foo", args("map {dir}/seq --out {dir}/out --sensor-model foo")},
       {"command_line", "out_is_a_file", E::kCliError, "is not a folder", args("map {dir}/seq --out {dir}/seq/rgb.txt")},
       {"command_line", "save_into_missing_folder", E::kCliError, "its folder does not exist (--save)",
        args("map {dir}/seq --out {dir}/out --save {dir}/no/such/s.vdmap")},
       {"command_line", "cell_size_not_a_number", E::kCliUsage, "--cell-size", args("map {dir}/seq --out {dir}/out --cell-size abc")},
       {"command_line", "missing_out", E::kCliUsage, "--out", args("map {dir}/seq")},
       {"command_line", "unknown_verb", E::kCliUsage, "frobnicate", args("frobnicate")},
-      {"command_line", "render_sigma_not_a_number", E::kCliError, "--sigma must be a positive number",
+      {"command_line", "render_sigma_not_a_number", E::kCliUsage, "--sigma: must be a number > 0, got nan",
        args("render --map {dir}/e.ply --out {dir}/o.png --sigma nan")},
       {"command_line", "render_out_in_missing_folder", E::kCliError, "its folder does not exist (--out)",
        args("render {dir}/seq --out {dir}/no/such/o.png")},
@@ -433,22 +442,23 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "eval_trajectory_and_map", E::kCliUsage, "excludes",
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --map {dir}/e.ply "
             "--mesh {dir}/seq/groundtruth.txt")},
-      {"command_line", "eval_nothing", E::kCliError, "nothing to evaluate", args("eval")},
+      {"command_line", "eval_nothing", E::kCliUsage, "nothing to evaluate", args("eval")},
       {"command_line", "eval_trajectory_offset_matches_nothing", E::kCliError, "groundtruth.txt: 0 of 3 poses match",
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --offset 100")},
-      {"command_line", "eval_trajectory_zero_max_difference", E::kCliError, "maximum timestamp difference",
+      {"command_line", "eval_trajectory_zero_max_difference", E::kCliUsage, "--max-difference: must be a number > 0",
        args("eval --trajectory {dir}/seq/groundtruth.txt --groundtruth {dir}/seq/groundtruth.txt --max-difference 0")},
       {"command_line", "bench_unknown_pose_source", E::kCliUsage, "--poses", args("bench {dir}/seq --poses imu")},
-      {"command_line", "render_bad_size", E::kCliError, "size", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
+      {"command_line", "render_bad_size", E::kCliUsage, "--size: '10': expected WIDTHxHEIGHT", args("render --map {dir}/e.ply --out {dir}/o.png --size 10")},
       // Smaller items.
-      {"command_line", "octomap_zero", E::kCliError, "--octomap must be > 0 m", args("map {dir}/seq --out {dir}/out --octomap 0")},
-      {"command_line", "octomap_negative", E::kCliError, "--octomap must be > 0 m",
+      {"command_line", "octomap_zero", E::kCliUsage, "--octomap: the resolution must be > 0 and at most 1 m",
+       args("map {dir}/seq --out {dir}/out --octomap 0")},
+      {"command_line", "octomap_negative", E::kCliUsage, "--octomap: the resolution must be > 0 and at most 1 m",
        args("map {dir}/seq --out {dir}/out --octomap -1")},
       {"command_line", "octomap_finer_than_the_keys_hold", E::kCliError, "is too fine for this map",
        args("map {dir}/seq --out {dir}/out --octomap 1e-9")},
       {"command_line", "frames_end_past_the_end", E::kCliError, "--frames 1:9 ends past the sequence: it lists 3 depth frames (0:3)",
        args("map {dir}/seq --out {dir}/out --frames 1:9")},
-      {"command_line", "frames_zero_count", E::kCliError, "N means the first N frames", args("map {dir}/seq --out {dir}/out --frames 0")},
+      {"command_line", "frames_zero_count", E::kCliUsage, "N means the first N frames", args("map {dir}/seq --out {dir}/out --frames 0")},
       {"command_line", "render_without_out", E::kCliUsage, "--out is required", args("render {dir}/seq")},
       {"command_line", "render_out_under_a_file", E::kCliError, "seq/rgb.txt is a file, not a folder (--out)",
        args("render {dir}/seq --out {dir}/seq/rgb.txt/x.png")},
@@ -509,6 +519,56 @@ const std::vector<BadCase>& badCases() {
        then(savedSession("0:2", "b/seq", 0.0, 1), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
       {"command_line", "load_a_finished_session", E::kCliError, "s.vdmap already covers the whole sequence",
        then(savedSession("0:3", ""), "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
+      // Option values and camera files. A value wrong by itself is CLI11's error, checked before
+      // any work; one that needs the data is exit 1. None is taken silently or replaced.
+      {"command_line", "frames_past_an_int", E::kCliUsage,
+       "--frames: '0:1000000000000': frame number 1000000000000 is out of range (0..2147483647)",
+       args("map {dir}/seq --out {dir}/out --frames 0:1000000000000")},
+      {"command_line", "octomap_coarser_than_a_metre", E::kCliUsage, "--octomap: the resolution must be > 0 and at most 1 m",
+       args("map {dir}/seq --out {dir}/out --octomap 1e9")},
+      {"command_line", "render_out_jpeg_2000", E::kCliUsage, "the image format follows the extension: .png, or .jpg",
+       args("render --map {dir}/e.ply --out {dir}/o.jp2")},
+      {"command_line", "render_unknown_color", E::kCliUsage, "--color: unknown colour mode 'red'",
+       args("render --map {dir}/e.ply --out {dir}/o.png --color red")},
+      {"command_line", "render_bad_view", E::kCliUsage, "--view: 'keyframe': expected global, keyframe:K or container:K",
+       args("render {dir}/seq --out {dir}/o.png --view keyframe")},
+      {"command_line", "synth_builtin_frames_zero", E::kCliUsage, "--builtin-frames: Value 0 not in range 2 to",
+       args("synth --builtin --builtin-frames 0 --out {dir}/out")},
+      {"command_line", "synth_builtin_frames_negative", E::kCliUsage, "--builtin-frames: Value -5 not in range 2 to",
+       args("synth --builtin --builtin-frames -5 --out {dir}/out")},
+      {"command_line", "synth_builtin_laps_zero", E::kCliUsage, "--builtin-laps: Value 0 not in range 1 to",
+       args("synth --builtin --builtin-laps 0 --out {dir}/out")},
+      {"command_line", "synth_builtin_frames_without_builtin", E::kCliUsage, "--builtin-frames requires --builtin",
+       args("synth --builtin-frames 30 --out {dir}/out")},
+      {"command_line", "synth_seed_negative", E::kCliUsage, "--seed: expected a whole number 0..2^64-1, got '-1'",
+       args("synth --builtin --builtin-frames 3 --seed -1 --out {dir}/out")},
+      {"command_line", "synth_unknown_noise", E::kCliUsage, "--noise: kinect not in",
+       args("synth --builtin --builtin-frames 3 --noise kinect --out {dir}/out")},
+      {"command_line", "bench_keyframe_every_zero", E::kCliUsage, "--keyframe-every: Value 0 not in range 1 to",
+       args("bench {dir}/seq --out {dir}/out --keyframe-every 0")},
+      {"command_line", "eval_mesh_missing", E::kCliError, "none.ply: cannot open the file",
+       then(write("p.ply", kMeshPly), "eval --map {dir}/p.ply --mesh {dir}/none.ply")},
+      // Thread counts, camera files and --refine: none is taken silently or printed on by a library.
+      {"command_line", "threads_65537", E::kCliUsage, "--threads: Value 65537 not in range 0 to 256",
+       args("map {dir}/seq --out {dir}/out --threads 65537")},
+      {"command_line", "threads_negative", E::kCliUsage, "--threads: Value -1 not in range 0 to 256",
+       args("map {dir}/seq --out {dir}/out --threads -1")},
+      {"command_line", "refine_with_ground_truth_poses", E::kCliError,
+       "--refine pairwise refines tracked poses (--poses track); this run maps the ground-truth poses",
+       args("map {dir}/seq --out {dir}/out --refine pairwise")},
+      {"command_line", "refine_with_explicit_gt_poses", E::kCliError, "--refine joint refines tracked poses",
+       args("map {dir}/seq --out {dir}/out --poses gt --refine joint")},
+      {"command_line", "render_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
+       args("render {dir}/seq --out {dir}/o.png --refine pairwise")},
+      {"command_line", "bench_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
+       args("bench {dir}/seq --out {dir}/out --refine pairwise")},
+      {"sequence", "camera_file_unknown_key", E::kInputError,
+       "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
+       "colour)",
+       write("seq/camera.yaml", "preset: tum-fr1\nfocal: 500\n")},
+      {"sequence", "camera_file_principal_point_outside", E::kInputError,
+       "camera.yaml: camera: principal point (cx 5000, cy 23.5) must lie within the 64x48 image",
+       write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 5000\ncy: 23.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
   };
   return all;
 }
@@ -548,11 +608,15 @@ TEST_P(BadInputMatrix, GivesTheExpectedErrorClass) {
     ASSERT_NE(r.exit_code, 0) << r.out;
     EXPECT_NE(r.err.find(c.fragment), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "out")) << "a failed run leaves no output";
+    EXPECT_EQ(r.err.rfind("vdmap", 0), 0u) << r.err;
+    EXPECT_NE(r.err.find(": error: "), std::string::npos) << r.err;
+    EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
     if (c.expect == Expect::kCliError) {
       EXPECT_EQ(r.exit_code, 1);
-      EXPECT_EQ(r.err.rfind("vdmap ", 0), 0u) << r.err;
-      EXPECT_NE(r.err.find(": error: "), std::string::npos) << r.err;
-      EXPECT_EQ(r.err.find('\n'), r.err.size() - 1) << "one line: " << r.err;
+    } else {
+      EXPECT_GE(r.exit_code, 100) << r.err;
+      EXPECT_LE(r.exit_code, 114) << r.err;
+      EXPECT_NE(r.err.find("(see --help)\n"), std::string::npos) << r.err;
     }
     return;
   }

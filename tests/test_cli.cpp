@@ -45,8 +45,10 @@ TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
   const auto missing = runVdmap("eval --map x.ply");
   EXPECT_NE(missing.exit_code, 0);
   EXPECT_EQ(missing.err, "vdmap eval: error: --map requires --mesh (see --help)\n");
-  const auto no_file = runVdmap("eval --map x.ply --mesh /nonexistent/mesh.ply");
-  EXPECT_NE(no_file.exit_code, 0);
+  test::writeText(dir / "points.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                      "property float z\nend_header\n0 0 1\n");
+  const auto no_file = runVdmap("eval --map '" + (dir / "points.ply").string() + "' --mesh /nonexistent/mesh.ply");
+  EXPECT_EQ(no_file.exit_code, 1) << "a missing file is exit 1, not a command-line error";
   EXPECT_EQ(std::count(no_file.err.begin(), no_file.err.end(), '\n'), 1) << no_file.err;
   EXPECT_NE(no_file.err.find("/nonexistent/mesh.ply"), std::string::npos) << no_file.err;
 }
@@ -112,6 +114,21 @@ TEST(Cli, VersionPrintsTheProjectVersionAndCommit) {
   EXPECT_TRUE(std::regex_match(r.out, std::regex(R"(vdmap \d+\.\d+\.\d+( \(git [0-9A-Za-z.+-]+\))?\n)"))) << r.out;
   const std::string commit = kGitDescribe[0] ? std::string(" (git ") + kGitDescribe + ")" : "";
   EXPECT_EQ(r.out, std::string("vdmap ") + kVersion + commit + "\n");
+}
+
+// render --out names the format: x.jpg is a JPEG (it held PNG bytes), x.png a PNG.
+TEST(Cli, RenderWritesTheFormatItsExtensionSays) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 3);
+  for (const char* name : {"o.jpg", "o.JPEG", "o.png"}) {
+    const auto r =
+        runVdmap("render '" + (dir / "seq").string() + "' --size 64x48 --out '" + (dir / name).string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string bytes = test::readFile(dir / name);
+    const bool png = std::string(name) == "o.png";
+    EXPECT_EQ(bytes.substr(0, png ? 4 : 3), png ? std::string("\x89PNG") : std::string("\xff\xd8\xff")) << name;
+    EXPECT_EQ(cv::imread((dir / name).string()).cols, 64) << name;
+  }
 }
 
 }  // namespace

@@ -4,6 +4,8 @@
 #include <sstream>
 #include <regex>
 #include <string>
+#include <thread>
+#include <vector>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -117,16 +119,65 @@ TEST(MapCli, StatsRecordTheProvenance) {
                                   (tmp / "out").string() + "'");
     ASSERT_EQ(r2.exit_code, 0) << r2.err;
     EXPECT_EQ(nlohmann::json::parse(r2.out)["camera_source"], kind) << option;
+// More threads than the machine has: the same map, and nothing on stderr (TBB warned that it
+// ignores the extra workers); 256 is the most --threads takes (65537 crashed in TBB's allocator).
+TEST(MapCli, ThreadsBeyondTheCoresPrintNothingAndAreBounded) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const std::string seq = "map '" + (tmp / "seq").string() + "' --out '";
+  const RunResult one = runVdmap(seq + (tmp / "one").string() + "' --threads 1");
+  ASSERT_EQ(one.exit_code, 0) << one.err;
+  const unsigned more = std::max(2u, std::thread::hardware_concurrency() + 1);
+  for (const unsigned threads : {more, 256u}) {
+    const fs::path out = tmp / ("t" + std::to_string(threads));
+    const RunResult r = runVdmap(seq + out.string() + "' --threads " + std::to_string(threads));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(r.err, "") << threads << " threads";
+    EXPECT_EQ(readFile(out / "global_ellipsoids.ply"), readFile(tmp / "one" / "global_ellipsoids.ply"));
+  }
+  const RunResult too_many = runVdmap(seq + (tmp / "x").string() + "' --threads 65537");
+  EXPECT_EQ(too_many.exit_code, 105) << too_many.err;
+  EXPECT_NE(too_many.err.find("--threads: Value 65537 not in range 0 to 256"), std::string::npos) << too_many.err;
+  EXPECT_FALSE(fs::exists(tmp / "x"));
+}
+
+// A camera guessed from the folder (its name, or the default) is said in one line on stderr: an
+// ICL-NUIM copy in a folder named b0 mapped with tum-default's focal length without a word.
+TEST(MapCli, SaysWhichCameraItGuessedAndWhy) {
+  TempDir tmp;
+  struct Case {
+    const char* folder;
+    std::string note;  // empty: the camera was given, nothing to say
+    const char* option = "";
+  };
+  const std::vector<Case> cases = {
+      {"b0", "no camera given, guessed preset tum-default (no camera file or hint in the folder): fx 525 fy 525"},
+      {"icl_b1", "no camera given, guessed preset icl-nuim (folder name 'icl_b1'): fx 481.2 fy 480"},
+      {"b2", "", " --camera tum-default"},
+  };
+  for (const Case& c : cases) {
+    writeTinySequence(tmp / c.folder, 2, 640, 480);
+    fs::remove(tmp / c.folder / "camera.yaml");
+    const RunResult r = runVdmap("map '" + (tmp / c.folder).string() + "' --out '" + (tmp / c.folder).string() +
+                                 "_out'" + c.option);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    if (c.note.empty()) {
+      EXPECT_EQ(r.err, "") << c.folder;
+      continue;
+    }
+    EXPECT_EQ(r.err.rfind("vdmap map: note: " + (tmp / c.folder).string() + ": " + c.note, 0), 0u) << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
 }
 
 TEST(MapCli, BadCellSizeFailsWithoutOutput) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 2);
-  for (const char* s : {"0", "49"}) {  // the tiny sequence is 64x48
+  // 0 is wrong by itself (CLI11's ValidationError, 105); 49 only for this 64x48 camera (exit 1).
+  for (const char* s : {"0", "49"}) {
     const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --cell-size " + s +
                                  " --out '" + (tmp / "out").string() + "'");
-    EXPECT_EQ(r.exit_code, 1);
+    EXPECT_EQ(r.exit_code, s[0] == '0' ? 105 : 1);
     EXPECT_NE(r.err.find(s[0] == '0' ? "cell_size must be >= 1 px" : "cell size 49 px"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(tmp / "out"));
   }
@@ -147,6 +198,21 @@ TEST(BenchCli, JsonHasTheContractKeys) {
   EXPECT_EQ(j["frame_range"], "0:2");
   EXPECT_TRUE(fs::exists(tmp / "bench.json"));
   EXPECT_TRUE(fs::exists(tmp / "bench.md"));
+}
+
+// The text report keeps its two keyframe rules apart: the update row's --keyframe-every and the
+// pipeline's keyframes, which the global map is built from (it said "keyframe every 1" and then
+// "global map 1 keyframe" for 3 frames).
+TEST(BenchCli, TextSaysWhoseKeyframesItCounts) {
+  TempDir tmp;
+  writeTinySequence(tmp / "seq", 3);
+  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --keyframe-every 1 --out '" +
+                               tmp.path().string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("keyframes       the update row starts one every frame; the pipeline made "), std::string::npos)
+      << r.out;
+  EXPECT_NE(r.out.find("global map      of the pipeline's "), std::string::npos) << r.out;
+  EXPECT_NE(readFile(tmp / "bench.md").find("Global map of the pipeline's "), std::string::npos);
 }
 
 // The long run: a row per frame, a global map every --global-every frames and after the last,
@@ -182,7 +248,7 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
   }
   EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
                 .exit_code,
-            1);
+            105);  // a value wrong by itself: CLI11's ValidationError
   EXPECT_EQ(j.value("poses", ""), "gt");
   EXPECT_FALSE(j.contains("loop_closures"));
 }
@@ -251,9 +317,9 @@ TEST(BenchCli, CreatesItsOutFolderAndSkippedPeersAreNull) {
   EXPECT_EQ(j["frame_range"], "0:3") << "the default 0:30, cut at the end of a shorter sequence";
   expectTidyNumbers(readFile(out / "bench.json"), 6);
   const std::string md = readFile(out / "bench.md");
-  EXPECT_NE(md.find("frames 0:3,"), std::string::npos) << md;
-  EXPECT_NE(md.find("Global map: "), std::string::npos) << md;
-  EXPECT_EQ(md.find("Global map: 1 keyframes"), std::string::npos) << md;
+  EXPECT_NE(md.find("frames 0:3;"), std::string::npos) << md;
+  EXPECT_NE(md.find("Global map of the pipeline's "), std::string::npos) << md;
+  EXPECT_EQ(md.find("1 keyframes"), std::string::npos) << md;
 }
 
 }  // namespace

@@ -94,7 +94,11 @@ TEST(Parameters, ValidateChecksTheTablesRanges) {
   EXPECT_EQ(message(values), "depth range must satisfy 0 <= min < max");
   values = {};
   values.global.threads = -1;
-  EXPECT_EQ(message(values), "threads must be >= 0");
+  EXPECT_EQ(message(values), "threads must be within 0..256");
+  values.global.threads = 257;  // 65537 crashed in TBB's allocator
+  EXPECT_EQ(message(values), "threads must be within 0..256");
+  values.global.threads = 256;
+  EXPECT_EQ(message(values), "");
 }
 
 // Each parameter is stored once in a session's PARM section, with a storage type that holds it.

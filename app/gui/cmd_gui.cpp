@@ -107,7 +107,8 @@ void runGui(GuiArgs args, bool builtin) {
     int w = 0, h = 0;
     char rest = 0;
     if (std::sscanf(args.window_size.c_str(), "%dx%d%c", &w, &h, &rest) != 2 || w < 320 || h < 240 || w > 16384 || h > 16384)
-      throw std::invalid_argument("--window-size '" + args.window_size + "': expected WxH within 320x240..16384x16384");
+      throw CLI::ValidationError("--window-size",
+                                 "'" + args.window_size + "': expected WxH within 320x240..16384x16384");
     settings.window_width = w;
     settings.window_height = h;
   }
@@ -115,7 +116,7 @@ void runGui(GuiArgs args, bool builtin) {
   // `gui /nope` named the display); a damaged session still opens the window with its error.
   if (!builtin && !args.map.empty() && !isSessionPath(args.map))
     throw InputError(args.map, fs::exists(args.map) ? "not a vdmap session file" : "no such session file");
-  if (!builtin && args.map.empty()) openSequence(args.sequence);
+  if (!builtin && args.map.empty()) noteCameraGuess(openSequence(args.sequence), "gui");
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
   gui::Workbench bench(settings, warning);
@@ -184,14 +185,15 @@ void addGuiCommand(CLI::App& app) {
     // `vdmap gui S.vdmap` opens a saved session, as the workbench's Open field does.
     if (args->map.empty() && fs::is_regular_file(args->sequence.folder)) std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
-      throw std::invalid_argument("give a sequence folder SEQ or --map FILE.vdmap (one of them)");
+      throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE.vdmap (one of them)");
     runGui(*args, false);
   });
 }
 
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app) {
   auto args = std::make_shared<GuiArgs>();
-  app.add_option("--frames", args->sequence.frames, "built-in scene: frames A:B of the walk (B exclusive)");
+  app.add_option("--frames", args->sequence.frames, "built-in scene: frames A:B of the walk (B exclusive)")
+      ->check(frameRangeCheck());
   addGuiOptions(app, *args);
   return [args] { runGui(*args, true); };
 }

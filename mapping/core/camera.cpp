@@ -1,6 +1,7 @@
 #include "mapping/core/camera.h"
 
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -22,6 +23,14 @@ void PinholeCamera::validate() const {
   if (!(std::isfinite(fx) && fx > 0) || !(std::isfinite(fy) && fy > 0))
     fail("focal lengths fx, fy must be positive and finite");
   if (!std::isfinite(cx) || !std::isfinite(cy)) fail("principal point cx, cy must be finite");
+  // The principal point is where the optical axis meets the image: a calibration puts it near the
+  // centre, never outside (a cx typed for another image size would project every point off it).
+  if (!(cx >= 0.0 && cx <= width && cy >= 0.0 && cy <= height)) {
+    char text[160];
+    std::snprintf(text, sizeof text, "principal point (cx %g, cy %g) must lie within the %dx%d image", cx, cy, width,
+                  height);
+    fail(text);
+  }
   if (!(std::isfinite(depth_scale) && depth_scale > 0)) fail("depth_scale must be positive");
 }
 

@@ -32,7 +32,8 @@ struct PinholeCamera {
     const double lo = -0.5 - margin_px;
     return u >= lo && v >= lo && u < width - 0.5 + margin_px && v < height - 0.5 + margin_px;
   }
-  /// Throws std::invalid_argument naming the first bad field (non-positive size/focal, ...).
+  /// Throws std::invalid_argument naming the first bad field (non-positive size/focal, a principal
+  /// point outside the image, ...).
   void validate() const;
 
   bool operator==(const PinholeCamera&) const = default;

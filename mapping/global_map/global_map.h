@@ -27,9 +27,9 @@ struct GlobalMapParams {
   /// Two ellipsoids of different groups are the same surface when their Bhattacharyya distance
   /// (bhattacharyyaDistance) is at most this.
   double fusion_max_distance = 1.0;
-  int threads = 0;                     ///< 0: all cores. The result does not depend on it.
+  int threads = 0;                     ///< 0: all cores; at most kMaxThreads. The result does not depend on it.
   /// Throws std::invalid_argument naming the first parameter out of range (the table's ranges,
-  /// and threads >= 0).
+  /// and threads within 0..kMaxThreads).
   void validate() const;
 };
 

@@ -2,6 +2,9 @@
 
 #include <limits>
 #include <stdexcept>
+#include <string>
+
+#include "mapping/core/parallel.h"
 
 namespace vdmap {
 namespace {
@@ -84,7 +87,8 @@ std::span<const ParameterRow<GlobalMapParams>> globalMapParameters() { return kR
 void GlobalMapParams::validate() const {
   checkRanges(globalMapParameters(), *this);
   // The thread count is no parameter of the table: it changes how fast a map is built, not the map.
-  if (threads < 0) throw std::invalid_argument("threads must be >= 0");
+  if (threads < 0 || threads > kMaxThreads)
+    throw std::invalid_argument("threads must be within 0.." + std::to_string(kMaxThreads));
 }
 
 }  // namespace vdmap

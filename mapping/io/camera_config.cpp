@@ -69,6 +69,18 @@ bool readNumber(const YAML::Node& node, std::initializer_list<const char*> keys,
   return false;
 }
 
+// Fails on the first key of `node` (a map) that is not one of `valid`, naming it and the valid ones.
+void checkKeys(const YAML::Node& node, std::initializer_list<const char*> valid, const std::string& file,
+               const std::string& block) {
+  for (const auto& entry : node) {
+    const std::string key = entry.first.Scalar();
+    if (std::any_of(valid.begin(), valid.end(), [&](const char* v) { return key == v; })) continue;
+    std::string list;
+    for (const char* v : valid) list += (list.empty() ? "" : ", ") + std::string(v);
+    throw InputError(file, entry.first.Mark().line + 1, "unknown key '" + key + "'" + block + " (valid keys: " + list + ")");
+  }
+}
+
 }  // namespace
 
 const std::vector<std::string>& cameraPresetNames() {
@@ -95,6 +107,7 @@ std::optional<ColourCamera> readColour(const YAML::Node& node, const std::string
   if (node.IsScalar() && node.as<std::string>() == "registered") return std::nullopt;
   if (!node.IsMap())
     throw InputError(file, line, "key 'colour' must be a map (fx, fy, cx, cy, T_colour_depth) or 'registered'");
+  checkKeys(node, {"fx", "fy", "cx", "cy", "T_colour_depth"}, file, " in 'colour'");
   ColourCamera c;
   for (auto [key, value] : {std::pair{"fx", &c.fx}, {"fy", &c.fy}, {"cx", &c.cx}, {"cy", &c.cy}})
     if (!readNumber(node, {key}, file, value))
@@ -133,7 +146,11 @@ PinholeCamera readCameraFile(const std::filesystem::path& file, std::optional<Co
     throw InputError(name, e.mark.line + 1, "not valid YAML/JSON: " + e.msg);
   }
   if (!root.IsMap()) throw InputError(name, "expected a map of camera keys (fx, fy, cx, cy, ...)");
-  const YAML::Node node = root["camera"] && root["camera"].IsMap() ? root["camera"] : root;
+  // cam_params.json keeps the camera in a block beside other tools' settings: only the block is ours.
+  const bool in_block = root["camera"] && root["camera"].IsMap();
+  const YAML::Node node = in_block ? root["camera"] : root;
+  checkKeys(node, {"preset", "fx", "fy", "cx", "cy", "depth_scale", "scale", "width", "w", "height", "h", "colour"},
+            name, in_block ? " in 'camera'" : "");
 
   PinholeCamera camera;
   std::optional<ColourCamera> unregistered;
@@ -204,17 +221,17 @@ CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string
                            Hint{"fr2_", "tum-fr2"}, Hint{"fr3_", "tum-fr3"}}) {
     if (name.find(hint.needle) != std::string::npos)
       return {cameraPreset(hint.preset), std::string("preset ") + hint.preset + " (folder name '" + folder_name + "')",
-              cameraPresetColour(hint.preset)};
+              cameraPresetColour(hint.preset), true};
   }
   // 7-Scenes names its depth maps frame-XXXXXX.depth.png.
   std::ifstream depth_list(folder / "depth.txt");
   for (std::string line; std::getline(depth_list, line);) {
     if (line.empty() || line[0] == '#') continue;
     if (line.find(".depth.png") != std::string::npos)
-      return {cameraPreset("7scenes"), "preset 7scenes (7-Scenes depth file names)", cameraPresetColour("7scenes")};
+      return {cameraPreset("7scenes"), "preset 7scenes (7-Scenes depth file names)", cameraPresetColour("7scenes"), true};
     break;
   }
-  return {cameraPreset("tum-default"), "preset tum-default (no camera file or hint in the folder)", {}};
+  return {cameraPreset("tum-default"), "preset tum-default (no camera file or hint in the folder)", {}, true};
 }
 
 }  // namespace vdmap

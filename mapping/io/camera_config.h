@@ -23,7 +23,8 @@ std::optional<ColourCamera> cameraPresetColour(const std::string& name);
 
 /// Reads a camera file (camera.yaml, camera.json, or the nvblox/NICE-SLAM cam_params.json with
 /// its "camera" block). Keys: fx, fy, cx, cy, depth_scale (or "scale"), width/w, height/h;
-/// a file may name a `preset` and override some keys of it. Unregistered colour: a map
+/// a file may name a `preset` and override some keys of it. Any other key is an error (a
+/// misspelt key would otherwise leave the preset's value silently). Unregistered colour: a map
 /// `colour: {fx, fy, cx, cy, T_colour_depth: [12 numbers, the 3x4 [R|t] row by row, metres]}`
 /// (T_colour_depth defaults to the identity), or `colour: registered` to drop a preset's colour
 /// camera. Throws InputError naming the file and the missing or malformed key.
@@ -34,6 +35,7 @@ struct CameraChoice {
   PinholeCamera camera;
   std::string source;
   std::optional<ColourCamera> colour = {};  ///< set when the colour images need registering
+  bool guessed = false;  ///< a preset guessed from the folder's name or file names, or the default
 };
 
 /// Chooses the camera of a sequence folder: `preset_override` when not empty; else a

@@ -4,6 +4,7 @@
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <stdexcept>
 
@@ -117,6 +118,10 @@ FrameRange parseFrameRange(const std::string& text) {
   auto number = [&](const std::string& s) {
     int value = 0;
     const auto [ptr, ec] = std::from_chars(s.data(), s.data() + s.size(), value);
+    // A number that does not fit an int is well-formed but past any sequence.
+    if (ec == std::errc::result_out_of_range && ptr == s.data() + s.size() && s[0] != '-')
+      throw std::invalid_argument("--frames '" + text + "': frame number " + s + " is out of range (0.." +
+                                  std::to_string(std::numeric_limits<int>::max()) + ")");
     if (ec != std::errc() || ptr != s.data() + s.size() || value < 0)
       throw std::invalid_argument("--frames '" + text + "': expected A:B (or N for 0:N) with frame numbers >= 0");
     return value;
@@ -152,6 +157,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     CameraChoice choice = chooseCamera(folder, options.camera_preset);
     seq.camera_ = choice.camera;
     seq.camera_source_ = choice.source;
+    seq.camera_guessed_ = choice.guessed;
     seq.colour_ = choice.colour;
     if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
   } catch (const std::invalid_argument& e) {

@@ -83,6 +83,8 @@ class TumSequence {
   const std::filesystem::path& folder() const { return folder_; }
   const PinholeCamera& camera() const { return camera_; }
   const std::string& cameraSource() const { return camera_source_; }
+  /// True when no --camera or camera file chose the camera: a preset was guessed (chooseCamera).
+  bool cameraGuessed() const { return camera_guessed_; }
   /// The colour camera when the colour images are not registered to the depth (load() registers
   /// them; see colour_registration.h), else nothing.
   const std::optional<ColourCamera>& colourCamera() const { return colour_; }
@@ -106,6 +108,7 @@ class TumSequence {
   std::filesystem::path folder_;
   PinholeCamera camera_;
   std::string camera_source_;
+  bool camera_guessed_ = false;
   std::optional<ColourCamera> colour_;
   std::vector<FrameEntry> entries_;
   int listed_ = 0;
