@@ -119,6 +119,9 @@ TEST(MapCli, StatsRecordTheProvenance) {
                                   (tmp / "out").string() + "'");
     ASSERT_EQ(r2.exit_code, 0) << r2.err;
     EXPECT_EQ(nlohmann::json::parse(r2.out)["camera_source"], kind) << option;
+  }
+}
+
 // More threads than the machine has: the same map, and nothing on stderr (TBB warned that it
 // ignores the extra workers); 256 is the most --threads takes (65537 crashed in TBB's allocator).
 TEST(MapCli, ThreadsBeyondTheCoresPrintNothingAndAreBounded) {
