@@ -15,6 +15,7 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/render_check.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -42,6 +43,7 @@ struct RenderArgs {
   bool grid = false;
   int bench_ellipsoids = 0;
   int sphere_subdivisions = 1;
+  RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --timings (app/render_check.h)
 };
 
 std::pair<int, int> parseSize(const std::string& text) {
@@ -236,11 +238,15 @@ void runRender(RenderArgs args) {
   namespace fs = std::filesystem;
   if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
-  if (args.out.empty()) throw CLI::RequiredError("--out");
+  checkRenderCheckArgs(args.check);
+  if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out (or --expect GOLDEN.png)");
   if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
                              "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
-  checkOutputFile(args.out, "--out");
+  if (!args.out.empty()) checkOutputFile(args.out, "--out");
+  StageTimes times(args.check.timings);
+  // The golden decodes before any work; its size is checked once the view's is known.
+  const cv::Mat golden = args.check.expect.empty() || args.check.update ? cv::Mat() : readGolden(args.check.expect);
   // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map (SEQ and
   // --map exclude each other).
   if (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder)) std::swap(args.map, args.sequence.folder);
@@ -257,7 +263,7 @@ void runRender(RenderArgs args) {
   RenderScene scene;
   std::optional<Session> session;
   if (from_session) {
-    session.emplace(loadSession(args.map));
+    session.emplace(loadSession(args.map, {.decode_images = false}));  // container:K decodes K's image
   } else if (!args.map.empty()) {
     // A `vdmap map` folder is drawn by its global map.
     const fs::path ply = fs::is_directory(args.map) ? fs::path(args.map) / "global_ellipsoids.ply" : fs::path(args.map);
@@ -267,7 +273,9 @@ void runRender(RenderArgs args) {
   }
   if (!args.mesh.empty()) scene.mesh = readPlyMesh(args.mesh);
   // The context comes before the mapping: a missing OSMesa should not cost a mapping run.
+  times.mark("load");
   auto context = render::createOffscreenContext();
+  times.mark("context");
   std::unique_ptr<Mapper> mapper;
   SceneSource source;
   if (from_sequence) {
@@ -286,7 +294,9 @@ void runRender(RenderArgs args) {
     addGraph(&scene, session->graph, session->info.camera, session->info.mapper.local_map.cell_size_px,
              session->info.global, choice, args.map, args.view);
     source = {args.map, session->info.state.frames_mapped, &session->graph};
+    if (scene.keyframe && choice.kind == ViewChoice::Kind::kContainer) keyframeImage(*scene.keyframe, args.map);
   }
+  times.mark("build");
 
   // Default sizes: the keyframe's own image for keyframe:K, the whole 2W x 2H container for
   // container:K, 1280x720 for the global view.
@@ -297,10 +307,13 @@ void runRender(RenderArgs args) {
                          ? std::pair{1280, 720}
                          : std::pair{scale * scene.camera.width, scale * scene.camera.height};
   }
-  writeImage(args.out, draw(context->gl(), scene, choice, w, h, args, color));
+  if (!golden.empty()) checkGoldenSize(args.check.expect, golden.size(), {w, h});
+  const cv::Mat rgb = draw(context->gl(), scene, choice, w, h, args, color);
+  times.mark("render");
+  if (!args.out.empty()) writeImage(args.out, rgb);
   const std::size_t drawn =
       choice.kind == ViewChoice::Kind::kContainer ? scene.container_ellipsoids.size() : scene.ellipsoids.size();
-  std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), w, h, args.view.c_str(),
+  std::printf("%s (%dx%d, view %s, %s, %s", args.out.empty() ? "rendered" : ("wrote " + args.out).c_str(), w, h, args.view.c_str(),
               counted(static_cast<long long>(drawn), "ellipsoid").c_str(),
               counted(static_cast<long long>(scene.mesh.triangles.size()), "triangle").c_str());
   if (source.graph)
@@ -308,6 +321,7 @@ void runRender(RenderArgs args) {
                 counted(static_cast<long long>(source.graph->size()), "keyframe").c_str(),
                 counted(static_cast<long long>(source.graph->edges().size()), "edge").c_str());
   std::printf(")\n");
+  finishRenderCheck(args.check, golden, rgb, &times);  // --timings printed, --expect checked
 }
 
 }  // namespace
@@ -354,6 +368,7 @@ void addRenderCommand(CLI::App& app) {
   verb->add_option("--points-below", args->point_below_px,
                    "draw ellipsoids projecting to a radius below this many pixels as flat splats (0: never)")
       ->check(CLI::Range(0.f, 64.f))->capture_default_str();
+  addRenderCheckArgs(*verb, args->check);
   verb->callback([args] { runRender(*args); });
 }
 
