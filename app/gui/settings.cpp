@@ -1,6 +1,7 @@
 #include "app/gui/settings.h"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstdlib>
 #include <fstream>
 
@@ -8,6 +9,7 @@
 
 #include "app/parameter_table.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
 #include "render/colormap.h"
 
@@ -53,7 +55,9 @@ json toJson(const Settings& s) {
         {"play_fps", s.play_fps},
         {"up_axis", kUpAxisNames[static_cast<int>(s.up_axis)]},
         {"container_grid", s.container_grid},
-        {"container_bounds", s.container_bounds}}},
+        {"container_bounds", s.container_bounds},
+        {"background", backgroundName(s.background)},
+        {"show_legend", s.show_legend}}},
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
   };
@@ -74,8 +78,8 @@ void read(const json& section, const char* section_name, const char* key, T& out
   }
 }
 
-Settings fromJson(const json& j) {
-  Settings s;
+Settings fromJson(const json& j, const Settings& base = {}) {
+  Settings s = base;
   if (!j.is_object()) throw std::invalid_argument("expected a JSON object");
   // The mapping parameters, each read and checked by the parameter table (as --set and the
   // command line do); keys the table does not know are left alone.
@@ -110,6 +114,14 @@ Settings fromJson(const json& j) {
     s.up_axis = static_cast<UpAxis>(it - std::begin(kUpAxisNames));
     read(v, "view", "container_grid", s.container_grid);
     read(v, "view", "container_bounds", s.container_bounds);
+    std::string background = backgroundName(s.background);
+    read(v, "view", "background", background);
+    try {
+      s.background = parseBackground(background);
+    } catch (const std::invalid_argument& e) {
+      throw std::invalid_argument(std::string("view.background: ") + e.what());
+    }
+    read(v, "view", "show_legend", s.show_legend);
     if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10)) throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
     if (!(s.play_fps >= 0 && s.play_fps <= 1000)) throw std::invalid_argument("view.play_fps must be in [0, 1000]");
   }
@@ -124,6 +136,67 @@ Settings fromJson(const json& j) {
 }
 
 }  // namespace
+
+glm::vec3 parseBackground(const std::string& text) {
+  if (text == "dark") return render::kDarkBackground;
+  if (text == "white") return render::kWhiteBackground;
+  const auto hex = [](char c) -> int {
+    if (c >= '0' && c <= '9') return c - '0';
+    if (c >= 'a' && c <= 'f') return c - 'a' + 10;
+    if (c >= 'A' && c <= 'F') return c - 'A' + 10;
+    return -1;
+  };
+  if (text.size() == 7 && text[0] == '#') {
+    glm::vec3 rgb;
+    bool ok = true;
+    for (int k = 0; k < 3; ++k) {
+      const int hi = hex(text[1 + 2 * k]), lo = hex(text[2 + 2 * k]);
+      ok = ok && hi >= 0 && lo >= 0;
+      rgb[k] = static_cast<float>(hi * 16 + lo) / 255.f;
+    }
+    if (ok) return rgb;
+  }
+  throw std::invalid_argument("'" + text + "': expected dark, white or #rrggbb");
+}
+
+std::string backgroundName(const glm::vec3& rgb) {
+  if (rgb == render::kDarkBackground) return "dark";
+  if (rgb == render::kWhiteBackground) return "white";
+  char text[8];
+  const auto byte = [](float v) { return static_cast<int>(std::clamp(v, 0.f, 1.f) * 255.f + 0.5f); };
+  std::snprintf(text, sizeof text, "#%02x%02x%02x", byte(rgb.r), byte(rgb.g), byte(rgb.b));
+  return text;
+}
+
+render::ViewSpec viewSpecOf(const Settings& s) {
+  render::ViewSpec spec;
+  spec.up = s.up_axis;
+  spec.color = s.color;
+  spec.ellipsoids = s.show_ellipsoids;
+  spec.sigma = s.ellipsoid_sigma;
+  spec.layers.frustums = s.show_frustums;
+  spec.layers.graph = s.show_graph;
+  spec.layers.trajectory = s.show_trajectory;
+  spec.layers.groundtruth = s.show_groundtruth;
+  spec.layers.legend = s.show_legend;
+  spec.layers.grid = s.container_grid;
+  spec.layers.bounds = s.container_bounds;
+  spec.background = s.background;
+  return spec;
+}
+
+Settings readSettingsFile(const fs::path& file, const Settings& base) {
+  if (!fs::exists(file)) throw InputError(file.string(), "no such file");
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "cannot be read");
+  json j = json::parse(in, nullptr, false);
+  if (j.is_discarded()) throw InputError(file.string(), "not valid JSON (expected a settings file)");
+  try {
+    return fromJson(j, base);
+  } catch (const std::exception& e) {
+    throw InputError(file.string(), e.what());
+  }
+}
 
 fs::path settingsPath() {
   const char* xdg = std::getenv("XDG_CONFIG_HOME");

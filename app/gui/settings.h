@@ -8,13 +8,13 @@
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/scene_types.h"
+#include "render/view_spec.h"
 
 namespace vdmap::app::gui {
 
-/// Which world direction the 3-D view keeps up (and orbits about).
-enum class UpAxis { kData, kPlusZ, kPlusY, kMinusY };
-/// Names in the settings file and --set, indexed by UpAxis.
-inline constexpr const char* kUpAxisNames[] = {"data", "+z", "+y", "-y"};
+/// Which world direction the 3-D view keeps up (render/view_spec.h, shared with `vdmap render`).
+using render::UpAxis;
+using render::kUpAxisNames;
 
 /// Everything that persists between runs. Defaults are the library's defaults.
 struct Settings {
@@ -29,6 +29,8 @@ struct Settings {
   UpAxis up_axis = UpAxis::kData;       ///< kData: estimated from the cameras and the map's floor
   bool container_grid = false;          ///< the container view's cell grid
   bool container_bounds = true;         ///< the container view's image outline
+  glm::vec3 background = render::kDarkBackground;  ///< "dark", "white" or "#rrggbb"
+  bool show_legend = true;              ///< the colour legend and tracking key over the 3-D view
   int window_width = 1600, window_height = 900;
   std::string last_sequence;
 };
@@ -40,6 +42,18 @@ std::filesystem::path settingsPath();
 /// or a value of the wrong type or out of range, gives the defaults and sets `warning` to a
 /// one-line message naming the file. Keys the file lacks keep their defaults.
 Settings loadSettings(const std::filesystem::path& file, std::string* warning);
+
+/// Reads a settings file named explicitly (--settings): keys the file lacks keep `base`'s values.
+/// Throws InputError naming the file for a missing, unreadable or malformed file or a bad value.
+Settings readSettingsFile(const std::filesystem::path& file, const Settings& base = {});
+
+/// The background names of the settings file, view files and --background: "dark", "white" or
+/// "#rrggbb". parseBackground throws std::invalid_argument naming the accepted forms.
+glm::vec3 parseBackground(const std::string& text);
+std::string backgroundName(const glm::vec3& rgb);
+
+/// The view a Settings describes (the window's global view with its options).
+render::ViewSpec viewSpecOf(const Settings& settings);
 
 /// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
 void saveSettings(const std::filesystem::path& file, const Settings& settings);
