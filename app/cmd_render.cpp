@@ -16,6 +16,7 @@
 #include "app/commands.h"
 #include "app/map_sequence.h"
 #include "app/render_check.h"
+#include "app/render_suite.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -369,7 +370,9 @@ void addRenderCommand(CLI::App& app) {
                    "draw ellipsoids projecting to a radius below this many pixels as flat splats (0: never)")
       ->check(CLI::Range(0.f, 64.f))->capture_default_str();
   addRenderCheckArgs(*verb, args->check);
-  verb->callback([args] { runRender(*args); });
+  verb->callback([args, verb] {
+    if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/render_suite.h)
+  });
 }
 
 }  // namespace vdmap::app

@@ -39,6 +39,9 @@ void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args) {
       ->check(parsedBy(parseTolerance, "COUNTS,SHARE"));
   verb.add_option("--diff", args.diff, "with --expect: where a differing render's diff image goes (PNG)");
   verb.add_flag("--update", args.update, "with --expect: write the render as the golden (atomically) and exit 0");
+  verb.add_option("--suite", args.suite,
+                  "render every view of this YAML file (maps loaded once), compare each with its golden; a table, "
+                  "JUnit XML and the failing views' images in its out folder; exit 2 when any differs");
   verb.add_flag("--timings", args.timings, "print how long each stage took (load, build, render, check) on stderr");
 }
 

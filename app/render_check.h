@@ -33,9 +33,10 @@ struct RenderCheckArgs {
   std::string tolerance;  ///< COUNTS,SHARE ("" : kGoldenTolerance)
   bool update = false;    ///< write the render as the golden instead of comparing
   bool timings = false;   ///< print the stage times on stderr
+  std::string suite;      ///< --suite views.yaml (app/render_suite.h)
 };
 
-/// Registers --expect, --tolerance, --diff, --update (and --timings) on `verb`.
+/// Registers --expect, --tolerance, --diff, --update, --suite (and --timings) on `verb`.
 void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args);
 
 /// The tolerance the arguments give (kGoldenTolerance without --tolerance).

@@ -569,6 +569,29 @@ const std::vector<BadCase>& badCases() {
       {"sequence", "camera_file_principal_point_outside", E::kInputError,
        "camera.yaml: camera: principal point (cx 5000, cy 23.5) must lie within the 64x48 image",
        write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 5000\ncy: 23.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
+      // Golden images and suites (`vdmap render --expect` / `--suite`): a golden that cannot be
+      // compared and a suite that cannot run are bad input (exit 1), found before anything is
+      // rendered or written; option misuse is CLI11's. The session is the matrix's good one.
+      {"session", "render_golden_other_size", E::kCliError, "g.png: the golden is 320x240, the view 160x120 (--size, or --update)",
+       then(image("g.png", cv::Mat(240, 320, CV_8UC3, cv::Scalar(10, 20, 30))),
+            "render {dir}/s.vdmap --size 160x120 --expect {dir}/g.png")},
+      {"session", "render_golden_corrupt_png", E::kCliError, "g.png: cannot decode colour image",
+       then(cutImage("g.png", texture(), ".png", 0.5), "render {dir}/s.vdmap --size 64x48 --expect {dir}/g.png")},
+      {"session", "render_golden_missing", E::kCliError, "g.png: no such golden image (render it once with --update)",
+       args("render {dir}/s.vdmap --expect {dir}/g.png")},
+      {"session", "render_suite_missing_map", E::kCliError, "views.yaml:4: map 'kitchen': no such file or folder",
+       then(write("views.yaml", "version: 1\nout: out\nmaps:\n  kitchen: missing.vdmap\nviews:\n  - {name: a, map: kitchen}\n"),
+            "render --suite {dir}/views.yaml")},
+      {"session", "render_suite_yaml_syntax", E::kCliError, "views.yaml:4: not valid YAML",
+       then(write("views.yaml", "version: 1\nout: out\nviews: [{name: a, map: s\nmaps: {s: s.vdmap}\n"),
+            "render --suite {dir}/views.yaml")},
+      {"session", "render_suite_unknown_view_key", E::kCliError, "views.yaml:5: unknown view key 'colour'",
+       then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - {name: a, map: s, colour: rgb}\n"),
+            "render --suite {dir}/views.yaml --update")},
+      {"session", "render_tolerance_bad", E::kCliUsage, "--tolerance: '8': expected COUNTS,SHARE",
+       args("render {dir}/s.vdmap --expect {dir}/g.png --tolerance 8")},
+      {"session", "render_update_without_expect", E::kCliUsage, "--update needs --expect GOLDEN.png (or --suite)",
+       args("render {dir}/s.vdmap --update --out {dir}/o.png")},
   };
   return all;
 }
