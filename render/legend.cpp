@@ -147,7 +147,9 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
   }
   cv::Mat rgba;
   cv::cvtColor(c.rgb, rgba, cv::COLOR_RGB2RGBA);
-  cv::Mat alpha = cv::max(c.mask, kPanelAlpha);
+  // The colour of an antialiased glyph edge is already blended with the panel's colour: opaque
+  // wherever anything was drawn, the panel's opacity elsewhere.
+  cv::Mat alpha = cv::max(c.mask > 0, kPanelAlpha);
   cv::insertChannel(alpha, rgba, 3);
   return rgba;
 }
