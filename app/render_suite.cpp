@@ -310,7 +310,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     r.size = sizeText(p.width, p.height);
     RenderSource& source = *p.map->source;
     t0 = std::chrono::steady_clock::now();
-    if (p.resolved.spec.kind != render::ViewKind::kContainer)
+    if (p.resolved.spec.kind != render::ViewKind::kContainer && source.graph())  // a map file's is read, not built
       p.map->global_maps.insert(source.globalMap(p.resolved.thresholds).data());  // one buffer per map built
     r.build_s = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();

@@ -207,6 +207,26 @@ TEST_F(RenderSuite, RendersEveryViewAndLoadsEachMapOnce) {
                      cv::imread((tmp / "goldens" / "orbit.png").string()), cv::NORM_L1), 0.0);
 }
 
+TEST_F(RenderSuite, EachMapLoadsOnceAndEachSetOfThresholdsBuildsOneGlobalMap) {
+  // Two maps (the session and its `vdmap map` folder); the session's views with two sets of
+  // thresholds: two loads, two global maps built (the folder's is read).
+  TempDir tmp;
+  writeText(tmp / "views.yaml", "version: 1\nmaps:\n  room: " + (*dir_ / "s.vdmap").string() + "\n  folder: " +
+                                    (*dir_ / "map").string() + "\nviews:\n"
+                                    "  - {name: a, map: room, size: 80x60}\n"
+                                    "  - {name: b, map: room, size: 80x60, orbit: \"0,30\"}\n"
+                                    "  - {name: c, map: room, size: 80x60, set: [filter_sigma_factor=1.5]}\n"
+                                    "  - {name: d, map: room, size: 80x60, view: \"keyframe:0\", set: [filter_sigma_factor=1.5]}\n"
+                                    "  - {name: e, map: folder, size: 80x60}\n"
+                                    "  - {name: f, map: folder, size: 80x60, color: count}\n");
+  const auto r = runSuite(tmp, " --update");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("maps loaded: 2, global maps built: 2"), std::string::npos) << r.out;
+  // The thresholds took effect: the stricter filter keeps fewer ellipsoids, another picture.
+  EXPECT_GT(cv::norm(cv::imread((tmp / "goldens" / "a.png").string()), cv::imread((tmp / "goldens" / "c.png").string()),
+                     cv::NORM_L1), 0.0);
+}
+
 TEST_F(RenderSuite, WritesJUnitXmlWithOneTestcasePerView) {
   TempDir tmp;
   writeSuite(tmp);
