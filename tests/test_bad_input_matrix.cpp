@@ -11,7 +11,10 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "app/view_file.h"
 
 #include "mapping/core/error.h"
 #include "mapping/eval/trajectory_error.h"
@@ -176,6 +179,16 @@ std::function<std::string(const fs::path&)> then(std::function<std::string(const
 std::function<std::string(const fs::path&)> removeFile(const char* file) {
   return [file](const fs::path& d) {
     fs::remove_all(d / file);
+    return std::string();
+  };
+}
+// Writes v.json, a good view file (writeViewFile of the default view) changed by `edit`.
+std::function<std::string(const fs::path&)> viewFile(std::function<void(nlohmann::json&)> edit) {
+  return [edit](const fs::path& d) {
+    app::writeViewFile(d / "v.json", render::ViewSpec{}, GlobalMapParams{}, "s.vdmap");
+    nlohmann::json j = nlohmann::json::parse(readFile(d / "v.json"));
+    edit(j);
+    writeText(d / "v.json", j.dump());
     return std::string();
   };
 }
@@ -592,6 +605,22 @@ const std::vector<BadCase>& badCases() {
        args("render {dir}/s.vdmap --expect {dir}/g.png --tolerance 8")},
       {"session", "render_update_without_expect", E::kCliUsage, "--update needs --expect GOLDEN.png (or --suite)",
        args("render {dir}/s.vdmap --update --out {dir}/o.png")},
+      // View files (`render --view-file`, the window's saved views): strict, naming the key.
+      {"session", "render_view_file_missing_key", E::kCliError, "v.json: missing key 'sigma'",
+       then(viewFile([](nlohmann::json& j) { j.erase("sigma"); }), "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_view_file_non_finite", E::kCliError, "v.json: camera.eye[0] must be finite",
+       then([](const fs::path& d) {
+              viewFile([](nlohmann::json& j) {
+                j["camera"] = {{"eye", {7, 1, 1}}, {"target", {0, 0, 0}}, {"up", {0, 0, 1}}, {"fov_y_deg", 60}};
+              })(d);
+              std::string text = readFile(d / "v.json");
+              text.replace(text.find("[7,"), 3, "[1e999,");  // JSON has no infinity: a number too large for a double
+              writeText(d / "v.json", text);
+              return std::string();
+            },
+            "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_view_file_unknown_key", E::kCliError, "v.json: unknown key 'zoom'",
+       then(viewFile([](nlohmann::json& j) { j["zoom"] = 2; }), "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
   };
   return all;
 }
