@@ -245,14 +245,14 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
   // decodes at its view's size. Nothing is rendered or written before all of it passed.
   std::map<std::string, LoadedMap> loaded;
   for (const MapEntry& m : suite.maps) {
-    const bool used = std::any_of(suite.views.begin(), suite.views.end(), [&](const ViewEntry& v) { return v.map == m.name; });
-    if (!used) continue;
     std::error_code ec;
     if (!fs::exists(m.path, ec))
       throw InputError(file, m.line, "map '" + m.name + "': no such file or folder " + m.path.string());
     if (fs::is_directory(m.path, ec) && !fs::exists(m.path / "global_ellipsoids.ply", ec))
       throw InputError(file, m.line, "map '" + m.name + "': " + m.path.string() +
                                          " is not a `vdmap map` folder (a sequence? map it once with `vdmap map --save`)");
+    const bool used = std::any_of(suite.views.begin(), suite.views.end(), [&](const ViewEntry& v) { return v.map == m.name; });
+    if (!used) continue;  // named but not drawn: checked, not loaded
     const auto t0 = std::chrono::steady_clock::now();
     try {
       loaded[m.name].source = std::make_unique<RenderSource>(SequenceArgs{}, m.path.string(), "");

@@ -7,6 +7,7 @@
 #include <gtest/gtest.h>
 #include <opencv2/imgcodecs.hpp>
 
+#include "app/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/synth/builtin_scene.h"
@@ -225,6 +226,39 @@ TEST_F(RenderSuite, EachMapLoadsOnceAndEachSetOfThresholdsBuildsOneGlobalMap) {
   // The thresholds took effect: the stricter filter keeps fewer ellipsoids, another picture.
   EXPECT_GT(cv::norm(cv::imread((tmp / "goldens" / "a.png").string()), cv::imread((tmp / "goldens" / "c.png").string()),
                      cv::NORM_L1), 0.0);
+}
+
+TEST_F(RenderSuite, ViewFilesAndSettingsAreReadRelativeToTheSuite) {
+  // A view file beside the suite (white, an explicit camera) draws what render --view-file draws;
+  // the suite's settings (a view file's thresholds: a stricter filter) reach every view.
+  TempDir tmp;
+  std::filesystem::create_directories(tmp / "suite");
+  render::ViewSpec spec;
+  spec.width = 96;
+  spec.height = 72;
+  spec.background = render::kWhiteBackground;
+  spec.look_at = render::LookAt{.eye = {2.f, -2.f, 2.f}, .target = {0.f, 0.f, 0.5f}, .up = {0.f, 0.f, 1.f}};
+  app::writeViewFile(tmp / "suite" / "white.json", spec, GlobalMapParams{}, "s.vdmap");
+  GlobalMapParams strict;
+  strict.filter.filter_sigma_factor = 1.0;
+  app::writeViewFile(tmp / "suite" / "strict.json", render::ViewSpec{}, strict, "s.vdmap");
+  const std::string head = "version: 1\nmaps: {room: " + (*dir_ / "s.vdmap").string() + "}\n";
+  writeText(tmp / "suite" / "views.yaml", head + "views:\n  - {name: white, map: room, view-file: white.json}\n"
+                                                 "  - {name: plain, map: room, size: 96x72}\n");
+  writeText(tmp / "suite" / "strict.yaml", head + "settings: strict.json\ngoldens: strict\n"
+                                                  "views:\n  - {name: plain, map: room, size: 96x72}\n");
+  for (const char* suite : {"views.yaml", "strict.yaml"}) {
+    const auto r = runVdmap("render --suite '" + (tmp / "suite" / suite).string() + "' --update");
+    ASSERT_EQ(r.exit_code, 0) << suite << ": " << r.err;
+  }
+  const auto white = tmp / "suite" / "goldens" / "white.png";
+  const auto r = runVdmap("render " + session() + " --view-file " + quoted(tmp / "suite" / "white.json") + " --expect " +
+                          quoted(white) + " --tolerance 0,0");
+  EXPECT_EQ(r.exit_code, 0) << "the suite's view is render --view-file's, pixel for pixel: " << r.err;
+  EXPECT_EQ(cv::imread(white.string()).at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
+  EXPECT_GT(cv::norm(cv::imread((tmp / "suite" / "goldens" / "plain.png").string()),
+                     cv::imread((tmp / "suite" / "strict" / "plain.png").string()), cv::NORM_L1), 0.0)
+      << "the suite's settings did not reach the view";
 }
 
 TEST_F(RenderSuite, WritesJUnitXmlWithOneTestcasePerView) {
