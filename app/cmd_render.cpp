@@ -116,8 +116,7 @@ void runRender(RenderArgs args) {
   if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
   checkRenderCheckArgs(args.check);
-  if (args.out.empty() && args.check.expect.empty())
-    throw CLI::RequiredError("--out is required (or --expect GOLDEN.png)", CLI::ExitCodes::RequiredError);
+  if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out");  // as every verb says it
   if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
                              "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
