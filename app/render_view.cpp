@@ -166,8 +166,7 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
       ->check(CLI::Range(1.f, 179.f));
   verb.add_option("--view-file", a.view_file,
                   "a view file (JSON, saved by the workbench's S key): its view, size, camera and options; flags "
-                  "given beside it override it")
-      ->check(CLI::ExistingFile);
+                  "given beside it override it");
   verb.add_option("--settings", a.settings,
                   "a settings.json (its thresholds and view keys) or a view file (its thresholds) instead of the "
                   "defaults or the session's thresholds");
@@ -439,7 +438,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     const std::vector<Ellipsoid> kept = keptEllipsoids(k.container, params.filter, k.T_W_K, k.id);
     mirror.setContainer(++m.container_serial, spec.keyframe, keyframeImage(k, name_), m.camera, k.T_W_K, kept,
                         {.sigma = spec.sigma, .color = spec.color, .cell_size_px = m.cell_size_px,
-                         .show_grid = spec.layers.grid});
+                         .show_grid = spec.layers.grid, .show_bounds = spec.layers.bounds});
     last_drawn_ = kept.size();
     return render::renderView(gl, mirror, spec, scene, w, h);
   }

@@ -15,6 +15,7 @@
 #include "render/colormap.h"
 #include "render/map_scene.h"
 #include "render/view_camera.h"
+#include "render/view_framing.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 #include "tests/test_util.h"
@@ -345,6 +346,20 @@ TEST_F(RenderSessionCli, EachLayerCanBeSwitchedOffAlone) {
   EXPECT_EQ(png(out("hex.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(0x30, 0x20, 0x10));
 }
 
+TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {
+  ASSERT_EQ(render("c.png", "--view container:1").exit_code, 0);
+  ASSERT_EQ(render("cn.png", "--view container:1 --layers none").exit_code, 0);
+  // At 320x240 the image fills the middle half: its outline runs along rows 60 and 179, columns
+  // 80 and 239.
+  const cv::Mat with = png(out("c.png")), without = png(out("cn.png"));
+  const glm::u8vec3 yellow{255, 220, 0};
+  for (const cv::Rect& edge : {cv::Rect(100, 58, 120, 4), cv::Rect(100, 178, 120, 4), cv::Rect(78, 80, 4, 80),
+                               cv::Rect(238, 80, 4, 80)}) {
+    EXPECT_GT(countColour(with(edge), yellow), 100) << edge;
+    EXPECT_EQ(countColour(without(edge), yellow), 0) << edge;
+  }
+}
+
 TEST_F(RenderSessionCli, OrbitOfTheDefaultAnglesIsTheDefaultView) {
   ASSERT_EQ(render("d.png", "").exit_code, 0);
   ASSERT_EQ(render("o.png", "--orbit -60,35").exit_code, 0);
@@ -432,6 +447,66 @@ TEST_F(RenderSessionCli, AViewFileServesAsSettings) {
   // A sequence has no session thresholds: the defaults, or the file alone.
   const auto seq_default = runVdmap("render " + seq() + " --size 64x48 --out '" + out("sd.png") + "'");
   EXPECT_NE(seq_default.out.find("note: settings: defaults\n"), std::string::npos) << seq_default.out;
+}
+
+// 7-Scenes' kitchen (its cameras' y axis is not the world's z): the default view is upright
+// (the floor below the table tops in the image) and framed (the robust box inside the image,
+// spanning most of it), as the window shows it.
+TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
+  VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
+  TempDir tmp;
+  const auto mapped = runVdmap("map '" + folder.string() + "' --frames 0:150 --out '" + (tmp / "m").string() +
+                               "' --save '" + (tmp / "k.vdmap").string() + "'");
+  ASSERT_EQ(mapped.exit_code, 0) << mapped.err;
+  const auto r = runVdmap("render '" + (tmp / "k.vdmap").string() + "' --size 640x360 --out '" + (tmp / "k.png").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(up \((\S+), (\S+), (\S+)\)\))"))) << r.out;
+  const glm::vec3 up = glm::normalize(glm::vec3(std::stof(m[1]), std::stof(m[2]), std::stof(m[3])));
+  std::printf("kitchen: up (%.2f, %.2f, %.2f)\n", up.x, up.y, up.z);
+  EXPECT_LT(std::abs(up.z), 0.9f) << "not the +z convention: the kitchen's up is not its z axis";
+  // The view the render drew, from the session (the same framing functions).
+  const Session session = loadSession(tmp / "k.vdmap");
+  const render::GraphScene graph =
+      render::graphSceneOf(session.graph, session.info.state, session.info.camera, false);
+  const std::vector<Ellipsoid> map = buildGlobalMap(session.graph, session.info.global).ellipsoids;
+  std::vector<glm::vec3> means;
+  for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  render::ViewScene scene;
+  scene.bounds = render::frameBounds(means, graph);
+  scene.up = up;
+  const render::ViewCamera view = render::viewCamera(render::ViewSpec{}, scene, 640, 360).camera;
+  const auto project = [&](const glm::vec3& p) {
+    const glm::vec4 q = view.T_C_W * glm::vec4(p, 1.f);
+    return glm::vec2(view.fx * q.x / q.z + view.cx, view.fy * q.y / q.z + view.cy);
+  };
+  const auto [lo, hi] = render::robustBounds(means);
+  glm::vec2 a(INFINITY), b(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec2 p = project({(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
+    a = glm::min(a, p), b = glm::max(b, p);
+  }
+  EXPECT_GE(a.x, 0.f);
+  EXPECT_GE(a.y, 0.f);
+  EXPECT_LE(b.x, 640.f);
+  EXPECT_LE(b.y, 360.f);
+  EXPECT_GE(std::max((b.x - a.x) / 640.f, (b.y - a.y) / 360.f), 0.6f);
+  // Upright: the lowest fifth of the means (along up) lies lower in the image than the highest.
+  std::vector<std::pair<float, float>> height_row;
+  for (const glm::vec3& p : means) height_row.emplace_back(glm::dot(p, up), project(p).y);
+  std::sort(height_row.begin(), height_row.end());
+  const std::size_t fifth = height_row.size() / 5;
+  double low_rows = 0, high_rows = 0;
+  for (std::size_t i = 0; i < fifth; ++i) low_rows += height_row[i].second, high_rows += height_row[height_row.size() - 1 - i].second;
+  EXPECT_GT(low_rows / fifth, high_rows / fifth + 20.0) << "the floor is not below the rest in the image";
+  // The image: dark, and the map fills a good part of it.
+  const cv::Mat img = png((tmp / "k.png").string());
+  EXPECT_EQ(img.at<cv::Vec3b>(0, 0), cv::Vec3b(38, 33, 33));
+  cv::Mat drawn;
+  cv::inRange(img, cv::Scalar(30, 25, 25), cv::Scalar(46, 41, 41), drawn);
+  const cv::Rect box = cv::boundingRect(~drawn);
+  std::printf("kitchen: drawn box %dx%d of 640x360\n", box.width, box.height);
+  EXPECT_GE(std::max(box.width / 640.0, box.height / 360.0), 0.6);
 }
 
 TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {
