@@ -14,6 +14,8 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/render_check.h"
+#include "app/render_suite.h"
 #include "app/render_view.h"
 #include "app/view_file.h"
 #include "app/timing.h"
@@ -40,6 +42,7 @@ struct RenderArgs {
   std::string map, mesh, out;
   RenderViewArgs view;
   int bench_ellipsoids = 0;
+  RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --suite, --timings (app/render_check.h)
 };
 
 // The image formats --out may name, by extension: PNG (lossless, what the goldens are) and JPEG.
@@ -112,11 +115,15 @@ void runBench(const RenderArgs& args) {
 void runRender(RenderArgs args) {
   if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
-  if (args.out.empty()) throw CLI::RequiredError("--out");
+  checkRenderCheckArgs(args.check);
+  if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out");  // as every verb says it
   if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
                              "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
-  checkOutputFile(args.out, "--out");
+  if (!args.out.empty()) checkOutputFile(args.out, "--out");
+  StageTimes times(args.check.timings);
+  // The golden decodes before any work; its size is checked once the view's is known.
+  const cv::Mat golden = args.check.expect.empty() || args.check.update ? cv::Mat() : readGolden(args.check.expect);
   // The view first (a bad view file or --settings costs no loading), then the context (a missing
   // OSMesa should not cost a mapping run), then the source.
   const bool session_given = (!args.map.empty() && isSessionPath(args.map)) ||
@@ -128,16 +135,23 @@ void runRender(RenderArgs args) {
                                 " needs keyframes: give a sequence (SEQ) or a session (.vdmap); a --map PLY or map "
                                 "folder has none");
   sharedOffscreenGl();
+  times.mark("context");
   RenderSource source(args.sequence, args.map, args.mesh);
+  times.mark("load");
   // The session's own thresholds (as the workbench showed them when it was saved) come under
   // --settings, --view-file and the flags.
   if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
   source.checkView(view.spec);
   std::printf("vdmap render: note: settings: %s\n", view.settings_source.c_str());
+  if (const auto [w, h] = source.imageSize(view.spec); !golden.empty()) checkGoldenSize(args.check.expect, golden.size(), {w, h});
+  if (args.check.timings && view.spec.kind != render::ViewKind::kContainer) source.globalMap(view.thresholds);
+  times.mark("build");
   const cv::Mat image = source.render(view.spec, view.thresholds);
-  writeImage(args.out, image);
+  times.mark("render");
+  if (!args.out.empty()) writeImage(args.out, image);
   const glm::vec3 up = source.lastUp();
-  std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), image.cols, image.rows, viewName(view.spec).c_str(),
+  std::printf("%s (%dx%d, view %s, %s, %s", args.out.empty() ? "rendered" : ("wrote " + args.out).c_str(), image.cols,
+              image.rows, viewName(view.spec).c_str(),
               counted(static_cast<long long>(source.lastDrawn()), "ellipsoid").c_str(),
               counted(static_cast<long long>(source.meshTriangles()), "triangle").c_str());
   if (const KeyframeGraph* graph = source.graph())
@@ -147,6 +161,7 @@ void runRender(RenderArgs args) {
   // The container view is drawn in the keyframe's image: no up axis.
   if (view.spec.kind != render::ViewKind::kContainer) std::printf(", up (%.2f, %.2f, %.2f)", up.x, up.y, up.z);
   std::printf(")\n");
+  finishRenderCheck(args.check, golden, image, &times);  // --timings printed, --expect checked
 }
 
 }  // namespace
@@ -171,7 +186,10 @@ void addRenderCommand(CLI::App& app) {
   verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,
                    "time N random instanced ellipsoids at --size instead of rendering a map")
       ->check(CLI::Range(0, std::numeric_limits<int>::max()));
-  verb->callback([args] { runRender(*args); });
+  addRenderCheckArgs(*verb, args->check);
+  verb->callback([args, verb] {
+    if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/render_suite.h)
+  });
 }
 
 }  // namespace vdmap::app

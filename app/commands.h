@@ -29,6 +29,14 @@ void addParamsCommand(CLI::App& app);
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);
 
+/// Ends a verb with an exit code other than 0 and 1 after it did its work: `vdmap render
+/// --expect/--suite` rendered, but an image differs from its golden (code 2, docs/cli.md "Exit
+/// codes and errors"). main() prints "vdmap VERB: differs: WHAT" (one line) and returns `code`.
+struct ExitWith : std::runtime_error {
+  ExitWith(int exit_code, const std::string& what) : std::runtime_error(what), code(exit_code) {}
+  int code;
+};
+
 /// "1 keyframe", "2 keyframes": a count with its noun (regular plurals only).
 inline std::string counted(long long n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");

@@ -27,10 +27,11 @@ int main(int argc, char** argv) {
   addGuiCommand(app);
   addParamsCommand(app);
   const auto workbench = addBuiltinWorkbenchOptions(app);
-  const auto error = [&app](const std::string& what) {
+  const auto print = [&app](const char* kind, const std::string& what) {
     const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();
-    std::cerr << "vdmap" << verb << ": error: " << what << "\n";
+    std::cerr << "vdmap" << verb << ": " << kind << ": " << what << "\n";
   };
+  const auto error = [&print](const std::string& what) { print("error", what); };
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) workbench();
@@ -39,6 +40,9 @@ int main(int argc, char** argv) {
     // One line like every other error (CLI11's own adds "Run with --help ...").
     error(std::string(e.what()) + " (see --help)");
     return e.get_exit_code();
+  } catch (const ExitWith& e) {  // the work was done; its verdict is not success (render --expect: 2)
+    print("differs", e.what());
+    return e.code;
   } catch (const std::exception& e) {
     error(e.what());
     return 1;

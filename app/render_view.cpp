@@ -317,7 +317,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
   if (!sequence.folder.empty() && isSessionPath(sequence.folder)) std::swap(map, sequence.folder);
   Impl& m = *impl_;
   if (!map.empty() && isSessionPath(map)) {
-    m.session.emplace(loadSession(map));
+    m.session.emplace(loadSession(map, {.decode_images = false}));  // a container view decodes its keyframe's image
     m.graph = &m.session->graph;
     m.state = &m.session->info.state;
     m.camera = m.session->info.camera;
@@ -436,7 +436,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   if (spec.kind == render::ViewKind::kContainer) {
     const Keyframe& k = m.graph->keyframe(spec.keyframe);
     const std::vector<Ellipsoid> kept = keptEllipsoids(k.container, params.filter, k.T_W_K, k.id);
-    mirror.setContainer(++m.container_serial, spec.keyframe, k.rgb(), m.camera, k.T_W_K, kept,
+    mirror.setContainer(++m.container_serial, spec.keyframe, keyframeImage(k, name_), m.camera, k.T_W_K, kept,
                         {.sigma = spec.sigma, .color = spec.color, .cell_size_px = m.cell_size_px,
                          .show_grid = spec.layers.grid, .show_bounds = spec.layers.bounds});
     last_drawn_ = kept.size();

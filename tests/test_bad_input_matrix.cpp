@@ -11,7 +11,10 @@
 #include <sstream>
 
 #include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
+
+#include "app/view_file.h"
 
 #include "mapping/core/error.h"
 #include "mapping/eval/trajectory_error.h"
@@ -176,6 +179,16 @@ std::function<std::string(const fs::path&)> then(std::function<std::string(const
 std::function<std::string(const fs::path&)> removeFile(const char* file) {
   return [file](const fs::path& d) {
     fs::remove_all(d / file);
+    return std::string();
+  };
+}
+// Writes v.json, a good view file (writeViewFile of the default view) changed by `edit`.
+std::function<std::string(const fs::path&)> viewFile(std::function<void(nlohmann::json&)> edit) {
+  return [edit](const fs::path& d) {
+    app::writeViewFile(d / "v.json", render::ViewSpec{}, GlobalMapParams{}, "s.vdmap");
+    nlohmann::json j = nlohmann::json::parse(readFile(d / "v.json"));
+    edit(j);
+    writeText(d / "v.json", j.dump());
     return std::string();
   };
 }
@@ -569,6 +582,45 @@ const std::vector<BadCase>& badCases() {
       {"sequence", "camera_file_principal_point_outside", E::kInputError,
        "camera.yaml: camera: principal point (cx 5000, cy 23.5) must lie within the 64x48 image",
        write("seq/camera.yaml", "fx: 50\nfy: 50\ncx: 5000\ncy: 23.5\ndepth_scale: 5000\nwidth: 64\nheight: 48\n")},
+      // Golden images and suites (`vdmap render --expect` / `--suite`): a golden that cannot be
+      // compared and a suite that cannot run are bad input (exit 1), found before anything is
+      // rendered or written; option misuse is CLI11's. The session is the matrix's good one.
+      {"session", "render_golden_other_size", E::kCliError, "g.png: the golden is 320x240, the view 160x120 (--size, or --update)",
+       then(image("g.png", cv::Mat(240, 320, CV_8UC3, cv::Scalar(10, 20, 30))),
+            "render {dir}/s.vdmap --size 160x120 --expect {dir}/g.png")},
+      {"session", "render_golden_corrupt_png", E::kCliError, "g.png: cannot decode colour image",
+       then(cutImage("g.png", texture(), ".png", 0.5), "render {dir}/s.vdmap --size 64x48 --expect {dir}/g.png")},
+      {"session", "render_golden_missing", E::kCliError, "g.png: no such golden image (render it once with --update)",
+       args("render {dir}/s.vdmap --expect {dir}/g.png")},
+      {"session", "render_suite_missing_map", E::kCliError, "views.yaml:4: map 'kitchen': no such file or folder",
+       then(write("views.yaml", "version: 1\nout: out\nmaps:\n  kitchen: missing.vdmap\nviews:\n  - {name: a, map: kitchen}\n"),
+            "render --suite {dir}/views.yaml")},
+      {"session", "render_suite_yaml_syntax", E::kCliError, "views.yaml:4: not valid YAML",
+       then(write("views.yaml", "version: 1\nout: out\nviews: [{name: a, map: s\nmaps: {s: s.vdmap}\n"),
+            "render --suite {dir}/views.yaml")},
+      {"session", "render_suite_unknown_view_key", E::kCliError, "views.yaml:5: unknown view key 'colour'",
+       then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - {name: a, map: s, colour: rgb}\n"),
+            "render --suite {dir}/views.yaml --update")},
+      {"session", "render_tolerance_bad", E::kCliUsage, "--tolerance: '8': expected COUNTS,SHARE",
+       args("render {dir}/s.vdmap --expect {dir}/g.png --tolerance 8")},
+      {"session", "render_update_without_expect", E::kCliUsage, "--update needs --expect GOLDEN.png (or --suite)",
+       args("render {dir}/s.vdmap --update --out {dir}/o.png")},
+      // View files (`render --view-file`, the window's saved views): strict, naming the key.
+      {"session", "render_view_file_missing_key", E::kCliError, "v.json: missing key 'sigma'",
+       then(viewFile([](nlohmann::json& j) { j.erase("sigma"); }), "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_view_file_non_finite", E::kCliError, "v.json: camera.eye[0] must be finite",
+       then([](const fs::path& d) {
+              viewFile([](nlohmann::json& j) {
+                j["camera"] = {{"eye", {7, 1, 1}}, {"target", {0, 0, 0}}, {"up", {0, 0, 1}}, {"fov_y_deg", 60}};
+              })(d);
+              std::string text = readFile(d / "v.json");
+              text.replace(text.find("[7,"), 3, "[1e999,");  // JSON has no infinity: a number too large for a double
+              writeText(d / "v.json", text);
+              return std::string();
+            },
+            "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_view_file_unknown_key", E::kCliError, "v.json: unknown key 'zoom'",
+       then(viewFile([](nlohmann::json& j) { j["zoom"] = 2; }), "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
   };
   return all;
 }

@@ -450,7 +450,7 @@ bool checkImageHeader(const Reader& r, int h, int w, int t, int type, int rows, 
 }
 
 /// Version 6: an image's file, decoded here once so that a session that loads never fails to show one.
-CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, const char* what) {
+CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, const char* what, bool decode) {
   const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
   if (!checkImageHeader(*r, h, w, t, type, camera.height, camera.width, what))
     return CompressedImage::fromEncoded(0, 0, t, {}, false);
@@ -459,7 +459,7 @@ CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, cons
            std::string(what) + ": red and blue swapped must be " + (type == CV_8UC3 ? "0 or 1" : "0"));
   const std::uint32_t n = r->count(1, what);
   CompressedImage image = CompressedImage::fromEncoded(h, w, t, std::string(r->bytes(n, what)), swapped == 1);
-  image.decode(r->context() + ": " + what);
+  if (decode) image.decode(r->context() + ": " + what);
   return image;
 }
 
@@ -563,7 +563,7 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   w->bytes(packed);
 }
 
-Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t version) {
+Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t version, bool decode_images) {
   const PinholeCamera& camera = info.camera;
   Keyframe k{id, 0, 0.0, Transform::Identity(), {}, {}, {},
              KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
@@ -578,8 +578,8 @@ Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t 
   r->check(k.frames_integrated >= 0, "frames integrated must be >= 0");
   FrameFeatures& f = k.features;
   if (version >= 6) {
-    k.rgb_image = readImage(r, CV_8UC3, camera, "rgb image");
-    k.depth_image = readImage(r, CV_16UC1, camera, "depth image");
+    k.rgb_image = readImage(r, CV_8UC3, camera, "rgb image", decode_images);
+    k.depth_image = readImage(r, CV_16UC1, camera, "depth image", decode_images);
     const std::uint32_t n = r->u32("keypoint count");
     r->check(n <= static_cast<std::uint32_t>(std::numeric_limits<int>::max()), "keypoint count " + std::to_string(n) + " is too large");
     const int h = r->i32("descriptors"), w = r->i32("descriptors"), t = r->i32("descriptors");
@@ -769,7 +769,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     } else if (s < first_keyframe) {
       readState(&r, version, &session.info, keyframes);
     } else {
-      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version));
+      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version, options.decode_images));
     }
   }
   body.setWhere("file");
@@ -790,7 +790,7 @@ bool isSessionPath(const std::filesystem::path& file) {
   return isSessionFile(file) || (file.extension() == ".vdmap" && std::filesystem::is_regular_file(file, ec));
 }
 
-Session loadSession(const std::filesystem::path& file) {
+Session loadSession(const std::filesystem::path& file, const SessionDecodeOptions& options) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "cannot open the session file");
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
@@ -798,7 +798,11 @@ Session loadSession(const std::filesystem::path& file) {
   if (file.extension() == ".vdmap" && bytes.compare(0, sizeof(kMagic), std::string_view(kMagic, sizeof(kMagic))) != 0)
     throw InputError(file.string(), bytes.empty() ? "a damaged session file: it is empty (wrong magic)"
                                                   : "a damaged session file: it does not start with 'VDMAPSES' (wrong magic)");
-  return decodeSession(bytes, file.string());
+  return decodeSession(bytes, file.string(), options);
+}
+
+cv::Mat keyframeImage(const Keyframe& k, const std::string& session) {
+  return k.rgb_image.decode(session + ": keyframe " + std::to_string(k.id) + ": rgb image");
 }
 
 }  // namespace vdmap

@@ -68,6 +68,11 @@ void saveSession(const std::filesystem::path& file, const KeyframeGraph& graph, 
 struct SessionDecodeOptions {
   /// Off only for the fuzzer, so that mutations reach the section parsers; never for files.
   bool verify_checksums = true;
+  /// Decode every keyframe's colour and depth image (format 6 stores the files) to prove that
+  /// they decode. Off for the headless renderer, which needs no image for the global and keyframe
+  /// views: it decodes a container view's image when it draws it (keyframeImage()), so a damaged
+  /// image is still one error naming the session and the keyframe. The workbench stays eager.
+  bool decode_images = true;
 };
 
 /// Parses a session from memory; `name` is what errors call it. Throws InputError with one line
@@ -87,7 +92,12 @@ bool isSessionPath(const std::filesystem::path& file);
 
 /// Reads and decodes a session file (InputError as decodeSession, or when it cannot be read; a
 /// file named *.vdmap without the session magic is "a damaged session file").
-Session loadSession(const std::filesystem::path& file);
+Session loadSession(const std::filesystem::path& file, const SessionDecodeOptions& options = {});
+
+/// Keyframe `k`'s colour image (CV_8UC3) of a session named `session` (its file): throws
+/// InputError "SESSION: keyframe K: rgb image: ..." when it does not decode (a session loaded
+/// with decode_images off was not checked).
+cv::Mat keyframeImage(const Keyframe& k, const std::string& session);
 
 /// CRC-32 (IEEE 802.3, the zlib polynomial) of `bytes`, continuing from `crc`.
 std::uint32_t crc32(std::string_view bytes, std::uint32_t crc = 0);
