@@ -8,6 +8,7 @@
 #include <Eigen/Geometry>
 
 #include "app/provenance.h"
+#include "app/view_file.h"
 #include "mapping/export/map_export.h"
 
 namespace vdmap::app::gui {
@@ -139,7 +140,12 @@ bool Workbench::openSession(const std::string& file) {
   try {
     Session saved = loadSession(path);
     // The session's own parameters, shown and used; the user's settings stay as they are.
-    const ParameterValues params{saved.info.mapper, saved.info.global};
+    ParameterValues params{saved.info.mapper, saved.info.global};
+    if (!session_settings_.empty()) {  // keys the file lacks keep the session's values
+      Settings base;
+      base.thresholds = params.global;
+      params.global = readSettingsArg(session_settings_, base).thresholds;
+    }
     std::optional<TumSequence> rest = framesAfter(saved, &why);
     auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
     worker->setOnChange(on_change_);

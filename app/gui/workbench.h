@@ -48,6 +48,9 @@ struct UiState {
   std::string export_text = "vdmap_export";   ///< export folder
   std::string session_text = "map.vdmap";     ///< "save session" file
   StatusLine status;
+  /// Which settings this run started with (the note cmd_gui prints) and the file they are saved
+  /// to on exit ("": not saved, a scripted run or --settings).
+  std::string settings_source = "defaults", settings_file;
   bool show_help = false;         ///< the key and mouse overlay (H, F1)
   bool show_container = false;    ///< the large container view window (C)
   /// The map, keyframes and trajectory as they were before the last pose-graph optimisation
@@ -140,6 +143,9 @@ class Workbench {
   void setRefinement(std::optional<MapRefinementParams> refine) { refine_ = std::move(refine); }
   /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
   bool openSession(const std::string& file);
+  /// The thresholds `file` sets (--settings FILE: a settings.json or a view file, readSettingsArg)
+  /// go over the saved thresholds of every session opened from now on; "": none.
+  void setSessionSettings(std::string file) { session_settings_ = std::move(file); }
   /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
   bool openPath(const std::string& path);
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
@@ -234,6 +240,8 @@ class Workbench {
   int framed_generation_ = -1;                     // the global map the view was last framed on
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
+  std::string session_settings_;                   // setSessionSettings'
+
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;
 };
