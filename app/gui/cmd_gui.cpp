@@ -24,6 +24,7 @@ struct GuiArgs {
   SequenceArgs sequence;
   std::string map;  ///< a saved session instead of a sequence
   std::string settings;  ///< --settings: this file instead of the defaults or the user's settings
+  std::string view_file;  ///< --view-file: read (strictly) before the window opens
   gui::ScriptOptions script;
   std::vector<std::string> set;
   std::string window_size;
@@ -128,6 +129,7 @@ void runGui(GuiArgs args, bool builtin) {
   const std::string verb = builtin ? "vdmap" : "vdmap gui";
   const bool session = !builtin && !args.map.empty();
   const StartSettings start = startSettings(args, session);
+  if (!args.view_file.empty()) args.script.view = readViewFile(args.view_file);
   const fs::path& settings_file = start.user_file;
   const std::string& warning = start.warning;
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
@@ -194,6 +196,13 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
       "f1, esc; e.g. h for the help)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
+  app.add_option_function<std::string>(
+      "--view-file", [&args](const std::string& file) { args.view_file = file; },
+      "scripted: show this view file's view (camera, view options) once mapping is done, instead of the default view");
+  app.add_option("--save-view", args.script.save_view,
+                 "scripted: save the view shown as a view file once mapping is done (as S does), for vdmap render --view-file");
+  app.add_option("--view-screenshot", args.script.view_screenshot,
+                 "scripted: a PNG of the 3-D view alone (no panels) at the view's size, once mapping is done");
   app.add_option("--settings", args.settings,
                  "FILE: start from this settings.json (or a view file's thresholds) instead of the defaults (scripted "
                  "runs) or your own settings (interactive runs); its thresholds go over a session's; your settings are "

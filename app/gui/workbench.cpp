@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <optional>
 
 #include <Eigen/Geometry>
@@ -34,6 +35,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
       {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
+      {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
@@ -458,7 +460,116 @@ void Workbench::key(KeyAction action) {
       break;
     case KeyAction::kUndo: undoPoseEdit(); break;
     case KeyAction::kBeforeOptimisation: showBeforeOptimisation(!ui_.show_before_optimisation); break;
+    case KeyAction::kSaveView: saveView(ui_.view_file_text); break;
   }
+}
+
+namespace {
+
+// The orbit camera whose eye(), target and up are the look-at's (OrbitCamera::eye inverted:
+// yaw about `up` from the same horizon axes, pitch clamped to +-89 degrees).
+render::OrbitCamera orbitLookingAt(const render::LookAt& l) {
+  render::OrbitCamera c;
+  c.target = l.target;
+  c.up = glm::normalize(l.up);
+  c.fov_y_deg = l.fov_y_deg;
+  const glm::vec3 d = l.eye - l.target;
+  c.distance_m = std::max(glm::length(d), 1e-3f);
+  const glm::vec3 n = d / c.distance_m;
+  glm::vec3 a = glm::cross(c.up, std::abs(c.up.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
+  a = glm::normalize(a);
+  const glm::vec3 b = glm::cross(c.up, a);
+  const float limit = glm::radians(89.f);
+  c.pitch = std::clamp(std::asin(std::clamp(glm::dot(n, c.up), -1.f, 1.f)), -limit, limit);
+  c.yaw = std::atan2(glm::dot(n, b), glm::dot(n, a));
+  return c;
+}
+
+}  // namespace
+
+render::ViewSpec Workbench::viewSpec() const {
+  render::ViewSpec spec = viewSpecOf(ui_.settings);
+  spec.selected_keyframe = ui_.selected_keyframe;
+  spec.fov_y_deg = ui_.camera.fov_y_deg;
+  const auto mapping = worker_ ? worker_->mapping() : nullptr;
+  const int keyframes = mapping ? static_cast<int>(mapping->keyframes.size()) : 0;
+  const auto mapped = [&](int id) { return id >= 0 && id < keyframes; };
+  if (ui_.show_container && mapped(ui_.selected_keyframe)) {
+    spec.kind = render::ViewKind::kContainer;
+    spec.keyframe = ui_.selected_keyframe;
+    spec.width = 2 * mapping->camera.width;
+    spec.height = 2 * mapping->camera.height;
+  } else if (mapped(ui_.view_from_keyframe)) {
+    spec.kind = render::ViewKind::kKeyframe;
+    spec.keyframe = ui_.view_from_keyframe;
+    const render::PixelRect r = render::letterbox(ui_.view_width, ui_.view_height, mapping->camera.width, mapping->camera.height);
+    spec.width = r.width;
+    spec.height = r.height;
+  } else {
+    spec.width = ui_.view_width;
+    spec.height = ui_.view_height;
+    spec.look_at = render::LookAt{ui_.camera.eye(), ui_.camera.target, ui_.camera.up, ui_.camera.fov_y_deg};
+  }
+  return spec;
+}
+
+bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
+  Settings& s = ui_.settings;
+  s.up_axis = spec.up;
+  s.color = spec.color;
+  s.show_ellipsoids = spec.ellipsoids;
+  s.ellipsoid_sigma = spec.sigma;
+  s.show_frustums = spec.layers.frustums;
+  s.show_graph = spec.layers.graph;
+  s.show_trajectory = spec.layers.trajectory;
+  s.show_groundtruth = spec.layers.groundtruth;
+  s.show_legend = spec.layers.legend;
+  s.container_grid = spec.layers.grid;
+  s.container_bounds = spec.layers.bounds;
+  s.background = spec.background;
+  ui_.show_container = false;
+  ui_.view_from_keyframe = -1;
+  if (spec.look_at) {
+    ui_.camera = orbitLookingAt(*spec.look_at);
+  } else {
+    resetView();
+    ui_.camera.fov_y_deg = spec.fov_y_deg;
+    if (spec.orbit) {
+      ui_.camera.yaw = glm::radians(spec.orbit->azimuth_deg);
+      ui_.camera.pitch = glm::radians(std::clamp(spec.orbit->elevation_deg, -89.f, 89.f));
+      if (spec.orbit->distance_m) ui_.camera.distance_m = *spec.orbit->distance_m;
+    }
+  }
+  ui_.follow_map = !spec.look_at && !spec.orbit;  // "camera": null is the framed view, which follows the map
+  const int id = spec.kind == render::ViewKind::kGlobal ? spec.selected_keyframe : spec.keyframe;
+  if (id >= 0 || ui_.selected_keyframe >= 0) selectKeyframe(id);
+  if (spec.kind == render::ViewKind::kGlobal) return true;
+  if (ui_.selected_keyframe != spec.keyframe) {
+    report(StatusLine::Kind::kError, "the view's keyframe " + std::to_string(spec.keyframe) + " is not mapped");
+    return false;
+  }
+  if (spec.kind == render::ViewKind::kKeyframe) ui_.view_from_keyframe = spec.keyframe;
+  else ui_.show_container = true;
+  return true;
+}
+
+bool Workbench::saveView(const std::string& file) {
+  if (!worker_) {
+    report(StatusLine::Kind::kError, "Save view: nothing is open");
+    return false;
+  }
+  const std::string path = absolute(file);
+  try {
+    if (path.empty()) throw std::invalid_argument("Save view: type a file name first");
+    writeViewFile(path, viewSpec(), ui_.params.global, viewSource());
+  } catch (const std::exception& e) {
+    report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  const std::string command = renderCommand(viewSpec(), viewSource(), path);
+  std::cout << "vdmap: view saved to " << path << "; draw it with: " << command << std::endl;
+  report(StatusLine::Kind::kSuccess, "view saved to " + path + "; " + command);
+  return true;
 }
 
 }  // namespace vdmap::app::gui

@@ -14,6 +14,7 @@
 #include "app/parameter_table.h"
 #include "render/map_mirror.h"
 #include "render/view_camera.h"
+#include "render/view_spec.h"
 
 namespace vdmap::app::gui {
 
@@ -47,6 +48,7 @@ struct UiState {
   std::string trajectory_text;    ///< the "load corrected trajectory" field
   std::string export_text = "vdmap_export";   ///< export folder
   std::string session_text = "map.vdmap";     ///< "save session" file
+  std::string view_file_text = "vdmap_view.json";  ///< "save view" file (S)
   StatusLine status;
   /// Which settings this run started with (the note cmd_gui prints) and the file they are saved
   /// to on exit ("": not saved, a scripted run or --settings).
@@ -63,7 +65,7 @@ struct UiState {
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo, kBeforeOptimisation
+  kEscape, kUndo, kBeforeOptimisation, kSaveView
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
@@ -215,6 +217,24 @@ class Workbench {
   glm::vec3 upVector() const;
   /// One keyboard action.
   void key(KeyAction action);
+
+  /// The view shown, as a view file holds it (docs/workbench.md "Save view"): container:K while
+  /// the container window is open (2W x 2H), keyframe:K while viewing from a keyframe (the
+  /// letterbox's size), else the global view with its camera (eye, target, up, field of view) at
+  /// the viewport's size; the view options and the selected keyframe from the settings and UI.
+  render::ViewSpec viewSpec() const;
+  /// Shows `spec` (the inverse of viewSpec, but the size: the window's viewport stays as laid
+  /// out): the view options go into the settings, the camera as given (else the default view,
+  /// turned by spec.orbit), and the view stops following the map. Keyframe and container views
+  /// select their keyframe (an id not mapped: the global view, and false is returned). The
+  /// thresholds stay: a view file's apply only through --settings.
+  bool applyViewSpec(const render::ViewSpec& spec);
+  /// The file a render command names for the open session: the .vdmap or sequence folder.
+  const std::string& viewSource() const { return ui_.settings.last_sequence; }
+  /// Writes viewSpec() and the thresholds as a view file to `file`; the status line and stdout
+  /// give its absolute path and the `vdmap render` command that draws it. False (the status line
+  /// says why) when nothing is open or the file cannot be written.
+  bool saveView(const std::string& file);
 
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
