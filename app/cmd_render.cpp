@@ -7,7 +7,6 @@
 #include <filesystem>
 #include <limits>
 #include <random>
-#include <regex>
 
 #include <glm/gtc/matrix_transform.hpp>
 #include <opencv2/imgcodecs.hpp>
@@ -15,6 +14,8 @@
 
 #include "app/commands.h"
 #include "app/map_sequence.h"
+#include "app/render_view.h"
+#include "app/view_file.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -36,24 +37,10 @@ namespace {
 
 struct RenderArgs {
   SequenceArgs sequence;
-  std::string map, mesh, view = "global", out, size, color = "rgb";
-  float sigma = 2.f;
-  float point_below_px = render::EllipsoidStyle{}.point_below_px;
-  bool grid = false;
+  std::string map, mesh, out;
+  RenderViewArgs view;
   int bench_ellipsoids = 0;
-  int sphere_subdivisions = 1;
 };
-
-std::pair<int, int> parseSize(const std::string& text) {
-  std::smatch m;
-  static const std::regex pattern(R"((\d{1,9})x(\d{1,9}))");
-  if (!std::regex_match(text, m, pattern))
-    throw std::invalid_argument("'" + text + "': expected WIDTHxHEIGHT, e.g. 1280x720");
-  const int w = std::stoi(m[1]), h = std::stoi(m[2]);
-  if (w < 1 || h < 1 || w > render::kMaxImageSide || h > render::kMaxImageSide)
-    throw std::invalid_argument("'" + text + "': each side must be in 1.." + std::to_string(render::kMaxImageSide));
-  return {w, h};
-}
 
 // The image formats --out may name, by extension: PNG (lossless, what the goldens are) and JPEG.
 enum class ImageFormat { kPng, kJpeg };
@@ -79,7 +66,9 @@ void writeImage(const std::filesystem::path& file, const cv::Mat& rgb) {
 }
 
 void runBench(const RenderArgs& args) {
-  const auto [w, h] = parseSize(args.size.empty() ? "1280x720" : args.size);
+  const auto [w, h] = parseViewSize(args.view.size.empty() ? "1280x720" : args.view.size);
+  const float sigma = args.view.sigma.value_or(2.f), point_below_px = args.view.points_below.value_or(4.f);
+  const int sphere_subdivisions = args.view.sphere_level.value_or(1);
   std::mt19937 rng(7);
   std::uniform_real_distribution<float> pos(-5.f, 5.f), size(0.005f, 0.04f), angle(0.f, 6.2832f);
   std::vector<render::EllipsoidInstance> set(static_cast<std::size_t>(args.bench_ellipsoids));
@@ -93,8 +82,8 @@ void runBench(const RenderArgs& args) {
   auto context = render::createOffscreenContext();
   const render::Gl& gl = context->gl();
   render::Framebuffer fb(gl, w, h);
-  render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .sphere_subdivisions = args.sphere_subdivisions,
-                                         .point_below_px = args.point_below_px});
+  render::EllipsoidRenderer renderer(gl, {.sigma = sigma, .sphere_subdivisions = sphere_subdivisions,
+                                         .point_below_px = point_below_px});
   auto t0 = std::chrono::steady_clock::now();
   renderer.set(set);
   gl.Finish();
@@ -113,127 +102,14 @@ void runBench(const RenderArgs& args) {
   }
   std::printf("renderer     %s\n", context->description().c_str());
   std::printf("ellipsoids   %d instanced, icosphere level %d, points below %.1f px, %dx%d\n", args.bench_ellipsoids,
-              args.sphere_subdivisions, args.point_below_px, w, h);
+              sphere_subdivisions, point_below_px, w, h);
   std::printf("upload       %.1f ms (eigen-decomposition + buffer upload)\n", upload_ms);
   std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", median(times), times.size(),
               *std::min_element(times.begin(), times.end()));
   if (!args.out.empty()) writeImage(args.out, fb.readRgb());
 }
 
-// --view: global, keyframe:K or container:K.
-struct ViewChoice {
-  enum class Kind { kGlobal, kKeyframe, kContainer } kind = Kind::kGlobal;
-  int keyframe = -1;
-};
-
-ViewChoice parseView(const std::string& text) {
-  std::smatch m;
-  static const std::regex pattern(R"((global)|(keyframe|container):(\d{1,9}))");
-  if (!std::regex_match(text, m, pattern))
-    throw std::invalid_argument("'" + text + "': expected global, keyframe:K or container:K");
-  if (m[1].matched) return {};
-  return {m[2] == "keyframe" ? ViewChoice::Kind::kKeyframe : ViewChoice::Kind::kContainer, std::stoi(m[3])};
-}
-
-// What one `vdmap render` draws: ellipsoids (a map file or the global map of a sequence), an
-// optional mesh, the keyframe graph's lines, and for keyframe/container views the keyframe.
-struct RenderScene {
-  std::vector<render::EllipsoidInstance> ellipsoids;
-  ColoredTriangleMesh mesh;
-  render::ColoredLines lines;
-  const Keyframe* keyframe = nullptr;
-  PinholeCamera camera;
-  std::vector<render::EllipsoidInstance> container_ellipsoids;  // K's own kept ellipsoids
-  int cell_size_px = 5;
-};
-
-// The whole scene: exact bounds of every ellipsoid (its mean +- sigma along the axes), mesh
-// vertex and graph line, so nothing at the edges is cut (a percentile box cropped the map).
-render::ViewCamera globalView(const RenderScene& scene, float sigma, int w, int h) {
-  glm::vec3 lo(INFINITY), hi(-INFINITY);
-  const auto add = [&](const glm::vec3& p, const glm::vec3& r) {
-    lo = glm::min(lo, p - r);
-    hi = glm::max(hi, p + r);
-  };
-  for (const auto& e : scene.ellipsoids)
-    add(e.mean, sigma * glm::sqrt(glm::max(glm::vec3(e.cov[0][0], e.cov[1][1], e.cov[2][2]), glm::vec3(0.f))));
-  for (const auto& p : scene.mesh.positions) add({p.x(), p.y(), p.z()}, glm::vec3(0.f));
-  for (const auto& p : scene.lines.positions) add(p, glm::vec3(0.f));
-  if (!(lo.x <= hi.x)) lo = glm::vec3(-1.f), hi = glm::vec3(1.f);  // nothing to frame
-  return render::OrbitCamera::framing(lo, hi).view(w, h);
-}
-
-cv::Mat draw(const render::Gl& gl, const RenderScene& scene, const ViewChoice& choice, int w, int h,
-             const RenderArgs& args, render::ColorMode color) {
-  render::Framebuffer fb(gl, w, h);
-  if (choice.kind == ViewChoice::Kind::kContainer) {
-    render::ContainerRenderer container(gl);
-    container.setKeyframe(scene.keyframe->rgb(), scene.camera, scene.keyframe->T_W_K);
-    container.setEllipsoids(scene.container_ellipsoids, {.sigma = args.sigma, .color = color,
-                                                         .cell_size_px = scene.cell_size_px, .show_grid = args.grid});
-    fb.bindAndClear(0.f, 0.f, 0.f);
-    container.draw(w, h);
-    return fb.readRgb();
-  }
-  const render::ViewCamera view = choice.kind == ViewChoice::Kind::kKeyframe
-                                      ? render::ViewCamera::fromPinhole(scene.camera, scene.keyframe->T_W_K, w, h)
-                                      : globalView(scene, args.sigma, w, h);
-  fb.bindAndClear(1.f, 1.f, 1.f);
-  if (!scene.mesh.triangles.empty()) {
-    render::MeshRenderer mesh_renderer(gl);
-    mesh_renderer.set(render::toColoredMesh(scene.mesh));
-    mesh_renderer.draw(view);
-  }
-  if (!scene.ellipsoids.empty()) {
-    render::EllipsoidRenderer renderer(gl, {.sigma = args.sigma, .color = color,
-                                             .sphere_subdivisions = args.sphere_subdivisions,
-                                             .point_below_px = args.point_below_px});
-    renderer.set(scene.ellipsoids);
-    renderer.draw(view);
-  }
-  if (!scene.lines.positions.empty()) {
-    render::LineRenderer lines(gl);
-    lines.set(scene.lines);
-    lines.setWidth(2.f);
-    lines.draw(view);
-  }
-  return fb.readRgb();
-}
-
-// What the scene was made from, for the summary line.
-struct SceneSource {
-  std::string name;  ///< the sequence folder or the session file (keyframe range errors name it)
-  int frames = 0;
-  const KeyframeGraph* graph = nullptr;
-};
-
-// The views of a keyframe graph (mapped from a sequence or loaded from a session): the global
-// map with the graph's lines, or keyframe K's view or container.
-void addGraph(RenderScene* scene, const KeyframeGraph& graph, const PinholeCamera& camera, int cell_size_px,
-              const GlobalMapParams& global_params, const ViewChoice& choice, const std::string& source,
-              const std::string& view_text) {
-  scene->camera = camera;
-  scene->cell_size_px = cell_size_px;
-  if (choice.kind == ViewChoice::Kind::kContainer || choice.kind == ViewChoice::Kind::kKeyframe) {
-    if (choice.keyframe >= static_cast<int>(graph.size()))
-      throw std::invalid_argument("--view " + view_text + ": " + source +
-                                  (graph.size() == 0 ? std::string(" has no keyframe")
-                                                     : " has keyframes 0.." + std::to_string(graph.size() - 1)));
-    scene->keyframe = &graph.keyframe(choice.keyframe);
-  }
-  if (choice.kind == ViewChoice::Kind::kContainer) {
-    scene->container_ellipsoids = render::toInstances(
-        keptEllipsoids(scene->keyframe->container, global_params.filter, scene->keyframe->T_W_K, scene->keyframe->id));
-  } else {
-    scene->ellipsoids = render::toInstances(buildGlobalMap(graph, global_params).ellipsoids);
-  }
-  // Frustums at 10% of the scene's extent would need the bounds first; 0.15 m reads well for
-  // rooms (the data vdmap is made for). Only the global view draws the graph.
-  if (choice.kind == ViewChoice::Kind::kGlobal) scene->lines = render::keyframeGraphLines(graph, camera, 0.15f);
-}
-
 void runRender(RenderArgs args) {
-  namespace fs = std::filesystem;
   if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
   if (args.out.empty()) throw CLI::RequiredError("--out");
@@ -241,73 +117,34 @@ void runRender(RenderArgs args) {
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
                              "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
   checkOutputFile(args.out, "--out");
-  // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map (SEQ and
-  // --map exclude each other).
-  if (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder)) std::swap(args.map, args.sequence.folder);
-  const bool from_sequence = !args.sequence.folder.empty();
-  const bool from_session = !args.map.empty() && isSessionPath(args.map);
-  const ViewChoice choice = parseView(args.view);
-  if (!from_sequence && !from_session && choice.kind != ViewChoice::Kind::kGlobal)
-    throw std::invalid_argument("--view " + args.view +
+  // The view first (a bad view file or --settings costs no loading), then the context (a missing
+  // OSMesa should not cost a mapping run), then the source.
+  const bool session_given = (!args.map.empty() && isSessionPath(args.map)) ||
+                             (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder));
+  const bool keyframes_given = session_given || !args.sequence.folder.empty();
+  ResolvedView view = resolveViewSpec(args.view, std::nullopt);
+  if (!keyframes_given && view.spec.kind != render::ViewKind::kGlobal)
+    throw std::invalid_argument("--view " + viewName(view.spec) +
                                 " needs keyframes: give a sequence (SEQ) or a session (.vdmap); a --map PLY or map "
                                 "folder has none");
-  const std::pair<int, int> size = args.size.empty() ? std::pair{0, 0} : parseSize(args.size);  // 0: default
-  const render::ColorMode color = render::parseColorMode(args.color);
-
-  RenderScene scene;
-  std::optional<Session> session;
-  if (from_session) {
-    session.emplace(loadSession(args.map));
-  } else if (!args.map.empty()) {
-    // A `vdmap map` folder is drawn by its global map.
-    const fs::path ply = fs::is_directory(args.map) ? fs::path(args.map) / "global_ellipsoids.ply" : fs::path(args.map);
-    if (fs::is_directory(args.map) && !fs::exists(ply))
-      throw InputError(args.map, "has no global_ellipsoids.ply (expected a `vdmap map` output folder)");
-    scene.ellipsoids = render::toInstances(readPlyEllipsoids(ply));
-  }
-  if (!args.mesh.empty()) scene.mesh = readPlyMesh(args.mesh);
-  // The context comes before the mapping: a missing OSMesa should not cost a mapping run.
-  auto context = render::createOffscreenContext();
-  std::unique_ptr<Mapper> mapper;
-  SceneSource source;
-  if (from_sequence) {
-    const TumSequence seq = openSequence(args.sequence);
-    noteCameraGuess(seq, "render");
-    MapperParams params;
-    params.poses = poseSource(args.sequence, seq);
-    checkRefinementApplies(args.sequence, params.poses);
-    mapper = std::make_unique<Mapper>(seq.camera(), params);
-    mapSequence(seq, *mapper, {}, refinement(args.sequence));
-    addGraph(&scene, mapper->graph(), seq.camera(), mapper->params().local_map.cell_size_px, GlobalMapParams{},
-             choice, seq.folder().string(), args.view);
-    source = {seq.folder().string(), mapper->framesMapped(), &mapper->graph()};
-  } else if (session) {
-    // The session's own live thresholds, as the workbench showed them when it was saved.
-    addGraph(&scene, session->graph, session->info.camera, session->info.mapper.local_map.cell_size_px,
-             session->info.global, choice, args.map, args.view);
-    source = {args.map, session->info.state.frames_mapped, &session->graph};
-  }
-
-  // Default sizes: the keyframe's own image for keyframe:K, the whole 2W x 2H container for
-  // container:K, 1280x720 for the global view.
-  auto [w, h] = size;
-  if (w == 0) {
-    const int scale = choice.kind == ViewChoice::Kind::kContainer ? 2 : 1;
-    std::tie(w, h) = choice.kind == ViewChoice::Kind::kGlobal
-                         ? std::pair{1280, 720}
-                         : std::pair{scale * scene.camera.width, scale * scene.camera.height};
-  }
-  writeImage(args.out, draw(context->gl(), scene, choice, w, h, args, color));
-  const std::size_t drawn =
-      choice.kind == ViewChoice::Kind::kContainer ? scene.container_ellipsoids.size() : scene.ellipsoids.size();
-  std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), w, h, args.view.c_str(),
-              counted(static_cast<long long>(drawn), "ellipsoid").c_str(),
-              counted(static_cast<long long>(scene.mesh.triangles.size()), "triangle").c_str());
-  if (source.graph)
-    std::printf(", %s, %s, %s", counted(source.frames, "frame").c_str(),
-                counted(static_cast<long long>(source.graph->size()), "keyframe").c_str(),
-                counted(static_cast<long long>(source.graph->edges().size()), "edge").c_str());
-  std::printf(")\n");
+  sharedOffscreenGl();
+  RenderSource source(args.sequence, args.map, args.mesh);
+  // The session's own thresholds (as the workbench showed them when it was saved) come under
+  // --settings, --view-file and the flags.
+  if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
+  source.checkView(view.spec);
+  std::printf("vdmap render: note: settings: %s\n", view.settings_source.c_str());
+  const cv::Mat image = source.render(view.spec, view.thresholds);
+  writeImage(args.out, image);
+  const glm::vec3 up = source.lastUp();
+  std::printf("wrote %s (%dx%d, view %s, %s, %s", args.out.c_str(), image.cols, image.rows, viewName(view.spec).c_str(),
+              counted(static_cast<long long>(source.lastDrawn()), "ellipsoid").c_str(),
+              counted(static_cast<long long>(source.meshTriangles()), "triangle").c_str());
+  if (const KeyframeGraph* graph = source.graph())
+    std::printf(", %s, %s, %s", counted(source.framesMapped(), "frame").c_str(),
+                counted(static_cast<long long>(graph->size()), "keyframe").c_str(),
+                counted(static_cast<long long>(graph->edges().size()), "edge").c_str());
+  std::printf(", up (%.2f, %.2f, %.2f))\n", up.x, up.y, up.z);
 }
 
 }  // namespace
@@ -326,34 +163,12 @@ void addRenderCommand(CLI::App& app) {
                    "ellipsoid PLY (docs/method.md 11) or `vdmap map` folder (its global_ellipsoids.ply; global view only)")
       ->excludes(seq);
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
-  verb->add_option("--view", args->view,
-                   "global (map, frustums, covisibility edges coloured by weight) | keyframe:K (the map from "
-                   "keyframe K with its intrinsics) | container:K (K's image with its ellipses)")
-      ->check(parsedBy(parseView, "VIEW"))
-      ->capture_default_str();
   verb->add_option("--out", args->out, "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says")
       ->check(parsedBy(imageFormat, "FILE.png|.jpg"));
-  verb->add_option("--size", args->size,
-                   "image size WIDTHxHEIGHT (default: 1280x720 global, the camera's for keyframe:K, the "
-                   "container's 2W x 2H for container:K)")
-      ->check(parsedBy(parseSize, "WxH"));
-  std::string color_modes;  // "rgb | keyframe | ..."
-  for (const char* name : render::kColorModeNames) color_modes += (color_modes.empty() ? "" : " | ") + std::string(name);
-  verb->add_option("--color", args->color, color_modes)
-      ->check(parsedBy(render::parseColorMode, "MODE"))
-      ->capture_default_str();
-  verb->add_flag("--grid", args->grid, "container view: draw the cell grid");
-  verb->add_option("--sigma", args->sigma, "ellipsoid surface at this many standard deviations (> 0)")
-      ->check(positiveFiniteCheck())
-      ->capture_default_str();
+  addRenderViewOptions(*verb, args->view);
   verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,
                    "time N random instanced ellipsoids at --size instead of rendering a map")
       ->check(CLI::Range(0, std::numeric_limits<int>::max()));
-  verb->add_option("--sphere-level", args->sphere_subdivisions, "icosphere subdivisions of one ellipsoid (0..3)")
-      ->check(CLI::Range(0, 3))->capture_default_str();
-  verb->add_option("--points-below", args->point_below_px,
-                   "draw ellipsoids projecting to a radius below this many pixels as flat splats (0: never)")
-      ->check(CLI::Range(0.f, 64.f))->capture_default_str();
   verb->callback([args] { runRender(*args); });
 }
 

@@ -29,7 +29,7 @@ namespace vdmap::app {
 /// The view flags of `vdmap render` as given (text, checked while parsing, resolved by
 /// resolveViewSpec). Empty / unset: not given, the lower layers of the precedence apply.
 struct RenderViewArgs {
-  std::string view = "global";   ///< --view global|keyframe:K|container:K
+  std::string view;              ///< --view global|keyframe:K|container:K (empty: global)
   std::string size;              ///< --size WxH
   std::string color;             ///< --color MODE
   std::string background;        ///< --background dark|white|#rrggbb
@@ -45,6 +45,9 @@ struct RenderViewArgs {
   std::optional<int> sphere_level, select;        ///< --sphere-level, --select K
   bool grid = false;             ///< --grid (container view's cell grid; as --layers +grid)
 };
+
+/// Parses --size WIDTHxHEIGHT (each side 1..kMaxImageSide); throws std::invalid_argument.
+std::pair<int, int> parseViewSize(const std::string& text);
 
 /// Registers the view flags on `verb` (or a suite view's parser), writing into `args` (which
 /// must outlive the parse). Syntax and ranges are checked while parsing.
@@ -78,6 +81,8 @@ class RenderSource {
   std::optional<GlobalMapParams> sessionThresholds() const;
   /// Frames mapped (sessions and sequences; 0 otherwise).
   int framesMapped() const;
+  /// Triangles of the --mesh (0 without one).
+  std::size_t meshTriangles() const;
   /// The global map for `params` (built once per distinct params; a map file's own map).
   const std::vector<Ellipsoid>& globalMap(const GlobalMapParams& params);
   /// The world's up direction for `axis` (kData: estimateUp of the cameras and this map).

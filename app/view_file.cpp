@@ -2,6 +2,9 @@
 
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <iterator>
 #include <fstream>
 #include <regex>
 #include <set>
@@ -21,6 +24,39 @@ using nlohmann::json;
 namespace {
 
 constexpr int kVersion = 1;
+// What a number too large for a double (1e999) is replaced by before parsing, so that the reader
+// can name its key ("must be finite") rather than the parser refuse the whole file.
+const std::string kNonFinite = std::string("\x01non-finite");
+
+// The text with every number literal outside strings that is not finite as a double replaced
+// by the string kNonFinite.
+std::string markNonFinite(const std::string& text) {
+  std::string out;
+  out.reserve(text.size());
+  bool in_string = false;
+  for (std::size_t i = 0; i < text.size(); ++i) {
+    const char c = text[i];
+    if (in_string) {
+      out += c;
+      if (c == '\\' && i + 1 < text.size()) out += text[++i];
+      else if (c == '"') in_string = false;
+      continue;
+    }
+    if (c == '"') in_string = true;
+    if (c == '-' || (c >= '0' && c <= '9')) {
+      std::size_t end = i;
+      while (end < text.size() && std::strchr("+-0123456789.eE", text[end])) ++end;
+      const std::string token = text.substr(i, end - i);
+      if (!std::isfinite(std::strtod(token.c_str(), nullptr))) {
+        out += json(kNonFinite).dump();
+        i = end - 1;
+        continue;
+      }
+    }
+    out += c;
+  }
+  return out;
+}
 const char* const kLayerKeys[] = {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid", "bounds"};
 bool render::ViewLayers::*const kLayerFields[] = {
     &render::ViewLayers::frustums, &render::ViewLayers::graph,  &render::ViewLayers::trajectory,
@@ -45,6 +81,7 @@ struct Reader {
     }
   }
   static double number(const json& v, const std::string& name) {
+    if (v.is_string() && v.get<std::string>() == kNonFinite) fail(name + " must be finite");
     if (!v.is_number()) fail(name + " must be a number, got " + v.dump());
     const double x = v.get<double>();
     if (!std::isfinite(x)) fail(name + " must be finite");
@@ -52,7 +89,11 @@ struct Reader {
   }
   static double number(const json& v, const std::string& name, double lo, double hi) {
     const double x = number(v, name);
-    if (x < lo || x > hi) fail(name + " must be in [" + json(lo).dump() + ", " + json(hi).dump() + "], got " + v.dump());
+    if (x < lo || x > hi) {
+      char range[64];
+      std::snprintf(range, sizeof range, "[%g, %g]", lo, hi);
+      fail(name + " must be in " + range + ", got " + v.dump());
+    }
     return x;
   }
   static int integer(const json& v, const std::string& name, int lo, int hi) {
@@ -147,7 +188,8 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
     live.insert(std::string(p.key));
     const std::string name = "thresholds." + std::string(p.key);
     const json& v = R::key(t, "thresholds.", std::string(p.key).c_str());
-    if (v.is_number() && !std::isfinite(v.get<double>())) R::fail(name + " must be finite");
+    if ((v.is_number() && !std::isfinite(v.get<double>())) || (v.is_string() && v.get<std::string>() == kNonFinite))
+      R::fail(name + " must be finite");
     if (!v.is_number() && !v.is_boolean() && !v.is_string()) R::fail(name + ": expected a value, got " + v.dump());
     try {
       setFromText(p, params, v.is_string() ? v.get<std::string>() : v.dump());
@@ -166,7 +208,8 @@ json parseFile(const fs::path& file) {
   if (!fs::exists(file)) throw InputError(file.string(), "no such file");
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "cannot be read");
-  json j = json::parse(in, nullptr, false);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  json j = json::parse(markNonFinite(text), nullptr, false);
   if (j.is_discarded()) throw InputError(file.string(), "not valid JSON");
   return j;
 }
@@ -294,7 +337,8 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
 bool isViewFile(const fs::path& file) {
   std::ifstream in(file);
   if (!in) return false;
-  const json j = json::parse(in, nullptr, false);
+  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const json j = json::parse(markNonFinite(text), nullptr, false);
   return !j.is_discarded() && j.is_object() && j.contains("vdmap_view");
 }
 

@@ -12,9 +12,6 @@
 namespace vdmap::render {
 namespace {
 
-// Icosahedra (20 triangles) rather than level-1 spheres (80): at 2 sigma an ellipsoid covers a
-// few pixels, and with a software renderer (llvmpipe) the view's frame time is 4x lower.
-constexpr EllipsoidStyle kEllipsoidStyle{.sphere_subdivisions = 0};
 constexpr glm::u8vec3 kSelected{255, 255, 255}, kCurrent{255, 220, 0}, kCamera{255, 60, 60};
 constexpr glm::u8vec3 kHighlight{255, 0, 255};
 
@@ -40,6 +37,24 @@ ColoredLines diamond(const Ellipsoid& e) {
 }
 
 }  // namespace
+
+GraphLines graphLines(const GraphScene& scene, const MirrorStyle& style) {
+  GraphLines out;
+  ColoredLines& lines = out.lines;
+  for (std::size_t i = 0; i < scene.keyframes.size() && style.frustums; ++i) {
+    const int id = static_cast<int>(i);
+    const glm::u8vec3 color = id == scene.selected_keyframe  ? kSelected
+                              : id == scene.current_keyframe ? kCurrent
+                                                             : keyframeColor(id);
+    addFrustum(lines, scene.camera, scene.keyframes[i], kKeyframeFrustumDepthM, color);
+  }
+  if (style.graph) addEdges(lines, scene.keyframes, scene.edges);
+  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
+  if (style.graph) addEdges(out.paths, scene.keyframes, scene.loops, kLoopEdgeColor);
+  if (style.groundtruth) addTrajectory(out.paths, scene.groundtruth, kGroundTruthColor);
+  if (style.trajectory) addTrajectory(out.paths, scene.trajectory, kTrajectoryColor);
+  return out;
+}
 
 std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {
   if (ellipsoids.empty() || mode == ColorMode::kRgb || mode == ColorMode::kKeyframe) return std::nullopt;
@@ -77,9 +92,13 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
   return image;
 }
 
-MapMirror::MapMirror(const Gl& gl)
-    : gl_(&gl), ellipsoids_(gl, kEllipsoidStyle), points_(gl), lines_(gl), paths_(gl), highlight_(gl), container_(gl),
-      rgb_(gl), depth_(gl), container_image_(gl) {
+// The default sphere level 0 draws icosahedra (20 triangles) rather than level-1 spheres (80):
+// at 2 sigma an ellipsoid covers a few pixels, and with a software renderer (llvmpipe) the
+// view's frame time is 4x lower.
+MapMirror::MapMirror(const Gl& gl, int sphere_level)
+    : gl_(&gl), ellipsoids_(gl, {.sphere_subdivisions = sphere_level}), points_(gl), lines_(gl), paths_(gl),
+      highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), rgb_(gl), depth_(gl),
+      container_image_(gl) {
   lines_.setWidth(1.5f);
   // The trajectories and loop edges are what one compares: drawn over the map, never hidden by
   // it, and wider where the context allows (a core profile draws 1 px).
@@ -93,7 +112,7 @@ MapMirror::~MapMirror() = default;
 
 void MapMirror::setStyle(const MirrorStyle& style) {
   style_ = style;
-  ellipsoids_.setStyle({.sigma = style.sigma, .color = style.color});
+  ellipsoids_.setStyle({.sigma = style.sigma, .color = style.color, .point_below_px = style.points_below_px});
   if (style.color != points_style_.color) {
     points_.set(instances_, style.color);
     points_style_.color = style.color;
@@ -119,23 +138,9 @@ void MapMirror::setGraph(int generation, int selected_keyframe, const std::funct
   graph_selected_ = selected_keyframe;
   graph_variant_ = variant;
   graph_style_ = style_;
-  const GraphScene scene = build();
-  ColoredLines lines;
-  for (std::size_t i = 0; i < scene.keyframes.size() && style_.frustums; ++i) {
-    const int id = static_cast<int>(i);
-    const glm::u8vec3 color = id == scene.selected_keyframe  ? kSelected
-                              : id == scene.current_keyframe ? kCurrent
-                                                             : keyframeColor(id);
-    addFrustum(lines, scene.camera, scene.keyframes[i], kKeyframeFrustumDepthM, color);
-  }
-  if (style_.graph) addEdges(lines, scene.keyframes, scene.edges);
-  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
-  lines_.set(lines);
-  ColoredLines paths;
-  if (style_.graph) addEdges(paths, scene.keyframes, scene.loops, kLoopEdgeColor);
-  if (style_.groundtruth) addTrajectory(paths, scene.groundtruth, kGroundTruthColor);
-  if (style_.trajectory) addTrajectory(paths, scene.trajectory, kTrajectoryColor);
-  paths_.set(paths);
+  const GraphLines lines = graphLines(build(), style_);
+  lines_.set(lines.lines);
+  paths_.set(lines.paths);
   ++uploads_.graph;
 }
 
@@ -180,6 +185,23 @@ void MapMirror::setHighlight(const std::optional<Ellipsoid>& ellipsoid) {
   highlighted_ = ellipsoid;
   highlight_.set(diamond(*ellipsoid));
 }
+
+void MapMirror::setLegend(const Legend& legend, const glm::vec3& background, int max_width) {
+  if (legend == legend_shown_ && background == legend_background_ && max_width == legend_width_) return;
+  legend_shown_ = legend;
+  legend_background_ = background;
+  legend_width_ = max_width;
+  legend_image_ = rasterizeLegend(legend, background, max_width);
+  legend_->set(legend_image_);
+}
+
+void MapMirror::drawLegend(int height) const {
+  if (legend_image_.empty()) return;
+  const cv::Point at = legendOrigin(legend_image_, height);
+  legend_->draw(at.x, at.y);
+}
+
+void MapMirror::drawContainer(int width, int height) const { container_.draw(width, height); }
 
 void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
   if (style_.ellipsoids) ellipsoids_.draw(view);

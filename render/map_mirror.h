@@ -18,30 +18,13 @@
 #include "render/container_renderer.h"
 #include "render/ellipsoid_renderer.h"
 #include "render/framebuffer.h"
+#include "render/overlay_renderer.h"
+#include "render/legend.h"
 #include "render/primitive_renderer.h"
 #include "render/scene_lines.h"
 #include "render/texture.h"
 
 namespace vdmap::render {
-
-/// The keyframe graph as the 3-D view draws it (world frame).
-struct GraphScene {
-  PinholeCamera camera;
-  std::vector<Transform> keyframes;   ///< T_W_K by keyframe id
-  std::vector<GraphEdge> edges;       ///< covisibility edges, viridis by weight
-  std::vector<GraphEdge> loops;       ///< loop-closure edges (kLoopEdgeColor), drawn with the graph
-  std::vector<Transform> trajectory;  ///< T_W_C per mapped frame; the last one is the current camera
-  std::vector<Transform> groundtruth; ///< T_W_C of the sequence's ground truth (kGroundTruthColor), if shown
-  int current_keyframe = -1;          ///< drawn yellow
-  int selected_keyframe = -1;         ///< drawn white
-};
-
-/// Line colours the window's legend names: the (estimated) trajectory, the ground-truth
-/// trajectory beside it, loop-closure edges (apart from viridis, keyframe yellow and camera red).
-constexpr glm::u8vec3 kTrajectoryColor{90, 200, 255}, kGroundTruthColor{120, 235, 120}, kLoopEdgeColor{255, 120, 20};
-
-/// Depth of the drawn frustums, m: keyframes and the camera now (the view frames them whole).
-constexpr float kKeyframeFrustumDepthM = 0.25f, kCameraFrustumDepthM = 0.15f;
 
 /// How the 3-D view draws the mirror.
 struct MirrorStyle {
@@ -50,15 +33,21 @@ struct MirrorStyle {
   bool ellipsoids = true;             ///< false: the ellipsoid centres as points
   bool frustums = true, graph = true, trajectory = true;
   bool groundtruth = true;            ///< GraphScene::groundtruth
+  float points_below_px = 4.f;        ///< EllipsoidStyle::point_below_px
   bool operator==(const MirrorStyle&) const = default;
 };
 
-/// The range of the colour ramp of a colour mode over a map, in the units a legend shows:
-/// uncertainty: the largest standard deviation sqrt(lambda_max), m; count: points per ellipsoid.
-/// Empty for rgb / keyframe colours or an empty map. The ramp is logarithmic in both.
-struct ColorRange {
-  float lo = 0.f, hi = 0.f;
+/// The lines of a keyframe graph as the 3-D view draws them: `lines` (frustums, selected white,
+/// current yellow, the camera now red; covisibility edges by weight) and `paths` (loop edges,
+/// ground truth, trajectory; drawn wider and on top), each part as the style's toggles say.
+struct GraphLines {
+  ColoredLines lines, paths;
 };
+GraphLines graphLines(const GraphScene& scene, const MirrorStyle& style);
+
+/// The range of the colour ramp of a colour mode over a map (ColorRange, legend.h), in the
+/// units a legend shows: uncertainty: the largest standard deviation sqrt(lambda_max), m; count:
+/// points per ellipsoid. Empty for rgb / keyframe colours or an empty map.
 std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
 
 /// Raw depth (CV_16U, `depth_scale` units per metre) as an RGB image: viridis over 0..max_m,
@@ -73,7 +62,8 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height);
 
 class MapMirror {
  public:
-  explicit MapMirror(const Gl& gl);
+  /// sphere_level: the ellipsoids' icosphere subdivisions (0: icosahedra, the window's).
+  explicit MapMirror(const Gl& gl, int sphere_level = 0);
   ~MapMirror();
   MapMirror(const MapMirror&) = delete;
   MapMirror& operator=(const MapMirror&) = delete;
@@ -99,9 +89,17 @@ class MapMirror {
   /// Re-sent only when the ellipsoid differs from the one marked.
   void setHighlight(const std::optional<Ellipsoid>& ellipsoid);
 
+  /// The legend drawn over the view (rasterised again only when it, the background or the
+  /// width changed); an empty legend draws nothing.
+  void setLegend(const Legend& legend, const glm::vec3& background, int max_width);
+
   /// Draws map, lines and highlight into the bound framebuffer's current viewport (whose size
   /// `view` must have). with_lines = false leaves the graph out ("view from keyframe").
   void draw(const ViewCamera& view, bool with_lines = true) const;
+  /// Draws the legend at the bottom-left of the current viewport (of `height` pixels).
+  void drawLegend(int height) const;
+  /// Draws the container set by setContainer into the bound framebuffer at width x height.
+  void drawContainer(int width, int height) const;
 
   const Texture2D& rgbTexture() const { return rgb_; }
   const Texture2D& depthTexture() const { return depth_; }
@@ -126,6 +124,11 @@ class MapMirror {
   PointRenderer points_;
   LineRenderer lines_, paths_, highlight_;  // paths_: trajectories and loop edges, wider
   ContainerRenderer container_;
+  std::unique_ptr<OverlayRenderer> legend_;
+  Legend legend_shown_;
+  glm::vec3 legend_background_{-1.f};
+  int legend_width_ = -1;
+  cv::Mat legend_image_;
   std::unique_ptr<Framebuffer> container_fb_;
   Texture2D rgb_, depth_, container_image_;
   cv::Mat container_rgb_;

@@ -115,19 +115,21 @@ glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid
   return {static_cast<float>(up.x()), static_cast<float>(up.y()), static_cast<float>(up.z())};
 }
 
-ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m) {
-  ColoredLines lines;
-  std::vector<Transform> poses;
-  for (const Keyframe& k : graph.keyframes()) {
-    addFrustum(lines, camera, k.T_W_K, frustum_depth_m, keyframeColor(k.id));
-    poses.push_back(k.T_W_K);
-  }
-  std::vector<GraphEdge> edges;
-  for (const CovisibilityEdge& e : graph.edges().edges())
-    edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
-  addEdges(lines, poses, edges);
-  addTrajectory(lines, poses, {150, 150, 150});
-  return lines;
+GraphScene graphSceneOf(const KeyframeGraph& graph, const MapperState& state, const PinholeCamera& camera,
+                        bool tracked) {
+  GraphScene scene;
+  scene.camera = camera;
+  for (const Keyframe& k : graph.keyframes()) scene.keyframes.push_back(k.T_W_K);
+  for (const CovisibilityEdge& e : graph.edges().edges()) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  for (const LoopClosure& l : state.loops) scene.loops.push_back({l.from, l.to, 1.f});
+  // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
+  const int n = static_cast<int>(scene.keyframes.size());
+  for (const FramePose& f : state.frame_poses)
+    if (f.keyframe >= 0 && f.keyframe < n) scene.trajectory.push_back(scene.keyframes[f.keyframe] * f.T_K_C);
+  if (state.frame_poses.empty()) scene.trajectory = scene.keyframes;
+  scene.current_keyframe = state.current_keyframe;
+  scene.tracked = tracked;
+  return scene;
 }
 
 }  // namespace vdmap::render

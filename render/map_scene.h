@@ -8,6 +8,7 @@
 #include "mapping/io/ply_reader.h"
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
+#include "mapping/pipeline/mapper.h"
 #include "render/scene_lines.h"
 
 namespace vdmap::render {
@@ -19,9 +20,6 @@ std::vector<EllipsoidInstance> toInstances(std::span<const EllipsoidRecord> reco
 /// A mesh read from a PLY as the mesh renderer's input.
 ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 
-/// The keyframe graph as lines in the world frame: every keyframe's frustum (image corners at
-/// `frustum_depth_m`, keyframe colour), every covisibility edge coloured by its weight, and the
-/// trajectory through the keyframe centres in creation order (grey).
 /// The world's up direction estimated from the data: the mean of the cameras' image-up
 /// directions (-y of each camera, which a hand-held or robot camera keeps roughly level),
 /// replaced by the normal of the map's largest plane within 40 degrees of it (floor, tables,
@@ -30,6 +28,10 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 /// point every way.
 glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map);
 
-ColoredLines keyframeGraphLines(const KeyframeGraph& graph, const PinholeCamera& camera, float frustum_depth_m);
+/// A keyframe graph and mapper state (a session's, or a Mapper's) as the 3-D view draws it, as
+/// the workbench's snapshot has it: the keyframe poses, covisibility edges, loop closures, every
+/// mapped frame's pose (the keyframes' for sessions that lack them) and the current keyframe.
+GraphScene graphSceneOf(const KeyframeGraph& graph, const MapperState& state, const PinholeCamera& camera,
+                        bool tracked);
 
 }  // namespace vdmap::render

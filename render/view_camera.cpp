@@ -89,12 +89,36 @@ void OrbitCamera::fly(float forward_m, float right_m, float up_m) {
   target += forward * forward_m + right * right_m + glm::normalize(up) * up_m;
 }
 
+namespace {
+
+// A frame with `up` as z: any perpendicular pair (a, b) spans the horizon.
+void horizon(const glm::vec3& up, glm::vec3* u, glm::vec3* a, glm::vec3* b) {
+  *u = glm::normalize(up);
+  *a = glm::normalize(glm::cross(*u, std::abs(u->x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0)));
+  *b = glm::cross(*u, *a);
+}
+
+}  // namespace
+
+OrbitCamera OrbitCamera::fromLookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
+                                    float fov_y_deg) {
+  OrbitCamera cam;
+  cam.target = target;
+  cam.up = up;
+  cam.fov_y_deg = fov_y_deg;
+  cam.distance_m = std::max(1e-3f, glm::length(eye - target));
+  glm::vec3 u, a, b;
+  horizon(up, &u, &a, &b);
+  const glm::vec3 dir = (eye - target) / cam.distance_m;
+  const float limit = glm::radians(89.f);
+  cam.pitch = std::clamp(std::asin(std::clamp(glm::dot(dir, u), -1.f, 1.f)), -limit, limit);
+  cam.yaw = std::atan2(glm::dot(dir, b), glm::dot(dir, a));
+  return cam;
+}
+
 glm::vec3 OrbitCamera::eye() const {
-  // A frame with `up` as z: any perpendicular pair spans the horizon.
-  const glm::vec3 u = glm::normalize(up);
-  glm::vec3 a = glm::cross(u, std::abs(u.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
-  a = glm::normalize(a);
-  const glm::vec3 b = glm::cross(u, a);
+  glm::vec3 u, a, b;
+  horizon(up, &u, &a, &b);
   const glm::vec3 dir = std::cos(pitch) * (std::cos(yaw) * a + std::sin(yaw) * b) + std::sin(pitch) * u;
   return target + distance_m * dir;
 }

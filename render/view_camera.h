@@ -61,6 +61,11 @@ struct OrbitCamera {
   /// The default view of a bounding box: from 35 degrees above the horizon, framed as frame().
   static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
                              const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
+  /// The orbit camera looking from `eye` at `target` about the axis `up`: distance |eye - target|,
+  /// yaw and pitch inverting eye() (pitch clamped to +-89 degrees, so eye() differs from `eye`
+  /// only for a view straight along `up`).
+  static OrbitCamera fromLookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
+                                float fov_y_deg = 60.f);
 };
 
 /// A rectangle in pixels.

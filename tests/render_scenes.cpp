@@ -28,6 +28,21 @@ std::vector<render::EllipsoidInstance> gridEllipsoids() {
   return out;
 }
 
+std::vector<Ellipsoid> gridMap() {
+  std::vector<Ellipsoid> out;
+  for (const render::EllipsoidInstance& g : gridEllipsoids()) {
+    Ellipsoid e;
+    e.mean = {g.mean.x, g.mean.y, g.mean.z};
+    for (int c = 0; c < 3; ++c)
+      for (int r = 0; r < 3; ++r) e.cov(r, c) = g.cov[c][r];
+    e.color = {float(g.rgb.r), float(g.rgb.g), float(g.rgb.b)};
+    e.keyframe = g.keyframe;
+    e.count = g.count;
+    out.push_back(e);
+  }
+  return out;
+}
+
 PinholeCamera smallCamera() {
   PinholeCamera c;
   c.width = 160;

@@ -5,6 +5,7 @@
 #include <opencv2/core.hpp>
 
 #include "mapping/core/camera.h"
+#include "mapping/local_map/ellipsoid_filter.h"
 #include "render/scene_lines.h"
 #include "render/scene_types.h"
 
@@ -13,6 +14,8 @@ namespace vdmap::test {
 /// 20 ellipsoids on a 5x4 grid in the plane z = 0 (x in [-1, 1], y in [-0.75, 0.75]) with
 /// varying orientation, size, colour, keyframe and count.
 std::vector<render::EllipsoidInstance> gridEllipsoids();
+/// The same grid as mapping ellipsoids (what the workbench's snapshots and a session hold).
+std::vector<Ellipsoid> gridMap();
 
 /// A 160x120 camera (fx = fy = 150) for container views.
 PinholeCamera smallCamera();

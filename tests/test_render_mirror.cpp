@@ -14,22 +14,6 @@ namespace {
 
 using test::matchesGolden;
 
-// The grid scene as mapping ellipsoids (what the workbench's snapshots hold).
-std::vector<Ellipsoid> gridMap() {
-  std::vector<Ellipsoid> out;
-  for (const EllipsoidInstance& g : test::gridEllipsoids()) {
-    Ellipsoid e;
-    e.mean = {g.mean.x, g.mean.y, g.mean.z};
-    for (int c = 0; c < 3; ++c)
-      for (int r = 0; r < 3; ++r) e.cov(r, c) = g.cov[c][r];
-    e.color = {float(g.rgb.r), float(g.rgb.g), float(g.rgb.b)};
-    e.keyframe = g.keyframe;
-    e.count = g.count;
-    out.push_back(e);
-  }
-  return out;
-}
-
 GraphScene ringScene() {
   GraphScene scene;
   scene.camera = test::smallCamera();
@@ -57,7 +41,7 @@ class MapMirrorTest : public ::testing::Test {
 
 TEST_F(MapMirrorTest, DrawsTheMapTheGraphAndThePickedEllipsoid) {
   MapMirror mirror(gl());
-  const std::vector<Ellipsoid> map = gridMap();
+  const std::vector<Ellipsoid> map = test::gridMap();
   mirror.setMap(1, map);
   mirror.setGraph(1, 1, ringScene);
   mirror.setHighlight(map[7]);
@@ -80,7 +64,7 @@ TEST_F(MapMirrorTest, DrawsTheMapTheGraphAndThePickedEllipsoid) {
 
 TEST_F(MapMirrorTest, UploadsOnlyWhatANewGenerationChanged) {
   MapMirror mirror(gl());
-  const std::vector<Ellipsoid> map = gridMap();
+  const std::vector<Ellipsoid> map = test::gridMap();
   int builds = 0;
   const auto build = [&] {
     ++builds;
@@ -126,7 +110,7 @@ int pixelsOf(const cv::Mat& rgb, const glm::u8vec3& color) {
 
 TEST_F(MapMirrorTest, LoopEdgesAndTheGroundTruthHaveTheirOwnColoursAndToggles) {
   MapMirror mirror(gl());
-  mirror.setMap(1, gridMap());  // the paths are drawn over it
+  mirror.setMap(1, test::gridMap());  // the paths are drawn over it
   int builds = 0;
   const auto build = [&] {
     ++builds;
@@ -157,7 +141,7 @@ TEST_F(MapMirrorTest, LoopEdgesAndTheGroundTruthHaveTheirOwnColoursAndToggles) {
 TEST_F(MapMirrorTest, ContainerViewIsTheContainerRenderersAndFollowsItsStyle) {
   // The scene of RenderGolden.ContainerView, through the mirror.
   MapMirror mirror(gl());
-  std::vector<Ellipsoid> set = gridMap();
+  std::vector<Ellipsoid> set = test::gridMap();
   for (auto& e : set) e.mean = {e.mean.x() * 0.8, e.mean.y(), 2.0 + e.mean.z()};
   const ContainerStyle style{.sigma = 2.f, .color = ColorMode::kRgb, .cell_size_px = 10, .show_grid = true};
   const PinholeCamera camera = test::smallCamera();

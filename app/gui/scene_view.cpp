@@ -6,12 +6,12 @@
 #include "app/gui/widgets.h"
 #include "app/timing.h"
 #include "render/colormap.h"
+#include "render/legend.h"
+#include "render/view_draw.h"
 
 namespace vdmap::app::gui {
 namespace {
 
-constexpr float kBackground[3] = {0.13f, 0.13f, 0.15f};
-constexpr float kLetterbox[3] = {0.05f, 0.05f, 0.06f};
 
 constexpr ImU32 kOverlayText = IM_COL32(230, 230, 230, 255), kOverlayDim = IM_COL32(170, 170, 170, 255);
 
@@ -29,8 +29,8 @@ void drawPreparation(ImDrawList* draw, const WindowState& win) {
   draw->AddRect({x, y}, {x + w, y + font}, kOverlayDim);
 }
 
-// Top left: what the view does (follows the map, looks through a keyframe), the tracking lines'
-// colours, and a banner while the map before the last optimisation shows.
+// Top left: what the view does (follows the map, looks through a keyframe) and a banner while the
+// map before the last optimisation shows. The tracking lines' key is in the legend (render/legend.h).
 void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping, const Rect& view) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
@@ -44,20 +44,6 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& m
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
     line_y += 1.3f * font;
   }
-  if (mapping.mapper.poses == PoseSource::kTrack && ui.view_from_keyframe < 0) {
-    // The line colours of tracking, under the mode line.
-    float x = view.x + pad;
-    const auto key = [&](const glm::u8vec3& color, const char* text) {
-      draw->AddLine({x, line_y + 0.55f * font}, {x + 1.4f * font, line_y + 0.55f * font}, rgbColor(color), 3.f);
-      x += 1.8f * font;
-      draw->AddText({x, line_y}, kOverlayText, text);
-      x += ImGui::CalcTextSize(text).x + font;
-    };
-    key(render::kTrajectoryColor, "tracked");
-    if (mapping.hasGroundTruth() && ui.settings.show_groundtruth) key(render::kGroundTruthColor, "ground truth");
-    if (!mapping.loops.empty()) key(render::kLoopEdgeColor, "loop closure");
-    line_y += 1.3f * font;
-  }
   if (ui.show_before_optimisation && !mapping.loops.empty()) {
     const LoopEvent& last = mapping.loops.back();
     char text[160];
@@ -65,46 +51,6 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& m
                   last.position, metres(last.loop.correction_m).c_str());
     draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), text, nullptr,
                   view.w - 2 * pad);  // wrapped in a narrow view
-  }
-}
-
-// Bottom left: the colour ramp of the uncertainty and count modes, the keyframes' colours of the
-// keyframe mode.
-void drawColourLegend(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping,
-                      const render::MapMirror& mirror, const Rect& view) {
-  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
-  const float bar_w = std::min(16.f * font, view.w - 2 * pad), bar_h = 0.8f * font;
-  float y = view.y + view.h - pad - bar_h - 1.4f * font;
-  const render::ColorMode color = ui.settings.color;
-  if (const auto range = mirror.mapColorRange()) {
-    const bool uncertainty = color == render::ColorMode::kUncertainty;
-    draw->AddText({view.x + pad, y - 1.4f * font}, kOverlayText,
-                  uncertainty ? "largest std. deviation (log scale)" : "points per ellipsoid (log scale)");
-    drawRamp(draw, {view.x + pad, y}, bar_w, bar_h);
-    char lo[32], hi[32];
-    if (uncertainty) {
-      std::snprintf(lo, sizeof lo, "%s", metres(range->lo).c_str());
-      std::snprintf(hi, sizeof hi, "%s", metres(range->hi).c_str());
-    } else {
-      std::snprintf(lo, sizeof lo, "%.0f", range->lo);
-      std::snprintf(hi, sizeof hi, "%.0f", range->hi);
-    }
-    draw->AddText({view.x + pad, y + bar_h + 2}, kOverlayText, lo);
-    draw->AddText({view.x + pad + bar_w - ImGui::CalcTextSize(hi).x, y + bar_h + 2}, kOverlayText, hi);
-  } else if (color == render::ColorMode::kKeyframe && !mapping.keyframes.empty()) {
-    // A swatch per keyframe, as many as fit in two rows.
-    const float cell = 3.2f * font;
-    const int per_row = std::max(1, static_cast<int>((view.w - 2 * pad) / cell));
-    const int n = static_cast<int>(mapping.keyframes.size()), rows = std::min(2, (n + per_row - 1) / per_row);
-    float top = view.y + view.h - pad - rows * 1.3f * font;
-    draw->AddText({view.x + pad, top - 1.4f * font}, kOverlayText, "keyframe colours");
-    for (int i = 0; i < std::min(n, 2 * per_row); ++i) {
-      const float x = view.x + pad + (i % per_row) * cell, yy = top + (i / per_row) * 1.3f * font;
-      draw->AddRectFilled({x, yy + 2}, {x + 0.9f * font, yy + font}, rgbColor(render::keyframeColor(i)));
-      char text[16];
-      std::snprintf(text, sizeof text, i + 1 == 2 * per_row && n > 2 * per_row ? "K%d.." : "K%d", i);
-      draw->AddText({x + 1.1f * font, yy}, kOverlayText, text);
-    }
   }
 }
 
@@ -132,6 +78,19 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
                    .graph = s.show_graph,
                    .trajectory = s.show_trajectory,
                    .groundtruth = s.show_groundtruth});
+  // The legend: the same function and pixels as `vdmap render` (render/legend.h).
+  render::GraphScene keys;
+  if (bench.isOpen()) {
+    const auto& mapping = *win.mapping;
+    keys.tracked = mapping.mapper.poses == PoseSource::kTrack && ui.view_from_keyframe < 0;
+    if (mapping.hasGroundTruth()) keys.groundtruth.resize(1);
+    keys.loops.resize(mapping.loops.size());
+    keys.keyframes.resize(mapping.keyframes.size());
+  }
+  mirror.setLegend(s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory,
+                                                     s.show_groundtruth, s.show_graph)
+                                 : render::Legend{},
+                   s.background, ui.view_width);
   if (!bench.isOpen()) return;
   if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session
     mirrored.session = bench.sessionSerial();
@@ -169,10 +128,11 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
 void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& mirror, const WindowState& win) {
   const Rect& view = win.layout.view;
   UiState& ui = bench.ui();
+  const glm::vec3 background = ui.settings.background;
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl.Disable(GL_SCISSOR_TEST);
   gl.Viewport(0, 0, win.layout.fb_width, win.layout.fb_height);
-  gl.ClearColor(kBackground[0], kBackground[1], kBackground[2], 1.f);
+  gl.ClearColor(background.r, background.g, background.b, 1.f);
   gl.ClearDepth(1.0);
   gl.Clear(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
   if (!bench.isOpen() || win.layout.fb_width <= 0 || win.layout.fb_height <= 0) return;
@@ -180,16 +140,9 @@ void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& 
   const int vx = static_cast<int>(view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
   const int vy = win.layout.fb_height - static_cast<int>(view.y * scale.y) - vh;  // GL counts rows from the bottom
   const ViewportView v = bench.view(vw, vh);
-  const bool from_keyframe = ui.view_from_keyframe >= 0;
-  if (from_keyframe) {  // the letterbox's bars
-    gl.Enable(GL_SCISSOR_TEST);
-    gl.Scissor(vx, vy, vw, vh);
-    gl.ClearColor(kLetterbox[0], kLetterbox[1], kLetterbox[2], 1.f);
-    gl.Clear(GL_COLOR_BUFFER_BIT);
-    gl.Disable(GL_SCISSOR_TEST);
-  }
-  gl.Viewport(vx + v.image.x, vy + (vh - v.image.y - v.image.height), v.image.width, v.image.height);
-  mirror.draw(v.camera, !from_keyframe);
+  // The scene as `vdmap render` draws it (render/view_draw.h).
+  render::drawMapView(gl, mirror, {v.camera, v.image}, background, {vx, vy, vw, vh}, ui.view_from_keyframe < 0,
+                      ui.settings.show_legend);
   gl.Viewport(0, 0, win.layout.fb_width, win.layout.fb_height);
 }
 
@@ -264,7 +217,6 @@ void drawViewOverlay(Workbench& bench, const render::MapMirror& mirror, const Wi
   }
   const UiState& ui = bench.ui();
   drawViewHints(draw, ui, *win.mapping, view);
-  drawColourLegend(draw, ui, *win.mapping, mirror, view);
   drawUpAxis(draw, ui, view);
 }
 

@@ -6,6 +6,7 @@
 #include <cstdio>
 
 #include "render/colormap.h"
+#include "render/legend.h"
 
 namespace vdmap::app::gui {
 
@@ -33,13 +34,7 @@ void drawRamp(ImDrawList* draw, ImVec2 at, float w, float h) {
   draw->AddRect(at, {at.x + w, at.y + h}, IM_COL32(200, 200, 200, 160));
 }
 
-std::string metres(double m) {
-  char text[32];
-  if (m < 0.01) std::snprintf(text, sizeof text, "%.2f mm", m * 1e3);
-  else if (m < 1.0) std::snprintf(text, sizeof text, "%.1f mm", m * 1e3);
-  else std::snprintf(text, sizeof text, "%.2f m", m);
-  return text;
-}
+std::string metres(double m) { return render::metresText(m); }
 
 void beginPanel(const char* name, Rect& r, float& width, float display_width) {
   const float font = ImGui::GetFontSize();

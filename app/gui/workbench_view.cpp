@@ -8,6 +8,7 @@
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
 #include "render/scene_lines.h"
+#include "render/view_framing.h"
 
 namespace vdmap::app::gui {
 
@@ -45,6 +46,7 @@ render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
   if (ui_.settings.show_groundtruth) scene.groundtruth = mapping.groundTruthWorld();
   scene.current_keyframe = mapping.current_keyframe;
   scene.selected_keyframe = ui_.selected_keyframe;
+  scene.tracked = mapping.mapper.poses == PoseSource::kTrack;
   return scene;
 }
 
@@ -53,23 +55,15 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
   std::vector<glm::vec3> means;
   if (const auto global = worker_->global())
     for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  // The cameras are few beside the map's ellipsoids and lie off its surfaces: trimmed with them,
-  // they would be the first to go and their frustums would be cut at the viewport's edge.
-  render::ColoredLines cameras;
+  // The cameras the view frames (render::frameBounds): keyframes, every mapped frame, the
+  // ground truth when shown.
+  render::GraphScene cameras;
   const auto mapping = worker_->mapping();  // held: the worker may replace it meanwhile
-  for (const KeyframeInfo& k : mapping->keyframes)
-    render::addFrustum(cameras, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
-  for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) {
-    const Eigen::Vector3d t = mapping->framePose(i).translation();
-    cameras.positions.emplace_back(t.x(), t.y(), t.z());
-  }
-  if (ui_.settings.show_groundtruth)
-    for (const Transform& T : mapping->groundTruthWorld())
-      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
-  if (means.empty() && cameras.positions.empty()) return render::robustBounds({});
-  auto [lo, hi] = means.empty() ? std::pair{cameras.positions[0], cameras.positions[0]} : render::robustBounds(means);
-  for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
-  return {lo, hi};
+  cameras.camera = mapping->camera;
+  for (const KeyframeInfo& k : mapping->keyframes) cameras.keyframes.push_back(k.T_W_K);
+  for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) cameras.trajectory.push_back(mapping->framePose(i));
+  if (ui_.settings.show_groundtruth) cameras.groundtruth = mapping->groundTruthWorld();
+  return render::frameBounds(means, cameras);
 }
 
 void Workbench::frameMap() {
@@ -86,7 +80,7 @@ void Workbench::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const auto [lo, hi] = frameBounds();
-  ui_.camera = render::OrbitCamera::framing(lo, hi, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera = render::defaultOrbit({lo, hi}, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -113,18 +107,12 @@ void Workbench::zoom(float wheel_steps) {
 }
 
 glm::vec3 Workbench::upVector() const {
-  switch (ui_.settings.up_axis) {
-    case UpAxis::kPlusZ: return {0.f, 0.f, 1.f};
-    case UpAxis::kPlusY: return {0.f, 1.f, 0.f};
-    case UpAxis::kMinusY: return {0.f, -1.f, 0.f};
-    case UpAxis::kData: break;
-  }
-  if (!worker_) return {0.f, 0.f, 1.f};
+  if (!worker_ || ui_.settings.up_axis != UpAxis::kData) return render::upDirection(ui_.settings.up_axis, {}, {});
   const auto mapping = worker_->mapping();
   const auto global = worker_->global();
   const std::vector<Transform> cameras = mapping->trajectoryWorld();
-  return render::estimateUp(cameras, global ? std::span<const Ellipsoid>(global->map.ellipsoids)
-                                            : std::span<const Ellipsoid>());
+  return render::upDirection(UpAxis::kData, cameras,
+                             global ? std::span<const Ellipsoid>(global->map.ellipsoids) : std::span<const Ellipsoid>());
 }
 
 ViewportView Workbench::view(int width, int height) const {

@@ -1,0 +1,162 @@
+#include "render/legend.h"
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+
+#include <opencv2/imgproc.hpp>
+
+#include "render/colormap.h"
+
+namespace vdmap::render {
+namespace {
+
+constexpr int kFont = cv::FONT_HERSHEY_SIMPLEX;
+constexpr int kPanelAlpha = 153;  // 60 %
+
+// Sizes at scale 1, pixels.
+struct Metrics {
+  float scale;
+  double font() const { return 0.42 * scale; }
+  int px(float v) const { return std::max(1, static_cast<int>(std::lround(v * scale))); }
+  int pad() const { return px(8); }
+  int row() const { return px(18); }
+  int textWidth(const std::string& text) const {
+    int baseline = 0;
+    return cv::getTextSize(text, kFont, font(), 1, &baseline).width;
+  }
+};
+
+std::string number(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.0f", v);
+  return text;
+}
+
+// Draws into the colour canvas and the coverage mask alike.
+struct Canvas {
+  cv::Mat rgb, mask;
+  cv::Scalar ink;
+  const Metrics& m;
+  void text(const std::string& s, int x, int baseline_y) {
+    cv::putText(rgb, s, {x, baseline_y}, kFont, m.font(), ink, 1, cv::LINE_AA);
+    cv::putText(mask, s, {x, baseline_y}, kFont, m.font(), cv::Scalar(255), 1, cv::LINE_AA);
+  }
+  void box(int x0, int y0, int x1, int y1, const glm::u8vec3& c) {
+    cv::rectangle(rgb, {x0, y0}, {x1 - 1, y1 - 1}, cv::Scalar(c.r, c.g, c.b), cv::FILLED);
+    cv::rectangle(mask, {x0, y0}, {x1 - 1, y1 - 1}, cv::Scalar(255), cv::FILLED);
+  }
+};
+
+}  // namespace
+
+std::string metresText(double m) {
+  char text[32];
+  if (m < 0.01) std::snprintf(text, sizeof text, "%.2f mm", m * 1e3);
+  else if (m < 1.0) std::snprintf(text, sizeof text, "%.1f mm", m * 1e3);
+  else std::snprintf(text, sizeof text, "%.2f m", m);
+  return text;
+}
+
+Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const GraphScene& graph,
+                 bool trajectory_shown, bool groundtruth_shown, bool loops_shown) {
+  Legend legend;
+  if (graph.tracked) {
+    if (trajectory_shown) legend.lines.push_back({kTrajectoryColor, "tracked"});
+    if (groundtruth_shown && !graph.groundtruth.empty()) legend.lines.push_back({kGroundTruthColor, "ground truth"});
+    if (loops_shown && !graph.loops.empty()) legend.lines.push_back({kLoopEdgeColor, "loop closure"});
+  }
+  if (range && (mode == ColorMode::kUncertainty || mode == ColorMode::kCount)) {
+    const bool uncertainty = mode == ColorMode::kUncertainty;
+    legend.ramp_title = uncertainty ? "largest std. deviation (log scale)" : "points per ellipsoid (log scale)";
+    legend.ramp_lo = uncertainty ? metresText(range->lo) : number(range->lo);
+    legend.ramp_hi = uncertainty ? metresText(range->hi) : number(range->hi);
+  } else if (mode == ColorMode::kKeyframe && !graph.keyframes.empty()) {
+    legend.swatch_title = "keyframe colours";
+    for (int i = 0; i < static_cast<int>(graph.keyframes.size()); ++i)
+      legend.swatches.push_back({keyframeColor(i), "K" + std::to_string(i)});
+  }
+  return legend;
+}
+
+cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int max_width, float scale) {
+  if (legend.empty()) return {};
+  const Metrics m{std::max(scale, 0.25f)};
+  const int pad = m.pad(), row = m.row(), ascent = m.px(12);
+  const int max_inner = std::max(m.px(40), max_width - 2 * pad - 2 * m.px(8));
+  // Widths first: the panel is as wide as its widest row.
+  int width = 0, height = 0;
+  const int key_line = m.px(20), key_gap = m.px(6), key_space = m.px(12);
+  int lines_w = 0;
+  for (const LegendKey& k : legend.lines) lines_w += key_line + key_gap + m.textWidth(k.text) + key_space;
+  if (!legend.lines.empty()) width = std::max(width, lines_w - key_space), height += row;
+  const int ramp_w = std::min(m.px(200), max_inner), ramp_h = m.px(10);
+  if (!legend.ramp_title.empty()) {
+    width = std::max({width, ramp_w, m.textWidth(legend.ramp_title)});
+    height += row + ramp_h + m.px(4) + row;
+  }
+  const int cell = m.px(50);
+  const int per_row = std::max(1, max_inner / cell);
+  const int n = static_cast<int>(legend.swatches.size());
+  const int shown = std::min(n, 2 * per_row), rows = (shown + per_row - 1) / per_row;
+  if (!legend.swatch_title.empty()) {
+    width = std::max({width, m.textWidth(legend.swatch_title), std::min(shown, per_row) * cell});
+    height += row + rows * row;
+  }
+  width = std::min(width, max_inner);
+  const glm::u8vec3 bg8(glm::clamp(background, 0.f, 1.f) * 255.f + 0.5f);
+  const bool dark = 0.299f * background.r + 0.587f * background.g + 0.114f * background.b < 0.5f;
+  Canvas c{cv::Mat(height + 2 * pad, width + 2 * pad, CV_8UC3, cv::Scalar(bg8.r, bg8.g, bg8.b)),
+           cv::Mat(height + 2 * pad, width + 2 * pad, CV_8U, cv::Scalar(0)),
+           dark ? cv::Scalar(230, 230, 230) : cv::Scalar(30, 30, 30), m};
+  int y = pad;  // top of the next row
+  if (!legend.lines.empty()) {
+    int x = pad;
+    for (const LegendKey& k : legend.lines) {
+      const int mid = y + row / 2 - m.px(2);
+      c.box(x, mid - m.px(1.5f), x + key_line, mid - m.px(1.5f) + m.px(3), k.color);
+      x += key_line + key_gap;
+      c.text(k.text, x, y + ascent);
+      x += m.textWidth(k.text) + key_space;
+    }
+    y += row;
+  }
+  if (!legend.ramp_title.empty()) {
+    c.text(legend.ramp_title, pad, y + ascent);
+    y += row;
+    constexpr int kSteps = 32;
+    for (int i = 0; i < kSteps; ++i) {
+      const int x0 = pad + ramp_w * i / kSteps, x1 = pad + ramp_w * (i + 1) / kSteps;
+      c.box(x0, y, x1, y + ramp_h, colormap((i + 0.5f) / kSteps));
+    }
+    y += ramp_h + m.px(4);
+    c.text(legend.ramp_lo, pad, y + ascent);
+    c.text(legend.ramp_hi, pad + ramp_w - m.textWidth(legend.ramp_hi), y + ascent);
+    y += row;
+  }
+  if (!legend.swatch_title.empty()) {
+    c.text(legend.swatch_title, pad, y + ascent);
+    y += row;
+    for (int i = 0; i < shown; ++i) {
+      const int x = pad + (i % per_row) * cell, yy = y + (i / per_row) * row;
+      const int sw = m.px(10);
+      c.box(x, yy + (row - sw) / 2 - m.px(2), x + sw, yy + (row - sw) / 2 - m.px(2) + sw, legend.swatches[i].color);
+      const bool more = i + 1 == shown && n > shown;
+      c.text(legend.swatches[i].text + (more ? ".." : ""), x + sw + m.px(4), yy + ascent);
+    }
+  }
+  cv::Mat rgba;
+  cv::cvtColor(c.rgb, rgba, cv::COLOR_RGB2RGBA);
+  // The colour of an antialiased glyph edge is already blended with the panel's colour: opaque
+  // wherever anything was drawn, the panel's opacity elsewhere.
+  cv::Mat alpha = cv::max(c.mask > 0, kPanelAlpha);
+  cv::insertChannel(alpha, rgba, 3);
+  return rgba;
+}
+
+cv::Point legendOrigin(const cv::Mat& legend, int height, float scale) {
+  const int margin = std::max(1, static_cast<int>(std::lround(8 * scale)));
+  return {margin, height - margin - legend.rows};
+}
+
+}  // namespace vdmap::render

@@ -1,0 +1,62 @@
+#pragma once
+// The legend over the 3-D view, the same pixels in the workbench and `vdmap render`: the colour
+// ramp of the uncertainty and count modes with its title and range, the keyframes' colours of
+// the keyframe mode, and the key of the tracking lines. Rasterised on the CPU with OpenCV's
+// Hershey font (deterministic, no font files) and blended over the view by OverlayRenderer.
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/type_precision.hpp>
+#include <opencv2/core.hpp>
+
+#include "render/scene_lines.h"
+
+namespace vdmap::render {
+
+/// The range of the colour ramp of a colour mode over a map, in the units a legend shows:
+/// uncertainty: the largest standard deviation sqrt(lambda_max), m; count: points per ellipsoid.
+/// Empty for rgb / keyframe colours or an empty map. The ramp is logarithmic in both.
+struct ColorRange {
+  float lo = 0.f, hi = 0.f;
+};
+/// One coloured entry: a swatch (keyframe colours) or a line (tracking key) with its label.
+struct LegendKey {
+  glm::u8vec3 color{0};
+  std::string text;
+  bool operator==(const LegendKey&) const = default;
+};
+
+/// What the legend says. Empty parts are not drawn; an empty legend draws nothing.
+struct Legend {
+  std::vector<LegendKey> lines;   ///< tracking key: the trajectory, ground truth, loop closures
+  std::string ramp_title;         ///< "largest std. deviation (log scale)"; empty: no ramp
+  std::string ramp_lo, ramp_hi;   ///< the ramp's ends, in the title's units
+  std::string swatch_title;       ///< "keyframe colours"; empty: no swatches
+  std::vector<LegendKey> swatches;  ///< one per keyframe, K0, K1, ...
+  bool empty() const { return lines.empty() && ramp_title.empty() && swatch_title.empty(); }
+  bool operator==(const Legend&) const = default;
+};
+
+/// The legend of a view coloured by `mode` (range: the map's colorRange) with `graph`: a ramp for
+/// uncertainty (metres) and count, a swatch per keyframe for keyframe colours, and for tracked
+/// poses the key of the lines shown (trajectory; ground truth when `groundtruth_shown` and there
+/// is one; loop closures when `loops_shown` and there are some).
+Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const GraphScene& graph,
+                 bool trajectory_shown = true, bool groundtruth_shown = true, bool loops_shown = true);
+
+/// A length for people: "0.42 mm", "3.1 mm", "1.20 m".
+std::string metresText(double m);
+
+/// The legend as an RGBA image (CV_8UC4, RGBA order, row 0 on top): a panel of `background` at
+/// 60 % opacity behind opaque text (light on a dark background, dark on a light one), at most
+/// `max_width` pixels wide (the keyframe swatches take as many as fit in two rows). `scale` 1 is
+/// a 12 px font. Empty for an empty legend.
+cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int max_width, float scale = 1.f);
+
+/// Where the legend image goes in a viewport of `height` pixels: its top-left corner in image
+/// coordinates (row 0 on top), bottom-left with a margin.
+cv::Point legendOrigin(const cv::Mat& legend, int height, float scale = 1.f);
+
+}  // namespace vdmap::render

@@ -1,0 +1,55 @@
+#pragma once
+// Where the camera of a view is, the same for the workbench and `vdmap render`: the box a view
+// frames, the world's up direction, the default orbit view and the camera a ViewSpec asks for.
+#include <span>
+#include <utility>
+
+#include <glm/glm.hpp>
+
+#include "mapping/local_map/ellipsoid_filter.h"
+#include "render/scene_lines.h"
+#include "render/view_camera.h"
+#include "render/view_spec.h"
+
+namespace vdmap::render {
+
+/// The box the global view frames: the 2nd-98th percentile box of the map's means (robustBounds,
+/// so a few strays do not shrink the map) grown to hold every keyframe frustum (at
+/// kKeyframeFrustumDepthM), every trajectory camera and every ground-truth camera (the cameras
+/// are few beside the map and lie off its surfaces: trimmed with it they would be cut at the
+/// edge). (-1, 1) when there is nothing.
+std::pair<glm::vec3, glm::vec3> frameBounds(std::span<const glm::vec3> means, const GraphScene& graph);
+
+/// The world's up direction: the axis named, or for kData estimateUp of the cameras and the map.
+glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map);
+
+/// The default view of `bounds`: OrbitCamera::framing (yaw -60, pitch 35 degrees about `up`,
+/// the box's bounding sphere fitting a width/height `aspect`).
+OrbitCamera defaultOrbit(const std::pair<glm::vec3, glm::vec3>& bounds, const glm::vec3& up, float aspect,
+                         float fov_y_deg = 60.f);
+
+/// What a view's camera is framed from.
+struct ViewScene {
+  std::pair<glm::vec3, glm::vec3> bounds{glm::vec3(-1.f), glm::vec3(1.f)};  ///< frameBounds
+  glm::vec3 up{0.f, 0.f, 1.f};       ///< upDirection of the spec's axis
+  PinholeCamera camera;              ///< the keyframes' camera (keyframe views)
+  Transform T_W_K = Transform::Identity();  ///< keyframe:K's pose
+};
+
+/// A view's camera and where its image lies in the viewport (the letterbox of a keyframe view;
+/// the whole viewport otherwise).
+struct FramedView {
+  ViewCamera camera;
+  PixelRect image;
+};
+
+/// The camera of `spec` at width x height: its look-at, else its orbit (angles about the up
+/// axis, distance framed unless given), else the default view; a keyframe view is the
+/// keyframe's own camera letterboxed (fromPinhole). Every global camera is made through
+/// OrbitCamera::view, as the window's.
+FramedView viewCamera(const ViewSpec& spec, const ViewScene& scene, int width, int height);
+
+/// The orbit camera `spec` describes for a global view (the window's ui.camera).
+OrbitCamera orbitCamera(const ViewSpec& spec, const ViewScene& scene, int width, int height);
+
+}  // namespace vdmap::render

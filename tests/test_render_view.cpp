@@ -1,0 +1,105 @@
+// renderView (render/view_draw.h): the headless path that draws what the window draws, with the
+// window's defaults (dark background, icosahedra, every layer, the legend).
+#include <gtest/gtest.h>
+
+#include "render/colormap.h"
+#include "render/context.h"
+#include "render/view_draw.h"
+#include "tests/golden.h"
+#include "tests/render_scenes.h"
+
+namespace vdmap::render {
+namespace {
+
+class RenderView : public ::testing::Test {
+ protected:
+  void SetUp() override {
+    context_ = createOffscreenContext();
+    map_ = test::gridMap();
+    graph_.camera = test::smallCamera();
+    graph_.keyframes = test::ringOfKeyframes(6);
+    graph_.edges = {{0, 1, 0.9f}, {1, 2, 0.7f}, {2, 3, 0.5f}, {0, 3, 0.1f}};
+    graph_.trajectory = {graph_.keyframes[0], graph_.keyframes[1], graph_.keyframes[2]};
+    graph_.current_keyframe = 2;
+    graph_.tracked = true;
+  }
+  // The view of the grid and the ring of keyframes as `vdmap render` draws it.
+  cv::Mat render(const ViewSpec& spec, int w = 320, int h = 240) {
+    MapMirror mirror(context_->gl(), spec.sphere_level);
+    mirror.setStyle(mirrorStyle(spec));
+    mirror.setMap(1, map_);
+    mirror.setGraph(1, spec.selected_keyframe, [&] { return graph_; });
+    if (spec.layers.legend)
+      mirror.setLegend(legendFor(spec.color, mirror.mapColorRange(), graph_), spec.background, w);
+    std::vector<glm::vec3> means;
+    for (const Ellipsoid& e : map_) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+    ViewScene scene;
+    scene.bounds = frameBounds(means, graph_);
+    scene.up = {0, 0, 1};
+    return renderView(context_->gl(), mirror, spec, scene, w, h);
+  }
+  std::unique_ptr<Context> context_;
+  std::vector<Ellipsoid> map_;
+  GraphScene graph_;
+};
+
+cv::Vec3b byte(const glm::vec3& c) {
+  return {static_cast<uchar>(c.r * 255.f + 0.5f), static_cast<uchar>(c.g * 255.f + 0.5f),
+          static_cast<uchar>(c.b * 255.f + 0.5f)};
+}
+
+bool near(const cv::Vec3b& a, const cv::Vec3b& b) {
+  return std::abs(a[0] - b[0]) <= 1 && std::abs(a[1] - b[1]) <= 1 && std::abs(a[2] - b[2]) <= 1;
+}
+
+TEST_F(RenderView, TheDefaultGlobalViewIsDarkWithItsLegend) {
+  const cv::Mat image = render(ViewSpec{});
+  EXPECT_TRUE(near(image.at<cv::Vec3b>(0, 0), byte(kDarkBackground))) << image.at<cv::Vec3b>(0, 0);
+  // The tracking key's "tracked" line, in the bottom-left corner.
+  int key = 0;
+  for (int y = image.rows - 60; y < image.rows; ++y)
+    for (int x = 0; x < 60; ++x) key += near(image.at<cv::Vec3b>(y, x), {kTrajectoryColor.r, kTrajectoryColor.g, kTrajectoryColor.b});
+  EXPECT_GT(key, 20) << "no tracking key at the bottom left";
+  EXPECT_TRUE(test::matchesGolden(image, "view_default"));
+}
+
+TEST_F(RenderView, WhiteBackgroundChangesOnlyTheBackground) {
+  ViewSpec spec;
+  const cv::Mat dark = render(spec);
+  spec.background = kWhiteBackground;
+  const cv::Mat white = render(spec);
+  // The legend's panel is the background at 60 %: leave its rectangle out.
+  const cv::Mat legend = rasterizeLegend(legendFor(ColorMode::kRgb, std::nullopt, graph_), kDarkBackground, 320);
+  const cv::Point at = legendOrigin(legend, 240);
+  const cv::Rect panel(at.x, at.y, legend.cols, legend.rows);
+  int background = 0, same = 0, changed_elsewhere = 0;
+  for (int y = 0; y < dark.rows; ++y)
+    for (int x = 0; x < dark.cols; ++x) {
+      if (panel.contains({x, y})) continue;
+      const cv::Vec3b d = dark.at<cv::Vec3b>(y, x), w = white.at<cv::Vec3b>(y, x);
+      if (d == byte(kDarkBackground)) {
+        background += w == byte(kWhiteBackground);
+        changed_elsewhere += w != byte(kWhiteBackground);
+      } else {
+        same += d == w;
+        changed_elsewhere += d != w;
+      }
+    }
+  EXPECT_GT(background, 30000);
+  EXPECT_GT(same, 2000) << "the map is drawn";
+  EXPECT_EQ(changed_elsewhere, 0);
+}
+
+TEST_F(RenderView, EachLayerSwitchesOffAlone) {
+  const cv::Mat all = render(ViewSpec{});
+  for (bool ViewLayers::*layer : {&ViewLayers::frustums, &ViewLayers::graph, &ViewLayers::trajectory,
+                                   &ViewLayers::legend}) {
+    ViewSpec spec;
+    spec.layers.*layer = false;
+    const cv::Mat without = render(spec);
+    EXPECT_GT(cv::countNonZero(cv::Mat(cv::abs(all - without)).reshape(1)), 10) << "a layer changed nothing";
+  }
+}
+
+}  // namespace
+}  // namespace vdmap::render

@@ -1,0 +1,132 @@
+// Where a view's camera is (render/view_framing.h), the same for the window and `vdmap render`.
+#include <cmath>
+
+#include <gtest/gtest.h>
+
+#include "render/map_scene.h"
+#include "render/view_framing.h"
+
+namespace vdmap::render {
+namespace {
+
+Transform cameraAt(const Eigen::Vector3d& t, double yaw = 0.0) {
+  Transform T = Transform::Identity();
+  // Camera looking along +y with image-down -z (x right): a level camera in a z-up world.
+  Eigen::Matrix3d R;
+  R << 1, 0, 0, 0, 0, 1, 0, -1, 0;
+  T.linear() = Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()).toRotationMatrix() * R;
+  T.translation() = t;
+  return T;
+}
+
+glm::vec2 project(const ViewCamera& v, const glm::vec3& p) {
+  const glm::vec4 q = v.T_C_W * glm::vec4(p, 1.f);
+  return {v.fx * q.x / q.z + v.cx, v.fy * q.y / q.z + v.cy};
+}
+
+TEST(ViewFraming, TheDefaultViewFramesTheRobustBoxAndEveryCameraAtTheViewsAspect) {
+  // 1000 means in a 2 x 1 x 0.5 m box and 10 strays 20 m away; two keyframes and a trajectory.
+  std::vector<glm::vec3> means;
+  for (int i = 0; i < 1000; ++i)
+    means.emplace_back(2.f * (i % 10) / 9.f, 1.f * ((i / 10) % 10) / 9.f, 0.5f * (i / 100) / 9.f);
+  for (int i = 0; i < 10; ++i) means.emplace_back(20.f, 20.f, 20.f);
+  GraphScene graph;
+  graph.camera = PinholeCamera{};
+  graph.keyframes = {cameraAt({-1, -1, 1}), cameraAt({3, -1, 1})};
+  graph.trajectory = {cameraAt({1, -2, 1.2})};
+  const auto [lo, hi] = frameBounds(means, graph);
+  EXPECT_LT(hi.x, 10.f) << "the strays are not framed";
+  EXPECT_LE(lo.y, -2.f) << "the trajectory's camera is framed";
+  EXPECT_LE(lo.x, -1.f);
+  EXPECT_GE(hi.x, 3.f);
+  for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{480, 640}}) {
+    ViewSpec spec;
+    ViewScene scene;
+    scene.bounds = {lo, hi};
+    const FramedView v = viewCamera(spec, scene, w, h);
+    EXPECT_EQ(v.image, (PixelRect{0, 0, w, h}));
+    // Every corner of the box is inside the image, and the box spans most of its narrow side.
+    glm::vec2 a(INFINITY), b(-INFINITY);
+    for (int c = 0; c < 8; ++c) {
+      const glm::vec2 p = project(v.camera, {(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
+      a = glm::min(a, p), b = glm::max(b, p);
+    }
+    EXPECT_GE(a.x, 0.f) << w << "x" << h;
+    EXPECT_GE(a.y, 0.f) << w << "x" << h;
+    EXPECT_LE(b.x, w) << w << "x" << h;
+    EXPECT_LE(b.y, h) << w << "x" << h;
+    EXPECT_GT(std::max((b.x - a.x) / w, (b.y - a.y) / h), 0.6f) << w << "x" << h;
+    // It is the window's default view: OrbitCamera::framing at the image's aspect.
+    const ViewCamera window = OrbitCamera::framing(lo, hi, {0, 0, 1}, float(w) / h).view(w, h);
+    EXPECT_EQ(v.camera.T_C_W, window.T_C_W);
+    EXPECT_EQ(v.camera.fx, window.fx);
+  }
+}
+
+TEST(ViewFraming, UpFromDataMatchesTheWindowsBeforeTheMove) {
+  // The window's up vector was estimateUp of every mapped camera and the map, or the axis named.
+  std::vector<Transform> cameras;
+  for (int i = 0; i < 20; ++i) cameras.push_back(cameraAt({0.1 * i, 0, 1.5}, 0.2 * i));
+  std::vector<Ellipsoid> floor;
+  for (int i = 0; i < 400; ++i) {
+    Ellipsoid e;
+    e.mean = {0.05 * (i % 20), 0.05 * (i / 20), 0.01 * ((i * 7) % 3)};
+    floor.push_back(e);
+  }
+  EXPECT_EQ(upDirection(UpAxis::kData, cameras, floor), estimateUp(cameras, floor));
+  EXPECT_NEAR(upDirection(UpAxis::kData, cameras, floor).z, 1.f, 1e-3f);
+  EXPECT_EQ(upDirection(UpAxis::kPlusZ, cameras, floor), glm::vec3(0, 0, 1));
+  EXPECT_EQ(upDirection(UpAxis::kPlusY, {}, {}), glm::vec3(0, 1, 0));
+  EXPECT_EQ(upDirection(UpAxis::kMinusY, {}, {}), glm::vec3(0, -1, 0));
+  EXPECT_EQ(upDirection(UpAxis::kData, {}, {}), glm::vec3(0, 0, 1)) << "no cameras: +z";
+}
+
+TEST(OrbitCamera, FromLookAtReproducesEyeAndTarget) {
+  for (const glm::vec3 up : {glm::vec3(0, 0, 1), glm::vec3(0, -0.9f, -0.45f), glm::vec3(1, 0, 0)}) {
+    const glm::vec3 eye(1.5f, -2.f, 0.7f), target(0.2f, 0.3f, -0.1f);
+    const OrbitCamera cam = OrbitCamera::fromLookAt(eye, target, up, 50.f);
+    EXPECT_NEAR(glm::length(cam.eye() - eye), 0.f, 1e-5f) << up.x << up.y << up.z;
+    EXPECT_EQ(cam.target, target);
+    EXPECT_EQ(cam.fov_y_deg, 50.f);
+    EXPECT_NEAR(cam.distance_m, glm::length(eye - target), 1e-6f);
+  }
+  // The default view's eye gives the default angles back.
+  const OrbitCamera framed = OrbitCamera::framing({-1, -1, 0}, {1, 1, 1}, {0, 0, 1}, 16.f / 9.f);
+  const OrbitCamera back = OrbitCamera::fromLookAt(framed.eye(), framed.target, framed.up);
+  EXPECT_NEAR(back.yaw, framed.yaw, 1e-5f);
+  EXPECT_NEAR(back.pitch, framed.pitch, 1e-5f);
+  // Straight down the up axis the pitch is clamped to 89 degrees.
+  const OrbitCamera down = OrbitCamera::fromLookAt({0, 0, 5}, {0, 0, 0}, {0, 0, 1});
+  EXPECT_NEAR(down.pitch, glm::radians(89.f), 1e-5f);
+}
+
+TEST(ViewFraming, AnOrbitOfTheDefaultAnglesIsTheDefaultViewAndALookAtIsDrawnAsGiven) {
+  ViewScene scene;
+  scene.bounds = {glm::vec3(-1, -2, 0), glm::vec3(2, 1, 1.5f)};
+  scene.up = glm::normalize(glm::vec3(0.1f, -0.9f, -0.4f));
+  ViewSpec spec;
+  const ViewCamera framed = viewCamera(spec, scene, 640, 360).camera;
+  spec.orbit = Orbit{-60.f, 35.f, std::nullopt};
+  EXPECT_EQ(viewCamera(spec, scene, 640, 360).camera.T_C_W, framed.T_C_W);
+  spec.orbit = Orbit{30.f, 35.f, std::nullopt};
+  EXPECT_NE(viewCamera(spec, scene, 640, 360).camera.T_C_W, framed.T_C_W);
+  spec.orbit.reset();
+  spec.look_at = LookAt{{3, 3, 3}, {0, 0, 0}, {0, 0, 1}, 40.f};
+  EXPECT_EQ(viewCamera(spec, scene, 640, 360).camera.T_C_W,
+            ViewCamera::lookAt({3, 3, 3}, {0, 0, 0}, {0, 0, 1}, 40.f, 640, 360).T_C_W);
+}
+
+TEST(ViewFraming, AKeyframeViewIsTheKeyframesCameraLetterboxed) {
+  ViewScene scene;
+  scene.camera = PinholeCamera{};  // 640 x 480
+  ViewSpec spec;
+  spec.kind = ViewKind::kKeyframe;
+  const FramedView own = viewCamera(spec, scene, scene.camera.width, scene.camera.height);
+  EXPECT_EQ(own.image, (PixelRect{0, 0, scene.camera.width, scene.camera.height}));
+  const FramedView wide = viewCamera(spec, scene, 1280, 720);
+  EXPECT_EQ(wide.image, letterbox(1280, 720, scene.camera.width, scene.camera.height));
+  EXPECT_EQ(wide.camera.width, wide.image.width);
+}
+
+}  // namespace
+}  // namespace vdmap::render
