@@ -11,6 +11,7 @@
 #include "app/provenance.h"
 #include "app/view_file.h"
 #include "mapping/export/map_export.h"
+#include "render/view_framing.h"
 
 namespace vdmap::app::gui {
 namespace fs = std::filesystem;
@@ -424,10 +425,14 @@ void Workbench::sync() {
   const auto global = worker_->global();
   const int generation = global ? global->generation : 0;
   if (ui_.picked && ui_.picked_generation != generation) ui_.picked.reset();  // it may not exist in the new map
-  if (ui_.follow_map && ui_.view_from_keyframe < 0 && generation != framed_generation_ && global &&
-      !global->map.ellipsoids.empty()) {
+  // Framed again for a new map, and for a new viewport size (its aspect): the window's panels
+  // settle a frame or two after the first map, and a resized window keeps the map framed.
+  const std::pair<int, int> size{ui_.view_width, ui_.view_height};
+  if (ui_.follow_map && ui_.view_from_keyframe < 0 && (generation != framed_generation_ || size != framed_size_) &&
+      global && !global->map.ellipsoids.empty()) {
     if (framed_generation_ < 0) resetView();
     else frameMap();
+    framed_size_ = size;
   }
 }
 
@@ -463,29 +468,6 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kSaveView: saveView(ui_.view_file_text); break;
   }
 }
-
-namespace {
-
-// The orbit camera whose eye(), target and up are the look-at's (OrbitCamera::eye inverted:
-// yaw about `up` from the same horizon axes, pitch clamped to +-89 degrees).
-render::OrbitCamera orbitLookingAt(const render::LookAt& l) {
-  render::OrbitCamera c;
-  c.target = l.target;
-  c.up = glm::normalize(l.up);
-  c.fov_y_deg = l.fov_y_deg;
-  const glm::vec3 d = l.eye - l.target;
-  c.distance_m = std::max(glm::length(d), 1e-3f);
-  const glm::vec3 n = d / c.distance_m;
-  glm::vec3 a = glm::cross(c.up, std::abs(c.up.x) < 0.9f ? glm::vec3(1, 0, 0) : glm::vec3(0, 1, 0));
-  a = glm::normalize(a);
-  const glm::vec3 b = glm::cross(c.up, a);
-  const float limit = glm::radians(89.f);
-  c.pitch = std::clamp(std::asin(std::clamp(glm::dot(n, c.up), -1.f, 1.f)), -limit, limit);
-  c.yaw = std::atan2(glm::dot(n, b), glm::dot(n, a));
-  return c;
-}
-
-}  // namespace
 
 render::ViewSpec Workbench::viewSpec() const {
   render::ViewSpec spec = viewSpecOf(ui_.settings);
@@ -529,17 +511,13 @@ bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
   s.background = spec.background;
   ui_.show_container = false;
   ui_.view_from_keyframe = -1;
-  if (spec.look_at) {
-    ui_.camera = orbitLookingAt(*spec.look_at);
-  } else {
-    resetView();
-    ui_.camera.fov_y_deg = spec.fov_y_deg;
-    if (spec.orbit) {
-      ui_.camera.yaw = glm::radians(spec.orbit->azimuth_deg);
-      ui_.camera.pitch = glm::radians(std::clamp(spec.orbit->elevation_deg, -89.f, 89.f));
-      if (spec.orbit->distance_m) ui_.camera.distance_m = *spec.orbit->distance_m;
-    }
-  }
+  // The camera as `vdmap render` makes it (render/view_framing.h), at the viewport's aspect.
+  render::ViewScene scene;
+  scene.bounds = frameBounds();
+  scene.up = upVector();
+  ui_.camera = render::orbitCamera(spec, scene, ui_.view_width, ui_.view_height);
+  framed_generation_ = worker_ && worker_->global() ? worker_->global()->generation : 0;
+  framed_size_ = {ui_.view_width, ui_.view_height};
   ui_.follow_map = !spec.look_at && !spec.orbit;  // "camera": null is the framed view, which follows the map
   const int id = spec.kind == render::ViewKind::kGlobal ? spec.selected_keyframe : spec.keyframe;
   if (id >= 0 || ui_.selected_keyframe >= 0) selectKeyframe(id);

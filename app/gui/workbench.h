@@ -258,6 +258,7 @@ class Workbench {
   std::vector<std::pair<int, Transform>> pose_undo_;  // (keyframe, pose before the edit)
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
+  std::pair<int, int> framed_size_{0, 0};          // and the viewport it was framed in
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
   std::string session_settings_;                   // setSessionSettings'
