@@ -135,8 +135,10 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   }
   const json& size = R::key(j, "", "size");
   if (!size.is_array() || size.size() != 2) R::fail("size must be [W, H], got " + size.dump());
-  spec.width = R::integer(size[0], "size[0]", 1, 16384);
-  spec.height = R::integer(size[1], "size[1]", 1, 16384);
+  // [0, 0]: the view kind's default size.
+  spec.width = R::integer(size[0], "size[0]", 0, 16384);
+  spec.height = R::integer(size[1], "size[1]", 0, 16384);
+  if ((spec.width == 0) != (spec.height == 0)) R::fail("size must be [W, H] with both > 0, or [0, 0], got " + size.dump());
   const json& camera = R::key(j, "", "camera");
   if (!camera.is_null()) {
     if (!camera.is_object()) R::fail("camera must be an object or null, got " + camera.dump());

@@ -5,7 +5,17 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include <regex>
+
+#include "app/view_file.h"
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/ply_reader.h"
 #include "mapping/io/tum_sequence.h"
+#include "mapping/pipeline/session_file.h"
+#include "render/colormap.h"
+#include "render/map_scene.h"
+#include "render/view_camera.h"
+#include "render/view_framing.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 #include "tests/test_util.h"
@@ -52,7 +62,7 @@ TEST(RenderCli, RendersAMapThroughOsmesaWithLibGlLinked) {
   TempDir tmp;
   writeEllipsoidPly(tmp / "map.ply");
   const auto r = runVdmap("render --map '" + (tmp / "map.ply").string() + "' --view global --size 160x120 --out '" +
-                          (tmp / "out.png").string() + "' --color keyframe");
+                          (tmp / "out.png").string() + "' --color keyframe --background white");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const cv::Mat img = cv::imread((tmp / "out.png").string());
   ASSERT_EQ(img.cols, 160);
@@ -152,7 +162,8 @@ double greyCorrelation(const cv::Mat& a_bgr, const cv::Mat& b_bgr) {
 }
 
 TEST_F(RenderSequenceCli, GlobalViewShowsTheMapAndTheKeyframeGraph) {
-  const auto r = runVdmap("render " + seq() + " --view global --size 320x240 --out '" + out("global.png") + "'");
+  const auto r = runVdmap("render " + seq() + " --view global --size 320x240 --background white --out '" +
+                          out("global.png") + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("keyframes"), std::string::npos) << r.out;
   const cv::Mat img = cv::imread(out("global.png"));
@@ -165,7 +176,7 @@ TEST_F(RenderSequenceCli, KeyframeViewReproducesTheKeyframesImage) {
   // their mean colour, shaded) must look like the frame: the same image up to cell-sized blur
   // and shading. Seen from the wrong pose (or with the y axis flipped) the correlation drops
   // near 0.
-  const auto r = runVdmap("render " + seq() + " --view keyframe:0 --out '" + out("kf0.png") + "'");
+  const auto r = runVdmap("render " + seq() + " --view keyframe:0 --background white --out '" + out("kf0.png") + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const cv::Mat img = cv::imread(out("kf0.png"));
   const cv::Mat frame = cv::imread((*dir_ / "room" / "rgb" / "000000.png").string());
@@ -217,15 +228,271 @@ TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
   }
   const auto with_map = runVdmap("render --map '" + out("s.vdmap") + "' --view keyframe:0 --out '" + out("k.png") + "'");
   EXPECT_EQ(with_map.exit_code, 0) << with_map.err;
-  const auto folder = runVdmap("render --map '" + out("map") + "' --size 320x240 --out '" + out("folder.png") + "'");
+  const auto folder = runVdmap("render --map '" + out("map") + "' --size 320x240 --background white --out '" +
+                               out("folder.png") + "'");
   ASSERT_EQ(folder.exit_code, 0) << folder.err;
-  // --map alone frames the whole map: nothing drawn touches the image's edges (it was cropped
-  // at the left and bottom).
+  // --map alone frames the map as the window does: the box of the central 96 % of the means
+  // (a few strays may reach past the edges) projects inside the image and spans at least 60 % of
+  // its width or height (the default view is from 35 degrees above the horizon, so the
+  // projected box is not the image).
   const cv::Mat img = cv::imread(out("folder.png"), cv::IMREAD_GRAYSCALE);
   ASSERT_FALSE(img.empty());
   EXPECT_GT(cv::countNonZero(img < 250), 1000) << "nothing was drawn";
-  for (const cv::Mat& edge : {img.row(0), img.row(img.rows - 1), img.col(0), img.col(img.cols - 1)})
-    EXPECT_EQ(cv::countNonZero(edge < 250), 0) << "the map reaches the image's edge";
+  std::vector<glm::vec3> means;
+  for (const EllipsoidRecord& e : readPlyEllipsoids(out("map") + "/global_ellipsoids.ply"))
+    means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  const auto [lo, hi] = render::robustBounds(means);
+  const render::ViewCamera view = render::OrbitCamera::framing(lo, hi, {0, 0, 1}, 320.f / 240.f).view(320, 240);
+  glm::vec2 a(INFINITY), b(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec4 q = view.T_C_W * glm::vec4((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z, 1.f);
+    const glm::vec2 p(view.fx * q.x / q.z + view.cx, view.fy * q.y / q.z + view.cy);
+    a = glm::min(a, p), b = glm::max(b, p);
+  }
+  EXPECT_GE(a.x, 0.f);
+  EXPECT_GE(a.y, 0.f);
+  EXPECT_LE(b.x, 320.f);
+  EXPECT_LE(b.y, 240.f);
+  EXPECT_GE(std::max((b.x - a.x) / 320.f, (b.y - a.y) / 240.f), 0.6f);
+  // What was drawn spans as much (the image, not only the formula).
+  cv::Rect drawn = cv::boundingRect(img < 250);
+  EXPECT_GE(std::max(drawn.width / 320.0, drawn.height / 240.0), 0.6) << drawn;
+}
+
+// The number in "N ellipsoids" of render's summary line (-1 when missing).
+long ellipsoidsDrawn(const std::string& out) {
+  std::smatch m;
+  return std::regex_search(out, m, std::regex(R"(, (\d+) ellipsoids?,)")) ? std::stol(m[1]) : -1;
+}
+
+// A PNG's pixels (BGR).
+cv::Mat png(const std::string& file) { return cv::imread(file); }
+
+double maxDifference(const cv::Mat& a, const cv::Mat& b) { return a.size() == b.size() ? cv::norm(a, b, cv::NORM_INF) : 1e9; }
+
+// Pixels of `image` (BGR) within 12 counts of `rgb`.
+int countColour(const cv::Mat& image, const glm::u8vec3& rgb) {
+  cv::Mat mask;
+  cv::inRange(image, cv::Scalar(rgb.b - 12, rgb.g - 12, rgb.r - 12), cv::Scalar(rgb.b + 12, rgb.g + 12, rgb.r + 12), mask);
+  return cv::countNonZero(mask);
+}
+
+// The session of the room, saved once for the tests below.
+class RenderSessionCli : public RenderSequenceCli {
+ protected:
+  static void SetUpTestSuite() {
+    RenderSequenceCli::SetUpTestSuite();
+    const auto saved = runVdmap("map " + seq() + " --out '" + out("m") + "' --save '" + out("s.vdmap") + "'");
+    ASSERT_EQ(saved.exit_code, 0) << saved.err;
+  }
+  static test::RunResult render(const std::string& name, const std::string& options) {
+    return runVdmap("render '" + out("s.vdmap") + "' --size 320x240 --out '" + out(name) + "' " + options);
+  }
+};
+
+TEST_F(RenderSessionCli, TheDefaultGlobalViewUsesTheWindowsThemeUpAndFraming) {
+  const auto r = render("default.png", "");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("vdmap render: note: settings: the session's thresholds\n"), std::string::npos) << r.out;
+  const cv::Mat img = png(out("default.png"));
+  EXPECT_EQ(img.at<cv::Vec3b>(0, 0), cv::Vec3b(38, 33, 33)) << "the window's dark background (BGR)";
+  // The up vector is the window's: estimateUp of every mapped camera and the session's map.
+  const Session session = loadSession(out("s.vdmap"));
+  const auto cameras = render::graphSceneOf(session.graph, session.info.state, session.info.camera, false).trajectory;
+  const glm::vec3 up = render::estimateUp(cameras, buildGlobalMap(session.graph, session.info.global).ellipsoids);
+  char expected[64];
+  std::snprintf(expected, sizeof expected, "up (%.2f, %.2f, %.2f))", up.x, up.y, up.z);
+  EXPECT_NE(r.out.find(expected), std::string::npos) << r.out << " expected " << expected;
+  // --up names an axis instead.
+  const auto y_up = render("y.png", "--up +y");
+  EXPECT_NE(y_up.out.find("up (0.00, 1.00, 0.00))"), std::string::npos) << y_up.out;
+  EXPECT_GT(maxDifference(img, png(out("y.png"))), 0.0);
+}
+
+TEST_F(RenderSessionCli, UncertaintyAndKeyframeColoursDrawTheirLegend) {
+  ASSERT_EQ(render("rgb.png", "").exit_code, 0);
+  ASSERT_EQ(render("u.png", "--color uncertainty").exit_code, 0);
+  ASSERT_EQ(render("k.png", "--color keyframe").exit_code, 0);
+  const cv::Rect corner(0, 240 - 60, 240, 60);  // the legend's place, bottom left
+  const cv::Mat rgb = png(out("rgb.png"))(corner), u = png(out("u.png"))(corner), k = png(out("k.png"))(corner);
+  EXPECT_GT(countColour(u, render::colormap(0.f)), 10) << "the ramp's dark end";
+  EXPECT_GT(countColour(u, render::colormap(1.f)), 10) << "the ramp's bright end";
+  EXPECT_GT(countColour(k, render::keyframeColor(0)), 10) << "K0's swatch";
+  EXPECT_GT(countColour(k, render::keyframeColor(1)), 10) << "K1's swatch";
+  EXPECT_LT(countColour(rgb, render::colormap(1.f)) + countColour(rgb, render::keyframeColor(1)), 5) << "rgb: no legend";
+}
+
+TEST_F(RenderSessionCli, EachLayerCanBeSwitchedOffAlone) {
+  ASSERT_EQ(render("all.png", "--color keyframe").exit_code, 0);
+  const cv::Mat all = png(out("all.png"));
+  const std::vector<std::string> layers = {"frustums", "graph", "trajectory", "legend"};
+  for (const std::string& off : layers) {
+    std::string list;
+    for (const std::string& l : layers)
+      if (l != off) list += (list.empty() ? "" : ",") + l;
+    const auto r = render("no-" + off + ".png", "--color keyframe --layers " + list);
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const cv::Mat without = png(out("no-" + off + ".png"));
+    cv::Mat diff;
+    cv::absdiff(all, without, diff);
+    EXPECT_GT(cv::countNonZero(diff.reshape(1)), 0) << off << " changed nothing";
+  }
+  ASSERT_EQ(render("none.png", "--color keyframe --layers none").exit_code, 0);
+  EXPECT_GT(maxDifference(all, png(out("none.png"))), 0.0);
+  // White changes the background only where nothing is drawn over it.
+  ASSERT_EQ(render("white.png", "--color keyframe --layers none --background white").exit_code, 0);
+  EXPECT_EQ(png(out("white.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
+  ASSERT_EQ(render("hex.png", "--color keyframe --layers none --background '#102030'").exit_code, 0);
+  EXPECT_EQ(png(out("hex.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(0x30, 0x20, 0x10));
+}
+
+TEST_F(RenderSessionCli, OrbitOfTheDefaultAnglesIsTheDefaultView) {
+  ASSERT_EQ(render("d.png", "").exit_code, 0);
+  ASSERT_EQ(render("o.png", "--orbit -60,35").exit_code, 0);
+  ASSERT_EQ(render("o2.png", "--orbit 30,35").exit_code, 0);
+  EXPECT_EQ(maxDifference(png(out("d.png")), png(out("o.png"))), 0.0) << "pixel-identical";
+  EXPECT_GT(maxDifference(png(out("d.png")), png(out("o2.png"))), 0.0);
+  const auto both = render("x.png", "--orbit 30,35 --look-at 1,1,1,0,0,0");
+  EXPECT_GE(both.exit_code, 100) << "--orbit excludes --look-at (CLI11's code)";
+}
+
+TEST_F(RenderSessionCli, LookAtFromAViewFilesCameraIsThatView) {
+  // A hand-written view file with a camera, and the same camera as flags.
+  writeText(out("v.json"), R"({"vdmap_view": 1, "source": "s.vdmap", "view": "global", "size": [320, 240],
+    "camera": {"eye": [2.5, -1.5, -2.0], "target": [0.1, 0.2, 1.5], "up": [0, -1, 0], "fov_y_deg": 50},
+    "up_axis": "data", "color": "rgb", "draw": "ellipsoids", "sigma": 2, "sphere_level": 0,
+    "points_below_px": 4, "background": "white",
+    "layers": {"frustums": true, "graph": true, "trajectory": true, "groundtruth": true, "legend": true,
+               "grid": false, "bounds": true},
+    "selected_keyframe": -1, "thresholds": {}})");
+  // thresholds are required in full: the reader names the first missing one.
+  const auto partial = runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") + "' --out '" + out("v.png") + "'");
+  EXPECT_EQ(partial.exit_code, 1);
+  EXPECT_NE(partial.err.find("v.json: missing key 'thresholds."), std::string::npos) << partial.err;
+  EXPECT_EQ(std::count(partial.err.begin(), partial.err.end(), '\n'), 1) << partial.err;
+  EXPECT_FALSE(std::filesystem::exists(out("v.png")));
+  // A file the window saves has every threshold: take them from one written by the view core.
+  std::string text = test::readFile(out("v.json"));
+  {
+    render::ViewSpec spec;
+    app::writeViewFile(out("full.json"), spec, GlobalMapParams{}, "s.vdmap");
+    const std::string full = test::readFile(out("full.json"));
+    const std::size_t at = full.find("\"thresholds\"");
+    ASSERT_NE(at, std::string::npos);
+    text = text.substr(0, text.find("\"thresholds\"")) + full.substr(at);
+  }
+  writeText(out("v.json"), text);
+  const auto from_file =
+      runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") + "' --out '" + out("v.png") + "'");
+  ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
+  const auto from_flags = render("f.png", "--look-at 2.5,-1.5,-2.0,0.1,0.2,1.5 --up 0,-1,0 --fov 50 --background white");
+  ASSERT_EQ(from_flags.exit_code, 0) << from_flags.err;
+  const cv::Mat a = png(out("v.png")), b = png(out("f.png"));
+  ASSERT_EQ(a.size(), cv::Size(320, 240)) << "the view file's size";
+  EXPECT_EQ(maxDifference(a, b), 0.0);
+  ASSERT_EQ(render("d.png", "--background white").exit_code, 0);
+  EXPECT_GT(maxDifference(a, png(out("d.png"))), 0.0) << "the camera is not the default one";
+  // A flag beside the view file overrides it.
+  const auto dark = runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") +
+                             "' --background dark --out '" + out("vd.png") + "'");
+  ASSERT_EQ(dark.exit_code, 0) << dark.err;
+  EXPECT_EQ(png(out("vd.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(38, 33, 33));
+}
+
+TEST_F(RenderSessionCli, ASettingsFileGivesTheWindowsThresholds) {
+  const auto plain = render("p.png", "");
+  writeText(out("settings.json"), R"({"thresholds": {"filter_sigma_factor": 1.0}})");
+  const auto with_file = render("s.png", "--settings '" + out("settings.json") + "'");
+  const auto with_set = render("t.png", "--set filter_sigma_factor=1.0");
+  ASSERT_EQ(with_file.exit_code, 0) << with_file.err;
+  ASSERT_EQ(with_set.exit_code, 0) << with_set.err;
+  EXPECT_NE(with_file.out.find("note: settings: " + out("settings.json") + " over the session's thresholds\n"),
+            std::string::npos) << with_file.out;
+  EXPECT_LT(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(plain.out)) << "k = 1 keeps fewer ellipsoids";
+  EXPECT_EQ(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(with_set.out));
+  // --set comes over --settings.
+  const auto both = render("b.png", "--settings '" + out("settings.json") + "' --set filter_sigma_factor=3");
+  EXPECT_EQ(ellipsoidsDrawn(both.out), ellipsoidsDrawn(plain.out));
+  // A malformed file is one line and exit 1.
+  writeText(out("bad.json"), R"({"thresholds": {"filter_sigma_factor": "many"}})");
+  const auto bad = render("bad.png", "--settings '" + out("bad.json") + "'");
+  EXPECT_EQ(bad.exit_code, 1);
+  EXPECT_EQ(bad.err.rfind("vdmap render: error: " + out("bad.json") + ": ", 0), 0u) << bad.err;
+  EXPECT_EQ(std::count(bad.err.begin(), bad.err.end(), '\n'), 1) << bad.err;
+}
+
+TEST_F(RenderSessionCli, AViewFileServesAsSettings) {
+  render::ViewSpec spec;
+  GlobalMapParams thresholds;
+  thresholds.filter.filter_sigma_factor = 1.0;
+  app::writeViewFile(out("tv.json"), spec, thresholds, "s.vdmap");
+  const auto r = render("tv.png", "--settings '" + out("tv.json") + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(ellipsoidsDrawn(r.out), ellipsoidsDrawn(render("t1.png", "--set filter_sigma_factor=1.0").out));
+  EXPECT_NE(r.out.find("note: settings: " + out("tv.json") + " over the session's thresholds"), std::string::npos);
+  // A sequence has no session thresholds: the defaults, or the file alone.
+  const auto seq_default = runVdmap("render " + seq() + " --size 64x48 --out '" + out("sd.png") + "'");
+  EXPECT_NE(seq_default.out.find("note: settings: defaults\n"), std::string::npos) << seq_default.out;
+}
+
+// 7-Scenes' kitchen (its cameras' y axis is not the world's z): the default view is upright
+// (the floor below the table tops in the image) and framed (the robust box inside the image,
+// spanning most of it), as the window shows it.
+TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
+  VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
+  TempDir tmp;
+  const auto mapped = runVdmap("map '" + folder.string() + "' --frames 0:150 --out '" + (tmp / "m").string() +
+                               "' --save '" + (tmp / "k.vdmap").string() + "'");
+  ASSERT_EQ(mapped.exit_code, 0) << mapped.err;
+  const auto r = runVdmap("render '" + (tmp / "k.vdmap").string() + "' --size 640x360 --out '" + (tmp / "k.png").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(up \((\S+), (\S+), (\S+)\)\))"))) << r.out;
+  const glm::vec3 up = glm::normalize(glm::vec3(std::stof(m[1]), std::stof(m[2]), std::stof(m[3])));
+  std::printf("kitchen: up (%.2f, %.2f, %.2f)\n", up.x, up.y, up.z);
+  EXPECT_LT(std::abs(up.z), 0.9f) << "not the +z convention: the kitchen's up is not its z axis";
+  // The view the render drew, from the session (the same framing functions).
+  const Session session = loadSession(tmp / "k.vdmap");
+  const render::GraphScene graph =
+      render::graphSceneOf(session.graph, session.info.state, session.info.camera, false);
+  const std::vector<Ellipsoid> map = buildGlobalMap(session.graph, session.info.global).ellipsoids;
+  std::vector<glm::vec3> means;
+  for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+  render::ViewScene scene;
+  scene.bounds = render::frameBounds(means, graph);
+  scene.up = up;
+  const render::ViewCamera view = render::viewCamera(render::ViewSpec{}, scene, 640, 360).camera;
+  const auto project = [&](const glm::vec3& p) {
+    const glm::vec4 q = view.T_C_W * glm::vec4(p, 1.f);
+    return glm::vec2(view.fx * q.x / q.z + view.cx, view.fy * q.y / q.z + view.cy);
+  };
+  const auto [lo, hi] = render::robustBounds(means);
+  glm::vec2 a(INFINITY), b(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec2 p = project({(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
+    a = glm::min(a, p), b = glm::max(b, p);
+  }
+  EXPECT_GE(a.x, 0.f);
+  EXPECT_GE(a.y, 0.f);
+  EXPECT_LE(b.x, 640.f);
+  EXPECT_LE(b.y, 360.f);
+  EXPECT_GE(std::max((b.x - a.x) / 640.f, (b.y - a.y) / 360.f), 0.6f);
+  // Upright: the lowest fifth of the means (along up) lies lower in the image than the highest.
+  std::vector<std::pair<float, float>> height_row;
+  for (const glm::vec3& p : means) height_row.emplace_back(glm::dot(p, up), project(p).y);
+  std::sort(height_row.begin(), height_row.end());
+  const std::size_t fifth = height_row.size() / 5;
+  double low_rows = 0, high_rows = 0;
+  for (std::size_t i = 0; i < fifth; ++i) low_rows += height_row[i].second, high_rows += height_row[height_row.size() - 1 - i].second;
+  EXPECT_GT(low_rows / fifth, high_rows / fifth + 20.0) << "the floor is not below the rest in the image";
+  // The image: dark, and the map fills a good part of it.
+  const cv::Mat img = png((tmp / "k.png").string());
+  EXPECT_EQ(img.at<cv::Vec3b>(0, 0), cv::Vec3b(38, 33, 33));
+  cv::Mat drawn;
+  cv::inRange(img, cv::Scalar(30, 25, 25), cv::Scalar(46, 41, 41), drawn);
+  const cv::Rect box = cv::boundingRect(~drawn);
+  std::printf("kitchen: drawn box %dx%d of 640x360\n", box.width, box.height);
+  EXPECT_GE(std::max(box.width / 640.0, box.height / 360.0), 0.6);
 }
 
 TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {
