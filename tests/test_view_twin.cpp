@@ -101,8 +101,10 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeView) {
 
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
   REQUIRE_XVFB();
-  const nlohmann::json spec = expectTwins("container", "--keyframe 1 --press c");
+  // The container window draws at 2 sigma whatever the 3-D view's sigma: its view file says so.
+  const nlohmann::json spec = expectTwins("container", "--keyframe 1 --press c --set ellipsoid_sigma=3");
   EXPECT_EQ(spec.value("view", ""), "container:1");
+  EXPECT_EQ(spec.value("sigma", 0.0), 2.0);
 }
 
 // A view written by hand (a camera of its own, a white background) given to the window is the

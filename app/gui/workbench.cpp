@@ -479,6 +479,7 @@ render::ViewSpec Workbench::viewSpec() const {
   if (ui_.show_container && mapped(ui_.selected_keyframe)) {
     spec.kind = render::ViewKind::kContainer;
     spec.keyframe = ui_.selected_keyframe;
+    spec.sigma = kContainerSigma;  // what the container window draws, whatever the 3-D view's sigma
     spec.width = 2 * mapping->camera.width;
     spec.height = 2 * mapping->camera.height;
   } else if (mapped(ui_.view_from_keyframe)) {
@@ -500,7 +501,7 @@ bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
   s.up_axis = spec.up;
   s.color = spec.color;
   s.show_ellipsoids = spec.ellipsoids;
-  s.ellipsoid_sigma = spec.sigma;
+  if (spec.kind != render::ViewKind::kContainer) s.ellipsoid_sigma = spec.sigma;  // a container's is fixed
   s.show_frustums = spec.layers.frustums;
   s.show_graph = spec.layers.graph;
   s.show_trajectory = spec.layers.trajectory;

@@ -62,6 +62,10 @@ struct UiState {
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
 
+/// The sigma the container window draws its ellipsoids at (scene_view.cpp's ContainerStyle), so
+/// a container view file says it.
+inline constexpr float kContainerSigma = 2.f;
+
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
