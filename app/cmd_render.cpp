@@ -144,7 +144,9 @@ void runRender(RenderArgs args) {
     std::printf(", %s, %s, %s", counted(source.framesMapped(), "frame").c_str(),
                 counted(static_cast<long long>(graph->size()), "keyframe").c_str(),
                 counted(static_cast<long long>(graph->edges().size()), "edge").c_str());
-  std::printf(", up (%.2f, %.2f, %.2f))\n", up.x, up.y, up.z);
+  // The container view is drawn in the keyframe's image: no up axis.
+  if (view.spec.kind != render::ViewKind::kContainer) std::printf(", up (%.2f, %.2f, %.2f)", up.x, up.y, up.z);
+  std::printf(")\n");
 }
 
 }  // namespace

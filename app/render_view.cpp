@@ -438,7 +438,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     const std::vector<Ellipsoid> kept = keptEllipsoids(k.container, params.filter, k.T_W_K, k.id);
     mirror.setContainer(++m.container_serial, spec.keyframe, k.rgb(), m.camera, k.T_W_K, kept,
                         {.sigma = spec.sigma, .color = spec.color, .cell_size_px = m.cell_size_px,
-                         .show_grid = spec.layers.grid});
+                         .show_grid = spec.layers.grid, .show_bounds = spec.layers.bounds});
     last_drawn_ = kept.size();
     return render::renderView(gl, mirror, spec, scene, w, h);
   }

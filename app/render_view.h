@@ -96,7 +96,8 @@ class RenderSource {
   /// The size render() uses for `spec`: its own, else 1280x720 global, the camera's for a
   /// keyframe view, 2W x 2H for a container.
   std::pair<int, int> imageSize(const render::ViewSpec& spec) const;
-  /// The number of ellipsoids the last render() drew and the up vector it used.
+  /// The number of ellipsoids the last render() drew and the up vector it used (a container
+  /// view uses none: the last one stays).
   std::size_t lastDrawn() const { return last_drawn_; }
   glm::vec3 lastUp() const { return last_up_; }
 

@@ -110,6 +110,7 @@ void ContainerRenderer::draw(int width, int height) const {
   background_->set("u_container", container);
   background_->set("u_image_offset", glm::vec2(camera_.width / 2, camera_.height / 2));
   background_->set("u_cell_size", style_.show_grid ? style_.cell_size_px : 0);
+  background_->set("u_bounds_only", 0);
   background_->set("u_image", 0);
   gl.ActiveTexture(GL_TEXTURE0);
   gl.BindTexture(GL_TEXTURE_2D, texture_.id());
@@ -123,6 +124,13 @@ void ContainerRenderer::draw(int width, int height) const {
     ellipses_->set("u_sigma", style_.sigma);
     ellipse_vao_.bind();
     gl.DrawArraysInstanced(GL_TRIANGLE_STRIP, 0, 4, static_cast<GLsizei>(count_));
+  }
+  if (style_.show_bounds) {  // the image's outline over the ellipses, as the window's
+    gl.Disable(GL_DEPTH_TEST);
+    background_->use();
+    background_->set("u_bounds_only", 1);
+    background_vao_.bind();
+    gl.DrawArrays(GL_TRIANGLE_STRIP, 0, 4);
   }
   gl.BindVertexArray(0);
 }

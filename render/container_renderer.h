@@ -36,6 +36,7 @@ struct ContainerStyle {
   ColorMode color = ColorMode::kRgb;
   int cell_size_px = 5;     ///< grid spacing (default s = 5 px)
   bool show_grid = false;
+  bool show_bounds = false; ///< the keyframe image's outline (yellow, about 1.5 output pixels)
   bool operator==(const ContainerStyle&) const = default;
 };
 

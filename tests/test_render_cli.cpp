@@ -346,6 +346,20 @@ TEST_F(RenderSessionCli, EachLayerCanBeSwitchedOffAlone) {
   EXPECT_EQ(png(out("hex.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(0x30, 0x20, 0x10));
 }
 
+TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {
+  ASSERT_EQ(render("c.png", "--view container:1").exit_code, 0);
+  ASSERT_EQ(render("cn.png", "--view container:1 --layers none").exit_code, 0);
+  // At 320x240 the image fills the middle half: its outline runs along rows 60 and 179, columns
+  // 80 and 239.
+  const cv::Mat with = png(out("c.png")), without = png(out("cn.png"));
+  const glm::u8vec3 yellow{255, 220, 0};
+  for (const cv::Rect& edge : {cv::Rect(100, 58, 120, 4), cv::Rect(100, 178, 120, 4), cv::Rect(78, 80, 4, 80),
+                               cv::Rect(238, 80, 4, 80)}) {
+    EXPECT_GT(countColour(with(edge), yellow), 100) << edge;
+    EXPECT_EQ(countColour(without(edge), yellow), 0) << edge;
+  }
+}
+
 TEST_F(RenderSessionCli, OrbitOfTheDefaultAnglesIsTheDefaultView) {
   ASSERT_EQ(render("d.png", "").exit_code, 0);
   ASSERT_EQ(render("o.png", "--orbit -60,35").exit_code, 0);
