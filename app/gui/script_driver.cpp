@@ -251,12 +251,27 @@ bool viewScreenshotDue(const ScriptRun& run, const Workbench& bench) {
          !bench.player().busy && !failedRun(run, bench);
 }
 
-void saveViewScreenshot(Workbench& bench, const render::Gl& gl, const render::MapMirror& mirror, const WindowState& win,
+void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirror& mirror, const WindowState& win,
                         const std::string& file) {
   const render::ViewSpec spec = bench.viewSpec();
   cv::Mat image;
-  if (spec.kind == render::ViewKind::kContainer) {
-    image = mirror.containerImage();
+  const auto selection = bench.selection();
+  if (spec.kind == render::ViewKind::kContainer && selection && selection->keyframe == spec.keyframe &&
+      win.mirrored.decoded_rgb_for >= 0) {
+    // The container as the view's layers draw it (the grid and the image bounds in GL, as
+    // `vdmap render` draws them; the window shows its own zoom-aware outline instead): the
+    // mirror's container drawn again with the view's style. The window's style comes back with
+    // the next frame's syncMirror.
+    const render::ContainerStyle style{.sigma = spec.sigma,
+                                       .color = spec.color,
+                                       .cell_size_px = win.mapping->mapper.local_map.cell_size_px,
+                                       .show_grid = spec.layers.grid,
+                                       .show_bounds = spec.layers.bounds};
+    mirror.setContainer(win.mirrored.decoded_rgb_for, spec.keyframe, win.mirrored.decoded_rgb, win.mapping->camera,
+                        selection->T_W_K, selection->local, style);
+    image = mirror.containerImage().clone();
+  } else if (spec.kind == render::ViewKind::kContainer) {
+    image = cv::Mat();  // no container yet: the error below
   } else {
     // Where drawScene drew the view (GL counts rows from the bottom).
     const UiState& ui = bench.ui();
