@@ -575,6 +575,14 @@ const std::vector<BadCase>& badCases() {
        args("render {dir}/seq --out {dir}/o.png --refine pairwise")},
       {"command_line", "bench_refine_with_ground_truth_poses", E::kCliError, "--refine pairwise refines tracked poses",
        args("bench {dir}/seq --out {dir}/out --refine pairwise")},
+      // gui --settings FILE and --view-file V.json: read strictly, before the display is looked at (the
+      // user's own settings file only warns).
+      {"command_line", "gui_settings_missing", E::kCliError, "none.json: no such file",
+       args("gui {dir}/seq --settings {dir}/none.json --exit")},
+      {"command_line", "gui_settings_out_of_range", E::kCliError, "bad.json: thresholds.merge_distance must be >= 0",
+       then(write("bad.json", R"({"thresholds": {"merge_distance": -1}})"), "gui {dir}/seq --settings {dir}/bad.json --exit")},
+      {"command_line", "gui_view_file_missing_key", E::kCliError, "v.json: missing key 'source'",
+       then(write("v.json", R"({"vdmap_view": 1})"), "gui {dir}/seq --view-file {dir}/v.json --exit")},
       {"sequence", "camera_file_unknown_key", E::kInputError,
        "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
        "colour)",

@@ -13,6 +13,7 @@
 
 #include "app/gui/settings.h"
 #include "app/gui/workbench.h"
+#include "app/view_file.h"
 #include "render/colormap.h"
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
@@ -868,6 +869,122 @@ TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
   // The image scaled alike along both axes (to the rounding of the letterbox to whole pixels).
   EXPECT_NEAR(v.camera.fx / v.camera.fy, c.fx / c.fy, 2e-3) << "stretched";
   EXPECT_NEAR(v.camera.fy, c.fy * 500.0 / c.height, 1e-3);
+}
+
+// viewSpec describes what is shown (global with its camera, keyframe:K at the letterbox's size,
+// container:K at 2W x 2H) and applyViewSpec shows it again: the camera, the view options and the
+// selection come back as they were.
+TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.worker().play();
+  t.worker().waitIdle();
+  UiState& ui = bench.ui();
+  ui.view_width = 900, ui.view_height = 500;
+  bench.sync();
+  bench.orbit(0.4f, -0.1f);
+  bench.zoom(2.f);
+  bench.pan(30.f, -12.f);
+  ui.settings.color = render::ColorMode::kUncertainty;
+  ui.settings.ellipsoid_sigma = 1.5f;
+  ui.settings.show_graph = false;
+  ui.settings.up_axis = render::UpAxis::kPlusY;
+  bench.selectKeyframe(1);
+  const render::OrbitCamera camera = ui.camera;
+  const render::ViewSpec global = bench.viewSpec();
+  EXPECT_EQ(global.kind, render::ViewKind::kGlobal);
+  EXPECT_EQ(global.width, 900);
+  EXPECT_EQ(global.height, 500);
+  ASSERT_TRUE(global.look_at.has_value());
+  EXPECT_EQ(global.color, render::ColorMode::kUncertainty);
+  EXPECT_FALSE(global.layers.graph);
+  EXPECT_EQ(global.selected_keyframe, 1);
+
+  // Elsewhere, with other options: applying the spec brings the view back.
+  const Settings defaults;
+  ui.settings.color = defaults.color;
+  ui.settings.ellipsoid_sigma = defaults.ellipsoid_sigma;
+  ui.settings.show_graph = defaults.show_graph;
+  ui.settings.up_axis = defaults.up_axis;
+  bench.key(KeyAction::kResetView);
+  bench.selectKeyframe(-1);
+  ASSERT_NE(bench.viewSpec(), global);
+  ASSERT_TRUE(bench.applyViewSpec(global));
+  EXPECT_FALSE(ui.follow_map);
+  const glm::vec3 eye = ui.camera.eye(), eye0 = camera.eye();
+  for (int i = 0; i < 3; ++i) {
+    EXPECT_NEAR(eye[i], eye0[i], 1e-4f) << i;
+    EXPECT_NEAR(ui.camera.target[i], camera.target[i], 1e-5f) << i;
+  }
+  render::ViewSpec again = bench.viewSpec();
+  ASSERT_TRUE(again.look_at.has_value());
+  for (int i = 0; i < 3; ++i) EXPECT_NEAR(again.look_at->eye[i], global.look_at->eye[i], 1e-4f);
+  again.look_at = global.look_at;
+  EXPECT_EQ(again, global);
+
+  // keyframe:1 at the letterbox of the 900 x 500 viewport.
+  bench.key(KeyAction::kViewFromKeyframe);
+  const render::ViewSpec keyframe = bench.viewSpec();
+  const PinholeCamera& c = t.worker().mapping()->camera;
+  const render::PixelRect box = render::letterbox(900, 500, c.width, c.height);
+  EXPECT_EQ(keyframe.kind, render::ViewKind::kKeyframe);
+  EXPECT_EQ(keyframe.keyframe, 1);
+  EXPECT_EQ(keyframe.width, box.width);
+  EXPECT_EQ(keyframe.height, box.height);
+  EXPECT_FALSE(keyframe.look_at.has_value());
+  // container:1, 2W x 2H, while the container window is open.
+  bench.key(KeyAction::kContainer);
+  const render::ViewSpec container = bench.viewSpec();
+  EXPECT_EQ(container.kind, render::ViewKind::kContainer);
+  EXPECT_EQ(container.keyframe, 1);
+  EXPECT_EQ(container.width, 2 * c.width);
+  EXPECT_EQ(container.height, 2 * c.height);
+
+  bench.key(KeyAction::kEscape);
+  ASSERT_TRUE(bench.applyViewSpec(keyframe));
+  EXPECT_EQ(ui.view_from_keyframe, 1);
+  EXPECT_EQ(bench.viewSpec(), keyframe);
+  ASSERT_TRUE(bench.applyViewSpec(container));
+  EXPECT_TRUE(ui.show_container);
+  EXPECT_EQ(bench.viewSpec(), container);
+  // A keyframe this session lacks: the global view, and an error saying so.
+  render::ViewSpec missing = keyframe;
+  missing.keyframe = 99;
+  EXPECT_FALSE(bench.applyViewSpec(missing));
+  EXPECT_EQ(bench.viewSpec().kind, render::ViewKind::kGlobal);
+  EXPECT_NE(ui.status.text.find("99"), std::string::npos) << ui.status.text;
+}
+
+// S writes the view shown as a view file (into the View section's file field) that reads back
+// as the same view, and the status line names the file and the render command.
+TEST(GuiView, SKeySavesTheViewFile) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.worker().play();
+  t.worker().waitIdle();
+  bench.sync();
+  bench.orbit(0.2f, 0.1f);
+  const fs::path file = t.dir / "views" / "v.json";
+  fs::create_directories(file.parent_path());
+  bench.ui().view_file_text = file.string();
+  bench.key(KeyAction::kSaveView);
+  ASSERT_TRUE(fs::exists(file)) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kSuccess);
+  EXPECT_NE(bench.ui().status.text.find(file.string()), std::string::npos) << bench.ui().status.text;
+  EXPECT_NE(bench.ui().status.text.find("vdmap render " + (t.dir / "seq").string() + " --view-file"), std::string::npos)
+      << bench.ui().status.text;
+  GlobalMapParams thresholds;
+  thresholds.merge_distance_m = -1;
+  const render::ViewSpec read = readViewFile(file, &thresholds);
+  const render::ViewSpec shown = bench.viewSpec();
+  ASSERT_TRUE(read.look_at && shown.look_at);
+  for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(read.look_at->eye[i], shown.look_at->eye[i]);
+  EXPECT_EQ(read, shown);
+  EXPECT_EQ(thresholds.merge_distance_m, bench.ui().params.global.merge_distance_m);
+  // Nothing written where no file can be: an error on the status line.
+  bench.ui().view_file_text = (t.dir / "no" / "such" / "v.json").string();
+  bench.key(KeyAction::kSaveView);
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
 }
 
 TEST(GuiView, FramingFitsTheBoxInNarrowAndWideViewports) {

@@ -232,6 +232,92 @@ TEST(GuiCli, AFailedScriptedRunWritesNeitherFile) {
   EXPECT_FALSE(fs::exists(home / "j.json"));
 }
 
+// Which settings apply (docs/workbench.md "Which settings apply"): --settings FILE, else the
+// defaults for a scripted run; each run says which in one note.
+const char* kTunedSettings = R"({"thresholds": {"filter_sigma_factor": 1, "merge_distance": 0.73}})";
+
+bool saysSettings(const RunResult& r, const std::string& source) {
+  return r.err.find("vdmap: note: settings: " + source + "\n") != std::string::npos ||
+         r.err.find("vdmap gui: note: settings: " + source + "\n") != std::string::npos;
+}
+
+TEST(GuiCli, AScriptedRunUsesTheSettingsFileItIsGivenAndSaysSo) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const fs::path tuned = home / "tuned.json";
+  writeText(tuned, kTunedSettings);
+  const auto run = [&](const std::string& name, const std::string& extra) {
+    const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --exit --stats-json '" + (home / name).string() + "' " + extra);
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return r;
+  };
+  const RunResult defaults = run("d.json", "");
+  const RunResult file = run("f.json", "--settings '" + tuned.string() + "'");
+  const RunResult set = run("s.json", "--set filter_sigma_factor=1 --set merge_distance=0.73");
+  EXPECT_TRUE(saysSettings(defaults, "defaults")) << defaults.err;
+  EXPECT_TRUE(saysSettings(file, tuned.string())) << file.err;
+  const nlohmann::json d = readJson(home / "d.json"), f = readJson(home / "f.json"), s = readJson(home / "s.json");
+  // k = 1 keeps fewer ellipsoids, h = 0.73 m merges more of them: the file's map, not the defaults'.
+  EXPECT_LT(f["sigma_e"].get<int>(), d["sigma_e"].get<int>());
+  EXPECT_NE(f["sigma_e_prime"], d["sigma_e_prime"]);
+  EXPECT_DOUBLE_EQ(f["merge_distance_m"].get<double>(), 0.73);
+  EXPECT_EQ(f["sigma_e"], s["sigma_e"]);  // the same map as the same values given with --set
+  EXPECT_EQ(f["sigma_e_prime"], s["sigma_e_prime"]);
+  EXPECT_FALSE(fs::exists(home / "config" / "vdmap" / "settings.json"));
+
+  // A saved session keeps its own thresholds; --settings goes over them, and says so.
+  writeTinySequence(home / "seq", 3);
+  const std::string session = (home / "s.vdmap").string();
+  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  const RunResult own = runInXvfb(home, "gui '" + session + "' --exit --stats-json '" + (home / "o.json").string() + "'");
+  const RunResult over = runInXvfb(home, "gui '" + session + "' --exit --settings '" + tuned.string() + "' --stats-json '" +
+                                             (home / "v.json").string() + "'");
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  ASSERT_EQ(over.exit_code, 0) << over.err;
+  EXPECT_TRUE(saysSettings(own, "the session's thresholds")) << own.err;
+  EXPECT_TRUE(saysSettings(over, tuned.string() + " over the session's thresholds")) << over.err;
+  EXPECT_DOUBLE_EQ(readJson(home / "o.json")["merge_distance_m"].get<double>(), 0.25);
+  EXPECT_DOUBLE_EQ(readJson(home / "v.json")["merge_distance_m"].get<double>(), 0.73);
+}
+
+TEST(GuiCli, AScriptedRunIgnoresTheUsersSettingsAndSaysDefaults) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const std::string args = "--frames 0:30 --play-to-end --exit --stats-json ";
+  const RunResult plain = runInXvfb(home, args + "'" + (home / "p.json").string() + "'");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  // Now the user has tuned thresholds (runInXvfb points XDG_CONFIG_HOME into `home`).
+  const fs::path user_file = home / "config" / "vdmap" / "settings.json";
+  fs::create_directories(user_file.parent_path());
+  writeText(user_file, kTunedSettings);
+  const RunResult tuned = runInXvfb(home, args + "'" + (home / "t.json").string() + "'");
+  ASSERT_EQ(tuned.exit_code, 0) << tuned.err;
+  EXPECT_TRUE(saysSettings(tuned, "defaults")) << tuned.err;
+  const nlohmann::json p = readJson(home / "p.json"), t = readJson(home / "t.json");
+  EXPECT_EQ(t["sigma_e"], p["sigma_e"]);
+  EXPECT_EQ(t["sigma_e_prime"], p["sigma_e_prime"]);
+  EXPECT_DOUBLE_EQ(t["merge_distance_m"].get<double>(), 0.25);
+  EXPECT_EQ(readFile(user_file), kTunedSettings);  // neither read nor written
+}
+
+// A --settings file that is malformed or out of range: one line naming it, before the display
+// is looked at.
+TEST(GuiCli, AMalformedSettingsFileIsOneErrorNamingIt) {
+  TempDir home;
+  writeTinySequence(home / "seq", 3);
+  const fs::path bad = home / "bad.json";
+  for (const std::string& text : {std::string(R"({"thresholds": {"merge_distance": -1}})"), std::string("{\"thresholds\": ")}) {
+    writeText(bad, text);
+    for (const std::string& verb : {"gui '" + (home / "seq").string() + "'", std::string("--frames 0:3")}) {
+      const RunResult r = runVdmap(verb + " --exit --settings '" + bad.string() + "'", "DISPLAY= WAYLAND_DISPLAY=");
+      EXPECT_EQ(r.exit_code, 1) << r.err;
+      EXPECT_NE(r.err.find("error: " + bad.string() + ": "), std::string::npos) << r.err;
+      EXPECT_EQ(r.err.find("display"), std::string::npos) << r.err;
+      EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+    }
+  }
+}
+
 // Without a display, a missing sequence or session is named (it named the display), in one line.
 TEST(GuiCli, AMissingInputIsNamedBeforeTheDisplay) {
   TempDir home;

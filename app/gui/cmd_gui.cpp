@@ -10,6 +10,7 @@
 #include "app/gui/workbench.h"
 #include "app/gui/workbench_window.h"
 #include "app/progress.h"
+#include "app/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/synth/builtin_scene.h"
@@ -22,6 +23,8 @@ namespace fs = std::filesystem;
 struct GuiArgs {
   SequenceArgs sequence;
   std::string map;  ///< a saved session instead of a sequence
+  std::string settings;  ///< --settings: this file instead of the defaults or the user's settings
+  std::string view_file;  ///< --view-file: read (strictly) before the window opens
   gui::ScriptOptions script;
   std::vector<std::string> set;
   std::string window_size;
@@ -93,15 +96,45 @@ std::string renderBuiltin(const BuiltinCache& c, const std::function<void(std::s
   return c.folder.string();
 }
 
+// Which settings a run starts with (docs/workbench.md "Which settings apply"): the file given
+// with --settings; else the defaults for a scripted run (reproducible) and the user's file for an
+// interactive one. A saved session opened at start keeps its own thresholds, unless --settings
+// names a file: the thresholds that file sets then go over the session's.
+struct StartSettings {
+  gui::Settings settings;
+  fs::path user_file;   ///< read now and saved at the end; empty: neither (scripted, or --settings)
+  std::string source;   ///< what the note names
+  std::string warning;  ///< the user's file was malformed (its defaults are used)
+};
+
+StartSettings startSettings(const GuiArgs& args, bool session) {
+  StartSettings start;
+  if (!args.settings.empty()) {
+    start.settings = readSettingsArg(args.settings);  // strict: a bad file is an error naming it
+    start.source = args.settings + (session ? " over the session's thresholds" : "");
+    return start;
+  }
+  if (!args.script.exit) {
+    start.user_file = gui::settingsPath();
+    start.settings = gui::loadSettings(start.user_file, &start.warning);
+    const std::string user = start.user_file.string() + (fs::exists(start.user_file) ? "" : " (not there yet: defaults)");
+    start.source = session ? "the session's thresholds, view options from " + user : user;
+    return start;
+  }
+  start.source = session ? "the session's thresholds" : "defaults";
+  return start;
+}
+
 void runGui(GuiArgs args, bool builtin) {
-  std::string warning;
-  const bool scripted = args.script.exit;
-  // A scripted run neither reads nor writes the user's settings, so tests are reproducible.
-  const fs::path settings_file = scripted ? fs::path() : gui::settingsPath();
-  const gui::Settings saved = scripted ? gui::Settings{} : gui::loadSettings(settings_file, &warning);
+  const std::string verb = builtin ? "vdmap" : "vdmap gui";
+  const bool session = !builtin && !args.map.empty();
+  const StartSettings start = startSettings(args, session);
+  if (!args.view_file.empty()) args.script.view = readViewFile(args.view_file);
+  const fs::path& settings_file = start.user_file;
+  const std::string& warning = start.warning;
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
   // --set and --window-size hold for this run only: they are not saved (saveChangedSettings).
-  gui::Settings settings = saved;
+  gui::Settings settings = start.settings;
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
   if (!args.window_size.empty()) {
     int w = 0, h = 0;
@@ -119,7 +152,11 @@ void runGui(GuiArgs args, bool builtin) {
   if (!builtin && args.map.empty()) noteCameraGuess(openSequence(args.sequence), "gui");
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
+  std::cerr << verb << ": note: settings: " << start.source << "\n";
   gui::Workbench bench(settings, warning);
+  if (!args.settings.empty()) bench.setSessionSettings(args.settings);
+  bench.ui().settings_source = start.source;
+  bench.ui().settings_file = settings_file.string();
   gui::Preparation prepare;
   if (builtin) {
     const BuiltinCache cache = builtinCache(args.sequence.frames);
@@ -159,6 +196,17 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
       "f1, esc; e.g. h for the help)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
+  app.add_option_function<std::string>(
+      "--view-file", [&args](const std::string& file) { args.view_file = file; },
+      "scripted: show this view file's view (camera, view options) once mapping is done, instead of the default view");
+  app.add_option("--save-view", args.script.save_view,
+                 "scripted: save the view shown as a view file once mapping is done (as S does), for vdmap render --view-file");
+  app.add_option("--view-screenshot", args.script.view_screenshot,
+                 "scripted: a PNG of the 3-D view alone (no panels) at the view's size, once mapping is done");
+  app.add_option("--settings", args.settings,
+                 "FILE: start from this settings.json (or a view file's thresholds) instead of the defaults (scripted "
+                 "runs) or your own settings (interactive runs); its thresholds go over a session's; your settings are "
+                 "neither read nor written");
   app.add_flag("--expand-sections", args.script.expand_sections,
                "scripted: open every collapsible section of the panels (the stats' labels_cut then covers them all)");
   app.add_option("--measure-latency", args.script.latency_runs,

@@ -28,7 +28,13 @@ GlfwWindowContext::GlfwWindowContext(int width, int height, const std::string& t
   glfwWindowHint(GLFW_CONTEXT_VERSION_MAJOR, 3);
   glfwWindowHint(GLFW_CONTEXT_VERSION_MINOR, 3);
   glfwWindowHint(GLFW_OPENGL_PROFILE, GLFW_OPENGL_CORE_PROFILE);
+  // A forward-compatible context refuses line widths above 1 px (core profile, "wide lines"
+  // deprecated), so the window drew every graph line 1 px wide while `vdmap render`'s OSMesa
+  // context, not forward-compatible, drew them 1.5 and 3 px: the same view, two pictures.
+  // macOS only offers core profiles that are forward-compatible.
+#ifdef __APPLE__
   glfwWindowHint(GLFW_OPENGL_FORWARD_COMPAT, GLFW_TRUE);
+#endif
   window_ = glfwCreateWindow(width, height, title.c_str(), nullptr, nullptr);
   if (!window_) {
     const std::string message = glfwMessage();

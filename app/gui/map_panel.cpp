@@ -50,8 +50,13 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
   if (section(win.check, "Settings")) {
     if (ImGui::Button("Reset to defaults")) bench.resetToDefaults();
     tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
-    ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
-                       settingsPath().c_str());
+    const UiState& ui = bench.ui();
+    ImGui::TextWrapped("This run started with: %s.", ui.settings_source.c_str());
+    if (ui.settings_file.empty())
+      ImGui::TextWrapped("Not saved on exit (a scripted run, or --settings): your settings are left as they are.");
+    else
+      ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
+                         ui.settings_file.c_str());
   }
   ImGui::End();
 }

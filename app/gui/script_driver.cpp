@@ -17,6 +17,16 @@ using Clock = ScriptRun::Clock;
 
 nlohmann::json toJson(const Rect& r) { return {r.x, r.y, r.w, r.h}; }
 
+// A --view-file view is drawn at the window's viewport, not at its own size: a size that differs
+// gives another picture than `vdmap render --view-file` (another aspect), so say so.
+void warnAboutTheViewsSize(Workbench& bench, const render::ViewSpec& asked) {
+  const render::ViewSpec shown = bench.viewSpec();
+  if (asked.width <= 0 || (asked.width == shown.width && asked.height == shown.height)) return;
+  bench.report(StatusLine::Kind::kWarning, "the view file's view is " + std::to_string(asked.width) + "x" +
+                                               std::to_string(asked.height) + ", the window's " + std::to_string(shown.width) +
+                                               "x" + std::to_string(shown.height) + " (--window-size changes it)");
+}
+
 // One slider change at a time (merge distance, alternating): from the edit until the frame
 // that shows the map built with it. Returns true while runs remain.
 bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
@@ -112,7 +122,9 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
 }  // namespace
 
 bool scripted(const ScriptRun& run) {
-  return !run.options.screenshot.empty() || !run.options.stats_json.empty() || run.options.exit;
+  const ScriptOptions& o = run.options;
+  return !o.screenshot.empty() || !o.stats_json.empty() || !o.view_screenshot.empty() || !o.save_view.empty() ||
+         o.view || o.exit;
 }
 
 bool failedRun(const ScriptRun& run, const Workbench& bench) { return run.options.exit && !bench.firstError().empty(); }
@@ -152,7 +164,8 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
             !st.busy && (st.target >= win.mapping->frames_total || !run.options.play_to_end || !st.error.empty());
         if (!done) return;
       }
-      bench.resetView();
+      if (run.options.view) bench.applyViewSpec(*run.options.view);
+      else bench.resetView();
       if (run.options.keyframe >= 0) bench.selectKeyframe(run.options.keyframe);
       for (const int key : run.options.press) keys.presses.emplace_back(key, 0);  // as if typed now
       run.countdown = 3;  // frames to draw the final map before the screenshot
@@ -167,6 +180,9 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         saveScreenshot(bench, gl, win, run.options.screenshot);
         run.screenshot_taken = true;
       }
+      if (run.options.view) warnAboutTheViewsSize(bench, *run.options.view);
+      if (!run.options.save_view.empty() && !failedRun(run, bench)) bench.saveView(run.options.save_view);
+      run.view_files_taken = !run.options.save_view.empty() || !run.options.view_screenshot.empty();
       run.phase = ScriptPhase::kLatency;
       return;
     case ScriptPhase::kLatency:
@@ -203,6 +219,11 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         std::error_code ignored;
         std::filesystem::remove(run.options.screenshot, ignored);
       }
+      if (failedRun(run, bench) && run.view_files_taken) {
+        std::error_code ignored;
+        for (const std::string* file : {&run.options.view_screenshot, &run.options.save_view})
+          if (!file->empty()) std::filesystem::remove(*file, ignored);
+      }
       run.finished = run.options.exit;
       run.phase = ScriptPhase::kDone;
       return;
@@ -219,6 +240,55 @@ void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& w
   try {
     render::writePng(path, image);
     bench.report(StatusLine::Kind::kSuccess, "screenshot written to " + path);
+  } catch (const std::exception& e) {
+    bench.report(StatusLine::Kind::kError, e.what());
+  }
+}
+
+bool viewScreenshotDue(const ScriptRun& run, const Workbench& bench) {
+  // advanceScript takes the screenshots in the frame whose settle countdown ends.
+  return !run.options.view_screenshot.empty() && run.phase == ScriptPhase::kSettle && run.countdown == 1 &&
+         !bench.player().busy && !failedRun(run, bench);
+}
+
+void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirror& mirror, const WindowState& win,
+                        const std::string& file) {
+  const render::ViewSpec spec = bench.viewSpec();
+  cv::Mat image;
+  const auto selection = bench.selection();
+  if (spec.kind == render::ViewKind::kContainer && selection && selection->keyframe == spec.keyframe &&
+      win.mirrored.decoded_rgb_for >= 0) {
+    // The container as the view's layers draw it (the grid and the image bounds in GL, as
+    // `vdmap render` draws them; the window shows its own zoom-aware outline instead): the
+    // mirror's container drawn again with the view's style. The window's style comes back with
+    // the next frame's syncMirror.
+    const render::ContainerStyle style{.sigma = spec.sigma,
+                                       .color = spec.color,
+                                       .cell_size_px = win.mapping->mapper.local_map.cell_size_px,
+                                       .show_grid = spec.layers.grid,
+                                       .show_bounds = spec.layers.bounds};
+    mirror.setContainer(win.mirrored.decoded_rgb_for, spec.keyframe, win.mirrored.decoded_rgb, win.mapping->camera,
+                        selection->T_W_K, selection->local, style);
+    image = mirror.containerImage().clone();
+  } else if (spec.kind == render::ViewKind::kContainer) {
+    image = cv::Mat();  // no container yet: the error below
+  } else {
+    // Where drawScene drew the view (GL counts rows from the bottom).
+    const UiState& ui = bench.ui();
+    const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
+    const int vx = static_cast<int>(win.layout.view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
+    const int vy = win.layout.fb_height - static_cast<int>(win.layout.view.y * scale.y) - vh;
+    const render::PixelRect r = bench.view(vw, vh).image;
+    gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
+    gl.ReadBuffer(GL_BACK);
+    image = render::readFramebufferRgb(gl, vx + r.x, vy + (vh - r.y - r.height), r.width, r.height);
+  }
+  std::error_code ignored;
+  const std::string path = std::filesystem::absolute(file, ignored).lexically_normal().string();
+  try {
+    if (image.empty()) throw std::runtime_error("--view-screenshot: the view has no image yet");
+    render::writePng(path, image);
+    bench.report(StatusLine::Kind::kSuccess, "view screenshot written to " + path);
   } catch (const std::exception& e) {
     bench.report(StatusLine::Kind::kError, e.what());
   }

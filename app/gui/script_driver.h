@@ -24,6 +24,7 @@ struct ScriptRun {
   int countdown = 0;               ///< frames to draw before the screenshot
   bool finished = false;           ///< done, and the window should close (options.exit)
   bool screenshot_taken = false;   ///< by the script, so a failure removes it (and no older file)
+  bool view_files_taken = false;   ///< --save-view / --view-screenshot, likewise
   nlohmann::json layout = nlohmann::json::object();  ///< recordLayout's figures
   int latency_generation = -1;     ///< the global map an edit waits to replace (-1: no edit pending)
   Clock::time_point latency_start, orbit_frame_start, idle_until;
@@ -51,5 +52,14 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
                    int settle_frames);
 /// Writes the window's back buffer as a PNG to `file`; the outcome goes to the status line.
 void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& win, const std::string& file);
+/// Whether this frame is the one the script takes its screenshots of: the window then calls
+/// saveViewScreenshot after drawing the 3-D view and before drawing the panels over it.
+bool viewScreenshotDue(const ScriptRun& run, const Workbench& bench);
+/// Writes the 3-D view's own image (Workbench::viewSpec's view: the viewport, the letterbox of a
+/// keyframe view, or the container drawn with the view's layers) as a PNG to `file`, read from
+/// the back buffer after the map is drawn and before ImGui draws; the outcome goes to the status
+/// line.
+void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirror& mirror, const WindowState& win,
+                        const std::string& file);
 
 }  // namespace vdmap::app::gui

@@ -8,6 +8,7 @@
 #include <imgui_stdlib.h>
 
 #include "app/gui/widgets.h"
+#include "app/view_file.h"
 #include "render/colormap.h"
 
 namespace vdmap::app::gui {
@@ -190,6 +191,27 @@ void drawView(Workbench& bench, WindowState& win) {
   ImGui::SameLine();
   ImGui::SetNextItemWidth(-FLT_MIN);
   ImGui::InputText("##shot", &win.screenshot_text);
+  // The view as a view file, and the command that draws it headless (docs/workbench.md "Save view").
+  UiState& ui = bench.ui();
+  ImGui::BeginDisabled(ui.view_file_text.empty());
+  if (ImGui::Button("Save view (S)")) bench.saveView(ui.view_file_text);
+  tip(ui.view_file_text.empty() ? "Type a file name on the right first."
+                                : "Writes the view shown (camera, size, colours, layers, thresholds) as a view file to the "
+                                  "file named on the right; `vdmap render --view-file` draws the same picture. The status "
+                                  "line gives the command.");
+  checkFits(win.check);
+  ImGui::EndDisabled();
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  ImGui::InputText("##viewfile", &ui.view_file_text);
+  std::string command = renderCommand(bench.viewSpec(), bench.viewSource());
+  if (ImGui::Button("Copy")) ImGui::SetClipboardText(command.c_str());
+  tip("Copies the `vdmap render` command that draws this view (every option spelled out) to the clipboard.");
+  checkFits(win.check);
+  ImGui::SameLine();
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  ImGui::InputText("##command", &command, ImGuiInputTextFlags_ReadOnly);
+  tip(command);
 }
 
 }  // namespace vdmap::app::gui

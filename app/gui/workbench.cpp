@@ -3,12 +3,15 @@
 #include <algorithm>
 #include <cmath>
 #include <filesystem>
+#include <iostream>
 #include <optional>
 
 #include <Eigen/Geometry>
 
 #include "app/provenance.h"
+#include "app/view_file.h"
 #include "mapping/export/map_export.h"
+#include "render/view_framing.h"
 
 namespace vdmap::app::gui {
 namespace fs = std::filesystem;
@@ -33,6 +36,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
       {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
+      {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
@@ -139,7 +143,12 @@ bool Workbench::openSession(const std::string& file) {
   try {
     Session saved = loadSession(path);
     // The session's own parameters, shown and used; the user's settings stay as they are.
-    const ParameterValues params{saved.info.mapper, saved.info.global};
+    ParameterValues params{saved.info.mapper, saved.info.global};
+    if (!session_settings_.empty()) {  // keys the file lacks keep the session's values
+      Settings base;
+      base.thresholds = params.global;
+      params.global = readSettingsArg(session_settings_, base).thresholds;
+    }
     std::optional<TumSequence> rest = framesAfter(saved, &why);
     auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
     worker->setOnChange(on_change_);
@@ -416,10 +425,14 @@ void Workbench::sync() {
   const auto global = worker_->global();
   const int generation = global ? global->generation : 0;
   if (ui_.picked && ui_.picked_generation != generation) ui_.picked.reset();  // it may not exist in the new map
-  if (ui_.follow_map && ui_.view_from_keyframe < 0 && generation != framed_generation_ && global &&
-      !global->map.ellipsoids.empty()) {
+  // Framed again for a new map, and for a new viewport size (its aspect): the window's panels
+  // settle a frame or two after the first map, and a resized window keeps the map framed.
+  const std::pair<int, int> size{ui_.view_width, ui_.view_height};
+  if (ui_.follow_map && ui_.view_from_keyframe < 0 && (generation != framed_generation_ || size != framed_size_) &&
+      global && !global->map.ellipsoids.empty()) {
     if (framed_generation_ < 0) resetView();
     else frameMap();
+    framed_size_ = size;
   }
 }
 
@@ -452,7 +465,90 @@ void Workbench::key(KeyAction action) {
       break;
     case KeyAction::kUndo: undoPoseEdit(); break;
     case KeyAction::kBeforeOptimisation: showBeforeOptimisation(!ui_.show_before_optimisation); break;
+    case KeyAction::kSaveView: saveView(ui_.view_file_text); break;
   }
+}
+
+render::ViewSpec Workbench::viewSpec() const {
+  render::ViewSpec spec = viewSpecOf(ui_.settings);
+  spec.selected_keyframe = ui_.selected_keyframe;
+  spec.fov_y_deg = ui_.camera.fov_y_deg;
+  const auto mapping = worker_ ? worker_->mapping() : nullptr;
+  const int keyframes = mapping ? static_cast<int>(mapping->keyframes.size()) : 0;
+  const auto mapped = [&](int id) { return id >= 0 && id < keyframes; };
+  if (ui_.show_container && mapped(ui_.selected_keyframe)) {
+    spec.kind = render::ViewKind::kContainer;
+    spec.keyframe = ui_.selected_keyframe;
+    spec.sigma = kContainerSigma;  // what the container window draws, whatever the 3-D view's sigma
+    spec.width = 2 * mapping->camera.width;
+    spec.height = 2 * mapping->camera.height;
+  } else if (mapped(ui_.view_from_keyframe)) {
+    spec.kind = render::ViewKind::kKeyframe;
+    spec.keyframe = ui_.view_from_keyframe;
+    const render::PixelRect r = render::letterbox(ui_.view_width, ui_.view_height, mapping->camera.width, mapping->camera.height);
+    spec.width = r.width;
+    spec.height = r.height;
+  } else {
+    spec.width = ui_.view_width;
+    spec.height = ui_.view_height;
+    spec.look_at = render::LookAt{ui_.camera.eye(), ui_.camera.target, ui_.camera.up, ui_.camera.fov_y_deg};
+  }
+  return spec;
+}
+
+bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
+  Settings& s = ui_.settings;
+  s.up_axis = spec.up;
+  s.color = spec.color;
+  s.show_ellipsoids = spec.ellipsoids;
+  if (spec.kind != render::ViewKind::kContainer) s.ellipsoid_sigma = spec.sigma;  // a container's is fixed
+  s.show_frustums = spec.layers.frustums;
+  s.show_graph = spec.layers.graph;
+  s.show_trajectory = spec.layers.trajectory;
+  s.show_groundtruth = spec.layers.groundtruth;
+  s.show_legend = spec.layers.legend;
+  s.container_grid = spec.layers.grid;
+  s.container_bounds = spec.layers.bounds;
+  s.background = spec.background;
+  ui_.show_container = false;
+  ui_.view_from_keyframe = -1;
+  // The camera as `vdmap render` makes it (render/view_framing.h), at the viewport's aspect.
+  render::ViewScene scene;
+  scene.bounds = frameBounds();
+  scene.up = upVector();
+  ui_.camera = render::orbitCamera(spec, scene, ui_.view_width, ui_.view_height);
+  framed_generation_ = worker_ && worker_->global() ? worker_->global()->generation : 0;
+  framed_size_ = {ui_.view_width, ui_.view_height};
+  ui_.follow_map = !spec.look_at && !spec.orbit;  // "camera": null is the framed view, which follows the map
+  const int id = spec.kind == render::ViewKind::kGlobal ? spec.selected_keyframe : spec.keyframe;
+  if (id >= 0 || ui_.selected_keyframe >= 0) selectKeyframe(id);
+  if (spec.kind == render::ViewKind::kGlobal) return true;
+  if (ui_.selected_keyframe != spec.keyframe) {
+    report(StatusLine::Kind::kError, "the view's keyframe " + std::to_string(spec.keyframe) + " is not mapped");
+    return false;
+  }
+  if (spec.kind == render::ViewKind::kKeyframe) ui_.view_from_keyframe = spec.keyframe;
+  else ui_.show_container = true;
+  return true;
+}
+
+bool Workbench::saveView(const std::string& file) {
+  if (!worker_) {
+    report(StatusLine::Kind::kError, "Save view: nothing is open");
+    return false;
+  }
+  const std::string path = absolute(file);
+  try {
+    if (path.empty()) throw std::invalid_argument("Save view: type a file name first");
+    writeViewFile(path, viewSpec(), ui_.params.global, viewSource());
+  } catch (const std::exception& e) {
+    report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  const std::string command = renderCommand(viewSpec(), viewSource(), path);
+  std::cout << "vdmap: view saved to " << path << "; draw it with: " << command << std::endl;
+  report(StatusLine::Kind::kSuccess, "view saved to " + path + "; " + command);
+  return true;
 }
 
 }  // namespace vdmap::app::gui

@@ -14,6 +14,7 @@
 #include "app/parameter_table.h"
 #include "render/map_mirror.h"
 #include "render/view_camera.h"
+#include "render/view_spec.h"
 
 namespace vdmap::app::gui {
 
@@ -47,7 +48,11 @@ struct UiState {
   std::string trajectory_text;    ///< the "load corrected trajectory" field
   std::string export_text = "vdmap_export";   ///< export folder
   std::string session_text = "map.vdmap";     ///< "save session" file
+  std::string view_file_text = "vdmap_view.json";  ///< "save view" file (S)
   StatusLine status;
+  /// Which settings this run started with (the note cmd_gui prints) and the file they are saved
+  /// to on exit ("": not saved, a scripted run or --settings).
+  std::string settings_source = "defaults", settings_file;
   bool show_help = false;         ///< the key and mouse overlay (H, F1)
   bool show_container = false;    ///< the large container view window (C)
   /// The map, keyframes and trajectory as they were before the last pose-graph optimisation
@@ -57,10 +62,14 @@ struct UiState {
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
 
+/// The sigma the container window draws its ellipsoids at (scene_view.cpp's ContainerStyle), so
+/// a container view file says it.
+inline constexpr float kContainerSigma = 2.f;
+
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo, kBeforeOptimisation
+  kEscape, kUndo, kBeforeOptimisation, kSaveView
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
@@ -140,6 +149,9 @@ class Workbench {
   void setRefinement(std::optional<MapRefinementParams> refine) { refine_ = std::move(refine); }
   /// Opens a saved session (.vdmap) the same way: its keyframes and saved thresholds, no player.
   bool openSession(const std::string& file);
+  /// The thresholds `file` sets (--settings FILE: a settings.json or a view file, readSettingsArg)
+  /// go over the saved thresholds of every session opened from now on; "": none.
+  void setSessionSettings(std::string file) { session_settings_ = std::move(file); }
   /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
   bool openPath(const std::string& path);
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
@@ -210,6 +222,24 @@ class Workbench {
   /// One keyboard action.
   void key(KeyAction action);
 
+  /// The view shown, as a view file holds it (docs/workbench.md "Save view"): container:K while
+  /// the container window is open (2W x 2H), keyframe:K while viewing from a keyframe (the
+  /// letterbox's size), else the global view with its camera (eye, target, up, field of view) at
+  /// the viewport's size; the view options and the selected keyframe from the settings and UI.
+  render::ViewSpec viewSpec() const;
+  /// Shows `spec` (the inverse of viewSpec, but the size: the window's viewport stays as laid
+  /// out): the view options go into the settings, the camera as given (else the default view,
+  /// turned by spec.orbit), and the view stops following the map. Keyframe and container views
+  /// select their keyframe (an id not mapped: the global view, and false is returned). The
+  /// thresholds stay: a view file's apply only through --settings.
+  bool applyViewSpec(const render::ViewSpec& spec);
+  /// The file a render command names for the open session: the .vdmap or sequence folder.
+  const std::string& viewSource() const { return ui_.settings.last_sequence; }
+  /// Writes viewSpec() and the thresholds as a view file to `file`; the status line and stdout
+  /// give its absolute path and the `vdmap render` command that draws it. False (the status line
+  /// says why) when nothing is open or the file cannot be written.
+  bool saveView(const std::string& file);
+
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
   /// Click in the 3-D view at (x, y) of a width x height viewport: sets ui().picked and selects
@@ -232,8 +262,11 @@ class Workbench {
   std::vector<std::pair<int, Transform>> pose_undo_;  // (keyframe, pose before the edit)
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
+  std::pair<int, int> framed_size_{0, 0};          // and the viewport it was framed in
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
+  std::string session_settings_;                   // setSessionSettings'
+
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;
 };

@@ -62,6 +62,7 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_V: return KeyAction::kViewFromKeyframe;
     case GLFW_KEY_C: return KeyAction::kContainer;
     case GLFW_KEY_B: return KeyAction::kBeforeOptimisation;
+    case GLFW_KEY_S: return KeyAction::kSaveView;
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return KeyAction::kHelp;
     case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
@@ -242,6 +243,7 @@ class WorkbenchWindow {
     last_seen_ = seen();
     ImGui::Render();
     drawScene(bench_, gl_, mirror_, win_);
+    if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     if (!win_.screenshot_request.empty()) {
       saveScreenshot(bench_, gl_, win_, win_.screenshot_request);

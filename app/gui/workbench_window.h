@@ -1,6 +1,7 @@
 #pragma once
 // The workbench window: GLFW + Dear ImGui drawing of a Workbench (all logic lives there).
 #include <functional>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -16,6 +17,11 @@ struct ScriptOptions {
   bool expand_sections = false;  ///< every collapsible section of the panels open (layout checks)
   std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
+  /// The headless twin (docs/workbench.md "Save view"): a view shown instead of the default one
+  /// once mapping is done (--view-file), the view then saved as a view file (--save-view) and
+  /// the 3-D view's own image, without the panels, at the view's size (--view-screenshot).
+  std::optional<render::ViewSpec> view;
+  std::string save_view, view_screenshot;
   bool exit = false;          ///< close the window once the above are written
   /// Measurements, in this order after the screenshot, into the stats file:
   int latency_runs = 0;       ///< slider-to-map latency: merge-distance edits until the new map is drawn, ms
