@@ -34,8 +34,10 @@ void drawMapView(const Gl& gl, const MapMirror& mirror, const FramedView& view, 
   gl.Viewport(viewport.x + r.x, image_y, r.width, r.height);
   if (mesh) mesh->draw(view.camera);
   mirror.draw(view.camera, with_lines);
+  // The legend sits at the image's bottom-left (inside a letterboxed keyframe view, as render
+  // draws it), then the viewport is restored for the caller.
+  if (legend) mirror.drawLegend(r.height);
   gl.Viewport(viewport.x, viewport.y, viewport.width, viewport.height);
-  if (legend) mirror.drawLegend(viewport.height);
 }
 
 cv::Mat renderView(const Gl& gl, MapMirror& mirror, const ViewSpec& spec, const ViewScene& scene, int width, int height,

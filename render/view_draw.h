@@ -19,7 +19,7 @@ MirrorStyle mirrorStyle(const ViewSpec& spec);
 /// Draws a map view into the bound framebuffer's rectangle `viewport` (GL pixels, from the
 /// bottom-left): clears it (`background` in view.image, kLetterboxColor around it), draws `mesh`
 /// (if any) and the mirror with `view.camera` in view.image, then the mirror's legend at the
-/// viewport's bottom-left when `legend`. with_lines = false leaves the graph out.
+/// image's bottom-left when `legend`. with_lines = false leaves the graph out.
 void drawMapView(const Gl& gl, const MapMirror& mirror, const FramedView& view, const glm::vec3& background,
                  const PixelRect& viewport, bool with_lines, bool legend, const MeshRenderer* mesh = nullptr);
 

@@ -99,6 +99,13 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeView) {
   EXPECT_EQ(spec.value("view", ""), "keyframe:1");
 }
 
+// A colour legend in a letterboxed keyframe view sits inside the image on both paths.
+TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeViewWithItsLegend) {
+  REQUIRE_XVFB();
+  const nlohmann::json spec = expectTwins("keyframe-uncertainty", "--keyframe 1 --press v --set color=uncertainty");
+  EXPECT_EQ(spec.value("color", ""), "uncertainty");
+}
+
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
   REQUIRE_XVFB();
   // The container window draws at 2 sigma whatever the 3-D view's sigma: its view file says so.

@@ -106,7 +106,7 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   const auto selection = bench.selection();
   if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
     const int id = selection->keyframe;
-    const render::ContainerStyle style{.sigma = 2.f, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
+    const render::ContainerStyle style{.sigma = kContainerSigma, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
     if (id >= 0) {
       const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
       // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
@@ -206,7 +206,7 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
 }
 
 // Legends and hints over the 3-D view (drawn in front of it, behind the panels).
-void drawViewOverlay(Workbench& bench, const render::MapMirror& mirror, const WindowState& win) {
+void drawViewOverlay(Workbench& bench, const WindowState& win) {
   ImDrawList* draw = ImGui::GetBackgroundDrawList();
   if (win.preparing) return drawPreparation(draw, win);
   const Rect& view = win.layout.view;
