@@ -142,7 +142,7 @@ void runRender(RenderArgs args) {
   // --settings, --view-file and the flags.
   if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
   source.checkView(view.spec);
-  std::printf("vdmap render: note: settings: %s\n", view.settings_source.c_str());
+  std::fprintf(stderr, "vdmap render: note: settings: %s\n", view.settings_source.c_str());
   if (const auto [w, h] = source.imageSize(view.spec); !golden.empty()) checkGoldenSize(args.check.expect, golden.size(), {w, h});
   if (args.check.timings && view.spec.kind != render::ViewKind::kContainer) source.globalMap(view.thresholds);
   times.mark("build");
