@@ -86,11 +86,11 @@ int main(int argc, char** argv) {
     yaml.close();
     std::printf("session  %s: %zu keyframes; %d views (%d global, %d keyframe, %d container)\n", session.c_str(), keyframes,
                 views, globals, keyframe_views, containers);
-    const auto update = vdmap::app::runSuite(dir / "views.yaml", {.update = true, .table = false});
+    const auto update = vdmap::app::runSuite(dir / "views.yaml", {.update = true, .tolerance = {}, .table = false});
     printStages("update", {update});
     std::vector<vdmap::app::SuiteResult> compares;
     for (int i = 0; i < runs; ++i) {
-      compares.push_back(vdmap::app::runSuite(dir / "views.yaml", {.table = false}));
+      compares.push_back(vdmap::app::runSuite(dir / "views.yaml", {.tolerance = {}, .table = false}));
       if (compares.back().failed() > 0) std::printf("warning: %d views differ from the goldens just written\n", compares.back().failed());
     }
     printStages("compare", compares);

@@ -74,7 +74,7 @@ Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const G
   } else if (mode == ColorMode::kKeyframe && !graph.keyframes.empty()) {
     legend.swatch_title = "keyframe colours";
     for (int i = 0; i < static_cast<int>(graph.keyframes.size()); ++i)
-      legend.swatches.push_back({keyframeColor(i), "K" + std::to_string(i)});
+      legend.swatches.push_back({keyframeColor(i), std::string("K").append(std::to_string(i))});
   }
   return legend;
 }

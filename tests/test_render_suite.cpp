@@ -54,8 +54,8 @@ class RenderGolden : public ::testing::Test {
     ASSERT_EQ(saved.exit_code, 0) << saved.err;
   }
   static void TearDownTestSuite() { delete dir_; }
-  static std::string session() { return "'" + (*dir_ / "s.vdmap").string() + "'"; }
-  static std::string quoted(const std::filesystem::path& p) { return "'" + p.string() + "'"; }
+  static std::string quoted(const std::filesystem::path& p) { return std::string("'").append(p.string()).append("'"); }
+  static std::string session() { return quoted(*dir_ / "s.vdmap"); }
   // A golden of the global view at 160x120 in `dir`.
   static std::filesystem::path makeGolden(const TempDir& dir, const std::string& extra = "") {
     const auto golden = dir / "g.png";

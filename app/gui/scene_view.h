@@ -18,7 +18,7 @@ void handleMouse(Workbench& bench, WindowState& win);
 void drawStatusBar(Workbench& bench, const WindowState& win);
 /// Legends and hints over the 3-D view (in front of it, behind the panels); the preparation's
 /// progress while it runs.
-void drawViewOverlay(Workbench& bench, const render::MapMirror& mirror, const WindowState& win);
+void drawViewOverlay(Workbench& bench, const WindowState& win);
 /// The keys and mouse overlay (H); win.layout.help is where it is (all zero when closed).
 void drawHelp(Workbench& bench, WindowState& win);
 

@@ -235,7 +235,7 @@ class WorkbenchWindow {
     drawSequencePanel(bench_, mirror_, win_);
     drawMapPanel(bench_, mirror_, win_);
     drawStatusBar(bench_, win_);
-    drawViewOverlay(bench_, mirror_, win_);
+    drawViewOverlay(bench_, win_);
     drawContainerWindow(bench_, mirror_, win_);
     drawHelp(bench_, win_);
     handleMouse(bench_, win_);
