@@ -142,13 +142,14 @@ void runRender(RenderArgs args) {
   // --settings, --view-file and the flags.
   if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
   source.checkView(view.spec);
-  std::fprintf(stderr, "vdmap render: note: settings: %s\n", view.settings_source.c_str());
   if (const auto [w, h] = source.imageSize(view.spec); !golden.empty()) checkGoldenSize(args.check.expect, golden.size(), {w, h});
   if (args.check.timings && view.spec.kind != render::ViewKind::kContainer) source.globalMap(view.thresholds);
   times.mark("build");
   const cv::Mat image = source.render(view.spec, view.thresholds);
   times.mark("render");
   if (!args.out.empty()) writeImage(args.out, image);
+  // After the work, so that bad input stays one error line.
+  std::fprintf(stderr, "vdmap render: note: settings: %s\n", view.settings_source.c_str());
   const glm::vec3 up = source.lastUp();
   std::printf("%s (%dx%d, view %s, %s, %s", args.out.empty() ? "rendered" : ("wrote " + args.out).c_str(), image.cols,
               image.rows, viewName(view.spec).c_str(),

@@ -293,7 +293,7 @@ class RenderSessionCli : public RenderSequenceCli {
 TEST_F(RenderSessionCli, TheDefaultGlobalViewUsesTheWindowsThemeUpAndFraming) {
   const auto r = render("default.png", "");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("vdmap render: note: settings: the session's thresholds\n"), std::string::npos) << r.out;
+  EXPECT_NE(r.err.find("vdmap render: note: settings: the session's thresholds\n"), std::string::npos) << r.err;
   const cv::Mat img = png(out("default.png"));
   EXPECT_EQ(img.at<cv::Vec3b>(0, 0), cv::Vec3b(38, 33, 33)) << "the window's dark background (BGR)";
   // The up vector is the window's: estimateUp of every mapped camera and the session's map.
@@ -420,8 +420,8 @@ TEST_F(RenderSessionCli, ASettingsFileGivesTheWindowsThresholds) {
   const auto with_set = render("t.png", "--set filter_sigma_factor=1.0");
   ASSERT_EQ(with_file.exit_code, 0) << with_file.err;
   ASSERT_EQ(with_set.exit_code, 0) << with_set.err;
-  EXPECT_NE(with_file.out.find("note: settings: " + out("settings.json") + " over the session's thresholds\n"),
-            std::string::npos) << with_file.out;
+  EXPECT_NE(with_file.err.find("note: settings: " + out("settings.json") + " over the session's thresholds\n"),
+            std::string::npos) << with_file.err;
   EXPECT_LT(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(plain.out)) << "k = 1 keeps fewer ellipsoids";
   EXPECT_EQ(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(with_set.out));
   // --set comes over --settings.
@@ -443,10 +443,10 @@ TEST_F(RenderSessionCli, AViewFileServesAsSettings) {
   const auto r = render("tv.png", "--settings '" + out("tv.json") + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(ellipsoidsDrawn(r.out), ellipsoidsDrawn(render("t1.png", "--set filter_sigma_factor=1.0").out));
-  EXPECT_NE(r.out.find("note: settings: " + out("tv.json") + " over the session's thresholds"), std::string::npos);
+  EXPECT_NE(r.err.find("note: settings: " + out("tv.json") + " over the session's thresholds"), std::string::npos);
   // A sequence has no session thresholds: the defaults, or the file alone.
   const auto seq_default = runVdmap("render " + seq() + " --size 64x48 --out '" + out("sd.png") + "'");
-  EXPECT_NE(seq_default.out.find("note: settings: defaults\n"), std::string::npos) << seq_default.out;
+  EXPECT_NE(seq_default.err.find("note: settings: defaults\n"), std::string::npos) << seq_default.err;
 }
 
 // 7-Scenes' kitchen (its cameras' y axis is not the world's z): the default view is upright
