@@ -1245,6 +1245,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
       EXPECT_TRUE(shown[i].isApprox(estimated[i].T_W_C, 1e-12)) << poses << " " << i;
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
+    EXPECT_EQ(mapping->frames_with_groundtruth, 8) << poses;  // the sequence has it, whatever mapped it
     EXPECT_EQ(bench.graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
@@ -1255,6 +1256,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   EXPECT_EQ(bench.worker()->mapping()->mapper.poses, PoseSource::kTrack);
   EXPECT_EQ(bench.worker()->mapping()->frames_mapped, 8);
   EXPECT_FALSE(bench.worker()->mapping()->hasGroundTruth());
+  EXPECT_EQ(bench.worker()->mapping()->frames_with_groundtruth, 0);
   EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
   // No loop closed, but after the last frame the keyframe poses were refined from the local
   // maps (the status says so): B shows the map before that.

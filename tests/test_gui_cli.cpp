@@ -163,6 +163,7 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_EQ(stats["frames_mapped"], 70);
   EXPECT_GE(stats["loop_closures"].get<int>(), 1);
   EXPECT_EQ(stats["has_groundtruth"], true);
+  EXPECT_EQ(stats["poses"], "track");
   EXPECT_EQ(stats["show_before_optimisation"], true);
   EXPECT_EQ(stats["map_before_optimisation"], true);
   EXPECT_EQ(stats["layout"]["labels_cut"], 0);
@@ -170,6 +171,22 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   const cv::Vec3b loop_color(255, 120, 20);  // render::kLoopEdgeColor
   EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
   EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
+}
+
+// A sequence mapped with its ground-truth poses has ground truth: the figures say so, and which
+// poses the map was made with.
+TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 6);
+  const fs::path json = home / "g.json";
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses gt --play-to-end --exit --stats-json '" +
+                                          json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  EXPECT_EQ(stats["frames_mapped"], 6);
+  EXPECT_EQ(stats["has_groundtruth"], true);
+  EXPECT_EQ(stats["poses"], "gt");
 }
 
 TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
