@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/gui/settings.h"
+#include "app/gui/tg_parts.h"
 #include "app/gui/workbench.h"
 #include "app/view_file.h"
 #include "render/colormap.h"
@@ -288,6 +289,26 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().global()->params.filter.min_points, FilterParams{}.min_points);
   EXPECT_TRUE(bench.ui().reset_layout);
+}
+
+// The "of which" row under t_g: every stage of the build, fusion included, and the rest, adding
+// up to t_g.
+TEST(Figures, TgPartsSumToTg) {
+  GlobalMap m;
+  m.t_g_s = 0.209;
+  m.groups_ms = 2, m.merge_ms = 90, m.occlusion_ms = 30, m.fusion_ms = 83;
+  const TgParts p = tgParts(m);
+  EXPECT_DOUBLE_EQ(p.fusion_ms, 83);
+  EXPECT_NEAR(p.other_ms, 4, 1e-9);
+
+  TinyBench t;  // a real build's parts
+  t.worker().play();
+  t.worker().waitIdle();
+  const GlobalMap& built = t.worker().global()->map;
+  const TgParts q = tgParts(built);
+  EXPECT_EQ(q.fusion_ms, built.fusion_ms);
+  EXPECT_GE(q.other_ms, 0);
+  EXPECT_NEAR(q.groups_ms + q.merge_ms + q.occlusion_ms + q.fusion_ms + q.other_ms, 1e3 * built.t_g_s, 1e-9);
 }
 
 TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
