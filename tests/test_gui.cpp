@@ -484,6 +484,32 @@ TEST(GuiWorkbench, ExportWritesTheTrajectoryAndProvenanceOfMap) {
   }
 }
 
+// A session mapped to its sequence's end, whose folder is still there, says so (the Sequence
+// panel shows it) rather than that it has no sequence; one that continues has nothing to say.
+TEST(GuiWorkbench, ASessionMappedToTheEndSaysSo) {
+  TinyBench t;
+  t.worker().seek(4);
+  t.worker().waitIdle();
+  t.bench.ui().session_text = (t.dir / "half.vdmap").string();
+  t.bench.saveSession();
+  t.worker().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
+  t.bench.ui().session_text = (t.dir / "all.vdmap").string();
+  t.bench.saveSession();
+  t.worker().waitIdle();
+  ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+
+  Workbench reopened{Settings{}};
+  ASSERT_TRUE(reopened.openPath((t.dir / "all.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_TRUE(reopened.savedSession());
+  const std::string seq = fs::absolute(t.dir / "seq").lexically_normal().string();
+  EXPECT_EQ(reopened.whyPlayerOff(), "mapped to the end of " + seq + " (10 of 10 frames): nothing to continue");
+  ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_FALSE(reopened.savedSession());
+  EXPECT_EQ(reopened.whyPlayerOff(), "");
+}
+
 // An opened session whose sequence is still there continues in the player from the
 // session's state, to the same map as one run over all frames; seeking back goes no further
 // back than the session.

@@ -130,6 +130,7 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
     ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
     tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
         "they were mapped with (the Re-run parameters show them).");
+    if (!bench.whyPlayerOff().empty()) ImGui::TextWrapped("%s", bench.whyPlayerOff().c_str());
   }
 }
 
@@ -231,7 +232,10 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   const int total = win.mapping->frames_total, mapped = win.mapping->frames_mapped;
   const bool saved = bench.savedSession();
   drawWhatIsOpen(bench, win);
-  const std::string why_saved = saved ? "A saved session has its keyframes but no sequence to play or re-map." : "";
+  const std::string why_saved =
+      !saved ? ""
+      : bench.whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
+                                     : "A saved session: " + bench.whyPlayerOff() + ".";
   ImGui::BeginDisabled(saved);
   drawPlayer(bench, win, status, why_saved);
   if (win.mapping->mapper.poses == PoseSource::kTrack) drawLoopStrip(bench, win, total);
