@@ -173,6 +173,26 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
 }
 
+// The picture a newcomer is left with: on first start (empty cache and settings) the built-in
+// scene renders, opens and the window then waits for input; in the last frame before it waits
+// no label is cut (tables still sizing their columns clip them to a letter). Likewise after
+// opening a saved session, whose figures table appears with its map.
+TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const fs::path json = home / "first.json";
+  const RunResult r = runInXvfb(home, "--frames 0:10 --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+
+  writeTinySequence(home / "seq", 3);
+  const std::string session = (home / "s.vdmap").string();
+  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  const RunResult s = runInXvfb(home, "gui '" + session + "' --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+}
+
 // A sequence mapped with its ground-truth poses has ground truth: the figures say so, and which
 // poses the map was made with.
 TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {

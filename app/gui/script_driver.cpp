@@ -101,6 +101,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["ui_frames_while_busy"] = run.busy_frame_ms.size();
   stats["ui_frame_ms_median_while_busy"] = median(run.busy_frame_ms);
   stats["layout"] = run.layout;
+  stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
   stats["view_from_keyframe"] = ui.view_from_keyframe;
   stats["show_before_optimisation"] = ui.show_before_optimisation;

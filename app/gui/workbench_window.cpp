@@ -24,6 +24,7 @@
 #include "app/gui/scene_view.h"
 #include "app/gui/script_driver.h"
 #include "app/gui/sequence_panel.h"
+#include "app/gui/widgets.h"
 #include "app/gui/window_state.h"
 #include "mapping/core/timing.h"
 
@@ -240,7 +241,16 @@ class WorkbenchWindow {
     drawHelp(bench_, win_);
     handleMouse(bench_, win_);
     bench_.ui().reset_layout = false;
-    last_seen_ = seen();
+    const Seen now = seen();
+    // A new session draws panels and tables it has not drawn before: let them settle.
+    if (now.session != last_seen_.session) settle_frames_ = std::max(settle_frames_, 2);
+    last_seen_ = now;
+    // Tables still sizing their columns clip their labels in this frame: draw the next one too.
+    if (takeTablesSettling() > 0) settle_frames_ = std::max(settle_frames_, 1);
+    // The picture a user looks at is the frame after which the loop waits for input: the labels
+    // it cuts (a scripted run draws on through its own phases, so the loop's own rule decides).
+    if (!preparing_.folder.valid() && keys_.events == 0 && keys_.presses.empty() && settle_frames_ == 0)
+      script_.labels_cut_before_wait = std::max(script_.labels_cut_before_wait, win_.check.labels_cut);
     ImGui::Render();
     drawScene(bench_, gl_, mirror_, win_);
     if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
