@@ -3,6 +3,7 @@
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
 #include <cstdlib>
+#include <regex>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -191,6 +192,25 @@ TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
   const RunResult s = runInXvfb(home, "gui '" + session + "' --exit --measure-idle 1 --stats-json '" + json.string() + "'");
   ASSERT_EQ(s.exit_code, 0) << s.err;
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+}
+
+// Closing the window while the first start renders the built-in scene (300 frames) stops the
+// render within a frame: the run exits 0 at once, says so, and caches nothing (neither the
+// sequence nor its temporary folder), so the next start renders it whole.
+TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
+  REQUIRE_XVFB();
+  TempDir home;
+  // Frames are drawn at the start and then after each batch of 8 rendered: the 5th comes after 16.
+  const RunResult r = runInXvfb(home, "--close-after-frames 5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"(closed while rendering the built-in scene \((\d+) of (\d+) frames done\): nothing kept)")))
+      << r.err;
+  EXPECT_LT(std::stoi(m[1]), std::stoi(m[2]));
+  EXPECT_EQ(std::stoi(m[2]), 300);
+  if (fs::exists(home / "cache" / "vdmap"))
+    for (const auto& entry : fs::directory_iterator(home / "cache" / "vdmap"))
+      ADD_FAILURE() << "left behind: " << entry.path();
 }
 
 // A sequence mapped with its ground-truth poses has ground truth: the figures say so, and which

@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <future>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -120,6 +121,7 @@ struct Preparing {
   SequenceArgs args;
   std::shared_ptr<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>> progress =
       std::make_shared<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>>(0, 0);
+  std::shared_ptr<std::atomic<bool>> cancel = std::make_shared<std::atomic<bool>>(false);
 };
 
 class WorkbenchWindow {
@@ -134,12 +136,15 @@ class WorkbenchWindow {
       preparing_.what = prepare.what;
       preparing_.args = prepare.args;
       auto progress = preparing_.progress;
-      preparing_.folder = std::async(std::launch::async, [run = std::move(prepare.run), progress] {
-        return run([progress](std::size_t done, std::size_t total) {
-          progress->first = done;
-          progress->second = total;
-          glfwPostEmptyEvent();
-        });
+      auto cancel = preparing_.cancel;
+      preparing_.folder = std::async(std::launch::async, [run = std::move(prepare.run), progress, cancel] {
+        return run(
+            [progress](std::size_t done, std::size_t total) {
+              progress->first = done;
+              progress->second = total;
+              glfwPostEmptyEvent();
+            },
+            [cancel] { return cancel->load(); });
       });
     } else {
       startScript();
@@ -147,7 +152,7 @@ class WorkbenchWindow {
   }
 
   ~WorkbenchWindow() {
-    if (preparing_.folder.valid()) preparing_.folder.wait();
+    if (preparing_.folder.valid()) cancelPreparation();
     bench_.setOnChange(nullptr);
   }
 
@@ -194,7 +199,9 @@ class WorkbenchWindow {
 
   bool needsFrame() const {
     if (keys_.events > 0 || !keys_.presses.empty() || settle_frames_ > 0) return true;
-    if (preparing_.folder.valid()) return true;  // the progress bar (woken by the renderer's progress)
+    if (preparing_.folder.valid())  // the progress bar, woken by the renderer's progress (no busy loop beside it)
+      return preparing_.progress->first != win_.prepare_done ||
+             preparing_.folder.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
     const ScriptPhase phase = script_.phase;
     if (scripted(script_)) {
       if (phase == ScriptPhase::kSettle || phase == ScriptPhase::kOrbit || phase == ScriptPhase::kFinish) return true;
@@ -215,6 +222,7 @@ class WorkbenchWindow {
 
   void frame() {
     const auto t0 = Clock::now();
+    if (++frames_drawn_ == script_.options.close_after_frames) glfwSetWindowShouldClose(context_.window(), GLFW_TRUE);
     scriptFrameStarts(script_, t0);
     // ImGui shows hover and active states a frame late: after input, draw two more frames.
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
@@ -268,6 +276,22 @@ class WorkbenchWindow {
     if (bench_.player().busy) script_.busy_frame_ms.push_back(frame_ms);
   }
 
+  // The window closed during the preparation: it goes at once, and the preparation stops within
+  // one of its steps (a frame of the built-in scene), leaving nothing behind.
+  void cancelPreparation() {
+    glfwHideWindow(context_.window());
+    *preparing_.cancel = true;
+    preparing_.folder.wait();
+    try {
+      preparing_.folder.get();  // it may have finished meanwhile: then all is kept
+    } catch (const std::exception&) {
+      const std::size_t done = preparing_.progress->first, total = preparing_.progress->second;
+      std::cerr << "vdmap: note: closed while " << preparing_.what << " ("
+                << (total > 0 ? std::to_string(done) + " of " + std::to_string(total) + " frames done" : "before its first frames")
+                << "): nothing kept\n";
+    }
+  }
+
   void finishPreparation() {
     try {
       SequenceArgs args = preparing_.args;
@@ -297,6 +321,7 @@ class WorkbenchWindow {
   Preparing preparing_;
   Seen last_seen_;
   int settle_frames_ = 2;
+  int frames_drawn_ = 0;
 };
 
 }  // namespace
