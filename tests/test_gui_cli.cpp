@@ -185,6 +185,11 @@ TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
   const RunResult r = runInXvfb(home, "--frames 0:10 --exit --measure-idle 1 --stats-json '" + json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+  // Then played, in the smallest window (each mapped frame is a picture between waits).
+  const RunResult p = runInXvfb(home, "--frames 0:10 --play-to-end --window-size 1280x720 --exit --measure-idle 1 "
+                                      "--stats-json '" + json.string() + "'");
+  ASSERT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0) << "while playing";
 
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();

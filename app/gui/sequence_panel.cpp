@@ -241,8 +241,14 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   if (win.mapping->mapper.poses == PoseSource::kTrack) drawLoopStrip(bench, win, total);
   drawScrubber(bench, win, why_saved);
   ImGui::EndDisabled();
-  ImGui::Text("%d / %d frames mapped, %zu keyframes%s", mapped, total, win.mapping->keyframes.size(),
-              status.busy ? " (working)" : "");
+  // The short form where the long one would be cut (a narrow panel while working).
+  const char* working = status.busy ? " (working)" : "";
+  std::string counts = std::to_string(mapped) + " / " + std::to_string(total) + " frames mapped, " +
+                       std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+  if (ImGui::CalcTextSize(counts.c_str()).x > ImGui::GetContentRegionAvail().x)
+    counts = std::to_string(mapped) + "/" + std::to_string(total) + " frames, " +
+             std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+  ImGui::TextUnformatted(counts.c_str());
   checkFits(win.check);
   tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "
       "keyframes they made (docs/method.md 5: a new one when a frame re-observes under tau of the current one's features).");
