@@ -120,7 +120,11 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     try {
       for (int start = first; start < last; start += kBatch) {
         std::vector<Pending> batch;
-        for (int i = start; i < std::min(last, start + kBatch); ++i) batch.push_back({i, renderer.render(trajectory[i].T_W_C)});
+        for (int i = start; i < std::min(last, start + kBatch); ++i) {
+          if (options.cancelled && options.cancelled())  // within a frame of being asked
+            throw SynthCancelled(static_cast<std::size_t>(i - first), static_cast<std::size_t>(last - first));
+          batch.push_back({i, renderer.render(trajectory[i].T_W_C)});
+        }
         finishWriting();
         writing = std::move(batch);
         writers.run([&] { tbb::parallel_for_each(writing.begin(), writing.end(), writeFrame); });
@@ -156,11 +160,12 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
 }
 
 void writeBuiltinSequence(const fs::path& out_dir, const BuiltinSceneParams& params,
-                          std::function<void(std::size_t, std::size_t)> progress) {
+                          std::function<void(std::size_t, std::size_t)> progress, std::function<bool()> cancelled) {
   const BuiltinScene scene = makeBuiltinScene(params);
   SynthOptions options;
   options.camera = scene.camera;
   options.progress = std::move(progress);
+  options.cancelled = std::move(cancelled);
   options.write_mesh = true;
   synthesizeSequence(scene.mesh, scene.trajectory, options, out_dir);
 }

@@ -4,6 +4,8 @@
 #include <filesystem>
 #include <functional>
 #include <memory>
+#include <stdexcept>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -49,14 +51,26 @@ struct SynthOptions {
   bool write_mesh = false;
   /// Called after each frame with (done, total).
   std::function<void(std::size_t, std::size_t)> progress;
+  /// Asked before each frame is rendered: true stops the rendering (SynthCancelled).
+  std::function<bool()> cancelled;
+};
+
+/// Thrown by synthesizeSequence when SynthOptions::cancelled says so; nothing is left behind.
+struct SynthCancelled : std::runtime_error {
+  std::size_t done = 0, total = 0;  ///< frames rendered when it stopped, of those asked for
+  SynthCancelled(std::size_t done_frames, std::size_t total_frames)
+      : std::runtime_error("cancelled after " + std::to_string(done_frames) + " of " + std::to_string(total_frames) +
+                           " frames"),
+        done(done_frames), total(total_frames) {}
 };
 
 /// Renders `trajectory` (T_W_C with timestamps) into the TUM folder `out_dir`: rgb/NNNNNN.png,
 /// depth/NNNNNN.png (16-bit), rgb.txt, depth.txt, groundtruth.txt, camera.yaml (mesh.ply with
 /// SynthOptions::write_mesh). Everything is
-/// written into a sibling temporary folder first and renamed at the end, so a failure leaves
-/// nothing behind. Throws std::invalid_argument when `out_dir` exists and is not empty or the
-/// frame range selects nothing, std::runtime_error on rendering/IO failures.
+/// written into a sibling temporary folder first and renamed at the end, so a failure or a
+/// cancel leaves nothing behind. Throws std::invalid_argument when `out_dir` exists and is not
+/// empty or the frame range selects nothing, SynthCancelled when cancelled, std::runtime_error
+/// on rendering/IO failures.
 void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<StampedPose>& trajectory,
                         const SynthOptions& options, const std::filesystem::path& out_dir);
 
@@ -64,6 +78,7 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
 /// with the nguyen2012 sensor model; `params` choose the walk (default: one lap of 300 frames;
 /// e.g. `.laps = 8`: 2400 frames, 133 keyframes).
 void writeBuiltinSequence(const std::filesystem::path& out_dir, const BuiltinSceneParams& params = {},
-                          std::function<void(std::size_t, std::size_t)> progress = {});
+                          std::function<void(std::size_t, std::size_t)> progress = {},
+                          std::function<bool()> cancelled = {});
 
 }  // namespace vdmap::render

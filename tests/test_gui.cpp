@@ -12,6 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/gui/settings.h"
+#include "app/gui/tg_parts.h"
 #include "app/gui/workbench.h"
 #include "app/view_file.h"
 #include "render/colormap.h"
@@ -290,6 +291,26 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   EXPECT_TRUE(bench.ui().reset_layout);
 }
 
+// The "of which" row under t_g: every stage of the build, fusion included, and the rest, adding
+// up to t_g.
+TEST(Figures, TgPartsSumToTg) {
+  GlobalMap m;
+  m.t_g_s = 0.209;
+  m.groups_ms = 2, m.merge_ms = 90, m.occlusion_ms = 30, m.fusion_ms = 83;
+  const TgParts p = tgParts(m);
+  EXPECT_DOUBLE_EQ(p.fusion_ms, 83);
+  EXPECT_NEAR(p.other_ms, 4, 1e-9);
+
+  TinyBench t;  // a real build's parts
+  t.worker().play();
+  t.worker().waitIdle();
+  const GlobalMap& built = t.worker().global()->map;
+  const TgParts q = tgParts(built);
+  EXPECT_EQ(q.fusion_ms, built.fusion_ms);
+  EXPECT_GE(q.other_ms, 0);
+  EXPECT_NEAR(q.groups_ms + q.merge_ms + q.occlusion_ms + q.fusion_ms + q.other_ms, 1e3 * built.t_g_s, 1e-9);
+}
+
 TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   TinyBench t;
   Workbench& bench = t.bench;
@@ -461,6 +482,32 @@ TEST(GuiWorkbench, ExportWritesTheTrajectoryAndProvenanceOfMap) {
     ASSERT_TRUE(gui.contains(key)) << key;
     EXPECT_EQ(gui[key], cli[key]) << key;
   }
+}
+
+// A session mapped to its sequence's end, whose folder is still there, says so (the Sequence
+// panel shows it) rather than that it has no sequence; one that continues has nothing to say.
+TEST(GuiWorkbench, ASessionMappedToTheEndSaysSo) {
+  TinyBench t;
+  t.worker().seek(4);
+  t.worker().waitIdle();
+  t.bench.ui().session_text = (t.dir / "half.vdmap").string();
+  t.bench.saveSession();
+  t.worker().waitIdle();
+  t.worker().play();
+  t.worker().waitIdle();
+  t.bench.ui().session_text = (t.dir / "all.vdmap").string();
+  t.bench.saveSession();
+  t.worker().waitIdle();
+  ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
+
+  Workbench reopened{Settings{}};
+  ASSERT_TRUE(reopened.openPath((t.dir / "all.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_TRUE(reopened.savedSession());
+  const std::string seq = fs::absolute(t.dir / "seq").lexically_normal().string();
+  EXPECT_EQ(reopened.whyPlayerOff(), "mapped to the end of " + seq + " (10 of 10 frames): nothing to continue");
+  ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_FALSE(reopened.savedSession());
+  EXPECT_EQ(reopened.whyPlayerOff(), "");
 }
 
 // An opened session whose sequence is still there continues in the player from the
@@ -1245,6 +1292,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
       EXPECT_TRUE(shown[i].isApprox(estimated[i].T_W_C, 1e-12)) << poses << " " << i;
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
+    EXPECT_EQ(mapping->frames_with_groundtruth, 8) << poses;  // the sequence has it, whatever mapped it
     EXPECT_EQ(bench.graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
@@ -1255,6 +1303,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   EXPECT_EQ(bench.worker()->mapping()->mapper.poses, PoseSource::kTrack);
   EXPECT_EQ(bench.worker()->mapping()->frames_mapped, 8);
   EXPECT_FALSE(bench.worker()->mapping()->hasGroundTruth());
+  EXPECT_EQ(bench.worker()->mapping()->frames_with_groundtruth, 0);
   EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
   // No loop closed, but after the last frame the keyframe poses were refined from the local
   // maps (the status says so): B shows the map before that.

@@ -3,6 +3,7 @@
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
 #include <cstdlib>
+#include <regex>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
@@ -163,6 +164,7 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_EQ(stats["frames_mapped"], 70);
   EXPECT_GE(stats["loop_closures"].get<int>(), 1);
   EXPECT_EQ(stats["has_groundtruth"], true);
+  EXPECT_EQ(stats["poses"], "track");
   EXPECT_EQ(stats["show_before_optimisation"], true);
   EXPECT_EQ(stats["map_before_optimisation"], true);
   EXPECT_EQ(stats["layout"]["labels_cut"], 0);
@@ -170,6 +172,66 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   const cv::Vec3b loop_color(255, 120, 20);  // render::kLoopEdgeColor
   EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
   EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
+}
+
+// The picture a newcomer is left with: on first start (empty cache and settings) the built-in
+// scene renders, opens and the window then waits for input; in the last frame before it waits
+// no label is cut (tables still sizing their columns clip them to a letter). Likewise after
+// opening a saved session, whose figures table appears with its map.
+TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const fs::path json = home / "first.json";
+  const RunResult r = runInXvfb(home, "--frames 0:10 --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+  // Then played, in the smallest window (each mapped frame is a picture between waits).
+  const RunResult p = runInXvfb(home, "--frames 0:10 --play-to-end --window-size 1280x720 --exit --measure-idle 1 "
+                                      "--stats-json '" + json.string() + "'");
+  ASSERT_EQ(p.exit_code, 0) << p.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0) << "while playing";
+
+  writeTinySequence(home / "seq", 3);
+  const std::string session = (home / "s.vdmap").string();
+  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  const RunResult s = runInXvfb(home, "gui '" + session + "' --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(s.exit_code, 0) << s.err;
+  EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
+}
+
+// Closing the window while the first start renders the built-in scene (300 frames) stops the
+// render within a frame: the run exits 0 at once, says so, and caches nothing (neither the
+// sequence nor its temporary folder), so the next start renders it whole.
+TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
+  REQUIRE_XVFB();
+  TempDir home;
+  // Frames are drawn at the start and then after each batch of 8 rendered: the 5th comes after 16.
+  const RunResult r = runInXvfb(home, "--close-after-frames 5");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  std::smatch m;
+  ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"(closed while rendering the built-in scene \((\d+) of (\d+) frames done\): nothing kept)")))
+      << r.err;
+  EXPECT_LT(std::stoi(m[1]), std::stoi(m[2]));
+  EXPECT_EQ(std::stoi(m[2]), 300);
+  if (fs::exists(home / "cache" / "vdmap"))
+    for (const auto& entry : fs::directory_iterator(home / "cache" / "vdmap"))
+      ADD_FAILURE() << "left behind: " << entry.path();
+}
+
+// A sequence mapped with its ground-truth poses has ground truth: the figures say so, and which
+// poses the map was made with.
+TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 6);
+  const fs::path json = home / "g.json";
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses gt --play-to-end --exit --stats-json '" +
+                                          json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  EXPECT_EQ(stats["frames_mapped"], 6);
+  EXPECT_EQ(stats["has_groundtruth"], true);
+  EXPECT_EQ(stats["poses"], "gt");
 }
 
 TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {

@@ -169,5 +169,22 @@ TEST(Synth, AFailureMidwayLeavesNothingBehind) {
   EXPECT_TRUE(std::filesystem::is_empty(tmp.path()));
 }
 
+// Closing the workbench while it renders the built-in scene on first start: the render stops
+// within a frame and leaves neither the folder nor its temporary sibling.
+TEST(Synth, CancelledRenderLeavesNothing) {
+  test::TempDir tmp;
+  std::size_t asked = 0;
+  auto cancelAfterOne = [&] { return ++asked > 1; };
+  try {
+    render::writeBuiltinSequence(tmp / "seq", {.frames = 30}, {}, cancelAfterOne);
+    ADD_FAILURE() << "not cancelled";
+  } catch (const render::SynthCancelled& e) {
+    EXPECT_EQ(e.done, 1u);
+    EXPECT_EQ(e.total, 30u);
+  }
+  EXPECT_EQ(asked, 2u);  // asked before each frame: rendered one, stopped before the second
+  EXPECT_TRUE(std::filesystem::is_empty(tmp.path()));
+}
+
 }  // namespace
 }  // namespace vdmap

@@ -78,7 +78,8 @@ BuiltinCache builtinCache(const std::string& frames) {
 
 // Renders the built-in scene into c.folder (OSMesa, on the calling thread, which must not own
 // the window's context), reporting progress to `progress` and the terminal.
-std::string renderBuiltin(const BuiltinCache& c, const std::function<void(std::size_t, std::size_t)>& progress) {
+std::string renderBuiltin(const BuiltinCache& c, const std::function<void(std::size_t, std::size_t)>& progress,
+                          const std::function<bool()>& cancelled) {
   fs::create_directories(c.folder.parent_path());
   render::SynthOptions options;
   options.camera = c.scene.camera;
@@ -88,6 +89,7 @@ std::string renderBuiltin(const BuiltinCache& c, const std::function<void(std::s
     bar.update(done);
     progress(done, total);
   };
+  options.cancelled = cancelled;
   try {
     render::synthesizeSequence(c.scene.mesh, c.scene.trajectory, options, c.folder);
   } catch (...) {
@@ -163,7 +165,8 @@ void runGui(GuiArgs args, bool builtin) {
     args.sequence.folder = cache.folder.string();
     if (!cache.cached())  // rendered while the window shows its progress
       prepare = {"rendering the built-in scene", args.sequence,
-                 [cache](const std::function<void(std::size_t, std::size_t)>& progress) { return renderBuiltin(cache, progress); }};
+                 [cache](const std::function<void(std::size_t, std::size_t)>& progress,
+                         const std::function<bool()>& cancelled) { return renderBuiltin(cache, progress, cancelled); }};
   }
   bench.setRefinement(refinement(args.sequence));
   // A failure shows in the window, which stays open.
@@ -216,6 +219,9 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
                  "scripted: then N frames orbiting the view (stats: orbit_frame_ms)");
   app.add_option("--measure-idle", args.script.idle_seconds,
                  "scripted: then S seconds of nothing happening (stats: idle_cpu_s, process CPU seconds)");
+  app.add_option("--close-after-frames", args.script.close_after_frames,
+                 "close the window as a user would after N frames drawn (tests: closing during the first start)")
+      ->check(CLI::PositiveNumber);
 }
 
 }  // namespace

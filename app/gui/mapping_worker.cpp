@@ -75,6 +75,8 @@ MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, s
 }
 
 void MappingWorker::trajectoryOfSession() {
+  // A session mapped with ground-truth poses had one for every frame it mapped.
+  frames_with_groundtruth_ = mapper_params_.poses == PoseSource::kGroundTruth ? base_frames_ : 0;
   // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
   if (!mapper_->framePoses().empty()) {
     for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.T_K_C, std::nullopt});
@@ -162,6 +164,7 @@ void MappingWorker::publishMapping() {
   for (const Keyframe& k : mapper_->graph().keyframes())
     snap->keyframes.push_back({k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
+  snap->frames_with_groundtruth = frames_with_groundtruth_;
   snap->frames_lost = mapper_->framesLost();
   snap->frames_weak = mapper_->framesWeak();
   snap->frames_relocalised = mapper_->framesRelocalised();
@@ -187,6 +190,7 @@ void MappingWorker::mapOneFrame() {
       if (mapper_params_.poses == PoseSource::kTrack && entry.has_pose) pose.T_W_C_truth = entry.T_W_C;
       trajectory_.push_back(pose);
     }
+    if (sequence_->entries()[static_cast<std::size_t>(i - base_frames_)].has_pose) ++frames_with_groundtruth_;
     // After the sequence's last frame, tracked keyframe poses are refined from the settled local
     // maps as `vdmap map` does (B shows the map before it); frames follow their keyframes.
     std::string refined;
@@ -333,6 +337,7 @@ void MappingWorker::restartMapper() {
     trajectoryOfSession();
   } else {
     mapper_ = std::make_unique<Mapper>(sequence_->camera(), mapper_params_);
+    frames_with_groundtruth_ = 0;
   }
   last_rgb_ = cv::Mat();
   last_depth_ = cv::Mat();

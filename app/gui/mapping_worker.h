@@ -65,6 +65,9 @@ struct MappingSnapshot {
   std::vector<CovisibilityEdge> edges;
   SharedSpan<TrajectoryPoint> trajectory;    ///< per mapped frame that was placed (lost ones have none)
   int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
+  /// Mapped frames the sequence has a ground-truth pose for, whatever the poses were mapped with
+  /// (mapper.poses: with ground-truth poses every mapped frame had one).
+  int frames_with_groundtruth = 0;
   int frames_lost = 0;         ///< frames the tracker could not place (skipped, not integrated)
   int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (Mapper::framesWeak)
   int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
@@ -85,6 +88,9 @@ struct MappingSnapshot {
   std::vector<Transform> trajectoryWorld(bool before_optimisation = false) const;
   /// The ground-truth T_W_C of the entries that have one (tracked poses only; else empty).
   std::vector<Transform> groundTruthWorld() const;
+  /// Whether a ground-truth trajectory is drawn beside the tracked one (tracked poses only: with
+  /// ground-truth poses the two coincide). Whether the sequence has ground truth at all is
+  /// frames_with_groundtruth.
   bool hasGroundTruth() const;
 };
 
@@ -218,6 +224,7 @@ class MappingWorker {
   std::optional<TumSequence> sequence_;
   std::shared_ptr<const Session> origin_;  // the saved session the mapper started from, if any
   int base_frames_ = 0;                    // frames in the map before sequence_'s first entry
+  int frames_with_groundtruth_ = 0;        // MappingSnapshot::frames_with_groundtruth
   std::string sequence_folder_;
   MapperParams mapper_params_;
   std::optional<MapRefinementParams> refine_;

@@ -87,7 +87,9 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
     stats["frames_lost"] = mapping->frames_lost;
     stats["frames_weak"] = mapping->frames_weak;
     stats["frames_relocalised"] = mapping->frames_relocalised;
-    stats["has_groundtruth"] = mapping->hasGroundTruth();
+    // The sequence has ground truth for the mapped frames, whether they were mapped with it or tracked.
+    stats["has_groundtruth"] = mapping->frames_with_groundtruth > 0;
+    stats["poses"] = mapping->mapper.poses == PoseSource::kTrack ? "track" : "gt";
   }
   if (global) {
     stats["sigma_e"] = global->map.sigma_e;
@@ -99,6 +101,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["ui_frames_while_busy"] = run.busy_frame_ms.size();
   stats["ui_frame_ms_median_while_busy"] = median(run.busy_frame_ms);
   stats["layout"] = run.layout;
+  stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
   stats["view_from_keyframe"] = ui.view_from_keyframe;
   stats["show_before_optimisation"] = ui.show_before_optimisation;

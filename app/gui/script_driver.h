@@ -34,6 +34,9 @@ struct ScriptRun {
   double idle_cpu_start = 0, idle_cpu_s = 0;
   int idle_frames = 0;
   std::vector<double> busy_frame_ms;  ///< UI frame times while the worker was busy
+  /// The most labels cut in a frame after which the event loop, unscripted, would wait for input
+  /// (the picture left on screen).
+  int labels_cut_before_wait = 0;
 };
 
 /// Whether there is a script at all (a screenshot, figures or --exit asked for).

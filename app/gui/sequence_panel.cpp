@@ -130,6 +130,7 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
     ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
     tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
         "they were mapped with (the Re-run parameters show them).");
+    if (!bench.whyPlayerOff().empty()) ImGui::TextWrapped("%s", bench.whyPlayerOff().c_str());
   }
 }
 
@@ -231,14 +232,23 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   const int total = win.mapping->frames_total, mapped = win.mapping->frames_mapped;
   const bool saved = bench.savedSession();
   drawWhatIsOpen(bench, win);
-  const std::string why_saved = saved ? "A saved session has its keyframes but no sequence to play or re-map." : "";
+  const std::string why_saved =
+      !saved ? ""
+      : bench.whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
+                                     : "A saved session: " + bench.whyPlayerOff() + ".";
   ImGui::BeginDisabled(saved);
   drawPlayer(bench, win, status, why_saved);
   if (win.mapping->mapper.poses == PoseSource::kTrack) drawLoopStrip(bench, win, total);
   drawScrubber(bench, win, why_saved);
   ImGui::EndDisabled();
-  ImGui::Text("%d / %d frames mapped, %zu keyframes%s", mapped, total, win.mapping->keyframes.size(),
-              status.busy ? " (working)" : "");
+  // The short form where the long one would be cut (a narrow panel while working).
+  const char* working = status.busy ? " (working)" : "";
+  std::string counts = std::to_string(mapped) + " / " + std::to_string(total) + " frames mapped, " +
+                       std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+  if (ImGui::CalcTextSize(counts.c_str()).x > ImGui::GetContentRegionAvail().x)
+    counts = std::to_string(mapped) + "/" + std::to_string(total) + " frames, " +
+             std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+  ImGui::TextUnformatted(counts.c_str());
   checkFits(win.check);
   tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "
       "keyframes they made (docs/method.md 5: a new one when a frame re-observes under tau of the current one's features).");

@@ -7,6 +7,7 @@
 
 #include <imgui_stdlib.h>
 
+#include "app/gui/tg_parts.h"
 #include "app/gui/widgets.h"
 #include "app/view_file.h"
 #include "render/colormap.h"
@@ -84,10 +85,14 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
         "%zu", m.sigma_e_prime);
     row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (docs/method.md 6.1).",
         "%zu", m.groups.size());
-    row("t_g", "t_g (docs/method.md 6.4): wall time of the global map build: grouping, merging, occlusion removal.",
+    row("t_g", "t_g (docs/method.md 6.4): wall time of the global map build: grouping, filtering and merging, occlusion "
+               "removal, fusion across groups.",
         "%.3f s", m.t_g_s);
-    row("of which", "Grouping, merging and occlusion removal, ms.", "%.0f / %.0f / %.0f ms", m.groups_ms, m.merge_ms,
-        m.occlusion_ms);
+    const TgParts parts = tgParts(m);
+    row("of which", "Grouping / filtering and merging / occlusion removal / fusion across groups (docs/method.md 7) / "
+                    "other (the rest of the build), ms: they add up to t_g.",
+        "%.0f / %.0f / %.0f / %.0f / %.0f ms", parts.groups_ms, parts.merge_ms, parts.occlusion_ms, parts.fusion_ms,
+        parts.other_ms);
     row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
         "%d frames%s", win.global->frames_mapped, bench.player().busy ? ", rebuilding" : "");
     ImGui::EndTable();

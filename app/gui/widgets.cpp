@@ -4,6 +4,9 @@
 #include <cfloat>
 #include <cstdint>
 #include <cstdio>
+#include <utility>
+
+#include <imgui_internal.h>
 
 #include "render/colormap.h"
 #include "render/legend.h"
@@ -47,12 +50,25 @@ void beginPanel(const char* name, Rect& r, float& width, float display_width) {
   r = {pos.x, pos.y, size.x, size.y};
 }
 
+namespace {
+int tables_settling = 0;  // beginRows tables still sizing their columns this frame
+}  // namespace
+
 bool beginRows(const char* id) {
   if (!ImGui::BeginTable(id, 2, ImGuiTableFlags_SizingFixedFit)) return false;
   ImGui::TableSetupColumn("label", ImGuiTableColumnFlags_WidthFixed);
   ImGui::TableSetupColumn("value", ImGuiTableColumnFlags_WidthStretch);
+  // A new table fits its label column to what the previous frame measured (Dear ImGui's
+  // auto-fit queue), so its first frames clip the labels: they need frames after this one.
+  if (const ImGuiTable* table = ImGui::GetCurrentTable()) {
+    bool settling = table->IsInitializing;
+    for (int c = 0; c < table->ColumnsCount; ++c) settling |= table->Columns[c].AutoFitQueue != 0;
+    tables_settling += settling;
+  }
   return true;
 }
+
+int takeTablesSettling() { return std::exchange(tables_settling, 0); }
 
 void label(LayoutCheck& check, const char* text, const std::string& help, bool pending) {
   ImGui::TableNextRow();

@@ -44,6 +44,9 @@ void beginPanel(const char* name, Rect& r, float& width, float display_width);
 /// Starts a two-column table of labelled rows (label, then widget); false: nothing to draw (no
 /// EndTable then).
 bool beginRows(const char* id);
+/// How many beginRows tables drawn since the last call were still sizing their columns (their
+/// labels clipped until a later frame); resets the count.
+int takeTablesSettling();
 /// A row of a beginRows table: the label (never cut: its column fits the widest) and a
 /// tooltip, then the widget fills the rest of the row. Pending: in kPendingColor.
 void label(LayoutCheck& check, const char* text, const std::string& help, bool pending = false);

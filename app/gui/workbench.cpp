@@ -97,6 +97,7 @@ bool Workbench::open(const SequenceArgs& args) {
     worker->setFps(ui_.settings.play_fps);
     worker_ = std::move(worker);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
+    why_player_off_.clear();
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return false;
@@ -109,19 +110,28 @@ namespace {
 
 // The frames of a saved session's sequence after its last one, for the player to continue
 // with: none when the session cannot continue, its folder is gone, or its camera is not the
-// session's (*why says which, for a warning).
-std::optional<TumSequence> framesAfter(const Session& saved, std::string* why) {
+// session's. *off says why there are none (the Sequence panel shows it); *why too when it is
+// worth a warning (not for a session mapped to its sequence's end).
+std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, std::string* why) {
   const SessionInfo& info = saved.info;
-  if (info.sequence.empty() || info.state.frames_mapped == 0) return std::nullopt;
+  if (info.sequence.empty() || info.state.frames_mapped == 0) {
+    *off = "the session names no sequence to continue with";
+    return std::nullopt;
+  }
   if (info.state.current_keyframe < 0) {
-    *why = "the session (format 1) cannot continue mapping: the player is off";
+    *off = *why = "the session (format 1) cannot continue mapping: the player is off";
     return std::nullopt;
   }
   try {
     // A session mapped to the end of its sequence has nothing to continue with: no warning.
-    if (std::filesystem::is_directory(info.sequence) &&
-        TumSequence::open(info.sequence).listedDepthFrames() <= info.state.last_frame_index + 1)
-      return std::nullopt;
+    if (std::filesystem::is_directory(info.sequence)) {
+      const std::size_t listed = TumSequence::open(info.sequence).listedDepthFrames();
+      if (listed <= static_cast<std::size_t>(info.state.last_frame_index) + 1) {
+        *off = "mapped to the end of " + info.sequence + " (" + std::to_string(info.state.last_frame_index + 1) +
+               " of " + std::to_string(listed) + " frames): nothing to continue";
+        return std::nullopt;
+      }
+    }
     SequenceOptions options;
     options.frames.first = info.state.last_frame_index + 1;
     TumSequence rest = TumSequence::open(info.sequence, options);
@@ -129,8 +139,8 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* why) {
       throw std::invalid_argument("its camera is not the session's");
     return rest;
   } catch (const std::exception& e) {
-    *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
-           e.what() + ")";
+    *off = *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
+                  e.what() + ")";
     return std::nullopt;
   }
 }
@@ -149,11 +159,13 @@ bool Workbench::openSession(const std::string& file) {
       base.thresholds = params.global;
       params.global = readSettingsArg(session_settings_, base).thresholds;
     }
-    std::optional<TumSequence> rest = framesAfter(saved, &why);
+    std::string off;
+    std::optional<TumSequence> rest = framesAfter(saved, &off, &why);
     auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
     worker->setOnChange(on_change_);
     worker_ = std::move(worker);
     ui_.params = params;
+    why_player_off_ = off;
   } catch (const std::exception& e) {
     report(StatusLine::Kind::kError, e.what());
     return false;

@@ -176,6 +176,9 @@ class Workbench {
   double inUse(const Parameter& p) const;
   /// True while a saved session (no sequence) is open: nothing to play or re-run.
   bool savedSession() const { return worker_ && !worker_->sequence(); }
+  /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
+  /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
+  const std::string& whyPlayerOff() const { return why_player_off_; }
   /// Thresholds, re-run parameters and view options back to their defaults (window size and
   /// last sequence kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
@@ -266,6 +269,7 @@ class Workbench {
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
   std::string session_settings_;                   // setSessionSettings'
+  std::string why_player_off_;                     // whyPlayerOff()
 
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;

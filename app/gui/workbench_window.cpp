@@ -8,6 +8,7 @@
 #include <chrono>
 #include <filesystem>
 #include <future>
+#include <iostream>
 #include <memory>
 #include <optional>
 #include <sstream>
@@ -24,6 +25,7 @@
 #include "app/gui/scene_view.h"
 #include "app/gui/script_driver.h"
 #include "app/gui/sequence_panel.h"
+#include "app/gui/widgets.h"
 #include "app/gui/window_state.h"
 #include "mapping/core/timing.h"
 
@@ -119,6 +121,7 @@ struct Preparing {
   SequenceArgs args;
   std::shared_ptr<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>> progress =
       std::make_shared<std::pair<std::atomic<std::size_t>, std::atomic<std::size_t>>>(0, 0);
+  std::shared_ptr<std::atomic<bool>> cancel = std::make_shared<std::atomic<bool>>(false);
 };
 
 class WorkbenchWindow {
@@ -133,12 +136,15 @@ class WorkbenchWindow {
       preparing_.what = prepare.what;
       preparing_.args = prepare.args;
       auto progress = preparing_.progress;
-      preparing_.folder = std::async(std::launch::async, [run = std::move(prepare.run), progress] {
-        return run([progress](std::size_t done, std::size_t total) {
-          progress->first = done;
-          progress->second = total;
-          glfwPostEmptyEvent();
-        });
+      auto cancel = preparing_.cancel;
+      preparing_.folder = std::async(std::launch::async, [run = std::move(prepare.run), progress, cancel] {
+        return run(
+            [progress](std::size_t done, std::size_t total) {
+              progress->first = done;
+              progress->second = total;
+              glfwPostEmptyEvent();
+            },
+            [cancel] { return cancel->load(); });
       });
     } else {
       startScript();
@@ -146,7 +152,7 @@ class WorkbenchWindow {
   }
 
   ~WorkbenchWindow() {
-    if (preparing_.folder.valid()) preparing_.folder.wait();
+    if (preparing_.folder.valid()) cancelPreparation();
     bench_.setOnChange(nullptr);
   }
 
@@ -193,7 +199,9 @@ class WorkbenchWindow {
 
   bool needsFrame() const {
     if (keys_.events > 0 || !keys_.presses.empty() || settle_frames_ > 0) return true;
-    if (preparing_.folder.valid()) return true;  // the progress bar (woken by the renderer's progress)
+    if (preparing_.folder.valid())  // the progress bar, woken by the renderer's progress (no busy loop beside it)
+      return preparing_.progress->first != win_.prepare_done ||
+             preparing_.folder.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
     const ScriptPhase phase = script_.phase;
     if (scripted(script_)) {
       if (phase == ScriptPhase::kSettle || phase == ScriptPhase::kOrbit || phase == ScriptPhase::kFinish) return true;
@@ -214,6 +222,7 @@ class WorkbenchWindow {
 
   void frame() {
     const auto t0 = Clock::now();
+    if (++frames_drawn_ == script_.options.close_after_frames) glfwSetWindowShouldClose(context_.window(), GLFW_TRUE);
     scriptFrameStarts(script_, t0);
     // ImGui shows hover and active states a frame late: after input, draw two more frames.
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
@@ -240,7 +249,16 @@ class WorkbenchWindow {
     drawHelp(bench_, win_);
     handleMouse(bench_, win_);
     bench_.ui().reset_layout = false;
-    last_seen_ = seen();
+    const Seen now = seen();
+    // A new session draws panels and tables it has not drawn before: let them settle.
+    if (now.session != last_seen_.session) settle_frames_ = std::max(settle_frames_, 2);
+    last_seen_ = now;
+    // Tables still sizing their columns clip their labels in this frame: draw the next one too.
+    if (takeTablesSettling() > 0) settle_frames_ = std::max(settle_frames_, 1);
+    // The picture a user looks at is the frame after which the loop waits for input: the labels
+    // it cuts (a scripted run draws on through its own phases, so the loop's own rule decides).
+    if (!preparing_.folder.valid() && keys_.events == 0 && keys_.presses.empty() && settle_frames_ == 0)
+      script_.labels_cut_before_wait = std::max(script_.labels_cut_before_wait, win_.check.labels_cut);
     ImGui::Render();
     drawScene(bench_, gl_, mirror_, win_);
     if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
@@ -256,6 +274,22 @@ class WorkbenchWindow {
     win_.frame_times.push_back(frame_ms);
     if (win_.frame_times.size() > 30) win_.frame_times.pop_front();
     if (bench_.player().busy) script_.busy_frame_ms.push_back(frame_ms);
+  }
+
+  // The window closed during the preparation: it goes at once, and the preparation stops within
+  // one of its steps (a frame of the built-in scene), leaving nothing behind.
+  void cancelPreparation() {
+    glfwHideWindow(context_.window());
+    *preparing_.cancel = true;
+    preparing_.folder.wait();
+    try {
+      preparing_.folder.get();  // it may have finished meanwhile: then all is kept
+    } catch (const std::exception&) {
+      const std::size_t done = preparing_.progress->first, total = preparing_.progress->second;
+      std::cerr << "vdmap: note: closed while " << preparing_.what << " ("
+                << (total > 0 ? std::to_string(done) + " of " + std::to_string(total) + " frames done" : "before its first frames")
+                << "): nothing kept\n";
+    }
   }
 
   void finishPreparation() {
@@ -287,6 +321,7 @@ class WorkbenchWindow {
   Preparing preparing_;
   Seen last_seen_;
   int settle_frames_ = 2;
+  int frames_drawn_ = 0;
 };
 
 }  // namespace

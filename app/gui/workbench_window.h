@@ -27,15 +27,21 @@ struct ScriptOptions {
   int latency_runs = 0;       ///< slider-to-map latency: merge-distance edits until the new map is drawn, ms
   int orbit_frames = 0;       ///< UI frame time while orbiting, ms per frame
   double idle_seconds = 0;    ///< process CPU time over this many seconds of nothing happening
+  /// Close the window as a user would after this many frames drawn (0: never); a test of
+  /// closing during the preparation.
+  int close_after_frames = 0;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
 /// run on its own thread while the window shows its progress. run() reports (done, total) and
-/// returns the folder to open with `args`.
+/// returns the folder to open with `args`; it stops soon after cancelled() turns true (the window
+/// was closed), throwing and leaving nothing half-written.
 struct Preparation {
   std::string what;
   SequenceArgs args;
-  std::function<std::string(const std::function<void(std::size_t, std::size_t)>& progress)> run;
+  std::function<std::string(const std::function<void(std::size_t, std::size_t)>& progress,
+                            const std::function<bool()>& cancelled)>
+      run;
 };
 
 /// The keys --press takes, by name ("space", "right", "h", ...), as GLFW key codes. Throws
