@@ -60,7 +60,7 @@ class ViewTwin : public ::testing::Test {
     EXPECT_EQ(w.exit_code, 0) << w.err;
     const RunResult h = runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
     EXPECT_EQ(h.exit_code, 0) << h.err;
-    if (w.exit_code != 0 || h.exit_code != 0) return {};
+    if (w.exit_code != 0 || h.exit_code != 0) return nlohmann::json::object();
     const nlohmann::json spec = nlohmann::json::parse(readFile(view));
     expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
     return spec;
