@@ -79,10 +79,10 @@ void MappingWorker::trajectoryOfSession() {
   frames_with_groundtruth_ = mapper_params_.poses == PoseSource::kGroundTruth ? base_frames_ : 0;
   // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
   if (!mapper_->framePoses().empty()) {
-    for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.T_K_C, std::nullopt});
+    for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.timestamp, f.T_K_C, std::nullopt});
     return;
   }
-  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, Transform::Identity(), std::nullopt});
+  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, k.timestamp, Transform::Identity(), std::nullopt});
 }
 
 void MappingWorker::start() {
@@ -185,7 +185,7 @@ void MappingWorker::mapOneFrame() {
     times_.push_back(report.ms);
     if (!report.lost) {  // a frame the tracker could not place has no pose
       const vdmap::FramePose& placed = mapper_->framePoses().back();
-      TrajectoryPoint pose{placed.keyframe, placed.T_K_C, std::nullopt};
+      TrajectoryPoint pose{placed.keyframe, placed.timestamp, placed.T_K_C, std::nullopt};
       const FrameEntry& entry = sequence_->entries()[static_cast<std::size_t>(i - base_frames_)];
       if (mapper_params_.poses == PoseSource::kTrack && entry.has_pose) pose.T_W_C_truth = entry.T_W_C;
       trajectory_.push_back(pose);
