@@ -77,7 +77,7 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
     if (p.kind == vdmap::ParameterSpec::Kind::kBool || p.kind == vdmap::ParameterSpec::Kind::kChoice) other = was == 0 ? 1 : 0;
     else if (p.kind == vdmap::ParameterSpec::Kind::kInt) other = was + 2;
     else if (std::string(p.key) == "tau_group") other = was + 0.05;
-    std::vector<double> t_g, groups, merge, occlusion, fusion, t_g_before;
+    std::vector<double> t_g, groups, merge, occlusion, fusion, t_g_before, cpu, cpu_before;
     std::vector<double> merged_groups;
     int occlusion_reused = 0, fusion_reused = 0;
     std::uint64_t hash[2] = {0, 0};
@@ -85,11 +85,14 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
       // Before the stage cache: the same edit with every stage re-run (in turns, under the same load).
       p.set(values, r % 2 == 0 ? other : was);
       workspace.forgetStages();
-      t_g_before.push_back(1e3 * vdmap::buildGlobalMap(session.graph, values.global, &workspace).t_g_s);
+      cpu_before.push_back(vdmap::app::cpuTimeMs([&] {
+        t_g_before.push_back(1e3 * vdmap::buildGlobalMap(session.graph, values.global, &workspace).t_g_s);
+      }));
       p.set(values, r % 2 == 0 ? was : other);
       vdmap::buildGlobalMap(session.graph, values.global, &workspace);
       p.set(values, r % 2 == 0 ? other : was);
-      const vdmap::GlobalMap map = vdmap::buildGlobalMap(session.graph, values.global, &workspace);
+      vdmap::GlobalMap map;
+      cpu.push_back(vdmap::app::cpuTimeMs([&] { map = vdmap::buildGlobalMap(session.graph, values.global, &workspace); }));
       t_g.push_back(1e3 * map.t_g_s);
       groups.push_back(map.groups_ms);
       merge.push_back(map.merge_ms);
@@ -107,9 +110,10 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
     }
     p.set(values, was);
     all_same = all_same && same;
-    std::printf("edit %-20s threads %d: t_g median %7.1f ms, all stages %7.1f ms (groups %.1f, merge %.1f, occlusion %.1f, fusion %.1f ms); "
+    std::printf("edit %-20s threads %d: t_g median %7.1f ms (CPU %7.1f), all stages %7.1f ms (CPU %7.1f) (groups %.1f, merge %.1f, occlusion %.1f, fusion %.1f ms); "
                 "merge groups kept %3.0f %%, occlusion kept %d/%d, fusion kept %d/%d; fresh build's map: %s\n",
-                std::string(p.key).c_str(), threads, median(t_g), median(t_g_before), median(groups), median(merge), median(occlusion),
+                std::string(p.key).c_str(), threads, median(t_g), median(cpu), median(t_g_before), median(cpu_before),
+                median(groups), median(merge), median(occlusion),
                 median(fusion), 100 * median(merged_groups), occlusion_reused, 2 * runs, fusion_reused, 2 * runs,
                 same ? "yes" : "NO");
   }

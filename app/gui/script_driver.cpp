@@ -58,7 +58,10 @@ bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
                                   {"build", msBetween(g.t_build_start, g.t_build_end)},
                                   {"after_build", msBetween(g.t_build_end, g.t_published)},
                                   {"to_ui", msBetween(g.t_published, run.frame_start)},
-                                  {"t_g", 1e3 * g.map.t_g_s}});
+                                  {"t_g", 1e3 * g.map.t_g_s},
+                                  {"t_g_parts", {g.map.groups_ms, g.map.merge_ms, g.map.occlusion_ms, g.map.fusion_ms}},
+                                  {"reused", {g.map.reuse.groups, g.map.reuse.merged_groups, g.map.groups.size(),
+                                              g.map.reuse.occlusion, g.map.reuse.fusion}}});
     run.latency_generation = -1;
     run.latency_shown_pending = true;
     return true;
