@@ -119,9 +119,9 @@ struct GlobalSnapshot {
   /// Built with the keyframe poses before the last pose-graph optimisation
   /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;
-  /// Latency stages (steady clock): the newest edit it includes (a threshold, a pose; the epoch
-  /// when it was built for mapped frames only), when its build started and ended, and when it was
-  /// published to the UI. The UI adds the first frame that draws it (script_driver.cpp).
+  /// Latency stages (steady clock): the newest threshold edit it includes (setThresholds; the
+  /// epoch before the first), when its build started and ended, and when it was published to the
+  /// UI. The scripted latency measurement adds the first frame that draws it (script_driver.cpp).
   std::chrono::steady_clock::time_point t_edit{}, t_build_start{}, t_build_end{}, t_published{};
 };
 

@@ -31,7 +31,7 @@ void warnAboutTheViewsSize(Workbench& bench, const render::ViewSpec& asked) {
 // --- Latency (global map stream): one slider change at a time, from the edit until the first
 // frame that draws the map built with it (what is still busy afterwards, such as the inspector's
 // selection, is not the map's latency). The edits go through the live parameters, each to
-// another value and back (merge distance first), so 2 x 9 runs time every one of them.
+// another value and back (merge distance first), so 2 x 10 runs time every one of them.
 struct LatencyEdit {
   const char* key;
   double other;  // the value edited to; the edit after it goes back
@@ -40,6 +40,7 @@ constexpr LatencyEdit kLatencyEdits[] = {
     {"merge_distance", 0.2},       {"fusion_max_distance", 0.7}, {"occlusion_distance", 0.4},
     {"occlusion_angle", 25},       {"tau_group", 0.15},          {"filter_sigma_factor", 2.5},
     {"min_points", 8},             {"occlusion_removal", 0},     {"fuse_across_groups", 0},
+    {"sensor_model", 1},
 };
 
 double msBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
