@@ -51,14 +51,16 @@ bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
   if (!bench.isOpen() || !global) return false;
   if (run.latency_generation >= 0) {
     if (global->generation <= run.latency_generation) return true;
-    // This frame draws the new map; it is timed once on screen (scriptFrameShown).
+    // This frame draws the new map; it is timed once on screen (scriptFrameShown), from its start
+    // or, when the map was published after the frame began, from then.
     const GlobalSnapshot& g = *global;
+    run.latency_pick = std::max(run.frame_start, g.t_published);
     run.latency_stages.push_back({{"parameter", kLatencyEdits[(run.latency_ms.size() / 2) % std::size(kLatencyEdits)].key},
                                   {"edit", msBetween(run.latency_start, g.t_edit)},
                                   {"queue", msBetween(g.t_edit, g.t_build_start)},
                                   {"build", msBetween(g.t_build_start, g.t_build_end)},
                                   {"after_build", msBetween(g.t_build_end, g.t_published)},
-                                  {"to_ui", msBetween(g.t_published, run.frame_start)},
+                                  {"to_ui", msBetween(g.t_published, run.latency_pick)},
                                   {"t_g", 1e3 * g.map.t_g_s},
                                   {"t_g_parts", {g.map.groups_ms, g.map.merge_ms, g.map.occlusion_ms, g.map.fusion_ms}},
                                   {"reused", {g.map.reuse.groups, g.map.reuse.merged_groups, g.map.groups.size(),
@@ -197,7 +199,7 @@ void scriptFrameShown(ScriptRun& run, Clock::time_point t0) {
   if (run.latency_shown_pending) {  // latency: the first frame with the edited map is on screen
     run.latency_shown_pending = false;
     run.latency_ms.push_back(msSince(run.latency_start));
-    run.latency_stages.back()["frame"] = msSince(t0);
+    run.latency_stages.back()["frame"] = msSince(run.latency_pick);
   }
   if (run.phase != ScriptPhase::kIdle) return;
   if (run.idle_until == Clock::time_point::max()) {  // the measurement starts now

@@ -34,6 +34,7 @@ struct ScriptRun {
   bool latency_shown_pending = false;  ///< the frame drawing the edited map is not on screen yet
   double latency_back = 0;             ///< the value the next edit goes back to
   Clock::time_point frame_start;       ///< when the current frame began
+  Clock::time_point latency_pick;      ///< when the frame drawing the edited map took it up
   double orbit_cpu_start = 0;
   bool orbit_started = false;
   double idle_cpu_start = 0, idle_cpu_s = 0;
