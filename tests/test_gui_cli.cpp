@@ -2,6 +2,7 @@
 // (--play-to-end --screenshot --stats-json --exit), a second run with another merge_distance,
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <regex>
 
@@ -173,6 +174,60 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
   EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
 }
+
+// --- Tracking error figures and latency stages (global map / worker stream): a tracked run with
+// ground truth reports ATE and RPE (app/gui/figures.h) in its stats.
+TEST(GuiCli, TrackedRunReportsAteAndRpe) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 40);
+  const fs::path json = home / "t.json";
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit "
+                                      "--window-size 1280x720 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  for (const char* key : {"ate_rmse_m", "rpe_frame_m", "rpe_frame_deg", "rpe_second_m"}) {
+    ASSERT_TRUE(stats.contains(key)) << key;
+    EXPECT_TRUE(std::isfinite(stats[key].get<double>())) << key;
+    EXPECT_GE(stats[key].get<double>(), 0.0) << key;
+  }
+  EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.05);
+  EXPECT_GT(stats["rpe_frame_m"].get<double>(), 0.0);
+}
+
+// --measure-latency splits each edit into stages from the snapshot's stamps and names the
+// parameter edited and what the global map's stage cache kept (the second edit goes back).
+TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 6);
+  const fs::path json = home / "l.json";
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses gt --play-to-end --exit "
+                                      "--measure-latency 4 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  ASSERT_EQ(stats["slider_to_map_ms"].size(), 4u);
+  const nlohmann::json& stages = stats["slider_to_map_stages_ms"];
+  ASSERT_EQ(stages.size(), 4u);
+  const char* expected[] = {"merge_distance", "merge_distance", "fusion_max_distance", "fusion_max_distance"};
+  for (std::size_t i = 0; i < 4; ++i) {
+    SCOPED_TRACE(i);
+    EXPECT_EQ(stages[i]["parameter"], expected[i]);
+    double sum = 0;
+    for (const char* stage : {"queue", "build", "after_build", "to_ui", "frame"}) {
+      ASSERT_TRUE(stages[i].contains(stage)) << stage;
+      EXPECT_GE(stages[i][stage].get<double>(), 0.0) << stage;
+      sum += stages[i][stage].get<double>();
+    }
+    EXPECT_LE(sum, stats["slider_to_map_ms"][i].get<double>() + 1.0) << "the stages lie within the edit's latency";
+    EXPECT_GE(stages[i]["build"].get<double>() + 1e-3, stages[i]["t_g"].get<double>()) << "the build holds t_g";
+  }
+  // A fusion edit keeps every merge group and the occlusion removal; a merge-distance edit none.
+  EXPECT_EQ(stages[0]["reused"][1], 0);
+  EXPECT_EQ(stages[2]["reused"][1], stages[2]["reused"][2]);
+  EXPECT_EQ(stages[2]["reused"][3], true);
+}
+// --- end tracking error figures and latency stages
 
 // The picture a newcomer is left with: on first start (empty cache and settings) the built-in
 // scene renders, opens and the window then waits for input; in the last frame before it waits

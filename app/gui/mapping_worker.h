@@ -38,6 +38,7 @@ struct KeyframeInfo {
 /// follows a keyframe's pose when it is corrected.
 struct TrajectoryPoint {
   int keyframe = 0;
+  double t = 0;  ///< the frame's timestamp (s, the sequence's depth time; FramePose::timestamp)
   Transform T_K_C = Transform::Identity();
   /// With tracked poses (PoseSource::kTrack): the sequence's ground-truth T_W_C of the frame,
   /// when it has one (the tracker anchors the world frame at the first frame's, so the two
@@ -49,6 +50,19 @@ struct TrajectoryPoint {
 struct LoopEvent {
   LoopClosure loop;
   int position = 0;  ///< the closing frame on the scrubber (0-based, counted like frames_mapped)
+};
+
+/// The last pose-graph optimisation of the keyframe poses, the one "before optimisation" (B)
+/// undoes: a loop closure, or the refinement after the sequence's last frame (tracked poses).
+struct LastOptimisation {
+  enum class Kind { kNone, kLoop, kRefinement };
+  Kind kind = Kind::kNone;
+  int loop = -1;             ///< kLoop: its index in MappingSnapshot::loops
+  /// kRefinement: "joint" or "pairwise", the covisible pairs registered (MapRefinementResult::pairs)
+  /// and the largest keyframe move (m, MapRefinementResult::moved_m).
+  std::string method;
+  int pairs = 0;
+  double correction_m = 0;
 };
 
 /// The mapping state after the last mapped frame (replaced after every frame).
@@ -77,6 +91,8 @@ struct MappingSnapshot {
   /// existed then (they were tracked from the corrected poses), so the map and trajectory keep
   /// their shape behind it.
   std::vector<Transform> keyframes_before;
+  /// What keyframes_before is before: kNone when it is empty.
+  LastOptimisation last_optimisation;
 
   /// Keyframe poses by id: the current ones, or those before the last optimisation (when there
   /// was one).
@@ -103,6 +119,10 @@ struct GlobalSnapshot {
   /// Built with the keyframe poses before the last pose-graph optimisation
   /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;
+  /// Latency stages (steady clock): the newest threshold edit it includes (setThresholds; the
+  /// epoch before the first), when its build started and ended, and when it was published to the
+  /// UI. The scripted latency measurement adds the first frame that draws it (script_driver.cpp).
+  std::chrono::steady_clock::time_point t_edit{}, t_build_start{}, t_build_end{}, t_published{};
 };
 
 /// The selected keyframe's local map (replaced after a selection change and after every rebuild).
@@ -237,6 +257,7 @@ class MappingWorker {
   AppendLog<TrajectoryPoint> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
   int pose_edits_ = 0;                 // worker thread only
+  LastOptimisation refinement_;        // worker thread only: the final refinement, once it moved poses
   int mapping_generation_ = 0, selection_serial_ = 0;  // worker thread only
 
   mutable std::mutex mutex_;
@@ -252,6 +273,7 @@ class MappingWorker {
   float fps_ = 0.f;
   std::chrono::steady_clock::time_point next_frame_time_{};
   std::chrono::steady_clock::time_point last_build_{};
+  std::chrono::steady_clock::time_point last_edit_{};  // GlobalSnapshot::t_edit of the next build
   double last_build_s_ = 0;
   std::string error_, message_;
   std::shared_ptr<const MappingSnapshot> mapping_;

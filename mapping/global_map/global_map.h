@@ -52,6 +52,14 @@ struct GlobalMap {
   std::size_t sigma_e_prime = 0;      ///< after merging, occlusion removal and fusion
   double t_g_s = 0;                   ///< wall time of grouping, merging, occlusion removal and fusion
   double groups_ms = 0, merge_ms = 0, fusion_ms = 0, occlusion_ms = 0;
+  /// What this build took over from the previous build with the same GlobalMapWorkspace instead
+  /// of computing it again (all zero without a workspace). The map is the same either way.
+  struct Reuse {
+    bool groups = false;            ///< the merge groups came out as before (they are always recomputed: microseconds)
+    std::size_t merged_groups = 0;  ///< groups whose merge was kept: same members, kept cells, poses and merge distance
+    bool occlusion = false;         ///< occlusion removal skipped: same merged ellipsoids, poses, edges and parameters
+    bool fusion = false;            ///< fusion skipped: same survivors and fusion parameters
+  } reuse;
 };
 
 /// Greedy merge groups of docs/method.md 6.1 (deterministic: ties go to the lower id).
@@ -96,16 +104,23 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
 
 /// What buildGlobalMap keeps from one build to the next when it is given one: its large buffers
 /// (a build writes ~0.5 GB on the 8-lap built-in session; memory first touched costs a page fault
-/// and zeroing per 4 KiB, 15-20 % of a build) and, per keyframe, the filter's kept cells while the
-/// container and the filter parameters are unchanged (a loop closure moves poses only). Owned by
-/// whoever rebuilds repeatedly (the workbench); it holds the largest build's memory until
-/// destroyed. The map does not depend on it. One build at a time.
+/// and zeroing per 4 KiB, 15-20 % of a build), per keyframe the filter's kept cells while the
+/// container and the filter parameters are unchanged (a loop closure moves poses only), and each
+/// later stage's output with what it was computed from, so that a build re-runs only the stages
+/// after what changed (GlobalMap::reuse): each merge group's merge while its members, their kept
+/// cells and poses and the merge distance are unchanged; occlusion removal while the merged
+/// ellipsoids, the keyframe poses, the edges and its parameters are; fusion while the survivors
+/// and its parameters are. Owned by whoever rebuilds repeatedly (the workbench); it holds the
+/// largest build's memory until destroyed. The map does not depend on it. One build at a time.
 class GlobalMapWorkspace {
  public:
   GlobalMapWorkspace();
   ~GlobalMapWorkspace();
   GlobalMapWorkspace(const GlobalMapWorkspace&) = delete;
   GlobalMapWorkspace& operator=(const GlobalMapWorkspace&) = delete;
+  /// The next build re-runs every stage (keeping the buffers and the filter's kept cells): what a
+  /// build cost before the stage cache, for benchmarks.
+  void forgetStages();
 
  private:
   friend GlobalMap buildGlobalMap(const KeyframeGraph& graph, const GlobalMapParams& params,
