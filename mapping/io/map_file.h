@@ -3,6 +3,7 @@
 // into one static map: a `vdmap map` output folder, an ellipsoid or point PLY, an OctoMap
 // (docs/cli.md "What vdmap gui and render open"). Sequences and sessions are opened elsewhere.
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -60,6 +61,20 @@ struct StaticMap {
 /// Throws InputError naming the file for anything else, a file that does not parse, or one with
 /// no ellipsoids, points or occupied leaves.
 StaticMap loadStaticMap(const std::filesystem::path& path);
+
+/// One entry of a folder as a file browser lists it.
+struct FolderEntry {
+  std::filesystem::path path;
+  bool folder = false;
+  /// What it opens as; nullopt for a plain folder (to enter) or a file vdmap does not open.
+  std::optional<MapFileKind> kind;
+};
+
+/// The entries of `dir`, folders first, each group by name (case-insensitive); hidden entries
+/// (a leading '.') are left out. A folder's kind is a sequence or map folder by its layout; a
+/// file's by detectMapFile (a PLY's or JSON's header only). Throws InputError naming `dir` when
+/// it cannot be listed.
+std::vector<FolderEntry> listFolder(const std::filesystem::path& dir);
 
 /// The median over `points` of the distance to each one's nearest other point (m; 0 for fewer
 /// than two points or all at one place). Deterministic; O(n log n) with a sorted cell grid.
