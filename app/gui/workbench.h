@@ -162,6 +162,8 @@ class Workbench {
   /// Opens a map file as a static map: one mapping snapshot (keyframe poses, edges and
   /// trajectory when the file has them) and one global map, nothing to play, rebuild or edit.
   bool openMapFile(const std::string& path);
+  /// The same for a map read already (vdmap gui PATH reads it before the window opens).
+  bool openMapFile(std::shared_ptr<const StaticMap> map);
   /// The open static map (null while nothing, a sequence or a session is open).
   const StaticMap* staticMap() const { return worker_ ? worker_->staticMap() : nullptr; }
   /// The tooltip of what a static map disables (thresholds, re-map, inspector, container, poses).
