@@ -316,7 +316,8 @@ struct RenderSource::Impl {
   int cell_size_px = 5;
   int frames = 0;
   bool tracked = false;
-  std::optional<std::vector<Ellipsoid>> map_file;  // a map folder or PLY's own ellipsoids
+  std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
+  std::vector<Transform> map_cameras;  // a map folder's trajectory (else keyframes): the data up axis
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, std::vector<Ellipsoid>>> maps;  // by paramsKey
   std::unique_ptr<render::MapMirror> mirror;
@@ -345,7 +346,10 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
   } else if (!map.empty()) {
     // A map file (a `vdmap map` folder, an ellipsoid or point PLY, an OctoMap) is drawn by its
     // ellipsoids (mapping/io/map_file.h, as the workbench opens it).
-    m.map_file = loadStaticMap(map).ellipsoids;
+    StaticMap file = loadStaticMap(map);
+    // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
+    for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory) m.map_cameras.push_back(p.T_W_C);
+    m.map_file = std::move(file.ellipsoids);
     name_ = map;
   }
   if (!mesh.empty()) {
@@ -400,6 +404,7 @@ glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
   if (axis != render::UpAxis::kData) return render::upDirection(axis, {}, {});
   std::vector<Transform> cameras;
   if (impl_->graph) cameras = render::graphSceneOf(*impl_->graph, *impl_->state, impl_->camera, false).trajectory;
+  else cameras = impl_->map_cameras;
   return render::upDirection(axis, cameras, globalMap(params));
 }
 

@@ -5,6 +5,7 @@
 
 #include "app/gui/settings.h"
 #include "app/gui/workbench.h"
+#include "app/render_view.h"
 #include "app/view_file.h"
 #include "mapping/export/map_export.h"
 #include "mapping/export/octomap_export.h"
@@ -143,6 +144,26 @@ TEST(GuiFiles, DropsWaitForTheFrameAndAViewFileIsApplied) {
   ASSERT_TRUE(shown.look_at);
   EXPECT_NEAR(glm::distance(shown.look_at->eye, glm::vec3(1.f, 2.f, 3.f)), 0.f, 1e-5f);
   EXPECT_NEAR(glm::distance(shown.look_at->target, glm::vec3(0.5f, 0.f, 1.f)), 0.f, 1e-5f);
+}
+
+// The headless twin: `vdmap render` of a map folder estimates the same data up axis as the window
+// (from the same cameras: the trajectory, else the keyframes, and the floor of the same map).
+TEST(GuiFiles, RenderAndTheWindowAgreeOnAMapFoldersUpAxis) {
+  const MapFolder m;
+  fs::remove(m.folder / "trajectory.txt");
+  for (const bool trajectory : {false, true}) {
+    if (trajectory) {
+      const KeyframeGraph& g = m.graph;
+      writeTumTrajectory(m.folder / "trajectory.txt",
+                         {{0.0, g.keyframe(0).T_W_K}, {0.5, g.keyframe(0).T_W_K}, {1.0, g.keyframe(1).T_W_K}}, "frames");
+    }
+    Workbench bench{Settings{}};
+    ASSERT_TRUE(bench.openPath(m.folder.string())) << bench.ui().status.text;
+    RenderSource source({}, m.folder.string(), "");
+    const glm::vec3 window = bench.upVector(), render = source.up(render::UpAxis::kData, GlobalMapParams{});
+    EXPECT_LT(glm::distance(window, render), 1e-6f) << trajectory;
+    EXPECT_GT(glm::distance(window, glm::vec3(0.f, 0.f, 1.f)), 0.1f) << "the cameras were not used";
+  }
 }
 
 }  // namespace

@@ -40,12 +40,17 @@ MappingWorker::MappingWorker(std::shared_ptr<const StaticMap> map) : static_map_
   snap->edges = m.edges;
   // The trajectory is held relative to keyframes: each frame to the newest keyframe at or before
   // its time (the first one for frames before it), so it is drawn where the file put it.
+  // Without a trajectory, the keyframes stand for it (as for a session that stores no frame
+  // poses), so the data up axis has cameras.
   if (!m.keyframes.empty()) {
     std::size_t k = 0;
     for (const StampedPose& p : m.trajectory) {
       while (k + 1 < m.keyframes.size() && m.keyframes[k + 1].t <= p.t) ++k;
       trajectory_.push_back({static_cast<int>(k), m.keyframes[k].T_W_C.inverse() * p.T_W_C, std::nullopt});
     }
+    if (m.trajectory.empty())
+      for (std::size_t id = 0; id < m.keyframes.size(); ++id)
+        trajectory_.push_back({static_cast<int>(id), Transform::Identity(), std::nullopt});
   }
   snap->trajectory = trajectory_.view();
   mapping_ = std::move(snap);
