@@ -2,8 +2,10 @@
 // of a `vdmap map` folder, PLYs and OctoMaps written by vdmap's own exports.
 #include <algorithm>
 #include <cmath>
+#include <fstream>
 
 #include <gtest/gtest.h>
+#include <octomap/ColorOcTree.h>
 #include <octomap/OcTree.h>
 
 #include "mapping/core/error.h"
@@ -137,6 +139,46 @@ TEST(MapFile, ReadsOccupiedOctomapLeaves) {
       return ((m.mean - e.mean).cwiseAbs().array() <= std::sqrt(e.cov(0, 0) * 12.0) / 2 + 1e-5).all();
     });
   EXPECT_EQ(inside, scene.map.ellipsoids.size());
+}
+
+// .ot files (liboctomap's full format): an OcTree's occupied leaves coloured by height, a
+// ColorOcTree's with their own colours; free leaves are left out.
+TEST(MapFile, ReadsOtFilesOfBothTreeTypes) {
+  test::TempDir tmp;
+  const std::vector<octomap::point3d> occupied = {{0.05f, 0.05f, 0.05f}, {1.05f, 0.05f, 0.55f}, {0.55f, 0.95f, 1.25f}};
+  octomap::OcTree plain(0.1);
+  octomap::ColorOcTree coloured(0.1);
+  for (const octomap::point3d& p : occupied) {
+    plain.updateNode(p, true);
+    coloured.updateNode(p, true);
+    coloured.setNodeColor(p.x(), p.y(), p.z(), 200, 10, 30);
+  }
+  plain.updateNode(octomap::point3d(-1.f, -1.f, -1.f), false);  // a free leaf
+  coloured.updateNode(octomap::point3d(-1.f, -1.f, -1.f), false);
+  {
+    std::ofstream a(tmp / "plain.ot", std::ios::binary), b(tmp / "colour.ot", std::ios::binary);
+    plain.write(a);
+    coloured.write(b);
+  }
+  for (const char* name : {"plain.ot", "colour.ot"}) {
+    SCOPED_TRACE(name);
+    const StaticMap map = loadStaticMap(tmp / name);
+    EXPECT_EQ(map.kind, MapFileKind::kOctomap);
+    ASSERT_EQ(map.ellipsoids.size(), occupied.size());
+    for (const Ellipsoid& e : map.ellipsoids) {
+      EXPECT_NEAR(e.cov(0, 0), 0.01 / 12, 1e-9);
+      const bool found = std::any_of(occupied.begin(), occupied.end(), [&](const octomap::point3d& p) {
+        return (e.mean - Eigen::Vector3d(p.x(), p.y(), p.z())).norm() < 1e-6;
+      });
+      EXPECT_TRUE(found) << e.mean.transpose();
+      if (std::string(name) == "colour.ot") EXPECT_EQ(e.color, Eigen::Vector3f(200, 10, 30));
+    }
+  }
+  const std::string bytes = test::readFile(tmp / "colour.ot");
+  test::writeText(tmp / "cut.ot", bytes.substr(0, bytes.size() - 3));
+  EXPECT_THROW(loadStaticMap(tmp / "cut.ot"), InputError);
+  test::writeText(tmp / "other.ot", "# Octomap OcTree file\nid CountingOcTree\nsize 1\nres 0.1\ndata\n");
+  EXPECT_THROW(loadStaticMap(tmp / "other.ot"), InputError);
 }
 
 TEST(MapFile, ACorruptOctomapIsRefusedNamingIt) {
