@@ -54,9 +54,16 @@ TEST(GuiFiles, AMapFolderOpensWithThresholdsDisabled) {
   EXPECT_EQ(global->map.sigma_e_prime, m.map.ellipsoids.size());
   for (const Parameter& p : parameterTable()) EXPECT_FALSE(bench.pending(p)) << p.key;
 
-  // Nothing rebuilds it: a threshold sent anyway is refused with the reason, the map stays.
-  bench.ui().params.global.merge_distance_m = 0.01;
-  bench.applyThresholds();
+  // Nothing rebuilds it: Reset to defaults (which applies the thresholds) leaves it and says
+  // nothing; thresholds sent to the worker anyway are refused with the reason; the map stays.
+  bench.ui().settings.recent = {"/a", "/b"};
+  bench.resetToDefaults();
+  bench.worker()->waitIdle();
+  EXPECT_EQ(bench.player().error, "");
+  EXPECT_EQ(bench.ui().settings.recent, (std::vector<std::string>{"/a", "/b"}));  // a history, kept
+  GlobalMapParams other;
+  other.merge_distance_m = 0.01;
+  bench.worker()->setThresholds(other);
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.global(), global);
   EXPECT_EQ(bench.player().error, Workbench::kStaticMapWhy);

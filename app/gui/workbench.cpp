@@ -231,7 +231,7 @@ void Workbench::saveSession() {
 }
 
 void Workbench::applyThresholds() {
-  if (!worker_) return;
+  if (!worker_ || staticMap()) return;  // a map file has nothing to rebuild (opening files)
   try {
     worker_->setThresholds(ui_.params.global);
   } catch (const std::exception& e) {
@@ -288,6 +288,7 @@ void Workbench::resetToDefaults() {
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
+  defaults.recent = ui_.settings.recent;  // opening files: a history, not a setting to reset
   const bool rerun_needed = worker_ && !savedSession() && !(ParameterValues{worker_->mapping()->mapper, {}} ==
                                                               ParameterValues{defaults.mapper, {}});
   ui_.settings = defaults;

@@ -199,8 +199,8 @@ class Workbench {
   /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
   /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
   const std::string& whyPlayerOff() const { return why_player_off_; }
-  /// Thresholds, re-run parameters and view options back to their defaults (window size and
-  /// last sequence kept); the thresholds are applied and the layout reset.
+  /// Thresholds, re-run parameters and view options back to their defaults (window size, last
+  /// sequence and recent files kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
   /// Selects keyframe `id` for the inspector and tells the session (an id not mapped: none).
   void selectKeyframe(int id);
