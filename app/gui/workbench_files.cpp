@@ -1,6 +1,7 @@
 // Opening files in the workbench (docs/workbench.md "Opening files"): whatever a path holds
 // (mapping/io/map_file.h) opens as a sequence, a session, a static map or a view; drops queue
 // here and the next frame opens them; opened paths go to the recent list.
+#include <cstdio>
 #include <filesystem>
 
 #include "app/gui/workbench.h"
@@ -77,9 +78,12 @@ bool Workbench::openMapFile(std::shared_ptr<const StaticMap> map) {
   ui_.params = {worker_->mapping()->mapper, worker_->global()->params};
   why_player_off_ = kStaticMapWhy;
   opened(m.path.string());
-  std::string what = std::string(mapFileKindName(m.kind)) + ", " + grouped(m.ellipsoids.size()) + " ellipsoids";
-  if (m.kind == MapFileKind::kPointPly) what += ", points drawn at sigma " + std::to_string(m.sigma_m * 1e3).substr(0, 4) + " mm";
-  if (m.kind == MapFileKind::kOctomap) what += " (occupied leaves at " + std::to_string(m.sigma_m).substr(0, 5) + " m)";
+  char sigma[32];
+  std::snprintf(sigma, sizeof sigma, "%.1f mm", m.sigma_m * 1e3);
+  std::string what = std::string(mapFileKindName(m.kind)) + ", " + grouped(m.ellipsoids.size()) +
+                     (m.kind == MapFileKind::kOctomap ? " occupied leaves" : " ellipsoids");
+  if (m.kind == MapFileKind::kPointPly) what += std::string(", points drawn at sigma ") + sigma;
+  if (m.kind == MapFileKind::kOctomap) what += std::string(", resolution ") + sigma;
   if (!m.keyframes.empty()) what += ", " + std::to_string(m.keyframes.size()) + " keyframes";
   report(StatusLine::Kind::kSuccess, "opened " + m.path.string() + " (" + what + ")");
   return true;
