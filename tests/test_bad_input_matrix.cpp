@@ -593,6 +593,8 @@ const std::vector<BadCase>& badCases() {
             "gui {dir}/p.ply --exit")},
       {"command_line", "gui_unknown_file_kind", E::kCliError, "notes.txt: is of no kind vdmap opens",
        then(write("notes.txt", "hello\n"), "gui {dir}/notes.txt --exit")},
+      {"command_line", "gui_view_file_as_path", E::kCliError, "v.json: is a view file: give it with --view-file",
+       then(viewFile([](nlohmann::json&) {}), "gui {dir}/v.json --exit")},
       {"command_line", "render_map_bt_not_an_octomap", E::kCliError, "m.bt:1: not an OctoMap .bt file",
        then(write("m.bt", "hello\n"), "render --map {dir}/m.bt --out {dir}/o.png")},
       {"sequence", "camera_file_unknown_key", E::kInputError,
