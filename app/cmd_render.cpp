@@ -175,10 +175,12 @@ void addRenderCommand(CLI::App& app) {
   addPoseSourceArg(*verb, args->sequence);
   addRefineArg(*verb, args->sequence);
   CLI::Option* seq = verb->get_option("SEQ")->required(false)->description(
-      "sequence to map (default parameters) and render, or a saved session (.vdmap) to render without mapping");
+      "sequence to map (default parameters) and render, or a saved session (.vdmap) or map file to render "
+      "without mapping");
   verb->add_option("--map", args->map,
-                   "instead of SEQ: a saved session (.vdmap: every view, with its keyframes and graph), or an "
-                   "ellipsoid PLY (docs/method.md 11) or `vdmap map` folder (its global_ellipsoids.ply; global view only)")
+                   "instead of SEQ: a saved session (.vdmap: every view, with its keyframes and graph), or a map "
+                   "file (global view only): a `vdmap map` folder, an ellipsoid PLY (docs/method.md 11), a point PLY, "
+                   "an OctoMap .bt/.ot")
       ->excludes(seq);
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
   verb->add_option("--out", args->out, "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says")

@@ -8,6 +8,7 @@
 #include "mapping/pipeline/parameters.h"
 #include "app/view_file.h"
 #include "mapping/core/error.h"
+#include "mapping/io/map_file.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"
@@ -290,6 +291,21 @@ const render::Gl& sharedOffscreenGl() {
   return context->gl();
 }
 
+namespace {
+
+// Whether `path` is a map file loadStaticMap reads (a sequence folder, a typo and the rest: no,
+// and they keep their own errors).
+bool isStaticMapFile(const std::string& path) {
+  try {
+    const MapFileKind kind = detectMapFile(path);
+    return kind != MapFileKind::kSequence && kind != MapFileKind::kSession && kind != MapFileKind::kViewFile;
+  } catch (const InputError&) {
+    return false;
+  }
+}
+
+}  // namespace
+
 struct RenderSource::Impl {
   std::optional<Session> session;
   std::unique_ptr<Mapper> mapper;
@@ -300,7 +316,8 @@ struct RenderSource::Impl {
   int cell_size_px = 5;
   int frames = 0;
   bool tracked = false;
-  std::optional<std::vector<Ellipsoid>> map_file;  // a map folder or PLY's own ellipsoids
+  std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
+  std::vector<Transform> map_cameras;  // a map folder's trajectory (else keyframes): the data up axis
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, std::vector<Ellipsoid>>> maps;  // by paramsKey
   std::unique_ptr<render::MapMirror> mirror;
@@ -313,8 +330,9 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     : impl_(std::make_unique<Impl>()) {
   SequenceArgs sequence = sequence_in;
   std::string map = map_in;
-  // A saved session can stand where SEQ does (as for vdmap gui) or be given as --map.
-  if (!sequence.folder.empty() && isSessionPath(sequence.folder)) std::swap(map, sequence.folder);
+  // A saved session or a map file can stand where SEQ does (as for vdmap gui) or be given as --map.
+  if (!sequence.folder.empty() && (isSessionPath(sequence.folder) || isStaticMapFile(sequence.folder)))
+    std::swap(map, sequence.folder);
   Impl& m = *impl_;
   if (!map.empty() && isSessionPath(map)) {
     m.session.emplace(loadSession(map, {.decode_images = false}));  // a container view decodes its keyframe's image
@@ -326,21 +344,12 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     m.tracked = m.session->info.mapper.poses == PoseSource::kTrack;
     name_ = map;
   } else if (!map.empty()) {
-    // A `vdmap map` folder is drawn by its global map.
-    const fs::path ply = fs::is_directory(map) ? fs::path(map) / "global_ellipsoids.ply" : fs::path(map);
-    if (fs::is_directory(map) && !fs::exists(ply))
-      throw InputError(map, "has no global_ellipsoids.ply (expected a `vdmap map` output folder)");
-    std::vector<Ellipsoid> ellipsoids;
-    for (const EllipsoidRecord& r : readPlyEllipsoids(ply)) {
-      Ellipsoid e;
-      e.mean = r.mean.cast<double>();
-      e.cov = r.cov.cast<double>();
-      e.color = {static_cast<float>(r.rgb[0]), static_cast<float>(r.rgb[1]), static_cast<float>(r.rgb[2])};
-      e.count = r.count;
-      e.keyframe = r.keyframe;
-      ellipsoids.push_back(e);
-    }
-    m.map_file = std::move(ellipsoids);
+    // A map file (a `vdmap map` folder, an ellipsoid or point PLY, an OctoMap) is drawn by its
+    // ellipsoids (mapping/io/map_file.h, as the workbench opens it).
+    StaticMap file = loadStaticMap(map);
+    // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
+    for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory) m.map_cameras.push_back(p.T_W_C);
+    m.map_file = std::move(file.ellipsoids);
     name_ = map;
   }
   if (!mesh.empty()) {
@@ -395,6 +404,7 @@ glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
   if (axis != render::UpAxis::kData) return render::upDirection(axis, {}, {});
   std::vector<Transform> cameras;
   if (impl_->graph) cameras = render::graphSceneOf(*impl_->graph, *impl_->state, impl_->camera, false).trajectory;
+  else cameras = impl_->map_cameras;
   return render::upDirection(axis, cameras, globalMap(params));
 }
 

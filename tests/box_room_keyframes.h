@@ -19,4 +19,13 @@ inline int addBoxRoomKeyframe(KeyframeGraph* graph, const PinholeCamera& camera,
   return graph->add(std::move(k)).id;
 }
 
+/// Two neighbouring keyframes looking at the same wall of the box room (tum-default camera),
+/// joined by an edge of weight 0.6: the smallest graph with a merge group.
+inline void addTwoBoxRoomViews(KeyframeGraph* graph, const PinholeCamera& camera) {
+  addBoxRoomKeyframe(graph, camera, lookAt({0, 0, 0}, {0, 0, 2}), lookAt({0, 0, 0}, {0, 0, 2}));
+  const Transform T = lookAt({0.3, 0, 0.2}, {0.5, 0.2, 2});
+  addBoxRoomKeyframe(graph, camera, T, T);
+  graph->edges().strengthen(0, 1, 0.6);
+}
+
 }  // namespace vdmap::test

@@ -583,6 +583,20 @@ const std::vector<BadCase>& badCases() {
        then(write("bad.json", R"({"thresholds": {"merge_distance": -1}})"), "gui {dir}/seq --settings {dir}/bad.json --exit")},
       {"command_line", "gui_view_file_missing_key", E::kCliError, "v.json: missing key 'source'",
        then(write("v.json", R"({"vdmap_view": 1})"), "gui {dir}/seq --view-file {dir}/v.json --exit")},
+      // Opening map files (gui PATH, render --map): a bad one is one line before the window opens.
+      {"command_line", "gui_bt_corrupt", E::kCliError, "m.bt: corrupt OctoMap: the tree data ends early (truncated?)",
+       then(write("m.bt", std::string("# Octomap OcTree binary file\nid OcTree\nsize 3\nres 0.1\ndata\n\x03")),
+            "gui {dir}/m.bt --exit")},
+      {"command_line", "gui_ply_no_vertices", E::kCliError, "p.ply: has no vertices (expected at least one point)",
+       then(write("p.ply", "ply\nformat ascii 1.0\nelement vertex 0\nproperty float x\nproperty float y\n"
+                           "property float z\nend_header\n"),
+            "gui {dir}/p.ply --exit")},
+      {"command_line", "gui_unknown_file_kind", E::kCliError, "notes.txt: is of no kind vdmap opens",
+       then(write("notes.txt", "hello\n"), "gui {dir}/notes.txt --exit")},
+      {"command_line", "gui_view_file_as_path", E::kCliError, "v.json: is a view file: give it with --view-file",
+       then(viewFile([](nlohmann::json&) {}), "gui {dir}/v.json --exit")},
+      {"command_line", "render_map_bt_not_an_octomap", E::kCliError, "m.bt:1: not an OctoMap .bt file",
+       then(write("m.bt", "hello\n"), "render --map {dir}/m.bt --out {dir}/o.png")},
       {"sequence", "camera_file_unknown_key", E::kInputError,
        "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
        "colour)",

@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdlib>
+#include <map>
 #include <regex>
 
 #include <gtest/gtest.h>
@@ -446,6 +447,109 @@ TEST(GuiCli, AMissingInputIsNamedBeforeTheDisplay) {
     EXPECT_EQ(r.err.find("display"), std::string::npos) << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   }
+}
+
+// ---- Opening files: map folders, PLYs and OctoMaps as `gui PATH` and dropped ----
+
+// Pixels of an image that differ from its most common colour (the view's background) by more
+// than 30 (L1 over BGR): what the map drew.
+int drawnPixels(const fs::path& png) {
+  const cv::Mat bgr = cv::imread(png.string());
+  if (bgr.empty()) return -1;
+  std::map<int, int> counts;
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) {
+      const cv::Vec3b c = bgr.at<cv::Vec3b>(y, x);
+      ++counts[c[0] << 16 | c[1] << 8 | c[2]];
+    }
+  const int mode = std::max_element(counts.begin(), counts.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+  const cv::Vec3b background(static_cast<uchar>(mode >> 16), static_cast<uchar>(mode >> 8 & 255), static_cast<uchar>(mode & 255));
+  int drawn = 0;
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) drawn += cv::norm(bgr.at<cv::Vec3b>(y, x), background, cv::NORM_L1) > 30;
+  return drawn;
+}
+
+// A `vdmap map` folder of a tiny sequence with its OctoMap; the counts its stats.json gives.
+struct MappedFolder {
+  fs::path seq, out;
+  int ellipsoids = 0, occupied_leaves = 0, keyframes = 0;
+  explicit MappedFolder(const TempDir& home) : seq(home / "seq"), out(home / "out") {
+    writeTinySequence(seq, 6);
+    const RunResult r = runVdmap("map '" + seq.string() + "' --out '" + out.string() + "' --octomap 0.02");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json stats = readJson(out / "stats.json");
+    ellipsoids = stats["sigma_e_prime"];
+    occupied_leaves = stats["octomap"]["occupied_leaves"];
+    keyframes = stats["keyframes"];
+  }
+};
+
+TEST(GuiCli, OpensAFolderAPlyAndABt) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const MappedFolder m(home);
+  ASSERT_GT(m.ellipsoids, 100);
+  ASSERT_GT(m.occupied_leaves, 10);
+  struct Case {
+    fs::path path;
+    int ellipsoids, keyframes;
+  };
+  for (const Case& c : {Case{m.out, m.ellipsoids, m.keyframes}, Case{m.out / "global_points.ply", m.ellipsoids, 0},
+                        Case{m.out / "global_ellipsoids.ply", m.ellipsoids, 0}, Case{m.out / "global.bt", m.occupied_leaves, 0}}) {
+    SCOPED_TRACE(c.path.string());
+    const fs::path stats = home / "s.json", view = home / "v.png";
+    fs::remove(view);
+    const RunResult r = runInXvfb(home, "gui '" + c.path.string() + "' --exit --window-size 1280x720 --stats-json '" +
+                                            stats.string() + "' --view-screenshot '" + view.string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const nlohmann::json s = readJson(stats);
+    EXPECT_EQ(s["error"], "");
+    EXPECT_EQ(s["sigma_e_prime"], c.ellipsoids);
+    EXPECT_EQ(s["keyframes"], c.keyframes);
+    EXPECT_GT(drawnPixels(view), 1000) << "the 3-D view looks empty";
+  }
+}
+
+TEST(GuiCli, ADroppedPathOpens) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const MappedFolder m(home);
+  const fs::path stats = home / "d.json", view = home / "d.png";
+  // The sequence opens (mapped to 3 frames), then the OctoMap dropped on the window replaces it.
+  const RunResult r = runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (m.out / "global.bt").string() +
+                                          "' --stats-json '" + stats.string() + "' --view-screenshot '" + view.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json s = readJson(stats);
+  EXPECT_EQ(s["sigma_e_prime"], m.occupied_leaves);
+  EXPECT_EQ(s["keyframes"], 0);
+  EXPECT_GT(drawnPixels(view), 1000);
+  // A dropped file that cannot be opened fails the scripted run with its name.
+  const RunResult bad = runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (home / "nope.bt").string() + "'");
+  EXPECT_EQ(bad.exit_code, 1) << bad.err;
+  EXPECT_NE(bad.err.find("nope.bt"), std::string::npos) << bad.err;
+}
+
+// A view file dropped on the window is applied as a view: its camera is the one saved after.
+TEST(GuiCli, ADroppedViewFileIsApplied) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const MappedFolder m(home);
+  const std::string map = "gui '" + m.out.string() + "' --exit --window-size 1280x720 ";
+  const fs::path a = home / "a.json", b = home / "b.json", c = home / "c.json";
+  // The default view, saved; the same moved up and sideways, written as another view file.
+  ASSERT_EQ(runInXvfb(home, map + "--save-view '" + b.string() + "'").exit_code, 0);
+  nlohmann::json va = readJson(b);
+  ASSERT_TRUE(va["camera"].is_object()) << va.dump();
+  va["camera"]["eye"][0] = va["camera"]["eye"][0].get<double>() + 0.4;
+  va["camera"]["eye"][1] = va["camera"]["eye"][1].get<double>() + 0.3;
+  writeText(a, va.dump(2));
+  const RunResult r = runInXvfb(home, map + "--drop '" + a.string() + "' --save-view '" + c.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json vc = readJson(c);
+  for (const char* key : {"eye", "target"})
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(vc["camera"][key][i].get<double>(), va["camera"][key][i].get<double>(), 1e-4) << key << i;
 }
 
 }  // namespace

@@ -12,6 +12,7 @@
 #include "app/progress.h"
 #include "app/view_file.h"
 #include "mapping/core/error.h"
+#include "mapping/io/map_file.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
@@ -22,7 +23,7 @@ namespace fs = std::filesystem;
 
 struct GuiArgs {
   SequenceArgs sequence;
-  std::string map;  ///< a saved session instead of a sequence
+  std::string map;  ///< a saved session or a map file (mapping/io/map_file.h) instead of a sequence
   std::string settings;  ///< --settings: this file instead of the defaults or the user's settings
   std::string view_file;  ///< --view-file: read (strictly) before the window opens
   gui::ScriptOptions script;
@@ -129,7 +130,7 @@ StartSettings startSettings(const GuiArgs& args, bool session) {
 
 void runGui(GuiArgs args, bool builtin) {
   const std::string verb = builtin ? "vdmap" : "vdmap gui";
-  const bool session = !builtin && !args.map.empty();
+  const bool session = !builtin && !args.map.empty() && isSessionPath(args.map);
   const StartSettings start = startSettings(args, session);
   if (!args.view_file.empty()) args.script.view = readViewFile(args.view_file);
   const fs::path& settings_file = start.user_file;
@@ -149,8 +150,14 @@ void runGui(GuiArgs args, bool builtin) {
   }
   // A missing sequence or session is named before the display is looked at (without a display,
   // `gui /nope` named the display); a damaged session still opens the window with its error.
-  if (!builtin && !args.map.empty() && !isSessionPath(args.map))
-    throw InputError(args.map, fs::exists(args.map) ? "not a vdmap session file" : "no such session file");
+  // A map file is read now, so a bad one fails with its one line before the window opens.
+  std::shared_ptr<const StaticMap> static_map;
+  if (!builtin && !args.map.empty() && !isSessionPath(args.map)) {
+    if (!fs::exists(args.map)) throw InputError(args.map, "no such session or map file");
+    if (detectMapFile(args.map) == MapFileKind::kViewFile)
+      throw InputError(args.map, "is a view file: give it with --view-file beside the map or sequence it views");
+    static_map = std::make_shared<const StaticMap>(loadStaticMap(fs::absolute(args.map).lexically_normal()));
+  }
   if (!builtin && args.map.empty()) noteCameraGuess(openSequence(args.sequence), "gui");
   // Without a display, say so now rather than after rendering the built-in scene (a minute).
   gui::requireDisplay();
@@ -171,7 +178,8 @@ void runGui(GuiArgs args, bool builtin) {
   bench.setRefinement(refinement(args.sequence));
   // A failure shows in the window, which stays open.
   if (!prepare.run) {
-    if (!args.map.empty()) bench.openSession(args.map);
+    if (static_map) bench.openMapFile(static_map);
+    else if (!args.map.empty()) bench.openSession(args.map);
     else bench.open(args.sequence);
   }
   const int code = gui::runWorkbenchWindow(bench, args.script, settings_file.string(), std::move(prepare));
@@ -199,6 +207,9 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
       "f1, esc; e.g. h for the help)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
+  app.add_option("--drop", args.script.drop,
+                 "scripted: PATH dropped on the window once mapping is done, before the screenshot (any kind the "
+                 "workbench opens; a view file is applied as a view); repeatable");
   app.add_option_function<std::string>(
       "--view-file", [&args](const std::string& file) { args.view_file = file; },
       "scripted: show this view file's view (camera, view options) once mapping is done, instead of the default view");
@@ -228,19 +239,24 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
 }  // namespace
 
 void addGuiCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("gui", "Open the workbench on a sequence");
+  auto* verb = app.add_subcommand("gui", "Open the workbench on a sequence, a saved session or a map file");
   auto args = std::make_shared<GuiArgs>();
   addSequenceArgs(*verb, args->sequence);
   addPoseSourceArg(*verb, args->sequence);
   addRefineArg(*verb, args->sequence);
   verb->get_option("SEQ")->required(false);
-  verb->add_option("--map", args->map, "open a saved session (.vdmap) instead of a sequence (a .vdmap file as SEQ does too)");
+  verb->add_option("--map", args->map,
+                   "open a saved session (.vdmap) or a map file instead of a sequence: a `vdmap map` folder, an "
+                   "ellipsoid or point PLY, an OctoMap .bt/.ot (any of them as SEQ does too)");
   addGuiOptions(*verb, *args);
   verb->callback([args] {
-    // `vdmap gui S.vdmap` opens a saved session, as the workbench's Open field does.
-    if (args->map.empty() && fs::is_regular_file(args->sequence.folder)) std::swap(args->map, args->sequence.folder);
+    // `vdmap gui S.vdmap` (or a map folder, PLY, OctoMap) opens it, as the workbench's Open field does.
+    const fs::path& seq = args->sequence.folder;
+    if (args->map.empty() && (fs::is_regular_file(seq) || (fs::is_directory(seq) && !fs::exists(seq / "rgb.txt") &&
+                                                            fs::exists(seq / "global_ellipsoids.ply"))))
+      std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
-      throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE.vdmap (one of them)");
+      throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE (one of them)");
     runGui(*args, false);
   });
 }

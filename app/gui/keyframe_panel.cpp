@@ -115,6 +115,10 @@ void drawKeyframes(Workbench& bench, const render::MapMirror& mirror, WindowStat
   const int id = bench.ui().selected_keyframe;
   if (id < 0 || id >= static_cast<int>(win.mapping->keyframes.size()))
     return ImGui::TextWrapped("Select a keyframe to inspect it.");
+  if (bench.staticMap()) {  // opening files: a map file's keyframes are poses only
+    ImGui::TextDisabled("K%d: no inspector, container or pose edit", id);
+    return tip(std::string("A map file: ") + Workbench::kStaticMapWhy + ".");
+  }
   drawInspector(bench, mirror, win, id);
   drawPoseEdit(bench, win);
 }
@@ -147,10 +151,12 @@ void drawPoseFile(Workbench& bench) {
   ImGui::SetNextItemWidth(-FLT_MIN);
   ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui.trajectory_text);
   tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
-  ImGui::BeginDisabled(ui.trajectory_text.empty());
+  const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
+  ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
   if (ImGui::Button("Load corrected trajectory")) bench.loadTrajectory();
-  tip(ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
-                                 : "Replaces the matching keyframes' poses; the map is rebuilt.");
+  tip(file ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
+      : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
+                                   : "Replaces the matching keyframes' poses; the map is rebuilt.");
   ImGui::EndDisabled();
 }
 

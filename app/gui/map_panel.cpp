@@ -20,14 +20,17 @@ void drawExport(Workbench& bench, WindowState& win) {
     ImGui::InputText("##session", &ui.session_text);
     ImGui::EndTable();
   }
-  ImGui::BeginDisabled(ui.export_text.empty());
+  const std::string file = bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "." : "";
+  ImGui::BeginDisabled(ui.export_text.empty() || !file.empty());
   if (ImGui::Button("Export")) bench.exportMap();
-  tip(ui.export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
+  tip(!file.empty() ? file
+      : ui.export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
   ImGui::EndDisabled();
   ImGui::SameLine();
-  ImGui::BeginDisabled(ui.session_text.empty());
+  ImGui::BeginDisabled(ui.session_text.empty() || !file.empty());
   if (ImGui::Button("Save session")) bench.saveSession();
-  tip(ui.session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
+  tip(!file.empty() ? file
+      : ui.session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
   ImGui::EndDisabled();
   checkFits(win.check);
 }

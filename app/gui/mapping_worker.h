@@ -18,6 +18,7 @@
 
 #include "app/gui/append_log.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/io/map_file.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
@@ -161,6 +162,15 @@ class MappingWorker {
   /// without, the player commands and seek do nothing. Re-run does nothing either way.
   MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
              std::optional<MapRefinementParams> refine = MapRefinementParams{});
+  // --- Static maps (mapping_worker_static.cpp) ---
+  /// A map file read whole (loadStaticMap): publishes one mapping snapshot (its keyframe poses,
+  /// edges and trajectory) and one global snapshot, and nothing after. The player, thresholds,
+  /// re-run, pose edits and selections change nothing (the error says a map file has no local
+  /// maps to rebuild from); withMapper is refused the same way.
+  explicit MappingWorker(std::shared_ptr<const StaticMap> map);
+  /// The map file this worker shows (null for a sequence or session).
+  const StaticMap* staticMap() const { return static_map_.get(); }
+  // --- end static maps ---
   ~MappingWorker();
   MappingWorker(const MappingWorker&) = delete;
   MappingWorker& operator=(const MappingWorker&) = delete;
@@ -281,6 +291,8 @@ class MappingWorker {
   std::shared_ptr<const SelectionSnapshot> selection_;
   std::function<void()> on_change_;
   int generation_ = 0;
+  std::shared_ptr<const StaticMap> static_map_;  // static maps: what the worker shows
+  void runStatic();                               // static maps: the worker's loop
   std::thread worker_;
 };
 

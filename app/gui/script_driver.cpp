@@ -228,6 +228,7 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
       else bench.resetView();
       if (run.options.keyframe >= 0) bench.selectKeyframe(run.options.keyframe);
       for (const int key : run.options.press) keys.presses.emplace_back(key, 0);  // as if typed now
+      for (const std::string& path : run.options.drop) bench.drop(path);  // as if dropped now (opened next frame)
       run.countdown = 3;  // frames to draw the final map before the screenshot
       run.phase = ScriptPhase::kSettle;
       return;

@@ -9,6 +9,7 @@
 
 #include <imgui_stdlib.h>
 
+#include "app/gui/map_file_panel.h"
 #include "app/gui/widgets.h"
 #include "app/timing.h"
 #include "render/colormap.h"
@@ -100,21 +101,6 @@ void drawTimes(WindowState& win, float width) {
   }
 }
 
-// The folder or session field and Open.
-void drawOpenField(Workbench& bench) {
-  UiState& ui = bench.ui();
-  const float open_w = ImGui::CalcTextSize("Open").x + 2 * ImGui::GetStyle().FramePadding.x;
-  ImGui::SetNextItemWidth(-open_w - ImGui::GetStyle().ItemSpacing.x);
-  const bool enter = ImGui::InputText("##folder", &ui.sequence_text, ImGuiInputTextFlags_EnterReturnsTrue);
-  tip("A TUM RGB-D folder (rgb.txt, depth.txt, groundtruth.txt) or a saved session (.vdmap).");
-  ImGui::SameLine();
-  ImGui::BeginDisabled(ui.sequence_text.empty());
-  if (ImGui::Button("Open") || (enter && !ui.sequence_text.empty())) bench.openPath(ui.sequence_text);
-  tip(ui.sequence_text.empty() ? "Type a folder or a .vdmap file on the left first."
-                               : "Opens the folder or session typed on the left; errors show in the status line below.");
-  ImGui::EndDisabled();
-}
-
 // The sequence's folder, camera and frames, or the saved session's.
 void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
   const MappingSnapshot& mapping = *win.mapping;
@@ -125,6 +111,11 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
                        mapping.camera.height, total);
     tip("Where the intrinsics come from (--camera, camera.yaml or a preset named by the folder), the image size "
         "in pixels, and the frames selected.");
+  } else if (const StaticMap* file = bench.staticMap()) {  // opening files: a map file
+    ImGui::TextWrapped("%s", file->path.c_str());
+    ImGui::TextWrapped("%s: %zu ellipsoids, %zu keyframes", mapFileKindName(file->kind), file->ellipsoids.size(),
+                       mapping.keyframes.size());
+    tip("A map read whole from a file: nothing to play, re-map or rebuild (the Map panel shows its figures).");
   } else {
     ImGui::TextWrapped("%s", bench.ui().settings.last_sequence.c_str());
     ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
@@ -222,9 +213,10 @@ void drawFrameImages(const render::MapMirror& mirror, WindowState& win, bool sho
 
 void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, WindowState& win) {
   beginPanel("Sequence", win.layout.left, win.layout.left_w, win.layout.last_size.x);
-  drawOpenField(bench);
+  drawOpenArea(bench, win);  // opening files: map_file_panel.cpp
   if (!bench.isOpen()) {
-    ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder or a .vdmap session above.");
+    ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder, a .vdmap session or a map file (map folder, PLY, "
+                       "OctoMap) above, or drop one on the window.");
     ImGui::End();
     return;
   }
@@ -234,8 +226,10 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   drawWhatIsOpen(bench, win);
   const std::string why_saved =
       !saved ? ""
+      : bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
       : bench.whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
                                      : "A saved session: " + bench.whyPlayerOff() + ".";
+  if (bench.staticMap()) return ImGui::End();  // a map file: nothing to play (opening files)
   ImGui::BeginDisabled(saved);
   drawPlayer(bench, win, status, why_saved);
   if (win.mapping->mapper.poses == PoseSource::kTrack) drawLoopStrip(bench, win, total);

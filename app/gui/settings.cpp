@@ -60,6 +60,7 @@ json toJson(const Settings& s) {
         {"show_legend", s.show_legend}}},
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
+      {"recent", s.recent},  // opened paths, newest first (Settings::recent)
   };
   for (const Parameter& p : parameters()) j[sectionOf(p)][std::string(p.key)] = valueJson(p, p.get(params));
   return j;
@@ -132,6 +133,15 @@ Settings fromJson(const json& j, const Settings& base = {}) {
       throw std::invalid_argument("window size must be in 320x240..16384x16384");
   }
   read(j, "settings", "last_sequence", s.last_sequence);
+  // Recently opened paths: a list of strings, the newest kRecentFiles kept.
+  if (j.contains("recent")) {
+    const json& r = j.at("recent");
+    if (!r.is_array() || !std::all_of(r.begin(), r.end(), [](const json& v) { return v.is_string(); }))
+      throw std::invalid_argument("recent: expected a list of paths, got " + r.dump());
+    s.recent.clear();
+    for (const json& v : r)
+      if (s.recent.size() < kRecentFiles) s.recent.push_back(v.get<std::string>());
+  }
   return s;
 }
 
@@ -250,6 +260,13 @@ void saveChangedSettings(const fs::path& file, const Settings& at_start, const S
 }
 
 bool rerunParamsDiffer(const Settings& a, const Settings& b) { return toJson(a).at("rerun") != toJson(b).at("rerun"); }
+
+void addRecent(Settings& settings, const std::string& path) {
+  std::vector<std::string>& r = settings.recent;
+  r.erase(std::remove(r.begin(), r.end(), path), r.end());
+  r.insert(r.begin(), path);
+  if (r.size() > kRecentFiles) r.resize(kRecentFiles);
+}
 
 std::string settingKeyList() {
   const json defaults = toJson(Settings{});

@@ -4,6 +4,7 @@
 // here (app/), the parameter structs stay in mapping/.
 #include <filesystem>
 #include <string>
+#include <vector>
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/mapper.h"
@@ -33,7 +34,15 @@ struct Settings {
   bool show_legend = true;              ///< the colour legend and tracking key over the 3-D view
   int window_width = 1600, window_height = 900;
   std::string last_sequence;
+  /// Recently opened paths (any kind the workbench opens), newest first, at most kRecentFiles;
+  /// settings key `recent`. addRecent keeps it so.
+  std::vector<std::string> recent;
 };
+
+/// How many paths Settings::recent keeps.
+inline constexpr std::size_t kRecentFiles = 10;
+/// Puts `path` at the front of settings.recent (once), dropping the oldest beyond kRecentFiles.
+void addRecent(Settings& settings, const std::string& path);
 
 /// $XDG_CONFIG_HOME/vdmap/settings.json (or ~/.config/vdmap/settings.json).
 std::filesystem::path settingsPath();

@@ -8,6 +8,7 @@
 #include <imgui_stdlib.h>
 
 #include "app/gui/tg_parts.h"
+#include "app/gui/map_file_panel.h"
 #include "app/gui/widgets.h"
 #include "app/view_file.h"
 #include "render/colormap.h"
@@ -109,18 +110,21 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
 }  // namespace
 
 void drawThresholds(Workbench& bench, WindowState& win) {
+  const bool file = bench.staticMap() != nullptr;  // opening files: a map file has nothing to rebuild
   if (beginRows("thresholds")) {
     for (const Parameter& p : parameterTable())
-      if (p.live) parameterRow(bench, win, p, whyDisabled(p, bench.ui().params));
+      if (p.live) parameterRow(bench, win, p, file ? Workbench::kStaticMapWhy : whyDisabled(p, bench.ui().params));
     ImGui::EndTable();
   }
+  if (file) return drawStaticMapFigures(bench, win);
   if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
   drawMapFigures(bench, win);
 }
 
 void drawRerun(Workbench& bench, WindowState& win) {
   const bool saved = bench.savedSession();
-  const std::string why = "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
+  const std::string why = bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
+                          : "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
   if (beginRows("rerun")) {
     for (const Parameter& p : parameterTable())
       if (!p.live) parameterRow(bench, win, p, saved ? why : "");

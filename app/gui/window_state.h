@@ -9,11 +9,13 @@
 #include <deque>
 #include <memory>
 #include <string>
+#include <vector>
 #include <utility>
 
 #include <imgui.h>
 
 #include "app/gui/widgets.h"
+#include "app/gui/file_browser.h"
 #include "app/gui/workbench.h"
 #include "render/map_mirror.h"
 
@@ -33,6 +35,7 @@ struct Layout {
 struct KeyQueue {
   std::deque<std::pair<int, int>> presses;  ///< (GLFW key, modifiers)
   int events = 0;                           ///< any input at all since the last frame
+  std::vector<std::string> dropped;         ///< paths dropped on the window (Workbench::drop takes them)
 };
 
 /// What the GPU mirror was last given, to key its generations.
@@ -67,6 +70,7 @@ struct WindowState {
   // The view section's screenshot: the file typed, and one asked for (taken after the frame is drawn).
   std::string screenshot_text = "vdmap_screenshot.png", screenshot_request;
   std::deque<double> frame_times;  ///< the last 30 UI frames' times, ms (the status line's median)
+  FileBrowser browser;             ///< Browse... beside Open (opening files)
 };
 
 }  // namespace vdmap::app::gui

@@ -175,11 +175,7 @@ bool Workbench::openSession(const std::string& file) {
   return true;
 }
 
-bool Workbench::openPath(const std::string& path) {
-  const fs::path p(path);
-  if (p.extension() == ".vdmap" && !fs::is_directory(p)) return openSession(path);
-  return open({path, "", "", ""});
-}
+// openPath: workbench_files.cpp (opening files of every kind).
 
 void Workbench::opened(const std::string& path) {
   ++session_serial_;
@@ -235,7 +231,7 @@ void Workbench::saveSession() {
 }
 
 void Workbench::applyThresholds() {
-  if (!worker_) return;
+  if (!worker_ || staticMap()) return;  // a map file has nothing to rebuild (opening files)
   try {
     worker_->setThresholds(ui_.params.global);
   } catch (const std::exception& e) {
@@ -292,6 +288,7 @@ void Workbench::resetToDefaults() {
   defaults.window_width = ui_.settings.window_width;
   defaults.window_height = ui_.settings.window_height;
   defaults.last_sequence = ui_.settings.last_sequence;
+  defaults.recent = ui_.settings.recent;  // opening files: a history, not a setting to reset
   const bool rerun_needed = worker_ && !savedSession() && !(ParameterValues{worker_->mapping()->mapper, {}} ==
                                                               ParameterValues{defaults.mapper, {}});
   ui_.settings = defaults;
@@ -469,7 +466,9 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kViewFromKeyframe:
       if (ui_.selected_keyframe >= 0) ui_.view_from_keyframe = ui_.view_from_keyframe >= 0 ? -1 : ui_.selected_keyframe;
       break;
-    case KeyAction::kContainer: ui_.show_container = !ui_.show_container; break;
+    case KeyAction::kContainer:  // a map file has no containers (opening files)
+      if (!staticMap()) ui_.show_container = !ui_.show_container;
+      break;
     case KeyAction::kHelp: ui_.show_help = !ui_.show_help; break;
     case KeyAction::kEscape:
       ui_.show_help = ui_.show_container = false;

@@ -12,6 +12,7 @@
 #include "app/gui/mapping_worker.h"
 #include "app/gui/settings.h"
 #include "app/parameter_table.h"
+#include "mapping/io/map_file.h"
 #include "render/map_mirror.h"
 #include "render/view_camera.h"
 #include "render/view_spec.h"
@@ -152,8 +153,27 @@ class Workbench {
   /// The thresholds `file` sets (--settings FILE: a settings.json or a view file, readSettingsArg)
   /// go over the saved thresholds of every session opened from now on; "": none.
   void setSessionSettings(std::string file) { session_settings_ = std::move(file); }
-  /// Opens `path` as a session when it is a .vdmap file, else as a sequence folder.
+  // --- Opening files: map files, drop, recent (workbench_files.cpp) ---
+  /// Opens whatever `path` holds (detectMapFile): a sequence folder (open), a session
+  /// (openSession), a map folder, ellipsoid or point PLY or OctoMap (openMapFile), or a view file
+  /// (applied as Load view does: the camera and view options, not its thresholds). On success
+  /// the path goes to the front of settings().recent. Failures go to the status line (false).
   bool openPath(const std::string& path);
+  /// Opens a map file as a static map: one mapping snapshot (keyframe poses, edges and
+  /// trajectory when the file has them) and one global map, nothing to play, rebuild or edit.
+  bool openMapFile(const std::string& path);
+  /// The same for a map read already (vdmap gui PATH reads it before the window opens).
+  bool openMapFile(std::shared_ptr<const StaticMap> map);
+  /// The open static map (null while nothing, a sequence or a session is open).
+  const StaticMap* staticMap() const { return worker_ ? worker_->staticMap() : nullptr; }
+  /// The tooltip of what a static map disables (thresholds, re-map, inspector, container, poses).
+  static constexpr const char* kStaticMapWhy = "a map file has no local maps to rebuild from";
+  /// Queues a path dropped on the window (or given by --drop); the next frame opens the queue in
+  /// order (openDropped), so a drop never opens in the middle of drawing one.
+  void drop(std::string path) { dropped_.push_back(std::move(path)); }
+  /// Opens the queued drops (openPath each); returns how many were taken. Once per UI frame.
+  int openDropped();
+  // --- end opening files ---
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
   /// the status line with the absolute path).
   void exportMap();
@@ -179,8 +199,8 @@ class Workbench {
   /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
   /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
   const std::string& whyPlayerOff() const { return why_player_off_; }
-  /// Thresholds, re-run parameters and view options back to their defaults (window size and
-  /// last sequence kept); the thresholds are applied and the layout reset.
+  /// Thresholds, re-run parameters and view options back to their defaults (window size, last
+  /// sequence and recent files kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
   /// Selects keyframe `id` for the inspector and tells the session (an id not mapped: none).
   void selectKeyframe(int id);
@@ -273,6 +293,7 @@ class Workbench {
 
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;
+  std::vector<std::string> dropped_;  // drop()'s, not opened yet (workbench_files.cpp)
 };
 
 }  // namespace vdmap::app::gui

@@ -51,6 +51,11 @@ void installInputCallbacks(GLFWwindow* window) {
   glfwSetCursorEnterCallback(window, [](GLFWwindow* w, int) { ++keyQueue(w).events; });
   glfwSetFramebufferSizeCallback(window, [](GLFWwindow* w, int, int) { ++keyQueue(w).events; });
   glfwSetWindowRefreshCallback(window, [](GLFWwindow* w) { ++keyQueue(w).events; });
+  // Opening files: paths dropped on the window wait for the next frame (Workbench::drop).
+  glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
+    ++keyQueue(w).events;
+    for (int i = 0; i < count; ++i) keyQueue(w).dropped.emplace_back(paths[i]);
+  });
 }
 
 std::optional<KeyAction> actionOf(int key, int mods) {
@@ -236,6 +241,10 @@ class WorkbenchWindow {
     glfwGetFramebufferSize(context_.window(), &win_.layout.fb_width, &win_.layout.fb_height);
     layOut(win_.layout, bench_.ui());
     handleKeys(bench_, keys_);
+    // Opening files: what was dropped (or --drop) opens before this frame reads the model.
+    for (std::string& path : keys_.dropped) bench_.drop(std::move(path));
+    keys_.dropped.clear();
+    bench_.openDropped();
     bench_.sync();
     win_.mapping = bench_.mapping();
     win_.global = bench_.global();

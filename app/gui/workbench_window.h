@@ -30,6 +30,9 @@ struct ScriptOptions {
   /// Close the window as a user would after this many frames drawn (0: never); a test of
   /// closing during the preparation.
   int close_after_frames = 0;
+  /// Paths dropped on the window once mapping is done, with the --press keys (--drop): through
+  /// the drop queue, so the next frame opens them (a view file is applied as a view).
+  std::vector<std::string> drop;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
