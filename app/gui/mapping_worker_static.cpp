@@ -46,11 +46,11 @@ MappingWorker::MappingWorker(std::shared_ptr<const StaticMap> map) : static_map_
     std::size_t k = 0;
     for (const StampedPose& p : m.trajectory) {
       while (k + 1 < m.keyframes.size() && m.keyframes[k + 1].t <= p.t) ++k;
-      trajectory_.push_back({static_cast<int>(k), m.keyframes[k].T_W_C.inverse() * p.T_W_C, std::nullopt});
+      trajectory_.push_back({static_cast<int>(k), p.t, m.keyframes[k].T_W_C.inverse() * p.T_W_C, std::nullopt});
     }
     if (m.trajectory.empty())
       for (std::size_t id = 0; id < m.keyframes.size(); ++id)
-        trajectory_.push_back({static_cast<int>(id), Transform::Identity(), std::nullopt});
+        trajectory_.push_back({static_cast<int>(id), m.keyframes[id].t, Transform::Identity(), std::nullopt});
   }
   snap->trajectory = trajectory_.view();
   mapping_ = std::move(snap);
