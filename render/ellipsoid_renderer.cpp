@@ -2,12 +2,14 @@
 
 #include <algorithm>
 #include <array>
+#include <chrono>
 #include <cmath>
 
 #include <Eigen/Eigenvalues>
 
 #include "render/colormap.h"
 #include "render/icosphere.h"
+#include "render/lod_order.h"
 
 namespace vdmap::render {
 namespace {
@@ -47,8 +49,10 @@ EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
     : gl_(&gl), style_(style),
       program_(std::make_unique<ShaderProgram>(gl, "ellipsoid.vert", "shaded.frag")),
       point_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_point.vert", "ellipsoid_point.frag")),
-      vao_(gl), near_vao_(gl), point_vao_(gl), sphere_vertices_(gl), sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER),
-      geometry_(gl), colors_(gl), near_geometry_(gl), near_colors_(gl) {
+      fast_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_fast.vert", "ellipsoid_fast.frag")),
+      vao_(gl), near_vao_(gl), point_vao_(gl), fast_vao_(gl), sphere_vertices_(gl),
+      sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER), geometry_(gl), colors_(gl), lod_order_(gl, GL_ELEMENT_ARRAY_BUFFER),
+      near_geometry_(gl), near_colors_(gl) {
   const Icosphere sphere = makeIcosphere(style.sphere_subdivisions);
   index_count_ = static_cast<GLsizei>(sphere.triangles.size() * 3);
   sphere_vertices_.upload(sphere.vertices.data(), sphere.vertices.size() * sizeof(glm::vec3));
@@ -70,6 +74,11 @@ EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
   point_vao_.bind();
   for (GLuint k = 0; k < 4; ++k) geometry_.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k);
   colors_.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0);
+  // The fast pass: the same buffers, read through the level-of-detail order.
+  fast_vao_.bind();
+  for (GLuint k = 0; k < 4; ++k) geometry_.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k);
+  colors_.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0);
+  lod_order_.upload(nullptr, 0);
   gl.BindVertexArray(0);
 }
 
@@ -82,6 +91,13 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
   geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
   colors_cpu_ = ellipsoidColors(instances_, style_.color);
   colors_.upload(colors_cpu_.data(), colors_cpu_.size() * sizeof(glm::u8vec4));
+  std::vector<glm::vec3> centres(instances_.size());
+  for (std::size_t i = 0; i < instances_.size(); ++i) centres[i] = instances_[i].mean;
+  lod_order_cpu_ = render::lodOrder(centres);
+  gl_->BindVertexArray(0);  // the element buffer binding belongs to the bound VAO: fast_vao_'s
+  fast_vao_.bind();
+  lod_order_.upload(lod_order_cpu_.data(), lod_order_cpu_.size() * sizeof(std::uint32_t));
+  gl_->BindVertexArray(0);
 }
 
 void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
@@ -129,12 +145,32 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
   return near_colors_cpu_.size();
 }
 
+void EllipsoidRenderer::drawFast(const ViewCamera& view, std::size_t budget) const {
+  const std::size_t count = std::min(budget, instances_.size());
+  last_draw_ = {.fast = true, .point_instances = count};
+  if (count == 0) return;
+  const Gl& gl = *gl_;
+  gl.Enable(GL_PROGRAM_POINT_SIZE);
+  fast_program_->useWithView(view);
+  fast_program_->set("u_focal_px", std::max(view.fx, view.fy));
+  fast_program_->set("u_spread", std::sqrt(static_cast<float>(instances_.size()) / static_cast<float>(count)));
+  fast_program_->set("u_max_px", 8.f);  // larger points cost llvmpipe more than they show
+  fast_vao_.bind();
+  gl.DrawElements(GL_POINTS, static_cast<GLsizei>(count), GL_UNSIGNED_INT, nullptr);
+  gl.BindVertexArray(0);
+}
+
 void EllipsoidRenderer::draw(const ViewCamera& view) const {
+  last_draw_ = {};
   if (instances_.empty()) return;
   const Gl& gl = *gl_;
   const float focal_px = std::max(view.fx, view.fy);
   const bool lod = style_.point_below_px > 0.f;
+  const auto t0 = std::chrono::steady_clock::now();
   const std::size_t mesh_count = lod ? selectMeshInstances(view) : instances_.size();
+  last_draw_.select_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - t0).count();
+  last_draw_.mesh_instances = mesh_count;
+  last_draw_.point_instances = lod ? instances_.size() : 0;
   program_->useWithView(view);
   program_->set("u_focal_px", focal_px);
   program_->set("u_point_below_px", style_.point_below_px);
