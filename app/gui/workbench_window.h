@@ -30,6 +30,9 @@ struct ScriptOptions {
   /// Close the window as a user would after this many frames drawn (0: never); a test of
   /// closing during the preparation.
   int close_after_frames = 0;
+  // Progressive drawing (docs/performance.md "Workbench"):
+  /// Ellipsoids the fast pass draws while the camera moves; 0: adapted to the frame times.
+  std::size_t fast_budget = 0;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
