@@ -44,8 +44,21 @@ bool ViewCache::draw(const MapMirror& mirror, const FramedView& view, const glm:
   gl.BindFramebuffer(GL_READ_FRAMEBUFFER, image_->id());
   gl.BindFramebuffer(GL_DRAW_FRAMEBUFFER, static_cast<GLuint>(target));
   gl.Disable(GL_SCISSOR_TEST);
-  gl.BlitFramebuffer(0, 0, viewport.width, viewport.height, viewport.x, viewport.y, viewport.x + viewport.width,
-                     viewport.y + viewport.height, GL_COLOR_BUFFER_BIT, GL_NEAREST);
+  // Colour and depth (the depth answers what lies under the cursor); a target whose depth format
+  // differs refuses the depth copy once, and gets the colour only from then on.
+  auto blit = [&](GLbitfield mask) {
+    gl.BlitFramebuffer(0, 0, viewport.width, viewport.height, viewport.x, viewport.y, viewport.x + viewport.width,
+                       viewport.y + viewport.height, mask, GL_NEAREST);
+  };
+  if (!depth_probed_) {  // the first copy finds out (an error earlier in the frame is checked, not kept)
+    checkGl(gl, "before the view image's copy");
+    blit(GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT);
+    depth_blit_ = gl.GetError() == GL_NO_ERROR;
+    depth_probed_ = true;
+    if (!depth_blit_) blit(GL_COLOR_BUFFER_BIT);
+  } else {
+    blit(depth_blit_ ? GL_COLOR_BUFFER_BIT | GL_DEPTH_BUFFER_BIT : GL_COLOR_BUFFER_BIT);
+  }
   gl.BindFramebuffer(GL_FRAMEBUFFER, static_cast<GLuint>(target));
   gl.Viewport(viewport.x, viewport.y, viewport.width, viewport.height);
   return redraw;

@@ -27,8 +27,9 @@ class ViewCache {
   /// the viewport's size) when anything it depends on changed since the last call: the camera,
   /// the image rectangle, the viewport's size, the background, the lines and legend flags, the
   /// mirror's content serial (every upload, style, highlight or legend change) and its fast
-  /// budget; then, or else only, it is copied (glBlitFramebuffer) into `viewport`. Returns true
-  /// when it drew the map.
+  /// budget; then, or else only, it is copied (glBlitFramebuffer) into `viewport`, colour and
+  /// depth (colour only where the target's depth format differs; depthCopied() says). Returns
+  /// true when it drew the map.
   bool draw(const MapMirror& mirror, const FramedView& view, const glm::vec3& background, const PixelRect& viewport,
             bool with_lines, bool legend);
   /// The next draw() draws the map.
@@ -36,6 +37,10 @@ class ViewCache {
   /// How often draw() drew the map and how often it only copied the image.
   int redraws() const { return redraws_; }
   int blits() const { return blits_; }
+  /// Whether the last draw() copied the depth too (else the map's depth is only in image()).
+  bool depthCopied() const { return depth_blit_; }
+  /// The cached image's framebuffer (colour and depth of the last view drawn; null before any).
+  const Framebuffer* image() const { return image_.get(); }
   /// Whether the image held is the fast pass's.
   bool fast() const { return key_.fast_budget > 0; }
 
@@ -56,6 +61,7 @@ class ViewCache {
   std::unique_ptr<Framebuffer> image_;
   Key key_;
   bool valid_ = false;
+  bool depth_probed_ = false, depth_blit_ = false;  // whether the target took the depth copy
   int redraws_ = 0, blits_ = 0;
 };
 
@@ -67,7 +73,7 @@ class ViewCache {
 class ViewMotion {
  public:
   using Clock = std::chrono::steady_clock;
-  static constexpr double kSettleSeconds = 0.15, kTargetMs = 35.0;
+  static constexpr double kSettleSeconds = 0.15, kTargetMs = 25.0;  // the panels and the swap take ~20 ms more
   static constexpr std::size_t kMinBudget = 20000, kStartBudget = 100000;
   explicit ViewMotion(std::size_t fixed_budget = 0) : fixed_(fixed_budget), budget_(fixed_budget ? fixed_budget : kStartBudget) {}
 
