@@ -46,23 +46,25 @@ int main(int argc, char** argv) {
   int replicate = 1, steps = 20, width = 752, height = 870;
   std::vector<std::size_t> budgets;
   float points_below = -1.f;
+  float zoom = 1.f;  // --zoom F: the orbit's distance is F times the framed one (F < 1: inside the map)
   std::string png;  // --png PREFIX: PREFIX_full.png and PREFIX_fast_K.png of the last step, to look at
   for (int i = 1; i < argc; ++i) {
     const std::string a = argv[i];
     if (a == "--replicate" && i + 1 < argc) replicate = std::max(1, std::atoi(argv[++i]));
     else if (a == "--steps" && i + 1 < argc) steps = std::max(2, std::atoi(argv[++i]));
     else if (a == "--fast-budget" && i + 1 < argc) budgets.push_back(std::strtoull(argv[++i], nullptr, 10));
+    else if (a == "--zoom" && i + 1 < argc) zoom = std::atof(argv[++i]);
     else if (a == "--png" && i + 1 < argc) png = argv[++i];
     else if (a == "--points-below" && i + 1 < argc) points_below = std::atof(argv[++i]);
     else if (a == "--size" && i + 1 < argc) std::tie(width, height) = app::parseViewSize(argv[++i]);
     else if (map_path.empty() && a[0] != '-') map_path = a;
     else {
-      std::fprintf(stderr, "usage: bench_view MAP [--replicate N] [--size WxH] [--steps S] [--fast-budget K]...\n");
+      std::fprintf(stderr, "usage: bench_view MAP [--replicate N] [--size WxH] [--steps S] [--zoom F] [--fast-budget K]... [--png PREFIX]\n");
       return 1;
     }
   }
   if (map_path.empty()) {
-    std::fprintf(stderr, "usage: bench_view MAP [--replicate N] [--size WxH] [--steps S] [--fast-budget K]...\n");
+    std::fprintf(stderr, "usage: bench_view MAP [--replicate N] [--size WxH] [--steps S] [--zoom F] [--fast-budget K]... [--png PREFIX]\n");
     return 1;
   }
   app::RenderSource source({}, map_path, "");
@@ -99,8 +101,11 @@ int main(int argc, char** argv) {
   scene.up = source.up(spec.up, resolved.thresholds);
   render::Framebuffer fb(gl, width, height);
   const render::PixelRect viewport{0, 0, width, height};
+  spec.orbit = render::Orbit{};
+  const float framed_m = render::orbitCamera(spec, scene, width, height).distance_m;
   auto cameraAt = [&](int s) {
-    spec.orbit = render::Orbit{-60.f + glm::degrees(0.03f) * static_cast<float>(s), 35.f, std::nullopt};
+    spec.orbit = render::Orbit{-60.f + glm::degrees(0.03f) * static_cast<float>(s), 35.f,
+                               zoom == 1.f ? std::nullopt : std::optional<float>(zoom * framed_m)};
     return render::viewCamera(spec, scene, width, height);
   };
   // One frame of step s drawn into fb (through `cache` when given), glFinish-timed, ms.
@@ -119,8 +124,9 @@ int main(int argc, char** argv) {
   };
   double load[3] = {0, 0, 0};
   getloadavg(load, 3);
-  std::printf("bench_view %s x%d: %zu ellipsoids, %dx%d, %d orbit steps, load average %.2f %.2f %.2f\n",
-              map_path.c_str(), replicate, map.size(), width, height, steps, load[0], load[1], load[2]);
+  std::printf("bench_view %s x%d: %zu ellipsoids, %dx%d, %d orbit steps at %.2f x the framed distance, load average "
+              "%.2f %.2f %.2f\n",
+              map_path.c_str(), replicate, map.size(), width, height, steps, zoom, load[0], load[1], load[2]);
   std::printf("  map upload (geometry, colours, LOD order): %.0f ms\n", upload_ms);
   // Full quality: every step re-selects the mesh instances (the view changed).
   {

@@ -61,12 +61,16 @@ class EllipsoidRenderer {
   // What decides the mesh-pass selection: the view's camera-z row, focal length, near plane and
   // the splat threshold.
   struct MeshSelectionKey {
-    glm::vec4 row_z;
-    float focal_px, near_m, threshold_px;
+    glm::mat4 T_C_W;
+    glm::vec4 intrinsics;  // fx, fy, cx, cy
+    glm::ivec2 size;
+    float near_m, threshold_px;
     bool operator==(const MeshSelectionKey&) const = default;
   };
-  // Instances that may need the mesh pass in this view, sent to near_geometry_/near_colors_
-  // unless they were already selected for the same key.
+  // Instances that may need the mesh pass in this view, sent to near_geometry_/near_colors_,
+  // and those the splat pass may draw (in front of the near plane, not certainly meshes, their
+  // splat within reach of the image), sent to far_indices_; unless they were already selected
+  // for the same key. Returns the mesh count.
   std::size_t selectMeshInstances(const ViewCamera& view) const;
 
   const Gl* gl_;
@@ -82,6 +86,8 @@ class EllipsoidRenderer {
   mutable GpuBuffer near_geometry_, near_colors_;
   mutable std::vector<float> near_geometry_cpu_;
   mutable std::vector<glm::u8vec4> near_colors_cpu_;
+  mutable GpuBuffer far_indices_;  // element buffer of point_vao_
+  mutable std::vector<std::uint32_t> far_indices_cpu_;
   mutable std::optional<MeshSelectionKey> near_key_;  // empty: geometry or colours changed since
   GLsizei index_count_ = 0;
 };

@@ -81,6 +81,56 @@ TEST_F(Progressive, FastPassDrawsTheBudgetPrefix) {
   EXPECT_EQ(renderer.lastDraw().point_instances, set.size());  // the full pass's splats: all of them
 }
 
+// The full pass sends the mesh pass only the near instances whose bounding sphere reaches the
+// image, and the splat pass only the far ones whose splat may: the same picture as a wider image
+// that draws them all, in fewer instances.
+TEST_F(Progressive, MeshAndSplatPassesSkipWhatLiesOutsideTheImage) {
+  ViewCamera narrow;
+  narrow.width = 320, narrow.height = 240, narrow.cx = 159.5f, narrow.cy = 119.5f;
+  ViewCamera wide = narrow;
+  wide.width = 960, wide.cx = 479.5f;  // the narrow image is its middle third
+  std::vector<EllipsoidInstance> set;
+  for (int j = 0; j < 24; ++j)
+    for (int i = 0; i < 90; ++i) {  // far and small: splats, spread over the wide image
+      EllipsoidInstance e;
+      // Centres 2.5 px outside the narrow image's left and right edges, too: their splats
+      // (about 3 px of radius) reach into it.
+      e.mean = {(10.f * i - 442.f) * 20.f / narrow.fx, (10.f * j - 115.f) * 20.f / narrow.fy, 20.f};
+      e.cov = test::covariance(0.06f, 0.03f, 0.04f, 0.3f * i);
+      e.rgb = {static_cast<std::uint8_t>(2 * i), static_cast<std::uint8_t>(10 * j), 200};
+      set.push_back(e);
+    }
+  for (int i = 0; i < 9; ++i) {  // near and large: meshes, two centred 20 px outside the narrow image
+    EllipsoidInstance e;
+    e.mean = {-1.6f + 0.4f * i, 0.1f * (i % 3), 2.f};
+    if (i == 2) e.mean.x = (300.f - 479.5f) * 2.f / narrow.fx;
+    if (i == 6) e.mean.x = (660.f - 479.5f) * 2.f / narrow.fx;
+    e.cov = test::covariance(0.08f, 0.05f, 0.03f, 0.5f * i);
+    e.rgb = {250, static_cast<std::uint8_t>(25 * i), 40};
+    set.push_back(e);
+  }
+  EllipsoidRenderer renderer(gl(), {});
+  renderer.set(set);
+  auto draw = [&](const ViewCamera& view) {
+    Framebuffer fb(gl(), view.width, view.height);
+    fb.bindAndClear(0.f, 0.f, 0.f);
+    renderer.draw(view);
+    return fb.readRgb();
+  };
+  const cv::Mat all = draw(wide);
+  const auto wide_stats = renderer.lastDraw();
+  const cv::Mat part = draw(narrow);
+  const auto stats = renderer.lastDraw();
+  EXPECT_EQ(wide_stats.mesh_instances, 9u);
+  EXPECT_EQ(wide_stats.point_instances, 90u * 24u);
+  EXPECT_LT(stats.mesh_instances, 9u);
+  EXPECT_GE(stats.mesh_instances, 3u);
+  EXPECT_LT(stats.point_instances, 90u * 24u / 2);
+  EXPECT_GE(stats.point_instances, 30u * 24u);
+  EXPECT_LE(differingPixels(part, all(cv::Rect(320, 0, 320, 240))), 48) << "the same picture (0 on Mesa 22 llvmpipe)";
+  EXPECT_GT(cv::countNonZero(part.reshape(1) > 0), 5000) << "something is drawn";
+}
+
 TEST_F(Progressive, AnUnchangedViewIsBlittedNotRedrawn) {
   MapMirror mirror(gl());
   mirror.setMap(1, test::gridMap());
