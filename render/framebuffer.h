@@ -24,6 +24,8 @@ class Framebuffer {
 
   int width() const { return width_; }
   int height() const { return height_; }
+  /// The GL framebuffer object (to bind it for reading, e.g. as a blit's source).
+  GLuint id() const { return fbo_; }
   /// Binds for drawing, sets the viewport and clears colour (to r, g, b), depth and the
   /// float target (to 0, "no surface").
   void bindAndClear(float r, float g, float b);

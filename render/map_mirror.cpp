@@ -111,6 +111,7 @@ MapMirror::MapMirror(const Gl& gl, int sphere_level)
 MapMirror::~MapMirror() = default;
 
 void MapMirror::setStyle(const MirrorStyle& style) {
+  if (!(style == style_)) ++content_serial_;
   style_ = style;
   ellipsoids_.setStyle({.sigma = style.sigma, .color = style.color, .point_below_px = style.points_below_px});
   if (style.color != points_style_.color) {
@@ -127,6 +128,7 @@ void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
   points_.set(instances_, style_.color);
   points_style_.color = style_.color;
   ++uploads_.map;
+  ++content_serial_;
 }
 
 void MapMirror::setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build, int variant) {
@@ -142,6 +144,7 @@ void MapMirror::setGraph(int generation, int selected_keyframe, const std::funct
   lines_.set(lines.lines);
   paths_.set(lines.paths);
   ++uploads_.graph;
+  ++content_serial_;
 }
 
 void MapMirror::setFrame(int generation, const cv::Mat& rgb, const cv::Mat& depth, double depth_scale) {
@@ -179,11 +182,13 @@ void MapMirror::setContainer(int generation, int keyframe, const cv::Mat& rgb, c
 }
 
 void MapMirror::setHighlight(const std::optional<Ellipsoid>& ellipsoid) {
+  if (has_highlight_ != ellipsoid.has_value()) ++content_serial_;
   has_highlight_ = ellipsoid.has_value();
   if (!ellipsoid) return;
   if (highlighted_ && highlighted_->mean == ellipsoid->mean && highlighted_->cov == ellipsoid->cov) return;
   highlighted_ = ellipsoid;
   highlight_.set(diamond(*ellipsoid));
+  ++content_serial_;
 }
 
 void MapMirror::setLegend(const Legend& legend, const glm::vec3& background, int max_width) {
@@ -191,6 +196,7 @@ void MapMirror::setLegend(const Legend& legend, const glm::vec3& background, int
   legend_shown_ = legend;
   legend_background_ = background;
   legend_width_ = max_width;
+  ++content_serial_;
   legend_image_ = rasterizeLegend(legend, background, max_width);
   legend_->set(legend_image_);
 }
@@ -204,7 +210,8 @@ void MapMirror::drawLegend(int height) const {
 void MapMirror::drawContainer(int width, int height) const { container_.draw(width, height); }
 
 void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
-  if (style_.ellipsoids) ellipsoids_.draw(view);
+  if (drawsFast()) ellipsoids_.drawFast(view, fast_budget_);
+  else if (style_.ellipsoids) ellipsoids_.draw(view);
   else points_.draw(view);
   if (with_lines) lines_.draw(view);
   if (with_lines) paths_.draw(view);

@@ -5,6 +5,7 @@
 // hands it the newest snapshots every UI frame; a generation it has already uploaded costs
 // nothing. It owns the renderers, the container view's framebuffer and the image textures;
 // screenshots read back through readFramebufferRgb. Use on the thread whose context is current.
+#include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -96,6 +97,16 @@ class MapMirror {
   /// Draws map, lines and highlight into the bound framebuffer's current viewport (whose size
   /// `view` must have). with_lines = false leaves the graph out ("view from keyframe").
   void draw(const ViewCamera& view, bool with_lines = true) const;
+  /// While the camera moves the window draws the fast pass (EllipsoidRenderer::drawFast) of
+  /// this many ellipsoids; 0 (the default, and always for `vdmap render`): full quality.
+  void setFastBudget(std::size_t budget) { fast_budget_ = budget; }
+  std::size_t fastBudget() const { return fast_budget_; }
+  /// Whether draw() draws the fast pass now (a budget is set and ellipsoids are drawn).
+  bool drawsFast() const { return fast_budget_ > 0 && style_.ellipsoids && !instances_.empty(); }
+  /// Bumped by every change of what draw() and drawLegend() show (uploads, style, highlight,
+  /// legend): the view image cache (render/view_cache.h) is keyed by it.
+  std::uint64_t contentSerial() const { return content_serial_; }
+  const EllipsoidRenderer& ellipsoidRenderer() const { return ellipsoids_; }
   /// Draws the legend at the bottom-left of the current viewport (of `height` pixels).
   void drawLegend(int height) const;
   /// Draws the container set by setContainer into the bound framebuffer at width x height.
@@ -140,6 +151,8 @@ class MapMirror {
   bool has_highlight_ = false;
   std::optional<Ellipsoid> highlighted_;  // what highlight_ holds
   Uploads uploads_;
+  std::size_t fast_budget_ = 0;
+  std::uint64_t content_serial_ = 0;
 };
 
 }  // namespace vdmap::render

@@ -554,3 +554,25 @@ TEST(GuiCli, ADroppedViewFileIsApplied) {
 
 }  // namespace
 }  // namespace vdmap::test
+
+// Progressive drawing (docs/performance.md "Workbench"): a scripted orbit draws the fast pass of
+// exactly --fast-budget ellipsoids per frame, and once the camera rests the loop wakes itself to
+// show the full-quality frame (the run waits for it; its pixels are the cache's, which
+// test_view_cache compares with a fresh draw).
+namespace vdmap::test {
+namespace {
+TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --exit --measure-orbit 6 --fast-budget 500 --stats-json '" +
+                                          (home / "s.json").string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(home / "s.json");
+  ASSERT_GT(stats["sigma_e_prime"].get<int>(), 500);
+  EXPECT_EQ(stats["fast_instances"], 500);
+  EXPECT_GE(stats["orbit_fast_ms"].size(), 5u) << stats["orbit_fast_ms"].dump();
+  EXPECT_EQ(stats["view_full_quality"], true);
+  EXPECT_GT(stats["settle_ms"].get<double>(), 0.0) << "the full frame followed the fast ones";
+}
+}  // namespace
+}  // namespace vdmap::test

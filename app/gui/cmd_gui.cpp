@@ -228,7 +228,13 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
                  "merge distance first), each timed until its map is drawn (stats: slider_to_map_ms, "
                  "slider_to_map_stages_ms)");
   app.add_option("--measure-orbit", args.script.orbit_frames,
-                 "scripted: then N frames orbiting the view (stats: orbit_frame_ms)");
+                 "scripted: then N frames orbiting the view (stats: orbit_frame_ms, orbit_fast_ms, fast_instances, "
+                 "settle_ms)");
+  // Progressive drawing:
+  app.add_option("--fast-budget", args.script.fast_budget,
+                 "N ellipsoids drawn (as points, a spatially even sample) while the camera moves, instead of the "
+                 "budget adapted to the frame time (scripted runs and tests)")
+      ->check(CLI::PositiveNumber);
   app.add_option("--measure-idle", args.script.idle_seconds,
                  "scripted: then S seconds of nothing happening (stats: idle_cpu_s, process CPU seconds)");
   app.add_option("--close-after-frames", args.script.close_after_frames,

@@ -125,7 +125,8 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   }
 }
 
-void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& mirror, const WindowState& win) {
+void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& mirror, const WindowState& win,
+               render::ViewCache* cache) {
   const Rect& view = win.layout.view;
   UiState& ui = bench.ui();
   const glm::vec3 background = ui.settings.background;
@@ -140,9 +141,13 @@ void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& 
   const int vx = static_cast<int>(view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
   const int vy = win.layout.fb_height - static_cast<int>(view.y * scale.y) - vh;  // GL counts rows from the bottom
   const ViewportView v = bench.view(vw, vh);
-  // The scene as `vdmap render` draws it (render/view_draw.h).
-  render::drawMapView(gl, mirror, {v.camera, v.image}, background, {vx, vy, vw, vh}, ui.view_from_keyframe < 0,
-                      ui.settings.show_legend);
+  // The scene as `vdmap render` draws it (render/view_draw.h), through the view image cache.
+  if (cache)
+    cache->draw(mirror, {v.camera, v.image}, background, {vx, vy, vw, vh}, ui.view_from_keyframe < 0,
+                ui.settings.show_legend);
+  else
+    render::drawMapView(gl, mirror, {v.camera, v.image}, background, {vx, vy, vw, vh}, ui.view_from_keyframe < 0,
+                        ui.settings.show_legend);
   gl.Viewport(0, 0, win.layout.fb_width, win.layout.fb_height);
 }
 

@@ -161,6 +161,12 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   if (!run.orbit_ms.empty()) {
     stats["orbit_frame_ms"] = run.orbit_ms;
     stats["orbit_frame_cpu_ms"] = run.orbit_cpu_ms;  // process CPU (all of llvmpipe's threads), per frame
+    // Progressive drawing: the fast frames' own (glFinish-timed) draw times, what they drew,
+    // and the last orbit step until the full-quality frame was on screen.
+    stats["orbit_fast_ms"] = run.fast_ms;
+    stats["fast_instances"] = run.fast_instances;
+    stats["settle_ms"] = run.settle_ms;
+    stats["view_full_quality"] = !run.view_fast;
   }
   if (run.options.idle_seconds > 0) {
     stats["idle_cpu_s"] = run.idle_cpu_s;
@@ -259,11 +265,12 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         }
         run.orbit_started = true;
         bench.orbit(0.03f, 0.f);
-        run.orbit_frame_start = Clock::now();
+        run.orbit_frame_start = run.last_move = Clock::now();
         run.orbit_cpu_start = cpu;
         return;
       }
       if (bench.player().busy || settle_frames > 0) return;  // idle: the worker and the UI
+      if (run.view_fast) return;  // the full-quality frame follows once the camera rests
       run.phase = ScriptPhase::kIdle;  // starts once this frame is on screen (scriptFrameShown)
       run.idle_until = Clock::time_point::max();
       return;

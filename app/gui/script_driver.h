@@ -40,6 +40,12 @@ struct ScriptRun {
   double idle_cpu_start = 0, idle_cpu_s = 0;
   int idle_frames = 0;
   std::vector<double> busy_frame_ms;  ///< UI frame times while the worker was busy
+  // Progressive drawing (the window fills these in; the orbit phase waits for the full frame):
+  bool view_fast = false;            ///< the 3-D view shown is the fast pass's
+  std::vector<double> fast_ms;       ///< glFinish-timed fast frames of the orbit, ms
+  std::size_t fast_instances = 0;    ///< ellipsoids the last fast frame drew
+  Clock::time_point last_move{};     ///< the orbit's last camera step
+  double settle_ms = -1;             ///< the last orbit step until the full frame was shown
   /// The most labels cut in a frame after which the event loop, unscripted, would wait for input
   /// (the picture left on screen).
   int labels_cut_before_wait = 0;

@@ -26,6 +26,7 @@
 #include "app/gui/script_driver.h"
 #include "app/gui/sequence_panel.h"
 #include "app/gui/widgets.h"
+#include "render/view_cache.h"
 #include "app/gui/window_state.h"
 #include "mapping/core/timing.h"
 
@@ -133,7 +134,8 @@ class WorkbenchWindow {
  public:
   WorkbenchWindow(Workbench& bench, GlfwWindowContext& context, const ScriptOptions& script, Preparation prepare,
                   KeyQueue& keys)
-      : bench_(bench), context_(context), gl_(context.gl()), keys_(keys), mirror_(gl_) {
+      : bench_(bench), context_(context), gl_(context.gl()), keys_(keys), mirror_(gl_), view_cache_(gl_),
+        motion_(script.fast_budget) {
     script_.options = script;
     win_.check.expand_sections = script.expand_sections;
     bench_.setOnChange([] { glfwPostEmptyEvent(); });
@@ -204,6 +206,7 @@ class WorkbenchWindow {
 
   bool needsFrame() const {
     if (keys_.events > 0 || !keys_.presses.empty() || settle_frames_ > 0) return true;
+    if (const auto due = motion_.secondsToFullFrame(Clock::now()); due && *due <= 0.0) return true;  // the camera rests
     if (preparing_.folder.valid())  // the progress bar, woken by the renderer's progress (no busy loop beside it)
       return preparing_.progress->first != win_.prepare_done ||
              preparing_.folder.wait_for(std::chrono::seconds(0)) == std::future_status::ready;
@@ -218,6 +221,8 @@ class WorkbenchWindow {
   }
 
   double waitSeconds() const {
+    // After a fast frame the loop wakes itself for the full-quality one.
+    if (const auto due = motion_.secondsToFullFrame(Clock::now())) return *due;
     if (script_.phase == ScriptPhase::kIdle)
       return std::max(0.0, std::chrono::duration<double>(script_.idle_until - Clock::now()).count());
     if (preparing_.folder.valid()) return 0.2;
@@ -269,7 +274,7 @@ class WorkbenchWindow {
     if (!preparing_.folder.valid() && keys_.events == 0 && keys_.presses.empty() && settle_frames_ == 0)
       script_.labels_cut_before_wait = std::max(script_.labels_cut_before_wait, win_.check.labels_cut);
     ImGui::Render();
-    drawScene(bench_, gl_, mirror_, win_);
+    drawView();
     if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     if (!win_.screenshot_request.empty()) {
@@ -283,6 +288,36 @@ class WorkbenchWindow {
     win_.frame_times.push_back(frame_ms);
     if (win_.frame_times.size() > 30) win_.frame_times.pop_front();
     if (bench_.player().busy) script_.busy_frame_ms.push_back(frame_ms);
+  }
+
+  // Progressive drawing (docs/performance.md "Workbench"): while the camera moves (ViewMotion) the
+  // fast pass draws a level-of-detail prefix of the map; the full frame follows kSettleSeconds
+  // after the last move (needsFrame and waitSeconds wake the loop for it); frames that change
+  // only the panels copy the view image cache.
+  void drawView() {
+    const Clock::time_point now = Clock::now();
+    std::size_t budget = 0;
+    if (bench_.isOpen()) {
+      // A scripted run's screenshots are full quality: only its orbit may draw fast.
+      const bool allowed = !scripted(script_) || script_.phase == ScriptPhase::kOrbit;
+      const UiState& ui = bench_.ui();
+      budget = motion_.frame(bench_.view(ui.view_width, ui.view_height).camera, mirror_.contentSerial(),
+                             mirror_.mapSize(), now, allowed);
+    }
+    mirror_.setFastBudget(budget);
+    const bool fast = mirror_.drawsFast();
+    drawScene(bench_, gl_, mirror_, win_, &view_cache_);
+    if (fast) {
+      gl_.Finish();  // the fast pass's own time, to adapt the budget
+      const double ms = msSince(now);
+      motion_.fastFrameTook(ms);
+      script_.fast_instances = mirror_.ellipsoidRenderer().lastDraw().point_instances;
+      if (script_.phase == ScriptPhase::kOrbit) script_.fast_ms.push_back(ms);
+    } else if (script_.view_fast && script_.phase == ScriptPhase::kOrbit) {
+      script_.settle_ms = msSince(script_.last_move);  // the full frame after the orbit's last step
+    }
+    mirror_.setFastBudget(0);  // anything else drawn this frame (the view screenshot) is full quality
+    script_.view_fast = fast;
   }
 
   // The window closed during the preparation: it goes at once, and the preparation stops within
@@ -325,6 +360,8 @@ class WorkbenchWindow {
   const render::Gl& gl_;
   KeyQueue& keys_;
   render::MapMirror mirror_;
+  render::ViewCache view_cache_;  // progressive drawing
+  render::ViewMotion motion_;
   WindowState win_;
   ScriptRun script_;
   Preparing preparing_;

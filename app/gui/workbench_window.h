@@ -33,6 +33,9 @@ struct ScriptOptions {
   /// Paths dropped on the window once mapping is done, with the --press keys (--drop): through
   /// the drop queue, so the next frame opens them (a view file is applied as a view).
   std::vector<std::string> drop;
+  // Progressive drawing (docs/performance.md "Workbench"):
+  /// Ellipsoids the fast pass draws while the camera moves; 0: adapted to the frame times.
+  std::size_t fast_budget = 0;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
