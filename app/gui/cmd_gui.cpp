@@ -159,6 +159,9 @@ void runGui(GuiArgs args, bool builtin) {
   if (!args.settings.empty()) bench.setSessionSettings(args.settings);
   bench.ui().settings_source = start.source;
   bench.ui().settings_file = settings_file.string();
+  // Saved 1 s after the last change while the window runs, and on close (below); scripted and
+  // --settings runs have no settings file and never save.
+  if (!settings_file.empty()) bench.enableSettingsAutosave(settings_file.string(), settings);
   gui::Preparation prepare;
   if (builtin) {
     const BuiltinCache cache = builtinCache(args.sequence.frames);

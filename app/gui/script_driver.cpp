@@ -17,16 +17,6 @@ using Clock = ScriptRun::Clock;
 
 nlohmann::json toJson(const Rect& r) { return {r.x, r.y, r.w, r.h}; }
 
-// A --view-file view is drawn at the window's viewport, not at its own size: a size that differs
-// gives another picture than `vdmap render --view-file` (another aspect), so say so.
-void warnAboutTheViewsSize(Workbench& bench, const render::ViewSpec& asked) {
-  const render::ViewSpec shown = bench.viewSpec();
-  if (asked.width <= 0 || (asked.width == shown.width && asked.height == shown.height)) return;
-  bench.report(StatusLine::Kind::kWarning, "the view file's view is " + std::to_string(asked.width) + "x" +
-                                               std::to_string(asked.height) + ", the window's " + std::to_string(shown.width) +
-                                               "x" + std::to_string(shown.height) + " (--window-size changes it)");
-}
-
 // One slider change at a time (merge distance, alternating): from the edit until the frame
 // that shows the map built with it. Returns true while runs remain.
 bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
@@ -183,7 +173,7 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         saveScreenshot(bench, gl, win, run.options.screenshot);
         run.screenshot_taken = true;
       }
-      if (run.options.view) warnAboutTheViewsSize(bench, *run.options.view);
+      if (run.options.view) bench.warnAboutTheViewsSize(*run.options.view);
       if (!run.options.save_view.empty() && !failedRun(run, bench)) bench.saveView(run.options.save_view);
       run.view_files_taken = !run.options.save_view.empty() || !run.options.view_screenshot.empty();
       run.phase = ScriptPhase::kLatency;
