@@ -31,6 +31,7 @@ struct MirrorStyle {
   ColorMode color = ColorMode::kRgb;
   float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
   bool ellipsoids = true;             ///< false: the ellipsoid centres as points
+  bool map = true;                    ///< false: draw mode "none", the map hidden (lines still drawn)
   bool frustums = true, graph = true, trajectory = true;
   bool groundtruth = true;            ///< GraphScene::groundtruth
   float points_below_px = 4.f;        ///< EllipsoidStyle::point_below_px

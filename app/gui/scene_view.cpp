@@ -66,13 +66,9 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   Mirrored& mirrored = win.mirrored;
   UiState& ui = bench.ui();
   const Settings& s = ui.settings;
-  mirror.setStyle({.color = s.color,
-                   .sigma = s.ellipsoid_sigma,
-                   .ellipsoids = s.show_ellipsoids,
-                   .frustums = s.show_frustums,
-                   .graph = s.show_graph,
-                   .trajectory = s.show_trajectory,
-                   .groundtruth = s.show_groundtruth});
+  // The style of the settings' view (viewSpecOf), as `vdmap render` draws it: draw mode (none
+  // hides the map), colours, sigma, layers.
+  mirror.setStyle(render::mirrorStyle(viewSpecOf(s)));
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
