@@ -88,8 +88,10 @@ std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const
   const int vy = win.layout.fb_height - static_cast<int>(win.layout.view.y * scale.y) - vh;
   gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
   gl.ReadBuffer(GL_BACK);
-  (void)vx, (void)vy;  // TEMP-PROBE
-  return std::nullopt;
+  const std::optional<float> depth = render::readDepth(gl, vx + px, vy + (vh - 1 - py));
+  if (!depth) return std::nullopt;
+  const ViewportView v = bench.view(vw, vh);
+  return render::unproject(v.camera, static_cast<float>(px - v.image.x), static_cast<float>(py - v.image.y), *depth);
 }
 
 void answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {

@@ -173,6 +173,7 @@ render::ViewSpec viewSpecOf(const Settings& s) {
   spec.up = s.up_axis;
   spec.color = s.color;
   spec.ellipsoids = s.show_ellipsoids;
+  spec.map_hidden = s.hide_map;
   spec.sigma = s.ellipsoid_sigma;
   spec.layers.frustums = s.show_frustums;
   spec.layers.graph = s.show_graph;

@@ -24,6 +24,8 @@ struct Settings {
   MapperParams mapper;                  ///< re-run: changing one re-maps the sequence
   render::ColorMode color = render::ColorMode::kRgb;
   bool show_ellipsoids = true;          ///< false: ellipsoid centres as points
+  /// Draw "hidden": no map at all (the paths and cameras alone). Not saved: a run starts with the map.
+  bool hide_map = false;
   bool show_frustums = true, show_graph = true, show_trajectory = true;
   bool show_groundtruth = true;         ///< tracked poses: the ground-truth trajectory beside them
   float ellipsoid_sigma = 2.f;

@@ -205,14 +205,19 @@ void drawView(Workbench& bench, WindowState& win) {
     int color = static_cast<int>(s.color);
     if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
       s.color = static_cast<render::ColorMode>(color);
-    label(win.check, "draw", "Ellipsoids as surfaces at sigma standard deviations, or their centres as points (faster).");
-    int shape = s.show_ellipsoids ? 0 : 1;
-    const char* shapes[] = {"ellipsoids", "centres"};
-    if (ImGui::Combo("##shape", &shape, shapes, 2)) s.show_ellipsoids = shape == 0;
+    label(win.check, "draw",
+          "Ellipsoids as surfaces at sigma standard deviations, their centres as points (faster), or hidden: no map, "
+          "the trajectories and cameras alone (not remembered: the next run shows the map).");
+    int shape = s.hide_map ? 2 : s.show_ellipsoids ? 0 : 1;
+    const char* shapes[] = {"ellipsoids", "centres", "hidden"};
+    if (ImGui::Combo("##shape", &shape, shapes, 3)) {
+      s.hide_map = shape == 2;
+      if (shape < 2) s.show_ellipsoids = shape == 0;
+    }
     label(win.check, "sigma", "Ellipsoid surfaces drawn at this many standard deviations.");
-    ImGui::BeginDisabled(!s.show_ellipsoids);
+    ImGui::BeginDisabled(!s.show_ellipsoids || s.hide_map);
     ImGui::SliderFloat("##sigma", &s.ellipsoid_sigma, 0.5f, 4.f, "%.1f");
-    tip(s.show_ellipsoids ? "" : "Only the centres are drawn.");
+    tip(s.hide_map ? "The map is hidden." : s.show_ellipsoids ? "" : "Only the centres are drawn.");
     ImGui::EndDisabled();
     label(win.check, "up axis",
           "The world direction kept up on screen, the one the view orbits about. data: estimated from the "
@@ -238,6 +243,9 @@ void drawView(Workbench& bench, WindowState& win) {
   ImGui::SameLine();
   if (ImGui::Button("Reset view (R)")) bench.resetView();
   tip("The default view of the whole map from above, about the up axis; follows the map again.");
+  ImGui::SameLine();
+  if (ImGui::Button("Frame paths (T)")) bench.frameTrajectories();
+  tip("Fits the tracked trajectory (and the ground truth, when shown) in the view, not the map.");
   ImGui::SameLine();
   if (ImGui::Button("Help (H)")) bench.key(KeyAction::kHelp);
   checkFits(win.check);

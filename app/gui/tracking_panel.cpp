@@ -84,7 +84,7 @@ void drawTracking(Workbench& bench, WindowState& win) {
       char text[128];
       std::snprintf(text, sizeof text, "frame %d  K%d -> K%d  %s  %.1f ms##loop%zu", e.position, e.loop.from, e.loop.to,
                     metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms, i);
-      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.selectKeyframe(e.loop.to);
+      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.selectKeyframe(e.loop.to, true);
     }
     ImGui::EndListBox();
   }

@@ -524,6 +524,7 @@ bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
   s.up_axis = spec.up;
   s.color = spec.color;
   s.show_ellipsoids = spec.ellipsoids;
+  s.hide_map = spec.map_hidden;
   if (spec.kind != render::ViewKind::kContainer) s.ellipsoid_sigma = spec.sigma;  // a container's is fixed
   s.show_frustums = spec.layers.frustums;
   s.show_graph = spec.layers.graph;

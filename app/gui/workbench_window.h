@@ -30,6 +30,9 @@ struct ScriptOptions {
   /// Close the window as a user would after this many frames drawn (0: never); a test of
   /// closing during the preparation.
   int close_after_frames = 0;
+  /// Measuring: view pixels x1, y1, x2, y2 (the 3-D viewport's framebuffer pixels, top-left
+  /// origin) probed once the screenshot's frame is drawn (stats: measure {a, b, distance_m}).
+  std::vector<float> measure;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
