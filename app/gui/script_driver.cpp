@@ -185,9 +185,10 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
     }
     case ScriptPhase::kSettle:
       if (bench.player().busy) return;  // a key pressed above may have asked for a rebuild
+      // A frame before the screenshot, so that it shows the measured line.
+      if (run.countdown == 2 && run.options.measure.size() == 4) measureScripted(run, bench, gl, win);
       if (--run.countdown > 0) return;
       recordLayout(run, bench, win);
-      if (run.options.measure.size() == 4) measureScripted(run, bench, gl, win);
       if (!run.options.screenshot.empty() && !failedRun(run, bench)) {
         saveScreenshot(bench, gl, win, run.options.screenshot);
         run.screenshot_taken = true;
