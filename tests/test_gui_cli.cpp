@@ -2,6 +2,7 @@
 // (--play-to-end --screenshot --stats-json --exit), a second run with another merge_distance,
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
+#include <cmath>
 #include <cstdlib>
 #include <regex>
 
@@ -175,6 +176,27 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
   EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
 }
+
+// --- Tracking error figures (global map / worker stream): a tracked run with ground truth
+// reports ATE and RPE (app/gui/figures.h) in its stats.
+TEST(GuiCli, TrackedRunReportsAteAndRpe) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 40);
+  const fs::path json = home / "t.json";
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit "
+                                      "--window-size 1280x720 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  for (const char* key : {"ate_rmse_m", "rpe_frame_m", "rpe_frame_deg", "rpe_second_m"}) {
+    ASSERT_TRUE(stats.contains(key)) << key;
+    EXPECT_TRUE(std::isfinite(stats[key].get<double>())) << key;
+    EXPECT_GE(stats[key].get<double>(), 0.0) << key;
+  }
+  EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.05);
+  EXPECT_GT(stats["rpe_frame_m"].get<double>(), 0.0);
+}
+// --- end tracking error figures
 
 // The picture a newcomer is left with: on first start (empty cache and settings) the built-in
 // scene renders, opens and the window then waits for input; in the last frame before it waits

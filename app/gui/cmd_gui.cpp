@@ -219,8 +219,9 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_flag("--expand-sections", args.script.expand_sections,
                "scripted: open every collapsible section of the panels (the stats' labels_cut then covers them all)");
   app.add_option("--measure-latency", args.script.latency_runs,
-                 "scripted: after the screenshot, N merge-distance edits, each timed until its map is drawn (stats: "
-                 "slider_to_map_ms)");
+                 "scripted: after the screenshot, N threshold edits (each live parameter to another value and back, "
+                 "merge distance first), each timed until its map is drawn (stats: slider_to_map_ms, "
+                 "slider_to_map_stages_ms)");
   app.add_option("--measure-orbit", args.script.orbit_frames,
                  "scripted: then N frames orbiting the view (stats: orbit_frame_ms)");
   app.add_option("--measure-idle", args.script.idle_seconds,

@@ -170,6 +170,12 @@ void MappingWorker::publishMapping() {
   snap->frames_relocalised = mapper_->framesRelocalised();
   for (const LoopClosure& loop : mapper_->poseGraph().loops()) snap->loops.push_back({loop, positionOf(loop.frame_index)});
   snap->keyframes_before = posesBeforeOptimisation();
+  // The final refinement comes after every loop closure (it runs after the sequence's last frame).
+  if (!snap->keyframes_before.empty()) {
+    if (refinement_.kind == LastOptimisation::Kind::kRefinement) snap->last_optimisation = refinement_;
+    else if (!snap->loops.empty())
+      snap->last_optimisation = {LastOptimisation::Kind::kLoop, static_cast<int>(snap->loops.size()) - 1, "", 0, 0};
+  }
   {
     std::lock_guard lock(mutex_);
     mapping_ = std::move(snap);
@@ -205,6 +211,7 @@ void MappingWorker::mapOneFrame() {
         std::snprintf(text, sizeof text, "keyframe poses refined (%s) from %d of %d covisible pairs' local maps (%.1f mm "
                       "at most, %.1f s)", method, r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
       refined = text;
+      if (!r.refused && r.rounds > 0) refinement_ = {LastOptimisation::Kind::kRefinement, -1, method, r.pairs, r.moved_m};
     }
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;
@@ -273,11 +280,13 @@ std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(const GlobalMapParams
 void MappingWorker::rebuildGlobal() {
   GlobalMapParams params;
   bool before = false;
+  Clock::time_point t_edit;
   {
     std::lock_guard lock(mutex_);
     params = thresholds_;
     before = before_optimisation_;
     global_dirty_ = false;
+    t_edit = last_edit_;
   }
   const auto t0 = Clock::now();
   std::shared_ptr<GlobalSnapshot> snap;
@@ -288,11 +297,15 @@ void MappingWorker::rebuildGlobal() {
     error_ = std::string("global map: ") + e.what();
     return;
   }
+  snap->t_edit = t_edit;
+  snap->t_build_start = t0;
+  snap->t_build_end = Clock::now();
   releaseFreedMemory();  // the build's other temporaries, before the next frames
   {
     std::lock_guard lock(mutex_);
     snap->frames_mapped = mapped_;
     snap->generation = ++generation_;
+    snap->t_published = Clock::now();
     global_ = std::move(snap);
     selection_dirty_ = true;
     last_build_ = Clock::now();
@@ -330,6 +343,7 @@ void MappingWorker::publishSelection() {
 }
 
 void MappingWorker::restartMapper() {
+  refinement_ = {};
   times_.clear();
   trajectory_.clear();
   if (origin_) {  // back to the saved session, whose frames are not in the sequence

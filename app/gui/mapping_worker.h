@@ -257,6 +257,7 @@ class MappingWorker {
   AppendLog<TrajectoryPoint> trajectory_;    // worker thread only (snapshots share it)
   cv::Mat last_rgb_, last_depth_;      // worker thread only
   int pose_edits_ = 0;                 // worker thread only
+  LastOptimisation refinement_;        // worker thread only: the final refinement, once it moved poses
   int mapping_generation_ = 0, selection_serial_ = 0;  // worker thread only
 
   mutable std::mutex mutex_;
@@ -272,6 +273,7 @@ class MappingWorker {
   float fps_ = 0.f;
   std::chrono::steady_clock::time_point next_frame_time_{};
   std::chrono::steady_clock::time_point last_build_{};
+  std::chrono::steady_clock::time_point last_edit_{};  // GlobalSnapshot::t_edit of the next build
   double last_build_s_ = 0;
   std::string error_, message_;
   std::shared_ptr<const MappingSnapshot> mapping_;

@@ -85,6 +85,7 @@ void MappingWorker::setThresholds(const GlobalMapParams& thresholds) {
     std::lock_guard lock(mutex_);
     thresholds_ = thresholds;
     global_dirty_ = true;
+    last_edit_ = Clock::now();
   }
   wake_.notify_all();
 }

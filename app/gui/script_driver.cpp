@@ -5,6 +5,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "app/gui/figures.h"
 #include "app/gui/measure_overlay.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
@@ -18,23 +19,54 @@ using Clock = ScriptRun::Clock;
 
 nlohmann::json toJson(const Rect& r) { return {r.x, r.y, r.w, r.h}; }
 
-// One slider change at a time (merge distance, alternating): from the edit until the frame
-// that shows the map built with it. Returns true while runs remain.
+// --- Latency (global map stream): one slider change at a time, from the edit until the first
+// frame that draws the map built with it (what is still busy afterwards, such as the inspector's
+// selection, is not the map's latency). The edits go through the live parameters, each to
+// another value and back (merge distance first), so 2 x 9 runs time every one of them.
+struct LatencyEdit {
+  const char* key;
+  double other;  // the value edited to; the edit after it goes back
+};
+constexpr LatencyEdit kLatencyEdits[] = {
+    {"merge_distance", 0.2},       {"fusion_max_distance", 0.7}, {"occlusion_distance", 0.4},
+    {"occlusion_angle", 25},       {"tau_group", 0.15},          {"filter_sigma_factor", 2.5},
+    {"min_points", 8},             {"occlusion_removal", 0},     {"fuse_across_groups", 0},
+};
+
+double msBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+
+// Returns true while runs remain.
 bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
   const auto& global = win.global;
   if (!bench.isOpen() || !global) return false;
   if (run.latency_generation >= 0) {
-    if (global->generation <= run.latency_generation || bench.player().busy) return true;
-    run.latency_ms.push_back(msSince(run.latency_start));  // this frame draws the new map
+    if (global->generation <= run.latency_generation) return true;
+    // This frame draws the new map; it is timed once on screen (scriptFrameShown).
+    const GlobalSnapshot& g = *global;
+    run.latency_stages.push_back({{"parameter", kLatencyEdits[(run.latency_ms.size() / 2) % std::size(kLatencyEdits)].key},
+                                  {"edit", msBetween(run.latency_start, g.t_edit)},
+                                  {"queue", msBetween(g.t_edit, g.t_build_start)},
+                                  {"build", msBetween(g.t_build_start, g.t_build_end)},
+                                  {"after_build", msBetween(g.t_build_end, g.t_published)},
+                                  {"to_ui", msBetween(g.t_published, run.frame_start)},
+                                  {"t_g", 1e3 * g.map.t_g_s}});
     run.latency_generation = -1;
+    run.latency_shown_pending = true;
+    return true;
   }
+  if (run.latency_shown_pending) return true;  // until that frame is on screen
   if (static_cast<int>(run.latency_ms.size()) >= run.options.latency_runs) return false;
-  const Parameter& p = *findParameter("merge_distance");
+  if (bench.player().busy) return true;  // the previous build's follow-up work (the selection)
+  const std::size_t i = run.latency_ms.size();
+  const LatencyEdit& edit = kLatencyEdits[(i / 2) % std::size(kLatencyEdits)];
+  const Parameter& p = *findParameter(edit.key);
+  if (i % 2 == 0) run.latency_back = bench.inUse(p);
   run.latency_generation = global->generation;
   run.latency_start = Clock::now();
-  bench.editParameter(p, run.latency_ms.size() % 2 == 0 ? 0.2 : GlobalMapParams{}.merge_distance_m);
+  bench.editParameter(p, i % 2 == 0 ? edit.other : run.latency_back);
   return true;
 }
+// --- end latency
 
 // Where the panels and the 3-D view are and where the map projects, for the stats file.
 void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
@@ -97,6 +129,14 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
     // The sequence has ground truth for the mapped frames, whether they were mapped with it or tracked.
     stats["has_groundtruth"] = mapping->frames_with_groundtruth > 0;
     stats["poses"] = mapping->mapper.poses == PoseSource::kTrack ? "track" : "gt";
+    // Tracking error against ground truth (figures.h; tracked poses with ground truth only).
+    if (const TrackingError e = trackingError(*mapping); e.valid) {
+      stats["ate_rmse_m"] = e.ate_rmse_m;
+      stats["rpe_frame_m"] = e.rpe_frame_m;
+      stats["rpe_frame_deg"] = e.rpe_frame_deg;
+      stats["rpe_second_m"] = e.rpe_second_m;
+      stats["trajectory_matched"] = e.matched;
+    }
   }
   if (global) {
     stats["sigma_e"] = global->map.sigma_e;
@@ -114,7 +154,12 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["view_from_keyframe"] = ui.view_from_keyframe;
   stats["show_before_optimisation"] = ui.show_before_optimisation;
   if (global) stats["map_before_optimisation"] = global->before_optimisation;
-  if (!run.latency_ms.empty()) stats["slider_to_map_ms"] = run.latency_ms;
+  // Latency (global map stream): per edit, the total and its stages (edit, queue, build,
+  // after_build, to_ui, frame: what the frame showing the new map took, upload and draw).
+  if (!run.latency_ms.empty()) {
+    stats["slider_to_map_ms"] = run.latency_ms;
+    stats["slider_to_map_stages_ms"] = run.latency_stages;
+  }
   if (!run.orbit_ms.empty()) {
     stats["orbit_frame_ms"] = run.orbit_ms;
     stats["orbit_frame_cpu_ms"] = run.orbit_cpu_ms;  // process CPU (all of llvmpipe's threads), per frame
@@ -147,11 +192,17 @@ double processCpuSeconds() {
 }
 
 void scriptFrameStarts(ScriptRun& run, Clock::time_point t0) {
+  run.frame_start = t0;  // latency: when the frame drawing a new map began
   if (run.phase == ScriptPhase::kIdle && t0 >= run.idle_until && run.idle_cpu_s == 0 && run.options.idle_seconds > 0)
     run.idle_cpu_s = processCpuSeconds() - run.idle_cpu_start;  // before this frame draws anything
 }
 
 void scriptFrameShown(ScriptRun& run, Clock::time_point t0) {
+  if (run.latency_shown_pending) {  // latency: the first frame with the edited map is on screen
+    run.latency_shown_pending = false;
+    run.latency_ms.push_back(msSince(run.latency_start));
+    run.latency_stages.back()["frame"] = msSince(t0);
+  }
   if (run.phase != ScriptPhase::kIdle) return;
   if (run.idle_until == Clock::time_point::max()) {  // the measurement starts now
     run.idle_cpu_start = processCpuSeconds();

@@ -30,6 +30,11 @@ struct ScriptRun {
   int latency_generation = -1;     ///< the global map an edit waits to replace (-1: no edit pending)
   Clock::time_point latency_start, orbit_frame_start, idle_until;
   std::vector<double> latency_ms, orbit_ms, orbit_cpu_ms;
+  // Latency stages (global map stream): per edit, from the GlobalSnapshot's stamps.
+  std::vector<nlohmann::json> latency_stages;
+  bool latency_shown_pending = false;  ///< the frame drawing the edited map is not on screen yet
+  double latency_back = 0;             ///< the value the next edit goes back to
+  Clock::time_point frame_start;       ///< when the current frame began
   double orbit_cpu_start = 0;
   bool orbit_started = false;
   double idle_cpu_start = 0, idle_cpu_s = 0;
