@@ -1366,6 +1366,23 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
   }
 }
 
+TEST(GuiTracking, AfterTheRefinementTheBannerNamesIt) {
+  Workbench bench{Settings{}};
+  MappingSnapshot m;
+  LoopEvent loop;
+  loop.position = 40;
+  loop.loop.correction_m = 0.012;
+  m.loops = {loop};
+  m.last_optimisation = {LastOptimisation::Kind::kLoop, 0, "", 0, 0};
+  EXPECT_EQ(bench.beforeOptimisationBanner(m), "") << "only while B shows the map before it";
+  bench.ui().show_before_optimisation = true;
+  EXPECT_NE(bench.beforeOptimisationBanner(m).find("loop at frame 40"), std::string::npos) << bench.beforeOptimisationBanner(m);
+  // After the sequence's last frame the refinement is the last optimisation, not the loop.
+  m.last_optimisation = {LastOptimisation::Kind::kRefinement, -1, "joint", 41, 0.0032};
+  EXPECT_EQ(bench.beforeOptimisationBanner(m), "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
+}
+
+
 // ---- The view tools: pick scroll, drag speed, zoom at the cursor, pivot, framing the paths,
 // view files, quick views, screenshots, settings autosave, loop-strip markers.
 
