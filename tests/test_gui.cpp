@@ -21,6 +21,7 @@
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
 #include "render/scene_lines.h"
+#include "render/view_draw.h"
 #include "tests/test_util.h"
 
 namespace vdmap::app::gui {
@@ -1484,6 +1485,22 @@ TEST(GuiViewTools, FrameTrajectoriesFramesOnlyThePaths) {
   }
   EXPECT_LT(bench.ui().camera.distance_m, 0.8f * map_distance);
 }
+
+TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
+  Settings s;
+  EXPECT_TRUE(render::mirrorStyle(viewSpecOf(s)).map);
+  s.hide_map = true;  // draw: hidden
+  const render::ViewSpec spec = viewSpecOf(s);
+  EXPECT_EQ(spec.draw(), render::DrawMode::kNone);
+  EXPECT_FALSE(render::mirrorStyle(spec).map) << "the mirror draws no ellipsoids";
+  // A view file's "draw": "none" hides the map in the window too, and "hidden" is not saved.
+  Workbench bench{Settings{}};
+  bench.applyViewSpec(spec);
+  EXPECT_TRUE(bench.ui().settings.hide_map);
+  EXPECT_EQ(bench.viewSpec().draw(), render::DrawMode::kNone);
+  EXPECT_TRUE(sameSettings(s, Settings{})) << "hidden lasts for the run only";
+}
+
 
 TEST(GuiViewTools, LoadViewRestoresTheSavedCamera) {
   MappedTinyBench t;
