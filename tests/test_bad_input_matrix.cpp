@@ -583,6 +583,11 @@ const std::vector<BadCase>& badCases() {
        then(write("bad.json", R"({"thresholds": {"merge_distance": -1}})"), "gui {dir}/seq --settings {dir}/bad.json --exit")},
       {"command_line", "gui_view_file_missing_key", E::kCliError, "v.json: missing key 'source'",
        then(write("v.json", R"({"vdmap_view": 1})"), "gui {dir}/seq --view-file {dir}/v.json --exit")},
+      // gui --measure X1,Y1,X2,Y2 (measuring): four view pixels or nothing.
+      {"command_line", "gui_measure_three_numbers", E::kCliUsage, "--measure: '1,2,3': expected X1,Y1,X2,Y2",
+       args("gui {dir}/seq --measure 1,2,3 --exit")},
+      {"command_line", "gui_measure_negative", E::kCliUsage, "--measure: '1,2,-3,4': expected X1,Y1,X2,Y2",
+       args("gui {dir}/seq --measure 1,2,-3,4 --exit")},
       {"sequence", "camera_file_unknown_key", E::kInputError,
        "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
        "colour)",

@@ -241,11 +241,11 @@ void drawView(Workbench& bench, WindowState& win) {
   if (ImGui::Button("Frame map (F)")) bench.frameMap();
   tip("Fits the map in the view, keeping the direction; the view follows the map again as it grows.");
   ImGui::SameLine();
-  if (ImGui::Button("Reset view (R)")) bench.resetView();
-  tip("The default view of the whole map from above, about the up axis; follows the map again.");
-  ImGui::SameLine();
   if (ImGui::Button("Frame paths (T)")) bench.frameTrajectories();
   tip("Fits the tracked trajectory (and the ground truth, when shown) in the view, not the map.");
+  checkFits(win.check);
+  if (ImGui::Button("Reset view (R)")) bench.resetView();
+  tip("The default view of the whole map from above, about the up axis; follows the map again.");
   ImGui::SameLine();
   if (ImGui::Button("Help (H)")) bench.key(KeyAction::kHelp);
   checkFits(win.check);
