@@ -85,8 +85,21 @@ void checkUp(const std::string& text) {
   if (glm::length(glm::vec3(v[0], v[1], v[2])) < 1e-6f) throw std::invalid_argument("'" + text + "': a zero vector");
 }
 
-void checkDraw(const std::string& text) {
-  if (text != "ellipsoids" && text != "centres") throw std::invalid_argument("'" + text + "': expected ellipsoids or centres");
+render::DrawMode parseDraw(const std::string& text) {
+  for (int i = 0; i < 3; ++i)
+    if (text == render::kDrawModeNames[i]) return static_cast<render::DrawMode>(i);
+  throw std::invalid_argument("'" + text + "': expected ellipsoids, centres or none");
+}
+
+// --slice LO:HI: heights above the floor in metres, LO < HI.
+render::HeightSlice parseSlice(const std::string& text) {
+  const std::size_t colon = text.find(':');
+  const std::string form = "LO:HI (heights above the floor in metres, LO < HI)";
+  if (colon == std::string::npos) throw std::invalid_argument("'" + text + "': expected " + form);
+  const std::vector<float> lo = parseNumbers(text.substr(0, colon), 1, 1, form);
+  const std::vector<float> hi = parseNumbers(text.substr(colon + 1), 1, 1, form);
+  if (!(lo[0] < hi[0])) throw std::invalid_argument("'" + text + "': expected " + form);
+  return {true, lo[0], hi[0]};
 }
 
 // The view keys of Settings that `spec` sets (the reverse of viewSpecOf), so --set can change them.
@@ -151,8 +164,14 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
                   "the world's up axis: data (estimated from the cameras and the map's floor, the default) | +z | "
                   "+y | -y; with --look-at also the image's up vector X,Y,Z")
       ->check(parsedBy(checkUp, "UP"));
-  verb.add_option("--draw", a.draw, "ellipsoids (the default) | centres (the ellipsoid centres as points)")
-      ->check(parsedBy(checkDraw, "WHAT"));
+  verb.add_option("--draw", a.draw,
+                  "ellipsoids (the default) | centres (the ellipsoid centres as points) | none (the map hidden; "
+                  "trajectories and frustums still drawn)")
+      ->check(parsedBy(parseDraw, "WHAT"));
+  verb.add_option("--slice", a.slice,
+                  "draw only the ellipsoids whose centre lies LO..HI metres above the floor (along the up axis; "
+                  "the floor is the 2nd percentile of the map's heights)")
+      ->check(parsedBy(parseSlice, "LO:HI"));
   auto* look = verb.add_option("--look-at", a.look_at,
                                "global view: the camera at EX,EY,EZ looking at TX,TY,TZ (world frame, metres; the "
                                "image's up from --up)")
@@ -233,7 +252,8 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
   if (!a.background.empty()) spec.background = gui::parseBackground(a.background);
   if (!a.layers.empty()) spec.layers = parseLayers(a.layers);
   if (a.grid) spec.layers.grid = true;
-  if (!a.draw.empty()) spec.ellipsoids = a.draw == "ellipsoids";
+  if (!a.draw.empty()) spec.setDraw(parseDraw(a.draw));
+  if (!a.slice.empty()) spec.slice = parseSlice(a.slice);
   if (a.sigma) spec.sigma = *a.sigma;
   if (a.sphere_level) spec.sphere_level = *a.sphere_level;
   if (a.points_below) spec.points_below_px = *a.points_below;

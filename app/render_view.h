@@ -35,7 +35,8 @@ struct RenderViewArgs {
   std::string background;        ///< --background dark|white|#rrggbb
   std::string layers;            ///< --layers LIST|none
   std::string up;                ///< --up data|+z|+y|-y, or X,Y,Z with --look-at
-  std::string draw;              ///< --draw ellipsoids|centres
+  std::string draw;              ///< --draw ellipsoids|centres|none
+  std::string slice;             ///< --slice LO:HI
   std::string look_at;           ///< --look-at EX,EY,EZ,TX,TY,TZ
   std::string orbit;             ///< --orbit AZ,EL[,DIST]
   std::string view_file;         ///< --view-file V.json

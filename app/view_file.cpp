@@ -23,7 +23,7 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kVersion = 1;
+constexpr int kVersion = 2;  // 2 added "slice"; version 1 files (without it) still read
 // What a number too large for a double (1e999) is replaced by before parsing, so that the reader
 // can name its key ("must be finite") rather than the parser refuse the whole file.
 const std::string kNonFinite = std::string("\x01non-finite");
@@ -122,10 +122,16 @@ json vec3Json(const glm::vec3& v) { return json::array({v.x, v.y, v.z}); }
 render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   using R = Reader;
   if (!j.is_object()) R::fail("expected a JSON object (a view file)");
-  R::onlyKeys(j, "", {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma",
-                      "sphere_level", "points_below_px", "background", "layers", "selected_keyframe", "thresholds"});
-  if (R::integer(R::key(j, "", "vdmap_view"), "vdmap_view", 1, 1000) != kVersion)
-    R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads version 1");
+  const int version = R::integer(R::key(j, "", "vdmap_view"), "vdmap_view", 1, 1000);
+  if (version > kVersion)
+    R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads versions 1 and 2");
+  if (version == 1)
+    R::onlyKeys(j, "", {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma",
+                        "sphere_level", "points_below_px", "background", "layers", "selected_keyframe", "thresholds"});
+  else
+    R::onlyKeys(j, "", {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma",
+                        "sphere_level", "points_below_px", "background", "layers", "selected_keyframe", "thresholds",
+                        "slice"});
   R::string(R::key(j, "", "source"), "source");
   render::ViewSpec spec;
   try {
@@ -163,8 +169,20 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
     R::fail(std::string("color: ") + e.what());
   }
   const std::string draw = R::string(R::key(j, "", "draw"), "draw");
-  if (draw != "ellipsoids" && draw != "centres") R::fail("draw must be ellipsoids or centres, got '" + draw + "'");
-  spec.ellipsoids = draw == "ellipsoids";
+  const auto mode = std::find(std::begin(render::kDrawModeNames), std::end(render::kDrawModeNames), draw);
+  if (mode == std::end(render::kDrawModeNames)) R::fail("draw must be ellipsoids, centres or none, got '" + draw + "'");
+  spec.setDraw(static_cast<render::DrawMode>(mode - std::begin(render::kDrawModeNames)));
+  if (version >= 2) {
+    // "slice": null (off) or [lo, hi], heights above the floor in metres.
+    const json& slice = R::key(j, "", "slice");
+    if (!slice.is_null()) {
+      if (!slice.is_array() || slice.size() != 2) R::fail("slice must be null or [lo, hi], got " + slice.dump());
+      spec.slice.on = true;
+      spec.slice.lo_m = static_cast<float>(R::number(slice[0], "slice[0]", -1e4, 1e4));
+      spec.slice.hi_m = static_cast<float>(R::number(slice[1], "slice[1]", -1e4, 1e4));
+      if (!(spec.slice.lo_m < spec.slice.hi_m)) R::fail("slice must be [lo, hi] with lo < hi, got " + slice.dump());
+    }
+  }
   spec.sigma = static_cast<float>(R::number(R::key(j, "", "sigma"), "sigma", 1e-3, 10));
   if (!(spec.sigma > 0)) R::fail("sigma must be > 0");
   spec.sphere_level = R::integer(R::key(j, "", "sphere_level"), "sphere_level", 0, 3);
@@ -279,7 +297,8 @@ void writeViewFile(const fs::path& file, const render::ViewSpec& spec, const Glo
   else j["camera"] = nullptr;
   j["up_axis"] = render::kUpAxisNames[static_cast<int>(spec.up)];
   j["color"] = render::colorModeName(spec.color);
-  j["draw"] = spec.ellipsoids ? "ellipsoids" : "centres";
+  j["draw"] = render::kDrawModeNames[static_cast<int>(spec.draw())];
+  j["slice"] = spec.slice.on ? json::array({spec.slice.lo_m, spec.slice.hi_m}) : json(nullptr);
   j["sigma"] = spec.sigma;
   j["sphere_level"] = spec.sphere_level;
   j["points_below_px"] = spec.points_below_px;
@@ -321,7 +340,9 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
     cmd += std::string(" --up ") + render::kUpAxisNames[static_cast<int>(spec.up)];
   }
   if (spec.color != defaults.color) cmd += std::string(" --color ") + render::colorModeName(spec.color);
-  if (spec.ellipsoids != defaults.ellipsoids) cmd += " --draw centres";
+  if (spec.draw() != defaults.draw())
+    cmd += std::string(" --draw ") + render::kDrawModeNames[static_cast<int>(spec.draw())];
+  if (spec.slice.on) cmd += " --slice " + number(spec.slice.lo_m) + ":" + number(spec.slice.hi_m);
   if (spec.sigma != defaults.sigma) cmd += " --sigma " + number(spec.sigma);
   if (spec.sphere_level != defaults.sphere_level) cmd += " --sphere-level " + std::to_string(spec.sphere_level);
   if (spec.points_below_px != defaults.points_below_px) cmd += " --points-below " + number(spec.points_below_px);

@@ -62,7 +62,22 @@ glm::u8vec3 keyframeColor(int keyframe) {
   return glm::u8vec3(glm::round(rgb * 255.f));
 }
 
-std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {
+std::pair<float, float> heightRange(std::span<const EllipsoidInstance> ellipsoids, const HeightFrame& frame,
+                                    const HeightSlice& slice) {
+  if (slice.on) return {slice.lo_m, slice.hi_m};
+  if (ellipsoids.empty()) return {0.f, 1.f};
+  std::vector<float> h;
+  h.reserve(ellipsoids.size());
+  for (const auto& e : ellipsoids) h.push_back(frame.height(e.mean));
+  const std::size_t a = h.size() * 2 / 100, b = std::min(h.size() - 1, h.size() * 98 / 100);
+  std::nth_element(h.begin(), h.begin() + static_cast<long>(a), h.end());
+  const float lo = h[a];
+  std::nth_element(h.begin(), h.begin() + static_cast<long>(b), h.end());
+  return {lo, std::max(h[b], lo + 1e-3f)};
+}
+
+std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode,
+                                         const HeightFrame& frame, const HeightSlice& slice) {
   std::vector<float> values;
   std::vector<glm::u8vec4> colors;
   switch (mode) {
@@ -78,6 +93,12 @@ std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> elli
     case ColorMode::kCount:
       for (const auto& e : ellipsoids) values.push_back(std::log(std::max<float>(1.f, e.count)));
       return rampColors(values);
+    case ColorMode::kHeight: {
+      const auto [lo, hi] = heightRange(ellipsoids, frame, slice);
+      const float span = hi - lo > 1e-6f ? hi - lo : 1.f;
+      for (const auto& e : ellipsoids) colors.emplace_back(colormap((frame.height(e.mean) - lo) / span), 255);
+      return colors;
+    }
   }
   return colors;
 }
@@ -85,7 +106,7 @@ std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> elli
 const char* colorModeName(ColorMode mode) { return kColorModeNames.at(static_cast<std::size_t>(mode)); }
 
 ColorMode parseColorMode(const std::string& name) {
-  std::string expected;  // "rgb, keyframe, uncertainty or count"
+  std::string expected;  // "rgb, keyframe, uncertainty, count or height"
   for (std::size_t i = 0; i < kColorModeNames.size(); ++i) {
     if (name == kColorModeNames[i]) return static_cast<ColorMode>(i);
     expected += std::string(i == 0 ? "" : i + 1 == kColorModeNames.size() ? " or " : ", ") + kColorModeNames[i];

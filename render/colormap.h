@@ -2,6 +2,7 @@
 #include <array>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "render/scene_types.h"
@@ -14,11 +15,17 @@ glm::u8vec3 colormap(float t);
 glm::u8vec3 keyframeColor(int keyframe);
 /// The colour of every ellipsoid under `mode`. Uncertainty uses log10(lambda_max) and count
 /// uses log(count), both normalised to the set's own range so every map uses the whole ramp.
-std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
+/// Height uses frame.height(mean) over heightRange(ellipsoids, frame, slice).
+std::vector<glm::u8vec4> ellipsoidColors(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode,
+                                         const HeightFrame& frame = {}, const HeightSlice& slice = {});
+/// The heights the height ramp spans: the slice's bounds when it is on, else the 2nd to 98th
+/// percentile of the centres' heights above the floor ({0, 1} for no ellipsoids).
+std::pair<float, float> heightRange(std::span<const EllipsoidInstance> ellipsoids, const HeightFrame& frame,
+                                    const HeightSlice& slice);
 /// The colour modes' names, indexed by ColorMode: the one list that the settings file, the
 /// workbench and `vdmap render --color` use.
-inline constexpr std::array<const char*, 4> kColorModeNames = {"rgb", "keyframe", "uncertainty", "count"};
-static_assert(kColorModeNames.size() == static_cast<std::size_t>(ColorMode::kCount) + 1);
+inline constexpr std::array<const char*, 5> kColorModeNames = {"rgb", "keyframe", "uncertainty", "count", "height"};
+static_assert(kColorModeNames.size() == static_cast<std::size_t>(ColorMode::kHeight) + 1);
 /// The name of `mode` in kColorModeNames.
 const char* colorModeName(ColorMode mode);
 /// Parses a name of kColorModeNames (throws std::invalid_argument naming them otherwise).

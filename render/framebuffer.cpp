@@ -1,5 +1,6 @@
 #include "render/framebuffer.h"
 
+#include <cmath>
 #include <stdexcept>
 #include <string>
 #include <vector>
@@ -79,6 +80,18 @@ cv::Mat Framebuffer::readRgb() const {
 cv::Mat Framebuffer::readFloat() const {
   if (!with_float_) throw std::logic_error("Framebuffer::readFloat without a float target");
   return read(GL_COLOR_ATTACHMENT1, CV_32FC2, GL_RG, GL_FLOAT, "reading the float buffer");
+}
+
+std::optional<float> readDepth(const Gl& gl, int x, int y) {
+  if (x < 0 || y < 0) return std::nullopt;
+  while (gl.GetError() != GL_NO_ERROR) {
+  }
+  float depth = 1.f;
+  gl.PixelStorei(GL_PACK_ALIGNMENT, 1);
+  gl.ReadPixels(x, y, 1, 1, GL_DEPTH_COMPONENT, GL_FLOAT, &depth);
+  if (gl.GetError() != GL_NO_ERROR) return std::nullopt;
+  if (!std::isfinite(depth) || depth >= 1.f) return std::nullopt;
+  return depth;
 }
 
 void writePng(const std::filesystem::path& file, const cv::Mat& rgb) {

@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <optional>
 
 #include <opencv2/core.hpp>
 
@@ -42,6 +43,12 @@ class Framebuffer {
   bool with_float_;
   GLuint fbo_ = 0, color_rb_ = 0, float_rb_ = 0, depth_rb_ = 0;
 };
+
+/// The depth-buffer value (0 at near, 1 at far) of pixel (x, y) of the bound read framebuffer,
+/// GL convention (x, y from the bottom-left); nullopt outside it or where nothing was drawn
+/// (1.0, the cleared depth). The window's and the headless framebuffer alike; with
+/// unproject() it gives the world point under the cursor.
+std::optional<float> readDepth(const Gl& gl, int x, int y);
 
 /// Writes an RGB (CV_8UC3, RGB order) image as PNG through a temporary name and a rename, so a
 /// failed write leaves nothing behind. Throws std::runtime_error naming the file.

@@ -210,9 +210,14 @@ void MapMirror::drawLegend(int height) const {
 void MapMirror::drawContainer(int width, int height) const { container_.draw(width, height); }
 
 void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
-  if (drawsFast()) ellipsoids_.drawFast(view, fast_budget_);
-  else if (style_.ellipsoids) ellipsoids_.draw(view);
-  else points_.draw(view);
+  if (!style_.map) {
+  } else if (drawsFast()) {
+    ellipsoids_.drawFast(view, fast_budget_);
+  } else if (style_.ellipsoids) {
+    ellipsoids_.draw(view);
+  } else {
+    points_.draw(view);
+  }
   if (with_lines) lines_.draw(view);
   if (with_lines) paths_.draw(view);
   if (has_highlight_) highlight_.draw(view);

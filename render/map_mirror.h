@@ -32,6 +32,7 @@ struct MirrorStyle {
   ColorMode color = ColorMode::kRgb;
   float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
   bool ellipsoids = true;             ///< false: the ellipsoid centres as points
+  bool map = true;                    ///< false: draw mode "none", the map hidden (lines still drawn)
   bool frustums = true, graph = true, trajectory = true;
   bool groundtruth = true;            ///< GraphScene::groundtruth
   float points_below_px = 4.f;        ///< EllipsoidStyle::point_below_px
@@ -102,7 +103,7 @@ class MapMirror {
   void setFastBudget(std::size_t budget) { fast_budget_ = budget; }
   std::size_t fastBudget() const { return fast_budget_; }
   /// Whether draw() draws the fast pass now (a budget is set and ellipsoids are drawn).
-  bool drawsFast() const { return fast_budget_ > 0 && style_.ellipsoids && !instances_.empty(); }
+  bool drawsFast() const { return fast_budget_ > 0 && style_.map && style_.ellipsoids && !instances_.empty(); }
   /// Bumped by every change of what draw() and drawLegend() show (uploads, style, highlight,
   /// legend): the view image cache (render/view_cache.h) is keyed by it.
   std::uint64_t contentSerial() const { return content_serial_; }

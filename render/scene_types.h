@@ -18,8 +18,34 @@ struct EllipsoidInstance {
   std::uint32_t count = 1;
 };
 
-/// How ellipsoids (and their centres and 2-D projections) are coloured.
-enum class ColorMode { kRgb, kKeyframe, kUncertainty, kCount };
+/// How ellipsoids (and their centres and 2-D projections) are coloured. kHeight: by height above
+/// the floor (HeightFrame), over the slice when one is on.
+enum class ColorMode { kRgb, kKeyframe, kUncertainty, kCount, kHeight };
+
+/// What of the map is drawn: its ellipsoids, their centres as points, or nothing (the map hidden;
+/// trajectories, frustums and the graph are still drawn).
+enum class DrawMode { kEllipsoids, kCentres, kNone };
+/// Names in view files, `render --draw` and the window's combo, indexed by DrawMode.
+inline constexpr const char* kDrawModeNames[] = {"ellipsoids", "centres", "none"};
+
+/// Where heights are measured from: height = dot(p, up) - floor_m. The floor is the 2nd
+/// percentile of dot(mean, up) over the map (heightFrame, view_framing.h).
+struct HeightFrame {
+  glm::vec3 up{0.f, 0.f, 1.f};
+  float floor_m = 0.f;
+  float height(const glm::vec3& p) const { return glm::dot(p, up) - floor_m; }
+  bool operator==(const HeightFrame&) const = default;
+};
+
+/// A slice of the map along the up axis: only ellipsoids whose centre's height above the floor
+/// lies in [lo_m, hi_m] are drawn, picked and framed (whole ellipsoids are kept or dropped).
+struct HeightSlice {
+  bool on = false;
+  float lo_m = 0.f, hi_m = 1.f;
+  /// Whether a centre at height `h` is kept (always when the slice is off).
+  bool keeps(float h) const { return !on || (h >= lo_m && h <= hi_m); }
+  bool operator==(const HeightSlice&) const = default;
+};
 
 /// A triangle mesh with per-vertex colours; triangles index into positions.
 struct ColoredMesh {

@@ -135,6 +135,54 @@ void OrbitCamera::frame(const glm::vec3& box_min, const glm::vec3& box_max, floa
   distance_m = radius / std::sin(std::min(half_x, half_y));
 }
 
+void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect, float margin) {
+  // The camera's axes for the held direction: r right, u up in the image, f forward.
+  glm::vec3 uu, a, b;
+  horizon(up, &uu, &a, &b);
+  const glm::vec3 back = std::cos(pitch) * (std::cos(yaw) * a + std::sin(yaw) * b) + std::sin(pitch) * uu;
+  const glm::vec3 f = -back;
+  glm::vec3 r = glm::cross(f, up);
+  if (glm::length(r) < 1e-6f) r = glm::cross(f, glm::vec3(1.f, 0.f, 0.f));
+  r = glm::normalize(r);
+  const glm::vec3 u = glm::cross(r, f);
+  const float tan_y = std::tan(glm::radians(fov_y_deg) * 0.5f);
+  const float tan_x = tan_y * std::max(aspect, 1e-3f);
+  const float keep = 1.f - std::clamp(margin, 0.f, 0.5f);
+  // A box of at least 5 cm, so a single point is framed at a sane distance.
+  const glm::vec3 mid = 0.5f * (box_min + box_max);
+  const glm::vec3 half = glm::max(0.5f * (box_max - box_min), glm::vec3(0.025f));
+  glm::vec3 corners[8];
+  for (int c = 0; c < 8; ++c)
+    corners[c] = mid + glm::vec3((c & 1) ? half.x : -half.x, (c & 2) ? half.y : -half.y, (c & 4) ? half.z : -half.z);
+  target = mid;
+  // The smallest distance at which every corner lies within the kept part of both half-angles:
+  // corner depth z = q.f + d must reach |q.r| / tan_x and |q.u| / tan_y.
+  const auto distance = [&] {
+    float d = 0.f;
+    for (const glm::vec3& c : corners) {
+      const glm::vec3 q = c - target;
+      d = std::max(d, std::max(std::abs(glm::dot(q, r)) / (tan_x * keep), std::abs(glm::dot(q, u)) / (tan_y * keep)) -
+                          glm::dot(q, f));
+    }
+    return d;
+  };
+  // Re-centre: shift the target sideways so the projected box's extremes sit symmetrically,
+  // then fit the distance again (the last step is always the fit, so every corner is inside).
+  for (int pass = 0; pass < 3; ++pass) {
+    distance_m = std::max(1e-3f, distance());
+    float x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
+    for (const glm::vec3& c : corners) {
+      const glm::vec3 q = c - target;
+      const float z = std::max(1e-6f, glm::dot(q, f) + distance_m);
+      x0 = std::min(x0, glm::dot(q, r) / z), x1 = std::max(x1, glm::dot(q, r) / z);
+      y0 = std::min(y0, glm::dot(q, u) / z), y1 = std::max(y1, glm::dot(q, u) / z);
+    }
+    // A lateral shift s moves a point at depth z by -s/z in the image: shift at the target's depth.
+    target += r * (0.5f * (x0 + x1) * distance_m) + u * (0.5f * (y0 + y1) * distance_m);
+  }
+  distance_m = std::max(1e-3f, distance());
+}
+
 OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_max,
                                  const glm::vec3& up, float aspect) {
   OrbitCamera cam;
@@ -143,6 +191,15 @@ OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_
   cam.pitch = glm::radians(35.f);
   cam.frame(box_min, box_max, aspect);
   return cam;
+}
+
+std::optional<glm::vec3> unproject(const ViewCamera& view, float x_px, float y_px, float depth01) {
+  if (!std::isfinite(depth01) || !std::isfinite(x_px) || !std::isfinite(y_px) || depth01 >= 1.f) return std::nullopt;
+  const glm::vec4 ndc(2.f * (x_px + 0.5f) / static_cast<float>(view.width) - 1.f,
+                      1.f - 2.f * (y_px + 0.5f) / static_cast<float>(view.height), 2.f * depth01 - 1.f, 1.f);
+  const glm::vec4 p = glm::inverse(view.viewProjection()) * ndc;
+  if (!(std::abs(p.w) > 1e-12f)) return std::nullopt;
+  return glm::vec3(p) / p.w;
 }
 
 PixelRect letterbox(int width, int height, int image_width, int image_height) {

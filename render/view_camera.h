@@ -2,6 +2,7 @@
 // Cameras for drawing. Every view uses the pinhole convention of docs/method.md 1 (camera x right,
 // y down, z forward; pixel (u, v) with the origin at the centre of the top-left pixel), so "view
 // from keyframe K" with the keyframe's intrinsics reproduces its image pixel for pixel.
+#include <optional>
 #include <utility>
 #include <vector>
 
@@ -58,6 +59,11 @@ struct OrbitCamera {
   /// Keeps the viewing direction and moves target and distance so that the box's bounding
   /// sphere fits both the vertical and the horizontal field of view of a width/height `aspect`.
   void frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f);
+  /// Keeps the viewing direction and sets target and distance so that all 8 corners of the box
+  /// project inside a width/height `aspect` view with `margin` (a fraction of each half-size)
+  /// to spare: the distance is the smallest that holds every corner, then the target is shifted
+  /// so the projected box is centred (the view's frustum, not the box's bounding sphere).
+  void fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f, float margin = 0.03f);
   /// The default view of a bounding box: from 35 degrees above the horizon, framed as frame().
   static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
                              const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
@@ -67,6 +73,11 @@ struct OrbitCamera {
   static OrbitCamera fromLookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
                                 float fov_y_deg = 60.f);
 };
+
+/// The world point seen at pixel (x_px, y_px) (row 0 on top, pixel centres at integers, as
+/// ViewCamera's projection) whose depth-buffer value is depth01 (0 at near, 1 at far: what
+/// readDepth returns); nullopt for depth01 >= 1 (no surface) or not finite.
+std::optional<glm::vec3> unproject(const ViewCamera& view, float x_px, float y_px, float depth01);
 
 /// A rectangle in pixels.
 struct PixelRect {

@@ -8,6 +8,7 @@ MirrorStyle mirrorStyle(const ViewSpec& spec) {
   return {.color = spec.color,
           .sigma = spec.sigma,
           .ellipsoids = spec.ellipsoids,
+          .map = !spec.map_hidden,
           .frustums = spec.layers.frustums,
           .graph = spec.layers.graph,
           .trajectory = spec.layers.trajectory,

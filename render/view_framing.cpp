@@ -1,6 +1,7 @@
 #include "render/view_framing.h"
 
 #include <algorithm>
+#include <cmath>
 #include <vector>
 
 #include "render/map_scene.h"
@@ -18,6 +19,62 @@ std::pair<glm::vec3, glm::vec3> frameBounds(std::span<const glm::vec3> means, co
                                 : robustBounds(std::vector<glm::vec3>(means.begin(), means.end()));
   for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
   return {lo, hi};
+}
+
+DrawnBounds drawnBounds(std::span<const Ellipsoid> map, float sigma, DrawMode mode, const HeightSlice& slice,
+                        const HeightFrame& frame) {
+  DrawnBounds out;
+  if (mode == DrawMode::kNone) return out;
+  std::vector<glm::vec3> means;
+  means.reserve(map.size());
+  for (const Ellipsoid& e : map) {
+    const glm::vec3 m(e.mean.x(), e.mean.y(), e.mean.z());
+    if (slice.keeps(frame.height(m))) means.push_back(m);
+  }
+  if (means.empty()) return out;
+  const auto [rlo, rhi] = robustBounds(means);
+  const glm::vec3 centre = 0.5f * (rlo + rhi);
+  const float reach = glm::length(rhi - rlo);
+  for (const Ellipsoid& e : map) {
+    const glm::vec3 m(e.mean.x(), e.mean.y(), e.mean.z());
+    if (!slice.keeps(frame.height(m))) continue;
+    if (glm::length(m - centre) > reach) {
+      ++out.strays;
+      continue;
+    }
+    glm::vec3 half(0.f);
+    if (mode == DrawMode::kEllipsoids)
+      for (int k = 0; k < 3; ++k) half[k] = sigma * static_cast<float>(std::sqrt(std::max(0.0, e.cov(k, k))));
+    if (out.empty) out.lo = m - half, out.hi = m + half, out.empty = false;
+    else out.lo = glm::min(out.lo, m - half), out.hi = glm::max(out.hi, m + half);
+    ++out.drawn;
+  }
+  return out;
+}
+
+std::pair<glm::vec3, glm::vec3> frameBounds(const DrawnBounds& map, const GraphScene& graph) {
+  ColoredLines cameras;
+  for (const Transform& T : graph.keyframes) addFrustum(cameras, graph.camera, T, kKeyframeFrustumDepthM, {});
+  for (const auto* poses : {&graph.trajectory, &graph.groundtruth})
+    for (const Transform& T : *poses)
+      cameras.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
+  if (map.empty && cameras.positions.empty()) return robustBounds({});
+  auto [lo, hi] = map.empty ? std::pair{cameras.positions[0], cameras.positions[0]} : std::pair{map.lo, map.hi};
+  for (const glm::vec3& p : cameras.positions) lo = glm::min(lo, p), hi = glm::max(hi, p);
+  return {lo, hi};
+}
+
+HeightFrame heightFrame(std::span<const Ellipsoid> map, const glm::vec3& up_in) {
+  HeightFrame frame;
+  frame.up = glm::length(up_in) > 1e-6f ? glm::normalize(up_in) : glm::vec3(0.f, 0.f, 1.f);
+  if (map.empty()) return frame;
+  std::vector<float> h;
+  h.reserve(map.size());
+  for (const Ellipsoid& e : map) h.push_back(glm::dot(glm::vec3(e.mean.x(), e.mean.y(), e.mean.z()), frame.up));
+  const std::size_t a = h.size() * 2 / 100;
+  std::nth_element(h.begin(), h.begin() + static_cast<long>(a), h.end());
+  frame.floor_m = h[a];
+  return frame;
 }
 
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map) {

@@ -20,6 +20,30 @@ namespace vdmap::render {
 /// edge). (-1, 1) when there is nothing.
 std::pair<glm::vec3, glm::vec3> frameBounds(std::span<const glm::vec3> means, const GraphScene& graph);
 
+/// What the map part of a framed box is made of: the box of what is drawn and the strays left out.
+struct DrawnBounds {
+  glm::vec3 lo{0.f}, hi{0.f};
+  bool empty = true;        ///< nothing drawn (an empty or hidden map, or all sliced away)
+  std::size_t drawn = 0;    ///< ellipsoids whose extent the box holds
+  std::size_t strays = 0;   ///< left out: centres beyond 1x the robust box's diagonal from its centre
+};
+
+/// The box of what the view draws of `map`: per ellipsoid, mean +- sigma sqrt(diag cov) (the
+/// exact axis-aligned box of the ellipsoid drawn at sigma) for kEllipsoids, the mean for
+/// kCentres, nothing for kNone. Ellipsoids outside `slice` (heights by `frame`) are not drawn,
+/// so not framed; strays (centres beyond 1x the diagonal of the robustBounds of the centres from
+/// its centre) are left out and counted.
+DrawnBounds drawnBounds(std::span<const Ellipsoid> map, float sigma, DrawMode mode, const HeightSlice& slice = {},
+                        const HeightFrame& frame = {});
+
+/// The box a view frames: `map` (drawnBounds) grown to hold every keyframe frustum, trajectory
+/// camera and ground-truth camera as the overload below; the cameras alone for an empty map.
+std::pair<glm::vec3, glm::vec3> frameBounds(const DrawnBounds& map, const GraphScene& graph);
+
+/// The height frame of a map and an up direction: the floor is the 2nd percentile of
+/// dot(mean, up) (0 for an empty map).
+HeightFrame heightFrame(std::span<const Ellipsoid> map, const glm::vec3& up);
+
 /// The world's up direction: the axis named, or for kData estimateUp of the cameras and the map.
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map);
 

@@ -58,6 +58,8 @@ struct ViewSpec {
   float fov_y_deg = 60.f;             ///< the framed and orbit views' vertical field of view
   ColorMode color = ColorMode::kRgb;
   bool ellipsoids = true;             ///< false: the ellipsoid centres as points
+  bool map_hidden = false;            ///< draw "none": no map at all (overrides `ellipsoids`)
+  HeightSlice slice;                  ///< heights above the floor drawn (view file v2 "slice")
   float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
   int sphere_level = 0;               ///< icosphere subdivisions (0: icosahedra, as the window)
   float points_below_px = 4.f;        ///< ellipsoids smaller than this are drawn as splats
@@ -65,6 +67,13 @@ struct ViewSpec {
   glm::vec3 background = kDarkBackground;
   int selected_keyframe = -1;         ///< drawn white (the window's selection)
   bool operator==(const ViewSpec&) const = default;
+
+  /// The draw mode `ellipsoids` and `map_hidden` spell (kDrawModeNames), and setting it.
+  DrawMode draw() const { return map_hidden ? DrawMode::kNone : ellipsoids ? DrawMode::kEllipsoids : DrawMode::kCentres; }
+  void setDraw(DrawMode mode) {
+    map_hidden = mode == DrawMode::kNone;
+    if (!map_hidden) ellipsoids = mode == DrawMode::kEllipsoids;
+  }
 };
 
 }  // namespace vdmap::render

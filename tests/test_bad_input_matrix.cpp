@@ -597,6 +597,11 @@ const std::vector<BadCase>& badCases() {
        then(viewFile([](nlohmann::json&) {}), "gui {dir}/v.json --exit")},
       {"command_line", "render_map_bt_not_an_octomap", E::kCliError, "m.bt:1: not an OctoMap .bt file",
        then(write("m.bt", "hello\n"), "render --map {dir}/m.bt --out {dir}/o.png")},
+      // gui --measure X1,Y1,X2,Y2 (measuring): four view pixels or nothing.
+      {"command_line", "gui_measure_three_numbers", E::kCliUsage, "--measure: '1,2,3': expected X1,Y1,X2,Y2",
+       args("gui {dir}/seq --measure 1,2,3 --exit")},
+      {"command_line", "gui_measure_negative", E::kCliUsage, "--measure: '1,2,-3,4': expected X1,Y1,X2,Y2",
+       args("gui {dir}/seq --measure 1,2,-3,4 --exit")},
       {"sequence", "camera_file_unknown_key", E::kInputError,
        "camera.yaml:2: unknown key 'focal' (valid keys: preset, fx, fy, cx, cy, depth_scale, scale, width, w, height, h, "
        "colour)",

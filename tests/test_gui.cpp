@@ -1,6 +1,8 @@
 // The workbench without a window: settings persistence, the mapping session (play, step, seek,
 // live thresholds, pose correction) and the UI actions, driven exactly as the ImGui code does.
 #include <atomic>
+#include <chrono>
+#include <fstream>
 #include <future>
 #include <random>
 #include <regex>
@@ -19,6 +21,7 @@
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
 #include "render/scene_lines.h"
+#include "render/view_draw.h"
 #include "tests/test_util.h"
 
 namespace vdmap::app::gui {
@@ -1362,6 +1365,300 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
     EXPECT_EQ(message.find("refined (joint)") != std::string::npos, refine.has_value()) << message;
     EXPECT_EQ(bench.canShowBeforeOptimisation(), refine.has_value());
   }
+}
+
+TEST(GuiTracking, AfterTheRefinementTheBannerNamesIt) {
+  Workbench bench{Settings{}};
+  MappingSnapshot m;
+  LoopEvent loop;
+  loop.position = 40;
+  loop.loop.correction_m = 0.012;
+  m.loops = {loop};
+  m.last_optimisation = {LastOptimisation::Kind::kLoop, 0, "", 0, 0};
+  EXPECT_EQ(bench.beforeOptimisationBanner(m), "") << "only while B shows the map before it";
+  bench.ui().show_before_optimisation = true;
+  EXPECT_NE(bench.beforeOptimisationBanner(m).find("loop at frame 40"), std::string::npos) << bench.beforeOptimisationBanner(m);
+  // After the sequence's last frame the refinement is the last optimisation, not the loop.
+  m.last_optimisation = {LastOptimisation::Kind::kRefinement, -1, "joint", 41, 0.0032};
+  EXPECT_EQ(bench.beforeOptimisationBanner(m), "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
+}
+
+
+// ---- The view tools: pick scroll, drag speed, zoom at the cursor, pivot, framing the paths,
+// view files, quick views, screenshots, settings autosave, loop-strip markers.
+
+// The pixel of the 3-D view (640x480) where world point p shows.
+glm::vec2 projectInView(const Workbench& bench, const glm::vec3& p) {
+  const render::ViewCamera v = bench.view(640, 480).camera;
+  const glm::vec4 q = v.T_C_W * glm::vec4(p, 1.f);
+  return {v.fx * q.x / q.z + v.cx, v.fy * q.y / q.z + v.cy};
+}
+
+// TinyBench mapped to the end, its view 640x480.
+struct MappedTinyBench : TinyBench {
+  MappedTinyBench() {
+    bench.ui().view_width = 640;
+    bench.ui().view_height = 480;
+    worker().play();
+    worker().waitIdle();
+    bench.sync();
+  }
+};
+
+TEST(GuiViewTools, PickScrollsTheListOnce) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  const auto global = t.worker().global();
+  const Eigen::Vector3d& m = global->map.ellipsoids[global->map.ellipsoids.size() / 2].mean;
+  const glm::vec2 at = projectInView(bench, {m.x(), m.y(), m.z()});
+  bench.pick(at.x, at.y, 640, 480);
+  ASSERT_TRUE(bench.ui().picked);
+  EXPECT_TRUE(bench.takeScrollToSelected()) << "a pick scrolls the keyframe list to its keyframe";
+  EXPECT_FALSE(bench.takeScrollToSelected()) << "once: the user may scroll away";
+  bench.selectKeyframe(0);  // a click in the list itself does not scroll it
+  EXPECT_FALSE(bench.takeScrollToSelected());
+}
+
+TEST(GuiViewTools, PoseDragSpeedFollowsTheViewDistance) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.selectKeyframe(0);
+  const float near = bench.poseDragSpeed();
+  bench.zoom(-6.f);  // farther away: a pixel spans more
+  const float far = bench.poseDragSpeed();
+  EXPECT_GT(far, 1.5f * near);
+  // A pixel of drag spans what a pixel of the view spans at the keyframe's depth.
+  const render::ViewCamera v = bench.view(640, 480).camera;
+  const Eigen::Vector3d k = t.worker().mapping()->keyframes[0].T_W_K.translation();
+  const float depth = (v.T_C_W * glm::vec4(k.x(), k.y(), k.z(), 1.f)).z;
+  EXPECT_NEAR(far, std::clamp(depth / v.fy, 1e-4f, 0.05f), 1e-6f);
+  bench.zoom(-60.f);
+  EXPECT_LE(bench.poseDragSpeed(), 0.05f) << "clamped";
+}
+
+TEST(GuiViewTools, ZoomAtKeepsThePointUnderTheCursor) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  const glm::vec3 p = bench.targetPlanePoint(100.f, 380.f, 640, 480) + glm::vec3(0.05f, -0.02f, 0.03f);
+  const glm::vec2 before = projectInView(bench, p);
+  const float distance = bench.ui().camera.distance_m;
+  bench.zoomAt(2.f, p);
+  const glm::vec2 after = projectInView(bench, p);
+  EXPECT_NEAR(after.x, before.x, 0.5f);
+  EXPECT_NEAR(after.y, before.y, 0.5f);
+  EXPECT_LT(bench.ui().camera.distance_m, distance);
+  EXPECT_FALSE(bench.ui().follow_map);
+  // The target's plane point under a pixel projects back to that pixel.
+  const glm::vec2 back = projectInView(bench, bench.targetPlanePoint(200.f, 100.f, 640, 480));
+  EXPECT_NEAR(back.x, 200.f, 0.5f);
+  EXPECT_NEAR(back.y, 100.f, 0.5f);
+}
+
+TEST(GuiViewTools, PivotHereKeepsTheEye) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  const glm::vec3 eye = bench.ui().camera.eye();
+  const glm::vec3 p = bench.targetPlanePoint(500.f, 100.f, 640, 480);
+  bench.pivotAt(p);
+  EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-4f);
+  EXPECT_LT(glm::length(bench.ui().camera.target - p), 1e-4f);
+  const glm::vec2 centre = projectInView(bench, p);
+  EXPECT_NEAR(centre.x, 319.5f, 0.5f) << "the pivot is in the middle of the view";
+  EXPECT_NEAR(centre.y, 239.5f, 0.5f);
+}
+
+TEST(GuiViewTools, FrameTrajectoriesFramesOnlyThePaths) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.key(KeyAction::kFrameMap);
+  const float map_distance = bench.ui().camera.distance_m;
+  bench.key(KeyAction::kFrameTrajectories);
+  EXPECT_FALSE(bench.ui().follow_map) << "a growing map does not take the view back";
+  // Every camera of the path inside the view; the path (10 frames on a short line) is framed far
+  // closer than the whole map.
+  for (const Transform& T : t.worker().mapping()->trajectoryWorld()) {
+    const glm::vec2 at = projectInView(bench, {T.translation().x(), T.translation().y(), T.translation().z()});
+    EXPECT_GE(at.x, 0.f);
+    EXPECT_LE(at.x, 640.f);
+    EXPECT_GE(at.y, 0.f);
+    EXPECT_LE(at.y, 480.f);
+  }
+  EXPECT_LT(bench.ui().camera.distance_m, 0.8f * map_distance);
+}
+
+TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
+  Settings s;
+  EXPECT_TRUE(render::mirrorStyle(viewSpecOf(s)).map);
+  s.hide_map = true;  // draw: hidden
+  const render::ViewSpec spec = viewSpecOf(s);
+  EXPECT_EQ(spec.draw(), render::DrawMode::kNone);
+  EXPECT_FALSE(render::mirrorStyle(spec).map) << "the mirror draws no ellipsoids";
+  // A view file's "draw": "none" hides the map in the window too, and "hidden" is not saved.
+  Workbench bench{Settings{}};
+  bench.applyViewSpec(spec);
+  EXPECT_TRUE(bench.ui().settings.hide_map);
+  EXPECT_EQ(bench.viewSpec().draw(), render::DrawMode::kNone);
+  EXPECT_TRUE(sameSettings(s, Settings{})) << "hidden lasts for the run only";
+}
+
+
+TEST(GuiViewTools, LoadViewRestoresTheSavedCamera) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.orbit(0.4f, 0.1f);
+  const glm::vec3 eye = bench.ui().camera.eye(), target = bench.ui().camera.target;
+  const fs::path file = t.dir / "v.json";
+  ASSERT_TRUE(bench.saveViewSafely(file.string())) << bench.ui().status.text;
+  const GlobalMapParams saved_thresholds = bench.ui().params.global;
+  bench.orbit(-1.f, 0.3f);
+  bench.zoom(3.f);
+  ASSERT_TRUE(bench.editParameter(*findParameter("merge_distance"), 0.2));
+  t.worker().waitIdle();
+  ASSERT_TRUE(bench.loadView(file.string(), false)) << bench.ui().status.text;
+  EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-5f);
+  EXPECT_LT(glm::length(bench.ui().camera.target - target), 1e-5f);
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kSuccess) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().params.global.merge_distance_m, 0.2) << "its thresholds only when asked";
+  ASSERT_TRUE(bench.loadView(file.string(), true));
+  EXPECT_EQ(bench.ui().params.global.merge_distance_m, saved_thresholds.merge_distance_m);
+  // The view's size differs from the viewport's: the status line says so.
+  bench.ui().view_width = 500;
+  ASSERT_TRUE(bench.loadView(file.string(), false));
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kWarning);
+  EXPECT_NE(bench.ui().status.text.find("640x480"), std::string::npos) << bench.ui().status.text;
+  EXPECT_FALSE(bench.loadView((t.dir / "none.json").string(), false));
+  EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
+}
+
+TEST(GuiViewTools, SaveViewAutoNumbersTheDefaultNameAndAsksForATypedOne) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  const fs::path first = t.dir / "vdmap_view.json";
+  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  const auto written = fs::last_write_time(first);
+  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  EXPECT_TRUE(fs::exists(t.dir / "vdmap_view-2.json"));
+  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  EXPECT_TRUE(fs::exists(t.dir / "vdmap_view-3.json"));
+  EXPECT_EQ(fs::last_write_time(first), written) << "never overwritten";
+  const fs::path typed = t.dir / "mine.json";
+  ASSERT_TRUE(bench.saveViewSafely(typed.string()));
+  EXPECT_FALSE(bench.saveViewSafely(typed.string())) << "a typed name that exists asks first";
+  EXPECT_EQ(bench.ui().confirm_view_replace, typed.string());
+  EXPECT_TRUE(bench.saveViewSafely(typed.string(), true));
+  EXPECT_TRUE(bench.ui().confirm_view_replace.empty());
+}
+
+TEST(GuiViewTools, QuickViewRecallsTheStoredCamera) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  EXPECT_FALSE(bench.recallQuickView(3)) << "nothing kept there yet";
+  bench.orbit(0.7f, -0.2f);
+  const glm::vec3 eye = bench.ui().camera.eye(), target = bench.ui().camera.target;
+  bench.storeQuickView(3);
+  bench.orbit(-1.5f, 0.4f);
+  bench.pan(40.f, 10.f);
+  ASSERT_TRUE(bench.recallQuickView(3));
+  EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-4f);
+  EXPECT_LT(glm::length(bench.ui().camera.target - target), 1e-4f);
+}
+
+TEST(GuiViewTools, MeasurePointsAlternateAndSnapToCentres) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.addMeasurePoint({0.f, 0.f, 1.f});
+  ASSERT_TRUE(bench.ui().measure_a);
+  EXPECT_FALSE(bench.ui().measure_b);
+  bench.addMeasurePoint({0.3f, 0.4f, 1.f});
+  ASSERT_TRUE(bench.ui().measure_b);
+  EXPECT_FLOAT_EQ(glm::length(*bench.ui().measure_b - *bench.ui().measure_a), 0.5f);
+  bench.ui().measure_snap = true;
+  const Eigen::Vector3d m = t.worker().global()->map.ellipsoids.front().mean;
+  bench.addMeasurePoint(glm::vec3(m.x(), m.y(), m.z()) + glm::vec3(1e-4f));  // a third click: A again
+  EXPECT_FALSE(bench.ui().measure_b);
+  EXPECT_LT(glm::length(*bench.ui().measure_a - glm::vec3(m.x(), m.y(), m.z())), 1e-6f);
+}
+
+TEST(GuiViewTools, ScreenshotNeverOverwritesADefaultName) {
+  test::TempDir dir;
+  const std::time_t when = 1764150000;
+  const fs::path first = freeTimestampedName(dir.path(), when);
+  EXPECT_TRUE(std::regex_match(first.filename().string(), std::regex(R"(vdmap-\d{8}-\d{6}\.png)")))
+      << first;
+  std::ofstream(first) << "x";
+  const fs::path second = freeTimestampedName(dir.path(), when);
+  EXPECT_NE(second, first);
+  EXPECT_EQ(second.filename().string(), first.stem().string() + "-2.png");
+  std::ofstream(second) << "x";
+  EXPECT_EQ(freeTimestampedName(dir.path(), when).filename().string(), first.stem().string() + "-3.png");
+  // The default folder: $XDG_PICTURES_DIR/vdmap.
+  const char* old = std::getenv("XDG_PICTURES_DIR");
+  const std::string kept = old ? old : "";
+  setenv("XDG_PICTURES_DIR", (dir / "pics").c_str(), 1);
+  EXPECT_EQ(screenshotFolder(), dir / "pics" / "vdmap");
+  const fs::path made = defaultScreenshotFile(when);
+  EXPECT_EQ(made.parent_path(), dir / "pics" / "vdmap");
+  EXPECT_TRUE(fs::is_directory(made.parent_path()));
+  if (old) setenv("XDG_PICTURES_DIR", kept.c_str(), 1);
+  else unsetenv("XDG_PICTURES_DIR");
+}
+
+TEST(GuiSettings, AutosaveIsDueOneSecondAfterTheLastChange) {
+  using namespace std::chrono_literals;
+  const SettingsAutosave::Clock::time_point t0{};
+  Settings s;
+  SettingsAutosave autosave(s);
+  autosave.note(t0, s);
+  EXPECT_FALSE(autosave.due(t0 + 5s)) << "nothing changed";
+  EXPECT_FALSE(autosave.dueIn(t0));
+  s.ellipsoid_sigma = 3.f;
+  autosave.note(t0, s);
+  EXPECT_FALSE(autosave.due(t0 + 900ms));
+  s.ellipsoid_sigma = 3.5f;  // a slider still moving: the second starts again
+  autosave.note(t0 + 900ms, s);
+  EXPECT_FALSE(autosave.due(t0 + 1500ms));
+  EXPECT_EQ(*autosave.dueIn(t0 + 1500ms), 400ms);
+  autosave.note(t0 + 1500ms, s);  // unchanged: the delay runs on
+  EXPECT_TRUE(autosave.due(t0 + 1900ms));
+  EXPECT_EQ(autosave.noted().ellipsoid_sigma, 3.5f);
+  autosave.saved();
+  EXPECT_FALSE(autosave.due(t0 + 10s)) << "saved: nothing more to do";
+  s.ellipsoid_sigma = 2.f;
+  autosave.note(t0 + 11s, s);
+  s.ellipsoid_sigma = 3.5f;  // changed back to what was saved within the second
+  autosave.note(t0 + 11500ms, s);
+  EXPECT_FALSE(autosave.due(t0 + 20s));
+}
+
+TEST(GuiSettings, TheWorkbenchAutosavesWhatChangedIntoTheFile) {
+  using namespace std::chrono_literals;
+  test::TempDir dir;
+  const fs::path file = dir / "settings.json";
+  Workbench bench{Settings{}};
+  bench.enableSettingsAutosave(file.string(), Settings{});
+  const SettingsAutosave::Clock::time_point t0{};
+  EXPECT_TRUE(std::isinf(bench.autosaveSettings(t0)));
+  bench.ui().settings.ellipsoid_sigma = 3.f;
+  EXPECT_NEAR(bench.autosaveSettings(t0 + 100ms), 1.0, 1e-9);
+  EXPECT_FALSE(fs::exists(file));
+  EXPECT_TRUE(std::isinf(bench.autosaveSettings(t0 + 1100ms)));
+  ASSERT_TRUE(fs::exists(file));
+  EXPECT_EQ(loadSettings(file, nullptr).ellipsoid_sigma, 3.f);
+}
+
+TEST(LoopStrip, NearbyMarkersMergeWithACount) {
+  const std::vector<MarkerCluster> c = clusterMarkers({10.f, 12.f, 15.f, 40.f, 41.f, 90.f}, 8.f);
+  ASSERT_EQ(c.size(), 3u);
+  EXPECT_EQ(c[0].members, (std::vector<int>{0, 1, 2}));
+  EXPECT_FLOAT_EQ(c[0].x, 12.5f);
+  EXPECT_EQ(c[1].members, (std::vector<int>{3, 4}));
+  EXPECT_EQ(c[2].members, (std::vector<int>{5}));
+  EXPECT_FLOAT_EQ(c[2].x, 90.f);
+  // A long run of markers 5 px apart does not merge into one: each cluster spans < min_px.
+  std::vector<float> run;
+  for (int i = 0; i < 10; ++i) run.push_back(5.f * static_cast<float>(i));
+  EXPECT_EQ(clusterMarkers(run, 8.f).size(), 5u);
+  EXPECT_TRUE(clusterMarkers({}, 8.f).empty());
 }
 
 }  // namespace

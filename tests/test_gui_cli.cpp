@@ -11,6 +11,8 @@
 #include <nlohmann/json.hpp>
 #include <opencv2/imgcodecs.hpp>
 
+#include "mapping/eval/mesh_accuracy.h"
+#include "mapping/synth/builtin_scene.h"
 #include "tests/test_util.h"
 
 namespace vdmap::test {
@@ -574,5 +576,47 @@ TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
   EXPECT_EQ(stats["view_full_quality"], true);
   EXPECT_GT(stats["settle_ms"].get<double>(), 0.0) << "the full frame followed the fast ones";
 }
+
+// Measuring: the points --measure finds under two pixels of the view (the depth of the drawn
+// scene, as Ctrl+click) lie on the built-in scene's surfaces, within 1 cm (the ellipsoids are
+// drawn at 2 sigma around the surface), and the distance is |b - a|. The pixels are taken where
+// the first run's view image shows a surface all around them (not the background, not a line).
+TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const std::string common = "--frames 0:30 --play-to-end --exit --window-size 1280x720 --set show_frustums=false "
+                             "--set show_graph=false --set show_trajectory=false";
+  const fs::path png = home / "view.png";
+  ASSERT_EQ(runInXvfb(home, common + " --view-screenshot '" + png.string() + "'").exit_code, 0);
+  const cv::Mat view = cv::imread(png.string());
+  ASSERT_FALSE(view.empty());
+  const cv::Vec3b background = view.at<cv::Vec3b>(2, view.cols - 3);
+  const auto surface = [&](int x, int y) {
+    for (int dy = -3; dy <= 3; ++dy)
+      for (int dx = -3; dx <= 3; ++dx)
+        if (cv::norm(view.at<cv::Vec3b>(y + dy, x + dx), background, cv::NORM_L1) <= 30) return false;
+    return true;
+  };
+  std::vector<cv::Point> found;  // surface pixels on a coarse grid, middle of the view first
+  for (int y = view.rows / 4; y < view.rows * 3 / 4; y += 17)
+    for (int x = view.cols / 4; x < view.cols * 3 / 4; x += 17)
+      if (surface(x, y)) found.push_back({x, y});
+  ASSERT_GE(found.size(), 2u) << "the view shows no surface";
+  const cv::Point a = found.front(), b = found.back();
+  const fs::path json = home / "m.json";
+  const RunResult r = runInXvfb(home, common + " --measure " + std::to_string(a.x) + "," + std::to_string(a.y) + "," +
+                                          std::to_string(b.x) + "," + std::to_string(b.y) + " --stats-json '" +
+                                          json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json m = readJson(json)["measure"];
+  ASSERT_TRUE(m.is_object()) << readJson(json).dump();
+  const Eigen::Vector3f pa(m["a"][0], m["a"][1], m["a"][2]), pb(m["b"][0], m["b"][1], m["b"][2]);
+  EXPECT_NEAR(m["distance_m"].get<double>(), (pb - pa).norm(), 1e-5);
+  EXPECT_GT((pb - pa).norm(), 0.05f) << "two different places";
+  const std::vector<double> d = distancesToMesh({pa, pb}, makeBuiltinScene().mesh);
+  EXPECT_LT(d[0], 0.01) << pa.transpose();
+  EXPECT_LT(d[1], 0.01) << pb.transpose();
+}
+
 }  // namespace
 }  // namespace vdmap::test

@@ -1,5 +1,8 @@
 // `vdmap` (no verb: the built-in scene) and `vdmap gui SEQ`: the workbench window, with a
 // scripted path for tests (--play-to-end --set KEY=VALUE --screenshot PNG --stats-json FILE --exit).
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <iostream>
 #include <thread>
@@ -166,6 +169,9 @@ void runGui(GuiArgs args, bool builtin) {
   if (!args.settings.empty()) bench.setSessionSettings(args.settings);
   bench.ui().settings_source = start.source;
   bench.ui().settings_file = settings_file.string();
+  // Saved 1 s after the last change while the window runs, and on close (below); scripted and
+  // --settings runs have no settings file and never save.
+  if (!settings_file.empty()) bench.enableSettingsAutosave(settings_file.string(), settings);
   gui::Preparation prepare;
   if (builtin) {
     const BuiltinCache cache = builtinCache(args.sequence.frames);
@@ -237,6 +243,18 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       ->check(CLI::PositiveNumber);
   app.add_option("--measure-idle", args.script.idle_seconds,
                  "scripted: then S seconds of nothing happening (stats: idle_cpu_s, process CPU seconds)");
+  app.add_option_function<std::string>(
+      "--measure",
+      [&args](const std::string& text) {
+        float v[4];
+        char rest = 0;
+        if (std::sscanf(text.c_str(), "%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &rest) != 4 ||
+            !std::all_of(v, v + 4, [](float x) { return std::isfinite(x) && x >= 0; }))
+          throw CLI::ValidationError("--measure", "'" + text + "': expected X1,Y1,X2,Y2 (view pixels, >= 0)");
+        args.script.measure.assign(v, v + 4);
+      },
+      "scripted: measure between view pixels X1,Y1 and X2,Y2 once mapping is done, as Ctrl+click does (stats: "
+      "measure {a, b, distance_m})");
   app.add_option("--close-after-frames", args.script.close_after_frames,
                  "close the window as a user would after N frames drawn (tests: closing during the first start)")
       ->check(CLI::PositiveNumber);

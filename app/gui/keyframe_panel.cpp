@@ -22,6 +22,8 @@ void poseEditStarted(Workbench& bench) {
 
 // Every keyframe, its colour as a square; a click selects it.
 void drawKeyframeList(Workbench& bench, const WindowState& win) {
+  // A keyframe picked in the view or by a loop marker scrolls into the list's middle once.
+  const bool scroll = bench.takeScrollToSelected();
   if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
     for (const KeyframeInfo& k : win.mapping->keyframes) {
       char text[96];
@@ -29,6 +31,7 @@ void drawKeyframeList(Workbench& bench, const WindowState& win) {
                     k.id == win.mapping->current_keyframe ? "  (current)" : "");
       const ImVec2 at = ImGui::GetCursorScreenPos();
       if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.selectKeyframe(k.id);
+      if (scroll && k.id == bench.ui().selected_keyframe) ImGui::SetScrollHereY(0.5f);
       const float h = ImGui::GetTextLineHeight();
       ImGui::GetWindowDrawList()->AddRectFilled({at.x + 2, at.y + 2}, {at.x + h - 2, at.y + h - 2},
                                                 rgbColor(render::keyframeColor(k.id)));
@@ -84,12 +87,18 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   bool moved = false;
   const bool before = ui.show_before_optimisation;
   ImGui::BeginDisabled(before);
+  // A pixel of drag moves the keyframe as far as a pixel of the view spans at its depth.
+  const float speed = bench.poseDragSpeed();
   if (beginRows("pose")) {
     label(win.check, "t (m)",
-          "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt.");
-    moved |= ImGui::DragFloat3("##t", &ui.pose_translation_m.x, 0.005f, -1000.f, 1000.f, "%.3f");
+          "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
+          "A pixel of drag moves it " + metres(speed) + " (what a pixel of the view spans at the keyframe's depth); "
+          "hold Alt for 100x finer, Shift for 10x coarser (Dear ImGui's drag keys); double-click to type a value.");
+    moved |= ImGui::DragFloat3("##t", &ui.pose_translation_m.x, speed, -1000.f, 1000.f, "%.3f");
     poseEditStarted(bench);
-    label(win.check, "roll, pitch, yaw (deg)", "R = Rz(yaw) Ry(pitch) Rx(roll); pitch stays within +-90 degrees.");
+    label(win.check, "roll, pitch, yaw (deg)",
+          "R = Rz(yaw) Ry(pitch) Rx(roll); pitch stays within +-90 degrees. 0.2 degrees per pixel of drag; Alt: 100x "
+          "finer, Shift: 10x coarser.");
     glm::vec3& rpy = ui.pose_rotation_deg;
     moved |= ImGui::DragFloat3("##rpy", &rpy.x, 0.2f, 0.f, 0.f, "%.1f");
     poseEditStarted(bench);
@@ -135,7 +144,13 @@ void drawPicked(Workbench& bench, WindowState& win) {
     label(win.check, "points n", "Depth points merged into it.");
     ImGui::Text("%u", e.count);
     label(win.check, "mean (m)", "Its centre in the world frame.");
+    char mean[96];
+    std::snprintf(mean, sizeof mean, "%.4f %.4f %.4f", e.mean.x(), e.mean.y(), e.mean.z());
+    ImGui::AlignTextToFramePadding();
     ImGui::Text("%.3f, %.3f, %.3f", e.mean.x(), e.mean.y(), e.mean.z());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Copy##mean")) ImGui::SetClipboardText(mean);
+    tip(std::string("Copies \"") + mean + "\" (x y z, metres) to the clipboard.");
     label(win.check, "sigma axes (mm)", "Standard deviations along its principal axes, largest last.");
     ImGui::Text("%.1f, %.1f, %.1f", axes.x(), axes.y(), axes.z());
     label(win.check, "colour", "Mean RGB of its points.");

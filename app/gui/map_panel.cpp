@@ -3,6 +3,7 @@
 #include <imgui_stdlib.h>
 
 #include "app/gui/keyframe_panel.h"
+#include "app/gui/measure_overlay.h"
 #include "app/gui/thresholds_panel.h"
 #include "app/gui/tracking_panel.h"
 #include "app/gui/widgets.h"
@@ -47,6 +48,7 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     if (section(win.check, "View", true)) drawView(bench, win);
     if (section(win.check, "Keyframes", true)) drawKeyframes(bench, mirror, win);
     if (section(win.check, "Picked ellipsoid", true)) drawPicked(bench, win);
+    if (section(win.check, "Measure", bench.ui().measure_a.has_value())) drawMeasure(bench, win);
     if (section(win.check, "Pose correction")) drawPoseFile(bench);
     if (section(win.check, "Export and save")) drawExport(bench, win);
   }
@@ -58,7 +60,8 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     if (ui.settings_file.empty())
       ImGui::TextWrapped("Not saved on exit (a scripted run, or --settings): your settings are left as they are.");
     else
-      ImGui::TextWrapped("Saved on exit (what you changed only) to %s; the window layout to imgui.ini beside it.",
+      ImGui::TextWrapped("Saved a second after each change and on exit (what you changed only) to %s; the window "
+                         "layout to imgui.ini beside it.",
                          ui.settings_file.c_str());
   }
   ImGui::End();

@@ -31,7 +31,7 @@ void drawPreparation(ImDrawList* draw, const WindowState& win) {
 
 // Top left: what the view does (follows the map, looks through a keyframe) and a banner while the
 // map before the last optimisation shows. The tracking lines' key is in the legend (render/legend.h).
-void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping, const Rect& view) {
+void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banner, const Rect& view) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
                      : ui.follow_map            ? "following the map (a drag stops it, F resumes)"
@@ -44,14 +44,9 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& m
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
     line_y += 1.3f * font;
   }
-  if (ui.show_before_optimisation && !mapping.loops.empty()) {
-    const LoopEvent& last = mapping.loops.back();
-    char text[160];
-    std::snprintf(text, sizeof text, "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)",
-                  last.position, metres(last.loop.correction_m).c_str());
-    draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), text, nullptr,
-                  view.w - 2 * pad);  // wrapped in a narrow view
-  }
+  if (!banner.empty())  // names the optimisation B undoes (Workbench::beforeOptimisationBanner)
+    draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), banner.c_str(),
+                  nullptr, view.w - 2 * pad);  // wrapped in a narrow view
 }
 
 // Bottom right: the up axis.
@@ -71,13 +66,9 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   Mirrored& mirrored = win.mirrored;
   UiState& ui = bench.ui();
   const Settings& s = ui.settings;
-  mirror.setStyle({.color = s.color,
-                   .sigma = s.ellipsoid_sigma,
-                   .ellipsoids = s.show_ellipsoids,
-                   .frustums = s.show_frustums,
-                   .graph = s.show_graph,
-                   .trajectory = s.show_trajectory,
-                   .groundtruth = s.show_groundtruth});
+  // The style of the settings' view (viewSpecOf), as `vdmap render` draws it: draw mode (none
+  // hides the map), colours, sigma, layers.
+  mirror.setStyle(render::mirrorStyle(viewSpecOf(s)));
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
@@ -167,10 +158,10 @@ void handleMouse(Workbench& bench, WindowState& win) {
   for (int b : {1, 2})
     if (win.drag_in_view[b] && ImGui::IsMouseDragging(b) && (io.MouseDelta.x != 0 || io.MouseDelta.y != 0))
       bench.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
-  if (over_view && io.MouseWheel != 0.f) bench.zoom(io.MouseWheel);
+  // The wheel zooms toward the point under the cursor: measure_overlay.cpp (handleViewTools).
   if (win.drag_in_view[0] && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
-    if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view)
+    if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view && !io.KeyCtrl)  // Ctrl+click measures
       bench.pick((io.MousePos.x - view.x) * scale.x, (io.MousePos.y - view.y) * scale.y, ui.view_width,
                  ui.view_height);
   }
@@ -221,7 +212,7 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
     return;
   }
   const UiState& ui = bench.ui();
-  drawViewHints(draw, ui, *win.mapping, view);
+  drawViewHints(draw, ui, bench.beforeOptimisationBanner(*win.mapping), view);
   drawUpAxis(draw, ui, view);
 }
 

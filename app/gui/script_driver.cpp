@@ -6,6 +6,7 @@
 #include <filesystem>
 
 #include "app/gui/figures.h"
+#include "app/gui/measure_overlay.h"
 #include "app/timing.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -17,16 +18,6 @@ namespace {
 using Clock = ScriptRun::Clock;
 
 nlohmann::json toJson(const Rect& r) { return {r.x, r.y, r.w, r.h}; }
-
-// A --view-file view is drawn at the window's viewport, not at its own size: a size that differs
-// gives another picture than `vdmap render --view-file` (another aspect), so say so.
-void warnAboutTheViewsSize(Workbench& bench, const render::ViewSpec& asked) {
-  const render::ViewSpec shown = bench.viewSpec();
-  if (asked.width <= 0 || (asked.width == shown.width && asked.height == shown.height)) return;
-  bench.report(StatusLine::Kind::kWarning, "the view file's view is " + std::to_string(asked.width) + "x" +
-                                               std::to_string(asked.height) + ", the window's " + std::to_string(shown.width) +
-                                               "x" + std::to_string(shown.height) + " (--window-size changes it)");
-}
 
 // --- Latency (global map stream): one slider change at a time, from the edit until the first
 // frame that draws the map built with it (what is still busy afterwards, such as the inspector's
@@ -110,6 +101,22 @@ void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
   run.layout["map_bbox_px"] = {x0, y0, x1, y1};
 }
 
+// --measure: the points under two pixels of the view as Ctrl+click finds them, from the depth
+// of the frame just drawn (ImGui draws without the depth test, so the scene's depth is intact).
+void measureScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, const WindowState& win) {
+  const std::vector<float>& m = run.options.measure;
+  const auto a = probeView(bench, gl, win, m[0], m[1]), b = probeView(bench, gl, win, m[2], m[3]);
+  if (!a || !b) {
+    bench.report(StatusLine::Kind::kError, std::string("--measure: nothing drawn under pixel ") +
+                                               (a ? std::to_string(m[2]) + "," + std::to_string(m[3])
+                                                  : std::to_string(m[0]) + "," + std::to_string(m[1])));
+    return;
+  }
+  bench.addMeasurePoint(*a);
+  bench.addMeasurePoint(*b);
+  run.measure = {{"a", {a->x, a->y, a->z}}, {"b", {b->x, b->y, b->z}}, {"distance_m", glm::length(*b - *a)}};
+}
+
 void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, const std::string& file) {
   const auto& mapping = win.mapping;
   const auto& global = win.global;
@@ -147,6 +154,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["ui_frames_while_busy"] = run.busy_frame_ms.size();
   stats["ui_frame_ms_median_while_busy"] = median(run.busy_frame_ms);
   stats["layout"] = run.layout;
+  if (!run.measure.is_null()) stats["measure"] = run.measure;
   stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
   stats["view_from_keyframe"] = ui.view_from_keyframe;
@@ -241,13 +249,15 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
     }
     case ScriptPhase::kSettle:
       if (bench.player().busy) return;  // a key pressed above may have asked for a rebuild
+      // A frame before the screenshot, so that it shows the measured line.
+      if (run.countdown == 2 && run.options.measure.size() == 4) measureScripted(run, bench, gl, win);
       if (--run.countdown > 0) return;
       recordLayout(run, bench, win);
       if (!run.options.screenshot.empty() && !failedRun(run, bench)) {
         saveScreenshot(bench, gl, win, run.options.screenshot);
         run.screenshot_taken = true;
       }
-      if (run.options.view) warnAboutTheViewsSize(bench, *run.options.view);
+      if (run.options.view) bench.warnAboutTheViewsSize(*run.options.view);
       if (!run.options.save_view.empty() && !failedRun(run, bench)) bench.saveView(run.options.save_view);
       run.view_files_taken = !run.options.save_view.empty() || !run.options.view_screenshot.empty();
       run.phase = ScriptPhase::kLatency;

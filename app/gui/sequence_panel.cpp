@@ -17,35 +17,54 @@
 namespace vdmap::app::gui {
 namespace {
 
-// Above the scrubber: a marker at every loop closure's frame, its figures in a tooltip.
+// Above the scrubber: a marker at every loop closure's frame, its figures in a tooltip. Markers
+// closer than 0.8 em merge into one wider marker with their count (clusterMarkers); a click on
+// one selects the newest loop's revisited keyframe.
 void drawLoopStrip(Workbench& bench, const WindowState& win, int total) {
   const float font = ImGui::GetFontSize();
   const bool clicked = ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
   const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
-  int revisited = -1;  // the keyframe of the loop under the mouse (the last one when several are)
   ImDrawList* draw = ImGui::GetWindowDrawList();
   const ImU32 color = rgbColor(render::kLoopEdgeColor);
   const float mouse_x = ImGui::GetIO().MousePos.x;
+  const std::vector<LoopEvent>& loops = win.mapping->loops;
+  std::vector<float> xs;
+  // Where the scrubber's grab stands at each loop's frame (the keyframe ticks' formula).
+  for (const LoopEvent& e : loops)
+    xs.push_back(lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(e.position) / std::max(1, total - 1));
+  int revisited = -1;  // the newest loop of the marker under the mouse
   std::string hovered;
-  for (const LoopEvent& e : win.mapping->loops) {
-    // Where the scrubber's grab stands at that frame (the keyframe ticks' formula).
-    const float x = lo.x + 6.f + (hi.x - lo.x - 12.f) * static_cast<float>(e.position) / std::max(1, total - 1);
-    draw->AddTriangleFilled({x - 0.35f * font, lo.y}, {x + 0.35f * font, lo.y}, {x, hi.y}, color);
-    if (std::abs(mouse_x - x) <= 0.5f * font) {
-      char text[200];
-      std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d (revisited; click selects it), %d inliers, "
-                    "correction %s, pose graph %.1f ms", hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to,
-                    e.loop.inliers, metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
-      hovered += text;
-      revisited = e.loop.to;
+  for (const MarkerCluster& c : clusterMarkers(xs, 0.8f * font)) {
+    const float left = xs[static_cast<std::size_t>(c.members.front())], right = xs[static_cast<std::size_t>(c.members.back())];
+    const float half = 0.35f * font;
+    draw->AddTriangleFilled({left - half, lo.y}, {right + half, lo.y}, {c.x, hi.y}, color);
+    if (c.members.size() > 1) {
+      char count[16];
+      std::snprintf(count, sizeof count, "x%zu", c.members.size());
+      draw->AddText({right + half + 2.f, lo.y - 0.15f * font}, color, count);
     }
+    if (mouse_x < left - 0.5f * font || mouse_x > right + 0.5f * font) continue;
+    constexpr std::size_t kListed = 10;
+    const std::size_t n = c.members.size();
+    for (std::size_t j = 0; j < std::min(n, kListed); ++j) {  // newest first
+      const LoopEvent& e = loops[static_cast<std::size_t>(c.members[n - 1 - j])];
+      char text[200];
+      std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d, %d inliers, correction %s, pose graph %.1f ms",
+                    hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to, e.loop.inliers,
+                    metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
+      hovered += text;
+    }
+    if (n > kListed) hovered += "\n... and " + std::to_string(n - kListed) + " earlier";
+    hovered += "\nclick: select K" + std::to_string(loops[static_cast<std::size_t>(c.members.back())].loop.to) +
+               " (the newest one's revisited keyframe)";
+    revisited = loops[static_cast<std::size_t>(c.members.back())].loop.to;
   }
-  if (clicked && revisited >= 0) bench.selectKeyframe(revisited);
+  if (clicked && revisited >= 0) bench.selectKeyframe(revisited, true);
   tip(!hovered.empty() ? hovered
-      : win.mapping->loops.empty()
+      : loops.empty()
           ? "Loop closures appear here (orange markers) when tracking re-observes a keyframe it is not linked to."
-          : "Loop closures: hover over a marker for its frame, keyframes, correction and optimisation time; click "
-            "it to select the revisited keyframe.");
+          : "Loop closures (markers closer than a character merge, with their count): hover over a marker for its "
+            "frame, keyframes, correction and optimisation time; click it to select the revisited keyframe.");
 }
 
 void drawDepthScale(float width) {

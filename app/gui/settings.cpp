@@ -183,6 +183,7 @@ render::ViewSpec viewSpecOf(const Settings& s) {
   spec.up = s.up_axis;
   spec.color = s.color;
   spec.ellipsoids = s.show_ellipsoids;
+  spec.map_hidden = s.hide_map;
   spec.sigma = s.ellipsoid_sigma;
   spec.layers.frustums = s.show_frustums;
   spec.layers.graph = s.show_graph;
@@ -257,6 +258,20 @@ void saveChangedSettings(const fs::path& file, const Settings& at_start, const S
   }
   fs::create_directories(file.parent_path());
   writeFileAtomically(file, jsonText(saved) + "\n");
+}
+
+bool sameSettings(const Settings& a, const Settings& b) { return toJson(a) == toJson(b); }
+
+void SettingsAutosave::note(Clock::time_point now, const Settings& settings) {
+  if (sameSettings(settings, noted_)) return;
+  noted_ = settings;
+  if (sameSettings(noted_, saved_)) changed_at_.reset();  // changed back: nothing to write
+  else changed_at_ = now;
+}
+
+std::optional<SettingsAutosave::Clock::duration> SettingsAutosave::dueIn(Clock::time_point now) const {
+  if (!changed_at_) return std::nullopt;
+  return std::max(Clock::duration::zero(), *changed_at_ + delay_ - now);
 }
 
 bool rerunParamsDiffer(const Settings& a, const Settings& b) { return toJson(a).at("rerun") != toJson(b).at("rerun"); }

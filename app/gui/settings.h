@@ -2,7 +2,9 @@
 // The workbench's persisted settings: thresholds, re-run parameters, view options, window size
 // and the last sequence, stored as JSON in $XDG_CONFIG_HOME/vdmap/settings.json. Parsing lives
 // here (app/), the parameter structs stay in mapping/.
+#include <chrono>
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -23,6 +25,8 @@ struct Settings {
   MapperParams mapper;                  ///< re-run: changing one re-maps the sequence
   render::ColorMode color = render::ColorMode::kRgb;
   bool show_ellipsoids = true;          ///< false: ellipsoid centres as points
+  /// Draw "hidden": no map at all (the paths and cameras alone). Not saved: a run starts with the map.
+  bool hide_map = false;
   bool show_frustums = true, show_graph = true, show_trajectory = true;
   bool show_groundtruth = true;         ///< tracked poses: the ground-truth trajectory beside them
   float ellipsoid_sigma = 2.f;
@@ -73,6 +77,36 @@ void saveSettings(const std::filesystem::path& file, const Settings& settings);
 /// the file (and folder) when missing; writes nothing when nothing changed. A file that exists
 /// but is not valid settings is never replaced: throws std::runtime_error saying so, naming it.
 void saveChangedSettings(const std::filesystem::path& file, const Settings& at_start, const Settings& at_end);
+
+/// Whether a and b hold the same values (every key of the settings file).
+bool sameSettings(const Settings& a, const Settings& b);
+
+/// When the window saves the settings while it runs: one second (`delay`) after the last change,
+/// so a slider dragged for a while is written once. Pure: the caller gives the clock.
+class SettingsAutosave {
+ public:
+  using Clock = std::chrono::steady_clock;
+  /// `saved`: the settings as they are in the file now (nothing is due until they change).
+  explicit SettingsAutosave(Settings saved, Clock::duration delay = std::chrono::seconds(1))
+      : saved_(std::move(saved)), noted_(saved_), delay_(delay) {}
+  /// The settings at `now`: a change restarts the delay.
+  void note(Clock::time_point now, const Settings& settings);
+  /// Whether a save is due at `now` (a change noted at least `delay` ago, not saved yet).
+  bool due(Clock::time_point now) const { return changed_at_ && now - *changed_at_ >= delay_; }
+  /// How long until due (nullopt: nothing to save).
+  std::optional<Clock::duration> dueIn(Clock::time_point now) const;
+  /// The noted settings were written.
+  void saved() {
+    saved_ = noted_;
+    changed_at_.reset();
+  }
+  const Settings& noted() const { return noted_; }
+
+ private:
+  Settings saved_, noted_;
+  Clock::duration delay_;
+  std::optional<Clock::time_point> changed_at_;
+};
 
 /// Whether a and b differ in a re-run parameter (a key of the settings file's "rerun" section),
 /// so that switching between them means re-mapping the sequence.

@@ -4,9 +4,37 @@
 #include <cfloat>
 #include <cstdio>
 
+#include "app/gui/figures.h"
 #include "app/gui/widgets.h"
 
 namespace vdmap::app::gui {
+namespace {
+
+// Tracked against true: ATE and RPE as the TUM RGB-D benchmark defines them (figures.h).
+void drawTrackingError(WindowState& win) {
+  const TrackingError e = trackingError(*win.mapping);
+  if (!e.valid) return;
+  if (beginRows("tracking error")) {
+    label(win.check, "ATE rmse",
+          "Absolute trajectory error (TUM RGB-D benchmark, Sturm et al. 2012): the tracked camera positions after the "
+          "least-squares SE(3) alignment to the ground truth (Horn), rmse over the " + std::to_string(e.matched) +
+          " frames both have (matched by timestamp). The gap drawn in the view is not aligned.");
+    ImGui::Text("%s  (median %s, max %s)", metres(e.ate_rmse_m).c_str(), metres(e.ate_median_m).c_str(),
+                metres(e.ate_max_m).c_str());
+    label(win.check, "RPE / frame",
+          "Relative pose error (TUM RGB-D benchmark): the error of the motion between consecutive matched frames, "
+          "rmse of its translation and rotation; the drift per frame, independent of the alignment.");
+    ImGui::Text("%s, %.2f deg", metres(e.rpe_frame_m).c_str(), e.rpe_frame_deg);
+    label(win.check, "RPE / second",
+          "Relative pose error over frames 1 s apart (TUM RGB-D benchmark, delta = 1 s): the drift per second, rmse "
+          "over " + std::to_string(e.rpe_second_pairs) + " pairs.");
+    if (e.rpe_second_pairs > 0) ImGui::Text("%s, %.2f deg", metres(e.rpe_second_m).c_str(), e.rpe_second_deg);
+    else ImGui::TextDisabled("under 1 s mapped");
+    ImGui::EndTable();
+  }
+}
+
+}  // namespace
 
 void drawTracking(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
@@ -31,6 +59,7 @@ void drawTracking(Workbench& bench, WindowState& win) {
               "frame anchors both), not aligned: the gap is the drift."
             : "The sequence has no groundtruth.txt poses for these frames.");
   ImGui::EndDisabled();
+  drawTrackingError(win);
   swatch(render::kLoopEdgeColor);
   ImGui::AlignTextToFramePadding();
   ImGui::Text("%zu loop closures", win.mapping->loops.size());
@@ -55,7 +84,7 @@ void drawTracking(Workbench& bench, WindowState& win) {
       char text[128];
       std::snprintf(text, sizeof text, "frame %d  K%d -> K%d  %s  %.1f ms##loop%zu", e.position, e.loop.from, e.loop.to,
                     metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms, i);
-      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.selectKeyframe(e.loop.to);
+      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.selectKeyframe(e.loop.to, true);
     }
     ImGui::EndListBox();
   }

@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 #include <utility>
+#include <vector>
 
 #include <imgui.h>
 
@@ -46,6 +47,15 @@ struct Mirrored {
   cv::Mat decoded_rgb;        ///< the selected keyframe's image, decoded once per selection
 };
 
+/// A question about the point under a pixel of the 3-D view, answered once the scene is drawn
+/// (measure_overlay.h answerProbes).
+struct ViewProbe {
+  enum class Purpose { kZoom, kPivot, kMeasure };
+  Purpose purpose = Purpose::kMeasure;
+  float x_px = 0, y_px = 0;  ///< viewport framebuffer pixels, top-left origin
+  float wheel = 0;           ///< kZoom: wheel steps
+};
+
 /// The window's own state (see the top of this file); the UI thread alone uses it.
 struct WindowState {
   /// The snapshots this frame draws, taken once after Workbench::sync (the worker may publish
@@ -67,8 +77,13 @@ struct WindowState {
   std::array<bool, 3> drag_in_view{};  ///< per mouse button: its drag started over the 3-D view
   float container_zoom = 1.f;
   ImVec2 container_center{0.5f, 0.5f};  ///< texture coordinates
-  // The view section's screenshot: the file typed, and one asked for (taken after the frame is drawn).
-  std::string screenshot_text = "vdmap_screenshot.png", screenshot_request;
+  // The view section's screenshot: the file typed ("": a timestamped name in screenshotFolder()),
+  // what it shows (the 3-D view alone or the window), and one asked for (taken after the frame
+  // is drawn; an existing typed name asks first).
+  std::string screenshot_text, screenshot_request, screenshot_confirm;
+  bool screenshot_view_only = false, screenshot_request_view = false;
+  std::vector<ViewProbe> probes;  ///< mouse actions waiting for the drawn scene's depth
+
   std::deque<double> frame_times;  ///< the last 30 UI frames' times, ms (the status line's median)
   FileBrowser browser;             ///< Browse... beside Open (opening files)
 };

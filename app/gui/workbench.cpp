@@ -2,15 +2,19 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 #include <iostream>
 #include <optional>
+#include <utility>
 
 #include <Eigen/Geometry>
 
 #include "app/provenance.h"
 #include "app/view_file.h"
 #include "mapping/export/map_export.h"
+#include "render/legend.h"
 #include "render/view_framing.h"
 
 namespace vdmap::app::gui {
@@ -37,12 +41,16 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
       {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
+      {"T", "frame the trajectories (tracked and ground truth) only"},
+      {"P, double-click", "turn about the point under the cursor (the eye stays)"},
+      {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
+      {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
       {"left drag", "orbit about the up axis"},
       {"right / middle drag, Shift + left drag", "pan"},
-      {"wheel", "zoom"},
+      {"wheel", "zoom toward the point under the cursor"},
       {"click", "pick an ellipsoid (marked magenta; its keyframe is selected)"},
       {"container view: wheel, drag", "zoom, pan"},
   };
@@ -342,8 +350,9 @@ void Workbench::setOnChange(std::function<void()> on_change) {
   if (worker_) worker_->setOnChange(on_change_);
 }
 
-void Workbench::selectKeyframe(int id) {
+void Workbench::selectKeyframe(int id, bool scroll) {
   ui_.selected_keyframe = id;
+  ui_.scroll_to_selected = scroll && id >= 0;
   if (!worker_) return;
   const auto mapping = worker_->mapping();
   if (id < 0 || id >= static_cast<int>(mapping->keyframes.size())) ui_.selected_keyframe = -1;
@@ -476,7 +485,9 @@ void Workbench::key(KeyAction action) {
       break;
     case KeyAction::kUndo: undoPoseEdit(); break;
     case KeyAction::kBeforeOptimisation: showBeforeOptimisation(!ui_.show_before_optimisation); break;
-    case KeyAction::kSaveView: saveView(ui_.view_file_text); break;
+    case KeyAction::kSaveView: saveViewSafely(ui_.view_file_text); break;
+    case KeyAction::kFrameTrajectories: frameTrajectories(); break;
+    case KeyAction::kPivotHere: ui_.pivot_requested = true; break;  // the window probes the point under the cursor
   }
 }
 
@@ -512,6 +523,7 @@ bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
   s.up_axis = spec.up;
   s.color = spec.color;
   s.show_ellipsoids = spec.ellipsoids;
+  s.hide_map = spec.map_hidden;
   if (spec.kind != render::ViewKind::kContainer) s.ellipsoid_sigma = spec.sigma;  // a container's is fixed
   s.show_frustums = spec.layers.frustums;
   s.show_graph = spec.layers.graph;
@@ -560,6 +572,254 @@ bool Workbench::saveView(const std::string& file) {
   std::cout << "vdmap: view saved to " << path << "; draw it with: " << command << std::endl;
   report(StatusLine::Kind::kSuccess, "view saved to " + path + "; " + command);
   return true;
+}
+
+}  // namespace vdmap::app::gui
+
+// ---- The view tools: pick marker list scroll, zoom at the cursor, pivot, pose drag speed,
+// measuring, view files and quick views, screenshot names.
+namespace vdmap::app::gui {
+
+std::vector<MarkerCluster> clusterMarkers(const std::vector<float>& positions_px, float min_px) {
+  std::vector<MarkerCluster> out;
+  float first = 0.f;  // the cluster's first marker: a cluster spans at most min_px
+  for (std::size_t i = 0; i < positions_px.size(); ++i) {
+    const float x = positions_px[i];
+    if (out.empty() || x - first >= min_px) {
+      out.push_back({x, {}});
+      first = x;
+    }
+    MarkerCluster& c = out.back();
+    c.members.push_back(static_cast<int>(i));
+    c.x = 0.5f * (first + x);
+  }
+  return out;
+}
+
+fs::path screenshotFolder() {
+  const char* pictures = std::getenv("XDG_PICTURES_DIR");
+  if (pictures && *pictures) return fs::path(pictures) / "vdmap";
+  const char* home = std::getenv("HOME");
+  if (home && *home) return fs::path(home) / "Pictures" / "vdmap";
+  return {};
+}
+
+fs::path freeTimestampedName(const fs::path& folder, std::time_t when, const std::string& stem) {
+  std::tm local{};
+  localtime_r(&when, &local);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", &local);
+  return freeNumberedName(folder / (stem + "-" + stamp + ".png"));
+}
+
+fs::path defaultScreenshotFile(std::time_t when) {
+  fs::path folder = screenshotFolder();
+  std::error_code error;
+  if (!folder.empty()) fs::create_directories(folder, error);
+  if (folder.empty() || error) folder = fs::current_path(error);
+  return freeTimestampedName(folder, when);
+}
+
+fs::path freeNumberedName(const fs::path& file) {
+  std::error_code ignored;
+  if (!fs::exists(file, ignored)) return file;
+  const fs::path stem = file.parent_path() / file.stem();
+  for (int n = 2;; ++n) {
+    fs::path next = stem;
+    next += "-" + std::to_string(n) + file.extension().string();
+    if (!fs::exists(next, ignored)) return next;
+  }
+}
+
+void Workbench::zoomAt(float wheel_steps, const glm::vec3& p) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  // eye' = (1 - f) p + f eye on the line from the eye to p: p stays at its pixel.
+  const float f = std::pow(0.9f, wheel_steps);
+  ui_.camera.target += (1.f - f) * (p - ui_.camera.target);
+  ui_.camera.distance_m = std::max(1e-3f, ui_.camera.distance_m * f);
+}
+
+glm::vec3 Workbench::targetPlanePoint(float x_px, float y_px, int width, int height) const {
+  const render::ViewCamera v = ui_.camera.view(width, height);
+  const glm::vec4 t = v.T_C_W * glm::vec4(ui_.camera.target, 1.f);
+  const float z = t.z > v.near_m ? t.z : ui_.camera.distance_m;
+  const glm::vec4 c((x_px - v.cx) / v.fx * z, (y_px - v.cy) / v.fy * z, z, 1.f);
+  return glm::vec3(glm::inverse(v.T_C_W) * c);
+}
+
+void Workbench::pivotAt(const glm::vec3& p) {
+  const glm::vec3 eye = ui_.camera.eye();
+  if (glm::length(p - eye) < 1e-4f) return;
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  ui_.camera = render::OrbitCamera::fromLookAt(eye, p, ui_.camera.up, ui_.camera.fov_y_deg);
+}
+
+void Workbench::frameTrajectories() {
+  const auto mapping = worker_ ? worker_->mapping() : nullptr;
+  if (!mapping) return;
+  glm::vec3 lo(INFINITY), hi(-INFINITY);
+  const auto grow = [&](const std::vector<Transform>& poses) {
+    for (const Transform& T : poses) {
+      const glm::vec3 p(T.translation().x(), T.translation().y(), T.translation().z());
+      lo = glm::min(lo, p);
+      hi = glm::max(hi, p);
+    }
+  };
+  grow(mapping->trajectoryWorld(ui_.show_before_optimisation));
+  if (ui_.settings.show_groundtruth) grow(mapping->groundTruthWorld());
+  if (!(lo.x <= hi.x)) {
+    report(StatusLine::Kind::kWarning, "no trajectory yet to frame");
+    return;
+  }
+  const glm::vec3 pad(0.05f);  // a straight path still gets a box
+  ui_.camera.frame(lo - pad, hi + pad, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.follow_map = false;  // a growing map must not take the view back
+  ui_.view_from_keyframe = -1;
+}
+
+float Workbench::poseDragSpeed() const {
+  const render::ViewCamera v = view(ui_.view_width, ui_.view_height).camera;
+  float depth = ui_.camera.distance_m;
+  const auto mapping = worker_ ? worker_->mapping() : nullptr;
+  const int id = ui_.selected_keyframe;
+  if (mapping && id >= 0 && id < static_cast<int>(mapping->keyframes.size())) {
+    const Eigen::Vector3d t = mapping->keyframes[static_cast<std::size_t>(id)].T_W_K.translation();
+    const float z = (v.T_C_W * glm::vec4(t.x(), t.y(), t.z(), 1.f)).z;
+    if (z > v.near_m) depth = z;
+  }
+  return std::clamp(depth / std::max(1.f, v.fy), 1e-4f, 0.05f);
+}
+
+bool Workbench::takeScrollToSelected() { return std::exchange(ui_.scroll_to_selected, false); }
+
+void Workbench::addMeasurePoint(const glm::vec3& point) {
+  glm::vec3 p = point;
+  if (ui_.measure_snap)
+    if (const auto g = global(); g && !g->map.ellipsoids.empty()) {
+      const Eigen::Vector3d q(p.x, p.y, p.z);
+      double best = INFINITY;
+      for (const Ellipsoid& e : g->map.ellipsoids)
+        if (const double d = (e.mean - q).squaredNorm(); d < best) {
+          best = d;
+          p = {e.mean.x(), e.mean.y(), e.mean.z()};
+        }
+    }
+  if (!ui_.measure_a || ui_.measure_b) {
+    ui_.measure_a = p;
+    ui_.measure_b.reset();
+  } else {
+    ui_.measure_b = p;
+  }
+}
+
+bool Workbench::loadView(const std::string& file, bool thresholds) {
+  if (!worker_) {
+    report(StatusLine::Kind::kError, "Load view: nothing is open");
+    return false;
+  }
+  const std::string path = absolute(file);
+  render::ViewSpec spec;
+  GlobalMapParams params = ui_.params.global;
+  try {
+    if (path.empty()) throw std::invalid_argument("Load view: type a file name first");
+    spec = readViewFile(path, &params);
+  } catch (const std::exception& e) {
+    report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  if (!applyViewSpec(spec)) return false;
+  if (thresholds) {
+    ui_.params.global = params;
+    applyThresholds();
+  }
+  if (!warnAboutTheViewsSize(spec))
+    report(StatusLine::Kind::kSuccess, "view loaded from " + path + (thresholds ? " with its thresholds" : ""));
+  return true;
+}
+
+bool Workbench::warnAboutTheViewsSize(const render::ViewSpec& asked) {
+  // The view is drawn at the window's viewport, not at its own size: a size that differs gives
+  // another picture than `vdmap render --view-file` (another aspect), so say so.
+  const render::ViewSpec shown = viewSpec();
+  if (asked.width <= 0 || (asked.width == shown.width && asked.height == shown.height)) return false;
+  report(StatusLine::Kind::kWarning, "the view file's view is " + std::to_string(asked.width) + "x" +
+                                         std::to_string(asked.height) + ", the window's " + std::to_string(shown.width) +
+                                         "x" + std::to_string(shown.height) + " (--window-size changes it)");
+  return true;
+}
+
+std::string Workbench::beforeOptimisationBanner(const MappingSnapshot& mapping) const {
+  if (!ui_.show_before_optimisation) return "";
+  const LastOptimisation& last = mapping.last_optimisation;
+  char text[200];
+  if (last.kind == LastOptimisation::Kind::kRefinement) {
+    std::snprintf(text, sizeof text, "BEFORE the final refinement (%s, %d pairs, %s; B: after)", last.method.c_str(),
+                  last.pairs, render::metresText(last.correction_m).c_str());
+    return text;
+  }
+  const int i = last.kind == LastOptimisation::Kind::kLoop ? last.loop : static_cast<int>(mapping.loops.size()) - 1;
+  if (i < 0 || i >= static_cast<int>(mapping.loops.size())) return "BEFORE the last pose-graph optimisation (B: after)";
+  const LoopEvent& loop = mapping.loops[static_cast<std::size_t>(i)];
+  std::snprintf(text, sizeof text, "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)",
+                loop.position, render::metresText(loop.loop.correction_m).c_str());
+  return text;
+}
+
+void Workbench::enableSettingsAutosave(std::string file, Settings at_start) {
+  autosave_file_ = std::move(file);
+  autosave_start_ = at_start;
+  autosave_.emplace(std::move(at_start));
+}
+
+double Workbench::autosaveSettings(SettingsAutosave::Clock::time_point now) {
+  if (!autosave_ || autosave_file_.empty()) return INFINITY;
+  autosave_->note(now, ui_.settings);
+  if (autosave_->due(now)) {
+    try {
+      saveChangedSettings(autosave_file_, autosave_start_, autosave_->noted());
+    } catch (const std::exception& e) {
+      report(StatusLine::Kind::kWarning, std::string("settings not saved: ") + e.what());
+    }
+    autosave_->saved();  // a failure is not retried every frame: the next change tries again
+  }
+  const auto left = autosave_->dueIn(now);
+  return left ? std::chrono::duration<double>(*left).count() : INFINITY;
+}
+
+void Workbench::storeQuickView(int slot) {
+  if (slot < 1 || slot > 9 || !worker_) return;
+  quick_views_[static_cast<std::size_t>(slot - 1)] = viewSpec();
+  report(StatusLine::Kind::kInfo, "view kept as quick view " + std::to_string(slot) + " (" + std::to_string(slot) +
+                                      " shows it again)");
+}
+
+bool Workbench::recallQuickView(int slot) {
+  if (slot < 1 || slot > 9 || !worker_) return false;
+  const auto& spec = quick_views_[static_cast<std::size_t>(slot - 1)];
+  if (!spec) {
+    report(StatusLine::Kind::kInfo, "no quick view " + std::to_string(slot) + " yet (Ctrl+" + std::to_string(slot) +
+                                        " keeps the view shown)");
+    return false;
+  }
+  return applyViewSpec(*spec);
+}
+
+bool Workbench::saveViewSafely(const std::string& file, bool replace) {
+  std::error_code ignored;
+  std::string target = file;
+  if (!replace && !file.empty() && fs::exists(file, ignored)) {
+    if (fs::path(file).filename() == "vdmap_view.json") {
+      target = freeNumberedName(file).string();  // the default name numbers itself
+    } else {
+      ui_.confirm_view_replace = absolute(file);
+      report(StatusLine::Kind::kWarning, ui_.confirm_view_replace + " exists: replace it?");
+      return false;
+    }
+  }
+  ui_.confirm_view_replace.clear();
+  return saveView(target);
 }
 
 }  // namespace vdmap::app::gui

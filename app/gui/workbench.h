@@ -2,6 +2,9 @@
 // The workbench's UI state and the actions it triggers, without a window: the ImGui code
 // (workbench_window.cpp and the panels it draws) only edits UiState, calls these actions and reads
 // the model through them, never the MappingWorker itself, so tests drive the same paths.
+#include <array>
+#include <ctime>
+#include <filesystem>
 #include <functional>
 #include <memory>
 #include <optional>
@@ -60,6 +63,17 @@ struct UiState {
   /// (Workbench::showBeforeOptimisation); off again when there is none (after seeking back).
   bool show_before_optimisation = false;
   bool reset_layout = false;      ///< panels go back to their default widths next frame
+  // The view tools: pick marker, keyframe list, measuring, quick views.
+  /// The keyframe list scrolls to the selected keyframe once (set by a pick or a loop marker;
+  /// Workbench::takeScrollToSelected clears it).
+  bool scroll_to_selected = false;
+  /// Measuring (Ctrl+click): point A, then B (world, metres); a third click starts again at A.
+  std::optional<glm::vec3> measure_a, measure_b;
+  bool measure_snap = false;      ///< measured points snap to the nearest ellipsoid centre
+  bool pivot_requested = false;   ///< P: the window turns the view about the point under the cursor
+  /// A file Save view was asked to write that exists: the window asks "Replace?" ("": none).
+  std::string confirm_view_replace;
+  bool load_view_thresholds = false;  ///< Load view: also its thresholds (as --settings does)
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
 };
 
@@ -70,7 +84,7 @@ inline constexpr float kContainerSigma = 2.f;
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo, kBeforeOptimisation, kSaveView
+  kEscape, kUndo, kBeforeOptimisation, kSaveView, kFrameTrajectories, kPivotHere
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
@@ -80,6 +94,27 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp();
 /// `radius_px`, preferring the nearer one among those within a pixel of the best; -1 if none.
 int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px,
                   float y_px, float radius_px = 8.f);
+
+/// The loop strip's markers (view pixels along the strip, in time order) merged where they lie
+/// closer than `min_px`: each cluster's centre and the indices of its markers.
+struct MarkerCluster {
+  float x = 0;
+  std::vector<int> members;
+};
+std::vector<MarkerCluster> clusterMarkers(const std::vector<float>& positions_px, float min_px);
+
+/// Where a screenshot goes by default: $XDG_PICTURES_DIR/vdmap, else ~/Pictures/vdmap, else the
+/// working folder ("" for none of the first two).
+std::filesystem::path screenshotFolder();
+/// A name in `folder` that does not exist yet: STEM-YYYYMMDD-HHMMSS.png for local time `when`, with
+/// -2, -3 ... appended while one exists.
+std::filesystem::path freeTimestampedName(const std::filesystem::path& folder, std::time_t when,
+                                          const std::string& stem = "vdmap");
+/// The file a screenshot with no name typed goes to: a free timestamped name in
+/// screenshotFolder() (created), else in the working folder when that cannot be made.
+std::filesystem::path defaultScreenshotFile(std::time_t when);
+/// `file` itself when it does not exist, else FILE-2.EXT, FILE-3.EXT ... (the first free one).
+std::filesystem::path freeNumberedName(const std::filesystem::path& file);
 
 /// Euler angles (deg, R = Rz Ry Rx) <-> rotation. rotationToEulerDeg gives pitch (y) within
 /// [-90, 90] and roll, yaw within (-180, 180]; at +-90 pitch (gimbal lock) roll is 0.
@@ -203,7 +238,8 @@ class Workbench {
   /// sequence and recent files kept); the thresholds are applied and the layout reset.
   void resetToDefaults();
   /// Selects keyframe `id` for the inspector and tells the session (an id not mapped: none).
-  void selectKeyframe(int id);
+  /// `scroll`: the keyframe list scrolls to it once (a pick in the view, a loop marker).
+  void selectKeyframe(int id, bool scroll = false);
   /// Sends ui().pose_* as the selected keyframe's new pose.
   void applyPoseEdit();
   /// Remembers the selected keyframe's pose before an edit starts (a drag's first frame), so
@@ -245,6 +281,42 @@ class Workbench {
   /// One keyboard action.
   void key(KeyAction action);
 
+  // The view tools (zoom at the cursor, pivot, drag speed, measuring, view files, quick views).
+  /// Zooms by `wheel_steps` toward `p` (world): the point under the cursor stays under it.
+  void zoomAt(float wheel_steps, const glm::vec3& p);
+  /// The point of the target's plane (facing the view) under pixel (x, y) of a width x height
+  /// viewport: where zoomAt and pivotAt go when there is no surface under the cursor.
+  glm::vec3 targetPlanePoint(float x_px, float y_px, int width, int height) const;
+  /// Turns about `p`: the target moves there, the eye stays (double-click, P).
+  void pivotAt(const glm::vec3& p);
+  /// Frames the trajectory and the ground truth only (T), keeping the direction.
+  void frameTrajectories();
+  /// Metres per pixel of a pose drag: the view's at the selected keyframe's depth, within
+  /// 0.1 mm..5 cm.
+  float poseDragSpeed() const;
+  /// Whether the keyframe list should scroll to the selection now (once per pick or marker).
+  bool takeScrollToSelected();
+  /// Ctrl+click: the next measuring point (A, then B, then A again). With ui().measure_snap it
+  /// snaps to the nearest ellipsoid centre of the global map.
+  void addMeasurePoint(const glm::vec3& p);
+  /// Reads `file` (a view file) and shows its view (applyViewSpec); with `thresholds` its
+  /// thresholds are applied too. A view whose size is not the viewport's warns (the picture
+  /// differs from `vdmap render --view-file`). False (the status line says why) on failure.
+  bool loadView(const std::string& file, bool thresholds);
+  /// Warns (true) when `asked`'s size is not the viewport's (loadView, --view-file).
+  bool warnAboutTheViewsSize(const render::ViewSpec& asked);
+  /// Ctrl+1..9 keep the view shown in memory; 1..9 show it again (false: none kept there).
+  void storeQuickView(int slot);
+  bool recallQuickView(int slot);
+  /// The window saves the settings while it runs, 1 s after the last change (SettingsAutosave):
+  /// into `file`, what changed since `at_start` (saveChangedSettings).
+  void enableSettingsAutosave(std::string file, Settings at_start);
+  /// Once per turn of the event loop: saves when due. Returns the seconds until the next save
+  /// is due (the loop's longest wait; infinity: nothing to save).
+  double autosaveSettings(SettingsAutosave::Clock::time_point now);
+  /// The banner over the view while the map before the last optimisation shows ("" while not).
+  std::string beforeOptimisationBanner(const MappingSnapshot& mapping) const;
+
   /// The view shown, as a view file holds it (docs/workbench.md "Save view"): container:K while
   /// the container window is open (2W x 2H), keyframe:K while viewing from a keyframe (the
   /// letterbox's size), else the global view with its camera (eye, target, up, field of view) at
@@ -262,6 +334,10 @@ class Workbench {
   /// give its absolute path and the `vdmap render` command that draws it. False (the status line
   /// says why) when nothing is open or the file cannot be written.
   bool saveView(const std::string& file);
+  /// As saveView, but never overwrites silently: the default name (vdmap_view.json) takes the
+  /// first free number (vdmap_view-2.json ...); another name that exists is written only with
+  /// `replace`, else ui().confirm_view_replace asks and false is returned.
+  bool saveViewSafely(const std::string& file, bool replace = false);
 
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
@@ -290,6 +366,10 @@ class Workbench {
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
   std::string session_settings_;                   // setSessionSettings'
   std::string why_player_off_;                     // whyPlayerOff()
+  std::array<std::optional<render::ViewSpec>, 9> quick_views_;  // storeQuickView's
+  std::optional<SettingsAutosave> autosave_;       // enableSettingsAutosave's
+  std::string autosave_file_;
+  Settings autosave_start_;
 
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;

@@ -137,7 +137,7 @@ void Workbench::pick(float x_px, float y_px, int width, int height) {
   if (i < 0) return;
   ui_.picked = global->map.ellipsoids[static_cast<std::size_t>(i)];
   ui_.picked_generation = global->generation;
-  selectKeyframe(ui_.picked->keyframe);
+  selectKeyframe(ui_.picked->keyframe, true);  // the keyframe list scrolls to it
 }
 
 }  // namespace vdmap::app::gui

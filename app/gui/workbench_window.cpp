@@ -22,6 +22,7 @@
 #include "app/gui/container_window.h"
 #include "app/gui/glfw_context.h"
 #include "app/gui/map_panel.h"
+#include "app/gui/measure_overlay.h"
 #include "app/gui/scene_view.h"
 #include "app/gui/script_driver.h"
 #include "app/gui/sequence_panel.h"
@@ -71,6 +72,8 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_C: return KeyAction::kContainer;
     case GLFW_KEY_B: return KeyAction::kBeforeOptimisation;
     case GLFW_KEY_S: return KeyAction::kSaveView;
+    case GLFW_KEY_T: return KeyAction::kFrameTrajectories;
+    case GLFW_KEY_P: return KeyAction::kPivotHere;
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return KeyAction::kHelp;
     case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
@@ -88,6 +91,10 @@ void handleKeys(Workbench& bench, KeyQueue& keys) {
     const auto [key, mods] = keys.presses.front();
     keys.presses.pop_front();
     if (typing && key != GLFW_KEY_F1) continue;  // the key belongs to a text field
+    if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {  // quick views: Ctrl+N keeps the view, N shows it
+      (mods & GLFW_MOD_CONTROL) ? bench.storeQuickView(key - GLFW_KEY_0) : void(bench.recallQuickView(key - GLFW_KEY_0));
+      continue;
+    }
     if (const auto action = actionOf(key, mods)) bench.key(*action);
   }
 }
@@ -166,6 +173,7 @@ class WorkbenchWindow {
   // Waits for input, news from the worker or a deadline, and draws a frame only when something
   // may have changed: an idle window costs (almost) nothing. Returns false when it should close.
   bool step() {
+    bench_.autosaveSettings(Clock::now());  // settings: 1 s after the last change
     if (!needsFrame()) {
       glfwWaitEventsTimeout(waitSeconds());
       if (!needsFrame()) return !glfwWindowShouldClose(context_.window()) && !script_.finished;
@@ -226,8 +234,9 @@ class WorkbenchWindow {
     if (script_.phase == ScriptPhase::kIdle)
       return std::max(0.0, std::chrono::duration<double>(script_.idle_until - Clock::now()).count());
     if (preparing_.folder.valid()) return 0.2;
-    // The worker wakes the loop itself (Workbench::setOnChange); the timeout is a safety net.
-    return 2.0;
+    // The worker wakes the loop itself (Workbench::setOnChange); the timeout is a safety net,
+    // and the settings' autosave wakes it when due.
+    return std::min(2.0, bench_.autosaveSettings(Clock::now()) + 0.01);
   }
 
   void frame() {
@@ -262,6 +271,8 @@ class WorkbenchWindow {
     drawContainerWindow(bench_, mirror_, win_);
     drawHelp(bench_, win_);
     handleMouse(bench_, win_);
+    handleViewTools(bench_, win_);  // wheel, double-click, P, Ctrl+click: probes answered below
+    drawViewMarks(bench_, win_);
     bench_.ui().reset_layout = false;
     const Seen now = seen();
     // A new session draws panels and tables it has not drawn before: let them settle.
@@ -275,7 +286,12 @@ class WorkbenchWindow {
       script_.labels_cut_before_wait = std::max(script_.labels_cut_before_wait, win_.check.labels_cut);
     ImGui::Render();
     drawView();
+    answerProbes(bench_, gl_, win_);  // the drawn scene's depth under the cursor
     if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
+    if (!win_.screenshot_request.empty() && win_.screenshot_request_view) {  // the 3-D view alone
+      saveViewScreenshot(bench_, gl_, mirror_, win_, win_.screenshot_request);
+      win_.screenshot_request.clear();
+    }
     ImGui_ImplOpenGL3_RenderDrawData(ImGui::GetDrawData());
     if (!win_.screenshot_request.empty()) {
       saveScreenshot(bench_, gl_, win_, win_.screenshot_request);

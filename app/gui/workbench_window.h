@@ -36,6 +36,9 @@ struct ScriptOptions {
   // Progressive drawing (docs/performance.md "Workbench"):
   /// Ellipsoids the fast pass draws while the camera moves; 0: adapted to the frame times.
   std::size_t fast_budget = 0;
+  /// Measuring: view pixels x1, y1, x2, y2 (the 3-D viewport's framebuffer pixels, top-left
+  /// origin) probed once the screenshot's frame is drawn (stats: measure {a, b, distance_m}).
+  std::vector<float> measure;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
