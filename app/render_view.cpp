@@ -476,12 +476,19 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     scene.T_W_K = m.graph->keyframe(spec.keyframe).T_W_K;
     graph.tracked = false;  // the window shows no tracking key through a keyframe
   }
-  std::vector<glm::vec3> means;
-  means.reserve(map.size());
-  for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  for (const auto& p : m.mesh.positions) means.emplace_back(p.x(), p.y(), p.z());  // a mesh is framed as the map
-  scene.bounds = render::frameBounds(means, graph);
+  // The frame holds what is drawn: each ellipsoid's extent at the sigma (strays left out), and a
+  // mesh whole.
   scene.up = up(spec.up, params);
+  const render::HeightFrame height_frame = render::heightFrame(map, scene.up);
+  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, height_frame);
+  for (const auto& p : m.mesh.positions) {
+    const glm::vec3 q(p.x(), p.y(), p.z());
+    drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
+    drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
+    drawn.empty = false;
+  }
+  last_strays_ = drawn.strays;
+  scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;
   last_up_ = spec.look_at ? glm::normalize(spec.look_at->up) : scene.up;
   mirror.setLegend(spec.layers.legend ? render::legendFor(spec.color, mirror.mapColorRange(), graph,

@@ -56,8 +56,8 @@ struct OrbitCamera {
   void fly(float forward_m, float right_m, float up_m);
   glm::vec3 eye() const;
   ViewCamera view(int width, int height) const;
-  /// Keeps the viewing direction and moves target and distance so that the box's bounding
-  /// sphere fits both the vertical and the horizontal field of view of a width/height `aspect`.
+  /// Keeps the viewing direction and frames the box in a width/height `aspect` view: fit() with
+  /// its default margin.
   void frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f);
   /// Keeps the viewing direction and sets target and distance so that all 8 corners of the box
   /// project inside a width/height `aspect` view with `margin` (a fraction of each half-size)

@@ -107,6 +107,7 @@ OrbitCamera orbitCamera(const ViewSpec& spec, const ViewScene& scene, int width,
     const float limit = glm::radians(89.f);
     cam.pitch = std::clamp(glm::radians(spec.orbit->elevation_deg), -limit, limit);
     if (spec.orbit->distance_m) cam.distance_m = *spec.orbit->distance_m;
+    else cam.fit(scene.bounds.first, scene.bounds.second, aspect);  // framed from these angles
   }
   return cam;
 }

@@ -1,6 +1,7 @@
 #pragma once
 // Where the camera of a view is, the same for the workbench and `vdmap render`: the box a view
 // frames, the world's up direction, the default orbit view and the camera a ViewSpec asks for.
+#include <cstddef>
 #include <span>
 #include <utility>
 

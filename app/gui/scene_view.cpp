@@ -31,7 +31,8 @@ void drawPreparation(ImDrawList* draw, const WindowState& win) {
 
 // Top left: what the view does (follows the map, looks through a keyframe) and a banner while the
 // map before the last optimisation shows. The tracking lines' key is in the legend (render/legend.h).
-void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping, const Rect& view) {
+void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& mapping, const Rect& view,
+                   std::size_t strays) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
                      : ui.follow_map            ? "following the map (a drag stops it, F resumes)"
@@ -41,6 +42,13 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const MappingSnapshot& m
   if (ui.view_from_keyframe >= 0) {
     char text[64];
     std::snprintf(text, sizeof text, "K%d, its own intrinsics", ui.view_from_keyframe);
+    draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
+    line_y += 1.3f * font;
+  }
+  if (strays > 0 && ui.view_from_keyframe < 0) {
+    // Framing leaves ellipsoids far beyond the map's robust box out (render::drawnBounds).
+    char text[96];
+    std::snprintf(text, sizeof text, "%zu ellipsoid%s outside the frame", strays, strays == 1 ? "" : "s");
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
     line_y += 1.3f * font;
   }
@@ -212,7 +220,7 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
     return;
   }
   const UiState& ui = bench.ui();
-  drawViewHints(draw, ui, *win.mapping, view);
+  drawViewHints(draw, ui, *win.mapping, view, bench.framedStrays());
   drawUpAxis(draw, ui, view);
 }
 

@@ -57,9 +57,12 @@ void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
                 {"help", toJson(at.help)},  // all zero while the help is closed
                 {"up", {ui.camera.up.x, ui.camera.up.y, ui.camera.up.z}}};
   if (!global || global->map.ellipsoids.empty()) return;
-  std::vector<glm::vec3> means;
-  for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  const auto [lo, hi] = render::robustBounds(means);
+  // What the view draws of the map (each ellipsoid's extent at the sigma, strays left out and
+  // counted), so a cut is seen here.
+  const render::DrawnBounds drawn = bench.drawnMap();
+  run.layout["map_strays"] = drawn.strays;
+  if (drawn.empty) return;
+  const glm::vec3 lo = drawn.lo, hi = drawn.hi;
   const ViewportView v = bench.view(ui.view_width, ui.view_height);
   float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (int c = 0; c < 8; ++c) {
