@@ -327,6 +327,8 @@ struct RenderSource::Impl {
   int mirror_level = -1;
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
   int container_serial = 0;
+  std::vector<Ellipsoid> sliced;  // the map's ellipsoids a --slice keeps
+  int slice_serial = 0;
 };
 
 RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& map_in, const std::string& mesh)
@@ -467,7 +469,17 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   int generation = 1;
   for (std::size_t i = 0; i < m.maps.size(); ++i)
     if (&m.maps[i].second == &map) generation = static_cast<int>(i) + 2;
-  mirror.setMap(generation, map);
+  // A height slice keeps the ellipsoids whose centre lies lo..hi above the floor, whole.
+  const std::vector<Ellipsoid>* shown = &map;
+  if (spec.slice.on) {
+    const render::HeightFrame floor = render::heightFrame(map, up(spec.up, params));
+    m.sliced.clear();
+    for (const Ellipsoid& e : map)
+      if (spec.slice.keeps(floor.height({e.mean.x(), e.mean.y(), e.mean.z()}))) m.sliced.push_back(e);
+    shown = &m.sliced;
+    generation = (1 << 24) + ++m.slice_serial;
+  }
+  mirror.setMap(generation, *shown);
   render::GraphScene graph;
   if (m.graph) graph = render::graphSceneOf(*m.graph, *m.state, m.camera, m.tracked);
   graph.selected_keyframe = spec.selected_keyframe;
@@ -480,9 +492,10 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   // mesh whole.
   scene.up = up(spec.up, params);
   const render::HeightFrame height_frame = render::heightFrame(map, scene.up);
-  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, height_frame);
+  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, height_frame,
+                                                  render::frameAxes(map, scene.up));
   for (const auto& p : m.mesh.positions) {
-    const glm::vec3 q(p.x(), p.y(), p.z());
+    const glm::vec3 q = glm::transpose(drawn.axes) * glm::vec3(p.x(), p.y(), p.z());
     drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
     drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
     drawn.empty = false;
@@ -500,7 +513,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     m.mesh_renderer = std::make_unique<render::MeshRenderer>(gl);
     m.mesh_renderer->set(render::toColoredMesh(m.mesh));
   }
-  last_drawn_ = map.size();
+  last_drawn_ = spec.map_hidden ? 0 : shown->size();
   return render::renderView(gl, mirror, spec, scene, w, h, m.mesh_renderer.get());
 }
 

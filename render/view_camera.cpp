@@ -127,11 +127,7 @@ ViewCamera OrbitCamera::view(int width, int height) const {
   return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height);
 }
 
-void OrbitCamera::frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect) {
-  fit(box_min, box_max, aspect);
-}
-
-void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect, float margin) {
+void OrbitCamera::fit(const FrameBox& box, float aspect, float margin) {
   // The camera's axes for the held direction: r right, u up in the image, f forward.
   glm::vec3 uu, a, b;
   horizon(up, &uu, &a, &b);
@@ -145,11 +141,13 @@ void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float 
   const float tan_x = tan_y * std::max(aspect, 1e-3f);
   const float keep = 1.f - std::clamp(margin, 0.f, 0.5f);
   // A box of at least 5 cm, so a single point is framed at a sane distance.
-  const glm::vec3 mid = 0.5f * (box_min + box_max);
-  const glm::vec3 half = glm::max(0.5f * (box_max - box_min), glm::vec3(0.025f));
+  const glm::vec3 box_mid = 0.5f * (box.lo + box.hi);
+  const glm::vec3 half = glm::max(0.5f * (box.hi - box.lo), glm::vec3(0.025f));
+  const glm::vec3 mid = box.axes * box_mid;
   glm::vec3 corners[8];
   for (int c = 0; c < 8; ++c)
-    corners[c] = mid + glm::vec3((c & 1) ? half.x : -half.x, (c & 2) ? half.y : -half.y, (c & 4) ? half.z : -half.z);
+    corners[c] = box.axes * (box_mid + glm::vec3((c & 1) ? half.x : -half.x, (c & 2) ? half.y : -half.y,
+                                                 (c & 4) ? half.z : -half.z));
   // The eye is mid + s_r r + s_u u - d f. A corner q (relative to mid) is inside when
   // |q.r - s_r| <= tan_x (q.f + d) and likewise for u. For a given d the shifts that hold every
   // corner form an interval per axis, non-empty from the d of the widest pair of corners on:
@@ -179,13 +177,12 @@ void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float 
   distance_m = d;
 }
 
-OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                                 const glm::vec3& up, float aspect) {
+OrbitCamera OrbitCamera::framing(const FrameBox& box, const glm::vec3& up, float aspect) {
   OrbitCamera cam;
   cam.up = up;
   cam.yaw = glm::radians(-60.f);
   cam.pitch = glm::radians(35.f);
-  cam.frame(box_min, box_max, aspect);
+  cam.frame(box, aspect);
   return cam;
 }
 

@@ -33,7 +33,10 @@ class RenderView : public ::testing::Test {
       mirror.setLegend(legendFor(spec.color, mirror.mapColorRange(), graph_), spec.background, w);
     ViewScene scene;
     scene.up = {0, 0, 1};
-    scene.bounds = frameBounds(drawnBounds(map_, spec.sigma, spec.draw(), spec.slice, heightFrame(map_, scene.up)), graph_);
+    // As `vdmap render` frames it (render_view.cpp).
+    scene.bounds = frameBounds(drawnBounds(map_, spec.sigma, spec.draw(), spec.slice, heightFrame(map_, scene.up),
+                                           frameAxes(map_, scene.up)),
+                               graph_);
     return renderView(context_->gl(), mirror, spec, scene, w, h);
   }
   std::unique_ptr<Context> context_;

@@ -139,6 +139,28 @@ TEST(ViewFraming, FitUsesTheViewNotABoundingSphere) {
     }
 }
 
+TEST(ViewFraming, ARoomTurnedAboutUpIsBoxedAlongItsWalls) {
+  // A 4 x 2 m floor turned 30 degrees about +z: boxed along its walls, the box is 4 x 2, not the
+  // 4.5 x 3.7 m of the world axes.
+  std::vector<Ellipsoid> map;
+  const float t = glm::radians(30.f);
+  for (int i = 0; i < 41; ++i)
+    for (int j = 0; j < 21; ++j) {
+      const float x = 0.1f * i - 2.f, y = 0.1f * j - 1.f;
+      map.push_back(ellipsoidAt({std::cos(t) * x - std::sin(t) * y, std::sin(t) * x + std::cos(t) * y, 0.f}, glm::vec3(0.01f)));
+    }
+  const glm::mat3 axes = frameAxes(map, {0, 0, 1});
+  EXPECT_NEAR(glm::length(axes[2] - glm::vec3(0, 0, 1)), 0.f, 1e-6f);
+  const DrawnBounds drawn = drawnBounds(map, 2.f, DrawMode::kEllipsoids, {}, {}, axes);
+  const glm::vec3 size = drawn.hi - drawn.lo;
+  EXPECT_NEAR(size.x * size.y, 4.04f * 2.04f, 0.2f);
+  // Every centre lies in the turned box.
+  for (const Ellipsoid& e : map) {
+    const glm::vec3 q = glm::transpose(axes) * glm::vec3(e.mean.x(), e.mean.y(), e.mean.z());
+    EXPECT_TRUE(glm::all(glm::greaterThanEqual(q, drawn.lo - 1e-4f)) && glm::all(glm::lessThanEqual(q, drawn.hi + 1e-4f)));
+  }
+}
+
 TEST(ViewFraming, StraysBeyondTheDiagonalAreCountedNotFramed) {
   std::vector<Ellipsoid> map = boxMap();
   for (int i = 0; i < 10; ++i) map.push_back(ellipsoidAt({20.f, 20.f, 20.f}, glm::vec3(0.01f)));

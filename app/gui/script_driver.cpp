@@ -62,11 +62,11 @@ void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
   const render::DrawnBounds drawn = bench.drawnMap();
   run.layout["map_strays"] = drawn.strays;
   if (drawn.empty) return;
-  const glm::vec3 lo = drawn.lo, hi = drawn.hi;
+  const render::FrameBox box(drawn.lo, drawn.hi, drawn.axes);
   const ViewportView v = bench.view(ui.view_width, ui.view_height);
   float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (int c = 0; c < 8; ++c) {
-    const glm::vec3 p((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+    const glm::vec3 p = box.corner(c);
     const glm::vec4 q = v.camera.T_C_W * glm::vec4(p, 1.f);
     const float u = v.camera.fx * q.x / q.z + v.camera.cx + win.layout.view.x + v.image.x;
     const float w = v.camera.fy * q.y / q.z + v.camera.cy + win.layout.view.y + v.image.y;

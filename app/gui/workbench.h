@@ -265,7 +265,7 @@ class Workbench {
   // The box the view frames: drawnMap() (strays left out, so a few far ellipsoids do not shrink
   // the map to a dot), grown to hold every camera of the trajectory and every keyframe's frustum
   // as drawn. `strays` receives drawnMap's count.
-  std::pair<glm::vec3, glm::vec3> frameBounds(std::size_t* strays = nullptr) const;
+  render::FrameBox frameBounds(std::size_t* strays = nullptr) const;
 
   UiState ui_;
   std::string first_error_;

@@ -56,12 +56,13 @@ render::DrawnBounds Workbench::drawnMap() const {
   if (!global) return {};
   const render::ViewSpec spec = viewSpecOf(ui_.settings);
   const std::span<const Ellipsoid> map(global->map.ellipsoids);
-  const render::HeightFrame frame = spec.slice.on ? render::heightFrame(map, upVector()) : render::HeightFrame{};
-  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame);
+  const glm::vec3 up = upVector();
+  const render::HeightFrame frame = spec.slice.on ? render::heightFrame(map, up) : render::HeightFrame{};
+  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, up));
 }
 
-std::pair<glm::vec3, glm::vec3> Workbench::frameBounds(std::size_t* strays) const {
-  if (!worker_) return render::robustBounds({});
+render::FrameBox Workbench::frameBounds(std::size_t* strays) const {
+  if (!worker_) return render::FrameBox(render::robustBounds({}));
   const render::DrawnBounds map = drawnMap();
   if (strays) *strays = map.strays;
   // The cameras the view frames (render::frameBounds): keyframes, every mapped frame, the
@@ -78,9 +79,9 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds(std::size_t* strays) cons
 void Workbench::frameMap() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds(&framed_strays_);
+  const render::FrameBox box = frameBounds(&framed_strays_);
   ui_.camera.up = upVector();
-  ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera.frame(box, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -88,8 +89,8 @@ void Workbench::frameMap() {
 void Workbench::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds(&framed_strays_);
-  ui_.camera = render::defaultOrbit({lo, hi}, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  const render::FrameBox box = frameBounds(&framed_strays_);
+  ui_.camera = render::defaultOrbit(box, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
