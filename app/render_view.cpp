@@ -344,6 +344,8 @@ struct RenderSource::Impl {
   int mirror_level = -1;
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
   int container_serial = 0;
+  std::vector<Ellipsoid> sliced;  // the map's ellipsoids a --slice keeps
+  int slice_serial = 0;
 };
 
 RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& map_in, const std::string& mesh)
@@ -477,7 +479,17 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   int generation = 1;
   for (std::size_t i = 0; i < m.maps.size(); ++i)
     if (&m.maps[i].second == &map) generation = static_cast<int>(i) + 2;
-  mirror.setMap(generation, map);
+  // A height slice keeps the ellipsoids whose centre lies lo..hi above the floor, whole.
+  const std::vector<Ellipsoid>* shown = &map;
+  if (spec.slice.on) {
+    const render::HeightFrame floor = render::heightFrame(map, up(spec.up, params));
+    m.sliced.clear();
+    for (const Ellipsoid& e : map)
+      if (spec.slice.keeps(floor.height({e.mean.x(), e.mean.y(), e.mean.z()}))) m.sliced.push_back(e);
+    shown = &m.sliced;
+    generation = (1 << 24) + ++m.slice_serial;
+  }
+  mirror.setMap(generation, *shown);
   render::GraphScene graph;
   if (m.graph) graph = render::graphSceneOf(*m.graph, *m.state, m.camera, m.tracked);
   graph.selected_keyframe = spec.selected_keyframe;
@@ -486,12 +498,20 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     scene.T_W_K = m.graph->keyframe(spec.keyframe).T_W_K;
     graph.tracked = false;  // the window shows no tracking key through a keyframe
   }
-  std::vector<glm::vec3> means;
-  means.reserve(map.size());
-  for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  for (const auto& p : m.mesh.positions) means.emplace_back(p.x(), p.y(), p.z());  // a mesh is framed as the map
-  scene.bounds = render::frameBounds(means, graph);
+  // The frame holds what is drawn: each ellipsoid's extent at the sigma (strays left out), and a
+  // mesh whole.
   scene.up = up(spec.up, params);
+  const render::HeightFrame height_frame = render::heightFrame(map, scene.up);
+  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, height_frame,
+                                                  render::frameAxes(map, scene.up));
+  for (const auto& p : m.mesh.positions) {
+    const glm::vec3 q = glm::transpose(drawn.axes) * glm::vec3(p.x(), p.y(), p.z());
+    drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
+    drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
+    drawn.empty = false;
+  }
+  last_strays_ = drawn.strays;
+  scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;
   last_up_ = spec.look_at ? glm::normalize(spec.look_at->up) : scene.up;
   mirror.setLegend(spec.layers.legend ? render::legendFor(spec.color, mirror.mapColorRange(), graph,
@@ -503,7 +523,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     m.mesh_renderer = std::make_unique<render::MeshRenderer>(gl);
     m.mesh_renderer->set(render::toColoredMesh(m.mesh));
   }
-  last_drawn_ = map.size();
+  last_drawn_ = spec.map_hidden ? 0 : shown->size();
   return render::renderView(gl, mirror, spec, scene, w, h, m.mesh_renderer.get());
 }
 

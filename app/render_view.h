@@ -100,6 +100,8 @@ class RenderSource {
   /// The number of ellipsoids the last render() drew and the up vector it used (a container
   /// view uses none: the last one stays).
   std::size_t lastDrawn() const { return last_drawn_; }
+  /// The ellipsoids the last global view left out of its frame (render::drawnBounds' strays).
+  std::size_t lastStrays() const { return last_strays_; }
   glm::vec3 lastUp() const { return last_up_; }
 
  private:
@@ -107,6 +109,7 @@ class RenderSource {
   std::unique_ptr<Impl> impl_;
   std::string name_;
   std::size_t last_drawn_ = 0;
+  std::size_t last_strays_ = 0;
   glm::vec3 last_up_{0.f, 0.f, 1.f};
 };
 

@@ -98,10 +98,24 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
   const int cell = m.px(50);
   const int per_row = std::max(1, max_inner / cell);
   const int n = static_cast<int>(legend.swatches.size());
-  const int shown = std::min(n, 2 * per_row), rows = (shown + per_row - 1) / per_row;
+  // Up to two rows of labelled swatches; more keyframes: a strip of one thin cell per keyframe
+  // in id order (at least 3 px each, up to 3 rows), labelled at its ends and middle.
+  const bool strip = n > 2 * per_row;
+  const int rows = strip ? 0 : (n + per_row - 1) / per_row;
+  const int cell_w = strip ? std::max(m.px(3), max_inner / std::max(1, n)) : 0;
+  const int per_strip_row = strip ? std::max(1, max_inner / cell_w) : 0;
+  const int strip_rows = strip ? std::min(3, (n + per_strip_row - 1) / per_strip_row) : 0;
+  const int strip_per_row = strip ? (n + strip_rows - 1) / strip_rows : 0;  // cells per row, the last may be shorter
+  const int strip_cell = strip ? std::max(1, std::min(cell_w, max_inner / std::max(1, strip_per_row))) : 0;
+  const int strip_h = m.px(10);
   if (!legend.swatch_title.empty()) {
-    width = std::max({width, m.textWidth(legend.swatch_title), std::min(shown, per_row) * cell});
-    height += row + rows * row;
+    if (strip) {
+      width = std::max({width, m.textWidth(legend.swatch_title), strip_per_row * strip_cell});
+      height += row + strip_rows * (strip_h + m.px(2)) + row;
+    } else {
+      width = std::max({width, m.textWidth(legend.swatch_title), std::min(n, per_row) * cell});
+      height += row + rows * row;
+    }
   }
   width = std::min(width, max_inner);
   const glm::u8vec3 bg8(glm::clamp(background, 0.f, 1.f) * 255.f + 0.5f);
@@ -137,12 +151,32 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
   if (!legend.swatch_title.empty()) {
     c.text(legend.swatch_title, pad, y + ascent);
     y += row;
-    for (int i = 0; i < shown; ++i) {
-      const int x = pad + (i % per_row) * cell, yy = y + (i / per_row) * row;
-      const int sw = m.px(10);
-      c.box(x, yy + (row - sw) / 2 - m.px(2), x + sw, yy + (row - sw) / 2 - m.px(2) + sw, legend.swatches[i].color);
-      const bool more = i + 1 == shown && n > shown;
-      c.text(legend.swatches[i].text + (more ? ".." : ""), x + sw + m.px(4), yy + ascent);
+    if (strip) {
+      for (int i = 0; i < n; ++i) {
+        const int x = pad + (i % strip_per_row) * strip_cell, yy = y + (i / strip_per_row) * (strip_h + m.px(2));
+        c.box(x, yy, x + strip_cell, yy + strip_h, legend.swatches[i].color);
+      }
+      y += strip_rows * (strip_h + m.px(2));
+      // Labels under the strip: the first id at the left, the middle id under its cell (one
+      // row) and the last id at the right.
+      const int last_x = pad + std::min(n, strip_per_row) * strip_cell;
+      const std::string& first = legend.swatches.front().text;
+      const std::string& end = legend.swatches.back().text;
+      c.text(first, pad, y + ascent);
+      c.text(end, last_x - m.textWidth(end), y + ascent);
+      if (strip_rows == 1) {
+        const std::string& mid = legend.swatches[n / 2].text;
+        const int mid_x = pad + (n / 2) * strip_cell + strip_cell / 2 - m.textWidth(mid) / 2;
+        if (mid_x > pad + m.textWidth(first) + m.px(6) && mid_x + m.textWidth(mid) + m.px(6) < last_x - m.textWidth(end))
+          c.text(mid, mid_x, y + ascent);
+      }
+    } else {
+      for (int i = 0; i < n; ++i) {
+        const int x = pad + (i % per_row) * cell, yy = y + (i / per_row) * row;
+        const int sw = m.px(10);
+        c.box(x, yy + (row - sw) / 2 - m.px(2), x + sw, yy + (row - sw) / 2 - m.px(2) + sw, legend.swatches[i].color);
+        c.text(legend.swatches[i].text, x + sw + m.px(4), yy + ascent);
+      }
     }
   }
   cv::Mat rgba;
@@ -152,6 +186,11 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
   cv::Mat alpha = cv::max(c.mask > 0, kPanelAlpha);
   cv::insertChannel(alpha, rgba, 3);
   return rgba;
+}
+
+LegendPlace legendPlace(int view_width, int up_label_width, float em) {
+  if (view_width < 40.f * em) return {view_width, true};
+  return {std::max(1, view_width - up_label_width - static_cast<int>(std::lround(3.f * em))), false};
 }
 
 cv::Point legendOrigin(const cv::Mat& legend, int height, float scale) {

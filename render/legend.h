@@ -51,9 +51,19 @@ std::string metresText(double m);
 
 /// The legend as an RGBA image (CV_8UC4, RGBA order, row 0 on top): a panel of `background` at
 /// 60 % opacity behind opaque text (light on a dark background, dark on a light one), at most
-/// `max_width` pixels wide (the keyframe swatches take as many as fit in two rows). `scale` 1 is
-/// a 12 px font. Empty for an empty legend.
+/// `max_width` pixels wide. Keyframe colours: labelled swatches when they fit in two rows, else a
+/// strip of one thin cell per keyframe (id order, up to 3 rows) labelled at its ends and middle.
+/// `scale` 1 is a 12 px font. Empty for an empty legend.
 cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int max_width, float scale = 1.f);
+
+/// How wide the legend may be in a view of `view_width` pixels whose bottom-right corner holds
+/// the up label (`up_label_width` pixels; `em` the font size): up to 3 em left of the label, or,
+/// in a view narrower than 40 em, the whole width with the label moved to the top instead.
+struct LegendPlace {
+  int max_width = 0;
+  bool up_label_on_top = false;
+};
+LegendPlace legendPlace(int view_width, int up_label_width, float em);
 
 /// Where the legend image goes in a viewport of `height` pixels: its top-left corner in image
 /// coordinates (row 0 on top), bottom-left with a margin.

@@ -127,15 +127,7 @@ ViewCamera OrbitCamera::view(int width, int height) const {
   return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height);
 }
 
-void OrbitCamera::frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect) {
-  target = 0.5f * (box_min + box_max);
-  const float radius = std::max(0.05f, 0.5f * glm::length(box_max - box_min));
-  const float half_y = glm::radians(fov_y_deg) * 0.5f;
-  const float half_x = std::atan(std::tan(half_y) * std::max(aspect, 1e-3f));
-  distance_m = radius / std::sin(std::min(half_x, half_y));
-}
-
-void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect, float margin) {
+void OrbitCamera::fit(const FrameBox& box, float aspect, float margin) {
   // The camera's axes for the held direction: r right, u up in the image, f forward.
   glm::vec3 uu, a, b;
   horizon(up, &uu, &a, &b);
@@ -149,47 +141,48 @@ void OrbitCamera::fit(const glm::vec3& box_min, const glm::vec3& box_max, float 
   const float tan_x = tan_y * std::max(aspect, 1e-3f);
   const float keep = 1.f - std::clamp(margin, 0.f, 0.5f);
   // A box of at least 5 cm, so a single point is framed at a sane distance.
-  const glm::vec3 mid = 0.5f * (box_min + box_max);
-  const glm::vec3 half = glm::max(0.5f * (box_max - box_min), glm::vec3(0.025f));
+  const glm::vec3 box_mid = 0.5f * (box.lo + box.hi);
+  const glm::vec3 half = glm::max(0.5f * (box.hi - box.lo), glm::vec3(0.025f));
+  const glm::vec3 mid = box.axes * box_mid;
   glm::vec3 corners[8];
   for (int c = 0; c < 8; ++c)
-    corners[c] = mid + glm::vec3((c & 1) ? half.x : -half.x, (c & 2) ? half.y : -half.y, (c & 4) ? half.z : -half.z);
-  target = mid;
-  // The smallest distance at which every corner lies within the kept part of both half-angles:
-  // corner depth z = q.f + d must reach |q.r| / tan_x and |q.u| / tan_y.
-  const auto distance = [&] {
-    float d = 0.f;
-    for (const glm::vec3& c : corners) {
-      const glm::vec3 q = c - target;
-      d = std::max(d, std::max(std::abs(glm::dot(q, r)) / (tan_x * keep), std::abs(glm::dot(q, u)) / (tan_y * keep)) -
-                          glm::dot(q, f));
-    }
-    return d;
-  };
-  // Re-centre: shift the target sideways so the projected box's extremes sit symmetrically,
-  // then fit the distance again (the last step is always the fit, so every corner is inside).
-  for (int pass = 0; pass < 3; ++pass) {
-    distance_m = std::max(1e-3f, distance());
-    float x0 = INFINITY, x1 = -INFINITY, y0 = INFINITY, y1 = -INFINITY;
-    for (const glm::vec3& c : corners) {
-      const glm::vec3 q = c - target;
-      const float z = std::max(1e-6f, glm::dot(q, f) + distance_m);
-      x0 = std::min(x0, glm::dot(q, r) / z), x1 = std::max(x1, glm::dot(q, r) / z);
-      y0 = std::min(y0, glm::dot(q, u) / z), y1 = std::max(y1, glm::dot(q, u) / z);
-    }
-    // A lateral shift s moves a point at depth z by -s/z in the image: shift at the target's depth.
-    target += r * (0.5f * (x0 + x1) * distance_m) + u * (0.5f * (y0 + y1) * distance_m);
+    corners[c] = box.axes * (box_mid + glm::vec3((c & 1) ? half.x : -half.x, (c & 2) ? half.y : -half.y,
+                                                 (c & 4) ? half.z : -half.z));
+  // The eye is mid + s_r r + s_u u - d f. A corner q (relative to mid) is inside when
+  // |q.r - s_r| <= tan_x (q.f + d) and likewise for u. For a given d the shifts that hold every
+  // corner form an interval per axis, non-empty from the d of the widest pair of corners on:
+  // d >= (a_i - a_j) / (2 tan) - (f_i + f_j) / 2. The smallest such d over both axes is taken,
+  // and each shift is its interval's middle (the projected box centred).
+  float d = 1e-3f;
+  for (int axis = 0; axis < 2; ++axis) {
+    const glm::vec3& dir = axis == 0 ? r : u;
+    const float t = (axis == 0 ? tan_x : tan_y) * keep;
+    for (const glm::vec3& ci : corners)
+      for (const glm::vec3& cj : corners)
+        d = std::max(d, glm::dot(ci - cj, dir) / (2.f * t) - 0.5f * (glm::dot(ci - mid, f) + glm::dot(cj - mid, f)));
   }
-  distance_m = std::max(1e-3f, distance());
+  glm::vec3 shift(0.f);
+  for (int axis = 0; axis < 2; ++axis) {
+    const glm::vec3& dir = axis == 0 ? r : u;
+    const float t = (axis == 0 ? tan_x : tan_y) * keep;
+    float lo = -INFINITY, hi = INFINITY;
+    for (const glm::vec3& c : corners) {
+      const float a = glm::dot(c - mid, dir), z = glm::dot(c - mid, f) + d;
+      lo = std::max(lo, a - t * z);
+      hi = std::min(hi, a + t * z);
+    }
+    shift += dir * (0.5f * (lo + hi));
+  }
+  target = mid + shift;
+  distance_m = d;
 }
 
-OrbitCamera OrbitCamera::framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                                 const glm::vec3& up, float aspect) {
+OrbitCamera OrbitCamera::framing(const FrameBox& box, const glm::vec3& up, float aspect) {
   OrbitCamera cam;
   cam.up = up;
   cam.yaw = glm::radians(-60.f);
   cam.pitch = glm::radians(35.f);
-  cam.frame(box_min, box_max, aspect);
+  cam.frame(box, aspect);
   return cam;
 }
 

@@ -37,6 +37,21 @@ struct ViewCamera {
                                 int height);
 };
 
+/// A box to frame: lo..hi along the columns of `axes` (orthonormal; the identity: axis-aligned).
+struct FrameBox {
+  glm::vec3 lo{-1.f}, hi{1.f};
+  glm::mat3 axes{1.f};
+  FrameBox() = default;
+  FrameBox(const glm::vec3& lo_in, const glm::vec3& hi_in, const glm::mat3& axes_in = glm::mat3(1.f))
+      : lo(lo_in), hi(hi_in), axes(axes_in) {}
+  FrameBox(const std::pair<glm::vec3, glm::vec3>& box) : lo(box.first), hi(box.second) {}  // NOLINT: axis-aligned
+  /// Corner c (bit 0: x, 1: y, 2: z at hi) in the world frame.
+  glm::vec3 corner(int c) const {
+    return axes * glm::vec3((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+  }
+  bool operator==(const FrameBox&) const = default;
+};
+
 /// The interactive camera model of the workbench: orbit around a target or fly through the
 /// scene. Angles in radians; `up` is the world's up axis.
 struct OrbitCamera {
@@ -56,17 +71,26 @@ struct OrbitCamera {
   void fly(float forward_m, float right_m, float up_m);
   glm::vec3 eye() const;
   ViewCamera view(int width, int height) const;
-  /// Keeps the viewing direction and moves target and distance so that the box's bounding
-  /// sphere fits both the vertical and the horizontal field of view of a width/height `aspect`.
-  void frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f);
+  /// Keeps the viewing direction and frames the box in a width/height `aspect` view: fit() with
+  /// its default margin.
+  void frame(const FrameBox& box, float aspect = 1.f) { fit(box, aspect); }
+  void frame(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f) {
+    fit(FrameBox(box_min, box_max), aspect);
+  }
   /// Keeps the viewing direction and sets target and distance so that all 8 corners of the box
   /// project inside a width/height `aspect` view with `margin` (a fraction of each half-size)
   /// to spare: the distance is the smallest that holds every corner, then the target is shifted
   /// so the projected box is centred (the view's frustum, not the box's bounding sphere).
-  void fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f, float margin = 0.03f);
+  void fit(const FrameBox& box, float aspect = 1.f, float margin = 0.03f);
+  void fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f, float margin = 0.03f) {
+    fit(FrameBox(box_min, box_max), aspect, margin);
+  }
   /// The default view of a bounding box: from 35 degrees above the horizon, framed as frame().
+  static OrbitCamera framing(const FrameBox& box, const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
   static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                             const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
+                             const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f) {
+    return framing(FrameBox(box_min, box_max), up, aspect);
+  }
   /// The orbit camera looking from `eye` at `target` about the axis `up`: distance |eye - target|,
   /// yaw and pitch inverting eye() (pitch clamped to +-89 degrees, so eye() differs from `eye`
   /// only for a view straight along `up`).

@@ -1,6 +1,7 @@
 #pragma once
 // Where the camera of a view is, the same for the workbench and `vdmap render`: the box a view
 // frames, the world's up direction, the default orbit view and the camera a ViewSpec asks for.
+#include <cstddef>
 #include <span>
 #include <utility>
 
@@ -22,7 +23,8 @@ std::pair<glm::vec3, glm::vec3> frameBounds(std::span<const glm::vec3> means, co
 
 /// What the map part of a framed box is made of: the box of what is drawn and the strays left out.
 struct DrawnBounds {
-  glm::vec3 lo{0.f}, hi{0.f};
+  glm::vec3 lo{0.f}, hi{0.f};  ///< along the columns of `axes`
+  glm::mat3 axes{1.f};
   bool empty = true;        ///< nothing drawn (an empty or hidden map, or all sliced away)
   std::size_t drawn = 0;    ///< ellipsoids whose extent the box holds
   std::size_t strays = 0;   ///< left out: centres beyond 1x the robust box's diagonal from its centre
@@ -33,12 +35,18 @@ struct DrawnBounds {
 /// kCentres, nothing for kNone. Ellipsoids outside `slice` (heights by `frame`) are not drawn,
 /// so not framed; strays (centres beyond 1x the diagonal of the robustBounds of the centres from
 /// its centre) are left out and counted.
+/// The box is along the columns of `axes` (frameAxes: the up axis and the map's horizontal
+/// principal directions box a room tightly whatever its walls' angle to the world axes).
 DrawnBounds drawnBounds(std::span<const Ellipsoid> map, float sigma, DrawMode mode, const HeightSlice& slice = {},
-                        const HeightFrame& frame = {});
+                        const HeightFrame& frame = {}, const glm::mat3& axes = glm::mat3(1.f));
+
+/// The axes a map is boxed along for framing: two horizontal directions, turned about `up` so
+/// the box of the means' horizontal 2-98 % extents is smallest (a room's walls), and `up`.
+glm::mat3 frameAxes(std::span<const Ellipsoid> map, const glm::vec3& up);
 
 /// The box a view frames: `map` (drawnBounds) grown to hold every keyframe frustum, trajectory
 /// camera and ground-truth camera as the overload below; the cameras alone for an empty map.
-std::pair<glm::vec3, glm::vec3> frameBounds(const DrawnBounds& map, const GraphScene& graph);
+FrameBox frameBounds(const DrawnBounds& map, const GraphScene& graph);
 
 /// The height frame of a map and an up direction: the floor is the 2nd percentile of
 /// dot(mean, up) (0 for an empty map).
@@ -48,13 +56,13 @@ HeightFrame heightFrame(std::span<const Ellipsoid> map, const glm::vec3& up);
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map);
 
 /// The default view of `bounds`: OrbitCamera::framing (yaw -60, pitch 35 degrees about `up`,
-/// the box's bounding sphere fitting a width/height `aspect`).
-OrbitCamera defaultOrbit(const std::pair<glm::vec3, glm::vec3>& bounds, const glm::vec3& up, float aspect,
+/// the box fitted to a width/height `aspect`).
+OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect,
                          float fov_y_deg = 60.f);
 
 /// What a view's camera is framed from.
 struct ViewScene {
-  std::pair<glm::vec3, glm::vec3> bounds{glm::vec3(-1.f), glm::vec3(1.f)};  ///< frameBounds
+  FrameBox bounds;                   ///< frameBounds
   glm::vec3 up{0.f, 0.f, 1.f};       ///< upDirection of the spec's axis
   PinholeCamera camera;              ///< the keyframes' camera (keyframe views)
   Transform T_W_K = Transform::Identity();  ///< keyframe:K's pose

@@ -620,3 +620,46 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
 
 }  // namespace
 }  // namespace vdmap::test
+
+// --- picture stream: framing what is drawn ---
+namespace vdmap::test {
+namespace {
+
+// Pixels on the border rows and columns of a view screenshot that differ from the dark
+// background by more than 8 counts.
+int borderPixelsOff(const fs::path& png) {
+  const cv::Mat bgr = cv::imread(png.string());
+  if (bgr.empty()) return -1;
+  const cv::Vec3b bg(38, 33, 33);  // render::kDarkBackground in BGR bytes
+  int off = 0;
+  for (int y = 0; y < bgr.rows; ++y)
+    for (int x = 0; x < bgr.cols; ++x) {
+      if (y != 0 && y != bgr.rows - 1 && x != 0 && x != bgr.cols - 1) continue;
+      const cv::Vec3b p = bgr.at<cv::Vec3b>(y, x);
+      off += std::abs(p[0] - bg[0]) > 8 || std::abs(p[1] - bg[1]) > 8 || std::abs(p[2] - bg[2]) > 8;
+    }
+  return off;
+}
+
+TEST(GuiCli, PressingFLeavesTheViewsBorderEmpty) {
+  REQUIRE_XVFB();
+  TempDir home;
+  for (const std::string size : {"1280x720", "900x1000"}) {
+    const fs::path view = home / (size + ".png"), json = home / (size + ".json");
+    const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --press f --exit --window-size " + size +
+                                            " --view-screenshot '" + view.string() + "' --stats-json '" +
+                                            json.string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(borderPixelsOff(view), 0) << size << ": the frame cuts what is drawn";
+    const nlohmann::json layout = readJson(json)["layout"];
+    EXPECT_EQ(layout["map_strays"], 0) << size;
+    const nlohmann::json& b = layout["map_bbox_px"];
+    const nlohmann::json& v = layout["viewport"];
+    EXPECT_TRUE(b[0] >= v[0] && b[1] >= v[1] && b[2] <= v[0].get<double>() + v[2].get<double>() &&
+                b[3] <= v[1].get<double>() + v[3].get<double>())
+        << "the drawn map's box " << b.dump() << " inside the view " << v.dump();
+  }
+}
+
+}  // namespace
+}  // namespace vdmap::test

@@ -26,6 +26,38 @@ int countColour(const cv::Mat& image, const glm::u8vec3& c, int tolerance = 10) 
   return n;
 }
 
+float deltaE(const glm::u8vec3& a, const glm::u8vec3& b) { return glm::length(srgbToLab(a) - srgbToLab(b)); }
+
+TEST(Colormap, TheKeyframePaletteIsTheGeneratedOne) {
+  const std::vector<glm::u8vec3> generated = generateKeyframePalette();
+  ASSERT_EQ(generated.size(), static_cast<std::size_t>(kKeyframePaletteSize));
+  std::string table;  // render/keyframe_palette.inc, should it need regenerating
+  for (const glm::u8vec3& c : generated)
+    table += "{" + std::to_string(c.r) + ", " + std::to_string(c.g) + ", " + std::to_string(c.b) + "},\n";
+  for (int k = 0; k < kKeyframePaletteSize; ++k)
+    ASSERT_EQ(keyframeColor(k), generated[static_cast<std::size_t>(k)]) << "K" << k << "; the table:\n" << table;
+}
+
+TEST(Colormap, First64KeyframeColoursAreAtLeast20DeltaEApart) {
+  float closest = INFINITY;
+  for (int a = 0; a < kKeyframePaletteSize; ++a) {
+    const float lightness = srgbToLab(keyframeColor(a)).x;
+    EXPECT_TRUE(lightness >= 44.5f && lightness <= 85.5f) << "K" << a << " L " << lightness;
+    for (int b = a + 1; b < kKeyframePaletteSize; ++b) closest = std::min(closest, deltaE(keyframeColor(a), keyframeColor(b)));
+  }
+  EXPECT_GE(closest, 20.f);
+}
+
+TEST(Colormap, KAndKPlus13Differ) {
+  // The golden-ratio hue steps made k and k + 13 (12 degrees of hue) and k + 21 near-repeats.
+  for (int k = 0; k + 21 < kKeyframePaletteSize; ++k)
+    for (int step : {1, 13, 21}) EXPECT_GE(deltaE(keyframeColor(k), keyframeColor(k + step)), 20.f) << "K" << k << "+" << step;
+  for (int k = 0; k < 128; ++k) EXPECT_GE(deltaE(keyframeColor(k), keyframeColor(k + 64)), 8.f) << "K" << k << "+64";
+  // A later cycle is the palette with its lightness shifted.
+  EXPECT_NEAR(srgbToLab(keyframeColor(64 + 5)).x - srgbToLab(keyframeColor(5)).x, 12.f, 2.5f);
+  EXPECT_GE(deltaE(keyframeColor(5), keyframeColor(64 + 5)), 8.f);
+}
+
 TEST(Legend, UncertaintyHasARampWithItsRangeInMetres) {
   const Legend legend = legendFor(ColorMode::kUncertainty, ColorRange{0.00087f, 0.1219f}, keyframes(3));
   EXPECT_EQ(legend.ramp_title, "largest std. deviation (log scale)");
@@ -55,13 +87,34 @@ TEST(Legend, KeyframeModeShowsOneSwatchPerKeyframeInTwoRows) {
   ASSERT_EQ(legend.swatches.size(), 44u);
   EXPECT_EQ(legend.swatches[43].text, "K43");
   EXPECT_EQ(legend.swatches[7].color, keyframeColor(7));
-  // Wide: every swatch fits in two rows. Narrow: as many as fit, in two rows.
+  // Wide: every swatch fits in two rows.
   const cv::Mat wide = rasterizeLegend(legend, kDarkBackground, 1600);
-  const cv::Mat narrow = rasterizeLegend(legend, kDarkBackground, 320);
   for (int k : {0, 7, 43}) EXPECT_GT(countColour(wide, keyframeColor(k)), 50) << "K" << k;
-  EXPECT_LE(narrow.cols, 320);
-  EXPECT_EQ(narrow.rows, wide.rows) << "two rows of swatches either way";
-  EXPECT_EQ(countColour(narrow, keyframeColor(43)), 0) << "K43 does not fit 320 px";
+}
+
+TEST(Legend, ManyKeyframesShowAStripWithEveryKeyframe) {
+  // 42 keyframes in 320 px: two rows of swatches would hold 10; the strip holds a cell per id.
+  for (const int n : {42, 150, 250}) {
+    const Legend legend = legendFor(ColorMode::kKeyframe, std::nullopt, keyframes(n));
+    const cv::Mat narrow = rasterizeLegend(legend, kDarkBackground, 320);
+    EXPECT_LE(narrow.cols, 320) << n;
+    for (int k = 0; k < n; ++k) ASSERT_GE(countColour(narrow, keyframeColor(k), 2), 3 * 10) << "K" << k << " of " << n;
+    EXPECT_LT(narrow.rows, 140) << n << ": at most 3 rows of cells";
+  }
+}
+
+TEST(Legend, StaysLeftOfTheUpLabel) {
+  const float em = 13.f;
+  const LegendPlace wide = legendPlace(1000, 200, em);
+  EXPECT_FALSE(wide.up_label_on_top);
+  EXPECT_EQ(wide.max_width, 1000 - 200 - 39);
+  const Legend legend = legendFor(ColorMode::kKeyframe, std::nullopt, keyframes(300));
+  EXPECT_LE(rasterizeLegend(legend, kDarkBackground, wide.max_width).cols, wide.max_width);
+  // Narrower than 40 em: the legend takes the width, the label goes to the top.
+  const LegendPlace narrow = legendPlace(500, 200, em);
+  EXPECT_TRUE(narrow.up_label_on_top);
+  EXPECT_EQ(narrow.max_width, 500);
+  EXPECT_LE(rasterizeLegend(legend, kDarkBackground, narrow.max_width).cols, 500);
 }
 
 TEST(Legend, TheTrackingKeyNamesTheLinesShown) {

@@ -31,11 +31,12 @@ class RenderView : public ::testing::Test {
     mirror.setGraph(1, spec.selected_keyframe, [&] { return graph_; });
     if (spec.layers.legend)
       mirror.setLegend(legendFor(spec.color, mirror.mapColorRange(), graph_), spec.background, w);
-    std::vector<glm::vec3> means;
-    for (const Ellipsoid& e : map_) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
     ViewScene scene;
-    scene.bounds = frameBounds(means, graph_);
     scene.up = {0, 0, 1};
+    // As `vdmap render` frames it (render_view.cpp).
+    scene.bounds = frameBounds(drawnBounds(map_, spec.sigma, spec.draw(), spec.slice, heightFrame(map_, scene.up),
+                                           frameAxes(map_, scene.up)),
+                               graph_);
     return renderView(context_->gl(), mirror, spec, scene, w, h);
   }
   std::unique_ptr<Context> context_;
@@ -99,6 +100,42 @@ TEST_F(RenderView, EachLayerSwitchesOffAlone) {
     const cv::Mat without = render(spec);
     EXPECT_GT(cv::countNonZero(cv::Mat(cv::abs(all - without)).reshape(1)), 10) << "a layer changed nothing";
   }
+}
+
+// Pixels on the image's border rows and columns that differ from `background` by more than 8 counts.
+int borderPixelsOff(const cv::Mat& image, const glm::vec3& background) {
+  const cv::Vec3b bg = byte(background);
+  int off = 0;
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      if (y != 0 && y != image.rows - 1 && x != 0 && x != image.cols - 1) continue;
+      const cv::Vec3b p = image.at<cv::Vec3b>(y, x);
+      off += std::abs(p[0] - bg[0]) > 8 || std::abs(p[1] - bg[1]) > 8 || std::abs(p[2] - bg[2]) > 8;
+    }
+  return off;
+}
+
+TEST_F(RenderView, AfterFramingNoMapPixelTouchesTheBorder) {
+  // The grid with long ellipsoids at its corners, no cameras: the frame holds every surface drawn.
+  for (const auto& [corner, sd] : {std::pair{Eigen::Vector3d(-1, -1, 0), Eigen::Vector3d(0.5, 0.01, 0.01)},
+                                   std::pair{Eigen::Vector3d(1, 1, 0), Eigen::Vector3d(0.01, 0.5, 0.01)},
+                                   std::pair{Eigen::Vector3d(1, -1, 0), Eigen::Vector3d(0.01, 0.01, 0.4)}}) {
+    Ellipsoid e = map_.front();
+    e.mean = corner;
+    e.cov = sd.cwiseProduct(sd).asDiagonal();
+    for (int i = 0; i < 3; ++i) map_.push_back(e);
+  }
+  graph_ = GraphScene{};
+  ViewSpec spec;
+  spec.layers.legend = false;
+  for (const auto& [w, h] : {std::pair{320, 240}, std::pair{240, 320}})
+    for (const float azimuth : {-60.f, 30.f}) {
+      spec.orbit = Orbit{azimuth, 35.f, std::nullopt};
+      const cv::Mat image = render(spec, w, h);
+      EXPECT_GT(cv::countNonZero(cv::Mat(cv::abs(image - cv::Scalar(byte(kDarkBackground)))).reshape(1)), 2000)
+          << "the map is drawn";
+      EXPECT_EQ(borderPixelsOff(image, kDarkBackground), 0) << w << "x" << h << " azimuth " << azimuth;
+    }
 }
 
 }  // namespace

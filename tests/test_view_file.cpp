@@ -165,5 +165,45 @@ TEST(ViewFile, TheRenderCommandParsesBackToTheSameView) {
             "vdmap render '/my maps/s.vdmap' --view-file v.json --out o.png");
 }
 
+// --- picture stream: view file version 2 (slice, draw none) ---
+TEST(ViewFile, Version2RoundTripsTheSliceAndDrawNone) {
+  TempDir tmp;
+  render::ViewSpec spec;
+  spec.slice = {true, 0.25f, 1.75f};
+  spec.setDraw(render::DrawMode::kNone);
+  writeViewFile(tmp / "v.json", spec, {}, "s.vdmap");
+  const nlohmann::json j = nlohmann::json::parse(test::readFile(tmp / "v.json"));
+  EXPECT_EQ(j["vdmap_view"], 2);
+  EXPECT_EQ(j["slice"], nlohmann::json::array({0.25, 1.75}));
+  EXPECT_EQ(j["draw"], "none");
+  const render::ViewSpec back = readViewFile(tmp / "v.json");
+  EXPECT_EQ(back, spec);
+  EXPECT_EQ(back.draw(), render::DrawMode::kNone);
+  spec.slice.on = false;
+  writeViewFile(tmp / "off.json", spec, {}, "s.vdmap");
+  EXPECT_TRUE(nlohmann::json::parse(test::readFile(tmp / "off.json"))["slice"].is_null());
+  EXPECT_EQ(readViewFile(tmp / "off.json").slice, render::HeightSlice{});
+  // A slice must be [lo, hi] with lo < hi.
+  EXPECT_NE(errorOf(editedViewFile(tmp, [](nlohmann::json& v) { v["slice"] = {2, 1}; })).find("slice"), std::string::npos);
+  // --slice and --draw none on the render command line.
+  spec.slice.on = true;
+  EXPECT_NE(renderCommand(spec, "s.vdmap").find(" --draw none --slice 0.25:1.75"), std::string::npos)
+      << renderCommand(spec, "s.vdmap");
+}
+
+TEST(ViewFile, Version1StillReads) {
+  TempDir tmp;
+  // A version 1 file: no "slice" key (and one is refused there).
+  const auto v1 = editedViewFile(tmp, [](nlohmann::json& j) {
+    j["vdmap_view"] = 1;
+    j.erase("slice");
+  });
+  EXPECT_EQ(readViewFile(v1), unusualSpec());
+  const auto v1_slice = editedViewFile(tmp, [](nlohmann::json& j) { j["vdmap_view"] = 1; });
+  EXPECT_NE(errorOf(v1_slice).find("slice"), std::string::npos) << errorOf(v1_slice);
+  const auto v3 = editedViewFile(tmp, [](nlohmann::json& j) { j["vdmap_view"] = 3; });
+  EXPECT_NE(errorOf(v3).find("versions 1 and 2"), std::string::npos) << errorOf(v3);
+}
+
 }  // namespace
 }  // namespace vdmap::app

@@ -63,6 +63,139 @@ TEST(ViewFraming, TheDefaultViewFramesTheRobustBoxAndEveryCameraAtTheViewsAspect
   }
 }
 
+Ellipsoid ellipsoidAt(const glm::vec3& m, const glm::vec3& sd) {
+  Ellipsoid e;
+  e.mean = {m.x, m.y, m.z};
+  e.cov = Eigen::Vector3d(sd.x * sd.x, sd.y * sd.y, sd.z * sd.z).asDiagonal();
+  return e;
+}
+
+// 500 small ellipsoids in a 2 x 1 x 0.5 m box.
+std::vector<Ellipsoid> boxMap() {
+  std::vector<Ellipsoid> map;
+  for (int i = 0; i < 500; ++i)
+    map.push_back(ellipsoidAt({2.f * (i % 10) / 9.f, 1.f * ((i / 10) % 10) / 9.f, 0.5f * (i / 100) / 4.f},
+                              glm::vec3(0.01f)));
+  return map;
+}
+
+// The projected box of the 8 corners of [lo, hi] in `v`.
+std::pair<glm::vec2, glm::vec2> projectedBox(const ViewCamera& v, const glm::vec3& lo, const glm::vec3& hi) {
+  glm::vec2 a(INFINITY), b(-INFINITY);
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec2 p = project(v, {(c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z});
+    a = glm::min(a, p), b = glm::max(b, p);
+  }
+  return {a, b};
+}
+
+TEST(ViewFraming, FramesEveryDrawnExtentAtSigma) {
+  // Long thin ellipsoids at a corner of the map: their means are inside the map's box, their
+  // surfaces at 2 sigma reach 1.2 m beyond it (the old frame cut them).
+  std::vector<Ellipsoid> map = boxMap();
+  for (int i = 0; i < 5; ++i) map.push_back(ellipsoidAt({2.f, 1.f, 0.5f}, {0.6f, 0.02f, 0.02f}));
+  map.push_back(ellipsoidAt({0.f, 0.f, 0.f}, {0.02f, 0.02f, 0.5f}));
+  const float sigma = 2.f;
+  const DrawnBounds drawn = drawnBounds(map, sigma, DrawMode::kEllipsoids);
+  EXPECT_EQ(drawn.drawn, map.size());
+  EXPECT_EQ(drawn.strays, 0u);
+  EXPECT_NEAR(drawn.hi.x, 2.f + 1.2f, 1e-4f);
+  EXPECT_NEAR(drawn.lo.z, -1.f, 1e-4f);
+  // Centres mode frames the centres only.
+  const DrawnBounds centres = drawnBounds(map, sigma, DrawMode::kCentres);
+  EXPECT_NEAR(centres.hi.x, 2.f, 1e-4f);
+  EXPECT_TRUE(drawnBounds(map, sigma, DrawMode::kNone).empty) << "a hidden map frames nothing";
+  for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{480, 640}})
+    for (const float azimuth : {-60.f, 20.f, 135.f}) {
+      ViewSpec spec;
+      spec.orbit = Orbit{azimuth, 35.f, std::nullopt};
+      ViewScene scene;
+      scene.bounds = frameBounds(drawn, GraphScene{});
+      const ViewCamera v = viewCamera(spec, scene, w, h).camera;
+      for (const Ellipsoid& e : map) {
+        const glm::vec3 m(e.mean.x(), e.mean.y(), e.mean.z());
+        const glm::vec3 half = sigma * glm::vec3(std::sqrt(e.cov(0, 0)), std::sqrt(e.cov(1, 1)), std::sqrt(e.cov(2, 2)));
+        const auto [a, b] = projectedBox(v, m - half, m + half);
+        ASSERT_TRUE(a.x >= 0.f && a.y >= 0.f && b.x <= w && b.y <= h)
+            << w << "x" << h << " azimuth " << azimuth << ": (" << a.x << ", " << a.y << ")-(" << b.x << ", " << b.y << ")";
+      }
+    }
+}
+
+TEST(ViewFraming, FitUsesTheViewNotABoundingSphere) {
+  // A flat, wide box fills the view on its limiting axis (the bounding sphere filled ~22 %).
+  const glm::vec3 lo(-2.f, -0.5f, 0.f), hi(2.f, 0.5f, 0.2f);
+  for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{752, 870}, std::pair{480, 640}})
+    for (const float pitch : {10.f, 35.f, 80.f}) {
+      OrbitCamera cam = OrbitCamera::framing(lo, hi, {0, 0, 1}, float(w) / h);
+      cam.pitch = glm::radians(pitch);
+      cam.fit(lo, hi, float(w) / h);
+      const auto [a, b] = projectedBox(cam.view(w, h), lo, hi);
+      EXPECT_TRUE(a.x >= 0.f && a.y >= 0.f && b.x <= w && b.y <= h) << w << "x" << h << " pitch " << pitch;
+      EXPECT_GE(std::max((b.x - a.x) / w, (b.y - a.y) / h), 0.9f) << w << "x" << h << " pitch " << pitch;
+      // Centred: the margins on the limiting axis are equal within a pixel or two.
+      if ((b.x - a.x) / w > (b.y - a.y) / h) EXPECT_NEAR(a.x, w - b.x, 2.f) << w << "x" << h;
+      else EXPECT_NEAR(a.y, h - b.y, 2.f) << w << "x" << h;
+    }
+}
+
+TEST(ViewFraming, ARoomTurnedAboutUpIsBoxedAlongItsWalls) {
+  // A 4 x 2 m floor turned 30 degrees about +z: boxed along its walls, the box is 4 x 2, not the
+  // 4.5 x 3.7 m of the world axes.
+  std::vector<Ellipsoid> map;
+  const float t = glm::radians(30.f);
+  for (int i = 0; i < 41; ++i)
+    for (int j = 0; j < 21; ++j) {
+      const float x = 0.1f * i - 2.f, y = 0.1f * j - 1.f;
+      map.push_back(ellipsoidAt({std::cos(t) * x - std::sin(t) * y, std::sin(t) * x + std::cos(t) * y, 0.f}, glm::vec3(0.01f)));
+    }
+  const glm::mat3 axes = frameAxes(map, {0, 0, 1});
+  EXPECT_NEAR(glm::length(axes[2] - glm::vec3(0, 0, 1)), 0.f, 1e-6f);
+  const DrawnBounds drawn = drawnBounds(map, 2.f, DrawMode::kEllipsoids, {}, {}, axes);
+  const glm::vec3 size = drawn.hi - drawn.lo;
+  EXPECT_NEAR(size.x * size.y, 4.04f * 2.04f, 0.2f);
+  // Every centre lies in the turned box.
+  for (const Ellipsoid& e : map) {
+    const glm::vec3 q = glm::transpose(axes) * glm::vec3(e.mean.x(), e.mean.y(), e.mean.z());
+    EXPECT_TRUE(glm::all(glm::greaterThanEqual(q, drawn.lo - 1e-4f)) && glm::all(glm::lessThanEqual(q, drawn.hi + 1e-4f)));
+  }
+}
+
+TEST(ViewFraming, StraysBeyondTheDiagonalAreCountedNotFramed) {
+  std::vector<Ellipsoid> map = boxMap();
+  for (int i = 0; i < 10; ++i) map.push_back(ellipsoidAt({20.f, 20.f, 20.f}, glm::vec3(0.01f)));
+  map.push_back(ellipsoidAt({2.5f, 1.f, 0.5f}, glm::vec3(0.01f)));  // near the box: framed
+  const DrawnBounds drawn = drawnBounds(map, 2.f, DrawMode::kEllipsoids);
+  EXPECT_EQ(drawn.strays, 10u);
+  EXPECT_EQ(drawn.drawn, map.size() - 10);
+  EXPECT_LT(drawn.hi.x, 3.f);
+  EXPECT_GE(drawn.hi.x, 2.5f);
+}
+
+TEST(ViewFraming, ASliceFramesOnlyWhatItKeeps) {
+  // Two floors 3 m apart: a slice of the upper one frames only it.
+  std::vector<Ellipsoid> map;
+  for (int i = 0; i < 200; ++i) map.push_back(ellipsoidAt({0.01f * i, 0.f, (i % 2) * 3.f}, glm::vec3(0.01f)));
+  const HeightFrame frame = heightFrame(map, {0, 0, 1});
+  EXPECT_NEAR(frame.floor_m, 0.f, 1e-6f);
+  const DrawnBounds upper = drawnBounds(map, 2.f, DrawMode::kEllipsoids, HeightSlice{true, 2.f, 4.f}, frame);
+  EXPECT_EQ(upper.drawn, 100u);
+  EXPECT_NEAR(upper.lo.z, 3.f - 0.02f, 1e-4f);
+}
+
+TEST(ViewCamera, UnprojectInvertsProjection) {
+  const ViewCamera v = ViewCamera::lookAt({1, -2, 1.5f}, {0, 0, 0.3f}, {0, 0, 1}, 55.f, 640, 360);
+  for (const glm::vec3 p : {glm::vec3(0, 0, 0.3f), glm::vec3(0.4f, 0.2f, -0.1f), glm::vec3(-0.3f, 0.5f, 0.8f)}) {
+    const glm::vec4 clip = v.viewProjection() * glm::vec4(p, 1.f);
+    const float depth01 = 0.5f * (clip.z / clip.w) + 0.5f;
+    const glm::vec2 px = project(v, p);
+    const auto back = unproject(v, px.x, px.y, depth01);
+    ASSERT_TRUE(back);
+    EXPECT_NEAR(glm::length(*back - p), 0.f, 1e-3f);
+  }
+  EXPECT_FALSE(unproject(v, 10, 10, 1.f)) << "the cleared depth is no surface";
+}
+
 TEST(ViewFraming, UpFromDataMatchesTheWindowsBeforeTheMove) {
   // The window's up vector was estimateUp of every mapped camera and the map, or the axis named.
   std::vector<Transform> cameras;

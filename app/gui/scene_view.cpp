@@ -1,6 +1,8 @@
 #include "app/gui/scene_view.h"
 
 #include <algorithm>
+#include <cmath>
+#include <string>
 #include <cstdio>
 
 #include "app/gui/widgets.h"
@@ -31,7 +33,8 @@ void drawPreparation(ImDrawList* draw, const WindowState& win) {
 
 // Top left: what the view does (follows the map, looks through a keyframe) and a banner while the
 // map before the last optimisation shows. The tracking lines' key is in the legend (render/legend.h).
-void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banner, const Rect& view) {
+void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banner, const Rect& view,
+                   std::size_t strays) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
                      : ui.follow_map            ? "following the map (a drag stops it, F resumes)"
@@ -44,20 +47,37 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banne
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
     line_y += 1.3f * font;
   }
+  if (strays > 0 && ui.view_from_keyframe < 0) {
+    // Framing leaves ellipsoids far beyond the map's robust box out (render::drawnBounds).
+    char text[96];
+    std::snprintf(text, sizeof text, "%zu ellipsoid%s outside the frame", strays, strays == 1 ? "" : "s");
+    draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
+    line_y += 1.3f * font;
+  }
   if (!banner.empty())  // names the optimisation B undoes (Workbench::beforeOptimisationBanner)
     draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), banner.c_str(),
                   nullptr, view.w - 2 * pad);  // wrapped in a narrow view
 }
 
-// Bottom right: the up axis.
-void drawUpAxis(ImDrawList* draw, const UiState& ui, const Rect& view) {
-  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+// The up label's text.
+std::string upAxisText(const UiState& ui) {
   const glm::vec3 up = ui.camera.up;
   char text[96];
   std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui.settings.up_axis)], up.x,
                 up.y, up.z);
-  const ImVec2 size = ImGui::CalcTextSize(text);
-  draw->AddText({view.x + view.w - pad - size.x, view.y + view.h - pad - size.y}, kOverlayDim, text);
+  return text;
+}
+
+// Bottom right: the up axis (top right in a view too narrow for it beside the legend,
+// render::legendPlace).
+void drawUpAxis(ImDrawList* draw, const UiState& ui, const Rect& view) {
+  const float font = ImGui::GetFontSize(), pad = 0.6f * font;
+  const std::string text = upAxisText(ui);
+  const ImVec2 size = ImGui::CalcTextSize(text.c_str());
+  const render::LegendPlace place =
+      render::legendPlace(static_cast<int>(view.w), static_cast<int>(std::ceil(size.x)), font);
+  const float y = place.up_label_on_top ? view.y + pad : view.y + view.h - pad - size.y;
+  draw->AddText({view.x + view.w - pad - size.x, y}, kOverlayDim, text.c_str());
 }
 
 }  // namespace
@@ -81,7 +101,13 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   mirror.setLegend(s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory,
                                                      s.show_groundtruth, s.show_graph)
                                  : render::Legend{},
-                   s.background, ui.view_width);
+                   s.background, [&] {
+                     // Left of the up label at the bottom-right (framebuffer pixels).
+                     const float fb_scale = ImGui::GetIO().DisplayFramebufferScale.x;
+                     const float em = ImGui::GetFontSize() * fb_scale;
+                     const int up_w = static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
+                     return render::legendPlace(ui.view_width, up_w, em).max_width;
+                   }());
   if (!bench.isOpen()) return;
   if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session
     mirrored.session = bench.sessionSerial();
@@ -212,7 +238,7 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
     return;
   }
   const UiState& ui = bench.ui();
-  drawViewHints(draw, ui, bench.beforeOptimisationBanner(*win.mapping), view);
+  drawViewHints(draw, ui, bench.beforeOptimisationBanner(*win.mapping), view, bench.framedStrays());
   drawUpAxis(draw, ui, view);
 }
 

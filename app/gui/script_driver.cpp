@@ -86,13 +86,16 @@ void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
                 {"help", toJson(at.help)},  // all zero while the help is closed
                 {"up", {ui.camera.up.x, ui.camera.up.y, ui.camera.up.z}}};
   if (!global || global->map.ellipsoids.empty()) return;
-  std::vector<glm::vec3> means;
-  for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
-  const auto [lo, hi] = render::robustBounds(means);
+  // What the view draws of the map (each ellipsoid's extent at the sigma, strays left out and
+  // counted), so a cut is seen here.
+  const render::DrawnBounds drawn = bench.drawnMap();
+  run.layout["map_strays"] = drawn.strays;
+  if (drawn.empty) return;
+  const render::FrameBox box(drawn.lo, drawn.hi, drawn.axes);
   const ViewportView v = bench.view(ui.view_width, ui.view_height);
   float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (int c = 0; c < 8; ++c) {
-    const glm::vec3 p((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z);
+    const glm::vec3 p = box.corner(c);
     const glm::vec4 q = v.camera.T_C_W * glm::vec4(p, 1.f);
     const float u = v.camera.fx * q.x / q.z + v.camera.cx + win.layout.view.x + v.image.x;
     const float w = v.camera.fy * q.y / q.z + v.camera.cy + win.layout.view.y + v.image.y;

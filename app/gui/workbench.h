@@ -18,6 +18,7 @@
 #include "mapping/io/map_file.h"
 #include "render/map_mirror.h"
 #include "render/view_camera.h"
+#include "render/view_framing.h"  // DrawnBounds (picture stream)
 #include "render/view_spec.h"
 
 namespace vdmap::app::gui {
@@ -339,6 +340,14 @@ class Workbench {
   /// `replace`, else ui().confirm_view_replace asks and false is returned.
   bool saveViewSafely(const std::string& file, bool replace = false);
 
+  // --- picture stream (framing what is drawn, height slice) ---
+  /// What the 3-D view draws of the global map, boxed (render::drawnBounds at the settings'
+  /// sigma, draw mode and slice): what F frames and the layout self-check projects.
+  render::DrawnBounds drawnMap() const;
+  /// The strays the last F / R / follow left out of the frame (the hint line counts them).
+  std::size_t framedStrays() const { return framed_strays_; }
+  // --- end picture stream ---
+
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
   /// Click in the 3-D view at (x, y) of a width x height viewport: sets ui().picked and selects
@@ -349,10 +358,10 @@ class Workbench {
   void opened(const std::string& path);
   void showPose(const Transform& T_W_K);
   void sendPose(int id, const Transform& T_W_K);
-  // The box the view frames: the global map's means without their outer 2 % per axis (a few
-  // stray ellipsoids would shrink the map to a dot), grown to hold every camera of the
-  // trajectory and every keyframe's frustum as drawn.
-  std::pair<glm::vec3, glm::vec3> frameBounds() const;
+  // The box the view frames: drawnMap() (strays left out, so a few far ellipsoids do not shrink
+  // the map to a dot), grown to hold every camera of the trajectory and every keyframe's frustum
+  // as drawn. `strays` receives drawnMap's count.
+  render::FrameBox frameBounds(std::size_t* strays = nullptr) const;
 
   UiState ui_;
   std::string first_error_;
@@ -362,6 +371,7 @@ class Workbench {
   std::string shown_error_, shown_message_;        // the session's, already reported
   int framed_generation_ = -1;                     // the global map the view was last framed on
   std::pair<int, int> framed_size_{0, 0};          // and the viewport it was framed in
+  std::size_t framed_strays_ = 0;                  // picture stream: left out of that frame
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
   std::string session_settings_;                   // setSessionSettings'

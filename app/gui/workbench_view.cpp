@@ -50,11 +50,21 @@ render::GraphScene Workbench::graphScene(const MappingSnapshot& mapping) const {
   return scene;
 }
 
-std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
-  if (!worker_) return render::robustBounds({});
-  std::vector<glm::vec3> means;
-  if (const auto global = worker_->global())
-    for (const Ellipsoid& e : global->map.ellipsoids) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+// --- picture stream: framing what is drawn ---
+render::DrawnBounds Workbench::drawnMap() const {
+  const auto global = worker_ ? worker_->global() : nullptr;
+  if (!global) return {};
+  const render::ViewSpec spec = viewSpecOf(ui_.settings);
+  const std::span<const Ellipsoid> map(global->map.ellipsoids);
+  const glm::vec3 up = upVector();
+  const render::HeightFrame frame = spec.slice.on ? render::heightFrame(map, up) : render::HeightFrame{};
+  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, up));
+}
+
+render::FrameBox Workbench::frameBounds(std::size_t* strays) const {
+  if (!worker_) return render::FrameBox(render::robustBounds({}));
+  const render::DrawnBounds map = drawnMap();
+  if (strays) *strays = map.strays;
   // The cameras the view frames (render::frameBounds): keyframes, every mapped frame, the
   // ground truth when shown.
   render::GraphScene cameras;
@@ -63,15 +73,15 @@ std::pair<glm::vec3, glm::vec3> Workbench::frameBounds() const {
   for (const KeyframeInfo& k : mapping->keyframes) cameras.keyframes.push_back(k.T_W_K);
   for (std::size_t i = 0; i < mapping->trajectory.size(); ++i) cameras.trajectory.push_back(mapping->framePose(i));
   if (ui_.settings.show_groundtruth) cameras.groundtruth = mapping->groundTruthWorld();
-  return render::frameBounds(means, cameras);
+  return render::frameBounds(map, cameras);
 }
 
 void Workbench::frameMap() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds();
+  const render::FrameBox box = frameBounds(&framed_strays_);
   ui_.camera.up = upVector();
-  ui_.camera.frame(lo, hi, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera.frame(box, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -79,11 +89,12 @@ void Workbench::frameMap() {
 void Workbench::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
-  const auto [lo, hi] = frameBounds();
-  ui_.camera = render::defaultOrbit({lo, hi}, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  const render::FrameBox box = frameBounds(&framed_strays_);
+  ui_.camera = render::defaultOrbit(box, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
+// --- end picture stream ---
 
 void Workbench::orbit(float d_yaw, float d_pitch) {
   ui_.follow_map = false;
