@@ -171,7 +171,9 @@ TEST(MapFile, ReadsOtFilesOfBothTreeTypes) {
         return (e.mean - Eigen::Vector3d(p.x(), p.y(), p.z())).norm() < 1e-6;
       });
       EXPECT_TRUE(found) << e.mean.transpose();
-      if (std::string(name) == "colour.ot") EXPECT_EQ(e.color, Eigen::Vector3f(200, 10, 30));
+      if (std::string(name) == "colour.ot") {
+        EXPECT_EQ(e.color, Eigen::Vector3f(200, 10, 30));
+      }
     }
   }
   const std::string bytes = test::readFile(tmp / "colour.ot");
