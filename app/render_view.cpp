@@ -8,7 +8,7 @@
 #include "mapping/pipeline/parameters.h"
 #include "app/view_file.h"
 #include "mapping/core/error.h"
-#include "mapping/io/map_file.h"
+#include "mapping/export/map_file.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"
@@ -367,7 +367,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     name_ = map;
   } else if (!map.empty()) {
     // A map file (a `vdmap map` folder, an ellipsoid or point PLY, an OctoMap) is drawn by its
-    // ellipsoids (mapping/io/map_file.h, as the workbench opens it).
+    // ellipsoids (mapping/export/map_file.h, as the workbench opens it).
     StaticMap file = loadStaticMap(map);
     // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
     for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory) m.map_cameras.push_back(p.T_W_C);

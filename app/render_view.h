@@ -64,7 +64,7 @@ struct ResolvedView {
 };
 ResolvedView resolveViewSpec(const RenderViewArgs& args, const std::optional<GlobalMapParams>& session_thresholds);
 
-/// One thing to draw, loaded once: a session, a map file (mapping/io/map_file.h), a mesh, or
+/// One thing to draw, loaded once: a session, a map file (mapping/export/map_file.h), a mesh, or
 /// a sequence mapped with the default parameters. Caches what several views of it share.
 class RenderSource {
  public:

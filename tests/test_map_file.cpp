@@ -1,4 +1,4 @@
-// Map files (mapping/io/map_file.h): what detectMapFile tells apart, and loadStaticMap's reading
+// Map files (mapping/export/map_file.h): what detectMapFile tells apart, and loadStaticMap's reading
 // of a `vdmap map` folder, PLYs and OctoMaps written by vdmap's own exports.
 #include <algorithm>
 #include <cmath>
@@ -13,7 +13,7 @@
 #include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/io/map_file.h"
+#include "mapping/export/map_file.h"
 #include "tests/box_room_keyframes.h"
 #include "tests/test_util.h"
 

@@ -15,7 +15,7 @@
 #include "app/gui/mapping_worker.h"
 #include "app/gui/settings.h"
 #include "app/parameter_table.h"
-#include "mapping/io/map_file.h"
+#include "mapping/export/map_file.h"
 #include "render/map_mirror.h"
 #include "render/view_camera.h"
 #include "render/view_framing.h"  // DrawnBounds (picture stream)

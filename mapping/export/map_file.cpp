@@ -1,4 +1,4 @@
-#include "mapping/io/map_file.h"
+#include "mapping/export/map_file.h"
 
 #include <algorithm>
 #include <array>
