@@ -198,6 +198,27 @@ TEST(GuiCli, TrackedRunReportsAteAndRpe) {
   EXPECT_GT(stats["rpe_frame_m"].get<double>(), 0.0);
 }
 
+// A session saved from a tracked run reopens with its tracking error: the ground truth comes
+// from the session's sequence folder, matched by timestamp.
+TEST(GuiCli, ATrackedSessionReopensWithItsTrackingError) {
+  REQUIRE_XVFB();
+  TempDir home;
+  writeBoxRoomSequence(home / "seq", 40);
+  const fs::path session = home / "s.vdmap", json = home / "t.json";
+  const RunResult m = runVdmap("map '" + (home / "seq").string() + "' --poses track --out '" + (home / "out").string() +
+                               "' --save '" + session.string() + "'");
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  const RunResult r = runInXvfb(home, "gui '" + session.string() + "' --exit --window-size 1280x720 --stats-json '" +
+                                          json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const nlohmann::json stats = readJson(json);
+  EXPECT_TRUE(stats["has_groundtruth"].get<bool>());
+  EXPECT_EQ(stats["poses"], "track");
+  ASSERT_TRUE(stats.contains("ate_rmse_m"));
+  EXPECT_EQ(stats["trajectory_matched"].get<int>(), stats["frames_mapped"].get<int>());
+  EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.05);
+}
+
 // --measure-latency splits each edit into stages from the snapshot's stamps and names the
 // parameter edited and what the global map's stage cache kept (the second edit goes back).
 TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {

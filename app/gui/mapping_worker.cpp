@@ -61,9 +61,13 @@ MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, c
 }
 
 MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
-                       std::optional<MapRefinementParams> refine)
+                       std::optional<MapRefinementParams> refine, std::vector<FrameEntry> truth)
     : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
+  for (FrameEntry& e : truth)
+    if (e.has_pose) session_truth_.push_back(std::move(e));
+  std::sort(session_truth_.begin(), session_truth_.end(),
+            [](const FrameEntry& a, const FrameEntry& b) { return a.t_depth < b.t_depth; });
   thresholds_.validate();
   base_frames_ = saved.info.state.frames_mapped;
   if (sequence_) origin_ = std::make_shared<const Session>(saved);  // kept to seek back to
@@ -79,7 +83,17 @@ void MappingWorker::trajectoryOfSession() {
   frames_with_groundtruth_ = mapper_params_.poses == PoseSource::kGroundTruth ? base_frames_ : 0;
   // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
   if (!mapper_->framePoses().empty()) {
-    for (const vdmap::FramePose& f : mapper_->framePoses()) trajectory_.push_back({f.keyframe, f.timestamp, f.T_K_C, std::nullopt});
+    for (const vdmap::FramePose& f : mapper_->framePoses()) {
+      TrajectoryPoint pose{f.keyframe, f.timestamp, f.T_K_C, std::nullopt};
+      // Tracked poses: the sequence's ground truth of the same frame (its depth timestamp).
+      const auto it = std::lower_bound(session_truth_.begin(), session_truth_.end(), f.timestamp - 1e-6,
+                                       [](const FrameEntry& e, double t) { return e.t_depth < t; });
+      if (it != session_truth_.end() && std::abs(it->t_depth - f.timestamp) <= 1e-6) {
+        pose.T_W_C_truth = it->T_W_C;
+        ++frames_with_groundtruth_;
+      }
+      trajectory_.push_back(pose);
+    }
     return;
   }
   for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, k.timestamp, Transform::Identity(), std::nullopt});

@@ -18,7 +18,7 @@
 
 #include "app/gui/append_log.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/map_file.h"
+#include "mapping/export/map_file.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
@@ -160,8 +160,11 @@ class MappingWorker {
   /// With `rest`, the frames of its sequence after the session's last one, the player continues
   /// mapping from the session's state (seeking back to before the session's end restores it);
   /// without, the player commands and seek do nothing. Re-run does nothing either way.
+  /// `truth`: for a session mapped with tracked poses, its sequence's frames (their ground-truth
+  /// poses, matched to the session's frames by timestamp) when the folder has them, so the
+  /// tracking error and the ground-truth line show as they did while it was mapped.
   MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
-             std::optional<MapRefinementParams> refine = MapRefinementParams{});
+             std::optional<MapRefinementParams> refine = MapRefinementParams{}, std::vector<FrameEntry> truth = {});
   // --- Static maps (mapping_worker_static.cpp) ---
   /// A map file read whole (loadStaticMap): publishes one mapping snapshot (its keyframe poses,
   /// edges and trajectory) and one global snapshot, and nothing after. The player, thresholds,
@@ -253,6 +256,7 @@ class MappingWorker {
 
   std::optional<TumSequence> sequence_;
   std::shared_ptr<const Session> origin_;  // the saved session the mapper started from, if any
+  std::vector<FrameEntry> session_truth_;   // its sequence's frames with ground truth, by time
   int base_frames_ = 0;                    // frames in the map before sequence_'s first entry
   int frames_with_groundtruth_ = 0;        // MappingSnapshot::frames_with_groundtruth
   std::string sequence_folder_;

@@ -153,6 +153,18 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, s
   }
 }
 
+// The frames of a session's sequence, for their ground truth, when it was mapped with tracked
+// poses and its folder has ground truth; none otherwise (the tracking error then stays hidden).
+std::vector<FrameEntry> groundTruthOf(const SessionInfo& info) {
+  if (info.mapper.poses != PoseSource::kTrack || !std::filesystem::is_directory(info.sequence)) return {};
+  try {
+    const TumSequence seq = TumSequence::open(info.sequence);
+    if (seq.hasGroundTruth()) return seq.entries();
+  } catch (const std::exception&) {  // framesAfter says what is wrong with the folder
+  }
+  return {};
+}
+
 }  // namespace
 
 bool Workbench::openSession(const std::string& file) {
@@ -169,7 +181,9 @@ bool Workbench::openSession(const std::string& file) {
     }
     std::string off;
     std::optional<TumSequence> rest = framesAfter(saved, &off, &why);
-    auto worker = std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_);
+    std::vector<FrameEntry> truth = groundTruthOf(saved.info);
+    auto worker =
+        std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_, std::move(truth));
     worker->setOnChange(on_change_);
     worker_ = std::move(worker);
     ui_.params = params;
