@@ -19,8 +19,9 @@ void drawTrackingError(WindowState& win) {
           "Absolute trajectory error (TUM RGB-D benchmark, Sturm et al. 2012): the tracked camera positions after the "
           "least-squares SE(3) alignment to the ground truth (Horn), rmse over the " + std::to_string(e.matched) +
           " frames both have (matched by timestamp). The gap drawn in the view is not aligned.");
-    ImGui::Text("%s  (median %s, max %s)", metres(e.ate_rmse_m).c_str(), metres(e.ate_median_m).c_str(),
-                metres(e.ate_max_m).c_str());
+    ImGui::TextUnformatted(metres(e.ate_rmse_m).c_str());
+    label(win.check, "ATE median, max", "The same aligned position errors' median and largest.");
+    ImGui::Text("%s, %s", metres(e.ate_median_m).c_str(), metres(e.ate_max_m).c_str());
     label(win.check, "RPE / frame",
           "Relative pose error (TUM RGB-D benchmark): the error of the motion between consecutive matched frames, "
           "rmse of its translation and rotation; the drift per frame, independent of the alignment.");

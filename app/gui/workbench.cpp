@@ -432,7 +432,11 @@ bool Workbench::canShowBeforeOptimisation() const {
 bool Workbench::showBeforeOptimisation(bool before) {
   if (before && !canShowBeforeOptimisation()) {
     ui_.show_before_optimisation = false;
-    report(StatusLine::Kind::kWarning, "no pose-graph optimisation yet: there is no map before one to show");
+    // A saved session keeps the poses after its optimisations only.
+    report(StatusLine::Kind::kWarning, worker_ && !worker_->mapping()->loops.empty()
+                                           ? "this map keeps only the poses after its last optimisation: there is no "
+                                             "map before it to show"
+                                           : "no pose-graph optimisation yet: there is no map before one to show");
     return false;
   }
   ui_.show_before_optimisation = before;
