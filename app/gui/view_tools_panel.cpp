@@ -1,7 +1,5 @@
 #include "app/gui/view_tools_panel.h"
 
-#include <cfloat>
-
 #include <imgui.h>
 
 #include "app/gui/widgets.h"
@@ -15,7 +13,8 @@ void drawSliceControls(Workbench& bench, WindowState& win) {
       "the map's heights along the up axis), whole; picking and framing ignore the rest. PgUp / PgDn move the "
       "slice by its thickness.");
   ImGui::SameLine();
-  ImGui::SetNextItemWidth(-FLT_MIN);
+  // DragFloatRange2 places its (empty) label one inner spacing after the fields: leave room.
+  ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemInnerSpacing.x);
   ImGui::BeginDisabled(!slice.on);
   float lo = slice.lo_m, hi = slice.hi_m;
   if (ImGui::DragFloatRange2("##slice", &lo, &hi, 0.01f, -100.f, 100.f, "%.2f m", "%.2f m", ImGuiSliderFlags_AlwaysClamp) &&

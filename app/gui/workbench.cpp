@@ -42,7 +42,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
       {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
       {"T", "frame the trajectories (tracked and ground truth) only"},
-      {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor at a time; turns it on)"},
+      {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
       {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
