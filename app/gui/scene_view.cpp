@@ -88,7 +88,9 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   const Settings& s = ui.settings;
   // The style of the settings' view (viewSpecOf), as `vdmap render` draws it: draw mode (none
   // hides the map), colours, sigma, layers.
-  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), bench.heightFrame()));
+  // The height frame only where it shows (its data up axis costs a pass over the map per mapped frame).
+  const bool heights = s.color == render::ColorMode::kHeight || s.slice.on;
+  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), heights ? bench.heightFrame() : render::HeightFrame{}));
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
