@@ -479,13 +479,14 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   int generation = 1;
   for (std::size_t i = 0; i < m.maps.size(); ++i)
     if (&m.maps[i].second == &map) generation = static_cast<int>(i) + 2;
+  // Heights (colours, the slice) are measured from the whole map's floor along the view's up.
+  scene.up = up(spec.up, params);
+  scene.height = render::heightFrame(map, scene.up);
+  mirror.setStyle(render::mirrorStyle(spec, scene.height));
   // A height slice keeps the ellipsoids whose centre lies lo..hi above the floor, whole.
   const std::vector<Ellipsoid>* shown = &map;
   if (spec.slice.on) {
-    const render::HeightFrame floor = render::heightFrame(map, up(spec.up, params));
-    m.sliced.clear();
-    for (const Ellipsoid& e : map)
-      if (spec.slice.keeps(floor.height({e.mean.x(), e.mean.y(), e.mean.z()}))) m.sliced.push_back(e);
+    m.sliced = render::slicedMap(map, scene.height, spec.slice);
     shown = &m.sliced;
     generation = (1 << 24) + ++m.slice_serial;
   }
@@ -500,9 +501,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   }
   // The frame holds what is drawn: each ellipsoid's extent at the sigma (strays left out), and a
   // mesh whole.
-  scene.up = up(spec.up, params);
-  const render::HeightFrame height_frame = render::heightFrame(map, scene.up);
-  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, height_frame,
+  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height,
                                                   render::frameAxes(map, scene.up));
   for (const auto& p : m.mesh.positions) {
     const glm::vec3 q = glm::transpose(drawn.axes) * glm::vec3(p.x(), p.y(), p.z());

@@ -95,7 +95,7 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
   instances_.assign(ellipsoids.begin(), ellipsoids.end());
   geometry_cpu_ = geometryOf(instances_, style_.sigma);
   geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
-  colors_cpu_ = ellipsoidColors(instances_, style_.color);
+  colors_cpu_ = ellipsoidColors(instances_, style_.color, style_.height, style_.slice);
   colors_.upload(colors_cpu_.data(), colors_cpu_.size() * sizeof(glm::u8vec4));
   std::vector<glm::vec3> centres(instances_.size());
   for (std::size_t i = 0; i < instances_.size(); ++i) centres[i] = instances_[i].mean;
@@ -108,9 +108,12 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
 
 void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
   const bool geometry_changed = style.sigma != style_.sigma;
-  const bool colors_changed = style.color != style_.color;
+  const bool colors_changed = style.color != style_.color ||
+                              (style.color == ColorMode::kHeight && (style.height != style_.height || style.slice != style_.slice));
   style_.sigma = style.sigma;
   style_.color = style.color;  // the sphere level is fixed at construction
+  style_.height = style.height;
+  style_.slice = style.slice;
   style_.point_below_px = style.point_below_px;
   if (geometry_changed || colors_changed) near_key_.reset();
   if (geometry_changed) {
@@ -118,7 +121,7 @@ void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
     geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
   }
   if (colors_changed) {
-    colors_cpu_ = ellipsoidColors(instances_, style_.color);
+    colors_cpu_ = ellipsoidColors(instances_, style_.color, style_.height, style_.slice);
     colors_.upload(colors_cpu_.data(), colors_cpu_.size() * 4);
   }
 }

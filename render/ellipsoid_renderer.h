@@ -22,6 +22,10 @@ struct EllipsoidStyle {
   /// mesh's shading gradient is a few pixels wide and hardly visible; 1 M ellipsoids in view
   /// render ~20x faster under llvmpipe (docs/performance.md).
   float point_below_px = 4.f;
+  /// ColorMode::kHeight: heights above `height`'s floor along its up axis, the ramp over the
+  /// slice when it is on, else over the instances' 2-98 % height range (ellipsoidColors).
+  HeightFrame height{};
+  HeightSlice slice{};
 };
 
 /// Draws ellipsoids as instanced, shaded icospheres scaled by the covariance's principal axes,

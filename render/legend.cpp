@@ -71,6 +71,13 @@ Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const G
     legend.ramp_title = uncertainty ? "largest std. deviation (log scale)" : "points per ellipsoid (log scale)";
     legend.ramp_lo = uncertainty ? metresText(range->lo) : number(range->lo);
     legend.ramp_hi = uncertainty ? metresText(range->hi) : number(range->hi);
+  } else if (range && mode == ColorMode::kHeight) {
+    char lo[32], hi[32];
+    std::snprintf(lo, sizeof lo, "%.2f", range->lo);
+    std::snprintf(hi, sizeof hi, "%.2f", range->hi);
+    legend.ramp_title = "height above floor (m)";
+    legend.ramp_lo = lo;
+    legend.ramp_hi = hi;
   } else if (mode == ColorMode::kKeyframe && !graph.keyframes.empty()) {
     legend.swatch_title = "keyframe colours";
     for (int i = 0; i < static_cast<int>(graph.keyframes.size()); ++i)

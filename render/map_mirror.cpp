@@ -56,8 +56,13 @@ GraphLines graphLines(const GraphScene& scene, const MirrorStyle& style) {
   return out;
 }
 
-std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {
+std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode,
+                                     const HeightFrame& height, const HeightSlice& slice) {
   if (ellipsoids.empty() || mode == ColorMode::kRgb || mode == ColorMode::kKeyframe) return std::nullopt;
+  if (mode == ColorMode::kHeight) {
+    const auto [lo, hi] = heightRange(ellipsoids, height, slice);
+    return ColorRange{lo, hi};
+  }
   ColorRange range{INFINITY, -INFINITY};
   for (const EllipsoidInstance& e : ellipsoids) {
     float v = static_cast<float>(std::max<std::uint32_t>(1, e.count));
@@ -113,10 +118,15 @@ MapMirror::~MapMirror() = default;
 void MapMirror::setStyle(const MirrorStyle& style) {
   if (!(style == style_)) ++content_serial_;
   style_ = style;
-  ellipsoids_.setStyle({.sigma = style.sigma, .color = style.color, .point_below_px = style.points_below_px});
-  if (style.color != points_style_.color) {
-    points_.set(instances_, style.color);
-    points_style_.color = style.color;
+  ellipsoids_.setStyle({.sigma = style.sigma,
+                        .color = style.color,
+                        .point_below_px = style.points_below_px,
+                        .height = style.height,
+                        .slice = style.slice});
+  if (style.color != points_style_.color ||
+      (style.color == ColorMode::kHeight && (style.height != points_style_.height || style.slice != points_style_.slice))) {
+    points_.set(instances_, style.color, style.height, style.slice);
+    points_style_ = style;
   }
 }
 
@@ -125,8 +135,8 @@ void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
   map_generation_ = generation;
   instances_ = toInstances(ellipsoids);
   ellipsoids_.set(instances_);
-  points_.set(instances_, style_.color);
-  points_style_.color = style_.color;
+  points_.set(instances_, style_.color, style_.height, style_.slice);
+  points_style_ = style_;
   ++uploads_.map;
   ++content_serial_;
 }
@@ -223,6 +233,6 @@ void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
   if (has_highlight_) highlight_.draw(view);
 }
 
-std::optional<ColorRange> MapMirror::mapColorRange() const { return colorRange(instances_, style_.color); }
+std::optional<ColorRange> MapMirror::mapColorRange() const { return colorRange(instances_, style_.color, style_.height, style_.slice); }
 
 }  // namespace vdmap::render

@@ -36,6 +36,8 @@ struct MirrorStyle {
   bool frustums = true, graph = true, trajectory = true;
   bool groundtruth = true;            ///< GraphScene::groundtruth
   float points_below_px = 4.f;        ///< EllipsoidStyle::point_below_px
+  HeightFrame height{};               ///< height colours: up axis and floor (heightFrame of the whole map)
+  HeightSlice slice{};                ///< height colours: the ramp spans the slice when it is on
   bool operator==(const MirrorStyle&) const = default;
 };
 
@@ -49,8 +51,10 @@ GraphLines graphLines(const GraphScene& scene, const MirrorStyle& style);
 
 /// The range of the colour ramp of a colour mode over a map (ColorRange, legend.h), in the
 /// units a legend shows: uncertainty: the largest standard deviation sqrt(lambda_max), m; count:
-/// points per ellipsoid. Empty for rgb / keyframe colours or an empty map.
-std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
+/// points per ellipsoid; height: heightRange(ellipsoids, height, slice), m above the floor. Empty
+/// for rgb / keyframe colours or an empty map.
+std::optional<ColorRange> colorRange(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode,
+                                     const HeightFrame& height = {}, const HeightSlice& slice = {});
 
 /// Raw depth (CV_16U, `depth_scale` units per metre) as an RGB image: viridis over 0..max_m,
 /// black where there is no measurement.

@@ -46,12 +46,13 @@ void PrimitiveRenderer::draw(const ViewCamera& view) const {
   if (on_top_) gl.Enable(GL_DEPTH_TEST);
 }
 
-void PointRenderer::set(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode) {
+void PointRenderer::set(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode, const HeightFrame& height,
+                        const HeightSlice& slice) {
   std::vector<glm::vec3> positions;
   std::vector<glm::u8vec3> colors;
   positions.reserve(ellipsoids.size());
   for (const auto& e : ellipsoids) positions.push_back(e.mean);
-  for (const auto& c : ellipsoidColors(ellipsoids, mode)) colors.emplace_back(c);
+  for (const auto& c : ellipsoidColors(ellipsoids, mode, height, slice)) colors.emplace_back(c);
   points_.set(positions, colors);
 }
 

@@ -38,7 +38,9 @@ class PrimitiveRenderer {
 class PointRenderer {
  public:
   explicit PointRenderer(const Gl& gl) : points_(gl, GL_POINTS) { points_.setSize(2.f); }
-  void set(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode);
+  /// The centres coloured as ellipsoidColors(ellipsoids, mode, height, slice).
+  void set(std::span<const EllipsoidInstance> ellipsoids, ColorMode mode, const HeightFrame& height = {},
+           const HeightSlice& slice = {});
   void setPointSize(float pixels) { points_.setSize(pixels); }
   void draw(const ViewCamera& view) const { points_.draw(view); }
 

@@ -4,7 +4,7 @@
 
 namespace vdmap::render {
 
-MirrorStyle mirrorStyle(const ViewSpec& spec) {
+MirrorStyle mirrorStyle(const ViewSpec& spec, const HeightFrame& height) {
   return {.color = spec.color,
           .sigma = spec.sigma,
           .ellipsoids = spec.ellipsoids,
@@ -13,7 +13,9 @@ MirrorStyle mirrorStyle(const ViewSpec& spec) {
           .graph = spec.layers.graph,
           .trajectory = spec.layers.trajectory,
           .groundtruth = spec.layers.groundtruth,
-          .points_below_px = spec.points_below_px};
+          .points_below_px = spec.points_below_px,
+          .height = height,
+          .slice = spec.slice};
 }
 
 void drawMapView(const Gl& gl, const MapMirror& mirror, const FramedView& view, const glm::vec3& background,
@@ -43,7 +45,7 @@ void drawMapView(const Gl& gl, const MapMirror& mirror, const FramedView& view, 
 
 cv::Mat renderView(const Gl& gl, MapMirror& mirror, const ViewSpec& spec, const ViewScene& scene, int width, int height,
                    const MeshRenderer* mesh) {
-  mirror.setStyle(mirrorStyle(spec));
+  mirror.setStyle(mirrorStyle(spec, scene.height));
   Framebuffer fb(gl, width, height);
   if (spec.kind == ViewKind::kContainer) {
     fb.bindAndClear(0.f, 0.f, 0.f);

@@ -13,8 +13,9 @@ namespace vdmap::render {
 /// The bars around a letterboxed keyframe view.
 inline constexpr glm::vec3 kLetterboxColor{0.05f, 0.05f, 0.06f};
 
-/// The mirror's style for `spec` (colour, sigma, ellipsoids or centres, layers, splats).
-MirrorStyle mirrorStyle(const ViewSpec& spec);
+/// The mirror's style for `spec` (colour, sigma, ellipsoids or centres, layers, splats, slice);
+/// `height`: the map's height frame (heightFrame) the height colours measure from.
+MirrorStyle mirrorStyle(const ViewSpec& spec, const HeightFrame& height = {});
 
 /// Draws a map view into the bound framebuffer's rectangle `viewport` (GL pixels, from the
 /// bottom-left): clears it (`background` in view.image, kLetterboxColor around it), draws `mesh`

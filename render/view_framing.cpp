@@ -122,6 +122,13 @@ HeightFrame heightFrame(std::span<const Ellipsoid> map, const glm::vec3& up_in) 
   return frame;
 }
 
+std::vector<Ellipsoid> slicedMap(std::span<const Ellipsoid> map, const HeightFrame& frame, const HeightSlice& slice) {
+  std::vector<Ellipsoid> kept;
+  for (const Ellipsoid& e : map)
+    if (slice.keeps(frame.height({e.mean.x(), e.mean.y(), e.mean.z()}))) kept.push_back(e);
+  return kept;
+}
+
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map) {
   switch (axis) {
     case UpAxis::kPlusZ: return {0.f, 0.f, 1.f};

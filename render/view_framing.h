@@ -4,6 +4,7 @@
 #include <cstddef>
 #include <span>
 #include <utility>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -52,6 +53,11 @@ FrameBox frameBounds(const DrawnBounds& map, const GraphScene& graph);
 /// dot(mean, up) (0 for an empty map).
 HeightFrame heightFrame(std::span<const Ellipsoid> map, const glm::vec3& up);
 
+/// The ellipsoids of `map` a height slice keeps, whole: those whose centre lies lo..hi above the
+/// floor of `frame` (all of them when the slice is off). The window's mirror, its picking and
+/// `vdmap render --slice` draw this one selection.
+std::vector<Ellipsoid> slicedMap(std::span<const Ellipsoid> map, const HeightFrame& frame, const HeightSlice& slice);
+
 /// The world's up direction: the axis named, or for kData estimateUp of the cameras and the map.
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map);
 
@@ -66,6 +72,7 @@ struct ViewScene {
   glm::vec3 up{0.f, 0.f, 1.f};       ///< upDirection of the spec's axis
   PinholeCamera camera;              ///< the keyframes' camera (keyframe views)
   Transform T_W_K = Transform::Identity();  ///< keyframe:K's pose
+  HeightFrame height{};              ///< the map's heightFrame about `up` (height colours, slice)
 };
 
 /// A view's camera and where its image lies in the viewport (the letterbox of a keyframe view;

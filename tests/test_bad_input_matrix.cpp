@@ -581,6 +581,11 @@ const std::vector<BadCase>& badCases() {
        args("gui {dir}/seq --settings {dir}/none.json --exit")},
       {"command_line", "gui_settings_out_of_range", E::kCliError, "bad.json: thresholds.merge_distance must be >= 0",
        then(write("bad.json", R"({"thresholds": {"merge_distance": -1}})"), "gui {dir}/seq --settings {dir}/bad.json --exit")},
+      // Height slice: settings keys slice_lo < slice_hi.
+      {"command_line", "gui_settings_slice_reversed", E::kCliError,
+       "bad.json: view.slice_lo must be below view.slice_hi (metres above the floor, within 1e4)",
+       then(write("bad.json", R"({"view": {"slice": true, "slice_lo": 2, "slice_hi": 1}})"),
+            "gui {dir}/seq --settings {dir}/bad.json --exit")},
       {"command_line", "gui_view_file_missing_key", E::kCliError, "v.json: missing key 'source'",
        then(write("v.json", R"({"vdmap_view": 1})"), "gui {dir}/seq --view-file {dir}/v.json --exit")},
       // Opening map files (gui PATH, render --map): a bad one is one line before the window opens.

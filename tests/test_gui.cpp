@@ -1486,6 +1486,48 @@ TEST(GuiViewTools, FrameTrajectoriesFramesOnlyThePaths) {
   EXPECT_LT(bench.ui().camera.distance_m, 0.8f * map_distance);
 }
 
+// --- height slice ---
+TEST(GuiViewTools, PickIgnoresSlicedAwayEllipsoids) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  const auto global = t.worker().global();
+  const std::vector<Ellipsoid>& map = global->map.ellipsoids;
+  const render::HeightFrame frame = bench.heightFrame();
+  const auto height = [&](const Ellipsoid& e) { return frame.height({e.mean.x(), e.mean.y(), e.mean.z()}); };
+  std::vector<float> h;
+  for (const Ellipsoid& e : map) h.push_back(height(e));
+  std::nth_element(h.begin(), h.begin() + static_cast<long>(h.size() / 2), h.end());
+  const float median = h[h.size() / 2];
+  // The highest ellipsoid, picked with the slice off.
+  const Ellipsoid& top = *std::max_element(map.begin(), map.end(), [&](auto& a, auto& b) { return height(a) < height(b); });
+  ASSERT_GT(height(top), median);
+  const glm::vec2 at = projectInView(bench, {top.mean.x(), top.mean.y(), top.mean.z()});
+  bench.pick(at.x, at.y, 640, 480);
+  ASSERT_TRUE(bench.ui().picked);
+  EXPECT_EQ(bench.shownMap().ellipsoids->size(), map.size()) << "no slice: the whole map is drawn";
+  // The lower half: the mirror gets only what it keeps, and a pick never returns the rest.
+  bench.ui().settings.slice = {true, -100.f, median};
+  const Workbench::ShownMap shown = bench.shownMap();
+  EXPECT_LT(shown.ellipsoids->size(), map.size());
+  EXPECT_GT(shown.ellipsoids->size(), 0u);
+  for (const Ellipsoid& e : *shown.ellipsoids) EXPECT_LE(height(e), median);
+  bench.pick(at.x, at.y, 640, 480);
+  if (bench.ui().picked) {
+    EXPECT_LE(height(*bench.ui().picked), median) << "a sliced-away ellipsoid was picked";
+  }
+  EXPECT_EQ(bench.shownMap().serial, shown.serial) << "an unchanged slice keeps its selection (no re-upload)";
+  // PgUp / PgDn move the slice by its thickness; the selection is new.
+  bench.key(KeyAction::kSliceUp);
+  EXPECT_NEAR(bench.ui().settings.slice.lo_m, median, 1e-4f);
+  EXPECT_NEAR(bench.ui().settings.slice.hi_m, 2.f * median + 100.f, 1e-4f);
+  EXPECT_NE(bench.shownMap().serial, shown.serial);
+  bench.key(KeyAction::kSliceDown);
+  EXPECT_NEAR(bench.ui().settings.slice.hi_m, median, 1e-4f);
+  // The slice is in the view spec a saved view file carries.
+  EXPECT_TRUE(bench.viewSpec().slice.on);
+  EXPECT_NEAR(bench.viewSpec().slice.hi_m, median, 1e-4f);
+}
+
 TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
   Settings s;
   EXPECT_TRUE(render::mirrorStyle(viewSpecOf(s)).map);

@@ -3,6 +3,7 @@
 // and the failure paths. Skips when xvfb-run is not installed.
 #include <algorithm>
 #include <cmath>
+#include <cstdio>
 #include <cstdlib>
 #include <map>
 #include <regex>
@@ -680,6 +681,32 @@ TEST(GuiCli, PressingFLeavesTheViewsBorderEmpty) {
                 b[3] <= v[1].get<double>() + v[3].get<double>())
         << "the drawn map's box " << b.dump() << " inside the view " << v.dump();
   }
+}
+
+// --- height slice ---
+// A slice set with --set draws fewer ellipsoids (the mirror's count) and pixels, and a saved
+// view carries it.
+TEST(GuiCli, ASliceDrawsFewerEllipsoidsAndIsSavedInTheView) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const MappedFolder m(home);
+  const std::string map = "gui '" + m.out.string() + "' --exit --window-size 1280x720 --set show_legend=false ";
+  const auto run = [&](const std::string& name, const std::string& options) {
+    const RunResult r = runInXvfb(home, map + options + " --stats-json '" + (home / (name + ".json")).string() +
+                                            "' --view-screenshot '" + (home / (name + ".png")).string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    return readJson(home / (name + ".json"));
+  };
+  const nlohmann::json all = run("all", "");
+  const nlohmann::json sliced =
+      run("sliced", "--set slice=true --set slice_lo=0 --set slice_hi=0.5 --save-view '" + (home / "v.json").string() + "'");
+  EXPECT_EQ(all["map_drawn"], m.ellipsoids);
+  EXPECT_GT(sliced["map_drawn"].get<int>(), 0);
+  EXPECT_LT(sliced["map_drawn"].get<int>(), 3 * m.ellipsoids / 4);
+  EXPECT_LT(drawnPixels(home / "sliced.png"), drawnPixels(home / "all.png"));
+  EXPECT_EQ(readJson(home / "v.json")["slice"], nlohmann::json::array({0.0, 0.5}));
+  std::printf("slice 0..0.5 m: %d of %d ellipsoids, %d of %d pixels\n", sliced["map_drawn"].get<int>(), m.ellipsoids,
+              drawnPixels(home / "sliced.png"), drawnPixels(home / "all.png"));
 }
 
 }  // namespace

@@ -138,5 +138,57 @@ TEST_F(RenderView, AfterFramingNoMapPixelTouchesTheBorder) {
     }
 }
 
+// --- height slice: height colours ---
+// Two floors 2 m apart along a tilted up axis, side by side seen from above: coloured by height
+// above the floor along that axis, each floor is one colour, the ramp's ends, and the legend
+// gives the range.
+TEST_F(RenderView, HeightColoursFollowTheUpAxisFromTheFloor) {
+  const glm::vec3 up = glm::normalize(glm::vec3(0.5f, 0.f, 1.f));
+  const glm::vec3 a = glm::normalize(glm::cross(glm::vec3(0, 1, 0), up)), b = glm::cross(up, a);
+  std::vector<Ellipsoid> map;
+  for (int floor = 0; floor < 2; ++floor)
+    for (int i = 0; i < 20; ++i)
+      for (int j = 0; j < 20; ++j) {
+        const glm::vec3 p = (floor == 0 ? -1.1f : 0.1f) * a + 0.05f * static_cast<float>(i) * a +
+                            0.05f * static_cast<float>(j - 10) * b + 2.f * static_cast<float>(floor) * up;
+        Ellipsoid e;
+        e.mean = {p.x, p.y, p.z};
+        e.cov = Eigen::Matrix3d::Identity() * 4e-4;
+        e.count = 10;
+        map.push_back(e);
+      }
+  ViewSpec spec;
+  spec.color = ColorMode::kHeight;
+  spec.ellipsoids = false;  // centres: flat colours
+  spec.layers = {.frustums = false, .graph = false, .trajectory = false, .groundtruth = false, .legend = false};
+  ViewScene scene;
+  scene.up = up;
+  scene.height = heightFrame(map, up);
+  EXPECT_NEAR(scene.height.floor_m, 0.f, 1e-4f);
+  scene.bounds = frameBounds(drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, frameAxes(map, up)), {});
+  spec.look_at = LookAt{.eye = glm::vec3(0.f) + 6.f * up, .target = glm::vec3(0.f) + 1.f * up, .up = b};
+  MapMirror mirror(context_->gl(), spec.sphere_level);
+  mirror.setStyle(mirrorStyle(spec, scene.height));
+  mirror.setMap(1, map);
+  const cv::Mat image = renderView(context_->gl(), mirror, spec, scene, 320, 240);
+  int low = 0, high = 0;
+  const glm::u8vec3 c0 = colormap(0.f), c1 = colormap(1.f);
+  for (int y = 0; y < image.rows; ++y)
+    for (int x = 0; x < image.cols; ++x) {
+      low += near(image.at<cv::Vec3b>(y, x), {c0.r, c0.g, c0.b});
+      high += near(image.at<cv::Vec3b>(y, x), {c1.r, c1.g, c1.b});
+    }
+  EXPECT_GT(low, 200) << "the lower floor is the ramp's low end";
+  EXPECT_GT(high, 200) << "the upper floor is the ramp's high end";
+  const Legend legend = legendFor(ColorMode::kHeight, mirror.mapColorRange(), {});
+  EXPECT_EQ(legend.ramp_title, "height above floor (m)");
+  EXPECT_EQ(legend.ramp_lo, "0.00");
+  EXPECT_EQ(legend.ramp_hi, "2.00");
+  // A slice over the upper floor: the ramp spans it and the legend says so.
+  spec.slice = {true, 1.5f, 2.5f};
+  mirror.setStyle(mirrorStyle(spec, scene.height));
+  EXPECT_EQ(legendFor(ColorMode::kHeight, mirror.mapColorRange(), {}).ramp_lo, "1.50");
+}
+
 }  // namespace
 }  // namespace vdmap::render

@@ -106,6 +106,16 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeViewWithItsLegend) {
   EXPECT_EQ(spec.value("color", ""), "uncertainty");
 }
 
+// --- height slice ---
+// Height colours from the floor along the up axis, and a slice: the same picture on both paths.
+TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameHeightColoursAndSlice) {
+  REQUIRE_XVFB();
+  const nlohmann::json all = expectTwins("height", "--set color=height");
+  EXPECT_EQ(all.value("color", ""), "height");
+  const nlohmann::json spec = expectTwins("height-slice", "--set color=height --set slice=true --set slice_lo=0.3 --set slice_hi=1.2");
+  EXPECT_EQ(spec["slice"], nlohmann::json::array({0.3f, 1.2f}));
+}
+
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
   REQUIRE_XVFB();
   // The container window draws at 2 sigma whatever the 3-D view's sigma: its view file says so.

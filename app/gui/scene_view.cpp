@@ -88,7 +88,9 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   const Settings& s = ui.settings;
   // The style of the settings' view (viewSpecOf), as `vdmap render` draws it: draw mode (none
   // hides the map), colours, sigma, layers.
-  mirror.setStyle(render::mirrorStyle(viewSpecOf(s)));
+  // The height frame only where it shows (its data up axis costs a pass over the map per mapped frame).
+  const bool heights = s.color == render::ColorMode::kHeight || s.slice.on;
+  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), heights ? bench.heightFrame() : render::HeightFrame{}));
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
@@ -113,7 +115,12 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     mirrored.session = bench.sessionSerial();
     mirrored.session_base += 1 << 20;
   }
-  if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
+  if (win.global && s.slice.on) {
+    // The slice's selection (Workbench::shownMap): negative generations, distinct from every
+    // session's, so a new selection re-uploads (and re-orders the fast pass, re-keys the cache).
+    const Workbench::ShownMap shown = bench.shownMap();
+    mirror.setMap(-2 - shown.serial, *shown.ellipsoids);
+  } else if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
   else mirror.setMap(mirrored.session_base, {});
   const auto mapping = win.mapping;
   mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);

@@ -161,6 +161,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
   stats["view_from_keyframe"] = ui.view_from_keyframe;
+  stats["map_drawn"] = run.map_drawn;  // height slice: the ellipsoids the 3-D view holds
   stats["show_before_optimisation"] = ui.show_before_optimisation;
   if (global) stats["map_before_optimisation"] = global->before_optimisation;
   // Latency (global map stream): per edit, the total and its stages (edit, queue, build,

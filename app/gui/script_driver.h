@@ -45,6 +45,7 @@ struct ScriptRun {
   bool view_fast = false;            ///< the 3-D view shown is the fast pass's
   std::vector<double> fast_ms;       ///< glFinish-timed fast frames of the orbit, ms
   std::size_t fast_instances = 0;    ///< ellipsoids the last fast frame drew
+  std::size_t map_drawn = 0;         ///< height slice: ellipsoids the mirror holds (what the slice keeps)
   Clock::time_point last_move{};     ///< the orbit's last camera step
   double settle_ms = -1;             ///< the last orbit step until the full frame was shown
   /// The most labels cut in a frame after which the event loop, unscripted, would wait for input

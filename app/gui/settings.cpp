@@ -57,7 +57,10 @@ json toJson(const Settings& s) {
         {"container_grid", s.container_grid},
         {"container_bounds", s.container_bounds},
         {"background", backgroundName(s.background)},
-        {"show_legend", s.show_legend}}},
+        {"show_legend", s.show_legend},
+        {"slice", s.slice.on},
+        {"slice_lo", s.slice.lo_m},
+        {"slice_hi", s.slice.hi_m}}},
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
       {"recent", s.recent},  // opened paths, newest first (Settings::recent)
@@ -123,6 +126,11 @@ Settings fromJson(const json& j, const Settings& base = {}) {
       throw std::invalid_argument(std::string("view.background: ") + e.what());
     }
     read(v, "view", "show_legend", s.show_legend);
+    read(v, "view", "slice", s.slice.on);
+    read(v, "view", "slice_lo", s.slice.lo_m);
+    read(v, "view", "slice_hi", s.slice.hi_m);
+    if (!(s.slice.lo_m < s.slice.hi_m && s.slice.lo_m >= -1e4f && s.slice.hi_m <= 1e4f))
+      throw std::invalid_argument("view.slice_lo must be below view.slice_hi (metres above the floor, within 1e4)");
     if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10)) throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
     if (!(s.play_fps >= 0 && s.play_fps <= 1000)) throw std::invalid_argument("view.play_fps must be in [0, 1000]");
   }
@@ -192,6 +200,7 @@ render::ViewSpec viewSpecOf(const Settings& s) {
   spec.layers.legend = s.show_legend;
   spec.layers.grid = s.container_grid;
   spec.layers.bounds = s.container_bounds;
+  spec.slice = s.slice;
   spec.background = s.background;
   return spec;
 }

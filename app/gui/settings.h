@@ -36,6 +36,9 @@ struct Settings {
   bool container_bounds = true;         ///< the container view's image outline
   glm::vec3 background = render::kDarkBackground;  ///< "dark", "white" or "#rrggbb"
   bool show_legend = true;              ///< the colour legend and tracking key over the 3-D view
+  /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
+  /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
+  render::HeightSlice slice;
   int window_width = 1600, window_height = 900;
   std::string last_sequence;
   /// Recently opened paths (any kind the workbench opens), newest first, at most kRecentFiles;

@@ -11,6 +11,7 @@
 
 #include "app/gui/tg_parts.h"
 #include "app/gui/map_file_panel.h"
+#include "app/gui/view_tools_panel.h"  // the height slice
 #include "app/gui/widgets.h"
 #include "app/view_file.h"
 #include "render/colormap.h"
@@ -205,7 +206,8 @@ void drawView(Workbench& bench, WindowState& win) {
   if (beginRows("view")) {
     label(win.check, "colour",
           "rgb: the surface colour; keyframe: the keyframe each ellipsoid came from (the key in the view); "
-          "uncertainty: the largest standard deviation; count: points merged into it (colour bars in the view).");
+          "uncertainty: the largest standard deviation; count: points merged into it; height: height above the "
+          "floor along the up axis, over the slice when it is on (colour bars in the view).");
     int color = static_cast<int>(s.color);
     if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
       s.color = static_cast<render::ColorMode>(color);
@@ -242,6 +244,7 @@ void drawView(Workbench& bench, WindowState& win) {
     checkFits(win.check);
     ImGui::EndTable();
   }
+  drawSliceControls(bench, win);
   if (ImGui::Button("Frame map (F)")) bench.frameMap();
   tip("Fits the map in the view, keeping the direction; the view follows the map again as it grows.");
   ImGui::SameLine();

@@ -42,6 +42,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
       {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
       {"T", "frame the trajectories (tracked and ground truth) only"},
+      {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
       {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
@@ -506,6 +507,8 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kSaveView: saveViewSafely(ui_.view_file_text); break;
     case KeyAction::kFrameTrajectories: frameTrajectories(); break;
     case KeyAction::kPivotHere: ui_.pivot_requested = true; break;  // the window probes the point under the cursor
+    case KeyAction::kSliceUp: moveSlice(1); break;
+    case KeyAction::kSliceDown: moveSlice(-1); break;
   }
 }
 
@@ -551,6 +554,7 @@ bool Workbench::applyViewSpec(const render::ViewSpec& spec) {
   s.container_grid = spec.layers.grid;
   s.container_bounds = spec.layers.bounds;
   s.background = spec.background;
+  s.slice = spec.slice;  // height slice
   ui_.show_container = false;
   ui_.view_from_keyframe = -1;
   // The camera as `vdmap render` makes it (render/view_framing.h), at the viewport's aspect.

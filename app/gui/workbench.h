@@ -85,7 +85,8 @@ inline constexpr float kContainerSigma = 2.f;
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo, kBeforeOptimisation, kSaveView, kFrameTrajectories, kPivotHere
+  kEscape, kUndo, kBeforeOptimisation, kSaveView, kFrameTrajectories, kPivotHere,
+  kSliceUp, kSliceDown  // height slice: PgUp / PgDn
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
@@ -348,6 +349,22 @@ class Workbench {
   std::size_t framedStrays() const { return framed_strays_; }
   // --- end picture stream ---
 
+  // --- height slice ---
+  /// The global map's height frame about upVector(): heights above its floor colour the map
+  /// (colour "height") and bound the slice. Computed once per map and up direction.
+  render::HeightFrame heightFrame() const;
+  /// What the 3-D view draws and picks of the global map: all of it, or with the settings' slice
+  /// on the ellipsoids it keeps (render::slicedMap, as `vdmap render --slice`). `serial` is
+  /// new whenever the selection is (a new map, up direction or slice). Null while none is open.
+  struct ShownMap {
+    std::shared_ptr<const std::vector<Ellipsoid>> ellipsoids;
+    int serial = 0;
+  };
+  ShownMap shownMap() const;
+  /// PgUp / PgDn: the slice moves up (+1) or down (-1) by its thickness (one floor at a time).
+  void moveSlice(int direction);
+  // --- end height slice ---
+
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
   /// Click in the 3-D view at (x, y) of a width x height viewport: sets ui().picked and selects
@@ -372,6 +389,17 @@ class Workbench {
   int framed_generation_ = -1;                     // the global map the view was last framed on
   std::pair<int, int> framed_size_{0, 0};          // and the viewport it was framed in
   std::size_t framed_strays_ = 0;                  // picture stream: left out of that frame
+  // Height slice: heightFrame's and shownMap's cache, keyed by the global snapshot and the up.
+  struct SliceCache {
+    std::shared_ptr<const GlobalSnapshot> global;
+    std::shared_ptr<const MappingSnapshot> mapping;  // its cameras give the data up axis
+    UpAxis axis = UpAxis::kData;
+    int serial = 0;
+    render::HeightFrame frame;
+    render::HeightSlice slice;
+    ShownMap shown;
+  };
+  mutable SliceCache slice_cache_;
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::function<void()> on_change_;                // setOnChange's, given to every new worker
   std::string session_settings_;                   // setSessionSettings'

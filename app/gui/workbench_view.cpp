@@ -56,9 +56,8 @@ render::DrawnBounds Workbench::drawnMap() const {
   if (!global) return {};
   const render::ViewSpec spec = viewSpecOf(ui_.settings);
   const std::span<const Ellipsoid> map(global->map.ellipsoids);
-  const glm::vec3 up = upVector();
-  const render::HeightFrame frame = spec.slice.on ? render::heightFrame(map, up) : render::HeightFrame{};
-  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, up));
+  const render::HeightFrame frame = heightFrame();
+  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, frame.up));
 }
 
 render::FrameBox Workbench::frameBounds(std::size_t* strays) const {
@@ -144,11 +143,56 @@ void Workbench::pick(float x_px, float y_px, int width, int height) {
   const auto global = worker_ ? worker_->global() : nullptr;
   if (!global) return;
   const ViewportView v = view(width, height);
-  const int i = pickEllipsoid(global->map.ellipsoids, v.camera, x_px - v.image.x, y_px - v.image.y);
+  const std::vector<Ellipsoid>& shown = *shownMap().ellipsoids;  // what the slice keeps
+  const int i = pickEllipsoid(shown, v.camera, x_px - v.image.x, y_px - v.image.y);
   if (i < 0) return;
-  ui_.picked = global->map.ellipsoids[static_cast<std::size_t>(i)];
+  ui_.picked = shown[static_cast<std::size_t>(i)];
   ui_.picked_generation = global->generation;
   selectKeyframe(ui_.picked->keyframe, true);  // the keyframe list scrolls to it
 }
+
+// --- height slice ---
+render::HeightFrame Workbench::heightFrame() const {
+  const auto global = worker_ ? worker_->global() : nullptr;
+  if (!global) return {};
+  const auto mapping = worker_->mapping();
+  SliceCache& c = slice_cache_;
+  if (c.global != global || c.axis != ui_.settings.up_axis || (c.axis == UpAxis::kData && c.mapping != mapping)) {
+    const glm::vec3 up = upVector();
+    if (c.global != global || up != c.frame.up) {
+      c.frame = render::heightFrame(global->map.ellipsoids, up);
+      c.shown = {};
+    }
+    c.global = global;
+    c.mapping = mapping;
+    c.axis = ui_.settings.up_axis;
+  }
+  return c.frame;
+}
+
+Workbench::ShownMap Workbench::shownMap() const {
+  const auto global = worker_ ? worker_->global() : nullptr;
+  if (!global) return {};
+  const render::HeightFrame frame = heightFrame();  // clears the selection on a new map or up
+  SliceCache& c = slice_cache_;
+  const render::HeightSlice& slice = ui_.settings.slice;
+  if (!c.shown.ellipsoids || !(slice == c.slice)) {
+    c.slice = slice;
+    c.shown.serial = ++c.serial;
+    c.shown.ellipsoids = slice.on ? std::make_shared<const std::vector<Ellipsoid>>(
+                                        render::slicedMap(global->map.ellipsoids, frame, slice))
+                                  : std::shared_ptr<const std::vector<Ellipsoid>>(global, &global->map.ellipsoids);
+  }
+  return c.shown;
+}
+
+void Workbench::moveSlice(int direction) {
+  render::HeightSlice& s = ui_.settings.slice;
+  const float step = static_cast<float>(direction) * (s.hi_m - s.lo_m);
+  s.on = true;
+  s.lo_m += step;
+  s.hi_m += step;
+}
+// --- end height slice ---
 
 }  // namespace vdmap::app::gui

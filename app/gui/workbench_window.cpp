@@ -74,6 +74,8 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_S: return KeyAction::kSaveView;
     case GLFW_KEY_T: return KeyAction::kFrameTrajectories;
     case GLFW_KEY_P: return KeyAction::kPivotHere;
+    case GLFW_KEY_PAGE_UP: return KeyAction::kSliceUp;
+    case GLFW_KEY_PAGE_DOWN: return KeyAction::kSliceDown;
     case GLFW_KEY_H:
     case GLFW_KEY_F1: return KeyAction::kHelp;
     case GLFW_KEY_ESCAPE: return KeyAction::kEscape;
@@ -323,6 +325,7 @@ class WorkbenchWindow {
     mirror_.setFastBudget(budget);
     const bool fast = mirror_.drawsFast();
     drawScene(bench_, gl_, mirror_, win_, &view_cache_);
+    script_.map_drawn = mirror_.mapSize();  // height slice
     if (fast) {
       gl_.Finish();  // the fast pass's own time, to adapt the budget
       const double ms = msSince(now);
@@ -398,7 +401,9 @@ std::vector<int> parseKeyNames(const std::string& comma_separated) {
     else if (name == "left") keys.push_back(GLFW_KEY_LEFT);
     else if (name == "f1") keys.push_back(GLFW_KEY_F1);
     else if (name == "esc") keys.push_back(GLFW_KEY_ESCAPE);
-    else throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc)");
+    else if (name == "pgup") keys.push_back(GLFW_KEY_PAGE_UP);
+    else if (name == "pgdn") keys.push_back(GLFW_KEY_PAGE_DOWN);
+    else throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc, pgup, pgdn)");
   }
   return keys;
 }
