@@ -33,7 +33,8 @@ TEST(Colormap, TheKeyframePaletteIsTheGeneratedOne) {
   ASSERT_EQ(generated.size(), static_cast<std::size_t>(kKeyframePaletteSize));
   std::string table;  // render/keyframe_palette.inc, should it need regenerating
   for (const glm::u8vec3& c : generated)
-    table += "{" + std::to_string(c.r) + ", " + std::to_string(c.g) + ", " + std::to_string(c.b) + "},\n";
+    table.append("{").append(std::to_string(c.r)).append(", ").append(std::to_string(c.g)).append(", ")
+        .append(std::to_string(c.b)).append("},\n");  // append: GCC 12 warns (-Wrestrict) on "{" + string
   for (int k = 0; k < kKeyframePaletteSize; ++k)
     ASSERT_EQ(keyframeColor(k), generated[static_cast<std::size_t>(k)]) << "K" << k << "; the table:\n" << table;
 }
