@@ -244,7 +244,9 @@ TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
       EXPECT_GE(stages[i][stage].get<double>(), 0.0) << stage;
       sum += stages[i][stage].get<double>();
     }
-    EXPECT_LE(sum, stats["slider_to_map_ms"][i].get<double>() + 1.0) << "the stages lie within the edit's latency";
+    // The stages come from the snapshot's stamps and the frame's own clock reads, the latency from
+    // the script's: a few per cent and ms apart under a sanitizer, never a stage counted twice.
+    EXPECT_LE(sum, 1.05 * stats["slider_to_map_ms"][i].get<double>() + 2.0) << "the stages lie within the edit's latency";
     EXPECT_GE(stages[i]["build"].get<double>() + 1e-3, stages[i]["t_g"].get<double>()) << "the build holds t_g";
   }
   // A fusion edit keeps every merge group and the occlusion removal; a merge-distance edit none.
