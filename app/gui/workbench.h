@@ -360,6 +360,7 @@ class Workbench {
     std::shared_ptr<const std::vector<Ellipsoid>> ellipsoids;
     int serial = 0;
   };
+  glm::vec3 framingUp() const;  // upVector(), from heightFrame's cache when it holds it
   ShownMap shownMap() const;
   /// PgUp / PgDn: the slice moves up (+1) or down (-1) by its thickness (one floor at a time).
   void moveSlice(int direction);

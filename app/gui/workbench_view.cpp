@@ -79,7 +79,7 @@ void Workbench::frameMap() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
-  ui_.camera.up = upVector();
+  ui_.camera.up = framingUp();
   ui_.camera.frame(box, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
@@ -89,7 +89,7 @@ void Workbench::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
-  ui_.camera = render::defaultOrbit(box, upVector(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera = render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -123,6 +123,12 @@ glm::vec3 Workbench::upVector() const {
   const std::vector<Transform> cameras = mapping->trajectoryWorld();
   return render::upDirection(UpAxis::kData, cameras,
                              global ? std::span<const Ellipsoid>(global->map.ellipsoids) : std::span<const Ellipsoid>());
+}
+
+// The up axis framing just used: heightFrame() holds it for the current snapshots, so the data
+// up axis (a fit over every camera and the map) is not estimated a second time per framing.
+glm::vec3 Workbench::framingUp() const {
+  return worker_ && worker_->global() ? heightFrame().up : upVector();
 }
 
 ViewportView Workbench::view(int width, int height) const {
