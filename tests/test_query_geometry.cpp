@@ -488,7 +488,9 @@ TEST(QueryMapSurface, DistanceIsTheMinimumOverEveryEllipsoid) {
       }
     }
     EXPECT_GT(inside, 10);
-    if (max_d < kInf) EXPECT_GT(beyond, 10);
+    if (max_d < kInf) {
+      EXPECT_GT(beyond, 10);
+    }
   }
 }
 
@@ -550,7 +552,9 @@ TEST(QueryMapSurface, CastViewEqualsCastRaysOnEveryPixel) {
       ASSERT_TRUE(sameHit(pixels[p], ref[p])) << "view " << view << " pixel " << p;
       hits += ref[p].hit;
     }
-    if (view < 2 || view == 4) EXPECT_GT(hits, rays.size() / 4) << view;
+    if (view < 2 || view == 4) {
+      EXPECT_GT(hits, rays.size() / 4) << view;
+    }
   }
 }
 
