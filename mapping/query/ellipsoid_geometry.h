@@ -72,11 +72,17 @@ inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d
 /// The smallest t >= 0 at which o + t d (d unit) enters the gate, t = 0 when o is inside; +inf when
 /// the ray misses it or enters it beyond max_t. alpha = d^T A d, beta = d^T A (o - mean), the root
 /// gamma / (sqrt(beta^2 - alpha gamma) - beta) (the smaller root, without cancellation).
+/// True when gamma / (-2 beta) > max_t by more than rounding (beta < 0).
+inline bool gateEntryBeyond(double gamma, double beta, double max_t) { return gamma > max_t * (-2.0 * beta) * (1 + 1e-9); }
+
 inline double gateRayEntry(const double a[6], const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (o.gamma <= 0) return 0.0;
   const double beta = d.x() * o.A_oc.x() + d.y() * o.A_oc.y() + d.z() * o.A_oc.z();
   if (beta >= 0) return kInf;  // moving away from the gate's centre while outside: no entry ahead
+  // sqrt(disc) <= -beta, so t >= gamma / (-2 beta): beyond max_t (with slack for rounding) it is a
+  // miss without the rest. Gives the same answers, sooner, when a nearer hit is known.
+  if (gateEntryBeyond(o.gamma, beta, max_t)) return kInf;
   const double alpha = gateQuadratic(d.x(), d.y(), d.z(), a[0], a[1], a[2], a[3], a[4], a[5]);
   const double disc = beta * beta - alpha * o.gamma;
   if (disc < 0) return kInf;

@@ -1,6 +1,7 @@
 // QueryMap's surface queries (docs/method.md 13.4-13.6): distance to the nearest k-sigma gate
 // surface, collision of sphere bodies, first gate entry along rays and whole camera views.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -161,6 +162,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
   }
   const std::size_t n = surface.size();
   std::vector<std::pair<double, std::int32_t>> nearest(n);  // (t_lo, index); index -1: not in view
+  std::vector<std::array<std::int16_t, 4>> box(n);          // its image box
   parallelFor(threads, n, [&](std::size_t i) {
     const EllipsoidGate& g = surface.gateOf(i);
     int u0, u1, v0, v1;
@@ -172,6 +174,8 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
     for (const Eigen::Vector3d& n : frustum_normals)
       if (n.dot(c) < -radius) return;
     if (!gateImageBounds(g, camera, T_C_W, 1.0, &u0, &u1, &v0, &v1)) return;
+    box[i] = {static_cast<std::int16_t>(u0), static_cast<std::int16_t>(u1), static_cast<std::int16_t>(v0),
+              static_cast<std::int16_t>(v1)};
     // No point of the gate is nearer to o (with slack for rounding).
     const double gap = (o - g.mean).norm() - g.semi_axes[0];
     nearest[i] = {gap > 0 ? gap * (1 - 1e-9) - 1e-9 : -1.0, static_cast<std::int32_t>(i)};
@@ -199,7 +203,8 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
     Splat& s = splats[k];
     s.t_lo = order[k].first;
     s.index = order[k].second;
-    gateImageBounds(g, camera, T_C_W, 1.0, &s.u0, &s.u1, &s.v0, &s.v1);
+    const auto& bx = box[static_cast<std::size_t>(s.index)];
+    s.u0 = bx[0], s.u1 = bx[1], s.v0 = bx[2], s.v1 = bx[3];
     const double a[6] = {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)};
     std::copy(a, a + 6, s.a);
     s.origin = gateRayOrigin(g, o);
@@ -237,6 +242,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
         dir[static_cast<std::size_t>(v - row0) * width + u] =
             unitDirection(pixelRay(camera, T_W_C, static_cast<int>(u), v));
     for (std::size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k) {
+      if (k + 4 < tile_start[tile + 1]) __builtin_prefetch(&splats[tile_splats[k + 4]]);
       const Splat& s = splats[tile_splats[k]];
       // Per row, only the pixels whose rays can reach the gate: with r = R_C_W d = (x, y, 1) up to
       // scale, gateRayEntry's discriminant (r.w)^2 - gamma r^T B r is a quadratic in x that is
