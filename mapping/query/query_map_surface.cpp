@@ -241,9 +241,14 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
       for (std::size_t u = 0; u < width; ++u)
         dir[static_cast<std::size_t>(v - row0) * width + u] =
             unitDirection(pixelRay(camera, T_W_C, static_cast<int>(u), v));
+    double farthest = std::numeric_limits<double>::infinity();  // max best_t over the tile (refreshed)
     for (std::size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k) {
       if (k + 4 < tile_start[tile + 1]) __builtin_prefetch(&splats[tile_splats[k + 4]]);
       const Splat& s = splats[tile_splats[k]];
+      // Splats come nearest first: once one starts beyond every pixel's hit, so do the rest, and
+      // every pixel would skip them.
+      if ((k - tile_start[tile]) % 256 == 255) farthest = *std::max_element(best_t.begin(), best_t.end());
+      if (s.t_lo > farthest) break;
       // Per row, only the pixels whose rays can reach the gate: with r = R_C_W d = (x, y, 1) up to
       // scale, gateRayEntry's discriminant (r.w)^2 - gamma r^T B r is a quadratic in x that is
       // >= 0 on the silhouette's span of the row. Extra pixels only cost time (each still
