@@ -60,7 +60,8 @@ void QueryMap::distance(std::span<const Eigen::Vector3d> q_W, std::span<Distance
     r.ellipsoid = n.ellipsoid;
     if (n.ellipsoid >= 0) {
       r.closest_W = n.closest;
-      if (n.distance > 0) r.gradient = (q_W[i] - n.closest) / (q_W[i] - n.closest).norm();
+      const Eigen::Vector3d away = q_W[i] - n.closest;
+      if (n.distance > 0 && away.norm() > 0) r.gradient = away / away.norm();
     }
     out[i] = r;
   });
