@@ -114,10 +114,15 @@ struct KeyframeViews::Impl {
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
 
   ViewVerdict verdict(const View& view, const Eigen::Vector3d& q_W) const {
-    ViewVerdict out;
     Eigen::Vector3d q;
     int col = 0, row = 0;
-    if (!view.locate(q_W, &q, &col, &row)) return out;
+    if (!view.locate(q_W, &q, &col, &row)) return {};
+    return verdictAt(view, q, col, row);
+  }
+
+  /// verdict() of a point located in the view (keyframe frame q, its grid column and row).
+  ViewVerdict verdictAt(const View& view, const Eigen::Vector3d& q, int col, int row) const {
+    ViewVerdict out;
     // Occupied: the nearest gate among the 3x3 cells (a gate reaches past its cell's border).
     double best_m2 = std::numeric_limits<double>::infinity();
     const Cell* best = nullptr;
@@ -169,6 +174,38 @@ struct KeyframeViews::Impl {
     out->m2 = t.m2;
     out->sigma_t = q.norm() / sqrt_a;
     return true;
+  }
+
+  /// Calls visit(id, verdict) for each of `ids` in turn until it returns false; the 3x3 slots of
+  /// each batch of candidates are prefetched first (as firstFree).
+  template <typename Visit>
+  void scanVerdicts(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, const Visit& visit) const {
+    constexpr std::size_t kBatch = 8;
+    struct Located {
+      const View* view;
+      Eigen::Vector3d q;
+      int col, row;
+      bool ok;
+    };
+    Located loc[kBatch];
+    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
+      const std::size_t m = std::min(kBatch, ids.size() - start);
+      for (std::size_t j = 0; j < m; ++j) {
+        Located& l = loc[j];
+        l.view = &views[static_cast<std::size_t>(ids[start + j])];
+        l.ok = l.view->locate(q_W, &l.q, &l.col, &l.row);
+        if (!l.ok) continue;
+        for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
+          const Slot* row = &l.view->slot[static_cast<std::size_t>(r) * l.view->cols];
+          __builtin_prefetch(row + std::max(l.col - 1, 0));
+          __builtin_prefetch(row + std::min(l.col + 1, l.view->cols - 1));
+        }
+      }
+      for (std::size_t j = 0; j < m; ++j) {
+        const Located& l = loc[j];
+        if (!visit(ids[start + j], l.ok ? verdictAt(*l.view, l.q, l.col, l.row) : ViewVerdict{})) return;
+      }
+    }
   }
 
   /// The first of `ids` (in their order) whose verdict is free, or -1: verdict() == kFree without
@@ -446,21 +483,18 @@ ViewVerdict KeyframeViews::combined(const Eigen::Vector3d& q_W, int* keyframe) c
     case ConflictRule::kOccupied:
       *keyframe = im.firstFree(ids, q_W, &best);
       return *keyframe >= 0 ? best : ViewVerdict{};
-    case ConflictRule::kRecent:  // candidates by rank, highest first
-      for (const std::int32_t id : ids) {
-        best = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);
-        if (best.state != Occupancy::kUnknown) {
-          *keyframe = id;
-          return best;
-        }
-      }
-      return ViewVerdict{};
+    case ConflictRule::kRecent:  // candidates by rank, highest first: the first verdict decides
+      im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
+        if (v.state == Occupancy::kUnknown) return true;
+        best = v, *keyframe = id;
+        return false;
+      });
+      return best;
     case ConflictRule::kPrecise:
-      for (const std::int32_t id : ids) {
-        const ViewVerdict verdict = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);
-        if (verdict.state != Occupancy::kUnknown && (*keyframe < 0 || verdict.sigma_t < best.sigma_t))
-          best = verdict, *keyframe = id;
-      }
+      im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
+        if (v.state != Occupancy::kUnknown && (*keyframe < 0 || v.sigma_t < best.sigma_t)) best = v, *keyframe = id;
+        return true;
+      });
       return best;
   }
   return best;
