@@ -390,11 +390,11 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
     impl->hi = impl->hi.cwiseMax(v.hi);
   }
   if (impl->lo.x() <= impl->hi.x()) {
-    // Voxels of 0.25 m (a room is a few thousand), coarser when the box would need more than
+    // Voxels of 0.125 m (a room is a few ten thousand), coarser when the box would need more than
     // 2^23 of them (a large map: the index stays under ~40 MB).
     const Eigen::Vector3d extent = impl->hi - impl->lo;
     const double volume = (extent.array() + 0.25).prod();
-    impl->voxel_m = std::max(0.25, std::cbrt(volume / double(1 << 23)) * 1.01);
+    impl->voxel_m = std::max(0.125, std::cbrt(volume / double(1 << 23)) * 1.01);
     impl->origin = impl->lo;
     impl->nx = static_cast<int>(std::floor(extent.x() / impl->voxel_m)) + 1;
     impl->ny = static_cast<int>(std::floor(extent.y() / impl->voxel_m)) + 1;
