@@ -16,12 +16,15 @@ namespace {
 /// One kept cell as the queries use it (docs/method.md 13.1): mean and A = (Sigma + s0^2 I)^-1 in
 /// the keyframe frame. The point's terms are taken relative to the mean (d = q - mu), so the gate
 /// distance m^2 = d^T A d has no cancellation; a = q^T A q and q^T A d = a - b follow from A q.
+/// Stored in float (40 B instead of 80: the cells are most of the views' memory and every cell
+/// read is a cache miss); the terms are evaluated in double. mu is the container's float mean
+/// exactly; A is rounded to float (1e-7 relative, far below the sensor's noise).
 struct Cell {
-  double a[6];   // A: xx xy xz yy yz zz
-  double mu[3];
-  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one: a point nearer
-  /// than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z, exactly).
-  double z_near_3x3;
+  float a[6];   // A: xx xy xz yy yz zz
+  float mu[3];
+  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one, rounded down: a
+  /// point nearer than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z).
+  float z_near_3x3;
 };
 
 /// A grid cell of a keyframe's container: its kept cell (-1: none) and the farthest z of that
@@ -45,21 +48,23 @@ struct CellTerms {
 };
 
 inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
+  const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = c.a[0] * dx + c.a[1] * dy + c.a[2] * dz;
-  const double ay = c.a[1] * dx + c.a[3] * dy + c.a[4] * dz;
-  const double az = c.a[2] * dx + c.a[4] * dy + c.a[5] * dz;
+  const double ax = a0 * dx + a1 * dy + a2 * dz;
+  const double ay = a1 * dx + a3 * dy + a4 * dz;
+  const double az = a2 * dx + a4 * dy + a5 * dz;
   return dx * ax + dy * ay + dz * az;
 }
 
 inline CellTerms terms(const Cell& c, const Eigen::Vector3d& q) {
+  const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = c.a[0] * dx + c.a[1] * dy + c.a[2] * dz;
-  const double ay = c.a[1] * dx + c.a[3] * dy + c.a[4] * dz;
-  const double az = c.a[2] * dx + c.a[4] * dy + c.a[5] * dz;
-  const double qx = c.a[0] * q.x() + c.a[1] * q.y() + c.a[2] * q.z();
-  const double qy = c.a[1] * q.x() + c.a[3] * q.y() + c.a[4] * q.z();
-  const double qz = c.a[2] * q.x() + c.a[4] * q.y() + c.a[5] * q.z();
+  const double ax = a0 * dx + a1 * dy + a2 * dz;
+  const double ay = a1 * dx + a3 * dy + a4 * dz;
+  const double az = a2 * dx + a4 * dy + a5 * dz;
+  const double qx = a0 * q.x() + a1 * q.y() + a2 * q.z();
+  const double qy = a1 * q.x() + a3 * q.y() + a4 * q.z();
+  const double qz = a2 * q.x() + a4 * q.y() + a5 * q.z();
   return {dx * ax + dy * ay + dz * az, q.x() * qx + q.y() * qy + q.z() * qz, q.x() * ax + q.y() * ay + q.z() * az};
 }
 
@@ -292,8 +297,9 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     const Eigen::Matrix3d cov = e.cov + s0 * s0 * Eigen::Matrix3d::Identity();
     const Eigen::Matrix3d A = cov.inverse();
     Cell c;
-    c.a[0] = A(0, 0), c.a[1] = A(0, 1), c.a[2] = A(0, 2), c.a[3] = A(1, 1), c.a[4] = A(1, 2), c.a[5] = A(2, 2);
-    c.mu[0] = e.mean.x(), c.mu[1] = e.mean.y(), c.mu[2] = e.mean.z();
+    const double upper[6] = {A(0, 0), A(0, 1), A(0, 2), A(1, 1), A(1, 2), A(2, 2)};
+    for (int j = 0; j < 6; ++j) c.a[j] = static_cast<float>(upper[j]);
+    for (int j = 0; j < 3; ++j) c.mu[j] = cells[i].mean[j];
     const double half_z = k * std::sqrt(cov(2, 2));
     Slot& slot = v.slot[static_cast<std::size_t>(cells[i].grid_index)];
     slot.cell = static_cast<std::int32_t>(v.cells.size());
@@ -321,7 +327,7 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, v.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
           nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
-      v.cells[slot.cell].z_near_3x3 = nearest;
+      v.cells[slot.cell].z_near_3x3 = std::nextafter(static_cast<float>(nearest), -std::numeric_limits<float>::infinity());
     }
   return v;
 }
