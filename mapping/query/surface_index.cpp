@@ -32,8 +32,11 @@ struct GateTest {
 struct GridLevel {
   double side = 0;
   std::vector<std::pair<std::uint64_t, std::int32_t>> entries;
-  std::vector<std::uint64_t> slot_key;  // kEmpty where free
-  std::vector<std::uint32_t> slot_begin, slot_end;
+  struct Slot {  // one cache access per probe
+    std::uint64_t key = kEmpty;
+    std::uint32_t begin = 0, end = 0;
+  };
+  std::vector<Slot> slots;
   std::uint64_t mask = 0;
   static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
 
@@ -50,17 +53,13 @@ struct GridLevel {
     std::size_t size = 16;
     while (size < 2 * voxels) size *= 2;
     mask = size - 1;
-    slot_key.assign(size, kEmpty);
-    slot_begin.assign(size, 0);
-    slot_end.assign(size, 0);
+    slots.assign(size, Slot{});
     for (std::size_t i = 0; i < entries.size();) {
       std::size_t j = i;
       while (j < entries.size() && entries[j].first == entries[i].first) ++j;
       std::uint64_t s = hash(entries[i].first) & mask;
-      while (slot_key[s] != kEmpty) s = (s + 1) & mask;
-      slot_key[s] = entries[i].first;
-      slot_begin[s] = static_cast<std::uint32_t>(i);
-      slot_end[s] = static_cast<std::uint32_t>(j);
+      while (slots[s].key != kEmpty) s = (s + 1) & mask;
+      slots[s] = {entries[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
       i = j;
     }
   }
@@ -69,14 +68,13 @@ struct GridLevel {
   std::pair<std::uint32_t, std::uint32_t> find(std::uint64_t key) const {
     if (entries.empty()) return {0, 0};
     for (std::uint64_t s = hash(key) & mask;; s = (s + 1) & mask) {
-      if (slot_key[s] == key) return {slot_begin[s], slot_end[s]};
-      if (slot_key[s] == kEmpty) return {0, 0};
+      if (slots[s].key == key) return {slots[s].begin, slots[s].end};
+      if (slots[s].key == kEmpty) return {0, 0};
     }
   }
 
   std::size_t memoryBytes() const {
-    return entries.capacity() * sizeof(entries[0]) + slot_key.capacity() * 8 + slot_begin.capacity() * 4 +
-           slot_end.capacity() * 4;
+    return entries.capacity() * sizeof(entries[0]) + slots.capacity() * sizeof(Slot);
   }
 };
 
@@ -101,12 +99,15 @@ void gateBox(const EllipsoidGate& g, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
 
 struct SurfaceIndex::Impl {
   std::vector<EllipsoidGate> gates;
-  std::vector<GateTest> tests;  // per gate
+  // The gate tests in Morton order of their means (a lookup's candidates are neighbours, so they
+  // share cache lines), and per test the ellipsoid's index. The grid's entries hold test ranks.
+  std::vector<GateTest> tests;
+  std::vector<std::int32_t> test_ellipsoid;
   std::vector<Eigen::Vector4d> balls;  // per gate: mean, longest semi-axis
   std::vector<int> levels_used;  // the non-empty levels
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
-  std::vector<std::int32_t> oversize;  // gates too large for every level, ascending
+  std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
   std::optional<BoxTree> tree;         // over the gate boxes
 };
 
@@ -118,15 +119,11 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     impl->gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m);
   });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
-  impl->tests.resize(n);
   impl->balls.resize(n);
   parallelFor(params.threads, n, [&](std::size_t i) {
     const EllipsoidGate& g = impl->gates[i];
     impl->balls[i] = Eigen::Vector4d(g.mean.x(), g.mean.y(), g.mean.z(), g.semi_axes[0]);
     gateBox(g, &lo[i], &hi[i]);
-    impl->tests[i] = {{g.mean.x(), g.mean.y(), g.mean.z()},
-                      {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
-                      g.k2};
   });
   impl->tree.emplace(lo, hi);
   if (n == 0) {
@@ -149,6 +146,39 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   double side = std::max({2.0 * half[n / 2], 1e-6, extent / static_cast<double>(VoxelKey::kAxisMax - 2)});
   impl->origin = lo_all;
 
+  // Gate tests in Morton order of the means at the finest side (ties: index), ranks in the grid.
+  {
+    const auto spread = [](std::uint64_t v) {  // 21 bits -> every third bit of 63
+      v &= 0x1fffff;
+      v = (v | v << 32) & 0x1f00000000ffffULL;
+      v = (v | v << 16) & 0x1f0000ff0000ffULL;
+      v = (v | v << 8) & 0x100f00f00f00f00fULL;
+      v = (v | v << 4) & 0x10c30c30c30c30c3ULL;
+      v = (v | v << 2) & 0x1249249249249249ULL;
+      return v;
+    };
+    std::vector<std::pair<std::uint64_t, std::int32_t>> order(n);
+    parallelFor(params.threads, n, [&](std::size_t i) {
+      std::uint64_t code = 0;
+      for (int a = 0; a < 3; ++a) {
+        const double c = std::clamp(std::floor((impl->gates[i].mean[a] - impl->origin[a]) / side), 0.0,
+                                    static_cast<double>(VoxelKey::kAxisMax));
+        code |= spread(static_cast<std::uint64_t>(c)) << a;
+      }
+      order[i] = {code, static_cast<std::int32_t>(i)};
+    });
+    parallelSort(params.threads, order.begin(), order.end());
+    impl->tests.resize(n);
+    impl->test_ellipsoid.resize(n);
+    parallelFor(params.threads, n, [&](std::size_t r) {
+      const EllipsoidGate& g = impl->gates[static_cast<std::size_t>(order[r].second)];
+      impl->tests[r] = {{g.mean.x(), g.mean.y(), g.mean.z()},
+                        {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
+                        g.k2};
+      impl->test_ellipsoid[r] = order[r].second;
+    });
+  }
+
   // Per ellipsoid its level and its voxels there.
   std::vector<int> level_of(n, kLevels);
   for (int l = 0; l < kLevels; ++l) impl->levels[l].side = side * std::pow(kLevelRatio, l);
@@ -166,7 +196,8 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   });
   for (int l = 0; l < kLevels; ++l) {
     GridLevel& level = impl->levels[l];
-    for (std::size_t i = 0; i < n; ++i) {
+    for (std::size_t r = 0; r < n; ++r) {
+      const auto i = static_cast<std::size_t>(impl->test_ellipsoid[r]);
       if (level_of[i] != l) continue;
       std::int64_t c0[3], c1[3];
       for (int a = 0; a < 3; ++a) {
@@ -178,14 +209,15 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
         for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
           for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-            level.entries.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(i)});
+            level.entries.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(r)});
     }
     parallelSort(params.threads, level.entries.begin(), level.entries.end());
     level.buildTable();
     if (!level.entries.empty()) impl->levels_used.push_back(l);
   }
-  for (std::size_t i = 0; i < n; ++i)
-    if (level_of[i] == kLevels) impl->oversize.push_back(static_cast<std::int32_t>(i));
+  for (std::size_t r = 0; r < n; ++r)
+    if (level_of[static_cast<std::size_t>(impl->test_ellipsoid[r])] == kLevels)
+      impl->oversize.push_back(static_cast<std::int32_t>(r));
 
   SurfaceIndex index;
   index.impl_ = std::move(impl);
@@ -196,7 +228,7 @@ std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0;
 
 std::size_t SurfaceIndex::memoryBytes() const {
   if (!impl_) return 0;
-  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
+  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) + impl_->test_ellipsoid.capacity() * 4 +
                       impl_->balls.capacity() * sizeof(Eigen::Vector4d) +
                       impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
@@ -212,11 +244,13 @@ const Eigen::Vector4d& SurfaceIndex::ballOf(std::size_t i) const { return impl_-
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
   std::pair<std::int32_t, double> best{-1, kInf};
   if (!impl_) return best;
-  const auto consider = [&](std::int32_t i) {
-    const GateTest& g = impl_->tests[static_cast<std::size_t>(i)];
+  const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
+    const GateTest& g = impl_->tests[static_cast<std::size_t>(r)];
     const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
                                     g.a[2], g.a[3], g.a[4], g.a[5]);
-    if (m2 <= g.k2 && (m2 < best.second || (m2 == best.second && i < best.first))) best = {i, m2};
+    if (m2 > g.k2 || m2 > best.second) return;
+    const std::int32_t i = impl_->test_ellipsoid[static_cast<std::size_t>(r)];
+    if (m2 < best.second || i < best.first) best = {i, m2};
   };
   for (const int l : impl_->levels_used) {
     const GridLevel& level = impl_->levels[l];
