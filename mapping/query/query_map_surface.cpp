@@ -1,0 +1,226 @@
+// QueryMap's surface queries (docs/method.md 13.4-13.6): distance to the nearest k-sigma gate
+// surface, collision of sphere bodies, first gate entry along rays and whole camera views.
+#include <algorithm>
+#include <cmath>
+#include <map>
+#include <stdexcept>
+#include <string>
+
+#include "mapping/core/parallel.h"
+#include "mapping/query/ellipsoid_geometry.h"
+#include "mapping/query/query_map_data.h"
+
+namespace vdmap {
+
+namespace {
+
+bool finite(const Eigen::Vector3d& v) { return v.allFinite(); }
+
+[[noreturn]] void badInput(const char* what, std::size_t index, const char* expected) {
+  throw std::invalid_argument(std::string(what) + " " + std::to_string(index) + ": " + expected);
+}
+
+void checkSizes(std::size_t in, std::size_t out) {
+  if (in != out)
+    throw std::invalid_argument("query output holds " + std::to_string(out) + " entries for " + std::to_string(in) +
+                                " inputs");
+}
+
+RayHit makeHit(const SurfaceIndex& surface, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+               const SurfaceIndex::Hit& h) {
+  RayHit hit;
+  if (h.ellipsoid < 0) return hit;
+  hit.hit = true;
+  hit.t_m = h.t;
+  hit.point_W = o + h.t * d;
+  hit.normal_W = gateNormal(surface.gateOf(static_cast<std::size_t>(h.ellipsoid)), hit.point_W);
+  hit.ellipsoid = h.ellipsoid;
+  return hit;
+}
+
+}  // namespace
+
+void QueryMap::distance(std::span<const Eigen::Vector3d> q_W, std::span<DistanceResult> out,
+                        double max_distance_m) const {
+  checkSizes(q_W.size(), out.size());
+  if (std::isnan(max_distance_m) || max_distance_m < 0)
+    throw std::invalid_argument("max_distance_m must be >= 0");
+  for (std::size_t i = 0; i < q_W.size(); ++i)
+    if (!finite(q_W[i])) badInput("point", i, "expected finite coordinates");
+  if (!data_) {
+    std::fill(out.begin(), out.end(), DistanceResult{});
+    return;
+  }
+  const SurfaceIndex& surface = data_->surface;
+  parallelFor(data_->params.threads, q_W.size(), [&](std::size_t i) {
+    const SurfaceIndex::Nearest n = surface.nearest(q_W[i], max_distance_m);
+    DistanceResult r;
+    r.distance_m = n.distance;
+    r.ellipsoid = n.ellipsoid;
+    if (n.ellipsoid >= 0) {
+      r.closest_W = n.closest;
+      if (n.distance > 0) r.gradient = (q_W[i] - n.closest) / (q_W[i] - n.closest).norm();
+    }
+    out[i] = r;
+  });
+}
+
+std::vector<BodyCollision> QueryMap::collide(std::span<const Sphere> spheres, double clearance_m) const {
+  if (!(clearance_m >= 0) || !std::isfinite(clearance_m))
+    throw std::invalid_argument("clearance must be a finite number >= 0");
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    if (!finite(spheres[i].centre_W)) badInput("sphere", i, "expected a finite centre");
+    if (!(spheres[i].radius_m > 0) || !std::isfinite(spheres[i].radius_m))
+      badInput("sphere", i, "expected a finite radius > 0");
+  }
+  std::vector<Eigen::Vector3d> centres(spheres.size());
+  for (std::size_t i = 0; i < spheres.size(); ++i) centres[i] = spheres[i].centre_W;
+  std::vector<DistanceResult> dist(spheres.size());
+  distance(centres, dist);
+
+  // 15 probe points per sphere (docs/method.md 13.5): the centre, 6 along the axes and 8 along the
+  // diagonals, at radius + clearance.
+  constexpr int kProbes = 15;
+  std::vector<Eigen::Vector3d> probes(spheres.size() * kProbes);
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    const double r = spheres[i].radius_m + clearance_m, rd = r / std::sqrt(3.0);
+    Eigen::Vector3d* p = &probes[i * kProbes];
+    int j = 0;
+    p[j++] = centres[i];
+    for (int axis = 0; axis < 3; ++axis)
+      for (const double s : {-1.0, 1.0}) p[j++] = centres[i] + s * r * Eigen::Vector3d::Unit(axis);
+    for (const double sx : {-1.0, 1.0})
+      for (const double sy : {-1.0, 1.0})
+        for (const double sz : {-1.0, 1.0}) p[j++] = centres[i] + rd * Eigen::Vector3d(sx, sy, sz);
+  }
+  std::vector<Classification> classes(probes.size());
+  classify(probes, classes);
+
+  std::map<int, BodyCollision> bodies;
+  for (std::size_t i = 0; i < spheres.size(); ++i) {
+    BodyCollision& b = bodies.try_emplace(spheres[i].body).first->second;
+    b.body = spheres[i].body;
+    const double c = dist[i].distance_m - spheres[i].radius_m;
+    if (c < b.clearance_m) b.clearance_m = c, b.sphere = static_cast<int>(i), b.closest_W = dist[i].closest_W;
+    if (c < clearance_m) b.collides = true;
+    for (int j = 0; j < kProbes; ++j)
+      if (classes[i * kProbes + j].state == Occupancy::kUnknown) b.touches_unknown = true;
+  }
+  std::vector<BodyCollision> result;
+  result.reserve(bodies.size());
+  for (auto& [body, b] : bodies) result.push_back(b);
+  return result;
+}
+
+void QueryMap::castRays(std::span<const Ray> rays, std::span<RayHit> out) const {
+  checkSizes(rays.size(), out.size());
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    if (!finite(rays[i].origin_W)) badInput("ray", i, "expected a finite origin");
+    if (!finite(rays[i].direction_W) || rays[i].direction_W.squaredNorm() == 0 ||
+        !std::isfinite(rays[i].direction_W.norm()))
+      badInput("ray", i, "expected a finite non-zero direction");
+    if (!(rays[i].max_range_m >= 0)) badInput("ray", i, "expected a maximum range >= 0");
+  }
+  if (!data_) {
+    std::fill(out.begin(), out.end(), RayHit{});
+    return;
+  }
+  const SurfaceIndex& surface = data_->surface;
+  parallelFor(data_->params.threads, rays.size(), [&](std::size_t i) {
+    const Eigen::Vector3d& o = rays[i].origin_W;
+    const Eigen::Vector3d d = unitDirection(rays[i].direction_W);
+    out[i] = makeHit(surface, o, d, surface.firstHit(o, d, rays[i].max_range_m));
+  });
+}
+
+std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transform& T_W_C, double max_range_m) const {
+  camera.validate();
+  if (!isValidTransform(T_W_C)) throw std::invalid_argument("camera pose: expected a finite rigid transform");
+  if (!(max_range_m >= 0)) throw std::invalid_argument("maximum range: expected a number >= 0");
+  const std::size_t width = static_cast<std::size_t>(camera.width), height = static_cast<std::size_t>(camera.height);
+  std::vector<RayHit> pixels(width * height);
+  if (!data_ || data_->surface.size() == 0) return pixels;
+  const SurfaceIndex& surface = data_->surface;
+  const int threads = data_->params.threads;
+  const Eigen::Vector3d o = T_W_C.translation();
+  const Transform T_C_W = T_W_C.inverse();
+
+  // Rasterise instead of tracing (docs/method.md 13.6): each gate in front of the camera splats
+  // over the exact image box of its silhouette (+1 px), where every pixel evaluates the same
+  // gateRayEntry on the same pixelRay as castRays; a pixel keeps the smallest (t, index). Gates go
+  // nearest first, so a pixel whose hit is nearer than a gate's nearest point skips that gate.
+  struct Splat {
+    double t_lo = 0;  // no point of the gate is nearer to o (with slack for rounding)
+    std::int32_t index = -1;
+    int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
+    GateRayOrigin origin;
+  };
+  const std::size_t n = surface.size();
+  std::vector<Splat> splats(n);
+  parallelFor(threads, n, [&](std::size_t i) {
+    const EllipsoidGate& g = surface.gateOf(i);
+    Splat& s = splats[i];
+    if (!gateImageBounds(g, camera, T_C_W, 1.0, &s.u0, &s.u1, &s.v0, &s.v1)) return;
+    s.index = static_cast<std::int32_t>(i);
+    s.origin = gateRayOrigin(g, o);
+    const double gap = (o - g.mean).norm() - g.semi_axes[0];
+    s.t_lo = gap > 0 ? gap * (1 - 1e-9) - 1e-9 : -1.0;
+  });
+  std::vector<std::pair<double, std::int32_t>> order;  // (t_lo, index): nearest first, no ties
+  for (const Splat& s : splats)
+    if (s.index >= 0) order.push_back({s.t_lo, s.index});
+  parallelSort(threads, order.begin(), order.end());
+
+  // Row tiles; per tile the splats that reach it, nearest first.
+  constexpr int kTileRows = 8;
+  const std::size_t tiles = (height + kTileRows - 1) / kTileRows;
+  std::vector<std::size_t> tile_start(tiles + 1, 0);
+  for (const auto& [t_lo, i] : order) {
+    const Splat& s = splats[static_cast<std::size_t>(i)];
+    for (int t = s.v0 / kTileRows; t <= s.v1 / kTileRows; ++t) ++tile_start[static_cast<std::size_t>(t) + 1];
+  }
+  for (std::size_t t = 0; t < tiles; ++t) tile_start[t + 1] += tile_start[t];
+  std::vector<std::int32_t> tile_splats(tile_start[tiles]);
+  {
+    std::vector<std::size_t> fill(tile_start.begin(), tile_start.end() - 1);
+    for (const auto& [t_lo, i] : order) {
+      const Splat& s = splats[static_cast<std::size_t>(i)];
+      for (int t = s.v0 / kTileRows; t <= s.v1 / kTileRows; ++t) tile_splats[fill[static_cast<std::size_t>(t)]++] = i;
+    }
+  }
+
+  parallelFor(threads, tiles, [&](std::size_t tile) {
+    const int row0 = static_cast<int>(tile) * kTileRows;
+    const int row1 = std::min(static_cast<int>(height), row0 + kTileRows) - 1;
+    const std::size_t tile_pixels = static_cast<std::size_t>(row1 - row0 + 1) * width;
+    std::vector<Eigen::Vector3d> dir(tile_pixels);
+    std::vector<double> best_t(tile_pixels, std::numeric_limits<double>::infinity());
+    std::vector<std::int32_t> best_i(tile_pixels, -1);
+    for (int v = row0; v <= row1; ++v)
+      for (std::size_t u = 0; u < width; ++u)
+        dir[static_cast<std::size_t>(v - row0) * width + u] =
+            unitDirection(pixelRay(camera, T_W_C, static_cast<int>(u), v));
+    for (std::size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k) {
+      const Splat& s = splats[static_cast<std::size_t>(tile_splats[k])];
+      const EllipsoidGate& g = surface.gateOf(static_cast<std::size_t>(s.index));
+      for (int v = std::max(s.v0, row0); v <= std::min(s.v1, row1); ++v) {
+        const std::size_t row = static_cast<std::size_t>(v - row0) * width;
+        for (int u = s.u0; u <= s.u1; ++u) {
+          const std::size_t p = row + static_cast<std::size_t>(u);
+          const double bt = best_t[p];
+          if (bt < s.t_lo) continue;
+          const double t = gateRayEntry(g, s.origin, dir[p], std::min(bt, max_range_m));
+          if (t < bt || (t == bt && t <= max_range_m && s.index < best_i[p])) best_t[p] = t, best_i[p] = s.index;
+        }
+      }
+    }
+    for (int v = row0; v <= row1; ++v)
+      for (std::size_t u = 0; u < width; ++u) {
+        const std::size_t p = static_cast<std::size_t>(v - row0) * width + u;
+        pixels[static_cast<std::size_t>(v) * width + u] = makeHit(surface, o, dir[p], {best_i[p], best_t[p]});
+      }
+  });
+  return pixels;
+}
+
+}  // namespace vdmap
