@@ -167,18 +167,18 @@ void drawViewMarks(Workbench& bench, const WindowState& win) {
     return at;
   };
   if (ui.probe && ui.probe_result) {
-    // The probe: a dot at its point, the answer beside the cursor.
+    // The probe: a dot at its point (under the cursor: the point lies on the cursor's ray), the
+    // answer beside it, or left of it where the view ends.
     const ProbeResult& r = *ui.probe_result;
     if (const auto at = toScreen(bench, win, r.point)) {
       draw->AddCircleFilled(*at, 4.f, kShadow);
       draw->AddCircleFilled(*at, 2.5f, probeColor(r));
+      const std::string text = r.text();
+      const ImVec2 size = ImGui::CalcTextSize(text.c_str());
+      float x = at->x + 16.f + size.x > view.x + view.w ? at->x - 10.f - size.x : at->x + 16.f;
+      x = std::max(view.x + 4.f, std::min(x, view.x + view.w - size.x - 4.f));  // wider than the room beside it
+      label(draw, {x, at->y + 12.f}, probeColor(r), text.c_str());
     }
-    const ImVec2 mouse = ImGui::GetIO().MousePos;
-    const std::string text = r.text();
-    const ImVec2 size = ImGui::CalcTextSize(text.c_str());
-    // Right of the cursor, or left of it where the view ends.
-    const float x = mouse.x + 16.f + size.x > view.x + view.w ? mouse.x - 10.f - size.x : mouse.x + 16.f;
-    label(draw, {x, mouse.y + 12.f}, probeColor(r), text.c_str());
   }
   if (ui.measure_a) {
     const auto a = dot(*ui.measure_a, "A");
