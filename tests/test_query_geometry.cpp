@@ -15,7 +15,9 @@
 #include "mapping/core/box_tree.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/local_map/sensor_model.h"
 #include "mapping/query/ellipsoid_geometry.h"
+#include "mapping/query/query_map.h"
 #include "mapping/query/surface_index.h"
 #include "tests/box_room_keyframes.h"
 
@@ -416,6 +418,319 @@ TEST(SurfaceIndex, SameAnswersForAnyThreadCountAndEmpty) {
   EXPECT_EQ(empty.nearest({0, 0, 0}).distance, kInf);
   EXPECT_EQ(empty.firstHit({0, 0, 0}, {0, 0, 1}, 8.0).ellipsoid, -1);
   EXPECT_EQ(SurfaceIndex().gate({0, 0, 0}).first, -1);
+}
+
+// ---- QueryMap: distance, collision, rays -------------------------------------------------------
+
+// The two box-room keyframes looking at the wall z = 2 (keyframe 0 from the origin, 2 m away) and
+// their query map.
+struct BoxRoomMap {
+  KeyframeGraph graph;
+  GlobalMap global;
+  QueryMap map;
+  std::vector<EllipsoidGate> gates;
+  explicit BoxRoomMap(int threads = 0) {
+    test::addTwoBoxRoomViews(&graph, cameraPreset("tum-default"));
+    global = buildGlobalMap(graph, GlobalMapParams{});
+    QueryParams params;
+    params.threads = threads;
+    map = QueryMap::build(graph, global, params);
+    gates = allGates(global.ellipsoids, params);
+  }
+};
+
+const BoxRoomMap& boxRoom() {
+  static const BoxRoomMap scene;
+  return scene;
+}
+
+std::vector<Eigen::Vector3d> roomPoints(std::size_t n, unsigned seed) {
+  std::mt19937 rng(seed);
+  std::uniform_real_distribution<double> x(-2.2, 2.2), y(-1.7, 1.7), z(-0.5, 2.2);
+  std::vector<Eigen::Vector3d> out;
+  for (std::size_t i = 0; i < n; ++i) out.push_back({x(rng), y(rng), z(rng)});
+  return out;
+}
+
+bool sameHit(const RayHit& a, const RayHit& b) {
+  return a.hit == b.hit && a.t_m == b.t_m && a.ellipsoid == b.ellipsoid && a.point_W == b.point_W &&
+         a.normal_W == b.normal_W;
+}
+
+TEST(QueryMapSurface, DistanceIsTheMinimumOverEveryEllipsoid) {
+  const BoxRoomMap& s = boxRoom();
+  // Points in the room, and on the wall within its gates.
+  std::vector<Eigen::Vector3d> pts = roomPoints(120, 23);
+  for (const Eigen::Vector3d& q : randomPoints(s.global.ellipsoids, 80, 29)) pts.push_back(q);
+  for (const double max_d : {kInf, 0.3}) {
+    std::vector<DistanceResult> out(pts.size());
+    s.map.distance(pts, out, max_d);
+    int inside = 0, beyond = 0;
+    for (std::size_t i = 0; i < pts.size(); ++i) {
+      const SurfaceIndex::Nearest ref = nearestByLoop(s.gates, pts[i], max_d);
+      ASSERT_EQ(out[i].ellipsoid, ref.ellipsoid) << i;
+      ASSERT_EQ(out[i].distance_m, ref.distance) << i;
+      if (ref.ellipsoid < 0) {
+        ++beyond;
+        EXPECT_EQ(out[i].distance_m, kInf);
+        EXPECT_EQ(out[i].gradient, Eigen::Vector3d::Zero());
+        continue;
+      }
+      ASSERT_EQ(out[i].closest_W, ref.closest) << i;
+      if (ref.distance == 0) {
+        ++inside;
+        EXPECT_EQ(out[i].gradient, Eigen::Vector3d::Zero());
+      } else {
+        // Unit, from the closest surface point to q; the closest point is on that gate's surface.
+        EXPECT_NEAR(out[i].gradient.norm(), 1.0, 1e-12);
+        EXPECT_NEAR(out[i].gradient.dot(pts[i] - out[i].closest_W), out[i].distance_m, 1e-9);
+        EXPECT_NEAR(gateDistance2(s.gates[static_cast<std::size_t>(ref.ellipsoid)], out[i].closest_W), 9.0, 1e-6);
+      }
+    }
+    EXPECT_GT(inside, 10);
+    if (max_d < kInf) {
+      EXPECT_GT(beyond, 10);
+    }
+  }
+}
+
+TEST(QueryMapSurface, CastRaysIsTheFirstGateEntryOverEveryEllipsoid) {
+  const BoxRoomMap& s = boxRoom();
+  std::mt19937 rng(31);
+  std::uniform_real_distribution<double> u(-1, 1);
+  const std::vector<Eigen::Vector3d> origins = roomPoints(2000, 37);
+  std::vector<Ray> rays;
+  for (std::size_t i = 0; i < origins.size(); ++i) {
+    Ray r;
+    r.origin_W = origins[i];
+    r.direction_W = Eigen::Vector3d(u(rng), u(rng), u(rng) + (i % 2 ? 1.5 : 0.0)) * 3.0;  // any length
+    r.max_range_m = i % 4 == 3 ? 0.5 : 8.0;
+    rays.push_back(r);
+  }
+  std::vector<RayHit> out(rays.size());
+  s.map.castRays(rays, out);
+  int hits = 0;
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    const Eigen::Vector3d d = unitDirection(rays[i].direction_W);
+    const SurfaceIndex::Hit ref = firstHitByLoop(s.gates, rays[i].origin_W, d, rays[i].max_range_m);
+    ASSERT_EQ(out[i].ellipsoid, ref.ellipsoid) << i;
+    ASSERT_EQ(out[i].hit, ref.ellipsoid >= 0) << i;
+    if (!out[i].hit) continue;
+    ++hits;
+    ASSERT_EQ(out[i].t_m, ref.t) << i;
+    EXPECT_EQ(out[i].point_W, rays[i].origin_W + ref.t * d);
+    const EllipsoidGate& g = s.gates[static_cast<std::size_t>(ref.ellipsoid)];
+    if (ref.t > 0) {
+      EXPECT_NEAR(gateDistance2(g, out[i].point_W), 9.0, 1e-6);
+      EXPECT_LE(out[i].normal_W.dot(d), 1e-9);  // entering: against the ray
+    }
+  }
+  EXPECT_GT(hits, 200);
+}
+
+TEST(QueryMapSurface, CastViewEqualsCastRaysOnEveryPixel) {
+  const BoxRoomMap& s = boxRoom();
+  const PinholeCamera camera = cameraPreset("tum-default");
+  std::mt19937 rng(41);
+  std::uniform_real_distribution<double> u(-1, 1);
+  for (int view = 0; view < 5; ++view) {
+    // Inside the room, looking anywhere (the seen wall, the unseen ones, from inside a gate).
+    Eigen::Vector3d c(u(rng), 0.8 * u(rng), u(rng));
+    if (view == 4) c = s.global.ellipsoids[s.global.ellipsoids.size() / 2].mean;  // in a gate: t = 0
+    const Eigen::Vector3d target = view < 3 ? Eigen::Vector3d(u(rng), u(rng), 2.0) : Eigen::Vector3d(u(rng), u(rng), u(rng) * 2);
+    const Transform T = test::lookAt(c, target);
+    const double max_range = view == 2 ? 1.5 : 8.0;
+    const std::vector<RayHit> pixels = s.map.castView(camera, T, max_range);
+    ASSERT_EQ(pixels.size(), static_cast<std::size_t>(camera.width * camera.height));
+    std::vector<Ray> rays;
+    for (int v = 0; v < camera.height; ++v)
+      for (int x = 0; x < camera.width; ++x) rays.push_back({T.translation(), pixelRay(camera, T, x, v), max_range});
+    std::vector<RayHit> ref(rays.size());
+    s.map.castRays(rays, ref);
+    std::size_t hits = 0;
+    for (std::size_t p = 0; p < rays.size(); ++p) {
+      ASSERT_TRUE(sameHit(pixels[p], ref[p])) << "view " << view << " pixel " << p;
+      hits += ref[p].hit;
+    }
+    if (view < 2 || view == 4) {
+      EXPECT_GT(hits, rays.size() / 4) << view;
+    }
+  }
+}
+
+TEST(QueryMapSurface, SameAnswersOnOneAndTwoThreads) {
+  const BoxRoomMap one(1), two(2);
+  const std::vector<Eigen::Vector3d> pts = roomPoints(3000, 43);
+  std::vector<DistanceResult> d1(pts.size()), d2(pts.size());
+  one.map.distance(pts, d1);
+  two.map.distance(pts, d2);
+  std::vector<Ray> rays;
+  for (std::size_t i = 0; i < pts.size(); ++i) rays.push_back({pts[i], Eigen::Vector3d(0.1, -0.2, 1.0), 8.0});
+  std::vector<RayHit> r1(rays.size()), r2(rays.size());
+  one.map.castRays(rays, r1);
+  two.map.castRays(rays, r2);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    ASSERT_EQ(d1[i].distance_m, d2[i].distance_m);
+    ASSERT_EQ(d1[i].closest_W, d2[i].closest_W);
+    ASSERT_EQ(d1[i].gradient, d2[i].gradient);
+    ASSERT_EQ(d1[i].ellipsoid, d2[i].ellipsoid);
+    ASSERT_TRUE(sameHit(r1[i], r2[i]));
+  }
+  const PinholeCamera camera = cameraPreset("tum-default");
+  const Transform T = test::lookAt({0.2, 0.1, 0.3}, {-0.3, 0.2, 2.0});
+  const std::vector<RayHit> v1 = one.map.castView(camera, T, 8.0), v2 = two.map.castView(camera, T, 8.0);
+  for (std::size_t p = 0; p < v1.size(); ++p) ASSERT_TRUE(sameHit(v1[p], v2[p]));
+  std::vector<Sphere> spheres;
+  for (std::size_t i = 0; i < 200; ++i) spheres.push_back({pts[i], 0.05, static_cast<int>(i % 7)});
+  const auto c1 = one.map.collide(spheres, 0.01), c2 = two.map.collide(spheres, 0.01);
+  ASSERT_EQ(c1.size(), c2.size());
+  for (std::size_t b = 0; b < c1.size(); ++b) {
+    EXPECT_EQ(c1[b].clearance_m, c2[b].clearance_m);
+    EXPECT_EQ(c1[b].sphere, c2[b].sphere);
+    EXPECT_EQ(c1[b].collides, c2[b].collides);
+    EXPECT_EQ(c1[b].touches_unknown, c2[b].touches_unknown);
+  }
+}
+
+// The wall z = 2 seen by keyframe 0 from 2 m: the distance and the ray range of the analytic wall,
+// short by at most the gate's reach k sigma_n (+ 1 mm), sigma_n the sensor's axial spread at 2 m.
+TEST(QueryMapSurface, BoxRoomWallDistanceAndRangeAreTheAnalyticOnes) {
+  const BoxRoomMap& s = boxRoom();
+  const double k = 3.0, sigma_n = nguyenAxialSd(2.0);
+  std::mt19937 rng(47);
+  std::uniform_real_distribution<double> u(-1, 1);
+  std::vector<Eigen::Vector3d> pts;
+  for (int i = 0; i < 500; ++i) pts.push_back({0.3 * u(rng), 0.3 * u(rng), 1.4 + 0.4 * u(rng)});
+  std::vector<DistanceResult> out(pts.size());
+  s.map.distance(pts, out);
+  for (std::size_t i = 0; i < pts.size(); ++i) {
+    const double analytic = 2.0 - pts[i].z();
+    EXPECT_LE(out[i].distance_m, analytic + 0.001) << i;
+    EXPECT_GE(out[i].distance_m, analytic - k * sigma_n - 0.001) << i;
+    EXPECT_GT(out[i].gradient.z(), -1.0 - 1e-9);
+    EXPECT_LT(out[i].gradient.z(), -0.99) << i;  // away from the wall
+  }
+  // Rays from keyframe 0's centre through the middle of its image.
+  const PinholeCamera camera = cameraPreset("tum-default");
+  const Transform T = s.graph.keyframe(0).T_W_K;
+  std::vector<Ray> rays;
+  for (int v = 60; v < 420; v += 7)
+    for (int x = 80; x < 560; x += 7) rays.push_back({T.translation(), pixelRay(camera, T, x, v), 8.0});
+  std::vector<RayHit> hits(rays.size());
+  s.map.castRays(rays, hits);
+  for (std::size_t i = 0; i < rays.size(); ++i) {
+    ASSERT_TRUE(hits[i].hit) << i;
+    const double cos_theta = rays[i].direction_W.normalized().z();
+    const double analytic = 2.0 / cos_theta;
+    EXPECT_LE(hits[i].t_m, analytic + 0.001) << i;
+    EXPECT_GE(hits[i].t_m, analytic - k * sigma_n / cos_theta - 0.001) << i;
+  }
+}
+
+TEST(QueryMapSurface, ASphereChainCollidesNearTheWallAndNotFarFromIt) {
+  const BoxRoomMap& s = boxRoom();
+  const double r = 0.05, clearance = 0.02;
+  std::vector<Sphere> spheres;
+  for (int i = 0; i < 7; ++i) spheres.push_back({{-0.3 + 0.1 * i, 0.0, 1.93}, r, 0});  // 7 cm from the wall
+  for (int i = 0; i < 7; ++i) spheres.push_back({{-0.3 + 0.1 * i, 0.0, 1.85}, r, 3});  // 15 cm from it
+  for (int i = 0; i < 3; ++i) spheres.push_back({{-0.1 + 0.1 * i, 0.0, -1.0}, r, 1});  // behind the cameras
+  const std::vector<BodyCollision> bodies = s.map.collide(spheres, clearance);
+  ASSERT_EQ(bodies.size(), 3u);
+  EXPECT_EQ(bodies[0].body, 0);
+  EXPECT_EQ(bodies[1].body, 1);
+  EXPECT_EQ(bodies[2].body, 3);
+  std::vector<Eigen::Vector3d> centres;
+  for (const Sphere& sp : spheres) centres.push_back(sp.centre_W);
+  std::vector<DistanceResult> d(centres.size());
+  s.map.distance(centres, d);
+  const auto expectBody = [&](const BodyCollision& b, int first, int count) {
+    double best = kInf;
+    int sphere = -1;
+    for (int i = first; i < first + count; ++i)
+      if (d[static_cast<std::size_t>(i)].distance_m - r < best) best = d[static_cast<std::size_t>(i)].distance_m - r, sphere = i;
+    EXPECT_EQ(b.clearance_m, best);
+    EXPECT_EQ(b.sphere, sphere);
+    EXPECT_EQ(b.closest_W, d[static_cast<std::size_t>(sphere)].closest_W);
+    EXPECT_EQ(b.collides, best < clearance);
+  };
+  expectBody(bodies[0], 0, 7);
+  expectBody(bodies[2], 7, 7);
+  expectBody(bodies[1], 14, 3);
+  EXPECT_TRUE(bodies[0].collides);       // 7 cm - 5 cm - the gate's reach < 2 cm
+  EXPECT_NEAR(bodies[0].clearance_m, 0.02, 0.02);
+  EXPECT_FALSE(bodies[2].collides);      // 15 cm - 5 cm - reach > 2 cm
+  EXPECT_FALSE(bodies[1].collides);
+  EXPECT_TRUE(bodies[1].touches_unknown);  // no keyframe sees behind the cameras
+  EXPECT_FALSE(bodies[2].touches_unknown);  // free in front of the seen wall
+}
+
+TEST(QueryMapSurface, EmptyMapAnswers) {
+  const QueryMap empty;
+  const std::vector<Eigen::Vector3d> pts = {{0, 0, 0}, {1, 2, 3}};
+  std::vector<DistanceResult> d(pts.size());
+  empty.distance(pts, d);
+  for (const DistanceResult& r : d) {
+    EXPECT_EQ(r.distance_m, kInf);
+    EXPECT_EQ(r.gradient, Eigen::Vector3d::Zero());
+    EXPECT_EQ(r.ellipsoid, -1);
+  }
+  std::vector<RayHit> h(1);
+  empty.castRays(std::vector<Ray>{Ray{}}, h);
+  EXPECT_FALSE(h[0].hit);
+  PinholeCamera small;
+  small.width = 32, small.height = 24, small.cx = 15.5, small.cy = 11.5;
+  for (const RayHit& p : empty.castView(small, Transform::Identity(), 8.0)) EXPECT_FALSE(p.hit);
+  const auto bodies = empty.collide(std::vector<Sphere>{{{0, 0, 0}, 0.1, 0}}, 0.0);
+  ASSERT_EQ(bodies.size(), 1u);
+  EXPECT_FALSE(bodies[0].collides);
+  EXPECT_EQ(bodies[0].clearance_m, kInf);
+  EXPECT_TRUE(bodies[0].touches_unknown);
+  EXPECT_TRUE(empty.collide({}, 0.0).empty());
+}
+
+TEST(QueryMapSurface, BadInputThrowsNamingTheIndex) {
+  const BoxRoomMap& s = boxRoom();
+  const double nan = std::numeric_limits<double>::quiet_NaN();
+  const auto message = [](const auto& f) {
+    try {
+      f();
+    } catch (const std::invalid_argument& e) {
+      return std::string(e.what());
+    }
+    return std::string("no exception");
+  };
+  std::vector<Eigen::Vector3d> pts = {{0, 0, 1}, {0, nan, 1}};
+  std::vector<DistanceResult> d(pts.size());
+  EXPECT_NE(message([&] { s.map.distance(pts, d); }).find("point 1"), std::string::npos);
+  pts[1] = {kInf, 0, 0};
+  EXPECT_NE(message([&] { s.map.distance(pts, d); }).find("point 1"), std::string::npos);
+  std::vector<Ray> rays = {Ray{}, Ray{}, {{0, 0, 0}, {0, 0, 0}, 8.0}};
+  std::vector<RayHit> h(rays.size());
+  EXPECT_NE(message([&] { s.map.castRays(rays, h); }).find("ray 2"), std::string::npos);
+  rays[2].direction_W = {nan, 0, 1};
+  EXPECT_NE(message([&] { s.map.castRays(rays, h); }).find("ray 2"), std::string::npos);
+  rays[2].direction_W = {0, 0, 1};
+  rays[1].origin_W = {0, 0, -kInf};
+  EXPECT_NE(message([&] { s.map.castRays(rays, h); }).find("ray 1"), std::string::npos);
+  std::vector<Sphere> spheres = {{{0, 0, 1}, 0.1, 0}, {{0, 0, 1}, 0.0, 0}};
+  EXPECT_NE(message([&] { s.map.collide(spheres, 0.0); }).find("sphere 1"), std::string::npos);
+  spheres[1].radius_m = -0.1;
+  EXPECT_NE(message([&] { s.map.collide(spheres, 0.0); }).find("sphere 1"), std::string::npos);
+  spheres[1].radius_m = nan;
+  EXPECT_NE(message([&] { s.map.collide(spheres, 0.0); }).find("sphere 1"), std::string::npos);
+  spheres[1] = {{nan, 0, 0}, 0.1, 0};
+  EXPECT_NE(message([&] { s.map.collide(spheres, 0.0); }).find("sphere 1"), std::string::npos);
+  spheres.pop_back();
+  EXPECT_NE(message([&] { s.map.collide(spheres, -0.01); }).find("clearance"), std::string::npos);
+  EXPECT_NE(message([&] { s.map.collide(spheres, nan); }).find("clearance"), std::string::npos);
+  PinholeCamera camera;
+  EXPECT_NE(message([&] { s.map.castView(camera, Transform::Identity(), -1.0); }), "no exception");
+  Transform bad = Transform::Identity();
+  bad.translation().x() = nan;
+  EXPECT_NE(message([&] { s.map.castView(camera, bad, 8.0); }), "no exception");
+  // Output spans of the wrong size.
+  std::vector<DistanceResult> short_out(1);
+  EXPECT_NE(message([&] { s.map.distance(pts, short_out); }), "no exception");
 }
 
 }  // namespace

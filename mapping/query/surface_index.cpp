@@ -14,11 +14,18 @@ namespace {
 
 constexpr double kInf = std::numeric_limits<double>::infinity();
 
-// Levels of the gate grid: voxel side g, 4g, 16g, ...; an ellipsoid sits at the finest level where
+// Levels of the gate grid: voxel side g, 2g, 4g, ...; an ellipsoid sits at the finest level where
 // its gate box spans at most 2 voxels per axis (so in at most 8 voxels), larger ones in a list
-// every lookup scans.
-constexpr int kLevels = 6;
-constexpr double kLevelRatio = 4.0;
+// every lookup scans. A lookup visits one voxel per non-empty level.
+constexpr int kLevels = 12;
+constexpr double kLevelRatio = 2.0;
+
+// What the gate test reads, packed (80 B instead of a whole EllipsoidGate).
+struct GateTest {
+  double mean[3];
+  double a[6];  // A00, A11, A22, A01, A02, A12
+  double k2;
+};
 
 // One level: the sorted (voxel key, ellipsoid) pairs, and an open-addressing table from a voxel
 // key to its run of pairs, filled in key order (deterministic).
@@ -94,6 +101,8 @@ void gateBox(const EllipsoidGate& g, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
 
 struct SurfaceIndex::Impl {
   std::vector<EllipsoidGate> gates;
+  std::vector<GateTest> tests;  // per gate
+  std::vector<int> levels_used;  // the non-empty levels
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // gates too large for every level, ascending
@@ -108,7 +117,14 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     impl->gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m);
   });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
-  parallelFor(params.threads, n, [&](std::size_t i) { gateBox(impl->gates[i], &lo[i], &hi[i]); });
+  impl->tests.resize(n);
+  parallelFor(params.threads, n, [&](std::size_t i) {
+    const EllipsoidGate& g = impl->gates[i];
+    gateBox(g, &lo[i], &hi[i]);
+    impl->tests[i] = {{g.mean.x(), g.mean.y(), g.mean.z()},
+                      {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
+                      g.k2};
+  });
   impl->tree.emplace(lo, hi);
   if (n == 0) {
     SurfaceIndex index;
@@ -163,6 +179,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     }
     parallelSort(params.threads, level.entries.begin(), level.entries.end());
     level.buildTable();
+    if (!level.entries.empty()) impl->levels_used.push_back(l);
   }
   for (std::size_t i = 0; i < n; ++i)
     if (level_of[i] == kLevels) impl->oversize.push_back(static_cast<std::int32_t>(i));
@@ -176,7 +193,8 @@ std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0;
 
 std::size_t SurfaceIndex::memoryBytes() const {
   if (!impl_) return 0;
-  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->oversize.capacity() * 4;
+  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
+                      impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
   // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
   bytes += size() / 2 * 40 + size() * 4;
@@ -189,12 +207,13 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
   std::pair<std::int32_t, double> best{-1, kInf};
   if (!impl_) return best;
   const auto consider = [&](std::int32_t i) {
-    const EllipsoidGate& g = impl_->gates[static_cast<std::size_t>(i)];
-    const double m2 = gateDistance2(g, q_W);
+    const GateTest& g = impl_->tests[static_cast<std::size_t>(i)];
+    const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
+                                    g.a[2], g.a[3], g.a[4], g.a[5]);
     if (m2 <= g.k2 && (m2 < best.second || (m2 == best.second && i < best.first))) best = {i, m2};
   };
-  for (const GridLevel& level : impl_->levels) {
-    if (level.entries.empty()) continue;
+  for (const int l : impl_->levels_used) {
+    const GridLevel& level = impl_->levels[l];
     const auto x = voxelCoord(q_W.x(), impl_->origin.x(), level.side);
     const auto y = voxelCoord(q_W.y(), impl_->origin.y(), level.side);
     const auto z = voxelCoord(q_W.z(), impl_->origin.z(), level.side);
@@ -219,11 +238,15 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
       q_W,
       [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
         const EllipsoidGate& g = gates[j];
-        // Lower bounds first: the gate's box and its bounding sphere (with slack for rounding).
-        const Eigen::Vector3d r = (q - g.mean).cwiseAbs() - g.half_extent;
-        const double box2 = r.cwiseMax(0.0).squaredNorm();
-        const double ball = (q - g.mean).norm() - g.semi_axes[0];
-        const double lower2 = std::max(box2, ball > 0 ? ball * ball : 0.0);
+        // Lower bounds first (with slack for rounding): the gate's box, and the coin that holds
+        // it (|offset along the shortest axis| <= e2, across it <= e0), tight for the flat
+        // patches of a surface, of which many are almost equally near a point far from them.
+        const Eigen::Vector3d r = q - g.mean;
+        const double box2 = (r.cwiseAbs() - g.half_extent).cwiseMax(0.0).squaredNorm();
+        const double h = r.dot(g.axes.col(2));
+        const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
+        const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
+        const double lower2 = std::max(box2, dh * dh + da * da);
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
         const double d = distanceToGate(g, q);
         return d * d;
