@@ -83,7 +83,9 @@ void handleViewTools(Workbench& bench, WindowState& win) {
   if (ui.probe) win.probes.push_back({ViewProbe::Purpose::kQuery, at.x, at.y});
   if (pivot || ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left))
     win.probes.push_back({ViewProbe::Purpose::kPivot, at.x, at.y});
-  if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});
+  if (io.MouseWheel != 0.f && ui.probe && io.KeyAlt)  // the probe's offset, 25 % a step
+    ui.probe_offset_m = std::clamp(ui.probe_offset_m * std::pow(1.25f, io.MouseWheel), 0.005f, 1.f);
+  else if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});
   if (io.KeyCtrl && ImGui::IsMouseReleased(ImGuiMouseButton_Left) && win.drag_in_view[0]) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
     if (drag.x * drag.x + drag.y * drag.y < 9.f) win.probes.push_back({ViewProbe::Purpose::kMeasure, at.x, at.y});

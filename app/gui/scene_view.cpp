@@ -263,6 +263,8 @@ void drawHelp(Workbench& bench, WindowState& win) {
   const float width = std::min(display.x * 0.95f, std::max(view.w - 2.f * font, 40.f * font));
   ImGui::SetNextWindowPos({view.x + view.w / 2, view.y + view.h / 2}, ImGuiCond_Always, {0.5f, 0.5f});
   ImGui::SetNextWindowSize({width, 0.f}, ImGuiCond_Always);  // 0: the height fits the content
+  // ... up to the view's height (it scrolls beyond: more keys than a small window's view holds).
+  ImGui::SetNextWindowSizeConstraints({width, 0.f}, {width, std::max(view.h - font, 10.f * font)});
   ImGui::Begin("Keys and mouse (H, F1 or Esc closes)", &ui.show_help,
                ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoResize);
   if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_RowBg)) {

@@ -44,7 +44,7 @@ void drawQueries(Workbench& bench, WindowState& win) {
   ImGui::Checkbox("Probe (Q)", &ui.probe);
   tip("Under the cursor: occupied, free or unknown (docs/method.md 13) with p_occupied, and the distance to the "
       "nearest surface, beside the cursor and in the status line. The point stands the offset in front of the "
-      "surface under the cursor, or on the query slice while it is shown.");
+      "surface under the cursor (Alt+wheel changes it), or on the query slice while it is shown.");
   checkFits(win.check);
   if (beginRows("queries")) {
     label(win.check, "probe offset", "How far in front of the surface under the cursor (toward the eye) the probe stands.");

@@ -44,7 +44,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"T", "frame the trajectories (tracked and ground truth) only"},
       {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
-      {"Q", "probe: occupied / free / unknown and the distance to the nearest surface under the cursor (Queries section)"},
+      {"Q", "probe under the cursor: free / occupied / unknown, distance (Alt+wheel: offset)"},
       {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
       {"H, F1", "show or hide these keys"},
