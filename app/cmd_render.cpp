@@ -33,6 +33,7 @@
 #include "render/map_scene.h"
 #include "render/mesh_renderer.h"
 #include "render/primitive_renderer.h"
+#include "render/query_slice.h"
 
 namespace vdmap::app {
 namespace {
@@ -43,6 +44,8 @@ struct RenderArgs {
   RenderViewArgs view;
   int bench_ellipsoids = 0;
   RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --suite, --timings (app/render_check.h)
+  std::optional<render::QuerySliceSpec> query_slice;  // --query-slice AXIS=VALUE, --query-slice-color
+  render::QuerySliceColor query_slice_color = render::QuerySliceColor::kOccupancy;
 };
 
 // The image formats --out may name, by extension: PNG (lossless, what the goldens are) and JPEG.
@@ -138,6 +141,11 @@ void runRender(RenderArgs args) {
   times.mark("context");
   RenderSource source(args.sequence, args.map, args.mesh);
   times.mark("load");
+  if (args.query_slice) {  // the point queries' slice plane (docs/workbench.md "Queries")
+    render::QuerySliceSpec slice = *args.query_slice;
+    slice.color = args.query_slice_color;
+    source.setQuerySlice(slice);
+  }
   // The session's own thresholds (as the workbench showed them when it was saved) come under
   // --settings, --view-file and the flags.
   if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
@@ -162,6 +170,11 @@ void runRender(RenderArgs args) {
   // The container view is drawn in the keyframe's image: no up axis.
   if (view.spec.kind != render::ViewKind::kContainer) std::printf(", up (%.2f, %.2f, %.2f)", up.x, up.y, up.z);
   std::printf(")\n");
+  if (const render::QuerySliceImage* slice = source.lastQuerySlice())
+    std::printf("query slice %s=%.3f (%s): %dx%d samples, %zu occupied, %zu free, %zu unknown, %.0f ms\n",
+                render::querySliceAxisName(slice->spec.axis), slice->spec.offset_m,
+                render::querySliceColorName(slice->spec.color), slice->plane.width, slice->plane.height,
+                slice->occupied, slice->free, slice->unknown, slice->compute_ms);
   finishRenderCheck(args.check, golden, image, &times);  // --timings printed, --expect checked
 }
 
@@ -190,6 +203,18 @@ void addRenderCommand(CLI::App& app) {
                    "time N random instanced ellipsoids at --size instead of rendering a map")
       ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   addRenderCheckArgs(*verb, args->check);
+  // The point queries' slice plane (docs/workbench.md "Queries"); not the height slice (--slice LO:HI).
+  verb->add_option_function<std::string>(
+      "--query-slice", [args](const std::string& text) { args->query_slice = render::parseQuerySlice(text); },
+      "draw the query slice: a plane across AXIS (up: VALUE m above the floor; x, y, z: at that world coordinate), "
+      "coloured by what the map answers there (free, occupied, unknown), e.g. up=1.0")
+      ->check(parsedBy(render::parseQuerySlice, "AXIS=VALUE"));
+  verb->add_option_function<std::string>(
+          "--query-slice-color",
+          [args](const std::string& text) { args->query_slice_color = render::parseQuerySliceColor(text); },
+          "the query slice's colours: occupancy (free green, occupied red, unknown grey; default) or distance (to "
+          "the nearest surface, viridis to 0.5 m; unknown grey)")
+      ->check(parsedBy(render::parseQuerySliceColor, "occupancy|distance"));
   verb->callback([args, verb] {
     if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/render_suite.h)
   });

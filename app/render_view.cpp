@@ -339,7 +339,13 @@ struct RenderSource::Impl {
   std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
   std::vector<Transform> map_cameras;  // a map folder's trajectory (else keyframes): the data up axis
   ColoredTriangleMesh mesh;
-  std::vector<std::pair<std::vector<double>, std::vector<Ellipsoid>>> maps;  // by paramsKey
+  std::vector<std::pair<std::vector<double>, GlobalMap>> maps;  // by paramsKey
+  // The query slice (--query-slice): the point queries of the last map asked for, and the slice.
+  std::optional<render::QuerySliceSpec> query_slice;
+  const std::vector<Ellipsoid>* query_for = nullptr;
+  std::shared_ptr<const QueryMap> query;
+  std::shared_ptr<const render::QuerySliceImage> slice_image;
+  render::HeightFrame slice_height;  // what slice_image was computed at
   std::unique_ptr<render::MapMirror> mirror;
   int mirror_level = -1;
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
@@ -417,10 +423,50 @@ const std::vector<Ellipsoid>& RenderSource::globalMap(const GlobalMapParams& par
   if (!m.graph) return kNone;
   const std::vector<double> key = paramsKey(params);
   for (const auto& [k, map] : m.maps)
-    if (k == key) return map;
-  m.maps.emplace_back(key, buildGlobalMap(*m.graph, params).ellipsoids);
-  return m.maps.back().second;
+    if (k == key) return map.ellipsoids;
+  m.maps.emplace_back(key, buildGlobalMap(*m.graph, params));
+  return m.maps.back().second.ellipsoids;
 }
+
+void RenderSource::setQuerySlice(std::optional<render::QuerySliceSpec> spec) {
+  impl_->query_slice = std::move(spec);
+  impl_->slice_image.reset();
+}
+
+std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const std::vector<Ellipsoid>& map,
+                                                                          const render::HeightFrame& height) {
+  Impl& m = *impl_;
+  if (!m.query_slice) return nullptr;
+  if (m.query_for != &map) {
+    // The global map's point queries (docs/method.md 13): a map file has no keyframes, so its
+    // queries hold the ellipsoids alone (nothing seen free).
+    const GlobalMap* global = nullptr;
+    for (const auto& entry : m.maps)
+      if (&entry.second.ellipsoids == &map) global = &entry.second;
+    GlobalMap file_map;
+    if (!global) file_map.ellipsoids = map, global = &file_map;
+    const KeyframeGraph none;
+    m.query = std::make_shared<const QueryMap>(QueryMap::build(global == &file_map ? none : *m.graph, *global, QueryParams{}));
+    m.query_for = &map;
+    m.slice_image.reset();
+  }
+  if (!m.slice_image || m.slice_image->spec != *m.query_slice || m.slice_height != height) {
+    m.slice_height = height;
+    std::optional<render::QuerySliceBox> fallback;
+    if (m.query->keyframes() == 0) {
+      std::vector<glm::vec3> means;
+      means.reserve(map.size());
+      for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
+      const auto [lo, hi] = render::robustBounds(means);
+      fallback = render::QuerySliceBox{{lo.x, lo.y, lo.z}, {hi.x, hi.y, hi.z}};
+    }
+    m.slice_image = std::make_shared<const render::QuerySliceImage>(
+        render::computeQuerySlice(*m.query, *m.query_slice, height, fallback));
+  }
+  return m.slice_image;
+}
+
+const render::QuerySliceImage* RenderSource::lastQuerySlice() const { return impl_->slice_image.get(); }
 
 glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
   if (axis != render::UpAxis::kData) return render::upDirection(axis, {}, {});
@@ -478,7 +524,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   // The generation names the map in the cache (a new params key is a new generation).
   int generation = 1;
   for (std::size_t i = 0; i < m.maps.size(); ++i)
-    if (&m.maps[i].second == &map) generation = static_cast<int>(i) + 2;
+    if (&m.maps[i].second.ellipsoids == &map) generation = static_cast<int>(i) + 2;
   // Heights (colours, the slice) are measured from the whole map's floor along the view's up.
   scene.up = up(spec.up, params);
   scene.height = render::heightFrame(map, scene.up);
@@ -491,6 +537,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     generation = (1 << 24) + ++m.slice_serial;
   }
   mirror.setMap(generation, *shown);
+  mirror.setQuerySlice(querySliceOf(map, scene.height));  // --query-slice (null: none)
   render::GraphScene graph;
   if (m.graph) graph = render::graphSceneOf(*m.graph, *m.state, m.camera, m.tracked);
   graph.selected_keyframe = spec.selected_keyframe;

@@ -17,6 +17,7 @@
 #include "mapping/io/ply_reader.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/pipeline/session_file.h"
+#include "render/query_slice.h"
 #include "render/view_spec.h"
 
 namespace vdmap::render {
@@ -88,6 +89,11 @@ class RenderSource {
   const std::vector<Ellipsoid>& globalMap(const GlobalMapParams& params);
   /// The world's up direction for `axis` (kData: estimateUp of the cameras and this map).
   glm::vec3 up(render::UpAxis axis, const GlobalMapParams& params);
+  /// The query slice (`--query-slice`; docs/workbench.md "Queries") drawn in every global and
+  /// keyframe view from now on (nullopt: none). The point queries are built once per map.
+  void setQuerySlice(std::optional<render::QuerySliceSpec> spec);
+  /// The slice the last render() drew (null: none).
+  const render::QuerySliceImage* lastQuerySlice() const;
   /// Throws std::invalid_argument when `spec` names a keyframe this source lacks.
   void checkView(const render::ViewSpec& spec) const;
 
@@ -106,6 +112,9 @@ class RenderSource {
 
  private:
   struct Impl;
+  // The slice of `map` (a globalMap() result) at `height`, computed when the map or spec changed.
+  std::shared_ptr<const render::QuerySliceImage> querySliceOf(const std::vector<Ellipsoid>& map,
+                                                              const render::HeightFrame& height);
   std::unique_ptr<Impl> impl_;
   std::string name_;
   std::size_t last_drawn_ = 0;

@@ -102,7 +102,7 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
 // view's frame time is 4x lower.
 MapMirror::MapMirror(const Gl& gl, int sphere_level)
     : gl_(&gl), ellipsoids_(gl, {.sphere_subdivisions = sphere_level}), points_(gl), lines_(gl), paths_(gl),
-      highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), rgb_(gl), depth_(gl),
+      highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), query_slice_renderer_(gl), rgb_(gl), depth_(gl),
       container_image_(gl) {
   lines_.setWidth(1.5f);
   // The trajectories and loop edges are what one compares: drawn over the map, never hidden by
@@ -228,9 +228,17 @@ void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
   } else {
     points_.draw(view);
   }
+  query_slice_renderer_.draw(view);  // after the opaque map, which hides it where in front
   if (with_lines) lines_.draw(view);
   if (with_lines) paths_.draw(view);
   if (has_highlight_) highlight_.draw(view);
+}
+
+void MapMirror::setQuerySlice(std::shared_ptr<const QuerySliceImage> slice) {
+  if (slice == query_slice_) return;
+  query_slice_ = std::move(slice);
+  query_slice_renderer_.set(query_slice_.get());
+  ++content_serial_;
 }
 
 std::optional<ColorRange> MapMirror::mapColorRange() const { return colorRange(instances_, style_.color, style_.height, style_.slice); }

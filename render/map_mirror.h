@@ -22,6 +22,7 @@
 #include "render/overlay_renderer.h"
 #include "render/legend.h"
 #include "render/primitive_renderer.h"
+#include "render/query_slice.h"
 #include "render/scene_lines.h"
 #include "render/texture.h"
 
@@ -91,6 +92,10 @@ class MapMirror {
   /// when the generation or the style changed. keyframe < 0 clears it.
   void setContainer(int generation, int keyframe, const cv::Mat& rgb, const PinholeCamera& camera,
                     const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids, const ContainerStyle& style);
+  /// The query slice drawn with the map (depth-tested, translucent; docs/workbench.md "Queries"):
+  /// uploaded when the pointer differs from the one shown; null: none.
+  void setQuerySlice(std::shared_ptr<const QuerySliceImage> slice);
+  const QuerySliceImage* querySlice() const { return query_slice_.get(); }
   /// Marks one ellipsoid (the picked one) with a wire diamond drawn over everything; empty: none.
   /// Re-sent only when the ellipsoid differs from the one marked.
   void setHighlight(const std::optional<Ellipsoid>& ellipsoid);
@@ -141,6 +146,8 @@ class MapMirror {
   LineRenderer lines_, paths_, highlight_;  // paths_: trajectories and loop edges, wider
   ContainerRenderer container_;
   std::unique_ptr<OverlayRenderer> legend_;
+  QuerySliceRenderer query_slice_renderer_;
+  std::shared_ptr<const QuerySliceImage> query_slice_;  // what query_slice_renderer_ holds
   Legend legend_shown_;
   glm::vec3 legend_background_{-1.f};
   int legend_width_ = -1;

@@ -473,6 +473,11 @@ const std::vector<BadCase>& badCases() {
        args("map {dir}/seq --out {dir}/out --frames 1:9")},
       {"command_line", "frames_zero_count", E::kCliUsage, "N means the first N frames", args("map {dir}/seq --out {dir}/out --frames 0")},
       {"command_line", "render_without_out", E::kCliUsage, "--out is required", args("render {dir}/seq")},
+      // The point queries' slice plane (docs/workbench.md "Queries").
+      {"command_line", "render_query_slice_bad_axis", E::kCliUsage, "--query-slice: 'w=1': expected AXIS=VALUE",
+       args("render --map {dir}/e.ply --out {dir}/o.png --query-slice w=1")},
+      {"command_line", "render_query_slice_bad_color", E::kCliUsage, "--query-slice-color: 'height': expected occupancy or distance",
+       args("render --map {dir}/e.ply --out {dir}/o.png --query-slice z=1 --query-slice-color height")},
       {"command_line", "render_out_under_a_file", E::kCliError, "seq/rgb.txt is a file, not a folder (--out)",
        args("render {dir}/seq --out {dir}/seq/rgb.txt/x.png")},
       {"command_line", "load_missing_session", E::kCliError, "no such session file (--load)",

@@ -601,19 +601,20 @@ TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
   EXPECT_GT(stats["settle_ms"].get<double>(), 0.0) << "the full frame followed the fast ones";
 }
 
-// Measuring: the points --measure finds under two pixels of the view (the depth of the drawn
-// scene, as Ctrl+click) lie on the built-in scene's surfaces, within 1 cm (the ellipsoids are
-// drawn at 2 sigma around the surface), and the distance is |b - a|. The pixels are taken where
-// the first run's view image shows a surface all around them (not the background, not a line).
-TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
-  REQUIRE_XVFB();
-  TempDir home;
-  const std::string common = "--frames 0:30 --play-to-end --exit --window-size 1280x720 --set show_frustums=false "
-                             "--set show_graph=false --set show_trajectory=false";
+// The built-in scene's first 30 frames with the map alone in the view (no lines), and that
+// view's image (empty on failure).
+const std::string kSurfaceViewArgs = "--frames 0:30 --play-to-end --exit --window-size 1280x720 "
+                                     "--set show_frustums=false --set show_graph=false --set show_trajectory=false";
+cv::Mat surfaceView(const TempDir& home) {
   const fs::path png = home / "view.png";
-  ASSERT_EQ(runInXvfb(home, common + " --view-screenshot '" + png.string() + "'").exit_code, 0);
-  const cv::Mat view = cv::imread(png.string());
-  ASSERT_FALSE(view.empty());
+  if (runInXvfb(home, kSurfaceViewArgs + " --view-screenshot '" + png.string() + "'").exit_code != 0) return {};
+  return cv::imread(png.string());
+}
+
+// The pixels of a view screenshot on a coarse grid over its middle half where a surface is drawn
+// all around them (not the background, not a line), top rows first.
+std::vector<cv::Point> surfacePixels(const cv::Mat& view) {
+  if (view.empty()) return {};
   const cv::Vec3b background = view.at<cv::Vec3b>(2, view.cols - 3);
   const auto surface = [&](int x, int y) {
     for (int dy = -3; dy <= 3; ++dy)
@@ -621,11 +622,23 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
         if (cv::norm(view.at<cv::Vec3b>(y + dy, x + dx), background, cv::NORM_L1) <= 30) return false;
     return true;
   };
-  std::vector<cv::Point> found;  // surface pixels on a coarse grid, middle of the view first
+  std::vector<cv::Point> found;
   for (int y = view.rows / 4; y < view.rows * 3 / 4; y += 17)
     for (int x = view.cols / 4; x < view.cols * 3 / 4; x += 17)
       if (surface(x, y)) found.push_back({x, y});
+  return found;
+}
+
+// Measuring: the points --measure finds under two pixels of the view (the depth of the drawn
+// scene, as Ctrl+click) lie on the built-in scene's surfaces, within 1 cm (the ellipsoids are
+// drawn at 2 sigma around the surface), and the distance is |b - a|. The pixels are taken where
+// the first run's view image shows a surface all around them (not the background, not a line).
+TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const std::vector<cv::Point> found = surfacePixels(surfaceView(home));
   ASSERT_GE(found.size(), 2u) << "the view shows no surface";
+  const std::string common = kSurfaceViewArgs;
   const cv::Point a = found.front(), b = found.back();
   const fs::path json = home / "m.json";
   const RunResult r = runInXvfb(home, common + " --measure " + std::to_string(a.x) + "," + std::to_string(a.y) + "," +
@@ -640,6 +653,50 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
   const std::vector<double> d = distancesToMesh({pa, pb}, makeBuiltinScene().mesh);
   EXPECT_LT(d[0], 0.01) << pa.transpose();
   EXPECT_LT(d[1], 0.01) << pb.transpose();
+}
+
+// Point queries (docs/workbench.md "Queries"): --probe at a pixel where the view shows a surface
+// finds the point 5 cm in front of it (so within 5 cm of a gate surface; occupied exactly when
+// at distance 0), and with --query-slice the point lies on the slice's plane; the stats give the
+// queries of the map shown and the slice's samples.
+TEST(GuiCli, ProbeAndQuerySliceScripted) {
+  REQUIRE_XVFB();
+  TempDir home;
+  const cv::Mat view = surfaceView(home);
+  const std::vector<cv::Point> found = surfacePixels(view);
+  ASSERT_FALSE(found.empty()) << "the view shows no surface";
+  const std::string common = kSurfaceViewArgs;
+  const cv::Point at = found[found.size() / 2];
+  const std::string pixel = std::to_string(at.x) + "," + std::to_string(at.y);
+  const fs::path json = home / "p.json";
+  RunResult r = runInXvfb(home, common + " --probe " + pixel + " --stats-json '" + json.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  nlohmann::json stats = readJson(json);
+  const nlohmann::json probe = stats["probe"];
+  ASSERT_TRUE(probe.is_object()) << stats.dump();
+  EXPECT_EQ(probe["on_slice"], false);
+  EXPECT_EQ(probe["generation"], stats["queries"]["generation"]);
+  EXPECT_GT(stats["queries"]["keyframes"].get<int>(), 0);
+  const double d = probe["distance_m"].get<double>();
+  EXPECT_LE(d, 0.051) << "5 cm in front of the drawn surface, which lies inside a gate";
+  EXPECT_EQ(probe["class"] == "occupied", d == 0.0) << probe.dump();
+
+  const fs::path shot = home / "slice.png";
+  r = runInXvfb(home, common + " --probe " + pixel + " --query-slice z=1.0 --query-slice-color distance --stats-json '" +
+                          json.string() + "' --view-screenshot '" + shot.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  stats = readJson(json);
+  EXPECT_EQ(stats["probe"]["on_slice"], true) << stats["probe"].dump();
+  EXPECT_NEAR(stats["probe"]["point"][2].get<double>(), 1.0, 1e-4);
+  const nlohmann::json slice = stats["query_slice"];
+  ASSERT_TRUE(slice.is_object()) << stats.dump();
+  EXPECT_EQ(slice["color"], "distance");
+  EXPECT_EQ(std::max(slice["width"].get<int>(), slice["height"].get<int>()), 256);
+  EXPECT_GT(slice["free"].get<int>(), 0);
+  EXPECT_GT(slice["occupied"].get<int>(), 0);
+  cv::Mat diff;
+  cv::absdiff(cv::imread(shot.string()), view, diff);
+  EXPECT_GT(cv::countNonZero(diff.reshape(1) > 30), 1000) << "the slice is drawn";
 }
 
 }  // namespace

@@ -255,6 +255,43 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       },
       "scripted: measure between view pixels X1,Y1 and X2,Y2 once mapping is done, as Ctrl+click does (stats: "
       "measure {a, b, distance_m})");
+  // Point queries (docs/workbench.md "Queries").
+  app.add_option_function<std::string>(
+      "--probe",
+      [&args](const std::string& text) {
+        float v[2];
+        char rest = 0;
+        if (std::sscanf(text.c_str(), "%f,%f%c", &v[0], &v[1], &rest) != 2 ||
+            !std::all_of(v, v + 2, [](float x) { return std::isfinite(x) && x >= 0; }))
+          throw CLI::ValidationError("--probe", "'" + text + "': expected X,Y (view pixels, >= 0)");
+        args.script.probe.assign(v, v + 2);
+      },
+      "scripted: the probe (Q) at view pixel X,Y once mapping is done (stats: probe {class, p, distance_m, point})");
+  app.add_option_function<std::string>(
+      "--query-slice",
+      [&args](const std::string& text) {
+        const auto color = args.script.query_slice ? args.script.query_slice->color : render::QuerySliceColor::kOccupancy;
+        try {
+          args.script.query_slice = render::parseQuerySlice(text);
+        } catch (const std::invalid_argument& e) {
+          throw CLI::ValidationError("--query-slice", e.what());
+        }
+        args.script.query_slice->color = color;
+      },
+      "show the query slice across AXIS (up: VALUE m above the floor; x, y, z: at that coordinate), e.g. up=1.0 "
+      "(Queries section; not the height slice, --set slice)");
+  app.add_option_function<std::string>(
+      "--query-slice-color",
+      [&args](const std::string& text) {
+        if (!args.script.query_slice) args.script.query_slice = render::QuerySliceSpec{};
+        try {
+          args.script.query_slice->color = render::parseQuerySliceColor(text);
+        } catch (const std::invalid_argument& e) {
+          throw CLI::ValidationError("--query-slice-color", e.what());
+        }
+      },
+      "the query slice's colours: occupancy (free green, occupied red, unknown grey) or distance (to the nearest "
+      "surface)");
   app.add_option("--close-after-frames", args.script.close_after_frames,
                  "close the window as a user would after N frames drawn (tests: closing during the first start)")
       ->check(CLI::PositiveNumber);

@@ -6,6 +6,7 @@
 #include "app/gui/measure_overlay.h"
 #include "app/gui/thresholds_panel.h"
 #include "app/gui/tracking_panel.h"
+#include "app/gui/view_tools_panel.h"
 #include "app/gui/widgets.h"
 
 namespace vdmap::app::gui {
@@ -49,6 +50,7 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     if (section(win.check, "Keyframes", true)) drawKeyframes(bench, mirror, win);
     if (section(win.check, "Picked ellipsoid", true)) drawPicked(bench, win);
     if (section(win.check, "Measure", bench.ui().measure_a.has_value())) drawMeasure(bench, win);
+    if (section(win.check, "Queries", bench.ui().probe || bench.ui().query_slice)) drawQueries(bench, win);
     if (section(win.check, "Pose correction")) drawPoseFile(bench);
     if (section(win.check, "Export and save")) drawExport(bench, win);
   }

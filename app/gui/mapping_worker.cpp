@@ -114,7 +114,7 @@ MappingWorker::~MappingWorker() {
 }
 
 bool MappingWorker::workLeft() const {
-  return working_ || !commands_.empty() || selection_dirty_ || mapped_ < target_ || global_dirty_;
+  return working_ || !commands_.empty() || selection_dirty_ || mapped_ < target_ || global_dirty_ || staticQueriesDue();
 }
 
 void MappingWorker::run() {
@@ -266,12 +266,15 @@ int MappingWorker::positionOf(int frame_index) const {
   return base_frames_ + static_cast<int>(it - entries.begin());
 }
 
-std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(const GlobalMapParams& params, bool before_optimisation) {
+std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(
+    const GlobalMapParams& params, bool before_optimisation,
+    const std::function<void(const KeyframeGraph&, const std::shared_ptr<GlobalSnapshot>&)>& with_graph) {
   auto snap = std::make_shared<GlobalSnapshot>();
   snap->params = params;
   const std::vector<Transform> before = before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
   if (before.empty()) {
     snap->map = buildGlobalMap(mapper_->graph(), params, &global_workspace_);
+    if (with_graph) with_graph(mapper_->graph(), snap);
     return snap;
   }
   // The local maps live in their keyframes' frames and do not change: the graph's poses are
@@ -288,42 +291,70 @@ std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(const GlobalMapParams
   for (std::size_t id = 0; id < before.size(); ++id) graph.setKeyframePose(static_cast<int>(id), before[id]);
   snap->map = buildGlobalMap(graph, params, &global_workspace_);
   snap->before_optimisation = true;
+  if (with_graph) with_graph(graph, snap);
   return snap;
 }
 
 void MappingWorker::rebuildGlobal() {
   GlobalMapParams params;
-  bool before = false;
+  bool before = false, queries = false;
   Clock::time_point t_edit;
   {
     std::lock_guard lock(mutex_);
     params = thresholds_;
     before = before_optimisation_;
+    queries = queries_wanted_;
     global_dirty_ = false;
     t_edit = last_edit_;
   }
   const auto t0 = Clock::now();
-  std::shared_ptr<GlobalSnapshot> snap;
+  // The map is published as soon as it is built; the point queries follow it, built with the
+  // graph at the poses the map was built with (so they answer at corrected poses).
+  const auto publish = [&](const KeyframeGraph& graph, const std::shared_ptr<GlobalSnapshot>& snap) {
+    snap->t_edit = t_edit;
+    snap->t_build_start = t0;
+    snap->t_build_end = Clock::now();
+    releaseFreedMemory();  // the build's other temporaries, before the next frames
+    {
+      std::lock_guard lock(mutex_);
+      snap->frames_mapped = mapped_;
+      snap->generation = ++generation_;
+      snap->t_published = Clock::now();
+      global_ = snap;
+      selection_dirty_ = true;
+      last_build_ = Clock::now();
+      last_build_s_ = secondsSince(t0);
+    }
+    notifyChange();
+    if (queries) buildQueries(graph, *snap);
+  };
   try {
-    snap = buildGlobal(params, before);
+    buildGlobal(params, before, publish);
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
     error_ = std::string("global map: ") + e.what();
     return;
   }
-  snap->t_edit = t_edit;
-  snap->t_build_start = t0;
-  snap->t_build_end = Clock::now();
-  releaseFreedMemory();  // the build's other temporaries, before the next frames
+  std::lock_guard lock(mutex_);
+  last_build_s_ = secondsSince(t0);  // the queries' build counts in the worker's share of map building
+}
+
+void MappingWorker::buildQueries(const KeyframeGraph& graph, const GlobalSnapshot& snap) {
+  auto query = std::make_shared<QuerySnapshot>();
+  query->generation = snap.generation;
+  const auto t0 = Clock::now();
+  try {
+    query->map = std::make_shared<const QueryMap>(QueryMap::build(graph, snap.map, QueryParams{}));
+  } catch (const std::exception& e) {
+    std::lock_guard lock(mutex_);
+    error_ = std::string("point queries: ") + e.what();
+    return;
+  }
+  query->build_ms = 1e3 * secondsSince(t0);
+  if (graph.size() == 0) query->note = "no keyframes: free space unknown";
   {
     std::lock_guard lock(mutex_);
-    snap->frames_mapped = mapped_;
-    snap->generation = ++generation_;
-    snap->t_published = Clock::now();
-    global_ = std::move(snap);
-    selection_dirty_ = true;
-    last_build_ = Clock::now();
-    last_build_s_ = secondsSince(t0);
+    query_ = std::move(query);
   }
   notifyChange();
 }

@@ -22,6 +22,7 @@
 #include "mapping/pipeline/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/query/query_map.h"
 
 namespace vdmap::app::gui {
 
@@ -126,6 +127,17 @@ struct GlobalSnapshot {
   std::chrono::steady_clock::time_point t_edit{}, t_build_start{}, t_build_end{}, t_published{};
 };
 
+/// The point queries (docs/method.md 13) of one global map build: built by the worker right after
+/// the map while queries are wanted (MappingWorker::wantQueries), and published just after it, so
+/// a pose edit, loop closure or threshold change answers at the corrected poses.
+struct QuerySnapshot {
+  int generation = 0;  ///< the GlobalSnapshot's it was built with
+  std::shared_ptr<const QueryMap> map;  ///< never null
+  double build_ms = 0;  ///< QueryMap::build's time
+  /// Why some answers are missing ("" when none): a map file has no keyframes, so no free space.
+  std::string note;
+};
+
 /// The selected keyframe's local map (replaced after a selection change and after every rebuild).
 struct SelectionSnapshot {
   int serial = 0;       ///< 1, 2, ... per selection published by this session
@@ -217,6 +229,13 @@ class MappingWorker {
   std::shared_ptr<const MappingSnapshot> mapping() const;
   /// Null until the first build.
   std::shared_ptr<const GlobalSnapshot> global() const;
+  /// Whether the worker builds the point queries after every global map build (off by default:
+  /// they cost memory and worker time only when the probe or the query slice is used). Turning
+  /// them on builds them for the map shown (a rebuild of a session's global map).
+  void wantQueries(bool on);
+  /// The newest point queries; null until built (and while not wanted). Its generation may lag
+  /// global()'s by one build while the queries are being built.
+  std::shared_ptr<const QuerySnapshot> query() const;
   /// Null until the first build or selection.
   std::shared_ptr<const SelectionSnapshot> selection() const;
   PlayerStatus status() const;
@@ -233,7 +252,12 @@ class MappingWorker {
   void rebuildGlobal();
   // Builds the global map with the current keyframe poses, or those before the last
   // optimisation when asked and there was one (then the snapshot says so).
-  std::shared_ptr<GlobalSnapshot> buildGlobal(const GlobalMapParams& params, bool before_optimisation);
+  // `with_graph`, if any, runs after the build with the graph at the poses it was built with.
+  std::shared_ptr<GlobalSnapshot> buildGlobal(
+      const GlobalMapParams& params, bool before_optimisation,
+      const std::function<void(const KeyframeGraph&, const std::shared_ptr<GlobalSnapshot>&)>& with_graph = {});
+  // Builds and publishes the point queries of `snap` (worker thread; `graph` at its poses).
+  void buildQueries(const KeyframeGraph& graph, const GlobalSnapshot& snap);
   // The poses MappingSnapshot::keyframes_before holds (worker thread).
   std::vector<Transform> posesBeforeOptimisation() const;
   // The scrubber position of a frame by its depth-list index.
@@ -293,6 +317,12 @@ class MappingWorker {
   std::shared_ptr<const MappingSnapshot> mapping_;
   std::shared_ptr<const GlobalSnapshot> global_;
   std::shared_ptr<const SelectionSnapshot> selection_;
+  std::shared_ptr<const QuerySnapshot> query_;
+  bool queries_wanted_ = false;
+  int queries_tried_ = -1;  // static maps: the generation the queries were last built for (mutex_ held)
+  bool staticQueriesDue() const {  // mutex_ held
+    return static_map_ && queries_wanted_ && global_ && queries_tried_ != global_->generation;
+  }
   std::function<void()> on_change_;
   int generation_ = 0;
   std::shared_ptr<const StaticMap> static_map_;  // static maps: what the worker shows

@@ -152,6 +152,23 @@ std::shared_ptr<const MappingSnapshot> MappingWorker::mapping() const {
   return mapping_;
 }
 
+void MappingWorker::wantQueries(bool on) {
+  {
+    std::lock_guard lock(mutex_);
+    if (queries_wanted_ == on) return;
+    queries_wanted_ = on;
+    if (!on) query_.reset(), queries_tried_ = -1;  // their memory back
+    // A session's queries are built with the global map (the graph must be at the map's poses).
+    else if (!static_map_) global_dirty_ = true;
+  }
+  wake_.notify_all();
+}
+
+std::shared_ptr<const QuerySnapshot> MappingWorker::query() const {
+  std::lock_guard lock(mutex_);
+  return query_;
+}
+
 std::shared_ptr<const GlobalSnapshot> MappingWorker::global() const {
   std::lock_guard lock(mutex_);
   return global_;

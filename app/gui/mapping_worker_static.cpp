@@ -88,6 +88,18 @@ void MappingWorker::runStatic() {
       selection_dirty_ = false;
       news = true;
     }
+    if (staticQueriesDue()) {
+      // The point queries of a map file: its ellipsoids' gates and distances; with no keyframes
+      // nothing is seen free (buildQueries notes it).
+      const std::shared_ptr<const GlobalSnapshot> global = global_;
+      queries_tried_ = global->generation;
+      working_ = true;
+      lock.unlock();
+      buildQueries(KeyframeGraph{}, *global);
+      lock.lock();
+      working_ = false;
+      continue;  // a command may have come meanwhile
+    }
     idle_.notify_all();
     if (news && on_change_) on_change_();  // mutex_ held: read safely
     wake_.wait(lock);

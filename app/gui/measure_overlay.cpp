@@ -31,6 +31,16 @@ std::optional<ImVec2> toScreen(Workbench& bench, const WindowState& win, const g
   return ImVec2(win.layout.view.x + u / scale.x, win.layout.view.y + w / scale.y);
 }
 
+// The probe's class: occupied red, free green, unknown grey (the query slice's colours).
+ImU32 probeColor(const ProbeResult& r) {
+  switch (r.state.state) {
+    case Occupancy::kOccupied: return IM_COL32(255, 110, 100, 255);
+    case Occupancy::kFree: return IM_COL32(110, 230, 130, 255);
+    case Occupancy::kUnknown: break;
+  }
+  return IM_COL32(200, 200, 200, 255);
+}
+
 std::string pointText(const glm::vec3& p) {
   char text[96];
   std::snprintf(text, sizeof text, "%.4f %.4f %.4f", p.x, p.y, p.z);
@@ -68,9 +78,14 @@ void handleViewTools(Workbench& bench, WindowState& win) {
   // P (Workbench::key) or a double-click: turn about the point under the cursor.
   const bool pivot = std::exchange(ui.pivot_requested, false);
   if (!bench.isOpen() || !over_view) return;
+  // The probe (Q) follows the cursor: asked every frame over the view (a frame is drawn only
+  // after input or news, such as the queries of a new map).
+  if (ui.probe) win.probes.push_back({ViewProbe::Purpose::kQuery, at.x, at.y});
   if (pivot || ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left))
     win.probes.push_back({ViewProbe::Purpose::kPivot, at.x, at.y});
-  if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});
+  if (io.MouseWheel != 0.f && ui.probe && io.KeyAlt)  // the probe's offset, 25 % a step
+    ui.probe_offset_m = std::clamp(ui.probe_offset_m * std::pow(1.25f, io.MouseWheel), 0.005f, 1.f);
+  else if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});
   if (io.KeyCtrl && ImGui::IsMouseReleased(ImGuiMouseButton_Left) && win.drag_in_view[0]) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
     if (drag.x * drag.x + drag.y * drag.y < 9.f) win.probes.push_back({ViewProbe::Purpose::kMeasure, at.x, at.y});
@@ -95,8 +110,9 @@ std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const
   return render::unproject(v.camera, static_cast<float>(px - v.image.x), static_cast<float>(py - v.image.y), *depth);
 }
 
-void answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
+bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
   const UiState& ui = bench.ui();
+  bool changed = false;
   for (const ViewProbe& probe : win.probes) {
     const std::optional<glm::vec3> p = probeView(bench, gl, win, probe.x_px, probe.y_px);
     switch (probe.purpose) {
@@ -112,9 +128,13 @@ void answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
         if (p) bench.addMeasurePoint(*p);
         else bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to measure at");
         break;
+      case ViewProbe::Purpose::kQuery:
+        changed = bench.probeAt(probe.x_px, probe.y_px, ui.view_width, ui.view_height, p) || changed;
+        break;
     }
   }
   win.probes.clear();
+  return changed;
 }
 
 void drawViewMarks(Workbench& bench, const WindowState& win) {
@@ -148,6 +168,20 @@ void drawViewMarks(Workbench& bench, const WindowState& win) {
     label(draw, {at->x + 7.f, at->y - 7.f - ImGui::GetFontSize()}, kMeasureColor, name);
     return at;
   };
+  if (ui.probe && ui.probe_result) {
+    // The probe: a dot at its point (under the cursor: the point lies on the cursor's ray), the
+    // answer beside it, or left of it where the view ends.
+    const ProbeResult& r = *ui.probe_result;
+    if (const auto at = toScreen(bench, win, r.point)) {
+      draw->AddCircleFilled(*at, 4.f, kShadow);
+      draw->AddCircleFilled(*at, 2.5f, probeColor(r));
+      const std::string text = r.text();
+      const ImVec2 size = ImGui::CalcTextSize(text.c_str());
+      float x = at->x + 16.f + size.x > view.x + view.w ? at->x - 10.f - size.x : at->x + 16.f;
+      x = std::max(view.x + 4.f, std::min(x, view.x + view.w - size.x - 4.f));  // wider than the room beside it
+      label(draw, {x, at->y + 12.f}, probeColor(r), text.c_str());
+    }
+  }
   if (ui.measure_a) {
     const auto a = dot(*ui.measure_a, "A");
     const auto b = ui.measure_b ? dot(*ui.measure_b, "B") : std::nullopt;

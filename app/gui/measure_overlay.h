@@ -18,8 +18,9 @@ void handleViewTools(Workbench& bench, WindowState& win);
 /// origin), read from the depth buffer of the scene just drawn; nullopt where nothing is drawn.
 std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const WindowState& win, float x_px,
                                    float y_px);
-/// Answers the queued probes (zoom toward, pivot at, measure at the point): after drawScene.
-void answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win);
+/// Answers the queued probes (zoom toward, pivot at, measure at the point, the point queries'
+/// probe): after drawScene. Returns whether what the view shows changed (the probe's text).
+bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win);
 /// The pick marker and the measured line over the 3-D view.
 void drawViewMarks(Workbench& bench, const WindowState& win);
 /// The Measure section of the Map panel: both points, the distance, Copy, Clear, snap.

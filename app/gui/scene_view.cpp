@@ -127,6 +127,7 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   const auto scene = [&] { return bench.graphScene(*mapping); };
   mirror.setGraph(mirrored.session_base + mapping->generation, ui.selected_keyframe, scene, ui.show_before_optimisation);
   mirror.setHighlight(ui.picked);
+  mirror.setQuerySlice(bench.querySlice());  // point queries: the slice computed for this map (or none)
   const auto selection = bench.selection();
   if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
     const int id = selection->keyframe;
@@ -212,7 +213,9 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
   const std::size_t shown = win.global ? win.global->map.ellipsoids.size() : 0;
   std::snprintf(right, sizeof right, "%zu ellipsoids | frame %.0f ms | H: help", shown,
                 median({win.frame_times.begin(), win.frame_times.end()}));
-  const float right_w = ImGui::CalcTextSize(right).x;
+  // The probe (Q) leads the right side: what the map says under the cursor.
+  const std::string right_text = ui.probe && ui.probe_result ? ui.probe_result->text() + " | " + right : right;
+  const float right_w = ImGui::CalcTextSize(right_text.c_str()).x;
   const StatusLine& st = ui.status;
   ImGui::AlignTextToFramePadding();
   if (!st.text.empty()) {
@@ -228,8 +231,8 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
     tip("Clear the message.");
   }
   ImGui::SameLine(status.w - right_w - ImGui::GetStyle().WindowPadding.x);
-  ImGui::TextUnformatted(right);
-  tip("Ellipsoids in the global map shown; the median time of the last 30 UI frames (the window draws only when "
+  ImGui::TextUnformatted(right_text.c_str());
+  tip("The probe's answer while it is on (Q); ellipsoids in the global map shown; the median time of the last 30 UI frames (the window draws only when "
       "something changes, so an idle window costs nothing).");
   ImGui::End();
 }
@@ -260,6 +263,8 @@ void drawHelp(Workbench& bench, WindowState& win) {
   const float width = std::min(display.x * 0.95f, std::max(view.w - 2.f * font, 40.f * font));
   ImGui::SetNextWindowPos({view.x + view.w / 2, view.y + view.h / 2}, ImGuiCond_Always, {0.5f, 0.5f});
   ImGui::SetNextWindowSize({width, 0.f}, ImGuiCond_Always);  // 0: the height fits the content
+  // ... up to the view's height (it scrolls beyond: more keys than a small window's view holds).
+  ImGui::SetNextWindowSizeConstraints({width, 0.f}, {width, std::max(view.h - font, 10.f * font)});
   ImGui::Begin("Keys and mouse (H, F1 or Esc closes)", &ui.show_help,
                ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoSavedSettings | ImGuiWindowFlags_NoResize);
   if (ImGui::BeginTable("keys", 2, ImGuiTableFlags_RowBg)) {

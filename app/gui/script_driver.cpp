@@ -120,6 +120,31 @@ void measureScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, con
   run.measure = {{"a", {a->x, a->y, a->z}}, {"b", {b->x, b->y, b->z}}, {"distance_m", glm::length(*b - *a)}};
 }
 
+// --probe: the point queries' probe under a pixel of the view, as the mouse there with Q on finds
+// it (from the depth of the frame just drawn, or on the query slice while it is shown).
+void probeScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, const WindowState& win) {
+  const std::vector<float>& at = run.options.probe;
+  const UiState& ui = bench.ui();
+  bench.probeAt(at[0], at[1], ui.view_width, ui.view_height, probeView(bench, gl, win, at[0], at[1]));
+  if (!ui.probe_result) {
+    bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + std::to_string(at[0]) + "," +
+                                               std::to_string(at[1]) + " (and no query slice there)");
+    return;
+  }
+  const ProbeResult& r = *ui.probe_result;
+  run.probe = {{"class", occupancyName(r.state.state)},
+               {"p", r.state.p_occupied},
+               {"distance_m", std::isfinite(r.distance.distance_m) ? nlohmann::json(r.distance.distance_m) : nlohmann::json()},
+               {"point", {r.point.x, r.point.y, r.point.z}},
+               {"on_slice", r.on_slice},
+               {"keyframe", r.state.keyframe},
+               {"ellipsoid", r.state.ellipsoid},
+               {"generation", r.generation},
+               {"query_us", r.query_us},
+               {"note", r.note},
+               {"text", r.text()}};
+}
+
 void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, const std::string& file) {
   const auto& mapping = win.mapping;
   const auto& global = win.global;
@@ -158,6 +183,22 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["ui_frame_ms_median_while_busy"] = median(run.busy_frame_ms);
   stats["layout"] = run.layout;
   if (!run.measure.is_null()) stats["measure"] = run.measure;
+  if (!run.probe.is_null()) stats["probe"] = run.probe;
+  if (const auto slice = bench.querySlice()) {
+    stats["query_slice"] = {{"axis", render::querySliceAxisName(slice->spec.axis)},
+                            {"offset_m", slice->spec.offset_m},
+                            {"color", render::querySliceColorName(slice->spec.color)},
+                            {"width", slice->plane.width},
+                            {"height", slice->plane.height},
+                            {"occupied", slice->occupied},
+                            {"free", slice->free},
+                            {"unknown", slice->unknown},
+                            {"compute_ms", slice->compute_ms}};
+  }
+  if (const auto query = bench.query())
+    stats["queries"] = {{"generation", query->generation}, {"build_ms", query->build_ms}, {"note", query->note},
+                        {"keyframes", query->map->keyframes()}, {"ellipsoids", query->map->ellipsoids()},
+                        {"memory_bytes", query->map->memoryBytes()}};
   stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
   stats["view_from_keyframe"] = ui.view_from_keyframe;
@@ -236,6 +277,16 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
   if (!scripted(run) || run.phase == ScriptPhase::kDone || win.preparing) return;
   switch (run.phase) {
     case ScriptPhase::kWaitDone: {
+      // Point queries asked for: on from the start, and built before the script goes on.
+      const bool queries = !run.options.probe.empty() || run.options.query_slice;
+      if (queries && bench.isOpen()) {
+        UiState& ui = bench.ui();
+        ui.probe = ui.probe || !run.options.probe.empty();
+        if (run.options.query_slice && !ui.query_slice) ui.query_slice = true, ui.query_slice_spec = *run.options.query_slice;
+        const auto query = bench.query();
+        const auto global = bench.global();
+        if ((!query || !global || query->generation != global->generation) && bench.player().error.empty()) return;
+      }
       if (bench.isOpen()) {
         const PlayerStatus st = bench.player();
         const bool done =
@@ -254,7 +305,9 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
     case ScriptPhase::kSettle:
       if (bench.player().busy) return;  // a key pressed above may have asked for a rebuild
       // A frame before the screenshot, so that it shows the measured line.
+      if (run.countdown == 3 && run.options.query_slice) bench.waitQuerySlice();  // drawn by the next frames
       if (run.countdown == 2 && run.options.measure.size() == 4) measureScripted(run, bench, gl, win);
+      if (run.countdown == 2 && run.options.probe.size() == 2) probeScripted(run, bench, gl, win);
       if (--run.countdown > 0) return;
       recordLayout(run, bench, win);
       if (!run.options.screenshot.empty() && !failedRun(run, bench)) {

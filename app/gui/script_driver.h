@@ -27,6 +27,7 @@ struct ScriptRun {
   bool view_files_taken = false;   ///< --save-view / --view-screenshot, likewise
   nlohmann::json layout = nlohmann::json::object();  ///< recordLayout's figures
   nlohmann::json measure;          ///< --measure's points and distance (null: none asked or found)
+  nlohmann::json probe;            ///< --probe's answer (null: none asked)
   int latency_generation = -1;     ///< the global map an edit waits to replace (-1: no edit pending)
   Clock::time_point latency_start, orbit_frame_start, idle_until;
   std::vector<double> latency_ms, orbit_ms, orbit_cpu_ms;

@@ -9,4 +9,8 @@ namespace vdmap::app::gui {
 /// move it by its thickness.
 void drawSliceControls(Workbench& bench, WindowState& win);
 
+/// The Queries section (docs/workbench.md "Queries"): the probe (Q) and its offset, the query
+/// slice (axis, offset, colour, samples) and what they were computed from.
+void drawQueries(Workbench& bench, WindowState& win);
+
 }  // namespace vdmap::app::gui

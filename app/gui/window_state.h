@@ -50,7 +50,7 @@ struct Mirrored {
 /// A question about the point under a pixel of the 3-D view, answered once the scene is drawn
 /// (measure_overlay.h answerProbes).
 struct ViewProbe {
-  enum class Purpose { kZoom, kPivot, kMeasure };
+  enum class Purpose { kZoom, kPivot, kMeasure, kQuery };  // kQuery: the probe (Q) under the cursor
   Purpose purpose = Purpose::kMeasure;
   float x_px = 0, y_px = 0;  ///< viewport framebuffer pixels, top-left origin
   float wheel = 0;           ///< kZoom: wheel steps

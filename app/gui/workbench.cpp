@@ -44,6 +44,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"T", "frame the trajectories (tracked and ground truth) only"},
       {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
+      {"Q", "probe under the cursor: free / occupied / unknown, distance (Alt+wheel: offset)"},
       {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
       {"H, F1", "show or hide these keys"},
@@ -447,6 +448,7 @@ bool Workbench::showBeforeOptimisation(bool before) {
 
 void Workbench::sync() {
   if (!worker_) return;
+  syncQueries();  // point queries: wanted by the probe or the slice, the slice's computation
   // Seeking back or re-running forgets the optimisation: show the map as it is again.
   if (ui_.show_before_optimisation && !canShowBeforeOptimisation()) showBeforeOptimisation(false);
   syncPoseFields();
@@ -509,6 +511,7 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kPivotHere: ui_.pivot_requested = true; break;  // the window probes the point under the cursor
     case KeyAction::kSliceUp: moveSlice(1); break;
     case KeyAction::kSliceDown: moveSlice(-1); break;
+    case KeyAction::kProbe: ui_.probe = !ui_.probe; break;
   }
 }
 

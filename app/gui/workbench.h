@@ -6,6 +6,7 @@
 #include <ctime>
 #include <filesystem>
 #include <functional>
+#include <future>
 #include <memory>
 #include <optional>
 #include <string>
@@ -17,6 +18,7 @@
 #include "app/parameter_table.h"
 #include "mapping/export/map_file.h"
 #include "render/map_mirror.h"
+#include "render/query_slice.h"
 #include "render/view_camera.h"
 #include "render/view_framing.h"  // DrawnBounds (picture stream)
 #include "render/view_spec.h"
@@ -29,6 +31,19 @@ struct StatusLine {
   Kind kind = Kind::kInfo;
   std::string text;  ///< empty: nothing to say
   int serial = 0;    ///< increases with every report (the window notices news by it)
+};
+
+/// What the probe found at one point (docs/workbench.md "Queries").
+struct ProbeResult {
+  glm::vec3 point{0.f};   ///< world, metres
+  bool on_slice = false;  ///< on the query slice's plane (else in front of the surface under the cursor)
+  Classification state;
+  DistanceResult distance;
+  int generation = 0;     ///< the global map whose queries answered (0: none built yet)
+  std::string note;       ///< what is missing ("" when nothing): queries being built, no keyframes
+  double query_us = 0;    ///< classify + distance of the point
+  /// "free p=0.001 · 0.212 m to surface (kf 17) · x y z" (and the note).
+  std::string text() const;
 };
 
 /// What only the UI edits (besides the persisted settings).
@@ -76,6 +91,13 @@ struct UiState {
   std::string confirm_view_replace;
   bool load_view_thresholds = false;  ///< Load view: also its thresholds (as --settings does)
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
+  // --- point queries (docs/workbench.md "Queries") ---
+  bool probe = false;                ///< Q: what the map says under the cursor
+  float probe_offset_m = 0.05f;      ///< the probe stands this far in front of the surface under the cursor
+  std::optional<ProbeResult> probe_result;  ///< the last probe (cleared when the probe is turned off)
+  bool query_slice = false;          ///< the query slice is drawn
+  render::QuerySliceSpec query_slice_spec;
+  // --- end point queries ---
 };
 
 /// The sigma the container window draws its ellipsoids at (scene_view.cpp's ContainerStyle), so
@@ -86,7 +108,8 @@ inline constexpr float kContainerSigma = 2.f;
 enum class KeyAction {
   kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
   kEscape, kUndo, kBeforeOptimisation, kSaveView, kFrameTrajectories, kPivotHere,
-  kSliceUp, kSliceDown  // height slice: PgUp / PgDn
+  kSliceUp, kSliceDown,  // height slice: PgUp / PgDn
+  kProbe                 // point queries: Q
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.
@@ -366,6 +389,28 @@ class Workbench {
   void moveSlice(int direction);
   // --- end height slice ---
 
+  // --- point queries (workbench_queries.cpp; docs/workbench.md "Queries") ---
+  /// The newest point queries of the open session (null while none are built: they are built
+  /// while the probe or the query slice is on). sync() asks the worker for them.
+  std::shared_ptr<const QuerySnapshot> query() const;
+  /// The probe's point for pixel (x, y) of a width x height viewport: on the query slice's plane
+  /// while it is shown, else `surface` (the drawn surface under the pixel) moved toward the eye
+  /// by ui().probe_offset_m; nullopt when neither exists.
+  std::optional<glm::vec3> probePoint(float x_px, float y_px, int width, int height,
+                                      const std::optional<glm::vec3>& surface) const;
+  /// Classifies `p` and its distance to the nearest surface with query() (a note says why when
+  /// none is built).
+  ProbeResult probe(const glm::vec3& p, bool on_slice = false) const;
+  /// The probe under pixel (x, y) into ui().probe_result (reset when there is no point there);
+  /// returns whether the text shown changed.
+  bool probeAt(float x_px, float y_px, int width, int height, const std::optional<glm::vec3>& surface);
+  /// The query slice drawn now (null: none yet, or off). sync() starts its computation off the UI
+  /// thread when the map, the spec or the up axis changed; the window is woken when it is done.
+  std::shared_ptr<const render::QuerySliceImage> querySlice() const { return ui_.query_slice ? slice_image_ : nullptr; }
+  /// Blocks until the slice being computed (if any) is taken (tests and scripted runs).
+  void waitQuerySlice();
+  // --- end point queries ---
+
   /// The 3-D view in a viewport of width x height (framebuffer pixels).
   ViewportView view(int width, int height) const;
   /// Click in the 3-D view at (x, y) of a width x height viewport: sets ui().picked and selects
@@ -409,6 +454,18 @@ class Workbench {
   std::optional<SettingsAutosave> autosave_;       // enableSettingsAutosave's
   std::string autosave_file_;
   Settings autosave_start_;
+
+  // Point queries: the slice shown, the one being computed and what it is computed for.
+  struct SliceKey {
+    std::shared_ptr<const QueryMap> map;  // held: a new map at the same address is not the same map
+    render::QuerySliceSpec spec;
+    render::HeightFrame height;
+    bool operator==(const SliceKey&) const = default;
+  };
+  void syncQueries();
+  std::shared_ptr<const render::QuerySliceImage> slice_image_;
+  std::future<std::shared_ptr<const render::QuerySliceImage>> slice_job_;
+  SliceKey slice_key_, slice_job_key_;
 
   int session_serial_ = 0;
   std::unique_ptr<MappingWorker> worker_;

@@ -74,6 +74,7 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_S: return KeyAction::kSaveView;
     case GLFW_KEY_T: return KeyAction::kFrameTrajectories;
     case GLFW_KEY_P: return KeyAction::kPivotHere;
+    case GLFW_KEY_Q: return KeyAction::kProbe;
     case GLFW_KEY_PAGE_UP: return KeyAction::kSliceUp;
     case GLFW_KEY_PAGE_DOWN: return KeyAction::kSliceDown;
     case GLFW_KEY_H:
@@ -191,6 +192,10 @@ class WorkbenchWindow {
   void startScript() {
     if (script_.options.play_to_end) bench_.play();
     if (script_.options.keyframe >= 0) bench_.preselectKeyframe(script_.options.keyframe);
+    if (script_.options.query_slice) {  // --query-slice: shown from the start (Queries section)
+      bench_.ui().query_slice = true;
+      bench_.ui().query_slice_spec = *script_.options.query_slice;
+    }
   }
 
   // What the newest snapshots are, to notice news without drawing.
@@ -288,7 +293,8 @@ class WorkbenchWindow {
       script_.labels_cut_before_wait = std::max(script_.labels_cut_before_wait, win_.check.labels_cut);
     ImGui::Render();
     drawView();
-    answerProbes(bench_, gl_, win_);  // the drawn scene's depth under the cursor
+    // The drawn scene's depth under the cursor; a probe whose text changed shows in the next frame.
+    if (answerProbes(bench_, gl_, win_)) settle_frames_ = std::max(settle_frames_, 1);
     if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
     if (!win_.screenshot_request.empty() && win_.screenshot_request_view) {  // the 3-D view alone
       saveViewScreenshot(bench_, gl_, mirror_, win_, win_.screenshot_request);

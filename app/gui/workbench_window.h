@@ -39,6 +39,13 @@ struct ScriptOptions {
   /// Measuring: view pixels x1, y1, x2, y2 (the 3-D viewport's framebuffer pixels, top-left
   /// origin) probed once the screenshot's frame is drawn (stats: measure {a, b, distance_m}).
   std::vector<float> measure;
+  // Point queries (docs/workbench.md "Queries"):
+  /// The probe at view pixel x, y (as the mouse there with Q on) once the screenshot's frame is
+  /// drawn (stats: probe {class, p, distance_m, point}); empty: none.
+  std::vector<float> probe;
+  /// The query slice shown from the start (--query-slice, --query-slice-color); the screenshot
+  /// waits for it (stats: query_slice).
+  std::optional<render::QuerySliceSpec> query_slice;
 };
 
 /// Work to do before the sequence can be opened (rendering the built-in scene on first start):
