@@ -176,10 +176,10 @@ void inChunks(const char* label, std::size_t n, const Ask& ask) {
   }
 }
 
-double rounded3(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
+double rounded6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
 
 // JSON has no infinity: null stands for "no surface".
-nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(rounded3(v)) : nlohmann::json(nullptr); }
+nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(rounded6(v)) : nlohmann::json(nullptr); }
 
 // Asks the map, writes the answers, and returns the summary's figures.
 nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& map, const QueryInput& input) {
@@ -221,7 +221,7 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
   const double ms = msSince(start);
   writeQueryAnswers(args.out, op, input, answers);
   summary["records"] = n;
-  summary["query_ms"] = rounded3(ms);
+  summary["query_ms"] = rounded6(ms);
   summary["records_per_s"] = ms > 0 ? std::round(1e3 * static_cast<double>(n) / ms) : 0.0;
   switch (op) {
     case QueryOp::kClassify: {
@@ -268,7 +268,7 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
         if (h.hit) t.push_back(h.t_m);
       summary["hits"] = t.size();
       summary["misses"] = n - t.size();
-      summary["median_t_m"] = t.empty() ? nlohmann::json(nullptr) : nlohmann::json(rounded3(median(t)));
+      summary["median_t_m"] = t.empty() ? nlohmann::json(nullptr) : nlohmann::json(rounded6(median(t)));
       break;
     }
     default:
@@ -294,13 +294,13 @@ nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map) {
   return {{"width", grid.width},
           {"height", grid.height},
           {"resolution_m", grid.resolution_m},
-          {"origin_m", {rounded3(grid.origin_m.x()), rounded3(grid.origin_m.y())}},
+          {"origin_m", {rounded6(grid.origin_m.x()), rounded6(grid.origin_m.y())}},
           {"up", upAxisName(grid.up)},
           {"occupied", grid.occupied},
           {"free", grid.free},
           {"unknown", grid.unknown},
           {"samples", grid.samples},
-          {"query_ms", rounded3(ms)},
+          {"query_ms", rounded6(ms)},
           {"records_per_s", ms > 0 ? std::round(1e3 * static_cast<double>(grid.samples) / ms) : 0.0}};
 }
 
@@ -313,7 +313,7 @@ nlohmann::json runOctomap(const QueryArgs& args, const QueryMap& map) {
   bar.reset();
   const double ms = 1e3 * r.seconds;
   return {{"resolution_m", args.resolution_m}, {"voxels", r.voxels}, {"occupied_voxels", r.occupied_voxels},
-          {"free_voxels", r.free_voxels},      {"leaves", r.leaves}, {"query_ms", rounded3(ms)},
+          {"free_voxels", r.free_voxels},      {"leaves", r.leaves}, {"query_ms", rounded6(ms)},
           {"records_per_s", ms > 0 ? std::round(1e3 * static_cast<double>(r.voxels) / ms) : 0.0}};
 }
 
@@ -375,8 +375,8 @@ void runQuery(QueryArgs args, const CLI::App& verb) {
   }
   summary["keyframes"] = loaded.keyframes;
   summary["ellipsoids"] = loaded.ellipsoids;
-  summary["load_ms"] = rounded3(loaded.load_ms);
-  summary["build_ms"] = rounded3(loaded.build_ms);
+  summary["load_ms"] = rounded6(loaded.load_ms);
+  summary["build_ms"] = rounded6(loaded.build_ms);
   summary["threads"] = args.params.threads;
   if (loaded.poses_matched >= 0) summary["keyframe_poses_matched"] = loaded.poses_matched;
   if (args.json) {

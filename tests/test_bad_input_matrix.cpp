@@ -668,8 +668,9 @@ const std::vector<BadCase>& badCases() {
       {"session", "query_ray_zero_direction", E::kCliError, "pts.txt:1: the direction dx dy dz is zero",
        then(write("pts.txt", "0 0 1 0 0 0\n"), "query {dir}/s.vdmap --op ray --points {dir}/pts.txt --out {dir}/out.txt")},
       {"session", "query_ply_vertex_inf", E::kCliError, "pts.ply: vertex 1: z is not finite (inf)",
-       then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 2\nproperty float x\nproperty float y\n"
-                             "property float z\nend_header\n0 0 1\n0 0 inf\n"),
+       then(write("pts.ply", std::string("ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+                                         "property float y\nproperty float z\nend_header\n") +
+                                 std::string("\0\0\0\0\0\0\0\0\0\0\x80\x3f\0\0\0\0\0\0\0\0\0\0\x80\x7f", 24)),
             "query {dir}/s.vdmap --op classify --points {dir}/pts.ply --out {dir}/out.ply")},
       {"session", "query_ply_without_radius", E::kCliError, "pts.ply: the vertex element has no property 'radius'",
        then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
