@@ -4,6 +4,7 @@
 // the edge cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <random>
@@ -15,6 +16,7 @@
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/query/keyframe_views.h"
 #include "mapping/query/query_map.h"
 #include "render/sequence_synth.h"
 #include "tests/box_room_keyframes.h"
@@ -134,12 +136,22 @@ void checkAgainstOracle(const KeyframeGraph& graph, const GlobalMap& global, con
       EXPECT_GT(n.unknown, static_cast<int>(points.size() / 50)) << what;
       expectMatchesOracle(fast, expected, points, what + " rule " + std::to_string(static_cast<int>(rule)));
       if (rule != ConflictRule::kOccupied) continue;
+      // The visibility index lists every keyframe that has a verdict (a superset), and the
+      // single-keyframe answers are the oracle's.
+      const KeyframeViews views = KeyframeViews::build(graph, global, params, {});
+      int missing = 0;
       for (int id = 0; id < static_cast<int>(graph.size()); ++id) {
         std::vector<Classification> one(points.size());
-        for (std::size_t i = 0; i < points.size(); ++i)
+        for (std::size_t i = 0; i < points.size(); ++i) {
           one[i] = test::QueryOracle::fromVerdict(oracle.verdict(id, points[i]), id);
+          if (one[i].state == Occupancy::kUnknown) continue;
+          const auto c = views.candidates(points[i]);
+          if (std::find(c.begin(), c.end(), id) == c.end() && ++missing <= 5)
+            ADD_FAILURE() << what << ": keyframe " << id << " sees " << points[i].transpose() << " but is no candidate";
+        }
         expectMatchesOracle(classifyInKeyframe(map, id, points), one, points, what + " keyframe " + std::to_string(id));
       }
+      EXPECT_EQ(missing, 0) << what;
     }
   }
 }
@@ -180,8 +192,8 @@ TEST(QueryClassify, AnalyticWallFreeInFrontOccupiedOnItUnknownBehindAndOutside) 
   const std::vector<Eigen::Vector3d> front{{0, 0, 1.5}, {0.3, 0.2, 1.5}, {-0.4, -0.3, 1.0}, {0.1, 0.1, 0.3}};
   const std::vector<Eigen::Vector3d> wall{{0, 0, 2}, {0.31, 0.17, 2}, {-0.52, 0.4, 2}};
   const std::vector<Eigen::Vector3d> behind{{0, 0, 2.02}, {0.31, 0.17, 2.02}, {-0.52, 0.4, 2.05}};
-  // Behind the camera, beside the frustum, far outside the room.
-  const std::vector<Eigen::Vector3d> outside{{0, 0, -1.0}, {1.9, 0, 0.1}, {0, 0, 5}, {10, 10, 10}};
+  // Behind the camera, at its centre (z = 0), beside the frustum, far outside the room.
+  const std::vector<Eigen::Vector3d> outside{{0, 0, -1.0}, {0, 0, 0}, {1.9, 0, 0.1}, {0, 0, 5}, {10, 10, 10}};
   for (const auto& c : classify(map, front)) {
     EXPECT_EQ(c.state, Occupancy::kFree) << describe(c);
     EXPECT_EQ(c.keyframe, 0);
@@ -354,6 +366,25 @@ TEST(QueryClassify, AnEmptyMapIsUnknownEverywhere) {
     }
     EXPECT_THROW(classifyInKeyframe(map, 0, points), std::invalid_argument);
   }
+}
+
+// A keyframe whose cells the filter all rejected sees nothing: no verdict anywhere, no seen box.
+TEST(QueryClassify, AKeyframeWithoutKeptCellsSeesNothing) {
+  KeyframeGraph graph;
+  const Transform T = test::lookAt({0, 0, 0}, {0, 0, 2});
+  test::addBoxRoomKeyframe(&graph, smallCamera(), T, T);
+  GlobalMapParams gp;
+  gp.filter.min_points = 1000000;
+  const QueryMap map = QueryMap::build(graph, buildGlobalMap(graph, gp), {});
+  EXPECT_EQ(map.keyframes(), 1u);
+  EXPECT_EQ(map.ellipsoids(), 0u);
+  EXPECT_FALSE(map.empty());
+  Eigen::Vector3d lo, hi;
+  map.seenBounds(&lo, &hi);
+  EXPECT_GT(lo.x(), hi.x());
+  const std::vector<Eigen::Vector3d> points{{0, 0, 1.5}, {0, 0, 2}};
+  for (const auto& c : classify(map, points)) EXPECT_EQ(c.state, Occupancy::kUnknown);
+  for (const auto& c : classifyInKeyframe(map, 0, points)) EXPECT_EQ(c.state, Occupancy::kUnknown);
 }
 
 TEST(QueryClassify, BadInputThrows) {
