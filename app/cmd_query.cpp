@@ -373,6 +373,11 @@ void runQuery(QueryArgs args, const CLI::App& verb) {
   } else {
     summary.update(runOctomap(args, loaded.map));
   }
+  Eigen::Vector3d lo, hi;
+  loaded.map.seenBounds(&lo, &hi);
+  if ((lo.array() <= hi.array()).all())  // where the keyframes see: where grids are laid out
+    summary["seen_bounds_m"] = {{rounded6(lo.x()), rounded6(lo.y()), rounded6(lo.z())},
+                                {rounded6(hi.x()), rounded6(hi.y()), rounded6(hi.z())}};
   summary["keyframes"] = loaded.keyframes;
   summary["ellipsoids"] = loaded.ellipsoids;
   summary["load_ms"] = rounded6(loaded.load_ms);

@@ -344,16 +344,25 @@ TEST(QueryCli, NanOnLine17IsOneErrorNamingTheLine) {
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(r.err, "vdmap query: error: " + (tmp / "pts.txt").string() + ":17: y is not finite ('nan')\n");
   EXPECT_FALSE(fs::exists(tmp / "out.txt"));
-  // A binary PLY (ascii PLY has no spelling of infinity the reader takes).
+  // A PLY: the reader refuses a non-finite value itself (one line naming the file); a record
+  // that is wrong for the op names its vertex (from 0).
   std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 20\nproperty float x\nproperty float y\n"
-                    "property float z\nend_header\n";
+                    "property float z\nproperty float radius\nend_header\n";
   for (int v = 0; v < 20; ++v)
-    for (const float c : {v == 16 ? INFINITY : 0.5f, 0.25f, 1.0f}) ply.append(reinterpret_cast<const char*>(&c), sizeof c);
+    for (const float c : {0.5f, 0.25f, 1.0f, v == 16 ? 0.0f : 0.1f}) ply.append(reinterpret_cast<const char*>(&c), sizeof c);
   writeText(tmp / "pts.ply", ply);
-  const RunResult p = runVdmap("query " + q(f.session) + " --op distance --points " + q(tmp / "pts.ply") + " --out " +
+  const RunResult p = runVdmap("query " + q(f.session) + " --op collide --points " + q(tmp / "pts.ply") + " --out " +
                                q(tmp / "out.ply"));
   EXPECT_EQ(p.exit_code, 1);
-  EXPECT_EQ(p.err, "vdmap query: error: " + (tmp / "pts.ply").string() + ": vertex 16: x is not finite (inf)\n");
+  EXPECT_EQ(p.err, "vdmap query: error: " + (tmp / "pts.ply").string() + ": vertex 16: the radius must be > 0, got 0\n");
+  const float inf = INFINITY;
+  ply.replace(ply.size() - 4, 4, reinterpret_cast<const char*>(&inf), 4);
+  writeText(tmp / "pts.ply", ply);
+  const RunResult n = runVdmap("query " + q(f.session) + " --op collide --points " + q(tmp / "pts.ply") + " --out " +
+                               q(tmp / "out.ply"));
+  EXPECT_EQ(n.exit_code, 1);
+  EXPECT_EQ(n.err, "vdmap query: error: " + (tmp / "pts.ply").string() +
+                       ": element data has a value that is not finite (NaN or infinity)\n");
   EXPECT_FALSE(fs::exists(tmp / "out.ply"));
 }
 
