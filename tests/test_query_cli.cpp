@@ -467,6 +467,23 @@ TEST(QueryCli, GridParsesBackAndFollowsTheColumnRule) {
   EXPECT_EQ(flipped.size(), pgm.size());
 }
 
+// vdmap map --grid writes the grid vdmap query --op grid gives of its session, into DIR.
+TEST(QueryCli, MapGridIsTheQuerysGrid) {
+  const Fixture& f = fixture();
+  TempDir tmp;
+  const RunResult m = runVdmap("map " + q(f.dir / "bi") + " --frames 0:3 --cell-size 16 --grid 0.5 --grid-band 0.3:0.9 --out " +
+                               q(tmp / "m"));
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  const RunResult r = runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band 0.3:0.9 --out " +
+                               q(tmp / "q.yaml"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(readFile(tmp / "m" / "grid.pgm"), readFile(tmp / "q.pgm"));
+  EXPECT_NE(readFile(tmp / "m" / "grid.yaml").find("image: grid.pgm\n"), std::string::npos);
+  const RunResult no_band = runVdmap("map " + q(f.dir / "bi") + " --grid 0.5 --out " + q(tmp / "n"));
+  EXPECT_EQ(no_band.exit_code, 107) << no_band.err;
+  EXPECT_FALSE(fs::exists(tmp / "n"));
+}
+
 // The .bt loads with liboctomap; at voxel centres farther than the half-diagonal from any surface
 // its search says what classify says (free: a free node, unknown: no node); nearer: occupied.
 TEST(QueryCli, OctomapLoadsAndAgreesWithClassify) {
