@@ -245,9 +245,7 @@ void runMap(MapArgs args) {
   if (args.grid_resolution_m > 0) {
     OccupancyGridSpec spec;
     spec.resolution_m = args.grid_resolution_m;
-    const auto colon = args.grid_band.find(':');
-    spec.band_lo_m = std::stod(args.grid_band.substr(0, colon));
-    spec.band_hi_m = std::stod(args.grid_band.substr(colon + 1));
+    std::tie(spec.band_lo_m, spec.band_hi_m) = parseGridBand(args.grid_band);
     spec.up = parseUpAxis(args.grid_up);
     QueryParams query;
     query.threads = args.params.global.threads;
@@ -304,16 +302,7 @@ void addMapCommand(CLI::App& app) {
                                 "of the --grid-band height band (vdmap query --op grid)")
                    ->check(positiveFiniteCheck());
   auto* band = verb->add_option("--grid-band", args->grid_band, "the grid's height band LO:HI (m along --grid-up)")
-                   ->check(parsedBy(
-                       [](const std::string& text) {
-                         char *a = nullptr, *b = nullptr;
-                         const auto colon = text.find(':');
-                         const std::string lo = text.substr(0, colon), hi = colon == std::string::npos ? "" : text.substr(colon + 1);
-                         const double l = std::strtod(lo.c_str(), &a), h = std::strtod(hi.c_str(), &b);
-                         if (lo.empty() || hi.empty() || *a || *b || !std::isfinite(l) || !std::isfinite(h) || !(l < h))
-                           throw std::invalid_argument("'" + text + "': expected LO:HI with LO < HI (m)");
-                       },
-                       "LO:HI"));
+                   ->check(parsedBy(parseGridBand, "LO:HI"));
   verb->add_option("--grid-up", args->grid_up, "the axis the grid's band runs along")
       ->check(CLI::IsMember({"+z", "-z", "+y", "-y", "+x", "-x"}))
       ->capture_default_str()

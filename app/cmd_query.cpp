@@ -55,22 +55,6 @@ struct QueryArgs {
 constexpr std::size_t kProgressAbove = 100000;
 constexpr std::size_t kChunk = 65536;
 
-// The band LO:HI (std::invalid_argument otherwise).
-std::pair<double, double> parseBand(const std::string& text) {
-  const auto colon = text.find(':');
-  const auto value = [&text](const std::string& part) {
-    char* end = nullptr;
-    const double v = std::strtod(part.c_str(), &end);
-    if (part.empty() || *end != '\0' || !std::isfinite(v))
-      throw std::invalid_argument("'" + text + "': expected LO:HI, two finite heights in metres with LO < HI");
-    return v;
-  };
-  if (colon == std::string::npos) value("");
-  const double lo = value(text.substr(0, colon)), hi = value(text.substr(colon + 1));
-  if (!(lo < hi)) throw std::invalid_argument("'" + text + "': expected LO:HI with LO < HI");
-  return {lo, hi};
-}
-
 ConflictRule conflictRule(const std::string& name) {
   if (name == "recent") return ConflictRule::kRecent;
   if (name == "precise") return ConflictRule::kPrecise;
@@ -280,7 +264,7 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
 nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map) {
   OccupancyGridSpec spec;
   spec.resolution_m = args.resolution_m;
-  std::tie(spec.band_lo_m, spec.band_hi_m) = parseBand(args.band);
+  std::tie(spec.band_lo_m, spec.band_hi_m) = parseGridBand(args.band);
   spec.up = parseUpAxis(args.up);
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<ProgressBar> bar;
@@ -441,7 +425,7 @@ void addQueryCommand(CLI::App& app) {
       ->check(positiveFiniteCheck())
       ->capture_default_str();
   verb->add_option("--band", args->band, "grid: the height band LO:HI (m along --up) a column is read over")
-      ->check(parsedBy(parseBand, "LO:HI"));
+      ->check(parsedBy(parseGridBand, "LO:HI"));
   verb->add_option("--up", args->up, "grid: the axis the band runs along")
       ->check(CLI::IsMember({"+z", "-z", "+y", "-y", "+x", "-x"}))
       ->capture_default_str();

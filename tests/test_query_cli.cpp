@@ -28,7 +28,12 @@ namespace {
 
 using app::QueryOp;
 
-std::string q(const fs::path& p) { return "'" + p.string() + "'"; }
+std::string q(const fs::path& p) {
+  std::string quoted(1, '\'');
+  quoted += p.string();
+  quoted += '\'';
+  return quoted;
+}
 
 // The tiny session (3 keyframes of the built-in walk, 16 px cells), made once.
 struct Fixture {
@@ -111,7 +116,10 @@ void writePly(const fs::path& file, const std::vector<std::string>& names, const
   for (const std::string& n : names) text += "property double " + n + "\n";
   text += "end_header\n";
   for (const auto& row : rows) {
-    for (std::size_t i = 0; i < row.size(); ++i) text += (i ? " " : "") + number(row[i]);
+    for (std::size_t i = 0; i < row.size(); ++i) {
+      if (i) text += ' ';
+      text += number(row[i]);
+    }
     text += "\n";
   }
   writeText(file, text);

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <stdexcept>
 
 #include "mapping/core/atomic_file.h"
@@ -25,6 +26,21 @@ UpAxis parseUpAxis(const std::string& text) {
   for (const UpAxis up : {UpAxis::kPlusZ, UpAxis::kMinusZ, UpAxis::kPlusY, UpAxis::kMinusY, UpAxis::kPlusX, UpAxis::kMinusX})
     if (text == upAxisName(up)) return up;
   throw std::invalid_argument("expected one of +z, -z, +y, -y, +x, -x, got '" + text + "'");
+}
+
+std::pair<double, double> parseGridBand(const std::string& text) {
+  const auto colon = text.find(':');
+  const auto value = [&text](const std::string& part) {
+    char* end = nullptr;
+    const double v = std::strtod(part.c_str(), &end);
+    if (part.empty() || *end != '\0' || !std::isfinite(v))
+      throw std::invalid_argument("'" + text + "': expected LO:HI, two finite heights in metres with LO < HI");
+    return v;
+  };
+  if (colon == std::string::npos) value("");
+  const double lo = value(text.substr(0, colon)), hi = value(text.substr(colon + 1));
+  if (!(lo < hi)) throw std::invalid_argument("'" + text + "': expected LO:HI with LO < HI");
+  return {lo, hi};
 }
 
 void gridAxes(UpAxis up, Eigen::Vector3d* u, Eigen::Vector3d* v, Eigen::Vector3d* w) {

@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <filesystem>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include <Eigen/Core>
@@ -24,6 +25,9 @@ enum class UpAxis : std::uint8_t { kPlusZ, kMinusZ, kPlusY, kMinusY, kPlusX, kMi
 /// "+z", "-z", ... ; parseUpAxis throws std::invalid_argument for any other text.
 const char* upAxisName(UpAxis up);
 UpAxis parseUpAxis(const std::string& text);
+
+/// The band "LO:HI" (two finite numbers, LO < HI); throws std::invalid_argument saying what was expected.
+std::pair<double, double> parseGridBand(const std::string& text);
 
 /// The unit vectors (u, v, up) of a grid whose band runs along `up` (world frame).
 void gridAxes(UpAxis up, Eigen::Vector3d* u, Eigen::Vector3d* v, Eigen::Vector3d* w);
