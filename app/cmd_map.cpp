@@ -23,6 +23,7 @@
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
+#include "mapping/export/occupancy_grid.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
 #include "mapping/pipeline/session_file.h"
@@ -38,6 +39,10 @@ struct MapArgs {
   bool json = false;
   ParameterValues params;  // every parameter of the table (mapping/pipeline/parameters.h)
   double octomap_resolution_m = 0.0;  // 0: no OctoMap (a given value is checked by octomapResolutionCheck)
+  // point queries (docs/method.md 13): --grid RES --grid-band LO:HI [--grid-up AXIS], a ROS map_server grid
+  double grid_resolution_m = 0.0;  // 0: no grid
+  std::string grid_band;
+  std::string grid_up = "+z";
 };
 
 // OctoMap carves free space along each ray from the camera to a surface it measured. vdmap maps
@@ -234,6 +239,20 @@ void runMap(MapArgs args) {
   releaseFreedMemory();  // the frames' freed buffers, before the build's peak
   const GlobalMap global = withStageBar("global map", [&] { return buildGlobalMap(graph, args.params.global); });
 
+  // --grid: computed before anything is written (a grid the map cannot give fails the run with
+  // nothing written), written into DIR once the export is in place.
+  std::optional<OccupancyGrid> grid;
+  if (args.grid_resolution_m > 0) {
+    OccupancyGridSpec spec;
+    spec.resolution_m = args.grid_resolution_m;
+    std::tie(spec.band_lo_m, spec.band_hi_m) = parseGridBand(args.grid_band);
+    spec.up = parseUpAxis(args.grid_up);
+    QueryParams query;
+    query.threads = args.params.global.threads;
+    grid = withStageBar("occupancy grid", [&] {
+      return computeOccupancyGrid(graph.size() ? QueryMap::build(graph, global, query) : QueryMap(), spec);
+    });
+  }
   if (!args.json) printKeyframeTable(graph, global);
   MapExportOptions options;
   options.octomap_resolution_m = args.octomap_resolution_m;
@@ -248,6 +267,7 @@ void runMap(MapArgs args) {
       withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
     };
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
+  if (grid) writeOccupancyGrid(std::filesystem::path(args.out) / "grid.yaml", *grid);
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;
@@ -276,6 +296,19 @@ void addMapCommand(CLI::App& app) {
                    "also write global.bt, an OctoMap of this resolution (m, > 0 and at most 1) sampled from the "
                    "global map; the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)")
       ->check(octomapResolutionCheck());
+  // point queries (docs/method.md 13): the occupancy grid planners read, as `vdmap query --op grid`
+  auto* grid = verb->add_option("--grid", args->grid_resolution_m,
+                                "also write grid.pgm + grid.yaml, a ROS map_server occupancy grid of this cell size (m) "
+                                "of the --grid-band height band (vdmap query --op grid)")
+                   ->check(positiveFiniteCheck());
+  auto* band = verb->add_option("--grid-band", args->grid_band, "the grid's height band LO:HI (m along --grid-up)")
+                   ->check(parsedBy(parseGridBand, "LO:HI"));
+  verb->add_option("--grid-up", args->grid_up, "the axis the grid's band runs along")
+      ->check(CLI::IsMember({"+z", "-z", "+y", "-y", "+x", "-x"}))
+      ->capture_default_str()
+      ->needs(grid);
+  grid->needs(band);
+  band->needs(grid);
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   addParameterOptions(*verb, args->params);
   verb->add_option("--threads", args->params.global.threads,

@@ -23,6 +23,8 @@ void addMapCommand(CLI::App& app);
 void addBenchCommand(CLI::App& app);
 void addEvalCommand(CLI::App& app);
 void addGuiCommand(CLI::App& app);
+/// `vdmap query MAP --op ...`: point queries and the planners' exports (docs/method.md 13).
+void addQueryCommand(CLI::App& app);
 /// `vdmap params [--markdown]`: the parameter table for users, or docs/parameters.md.
 void addParamsCommand(CLI::App& app);
 /// The workbench options of `vdmap` without a verb; the returned function opens the workbench

@@ -658,6 +658,54 @@ const std::vector<BadCase>& badCases() {
             "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
       {"session", "render_view_file_unknown_key", E::kCliError, "v.json: unknown key 'zoom'",
        then(viewFile([](nlohmann::json& j) { j["zoom"] = 2; }), "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      // Point queries (`vdmap query`, docs/method.md 13): a bad record is one line naming the file and
+      // line (a PLY: the vertex), found before the map is loaded; option misuse is CLI11's.
+      {"session", "query_points_nan", E::kCliError, "pts.txt:3: y is not finite ('nan')",
+       then(write("pts.txt", "# x y z\n0 0 1\n0 nan 1\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_points_two_columns", E::kCliError, "pts.txt:2: expected x y z (--op distance), got 2 fields",
+       then(write("pts.txt", "0 0 1\n0 1\n"), "query {dir}/s.vdmap --op distance --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_points_none", E::kCliError, "pts.txt: has no records (expected lines of x y z)",
+       then(write("pts.txt", "# nothing\n\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_points_missing", E::kCliError, "none.txt: no such file (--points)",
+       args("query {dir}/s.vdmap --op classify --points {dir}/none.txt --out {dir}/out.txt")},
+      {"session", "query_sphere_radius_zero", E::kCliError, "pts.txt:1: the radius must be > 0, got 0",
+       then(write("pts.txt", "0 0 1 0 2\n"), "query {dir}/s.vdmap --op collide --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_ray_zero_direction", E::kCliError, "pts.txt:1: the direction dx dy dz is zero",
+       then(write("pts.txt", "0 0 1 0 0 0\n"), "query {dir}/s.vdmap --op ray --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_ply_vertex_inf", E::kCliError, "pts.ply: element data has a value that is not finite",
+       then(write("pts.ply", std::string("ply\nformat binary_little_endian 1.0\nelement vertex 2\nproperty float x\n"
+                                         "property float y\nproperty float z\nend_header\n") +
+                                 std::string("\0\0\0\0\0\0\0\0\0\0\x80\x3f\0\0\0\0\0\0\0\0\0\0\x80\x7f", 24)),
+            "query {dir}/s.vdmap --op classify --points {dir}/pts.ply --out {dir}/out.ply")},
+      {"session", "query_ply_without_radius", E::kCliError, "pts.ply: the vertex element has no property 'radius'",
+       then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n0 0 1\n"),
+            "query {dir}/s.vdmap --op collide --points {dir}/pts.ply --out {dir}/out.ply")},
+      {"session", "query_map_folder", E::kCliError, "not a session: vdmap query reads a session file",
+       then(write("pts.txt", "0 0 1\n"), "query {dir} --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_keyframe_outside_the_graph", E::kCliError, "--keyframe 40: the session has",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --keyframe 40 --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_keyframe_poses_match_nothing", E::kCliError, "poses.txt",
+       then([](const fs::path& d) {
+              writeText(d / "pts.txt", "0 0 1\n");
+              writeText(d / "poses.txt", "1000.0 0 0 0 0 0 0 1\n");
+              return std::string();
+            },
+            "query {dir}/s.vdmap --op classify --keyframe-poses {dir}/poses.txt --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_without_points", E::kCliUsage, "--op classify needs --points FILE",
+       args("query {dir}/s.vdmap --op classify --out {dir}/out.txt")},
+      {"session", "query_unknown_op", E::kCliUsage, "--op: nearest not in",
+       args("query {dir}/s.vdmap --op nearest --out {dir}/out.txt")},
+      {"session", "query_out_extension", E::kCliUsage, "--op classify writes .txt or .ply",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.csv")},
+      {"session", "query_grid_without_band", E::kCliUsage, "--op grid needs --band LO:HI",
+       args("query {dir}/s.vdmap --op grid --out {dir}/out.yaml")},
+      {"session", "query_grid_band_reversed", E::kCliUsage, "--band: '2:1': expected LO:HI with LO < HI",
+       args("query {dir}/s.vdmap --op grid --band 2:1 --out {dir}/out.yaml")},
+      {"session", "query_points_with_grid", E::kCliUsage, "--points: applies to --op classify, distance, collide and ray only",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op grid --band 0:1 --points {dir}/pts.txt --out {dir}/out.yaml")},
+      {"session", "query_octomap_resolution_zero", E::kCliUsage, "--resolution: must be a number > 0, got 0",
+       args("query {dir}/s.vdmap --op octomap --resolution 0 --out {dir}/out.bt")},
   };
   return all;
 }

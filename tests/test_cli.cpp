@@ -17,7 +17,7 @@ using test::runVdmap;
 TEST(Cli, HelpListsVerbs) {
   const auto r = runVdmap("--help");
   EXPECT_EQ(r.exit_code, 0);
-  for (const char* verb : {"info", "map", "render", "bench", "synth", "eval", "gui"})
+  for (const char* verb : {"info", "map", "render", "bench", "synth", "eval", "gui", "query"})
     EXPECT_NE(r.out.find(verb), std::string::npos) << verb;
   EXPECT_EQ(runVdmap("info --help").exit_code, 0);
 }

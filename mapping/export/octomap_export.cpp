@@ -4,6 +4,7 @@
 #include <cmath>
 #include <cstdio>
 #include <numeric>
+#include <span>
 #include <sstream>
 #include <stdexcept>
 
@@ -12,6 +13,7 @@
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
+#include "mapping/query/query_map.h"
 
 namespace vdmap {
 
@@ -39,10 +41,13 @@ double octomapExtent(const KeyframeGraph& graph, const std::vector<Ellipsoid>& e
   return extent;
 }
 
-void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids) {
+namespace {
+
+// Throws std::invalid_argument for a resolution that is not > 0, or too fine for a map reaching
+// `extent` m (max norm) from the origin.
+void checkOctomapResolutionForExtent(double resolution_m, double extent) {
   if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
     throw std::invalid_argument("octomap resolution must be > 0 m");
-  const double extent = octomapExtent(graph, ellipsoids);
   if (extent / resolution_m >= kOctomapMaxVoxels) {
     char text[256];
     std::snprintf(text, sizeof text,
@@ -51,6 +56,12 @@ void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, con
                   resolution_m, extent, kOctomapMaxVoxels, std::nextafter(extent / kOctomapMaxVoxels, INFINITY));
     throw std::invalid_argument(text);
   }
+}
+
+}  // namespace
+
+void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, const std::vector<Ellipsoid>& ellipsoids) {
+  checkOctomapResolutionForExtent(resolution_m, octomapExtent(graph, ellipsoids));
 }
 
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
@@ -97,6 +108,12 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
   report.means_occupied = ellipsoids.empty() ? 1.0 : static_cast<double>(inside) / ellipsoids.size();
   for (auto it = tree.begin_leafs(); it != tree.end_leafs(); ++it)
     if (tree.isNodeOccupied(*it)) ++report.occupied_leaves;
+  writeOctreeFile(file, tree);
+  report.seconds = secondsSince(start);
+  return report;
+}
+
+void writeOctreeFile(const std::filesystem::path& file, const octomap::OcTree& tree) {
   // The bytes of OcTree::writeBinaryConst, written here because liboctomap's own prints a bare
   // " done." line to stderr.
   std::ostringstream bytes;
@@ -105,6 +122,79 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
         << tree.getTreeType() << "\nsize " << tree.size() << "\nres " << tree.getResolution() << "\ndata\n";
   if (tree.getRoot()) tree.writeBinaryNode(bytes, tree.getRoot());
   writeFileAtomically(file, bytes.str());
+}
+
+QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, const QueryMap& map, double resolution_m,
+                                           const ExportProgress& progress) {
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) throw std::invalid_argument("octomap resolution must be > 0 m");
+  Eigen::Vector3d lo, hi;
+  map.seenBounds(&lo, &hi);
+  if (!(lo.array() <= hi.array()).all())
+    throw std::invalid_argument("the map sees nothing (no keyframe with a kept cell): there is no region to fill an OctoMap with");
+  checkOctomapResolutionForExtent(resolution_m, std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
+  const auto start = std::chrono::steady_clock::now();
+  octomap::OcTree tree(resolution_m);
+  octomap::OcTreeKey k_lo, k_hi;
+  for (int a = 0; a < 3; ++a) {
+    k_lo[a] = tree.coordToKey(lo[a]);
+    k_hi[a] = tree.coordToKey(hi[a]);
+  }
+  const std::size_t nx = k_hi[0] - k_lo[0] + 1u, ny = k_hi[1] - k_lo[1] + 1u, nz = k_hi[2] - k_lo[2] + 1u;
+  if (static_cast<double>(nx) * ny * nz > static_cast<double>(kMaxQueryOctomapVoxels)) {
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  "octomap resolution %g m over the seen %.3g x %.3g x %.3g m would ask about %.3g voxels (at most %zu): "
+                  "give a coarser resolution",
+                  resolution_m, hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z(), static_cast<double>(nx) * ny * nz,
+                  kMaxQueryOctomapVoxels);
+    throw std::invalid_argument(text);
+  }
+  const double half_diagonal = resolution_m * std::sqrt(3.0) / 2;
+  const float occupied_value = tree.getClampingThresMaxLog(), free_value = tree.getClampingThresMinLog();
+  QueryOctomapReport report;
+  std::vector<Eigen::Vector3d> centres(nx * ny), open;
+  std::vector<DistanceResult> distances(centres.size());
+  std::vector<Classification> classes;
+  std::vector<octomap::OcTreeKey> open_keys;
+  for (std::size_t z = 0; z < nz; ++z) {
+    // One layer of voxels at a time: their centres, then occupied, then free among the others.
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x) {
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x), static_cast<octomap::key_type>(k_lo[1] + y),
+                                     static_cast<octomap::key_type>(k_lo[2] + z));
+        const octomap::point3d c = tree.keyToCoord(key);
+        centres[y * nx + x] = {c.x(), c.y(), c.z()};
+      }
+    map.distance(centres, distances, 2 * half_diagonal);
+    report.voxels += centres.size();
+    open.clear();
+    open_keys.clear();
+    for (std::size_t y = 0; y < ny; ++y)
+      for (std::size_t x = 0; x < nx; ++x) {
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x), static_cast<octomap::key_type>(k_lo[1] + y),
+                                     static_cast<octomap::key_type>(k_lo[2] + z));
+        if (distances[y * nx + x].distance_m <= half_diagonal) {
+          tree.setNodeValue(key, occupied_value, true);
+          ++report.occupied_voxels;
+        } else {
+          open.push_back(centres[y * nx + x]);
+          open_keys.push_back(key);
+        }
+      }
+    classes.resize(open.size());
+    map.classify(open, classes);
+    for (std::size_t i = 0; i < open.size(); ++i)
+      if (classes[i].state == Occupancy::kFree) {
+        tree.setNodeValue(open_keys[i], free_value, true);
+        ++report.free_voxels;
+      }
+    if ((z + 1) % 16 == 0) tree.prune();  // keeps the tree small while it fills
+    if (progress) progress(z + 1, nz);
+  }
+  tree.updateInnerOccupancy();
+  tree.prune();
+  report.leaves = tree.getNumLeafNodes();
+  writeOctreeFile(file, tree);
   report.seconds = secondsSince(start);
   return report;
 }

@@ -8,7 +8,13 @@
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
+namespace octomap {
+class OcTree;
+}
+
 namespace vdmap {
+
+class QueryMap;
 
 /// Called with (done, total) steps of a long export, from the exporting thread.
 using ExportProgress = std::function<void(std::size_t done, std::size_t total)>;
@@ -48,5 +54,33 @@ void checkOctomapResolution(double resolution_m, const KeyframeGraph& graph, con
 OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const KeyframeGraph& graph,
                                    const std::vector<Ellipsoid>& ellipsoids, double resolution_m,
                                    const ExportProgress& progress = {});
+
+/// Writes `tree` as a binary .bt (the bytes of OcTree::writeBinaryConst, written here because
+/// liboctomap's own prints a bare " done." line to stderr) atomically. Throws std::runtime_error
+/// naming `file` when it cannot be written.
+void writeOctreeFile(const std::filesystem::path& file, const octomap::OcTree& tree);
+
+/// What writeOctomapBtFromQuery built.
+struct QueryOctomapReport {
+  std::size_t voxels = 0;           ///< voxel centres of the seen region asked about
+  std::size_t occupied_voxels = 0;  ///< before pruning
+  std::size_t free_voxels = 0;
+  std::size_t leaves = 0;           ///< leaves of the pruned tree
+  double seconds = 0;
+};
+
+/// Most voxels writeOctomapBtFromQuery asks about (a resolution far too fine is refused).
+inline constexpr std::size_t kMaxQueryOctomapVoxels = std::size_t{1} << 31;
+
+/// An OctoMap whose free space is the view-dependent free space (docs/method.md 13) instead of
+/// rays carved from sample points: every voxel of `resolution_m` whose centre lies in
+/// QueryMap::seenBounds is occupied when the centre is within the voxel's half-diagonal
+/// (res sqrt(3) / 2) of a surface (QueryMap::distance), else free when the centre is classified
+/// free, else left out (unknown). Occupied and free voxels hold the tree's clamping log-odds (what
+/// toMaxLikelihood gives); the tree is pruned and written as writeOctreeFile does. Throws
+/// std::invalid_argument for a resolution that is not > 0, one too fine for OctoMap's keys or for
+/// kMaxQueryOctomapVoxels, or an empty map (nothing seen). `progress`: (layers done, layers).
+QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, const QueryMap& map, double resolution_m,
+                                           const ExportProgress& progress = {});
 
 }  // namespace vdmap
