@@ -3,6 +3,7 @@
 // Gaussians in the keyframe frame, and an index of which keyframes can see a world point.
 // Internal to mapping/query (QueryMap is the interface). Owner: the classification code.
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <vector>
 
@@ -12,30 +13,41 @@
 
 namespace vdmap {
 
-/// One keyframe's verdict about a point.
+/// One keyframe's verdict about a point (docs/method.md 13.1).
 struct ViewVerdict {
   Occupancy state = Occupancy::kUnknown;  ///< kUnknown: the keyframe does not see it (or sees it behind its surface)
-  double z = 0;                           ///< (|q| - t*) / sigma_t: < -k free, |.| small on the surface
-  double sigma_t = 0;                     ///< the surface's sigma along the ray (m)
-  double m2 = 0;                          ///< squared gate distance to the cell's ellipsoid (occupied)
+  double z = 0;                           ///< (|q| - t*) / sigma_t of the point's own cell: < -k free
+  double sigma_t = 0;                     ///< the deciding cell's sigma along the ray (m)
+  double m2 = 0;                          ///< squared gate distance to the nearest of the 3x3 cells (occupied)
 };
 
+/// Immutable after build; const methods are thread-safe. A copy shares the built data.
 class KeyframeViews {
  public:
   KeyframeViews() = default;
+  /// Per keyframe of `graph` at its current pose, the cells `global.kept` keeps. `keyframe_rank`
+  /// (empty: ids) orders keyframes for ConflictRule::kRecent. Throws std::invalid_argument when
+  /// `global` was not built from `graph` or keyframe_rank has the wrong size.
   static KeyframeViews build(const KeyframeGraph& graph, const GlobalMap& global, const QueryParams& params,
                              std::span<const int> keyframe_rank);
   std::size_t size() const;
   std::size_t memoryBytes() const;
+  /// Box of every keyframe's frustum cut at its farthest gate (lo > hi when nothing is seen).
   void seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const;
-  /// Keyframe `id`'s verdict about world point q_W.
+  /// Keyframe `id`'s verdict about world point q_W (docs/method.md 13.1).
   ViewVerdict verdict(int id, const Eigen::Vector3d& q_W) const;
-  /// The combined verdict of every keyframe under `params.conflict`, for a point no global gate holds
-  /// (kOccupied) or for any point (kRecent, kPrecise); `keyframe` receives the deciding keyframe.
+  /// The combined verdict of the keyframes that may see q_W under `params.conflict`:
+  /// kOccupied: the first keyframe (ascending id) whose verdict is free, else unknown (only
+  /// called for points no global gate holds); kRecent: the verdict of the highest-ranked keyframe
+  /// that has one; kPrecise: the verdict with the smallest sigma_t. Ties: lower id. `keyframe`
+  /// receives the deciding keyframe (-1 when unknown).
   ViewVerdict combined(const Eigen::Vector3d& q_W, int* keyframe) const;
+  /// The keyframes that may see q_W, ascending (a superset of those with a verdict).
+  std::span<const std::int32_t> candidates(const Eigen::Vector3d& q_W) const;
+
+  struct Impl;
 
  private:
-  struct Impl;
   std::shared_ptr<const Impl> impl_;
 };
 

@@ -4,12 +4,14 @@
 // nearest-surface and first-hit searches. Internal to mapping/query (QueryMap is the interface).
 // Owner: the geometry code.
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <utility>
 #include <vector>
 
 #include <Eigen/Core>
 
+#include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/query_map.h"
 
 namespace vdmap {
@@ -23,6 +25,26 @@ class SurfaceIndex {
   /// The ellipsoid whose gate holds q with the smallest squared gate distance m2 (ties: lower index),
   /// or {-1, inf} when no gate holds q.
   std::pair<std::int32_t, double> gate(const Eigen::Vector3d& q_W) const;
+
+  struct Nearest {
+    std::int32_t ellipsoid = -1;
+    double distance = std::numeric_limits<double>::infinity();
+    Eigen::Vector3d closest = Eigen::Vector3d::Zero();
+  };
+  /// The nearest gate surface (distanceToGate): inside a gate, distance 0 and gate(q)'s ellipsoid;
+  /// else the smallest (distance, index) over all ellipsoids, when that distance is below
+  /// max_distance ({-1, inf} otherwise).
+  Nearest nearest(const Eigen::Vector3d& q_W, double max_distance = std::numeric_limits<double>::infinity()) const;
+
+  struct Hit {
+    std::int32_t ellipsoid = -1;
+    double t = std::numeric_limits<double>::infinity();
+  };
+  /// The smallest (gateRayEntry, index) over all ellipsoids of the ray o + t d (d unit), t <= max_t.
+  Hit firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const;
+
+  /// Ellipsoid i's gate (as built: the kernels' input).
+  const EllipsoidGate& gateOf(std::size_t i) const;
 
  private:
   struct Impl;

@@ -1,0 +1,104 @@
+#pragma once
+// Geometry of one ellipsoid's k-sigma gate (docs/method.md 13.4-13.6), shared by the fast query
+// paths and the plain references in the tests so that both give the same answers bit for bit:
+// the gate matrix, the squared gate distance, the exact Euclidean distance to the gate's surface,
+// a ray's first entry into the gate and the ray through a camera pixel's centre.
+#include <cmath>
+#include <limits>
+
+#include <Eigen/Core>
+
+#include "mapping/core/camera.h"
+#include "mapping/core/types.h"
+#include "mapping/local_map/ellipsoid_filter.h"
+
+namespace vdmap {
+
+/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1.
+struct EllipsoidGate {
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();
+  Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
+  /// Principal frame of Sigma + s0^2 I: columns are unit axes, longest first; semi_axes[i] =
+  /// k sqrt(lambda_i) along column i (descending).
+  Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d semi_axes = Eigen::Vector3d::Zero();
+  /// Half-extent of the gate's axis-aligned bounding box: k sqrt(Sigma_ii + s0^2).
+  Eigen::Vector3d half_extent = Eigen::Vector3d::Zero();
+  double k2 = 0;  ///< k^2
+};
+
+/// The gate of `e` at k = gate_sigma with covariance floor min_sigma_m (docs/method.md 13).
+EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m);
+
+/// (q - mean)^T A (q - mean): inside the gate when <= k^2.
+inline double gateDistance2(const EllipsoidGate& g, const Eigen::Vector3d& q) {
+  const Eigen::Vector3d r = q - g.mean;
+  const Eigen::Matrix3d& A = g.A;
+  return A(0, 0) * r.x() * r.x() + A(1, 1) * r.y() * r.y() + A(2, 2) * r.z() * r.z() +
+         2.0 * (A(0, 1) * r.x() * r.y() + A(0, 2) * r.x() * r.z() + A(1, 2) * r.y() * r.z());
+}
+
+/// Euclidean distance from y to the surface of the axis-aligned ellipsoid with semi-axes
+/// e0 >= e1 >= e2 > 0 centred at the origin (Eberly, "Distance from a point to an ellipse, an
+/// ellipsoid, or a hyperellipsoid": robust bisection on the root of the 1-D equation, to the last
+/// bit). `closest` (optional) receives the nearest surface point. Works inside and outside.
+double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y,
+                                  Eigen::Vector3d* closest = nullptr);
+
+/// Distance from q to the gate's surface: 0 inside the gate (gateDistance2 <= k^2, closest = q),
+/// else the exact Euclidean distance to {x : (x - mean)^T A (x - mean) = k^2}.
+double distanceToGate(const EllipsoidGate& g, const Eigen::Vector3d& q, Eigen::Vector3d* closest = nullptr);
+
+/// What a ray's gate entry needs of its origin o alone (so a view computes it once per ellipsoid).
+struct GateRayOrigin {
+  Eigen::Vector3d A_oc = Eigen::Vector3d::Zero();  ///< A (o - mean)
+  double gamma = 0;                                ///< (o - mean)^T A (o - mean) - k^2
+};
+
+inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d& o) {
+  GateRayOrigin r;
+  const Eigen::Vector3d oc = o - g.mean;
+  r.A_oc = g.A * oc;
+  r.gamma = oc.dot(r.A_oc) - g.k2;
+  return r;
+}
+
+/// The smallest t >= 0 at which o + t d (d unit) enters the gate, t = 0 when o is inside; +inf when
+/// the ray misses it or enters it beyond max_t. alpha = d^T A d, beta = d^T A (o - mean), the root
+/// gamma / (sqrt(beta^2 - alpha gamma) - beta) (the smaller root, without cancellation).
+inline double gateRayEntry(const EllipsoidGate& g, const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
+  constexpr double kInf = std::numeric_limits<double>::infinity();
+  if (o.gamma <= 0) return 0.0;
+  const double beta = d.x() * o.A_oc.x() + d.y() * o.A_oc.y() + d.z() * o.A_oc.z();
+  if (beta >= 0) return kInf;  // moving away from the gate's centre while outside: no entry ahead
+  const Eigen::Matrix3d& A = g.A;
+  const double alpha = A(0, 0) * d.x() * d.x() + A(1, 1) * d.y() * d.y() + A(2, 2) * d.z() * d.z() +
+                       2.0 * (A(0, 1) * d.x() * d.y() + A(0, 2) * d.x() * d.z() + A(1, 2) * d.y() * d.z());
+  const double disc = beta * beta - alpha * o.gamma;
+  if (disc < 0) return kInf;
+  const double t = o.gamma / (std::sqrt(disc) - beta);
+  return t <= max_t ? t : kInf;
+}
+
+/// Outward unit normal of the gate's surface at p: A (p - mean) normalised.
+Eigen::Vector3d gateNormal(const EllipsoidGate& g, const Eigen::Vector3d& p);
+
+/// A ray direction as every query uses it: d / |d|. Throws nothing; the caller checks d.
+inline Eigen::Vector3d unitDirection(const Eigen::Vector3d& d) { return d / d.norm(); }
+
+/// The unit world direction of the ray through the centre of pixel (u, v) of a camera at T_W_C
+/// (its origin is T_W_C.translation()).
+inline Eigen::Vector3d pixelRay(const PinholeCamera& camera, const Transform& T_W_C, int u, int v) {
+  const Eigen::Vector3d d_C((u - camera.cx) / camera.fx, (v - camera.cy) / camera.fy, 1.0);
+  return unitDirection(T_W_C.linear() * d_C);
+}
+
+/// Pixel box [u0, u1] x [v0, v1] (inclusive, clamped to the image) that holds every pixel whose
+/// centre ray can meet the gate of `g` seen by a camera at T_C_W's inverse: the exact bounds of the
+/// gate's silhouette (its dual quadric), grown by margin_px; the whole image when the gate reaches
+/// behind the camera's z = 0 plane. False when no pixel can see it (entirely behind the camera or
+/// outside the image).
+bool gateImageBounds(const EllipsoidGate& g, const PinholeCamera& camera, const Transform& T_C_W, double margin_px,
+                     int* u0, int* u1, int* v0, int* v1);
+
+}  // namespace vdmap
