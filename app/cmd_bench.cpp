@@ -179,6 +179,11 @@ void addBenchCommand(CLI::App& app) {
                    "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
       ->needs(query)
       ->needs(mesh);
+  verb->add_option("--truth-points", args->truth_points,
+                   "with --truth: occupied, free and unknown points scored each (free near the surface: half as many)")
+      ->needs(query)
+      ->check(CLI::Range(std::size_t{2}, std::size_t{10'000'000}))
+      ->capture_default_str();
   verb->add_option("--query-points", args->query_points, "with --query: points classified per pass")
       ->needs(query)
       ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}))
@@ -187,9 +192,9 @@ void addBenchCommand(CLI::App& app) {
                    "with --query: frames between OctoMap insertions (default: ceil(frames / 500))")
       ->needs(query)
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
-  verb->add_option("--views", args->views, "with --query: castView poses (keyframes spread over the map)")
+  verb->add_option("--views", args->views, "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
       ->needs(query)
-      ->check(CLI::Range(1, 1000))
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });

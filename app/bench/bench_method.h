@@ -34,6 +34,7 @@ struct BenchArgs {
   std::size_t query_points = 1'000'000;  ///< points classified per pass
   int octomap_every = 0;                 ///< frames between OctoMap insertions (0: ceil(frames / 500))
   int views = 10;                        ///< castView poses
+  std::size_t truth_points = 100'000;    ///< O, F and U points each (F_near: half as many)
 };
 
 /// One row of the comparison.

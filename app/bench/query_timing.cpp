@@ -110,7 +110,10 @@ Maps buildMaps(const BenchArgs& args) {
   params.poses = PoseSource::kGroundTruth;
   m.mapper = std::make_unique<Mapper>(cam, params);
   for (const double res : {0.05, 0.02}) m.peers.push_back(std::make_unique<OctoPeer>(res));
-  if (exact) m.truth.emplace(cam);
+  OccupancyTruthParams truth_params;
+  truth_params.occupied = truth_params.free = truth_params.unknown = args.truth_points;
+  truth_params.free_near = args.truth_points / 2;
+  if (exact) m.truth.emplace(cam, truth_params);
   const DepthRange& range = args.local_map.depth_range;
   ProgressBar progress("mapping", m.frames);
   for (std::size_t i = 0; i < m.frames; ++i) {
@@ -214,9 +217,10 @@ Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam
   s.distance_ms = medianMs([&] { m.query.distance(near, dist); });
   const std::vector<Transform> poses = viewPoses(m.mapper->graph(), args.views);
   s.views = poses.size();
-  s.view_ms = medianMs([&] {
-                for (const Transform& T : poses) (void)m.query.castView(cam, T, m.max_depth_m);
-              }) / std::max<std::size_t>(1, poses.size());
+  if (!poses.empty())
+    s.view_ms = medianMs([&] {
+                  for (const Transform& T : poses) (void)m.query.castView(cam, T, m.max_depth_m);
+                }) / static_cast<double>(poses.size());
   s.octo_views = std::min(kOctoViews, poses.size());
   for (const auto& peer : m.peers) {
     std::vector<std::uint8_t> states(points.size());
@@ -233,7 +237,7 @@ Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam
       view_ms.push_back(cpuTimeMs([&] { (void)octoView(*peer, cam, poses[i], m.max_depth_m); }));
       progress.update(i + 1);
     }
-    s.octo_view_ms.push_back(median(view_ms));
+    s.octo_view_ms.push_back(median(view_ms));  // 0 without views
   }
   return s;
 }
@@ -376,6 +380,7 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   std::snprintf(buf, sizeof buf, "%-16s %14s %10s %14s %10s %12s %10s\n", "method", "classify [/s]", "x vdmap",
                 "distance [/s]", "x vdmap", "view [ms]", "x vdmap");
   text << buf;
+  const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };  // 0: not timed
   const auto perSec = [](std::size_t n, double ms) { return ms > 0 ? 1e3 * static_cast<double>(n) / ms : 0.0; };
   std::snprintf(buf, sizeof buf, "%-16s %14.0f %10s %14.0f %10s %12.2f %10s\n", "vdmap", perSec(s.points, s.classify_ms),
                 "1", perSec(s.distance_points, s.distance_ms), "1", s.view_ms, "1");
@@ -393,16 +398,16 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   for (std::size_t p = 0; p < m.peers.size(); ++p) {
     const double c = s.octo_classify_ms[p], d = s.octo_distance_ms[p], v = s.octo_view_ms[p];
     std::snprintf(buf, sizeof buf, "%-16s %14.0f %10.2f %14.0f %10.2f %12.2f %10.2f\n", m.peers[p]->name().c_str(),
-                  perSec(s.points, c), c / s.classify_ms, perSec(s.distance_points, d), d / s.distance_ms, v,
-                  v / s.view_ms);
+                  perSec(s.points, c), ratio(c, s.classify_ms), perSec(s.distance_points, d), ratio(d, s.distance_ms), v,
+                  ratio(v, s.view_ms));
     text << buf;
     speed[m.peers[p]->key()] = {{"classify_ms", rounded(c)},
                                 {"classify_per_s", rounded(perSec(s.points, c))},
-                                {"classify_ratio_to_vdmap", rounded(c / s.classify_ms)},
+                                {"classify_ratio_to_vdmap", rounded(ratio(c, s.classify_ms))},
                                 {"distance_ms", rounded(d)},
-                                {"distance_ratio_to_vdmap", rounded(d / s.distance_ms)},
+                                {"distance_ratio_to_vdmap", rounded(ratio(d, s.distance_ms))},
                                 {"view_ms", rounded(v)},
-                                {"view_ratio_to_vdmap", rounded(v / s.view_ms)},
+                                {"view_ratio_to_vdmap", rounded(ratio(v, s.view_ms))},
                                 {"insert_ms_median", rounded(median(m.peers[p]->insert_ms))}};
   }
   text << "(x vdmap: the peer's time over vdmap's; OctoMap's distance is to the nearest occupied leaf's box through "
