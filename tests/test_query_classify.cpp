@@ -4,6 +4,7 @@
 // the edge cases.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <random>
@@ -15,6 +16,7 @@
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/query/keyframe_views.h"
 #include "mapping/query/query_map.h"
 #include "render/sequence_synth.h"
 #include "tests/box_room_keyframes.h"
@@ -134,12 +136,22 @@ void checkAgainstOracle(const KeyframeGraph& graph, const GlobalMap& global, con
       EXPECT_GT(n.unknown, static_cast<int>(points.size() / 50)) << what;
       expectMatchesOracle(fast, expected, points, what + " rule " + std::to_string(static_cast<int>(rule)));
       if (rule != ConflictRule::kOccupied) continue;
+      // The visibility index lists every keyframe that has a verdict (a superset), and the
+      // single-keyframe answers are the oracle's.
+      const KeyframeViews views = KeyframeViews::build(graph, global, params, {});
+      int missing = 0;
       for (int id = 0; id < static_cast<int>(graph.size()); ++id) {
         std::vector<Classification> one(points.size());
-        for (std::size_t i = 0; i < points.size(); ++i)
+        for (std::size_t i = 0; i < points.size(); ++i) {
           one[i] = test::QueryOracle::fromVerdict(oracle.verdict(id, points[i]), id);
+          if (one[i].state == Occupancy::kUnknown) continue;
+          const auto c = views.candidates(points[i]);
+          if (std::find(c.begin(), c.end(), id) == c.end() && ++missing <= 5)
+            ADD_FAILURE() << what << ": keyframe " << id << " sees " << points[i].transpose() << " but is no candidate";
+        }
         expectMatchesOracle(classifyInKeyframe(map, id, points), one, points, what + " keyframe " + std::to_string(id));
       }
+      EXPECT_EQ(missing, 0) << what;
     }
   }
 }

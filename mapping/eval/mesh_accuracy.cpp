@@ -9,7 +9,7 @@
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
 
-#include "mapping/eval/box_tree.h"
+#include "mapping/core/box_tree.h"
 
 namespace vdmap {
 namespace {

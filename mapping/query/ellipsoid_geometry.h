@@ -30,12 +30,18 @@ struct EllipsoidGate {
 /// The gate of `e` at k = gate_sigma with covariance floor min_sigma_m (docs/method.md 13).
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m);
 
+/// r^T A r for symmetric A given by its upper triangle (the one expression every gate test uses,
+/// so that a compact copy of A gives the same bits).
+inline double gateQuadratic(double x, double y, double z, double a00, double a11, double a22, double a01, double a02,
+                            double a12) {
+  return a00 * x * x + a11 * y * y + a22 * z * z + 2.0 * (a01 * x * y + a02 * x * z + a12 * y * z);
+}
+
 /// (q - mean)^T A (q - mean): inside the gate when <= k^2.
 inline double gateDistance2(const EllipsoidGate& g, const Eigen::Vector3d& q) {
-  const Eigen::Vector3d r = q - g.mean;
   const Eigen::Matrix3d& A = g.A;
-  return A(0, 0) * r.x() * r.x() + A(1, 1) * r.y() * r.y() + A(2, 2) * r.z() * r.z() +
-         2.0 * (A(0, 1) * r.x() * r.y() + A(0, 2) * r.x() * r.z() + A(1, 2) * r.y() * r.z());
+  return gateQuadratic(q.x() - g.mean.x(), q.y() - g.mean.y(), q.z() - g.mean.z(), A(0, 0), A(1, 1), A(2, 2), A(0, 1),
+                       A(0, 2), A(1, 2));
 }
 
 /// Euclidean distance from y to the surface of the axis-aligned ellipsoid with semi-axes

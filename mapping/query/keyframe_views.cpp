@@ -19,7 +19,24 @@ namespace {
 struct Cell {
   double a[6];   // A: xx xy xz yy yz zz
   double mu[3];
+  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one: a point nearer
+  /// than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z, exactly).
+  double z_near_3x3;
 };
+
+/// A grid cell of a keyframe's container: its kept cell (-1: none) and the farthest z of that
+/// cell's gate. A point behind it is neither in the gate nor in front of the surface (its ray's
+/// closest approach t* q/|q| lies in the gate), so most points behind surfaces are rejected
+/// without reading the cell.
+struct Slot {
+  std::int32_t cell = -1;
+  float z_far = 0;
+};
+
+constexpr int kTile = 8;  // grid cells per side of a visibility tile
+
+/// Bounds of a gate along z in float, rounded outwards (a float is enough to reject, never to accept).
+constexpr double kZMargin = 1e-6;  // m
 
 struct CellTerms {
   double m2;   // (q - mu)^T A (q - mu)
@@ -54,12 +71,16 @@ struct View {
   double width2 = 0, height2 = 0;  // 2W, 2H: the container's extent in container pixels
   double offset_u = 0, offset_v = 0;
   int cell_px = 1, cols = 0, rows = 0;
-  std::vector<std::int32_t> slot;  // per grid cell: index into cells, -1 = no kept cell (empty when no cells)
+  std::vector<Slot> slot;  // per grid cell (empty when the keyframe has no kept cell)
   std::vector<Cell> cells;
   int rank = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   double z_max = 0;  // farthest gate along the optical axis (keyframe frame)
+  /// Build only: per tile of kTile x kTile grid cells, the farthest z_far of its kept cells
+  /// (-inf: none), for the visibility index.
+  std::vector<double> tile_z_far;
+  int tile_cols = 0, tile_rows = 0;
 
   /// Keyframe-frame point, its grid column and row; false when the container does not hold it.
   bool locate(const Eigen::Vector3d& q_W, Eigen::Vector3d* q, int* col, int* row) const {
@@ -102,10 +123,10 @@ struct KeyframeViews::Impl {
     const Cell* best = nullptr;
     for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
       for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
-        const std::int32_t s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
-        if (s < 0) continue;
-        const double m2 = gate2(view.cells[s], q);
-        if (m2 < best_m2) best_m2 = m2, best = &view.cells[s];
+        const Slot& s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
+        if (s.cell < 0 || !(q.z() < s.z_far)) continue;  // behind the gate: m^2 > k^2
+        const double m2 = gate2(view.cells[s.cell], q);
+        if (m2 < best_m2) best_m2 = m2, best = &view.cells[s.cell];
       }
     if (best != nullptr && best_m2 <= k2) {
       const CellTerms t = terms(*best, q);
@@ -115,7 +136,7 @@ struct KeyframeViews::Impl {
       out.sigma_t = q.norm() / std::sqrt(t.a);
       return out;
     }
-    const std::int32_t own = view.slot[static_cast<std::size_t>(row) * view.cols + col];
+    const std::int32_t own = view.slot[static_cast<std::size_t>(row) * view.cols + col].cell;
     if (own < 0) return out;
     const CellTerms t = terms(view.cells[own], q);
     const double sqrt_a = std::sqrt(t.a);
@@ -128,28 +149,68 @@ struct KeyframeViews::Impl {
     return out;
   }
 
-  /// verdict() == kFree, without the occupied answer's terms: the fast path of ConflictRule::kOccupied.
-  bool isFree(const View& view, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    Eigen::Vector3d q;
-    int col = 0, row = 0;
-    if (!view.locate(q_W, &q, &col, &row)) return false;
-    const std::int32_t own = view.slot[static_cast<std::size_t>(row) * view.cols + col];
-    if (own < 0) return false;
-    const CellTerms t = terms(view.cells[own], q);
+  /// verdict() == kFree for a located point whose own slot passed the z_far test (isFree's tail).
+  bool isFreeAt(const View& view, const Eigen::Vector3d& q, int col, int row, const Slot& own, ViewVerdict* out) const {
+    const Cell& cell = view.cells[own.cell];
+    const CellTerms t = terms(cell, q);
     const double sqrt_a = std::sqrt(t.a);
     const double z = t.qad / sqrt_a;
     if (!(z < -k && t.m2 - z * z <= k2)) return false;
-    // No gate of the 3x3 cells may hold the point (the own cell's cannot: m^2 >= z^2 > k^2).
-    for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
-      for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
-        const std::int32_t s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
-        if (s >= 0 && gate2(view.cells[s], q) <= k2) return false;
-      }
+    // No gate of the 3x3 cells may hold the point (the own cell's cannot: m^2 >= z^2 > k^2);
+    // none can when the point is nearer than all of them (nearly always: free is far in front).
+    if (!(q.z() < cell.z_near_3x3))
+      for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
+        for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
+          const Slot& s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
+          if (s.cell >= 0 && gate2(view.cells[s.cell], q) <= k2) return false;
+        }
     out->state = Occupancy::kFree;
     out->z = z;
     out->m2 = t.m2;
     out->sigma_t = q.norm() / sqrt_a;
     return true;
+  }
+
+  /// The first of `ids` (in their order) whose verdict is free, or -1: verdict() == kFree without
+  /// the occupied answer's terms, the fast path of ConflictRule::kOccupied. Candidates go in
+  /// batches: each batch's slots, then cells, are prefetched before any is read, so that their
+  /// cache misses overlap instead of following one another (the answer is the sequential one).
+  int firstFree(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
+    constexpr std::size_t kBatch = 8;
+    struct Located {
+      const View* view;
+      Eigen::Vector3d q;
+      int col, row;
+      const Slot* slot;
+    };
+    Located loc[kBatch];
+    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
+      const std::size_t m = std::min(kBatch, ids.size() - start);
+      for (std::size_t j = 0; j < m; ++j) {
+        Located& l = loc[j];
+        l.view = &views[static_cast<std::size_t>(ids[start + j])];
+        l.slot = nullptr;
+        if (!l.view->locate(q_W, &l.q, &l.col, &l.row)) continue;
+        l.slot = &l.view->slot[static_cast<std::size_t>(l.row) * l.view->cols + l.col];
+        __builtin_prefetch(l.slot);
+      }
+      for (std::size_t j = 0; j < m; ++j) {
+        Located& l = loc[j];
+        if (l.slot == nullptr) continue;
+        if (l.slot->cell < 0 || !(l.q.z() < l.slot->z_far)) {
+          l.slot = nullptr;
+          continue;
+        }
+        const char* cell = reinterpret_cast<const char*>(&l.view->cells[l.slot->cell]);
+        __builtin_prefetch(cell);
+        __builtin_prefetch(cell + sizeof(Cell) - 1);
+      }
+      for (std::size_t j = 0; j < m; ++j) {
+        const Located& l = loc[j];
+        if (l.slot != nullptr && isFreeAt(*l.view, l.q, l.col, l.row, *l.slot, out)) return ids[start + j];
+      }
+    }
+    return -1;
   }
 
   std::span<const std::int32_t> candidates(const Eigen::Vector3d& q_W) const {
@@ -181,7 +242,8 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
   std::size_t n_kept = 0;
   for (std::size_t i = 0; i < cells.size(); ++i) n_kept += kept[i] ? 1 : 0;
   if (n_kept == 0) return v;
-  v.slot.assign(static_cast<std::size_t>(v.cols) * v.rows, -1);
+  v.slot.assign(static_cast<std::size_t>(v.cols) * v.rows, Slot{});
+  std::vector<double> z_near(v.slot.size(), std::numeric_limits<double>::infinity());
   v.cells.reserve(n_kept);
   const Eigen::Matrix3d R_W_K = kf.T_W_K.linear();
   const Eigen::Vector3d centre_W = kf.T_W_K.translation();
@@ -195,7 +257,11 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     Cell c;
     c.a[0] = A(0, 0), c.a[1] = A(0, 1), c.a[2] = A(0, 2), c.a[3] = A(1, 1), c.a[4] = A(1, 2), c.a[5] = A(2, 2);
     c.mu[0] = e.mean.x(), c.mu[1] = e.mean.y(), c.mu[2] = e.mean.z();
-    v.slot[static_cast<std::size_t>(cells[i].grid_index)] = static_cast<std::int32_t>(v.cells.size());
+    const double half_z = k * std::sqrt(cov(2, 2));
+    Slot& slot = v.slot[static_cast<std::size_t>(cells[i].grid_index)];
+    slot.cell = static_cast<std::int32_t>(v.cells.size());
+    slot.z_far = std::nextafter(static_cast<float>(e.mean.z() + half_z + kZMargin), std::numeric_limits<float>::infinity());
+    z_near[static_cast<std::size_t>(cells[i].grid_index)] = e.mean.z() - half_z - kZMargin;
     v.cells.push_back(c);
     // Every point with a verdict lies in a gate or on the segment from the centre to a gate:
     // inside the box of the centre and the gates' boxes, and no farther along z than a gate.
@@ -206,11 +272,27 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     v.lo = v.lo.cwiseMin(mean_W - half);
     v.hi = v.hi.cwiseMax(mean_W + half);
   }
+  v.tile_cols = (v.cols + kTile - 1) / kTile, v.tile_rows = (v.rows + kTile - 1) / kTile;
+  v.tile_z_far.assign(static_cast<std::size_t>(v.tile_cols) * v.tile_rows, -std::numeric_limits<double>::infinity());
+  for (int row = 0; row < v.rows; ++row)
+    for (int col = 0; col < v.cols; ++col) {
+      const Slot& slot = v.slot[static_cast<std::size_t>(row) * v.cols + col];
+      if (slot.cell < 0) continue;
+      double& tile = v.tile_z_far[static_cast<std::size_t>(row / kTile) * v.tile_cols + col / kTile];
+      tile = std::max(tile, static_cast<double>(slot.z_far));
+      double nearest = std::numeric_limits<double>::infinity();
+      for (int r = std::max(row - 1, 0); r <= std::min(row + 1, v.rows - 1); ++r)
+        for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
+          nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
+      v.cells[slot.cell].z_near_3x3 = nearest;
+    }
   return v;
 }
 
-/// True when a ball (centre c_W, radius r) may meet the view's container frustum cut at z_max.
-bool ballMeetsFrustum(const View& v, const Eigen::Vector3d& c_W, double r) {
+/// True when a ball (centre c_W, radius r) may hold a point the view has a verdict about: a point
+/// that projects into a kept cell (or next to one: the 3x3 gates) no farther than that cell's gate
+/// reaches (z_far). False is exact; true may be wrong (a superset).
+bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
   const Eigen::Vector3d p = v.R_K_W * c_W + v.t_K_W;
   if (p.z() < -r || p.z() > v.z_max + r) return false;
   // Container pixels u in [-offset_u - 0.5, 2W - offset_u - 0.5): x / z within [xl, xr].
@@ -221,7 +303,23 @@ bool ballMeetsFrustum(const View& v, const Eigen::Vector3d& c_W, double r) {
   };
   if (outside(1.0, -xl, p.x(), p.z()) || outside(-1.0, xr, p.x(), p.z())) return false;
   if (outside(1.0, -yl, p.y(), p.z()) || outside(-1.0, yr, p.y(), p.z())) return false;
-  return true;
+  const double z0 = p.z() - r, z1 = p.z() + r;
+  if (z0 < 1e-3) return true;  // the ball reaches the camera: its image is unbounded
+  // The ball's box projects within the extreme ratios of its corners; its grid cells, grown by
+  // one for the neighbours' gates, and the tiles that hold them.
+  const auto range = [&](double c, double f, double centre, double offset, int cells, int* lo, int* hi) {
+    const double a = std::min((c - r) / z0, (c - r) / z1), b = std::max((c + r) / z0, (c + r) / z1);
+    const double p0 = f * a + centre + offset + 0.5, p1 = f * b + centre + offset + 0.5;
+    *lo = static_cast<int>(std::clamp(std::floor(p0 / v.cell_px) - 1, 0.0, cells - 1.0));
+    *hi = static_cast<int>(std::clamp(std::floor(p1 / v.cell_px) + 1, 0.0, cells - 1.0));
+  };
+  int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
+  range(p.x(), v.fx, v.cx, v.offset_u, v.cols, &c0, &c1);
+  range(p.y(), v.fy, v.cy, v.offset_v, v.rows, &r0, &r1);
+  for (int tr = r0 / kTile; tr <= r1 / kTile; ++tr)
+    for (int tc = c0 / kTile; tc <= c1 / kTile; ++tc)
+      if (v.tile_z_far[static_cast<std::size_t>(tr) * v.tile_cols + tc] >= z0) return true;
+  return false;
 }
 
 }  // namespace
@@ -277,7 +375,7 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
         for (int y = a.y(); y <= std::min(b.y(), impl->ny - 1); ++y)
           for (int x = a.x(); x <= std::min(b.x(), impl->nx - 1); ++x) {
             const Eigen::Vector3d centre = impl->origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
-            if (ballMeetsFrustum(v, centre, radius))
+            if (ballMaySee(v, centre, radius))
               touched[id].push_back(static_cast<std::uint32_t>((static_cast<std::size_t>(z) * impl->ny + y) * impl->nx + x));
           }
     });
@@ -290,7 +388,17 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
     std::vector<std::uint32_t> fill(impl->begin.begin(), impl->begin.end() - 1);
     for (std::size_t id = 0; id < n; ++id)
       for (std::uint32_t vox : touched[id]) impl->ids[fill[vox]++] = static_cast<std::int32_t>(id);
+    // kRecent scans the highest rank first (ties: lower id) and stops at the first verdict.
+    if (params.conflict == ConflictRule::kRecent)
+      parallelFor(params.threads, voxels, [&](std::size_t vox) {
+        std::sort(impl->ids.begin() + impl->begin[vox], impl->ids.begin() + impl->begin[vox + 1],
+                  [&](std::int32_t a, std::int32_t b) {
+                    const int ra = impl->views[static_cast<std::size_t>(a)].rank, rb = impl->views[static_cast<std::size_t>(b)].rank;
+                    return ra != rb ? ra > rb : a < b;
+                  });
+      });
   }
+  for (View& v : impl->views) v.tile_z_far = {};
   KeyframeViews out;
   out.impl_ = std::move(impl);
   return out;
@@ -303,7 +411,7 @@ std::size_t KeyframeViews::memoryBytes() const {
   std::size_t bytes = sizeof(Impl) + impl_->views.capacity() * sizeof(View) +
                       impl_->begin.capacity() * sizeof(std::uint32_t) + impl_->ids.capacity() * sizeof(std::int32_t);
   for (const View& v : impl_->views)
-    bytes += v.slot.capacity() * sizeof(std::int32_t) + v.cells.capacity() * sizeof(Cell);
+    bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
   return bytes;
 }
 
@@ -336,20 +444,17 @@ ViewVerdict KeyframeViews::combined(const Eigen::Vector3d& q_W, int* keyframe) c
   const std::span<const std::int32_t> ids = im.candidates(q_W);
   switch (im.params.conflict) {
     case ConflictRule::kOccupied:
-      for (const std::int32_t id : ids)
-        if (im.isFree(im.views[static_cast<std::size_t>(id)], q_W, &best)) {
+      *keyframe = im.firstFree(ids, q_W, &best);
+      return *keyframe >= 0 ? best : ViewVerdict{};
+    case ConflictRule::kRecent:  // candidates by rank, highest first
+      for (const std::int32_t id : ids) {
+        best = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);
+        if (best.state != Occupancy::kUnknown) {
           *keyframe = id;
           return best;
         }
-      return ViewVerdict{};
-    case ConflictRule::kRecent:
-      for (const std::int32_t id : ids) {
-        const View& v = im.views[static_cast<std::size_t>(id)];
-        if (*keyframe >= 0 && v.rank <= im.views[static_cast<std::size_t>(*keyframe)].rank) continue;
-        const ViewVerdict verdict = im.verdict(v, q_W);
-        if (verdict.state != Occupancy::kUnknown) best = verdict, *keyframe = id;
       }
-      return best;
+      return ViewVerdict{};
     case ConflictRule::kPrecise:
       for (const std::int32_t id : ids) {
         const ViewVerdict verdict = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);

@@ -42,7 +42,8 @@ class KeyframeViews {
   /// that has one; kPrecise: the verdict with the smallest sigma_t. Ties: lower id. `keyframe`
   /// receives the deciding keyframe (-1 when unknown).
   ViewVerdict combined(const Eigen::Vector3d& q_W, int* keyframe) const;
-  /// The keyframes that may see q_W, ascending (a superset of those with a verdict).
+  /// The keyframes that may see q_W (a superset of those with a verdict), ascending ids; under
+  /// kRecent by rank, highest first (ties: lower id).
   std::span<const std::int32_t> candidates(const Eigen::Vector3d& q_W) const;
 
   struct Impl;

@@ -1,19 +1,189 @@
 #include "mapping/query/surface_index.h"
 
+#include <algorithm>
+#include <cmath>
+#include <optional>
+
+#include "mapping/core/box_tree.h"
 #include "mapping/core/parallel.h"
+#include "mapping/global_map/sorted_voxel_grid.h"
 
 namespace vdmap {
 
+namespace {
+
+constexpr double kInf = std::numeric_limits<double>::infinity();
+
+// Levels of the gate grid: voxel side g, 2g, 4g, ...; an ellipsoid sits at the finest level where
+// its gate box spans at most 2 voxels per axis (so in at most 8 voxels), larger ones in a list
+// every lookup scans. A lookup visits one voxel per non-empty level.
+constexpr int kLevels = 12;
+constexpr double kLevelRatio = 2.0;
+
+// What the gate test reads, packed (80 B instead of a whole EllipsoidGate).
+struct GateTest {
+  double mean[3];
+  double a[6];  // A00, A11, A22, A01, A02, A12
+  double k2;
+};
+
+// One level: the sorted (voxel key, ellipsoid) pairs, and an open-addressing table from a voxel
+// key to its run of pairs, filled in key order (deterministic).
+struct GridLevel {
+  double side = 0;
+  std::vector<std::pair<std::uint64_t, std::int32_t>> entries;
+  std::vector<std::uint64_t> slot_key;  // kEmpty where free
+  std::vector<std::uint32_t> slot_begin, slot_end;
+  std::uint64_t mask = 0;
+  static constexpr std::uint64_t kEmpty = ~std::uint64_t{0};
+
+  static std::uint64_t hash(std::uint64_t key) {
+    key ^= key >> 33;
+    key *= 0xff51afd7ed558ccdULL;
+    key ^= key >> 33;
+    return key;
+  }
+
+  void buildTable() {
+    std::size_t voxels = 0;
+    for (std::size_t i = 0; i < entries.size(); ++i) voxels += i == 0 || entries[i].first != entries[i - 1].first;
+    std::size_t size = 16;
+    while (size < 2 * voxels) size *= 2;
+    mask = size - 1;
+    slot_key.assign(size, kEmpty);
+    slot_begin.assign(size, 0);
+    slot_end.assign(size, 0);
+    for (std::size_t i = 0; i < entries.size();) {
+      std::size_t j = i;
+      while (j < entries.size() && entries[j].first == entries[i].first) ++j;
+      std::uint64_t s = hash(entries[i].first) & mask;
+      while (slot_key[s] != kEmpty) s = (s + 1) & mask;
+      slot_key[s] = entries[i].first;
+      slot_begin[s] = static_cast<std::uint32_t>(i);
+      slot_end[s] = static_cast<std::uint32_t>(j);
+      i = j;
+    }
+  }
+
+  // The pairs of voxel `key`, or an empty run.
+  std::pair<std::uint32_t, std::uint32_t> find(std::uint64_t key) const {
+    if (entries.empty()) return {0, 0};
+    for (std::uint64_t s = hash(key) & mask;; s = (s + 1) & mask) {
+      if (slot_key[s] == key) return {slot_begin[s], slot_end[s]};
+      if (slot_key[s] == kEmpty) return {0, 0};
+    }
+  }
+
+  std::size_t memoryBytes() const {
+    return entries.capacity() * sizeof(entries[0]) + slot_key.capacity() * 8 + slot_begin.capacity() * 4 +
+           slot_end.capacity() * 4;
+  }
+};
+
+// Integer voxel coordinate of x along an axis, or nothing outside the key's range.
+std::optional<std::int64_t> voxelCoord(double x, double origin, double side) {
+  const double c = std::floor((x - origin) / side);
+  if (!(c >= 0) || c > static_cast<double>(VoxelKey::kAxisMax)) return std::nullopt;
+  return static_cast<std::int64_t>(c);
+}
+
+// The gate's box rounded outward to float and grown by a millionth of its size (and a nanometre),
+// so that rounding in the gate kernels never puts a point or hit of the gate outside its box.
+void gateBox(const EllipsoidGate& g, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
+  const double pad = 1e-6 * g.half_extent.maxCoeff() + 1e-9;
+  for (int a = 0; a < 3; ++a) {
+    (*lo)[a] = std::nextafter(static_cast<float>(g.mean[a] - g.half_extent[a] - pad), -INFINITY);
+    (*hi)[a] = std::nextafter(static_cast<float>(g.mean[a] + g.half_extent[a] + pad), INFINITY);
+  }
+}
+
+}  // namespace
+
 struct SurfaceIndex::Impl {
   std::vector<EllipsoidGate> gates;
+  std::vector<GateTest> tests;  // per gate
+  std::vector<int> levels_used;  // the non-empty levels
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
+  GridLevel levels[kLevels];
+  std::vector<std::int32_t> oversize;  // gates too large for every level, ascending
+  std::optional<BoxTree> tree;         // over the gate boxes
 };
 
 SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, const QueryParams& params) {
   auto impl = std::make_shared<Impl>();
-  impl->gates.resize(ellipsoids_W.size());
-  parallelFor(params.threads, ellipsoids_W.size(), [&](std::size_t i) {
+  const std::size_t n = ellipsoids_W.size();
+  impl->gates.resize(n);
+  parallelFor(params.threads, n, [&](std::size_t i) {
     impl->gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m);
   });
+  std::vector<Eigen::Vector3f> lo(n), hi(n);
+  impl->tests.resize(n);
+  parallelFor(params.threads, n, [&](std::size_t i) {
+    const EllipsoidGate& g = impl->gates[i];
+    gateBox(g, &lo[i], &hi[i]);
+    impl->tests[i] = {{g.mean.x(), g.mean.y(), g.mean.z()},
+                      {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
+                      g.k2};
+  });
+  impl->tree.emplace(lo, hi);
+  if (n == 0) {
+    SurfaceIndex index;
+    index.impl_ = std::move(impl);
+    return index;
+  }
+
+  // The gate grid: finest side twice the median gate half-width (docs/method.md 13.4), at least
+  // what keeps the map's extent within a key.
+  std::vector<double> half(n);
+  Eigen::Vector3d lo_all = Eigen::Vector3d::Constant(kInf), hi_all = -lo_all;
+  for (std::size_t i = 0; i < n; ++i) {
+    half[i] = impl->gates[i].half_extent.maxCoeff();
+    lo_all = lo_all.cwiseMin(lo[i].cast<double>());
+    hi_all = hi_all.cwiseMax(hi[i].cast<double>());
+  }
+  std::nth_element(half.begin(), half.begin() + n / 2, half.end());
+  const double extent = (hi_all - lo_all).maxCoeff();
+  double side = std::max({2.0 * half[n / 2], 1e-6, extent / static_cast<double>(VoxelKey::kAxisMax - 2)});
+  impl->origin = lo_all;
+
+  // Per ellipsoid its level and its voxels there.
+  std::vector<int> level_of(n, kLevels);
+  for (int l = 0; l < kLevels; ++l) impl->levels[l].side = side * std::pow(kLevelRatio, l);
+  parallelFor(params.threads, n, [&](std::size_t i) {
+    for (int l = 0; l < kLevels; ++l) {
+      const double s = impl->levels[l].side;
+      bool fits = true;
+      for (int a = 0; a < 3 && fits; ++a)
+        fits = std::floor((hi[i][a] - impl->origin[a]) / s) - std::floor((lo[i][a] - impl->origin[a]) / s) <= 1;
+      if (fits) {
+        level_of[i] = l;
+        return;
+      }
+    }
+  });
+  for (int l = 0; l < kLevels; ++l) {
+    GridLevel& level = impl->levels[l];
+    for (std::size_t i = 0; i < n; ++i) {
+      if (level_of[i] != l) continue;
+      std::int64_t c0[3], c1[3];
+      for (int a = 0; a < 3; ++a) {
+        c0[a] = static_cast<std::int64_t>(std::floor((lo[i][a] - impl->origin[a]) / level.side));
+        c1[a] = static_cast<std::int64_t>(std::floor((hi[i][a] - impl->origin[a]) / level.side));
+        c0[a] = std::clamp<std::int64_t>(c0[a], 0, VoxelKey::kAxisMax);
+        c1[a] = std::clamp<std::int64_t>(c1[a], 0, VoxelKey::kAxisMax);
+      }
+      for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
+        for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
+          for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
+            level.entries.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(i)});
+    }
+    parallelSort(params.threads, level.entries.begin(), level.entries.end());
+    level.buildTable();
+    if (!level.entries.empty()) impl->levels_used.push_back(l);
+  }
+  for (std::size_t i = 0; i < n; ++i)
+    if (level_of[i] == kLevels) impl->oversize.push_back(static_cast<std::int32_t>(i));
+
   SurfaceIndex index;
   index.impl_ = std::move(impl);
   return index;
@@ -22,43 +192,82 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
 std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0; }
 
 std::size_t SurfaceIndex::memoryBytes() const {
-  return impl_ ? impl_->gates.capacity() * sizeof(EllipsoidGate) : 0;
+  if (!impl_) return 0;
+  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
+                      impl_->oversize.capacity() * 4;
+  for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
+  // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
+  bytes += size() / 2 * 40 + size() * 4;
+  return bytes;
 }
 
 const EllipsoidGate& SurfaceIndex::gateOf(std::size_t i) const { return impl_->gates[i]; }
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
-  std::pair<std::int32_t, double> best{-1, std::numeric_limits<double>::infinity()};
-  for (std::size_t i = 0; i < size(); ++i) {
-    const EllipsoidGate& g = impl_->gates[i];
-    const double m2 = gateDistance2(g, q_W);
-    if (m2 <= g.k2 && m2 < best.second) best = {static_cast<std::int32_t>(i), m2};
+  std::pair<std::int32_t, double> best{-1, kInf};
+  if (!impl_) return best;
+  const auto consider = [&](std::int32_t i) {
+    const GateTest& g = impl_->tests[static_cast<std::size_t>(i)];
+    const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
+                                    g.a[2], g.a[3], g.a[4], g.a[5]);
+    if (m2 <= g.k2 && (m2 < best.second || (m2 == best.second && i < best.first))) best = {i, m2};
+  };
+  for (const int l : impl_->levels_used) {
+    const GridLevel& level = impl_->levels[l];
+    const auto x = voxelCoord(q_W.x(), impl_->origin.x(), level.side);
+    const auto y = voxelCoord(q_W.y(), impl_->origin.y(), level.side);
+    const auto z = voxelCoord(q_W.z(), impl_->origin.z(), level.side);
+    if (!x || !y || !z) continue;
+    const auto [b, e] = level.find(VoxelKey::pack(*x, *y, *z));
+    for (std::uint32_t k = b; k < e; ++k) consider(level.entries[k].second);
   }
+  for (const std::int32_t i : impl_->oversize) consider(i);
   return best;
 }
 
 SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double max_distance) const {
   Nearest best;
+  if (!impl_ || impl_->gates.empty()) return best;
   const auto inside = gate(q_W);
   if (inside.first >= 0) {
     best.ellipsoid = inside.first, best.distance = 0, best.closest = q_W;
     return best;
   }
-  for (std::size_t i = 0; i < size(); ++i) {
-    Eigen::Vector3d x;
-    const double d = distanceToGate(impl_->gates[i], q_W, &x);
-    if (d < best.distance && d < max_distance) best = {static_cast<std::int32_t>(i), d, x};
-  }
+  const auto& gates = impl_->gates;
+  const auto [i, d2] = impl_->tree->nearest(
+      q_W,
+      [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
+        const EllipsoidGate& g = gates[j];
+        // Lower bounds first (with slack for rounding): the gate's box, and the coin that holds
+        // it (|offset along the shortest axis| <= e2, across it <= e0), tight for the flat
+        // patches of a surface, of which many are almost equally near a point far from them.
+        const Eigen::Vector3d r = q - g.mean;
+        const double box2 = (r.cwiseAbs() - g.half_extent).cwiseMax(0.0).squaredNorm();
+        const double h = r.dot(g.axes.col(2));
+        const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
+        const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
+        const double lower2 = std::max(box2, dh * dh + da * da);
+        if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
+        const double d = distanceToGate(g, q);
+        return d * d;
+      },
+      max_distance * max_distance);
+  if (i < 0) return best;
+  best.ellipsoid = static_cast<std::int32_t>(i);
+  best.distance = distanceToGate(gates[static_cast<std::size_t>(i)], q_W, &best.closest);
+  (void)d2;
   return best;
 }
 
 SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const {
   Hit best;
-  for (std::size_t i = 0; i < size(); ++i) {
-    const EllipsoidGate& g = impl_->gates[i];
-    const double t = gateRayEntry(g, gateRayOrigin(g, o), d, max_t);
-    if (t < best.t) best = {static_cast<std::int32_t>(i), t};
-  }
+  if (!impl_ || impl_->gates.empty()) return best;
+  const auto& gates = impl_->gates;
+  const auto [i, t] = impl_->tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
+    const EllipsoidGate& g = gates[j];
+    return gateRayEntry(g, gateRayOrigin(g, o), d, bound);
+  });
+  if (i >= 0) best = {static_cast<std::int32_t>(i), t};
   return best;
 }
 

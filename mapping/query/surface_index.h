@@ -32,15 +32,16 @@ class SurfaceIndex {
     Eigen::Vector3d closest = Eigen::Vector3d::Zero();
   };
   /// The nearest gate surface (distanceToGate): inside a gate, distance 0 and gate(q)'s ellipsoid;
-  /// else the smallest (distance, index) over all ellipsoids, when that distance is below
-  /// max_distance ({-1, inf} otherwise).
+  /// else the ellipsoid with the smallest (distance^2, index) over all ellipsoids, when distance^2 <
+  /// max_distance^2 ({-1, inf} otherwise). Exact: a box tree over the gates' boxes.
   Nearest nearest(const Eigen::Vector3d& q_W, double max_distance = std::numeric_limits<double>::infinity()) const;
 
   struct Hit {
     std::int32_t ellipsoid = -1;
     double t = std::numeric_limits<double>::infinity();
   };
-  /// The smallest (gateRayEntry, index) over all ellipsoids of the ray o + t d (d unit), t <= max_t.
+  /// The smallest (gateRayEntry, index) over all ellipsoids of the ray o + t d (d unit), t <= max_t
+  /// (box tree, nearest node first).
   Hit firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const;
 
   /// Ellipsoid i's gate (as built: the kernels' input).

@@ -1,4 +1,4 @@
-#include "mapping/eval/box_tree.h"
+#include "mapping/core/box_tree.h"
 
 #include <algorithm>
 #include <cassert>

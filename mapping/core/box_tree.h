@@ -1,0 +1,147 @@
+#pragma once
+// A bounding-volume hierarchy over axis-aligned boxes for exact nearest-item and first-hit
+// queries (docs/method.md 12, 13.4, 13.6). Nodes split at the median of their longest axis; a
+// query descends the nearer child first and prunes every node whose box is farther than the best
+// item so far. Exact whenever an item's distance is at least the distance to its box (triangles,
+// points, ellipsoids in their bounding boxes), and logarithmic even for queries far from
+// everything, where a uniform grid has to sweep empty space.
+#include <cstdint>
+#include <limits>
+#include <type_traits>
+#include <utility>
+#include <vector>
+
+#include <Eigen/Core>
+
+namespace vdmap {
+
+class BoxTree {
+ public:
+  /// Item i has the box [lo[i], hi[i]] (metres). The tree keeps no reference to the inputs.
+  BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi);
+
+  /// Index and squared distance of the nearest item to q, where sq_dist(i, q) is the exact
+  /// squared distance to item i; ties go to the lower index. {-1, inf} when there are no
+  /// items, or none nearer than sqrt(max_sq_dist). Const, so safe to call from many threads.
+  /// sq_dist may take the best squared distance so far as a third argument: it may then return
+  /// any value above that bound instead of the exact one for an item it proves farther.
+  template <typename SqDist>
+  std::pair<std::int64_t, double> nearest(const Eigen::Vector3d& q, SqDist&& sq_dist,
+                                          double max_sq_dist = std::numeric_limits<double>::infinity()) const;
+
+  /// The item with the smallest (t, index) hit by the ray o + t d, 0 <= t <= max_t, where
+  /// hit(i, bound) returns item i's hit t or +inf, and may return +inf for any hit beyond `bound`
+  /// (the best so far). An item's hits must lie within its box. {-1, inf} when nothing is hit.
+  /// Nodes are visited nearest entry first (slab test) and pruned past the best hit.
+  template <typename Hit>
+  std::pair<std::int64_t, double> firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t,
+                                           Hit&& hit) const;
+
+ private:
+  struct Node {
+    Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
+    std::uint32_t first = 0, count = 0;  // leaf: items_[first, first + count); inner: count == 0
+    std::uint32_t left = 0, right = 0;   // children (inner nodes)
+  };
+  static constexpr std::uint32_t kLeafSize = 4;
+
+  std::uint32_t build(std::uint32_t first, std::uint32_t count, const std::vector<Eigen::Vector3f>& lo,
+                      const std::vector<Eigen::Vector3f>& hi, const std::vector<Eigen::Vector3f>& centre);
+  static double sqDistToBox(const Node& n, const Eigen::Vector3d& q) {
+    const Eigen::Vector3d d = (n.lo.cast<double>() - q).cwiseMax(q - n.hi.cast<double>()).cwiseMax(0.0);
+    return d.squaredNorm();
+  }
+  /// Entry t of the ray o + t d (inv_d = 1 / d per axis) into node n within [0, max_t]; +inf when it
+  /// misses. An axis along which the ray does not move constrains only its origin.
+  static double rayEntry(const Node& n, const Eigen::Vector3d& o, const Eigen::Vector3d& d,
+                         const Eigen::Vector3d& inv_d, double max_t) {
+    double t0 = 0, t1 = max_t;
+    for (int a = 0; a < 3; ++a) {
+      const double lo = n.lo[a], hi = n.hi[a];
+      if (d[a] == 0) {
+        if (o[a] < lo || o[a] > hi) return std::numeric_limits<double>::infinity();
+        continue;
+      }
+      double ta = (lo - o[a]) * inv_d[a], tb = (hi - o[a]) * inv_d[a];
+      if (ta > tb) std::swap(ta, tb);
+      t0 = ta > t0 ? ta : t0;
+      t1 = tb < t1 ? tb : t1;
+    }
+    return t0 <= t1 ? t0 : std::numeric_limits<double>::infinity();
+  }
+
+  std::vector<Node> nodes_;
+  std::vector<std::uint32_t> items_;
+};
+
+template <typename SqDist>
+std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDist&& sq_dist, double max_sq_dist) const {
+  std::int64_t best = -1;
+  double best_d2 = max_sq_dist;
+  if (nodes_.empty()) return {best, best_d2};
+  std::pair<double, std::uint32_t> stack[64];  // depth <= log2(2^32 / kLeafSize) + 1 for median splits
+  int top = 0;
+  stack[top++] = {sqDistToBox(nodes_[0], q), 0};
+  while (top > 0) {
+    const auto [box_d2, id] = stack[--top];
+    if (box_d2 > best_d2) continue;
+    const Node& n = nodes_[id];
+    if (n.count > 0) {
+      for (std::uint32_t j = n.first; j < n.first + n.count; ++j) {
+        double d2;
+        if constexpr (std::is_invocable_v<SqDist, std::uint32_t, const Eigen::Vector3d&, double>)
+          d2 = sq_dist(items_[j], q, best_d2);
+        else
+          d2 = sq_dist(items_[j], q);
+        if (d2 < best_d2 || (d2 == best_d2 && items_[j] < best)) best_d2 = d2, best = items_[j];
+      }
+      continue;
+    }
+    const double dl = sqDistToBox(nodes_[n.left], q), dr = sqDistToBox(nodes_[n.right], q);
+    // Push the farther child first so the nearer one is searched first.
+    if (dl <= dr) stack[top++] = {dr, n.right}, stack[top++] = {dl, n.left};
+    else stack[top++] = {dl, n.left}, stack[top++] = {dr, n.right};
+  }
+  if (best < 0) best_d2 = std::numeric_limits<double>::infinity();
+  return {best, best_d2};
+}
+
+template <typename Hit>
+std::pair<std::int64_t, double> BoxTree::firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t,
+                                                  Hit&& hit) const {
+  std::int64_t best = -1;
+  double best_t = std::numeric_limits<double>::infinity();
+  if (nodes_.empty() || !(max_t >= 0)) return {best, best_t};
+  const Eigen::Vector3d inv_d = d.cwiseInverse();
+  std::pair<double, std::uint32_t> stack[64];
+  int top = 0;
+  const double t_root = rayEntry(nodes_[0], o, d, inv_d, max_t);
+  if (t_root > max_t) return {best, best_t};
+  stack[top++] = {t_root, 0};
+  while (top > 0) {
+    const auto [box_t, id] = stack[--top];
+    if (box_t > best_t) continue;  // ties kept: an item hit at the same t may have a lower index
+    const Node& n = nodes_[id];
+    const double bound = best_t < max_t ? best_t : max_t;
+    if (n.count > 0) {
+      for (std::uint32_t j = n.first; j < n.first + n.count; ++j) {
+        const double t = hit(items_[j], bound);
+        if (t < best_t || (t == best_t && t <= max_t && items_[j] < best)) best_t = t, best = items_[j];
+      }
+      continue;
+    }
+    const double tl = rayEntry(nodes_[n.left], o, d, inv_d, bound), tr = rayEntry(nodes_[n.right], o, d, inv_d, bound);
+    // The farther child first on the stack, so the nearer one is searched first; misses not at all.
+    if (tl <= tr) {
+      if (tr <= bound) stack[top++] = {tr, n.right};
+      if (tl <= bound) stack[top++] = {tl, n.left};
+    } else {
+      if (tl <= bound) stack[top++] = {tl, n.left};
+      if (tr <= bound) stack[top++] = {tr, n.right};
+    }
+  }
+  if (best_t > max_t) best = -1, best_t = std::numeric_limits<double>::infinity();
+  return {best, best_t};
+}
+
+}  // namespace vdmap
