@@ -147,6 +147,7 @@ TEST(OccupancyTruth, SetsMatchTheRoomsGeometry) {
     ASSERT_TRUE(inside(sets.free[i]));
     ASSERT_GT(d_free[i], params.clearance_m);
     ASSERT_NEAR(sets.free_distance_m[i], d_free[i], 1e-6);
+    ASSERT_GE(sets.free_seen_distance_m[i], d_free[i] - 1e-6);  // a part of the mesh is no nearer
     ASSERT_TRUE(truth.seen(sets.free[i]).free);
   }
   const std::vector<double> d_near = distancesToMeshBruteForce(toFloat(sets.free_near), mesh);
@@ -171,6 +172,10 @@ TEST(OccupancyTruth, SetsMatchTheRoomsGeometry) {
     }
   }
   EXPECT_GT(behind, 0u);
+  // The walls behind both cameras are never seen: their triangles are not in the seen part, so
+  // a free point near the back wall (z = -1) is farther from the seen part than from the mesh.
+  EXPECT_GT(sets.seen_triangles, 0u);
+  EXPECT_LT(sets.seen_triangles, mesh.triangles.size());
 }
 
 TEST(OccupancyTruth, SetsDependOnTheSeedAloneNotOnThreads) {

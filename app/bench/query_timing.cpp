@@ -20,7 +20,7 @@
 #include "app/progress.h"
 #include "app/timing.h"
 #include "mapping/core/timing.h"
-#include "mapping/eval/box_tree.h"
+#include "mapping/core/box_tree.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/occupancy_truth.h"
 #include "mapping/export/map_export.h"
@@ -283,8 +283,9 @@ Accuracy score(const OccupancyTruthSets& sets, const Classifier& classify, const
   a.balanced = (a.o.occupied + a.f.free + a.u.unknown) / 3.0;
   std::vector<Eigen::Vector3d> pts = sets.free;
   pts.insert(pts.end(), sets.free_near.begin(), sets.free_near.end());
-  std::vector<double> truth = sets.free_distance_m;
-  truth.insert(truth.end(), sets.free_near_distance_m.begin(), sets.free_near_distance_m.end());
+  // Truth: the distance to the part of the mesh the frames saw (what a map of them can know).
+  std::vector<double> truth = sets.free_seen_distance_m;
+  truth.insert(truth.end(), sets.free_near_seen_distance_m.begin(), sets.free_near_seen_distance_m.end());
   const std::vector<double> d = distance(pts);
   std::vector<double> err;
   std::size_t over = 0;
@@ -428,9 +429,9 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
     const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
     std::snprintf(buf, sizeof buf,
                   "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
-                  "seen free by a grazing view left out); distance on F + F_near\n",
+                  "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
                   args.mesh.c_str(), m.truth->frames(), sets.occupied.size(), sets.free.size(), sets.free_near.size(),
-                  sets.unknown.size(), sets.ambiguous_occupied);
+                  sets.unknown.size(), sets.ambiguous_occupied, sets.seen_triangles, mesh->triangles.size());
     text << buf;
     std::snprintf(buf, sizeof buf, "%-16s %8s %7s %7s %8s %7s %8s %9s %9s %8s %11s\n", "method", "bal.acc", "rec O",
                   "rec F", "rec Fnear", "rec U", "O free", "|d| med", "|d| p95", "over 1cm", "memory [MB]");
@@ -438,6 +439,7 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
     nlohmann::json acc = {{"sets", {{"occupied", sets.occupied.size()}, {"free", sets.free.size()},
                                     {"free_near", sets.free_near.size()}, {"unknown", sets.unknown.size()},
                                     {"ambiguous_occupied", sets.ambiguous_occupied}}},
+                          {"seen_triangles", sets.seen_triangles},
                           {"truth_frames", m.truth->frames()},
                           {"vdmap_query_bytes", m.query.memoryBytes()},
                           {"vdmap_kept_cell_bytes", kept_bytes}};

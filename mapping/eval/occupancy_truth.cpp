@@ -205,6 +205,31 @@ OccupancyTruthSets OccupancyTruth::sample(const ColoredTriangleMesh& mesh) const
     for (std::size_t i = 0; i < candidates.size() && sets.unknown.size() < P.unknown; ++i)
       if (never[i]) sets.unknown.push_back(candidates[i]);
   }
+
+  // The seen part of the mesh and the free points' distances to it.
+  {
+    std::vector<std::uint32_t> tri;
+    const std::vector<Eigen::Vector3f> samples = sampleMeshSurface(mesh, P.seen_mesh_samples, P.seed + 1000, &tri);
+    std::vector<std::uint8_t> seen_sample(samples.size());
+    parallelFor(P.threads, samples.size(), [&](std::size_t i) {
+      for (std::size_t f = 0; f < frames_.size() && !seen_sample[i]; ++f)
+        seen_sample[i] = sight(f, samples[i].cast<double>()) == FrameSight::kSurface;
+    });
+    std::vector<std::uint8_t> seen_triangle(mesh.triangles.size(), 0);
+    for (std::size_t i = 0; i < samples.size(); ++i) seen_triangle[tri[i]] |= seen_sample[i];
+    ColoredTriangleMesh seen_mesh;
+    seen_mesh.positions = mesh.positions;
+    seen_mesh.colors = mesh.colors;
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      if (seen_triangle[t]) seen_mesh.triangles.push_back(mesh.triangles[t]);
+    sets.seen_triangles = seen_mesh.triangles.size();
+    const auto toSeen = [&](const std::vector<Eigen::Vector3d>& points) {
+      if (seen_mesh.triangles.empty()) return std::vector<double>(points.size(), std::numeric_limits<double>::infinity());
+      return distancesToMesh(asFloat(points), seen_mesh);
+    };
+    sets.free_seen_distance_m = toSeen(sets.free);
+    sets.free_near_seen_distance_m = toSeen(sets.free_near);
+  }
   return sets;
 }
 
