@@ -23,6 +23,7 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/session_file.h"
+#include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/query_map.h"
 #include "mapping/query/surface_index.h"
 
@@ -77,6 +78,23 @@ void makeSetup(const std::string& file) {
   }
   for (int i = 0; i < 8; ++i)
     setup->views.push_back(graph.keyframe(static_cast<int>((graph.size() * (2 * i + 1)) / 16)).T_W_K);
+
+  // The first view raster against castRays on its pixel rays (bit for bit, as the tests check on
+  // generated maps).
+  const PinholeCamera& camera = setup->session.info.camera;
+  const std::vector<RayHit> pixels = setup->map.castView(camera, setup->views[0], 8.0);
+  std::vector<Ray> rays;
+  for (int v = 0; v < camera.height; ++v)
+    for (int x = 0; x < camera.width; ++x)
+      rays.push_back({setup->views[0].translation(), pixelRay(camera, setup->views[0], x, v), 8.0});
+  std::vector<RayHit> traced(rays.size());
+  setup->map.castRays(rays, traced);
+  std::size_t differ = 0;
+  for (std::size_t p = 0; p < rays.size(); ++p)
+    differ += pixels[p].hit != traced[p].hit || pixels[p].t_m != traced[p].t_m ||
+              pixels[p].ellipsoid != traced[p].ellipsoid || pixels[p].normal_W != traced[p].normal_W;
+  std::printf("bench_query: castView of keyframe %zu's view == castRays on its %zu pixels: %s (%zu differ)\n",
+              graph.size() / 16, rays.size(), differ == 0 ? "yes" : "NO", differ);
 }
 
 void SurfaceBuild(benchmark::State& state) {

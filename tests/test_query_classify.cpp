@@ -192,8 +192,8 @@ TEST(QueryClassify, AnalyticWallFreeInFrontOccupiedOnItUnknownBehindAndOutside) 
   const std::vector<Eigen::Vector3d> front{{0, 0, 1.5}, {0.3, 0.2, 1.5}, {-0.4, -0.3, 1.0}, {0.1, 0.1, 0.3}};
   const std::vector<Eigen::Vector3d> wall{{0, 0, 2}, {0.31, 0.17, 2}, {-0.52, 0.4, 2}};
   const std::vector<Eigen::Vector3d> behind{{0, 0, 2.02}, {0.31, 0.17, 2.02}, {-0.52, 0.4, 2.05}};
-  // Behind the camera, beside the frustum, far outside the room.
-  const std::vector<Eigen::Vector3d> outside{{0, 0, -1.0}, {1.9, 0, 0.1}, {0, 0, 5}, {10, 10, 10}};
+  // Behind the camera, at its centre (z = 0), beside the frustum, far outside the room.
+  const std::vector<Eigen::Vector3d> outside{{0, 0, -1.0}, {0, 0, 0}, {1.9, 0, 0.1}, {0, 0, 5}, {10, 10, 10}};
   for (const auto& c : classify(map, front)) {
     EXPECT_EQ(c.state, Occupancy::kFree) << describe(c);
     EXPECT_EQ(c.keyframe, 0);
@@ -366,6 +366,25 @@ TEST(QueryClassify, AnEmptyMapIsUnknownEverywhere) {
     }
     EXPECT_THROW(classifyInKeyframe(map, 0, points), std::invalid_argument);
   }
+}
+
+// A keyframe whose cells the filter all rejected sees nothing: no verdict anywhere, no seen box.
+TEST(QueryClassify, AKeyframeWithoutKeptCellsSeesNothing) {
+  KeyframeGraph graph;
+  const Transform T = test::lookAt({0, 0, 0}, {0, 0, 2});
+  test::addBoxRoomKeyframe(&graph, smallCamera(), T, T);
+  GlobalMapParams gp;
+  gp.filter.min_points = 1000000;
+  const QueryMap map = QueryMap::build(graph, buildGlobalMap(graph, gp), {});
+  EXPECT_EQ(map.keyframes(), 1u);
+  EXPECT_EQ(map.ellipsoids(), 0u);
+  EXPECT_FALSE(map.empty());
+  Eigen::Vector3d lo, hi;
+  map.seenBounds(&lo, &hi);
+  EXPECT_GT(lo.x(), hi.x());
+  const std::vector<Eigen::Vector3d> points{{0, 0, 1.5}, {0, 0, 2}};
+  for (const auto& c : classify(map, points)) EXPECT_EQ(c.state, Occupancy::kUnknown);
+  for (const auto& c : classifyInKeyframe(map, 0, points)) EXPECT_EQ(c.state, Occupancy::kUnknown);
 }
 
 TEST(QueryClassify, BadInputThrows) {

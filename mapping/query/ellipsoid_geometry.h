@@ -72,18 +72,29 @@ inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d
 /// The smallest t >= 0 at which o + t d (d unit) enters the gate, t = 0 when o is inside; +inf when
 /// the ray misses it or enters it beyond max_t. alpha = d^T A d, beta = d^T A (o - mean), the root
 /// gamma / (sqrt(beta^2 - alpha gamma) - beta) (the smaller root, without cancellation).
-inline double gateRayEntry(const EllipsoidGate& g, const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
+/// True when gamma / (-2 beta) > max_t by more than rounding (beta < 0).
+inline bool gateEntryBeyond(double gamma, double beta, double max_t) { return gamma > max_t * (-2.0 * beta) * (1 + 1e-9); }
+
+inline double gateRayEntry(const double a[6], const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
   constexpr double kInf = std::numeric_limits<double>::infinity();
   if (o.gamma <= 0) return 0.0;
   const double beta = d.x() * o.A_oc.x() + d.y() * o.A_oc.y() + d.z() * o.A_oc.z();
   if (beta >= 0) return kInf;  // moving away from the gate's centre while outside: no entry ahead
-  const Eigen::Matrix3d& A = g.A;
-  const double alpha = A(0, 0) * d.x() * d.x() + A(1, 1) * d.y() * d.y() + A(2, 2) * d.z() * d.z() +
-                       2.0 * (A(0, 1) * d.x() * d.y() + A(0, 2) * d.x() * d.z() + A(1, 2) * d.y() * d.z());
+  // sqrt(disc) <= -beta, so t >= gamma / (-2 beta): beyond max_t (with slack for rounding) it is a
+  // miss without the rest. Gives the same answers, sooner, when a nearer hit is known.
+  if (gateEntryBeyond(o.gamma, beta, max_t)) return kInf;
+  const double alpha = gateQuadratic(d.x(), d.y(), d.z(), a[0], a[1], a[2], a[3], a[4], a[5]);
   const double disc = beta * beta - alpha * o.gamma;
   if (disc < 0) return kInf;
   const double t = o.gamma / (std::sqrt(disc) - beta);
   return t <= max_t ? t : kInf;
+}
+
+/// gateRayEntry with the gate's A (its upper triangle a = A00, A11, A22, A01, A02, A12: the same
+/// bits from a packed copy).
+inline double gateRayEntry(const EllipsoidGate& g, const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
+  const double a[6] = {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)};
+  return gateRayEntry(a, o, d, max_t);
 }
 
 /// Outward unit normal of the gate's surface at p: A (p - mean) normalised.

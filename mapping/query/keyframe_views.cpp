@@ -16,12 +16,15 @@ namespace {
 /// One kept cell as the queries use it (docs/method.md 13.1): mean and A = (Sigma + s0^2 I)^-1 in
 /// the keyframe frame. The point's terms are taken relative to the mean (d = q - mu), so the gate
 /// distance m^2 = d^T A d has no cancellation; a = q^T A q and q^T A d = a - b follow from A q.
+/// Stored in float (40 B instead of 80: the cells are most of the views' memory and every cell
+/// read is a cache miss); the terms are evaluated in double. mu is the container's float mean
+/// exactly; A is rounded to float (1e-7 relative, far below the sensor's noise).
 struct Cell {
-  double a[6];   // A: xx xy xz yy yz zz
-  double mu[3];
-  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one: a point nearer
-  /// than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z, exactly).
-  double z_near_3x3;
+  float a[6];   // A: xx xy xz yy yz zz
+  float mu[3];
+  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one, rounded down: a
+  /// point nearer than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z).
+  float z_near_3x3;
 };
 
 /// A grid cell of a keyframe's container: its kept cell (-1: none) and the farthest z of that
@@ -45,21 +48,23 @@ struct CellTerms {
 };
 
 inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
+  const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = c.a[0] * dx + c.a[1] * dy + c.a[2] * dz;
-  const double ay = c.a[1] * dx + c.a[3] * dy + c.a[4] * dz;
-  const double az = c.a[2] * dx + c.a[4] * dy + c.a[5] * dz;
+  const double ax = a0 * dx + a1 * dy + a2 * dz;
+  const double ay = a1 * dx + a3 * dy + a4 * dz;
+  const double az = a2 * dx + a4 * dy + a5 * dz;
   return dx * ax + dy * ay + dz * az;
 }
 
 inline CellTerms terms(const Cell& c, const Eigen::Vector3d& q) {
+  const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = c.a[0] * dx + c.a[1] * dy + c.a[2] * dz;
-  const double ay = c.a[1] * dx + c.a[3] * dy + c.a[4] * dz;
-  const double az = c.a[2] * dx + c.a[4] * dy + c.a[5] * dz;
-  const double qx = c.a[0] * q.x() + c.a[1] * q.y() + c.a[2] * q.z();
-  const double qy = c.a[1] * q.x() + c.a[3] * q.y() + c.a[4] * q.z();
-  const double qz = c.a[2] * q.x() + c.a[4] * q.y() + c.a[5] * q.z();
+  const double ax = a0 * dx + a1 * dy + a2 * dz;
+  const double ay = a1 * dx + a3 * dy + a4 * dz;
+  const double az = a2 * dx + a4 * dy + a5 * dz;
+  const double qx = a0 * q.x() + a1 * q.y() + a2 * q.z();
+  const double qy = a1 * q.x() + a3 * q.y() + a4 * q.z();
+  const double qz = a2 * q.x() + a4 * q.y() + a5 * q.z();
   return {dx * ax + dy * ay + dz * az, q.x() * qx + q.y() * qy + q.z() * qz, q.x() * ax + q.y() * ay + q.z() * az};
 }
 
@@ -114,10 +119,15 @@ struct KeyframeViews::Impl {
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
 
   ViewVerdict verdict(const View& view, const Eigen::Vector3d& q_W) const {
-    ViewVerdict out;
     Eigen::Vector3d q;
     int col = 0, row = 0;
-    if (!view.locate(q_W, &q, &col, &row)) return out;
+    if (!view.locate(q_W, &q, &col, &row)) return {};
+    return verdictAt(view, q, col, row);
+  }
+
+  /// verdict() of a point located in the view (keyframe frame q, its grid column and row).
+  ViewVerdict verdictAt(const View& view, const Eigen::Vector3d& q, int col, int row) const {
+    ViewVerdict out;
     // Occupied: the nearest gate among the 3x3 cells (a gate reaches past its cell's border).
     double best_m2 = std::numeric_limits<double>::infinity();
     const Cell* best = nullptr;
@@ -169,6 +179,38 @@ struct KeyframeViews::Impl {
     out->m2 = t.m2;
     out->sigma_t = q.norm() / sqrt_a;
     return true;
+  }
+
+  /// Calls visit(id, verdict) for each of `ids` in turn until it returns false; the 3x3 slots of
+  /// each batch of candidates are prefetched first (as firstFree).
+  template <typename Visit>
+  void scanVerdicts(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, const Visit& visit) const {
+    constexpr std::size_t kBatch = 8;
+    struct Located {
+      const View* view;
+      Eigen::Vector3d q;
+      int col, row;
+      bool ok;
+    };
+    Located loc[kBatch];
+    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
+      const std::size_t m = std::min(kBatch, ids.size() - start);
+      for (std::size_t j = 0; j < m; ++j) {
+        Located& l = loc[j];
+        l.view = &views[static_cast<std::size_t>(ids[start + j])];
+        l.ok = l.view->locate(q_W, &l.q, &l.col, &l.row);
+        if (!l.ok) continue;
+        for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
+          const Slot* row = &l.view->slot[static_cast<std::size_t>(r) * l.view->cols];
+          __builtin_prefetch(row + std::max(l.col - 1, 0));
+          __builtin_prefetch(row + std::min(l.col + 1, l.view->cols - 1));
+        }
+      }
+      for (std::size_t j = 0; j < m; ++j) {
+        const Located& l = loc[j];
+        if (!visit(ids[start + j], l.ok ? verdictAt(*l.view, l.q, l.col, l.row) : ViewVerdict{})) return;
+      }
+    }
   }
 
   /// The first of `ids` (in their order) whose verdict is free, or -1: verdict() == kFree without
@@ -255,8 +297,9 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     const Eigen::Matrix3d cov = e.cov + s0 * s0 * Eigen::Matrix3d::Identity();
     const Eigen::Matrix3d A = cov.inverse();
     Cell c;
-    c.a[0] = A(0, 0), c.a[1] = A(0, 1), c.a[2] = A(0, 2), c.a[3] = A(1, 1), c.a[4] = A(1, 2), c.a[5] = A(2, 2);
-    c.mu[0] = e.mean.x(), c.mu[1] = e.mean.y(), c.mu[2] = e.mean.z();
+    const double upper[6] = {A(0, 0), A(0, 1), A(0, 2), A(1, 1), A(1, 2), A(2, 2)};
+    for (int j = 0; j < 6; ++j) c.a[j] = static_cast<float>(upper[j]);
+    for (int j = 0; j < 3; ++j) c.mu[j] = cells[i].mean[j];
     const double half_z = k * std::sqrt(cov(2, 2));
     Slot& slot = v.slot[static_cast<std::size_t>(cells[i].grid_index)];
     slot.cell = static_cast<std::int32_t>(v.cells.size());
@@ -284,7 +327,7 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, v.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
           nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
-      v.cells[slot.cell].z_near_3x3 = nearest;
+      v.cells[slot.cell].z_near_3x3 = std::nextafter(static_cast<float>(nearest), -std::numeric_limits<float>::infinity());
     }
   return v;
 }
@@ -353,11 +396,11 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
     impl->hi = impl->hi.cwiseMax(v.hi);
   }
   if (impl->lo.x() <= impl->hi.x()) {
-    // Voxels of 0.25 m (a room is a few thousand), coarser when the box would need more than
+    // Voxels of 0.125 m (a room is a few ten thousand), coarser when the box would need more than
     // 2^23 of them (a large map: the index stays under ~40 MB).
     const Eigen::Vector3d extent = impl->hi - impl->lo;
     const double volume = (extent.array() + 0.25).prod();
-    impl->voxel_m = std::max(0.25, std::cbrt(volume / double(1 << 23)) * 1.01);
+    impl->voxel_m = std::max(0.125, std::cbrt(volume / double(1 << 23)) * 1.01);
     impl->origin = impl->lo;
     impl->nx = static_cast<int>(std::floor(extent.x() / impl->voxel_m)) + 1;
     impl->ny = static_cast<int>(std::floor(extent.y() / impl->voxel_m)) + 1;
@@ -446,21 +489,18 @@ ViewVerdict KeyframeViews::combined(const Eigen::Vector3d& q_W, int* keyframe) c
     case ConflictRule::kOccupied:
       *keyframe = im.firstFree(ids, q_W, &best);
       return *keyframe >= 0 ? best : ViewVerdict{};
-    case ConflictRule::kRecent:  // candidates by rank, highest first
-      for (const std::int32_t id : ids) {
-        best = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);
-        if (best.state != Occupancy::kUnknown) {
-          *keyframe = id;
-          return best;
-        }
-      }
-      return ViewVerdict{};
+    case ConflictRule::kRecent:  // candidates by rank, highest first: the first verdict decides
+      im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
+        if (v.state == Occupancy::kUnknown) return true;
+        best = v, *keyframe = id;
+        return false;
+      });
+      return best;
     case ConflictRule::kPrecise:
-      for (const std::int32_t id : ids) {
-        const ViewVerdict verdict = im.verdict(im.views[static_cast<std::size_t>(id)], q_W);
-        if (verdict.state != Occupancy::kUnknown && (*keyframe < 0 || verdict.sigma_t < best.sigma_t))
-          best = verdict, *keyframe = id;
-      }
+      im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
+        if (v.state != Occupancy::kUnknown && (*keyframe < 0 || v.sigma_t < best.sigma_t)) best = v, *keyframe = id;
+        return true;
+      });
       return best;
   }
   return best;

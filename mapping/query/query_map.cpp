@@ -2,6 +2,7 @@
 // collision and rays are in query_map_surface.cpp.
 #include "mapping/query/query_map.h"
 
+#include <algorithm>
 #include <cmath>
 #include <stdexcept>
 #include <string>
@@ -38,6 +39,16 @@ void checkPoints(std::span<const Eigen::Vector3d> q_W, std::size_t out_size) {
                                 " outputs");
   for (std::size_t i = 0; i < q_W.size(); ++i)
     if (!q_W[i].allFinite()) throw std::invalid_argument("point " + std::to_string(i) + " is not finite");
+}
+
+/// body(i) for i in [0, n) through parallelFor in chunks of 1024 points (a point takes ~1 us:
+/// a task per point would cost as much as the point).
+template <typename Body>
+void forEachPoint(int threads, std::size_t n, const Body& body) {
+  constexpr std::size_t kChunk = 1024;
+  parallelFor(threads, (n + kChunk - 1) / kChunk, [&](std::size_t chunk) {
+    for (std::size_t i = chunk * kChunk; i < std::min(n, (chunk + 1) * kChunk); ++i) body(i);
+  });
 }
 
 }  // namespace
@@ -91,7 +102,7 @@ void QueryMap::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const { data
 void QueryMap::classify(std::span<const Eigen::Vector3d> q_W, std::span<Classification> out) const {
   checkPoints(q_W, out.size());
   const Data& d = *data_;
-  parallelFor(d.params.threads, q_W.size(), [&](std::size_t i) {
+  forEachPoint(d.params.threads, q_W.size(), [&](std::size_t i) {
     const Eigen::Vector3d& q = q_W[i];
     if (d.params.conflict == ConflictRule::kOccupied) {
       // docs/method.md 13.2: the global map's gates decide occupied, the keyframes' views free.
@@ -118,8 +129,8 @@ void QueryMap::classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d>
     throw std::invalid_argument("keyframe " + std::to_string(keyframe) + " is not in the map (" +
                                 std::to_string(d.views.size()) + " keyframes)");
   checkPoints(q_W, out.size());
-  parallelFor(d.params.threads, q_W.size(),
-              [&](std::size_t i) { out[i] = fromVerdict(d.views.verdict(keyframe, q_W[i]), keyframe); });
+  forEachPoint(d.params.threads, q_W.size(),
+               [&](std::size_t i) { out[i] = fromVerdict(d.views.verdict(keyframe, q_W[i]), keyframe); });
 }
 
 }  // namespace vdmap

@@ -1,6 +1,7 @@
 // QueryMap's surface queries (docs/method.md 13.4-13.6): distance to the nearest k-sigma gate
 // surface, collision of sphere bodies, first gate entry along rays and whole camera views.
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <map>
 #include <stdexcept>
@@ -59,7 +60,8 @@ void QueryMap::distance(std::span<const Eigen::Vector3d> q_W, std::span<Distance
     r.ellipsoid = n.ellipsoid;
     if (n.ellipsoid >= 0) {
       r.closest_W = n.closest;
-      if (n.distance > 0) r.gradient = (q_W[i] - n.closest) / (q_W[i] - n.closest).norm();
+      const Eigen::Vector3d away = q_W[i] - n.closest;
+      if (n.distance > 0 && away.norm() > 0) r.gradient = away / away.norm();
     }
     out[i] = r;
   });
@@ -150,44 +152,83 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
   // over the exact image box of its silhouette (+1 px), where every pixel evaluates the same
   // gateRayEntry on the same pixelRay as castRays; a pixel keeps the smallest (t, index). Gates go
   // nearest first, so a pixel whose hit is nearer than a gate's nearest point skips that gate.
-  struct Splat {
-    double t_lo = 0;  // no point of the gate is nearer to o (with slack for rounding)
-    std::int32_t index = -1;
-    int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
-    GateRayOrigin origin;
-  };
+  // Inward unit normals of the frustum's side planes through the camera centre, 2 px outside the
+  // image's outer pixel edges (camera frame).
+  std::vector<Eigen::Vector3d> frustum_normals;
+  {
+    const double l = (-2.5 - camera.cx) / camera.fx, r = (camera.width + 1.5 - camera.cx) / camera.fx;
+    const double t = (-2.5 - camera.cy) / camera.fy, b = (camera.height + 1.5 - camera.cy) / camera.fy;
+    frustum_normals = {Eigen::Vector3d(1, 0, -l).normalized(), Eigen::Vector3d(-1, 0, r).normalized(),
+                       Eigen::Vector3d(0, 1, -t).normalized(), Eigen::Vector3d(0, -1, b).normalized()};
+  }
   const std::size_t n = surface.size();
-  std::vector<Splat> splats(n);
+  std::vector<std::pair<double, std::int32_t>> nearest(n);  // (t_lo, index); index -1: not in view
+  std::vector<std::array<std::int16_t, 4>> box(n);          // its image box
   parallelFor(threads, n, [&](std::size_t i) {
     const EllipsoidGate& g = surface.gateOf(i);
-    Splat& s = splats[i];
-    if (!gateImageBounds(g, camera, T_C_W, 1.0, &s.u0, &s.u1, &s.v0, &s.v1)) return;
-    s.index = static_cast<std::int32_t>(i);
-    s.origin = gateRayOrigin(g, o);
+    int u0, u1, v0, v1;
+    nearest[i] = {0.0, -1};
+    // Cheap first: the gate's bounding ball behind the camera or outside a side of the frustum.
+    const Eigen::Vector3d c = T_C_W * g.mean;
+    const double radius = g.semi_axes[0] * (1 + 1e-9) + 1e-9;
+    if (c.z() + radius <= 0) return;
+    for (const Eigen::Vector3d& n : frustum_normals)
+      if (n.dot(c) < -radius) return;
+    if (!gateImageBounds(g, camera, T_C_W, 1.0, &u0, &u1, &v0, &v1)) return;
+    box[i] = {static_cast<std::int16_t>(u0), static_cast<std::int16_t>(u1), static_cast<std::int16_t>(v0),
+              static_cast<std::int16_t>(v1)};
+    // No point of the gate is nearer to o (with slack for rounding).
     const double gap = (o - g.mean).norm() - g.semi_axes[0];
-    s.t_lo = gap > 0 ? gap * (1 - 1e-9) - 1e-9 : -1.0;
+    nearest[i] = {gap > 0 ? gap * (1 - 1e-9) - 1e-9 : -1.0, static_cast<std::int32_t>(i)};
   });
-  std::vector<std::pair<double, std::int32_t>> order;  // (t_lo, index): nearest first, no ties
-  for (const Splat& s : splats)
-    if (s.index >= 0) order.push_back({s.t_lo, s.index});
+  std::vector<std::pair<double, std::int32_t>> order;  // nearest first, no ties
+  for (const auto& e : nearest)
+    if (e.second >= 0) order.push_back(e);
   parallelSort(threads, order.begin(), order.end());
 
+  // Everything a splat's pixels read, in that order (packed, computed once).
+  struct Splat {
+    double t_lo = 0;
+    std::int32_t index = -1;
+    int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
+    double a[6];          // the gate's A, upper triangle
+    GateRayOrigin origin;
+    // The silhouette's span per row (see below): w = R A (o - mean), B = R A R^T (upper), qa.
+    Eigen::Vector3d w;
+    double b[6];
+    double qa = 0;
+  };
+  std::vector<Splat> splats(order.size());
+  parallelFor(threads, order.size(), [&](std::size_t k) {
+    const EllipsoidGate& g = surface.gateOf(static_cast<std::size_t>(order[k].second));
+    Splat& s = splats[k];
+    s.t_lo = order[k].first;
+    s.index = order[k].second;
+    const auto& bx = box[static_cast<std::size_t>(s.index)];
+    s.u0 = bx[0], s.u1 = bx[1], s.v0 = bx[2], s.v1 = bx[3];
+    const double a[6] = {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)};
+    std::copy(a, a + 6, s.a);
+    s.origin = gateRayOrigin(g, o);
+    s.w = R_C_W * s.origin.A_oc;
+    const Eigen::Matrix3d B = R_C_W * g.A * R_C_W.transpose();
+    const double b[6] = {B(0, 0), B(1, 1), B(2, 2), B(0, 1), B(0, 2), B(1, 2)};
+    std::copy(b, b + 6, s.b);
+    s.qa = s.w.x() * s.w.x() - s.origin.gamma * B(0, 0);
+  });
+
   // Row tiles; per tile the splats that reach it, nearest first.
-  constexpr int kTileRows = 8;
+  constexpr int kTileRows = 16;
   const std::size_t tiles = (height + kTileRows - 1) / kTileRows;
   std::vector<std::size_t> tile_start(tiles + 1, 0);
-  for (const auto& [t_lo, i] : order) {
-    const Splat& s = splats[static_cast<std::size_t>(i)];
+  for (const Splat& s : splats)
     for (int t = s.v0 / kTileRows; t <= s.v1 / kTileRows; ++t) ++tile_start[static_cast<std::size_t>(t) + 1];
-  }
   for (std::size_t t = 0; t < tiles; ++t) tile_start[t + 1] += tile_start[t];
-  std::vector<std::int32_t> tile_splats(tile_start[tiles]);
+  std::vector<std::uint32_t> tile_splats(tile_start[tiles]);
   {
     std::vector<std::size_t> fill(tile_start.begin(), tile_start.end() - 1);
-    for (const auto& [t_lo, i] : order) {
-      const Splat& s = splats[static_cast<std::size_t>(i)];
-      for (int t = s.v0 / kTileRows; t <= s.v1 / kTileRows; ++t) tile_splats[fill[static_cast<std::size_t>(t)]++] = i;
-    }
+    for (std::size_t k = 0; k < splats.size(); ++k)
+      for (int t = splats[k].v0 / kTileRows; t <= splats[k].v1 / kTileRows; ++t)
+        tile_splats[fill[static_cast<std::size_t>(t)]++] = static_cast<std::uint32_t>(k);
   }
 
   parallelFor(threads, tiles, [&](std::size_t tile) {
@@ -201,27 +242,30 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
       for (std::size_t u = 0; u < width; ++u)
         dir[static_cast<std::size_t>(v - row0) * width + u] =
             unitDirection(pixelRay(camera, T_W_C, static_cast<int>(u), v));
+    double farthest = std::numeric_limits<double>::infinity();  // max best_t over the tile (refreshed)
     for (std::size_t k = tile_start[tile]; k < tile_start[tile + 1]; ++k) {
-      const Splat& s = splats[static_cast<std::size_t>(tile_splats[k])];
-      const EllipsoidGate& g = surface.gateOf(static_cast<std::size_t>(s.index));
-      // Per row, only the pixels whose rays can reach the gate: with r = R_C_W^T-ray (x, y, 1),
-      // gateRayEntry's discriminant (r.w)^2 - gamma r^T B r (w = R A (o - mean), B = R A R^T) is a
-      // quadratic in x that is >= 0 on the silhouette's span of the row. Extra pixels only cost
-      // time (each still evaluates the exact entry), so the span is grown by 2 px.
-      const Eigen::Vector3d w = R_C_W * s.origin.A_oc;
-      const Eigen::Matrix3d B = R_C_W * g.A * R_C_W.transpose();
-      const double gamma = s.origin.gamma;
-      const double qa = w.x() * w.x() - gamma * B(0, 0);
+      if (k + 4 < tile_start[tile + 1]) __builtin_prefetch(&splats[tile_splats[k + 4]]);
+      const Splat& s = splats[tile_splats[k]];
+      // Splats come nearest first: once one starts beyond every pixel's hit, so do the rest, and
+      // every pixel would skip them.
+      if ((k - tile_start[tile]) % 256 == 255) farthest = *std::max_element(best_t.begin(), best_t.end());
+      if (s.t_lo > farthest) break;
+      // Per row, only the pixels whose rays can reach the gate: with r = R_C_W d = (x, y, 1) up to
+      // scale, gateRayEntry's discriminant (r.w)^2 - gamma r^T B r is a quadratic in x that is
+      // >= 0 on the silhouette's span of the row. Extra pixels only cost time (each still
+      // evaluates the exact entry), so the span is grown by 2 px.
+      const Eigen::Vector3d& w = s.w;
+      const double gamma = s.origin.gamma, qa = s.qa, inv_qa = 1.0 / qa;
       for (int v = std::max(s.v0, row0); v <= std::min(s.v1, row1); ++v) {
         const std::size_t row = static_cast<std::size_t>(v - row0) * width;
         int ua = s.u0, ub = s.u1;
         if (gamma > 0 && qa < 0) {
           const double y = (v - camera.cy) / camera.fy, wy = w.y() * y + w.z();
-          const double qb = w.x() * wy - gamma * (B(0, 1) * y + B(0, 2));
-          const double qc = wy * wy - gamma * (B(1, 1) * y * y + 2.0 * B(1, 2) * y + B(2, 2));
+          const double qb = w.x() * wy - gamma * (s.b[3] * y + s.b[4]);
+          const double qc = wy * wy - gamma * (s.b[1] * y * y + 2.0 * s.b[5] * y + s.b[2]);
           const double disc = qb * qb - qa * qc;
           const double r = disc > 0 ? std::sqrt(disc) : 0.0;  // no span: the vertex, in case of rounding
-          const double x_lo = (-qb + r) / qa, x_hi = (-qb - r) / qa;  // qa < 0
+          const double x_lo = (-qb + r) * inv_qa, x_hi = (-qb - r) * inv_qa;  // qa < 0
           const double p_lo = camera.cx + camera.fx * x_lo - 2.0, p_hi = camera.cx + camera.fx * x_hi + 2.0;
           if (p_lo <= p_hi) {  // (not NaN)
             if (p_lo > ua) ua = p_lo > ub ? ub + 1 : static_cast<int>(std::floor(p_lo));
@@ -232,7 +276,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
           const std::size_t p = row + static_cast<std::size_t>(u);
           const double bt = best_t[p];
           if (bt < s.t_lo) continue;
-          const double t = gateRayEntry(g, s.origin, dir[p], std::min(bt, max_range_m));
+          const double t = gateRayEntry(s.a, s.origin, dir[p], std::min(bt, max_range_m));
           if (t < bt || (t == bt && t <= max_range_m && s.index < best_i[p])) best_t[p] = t, best_i[p] = s.index;
         }
       }
