@@ -5,7 +5,8 @@
 // figure is one core), then times:
 // - SurfaceBuild: the gates, gate grid and box tree of the global map's ellipsoids;
 // - Gate: SurfaceIndex::gate (the occupied test of classification) per point;
-// - Distance: QueryMap::distance per point (batches of 10k);
+// - Distance: QueryMap::distance per point (batches of 10k; DistanceHalf/1 the near half, /0 the
+//   uniform half);
 // - CastRays: QueryMap::castRays per ray, 8 m (batches of 10k);
 // - CastView: one 640x480 (the session camera's) QueryMap::castView from a keyframe's pose,
 //   cycling through 8 keyframes spread over the session.
@@ -117,6 +118,18 @@ void Distance(benchmark::State& state) {
   state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(setup->points.size()));
 }
 
+// The two halves of the points apart: near surfaces (within 10 cm of a mean) and uniform in the
+// seen box (mostly open space, where many surface patches are almost equally near).
+void DistanceHalf(benchmark::State& state) {
+  std::vector<Eigen::Vector3d> half;
+  for (std::size_t i = static_cast<std::size_t>(state.range(0)); i < setup->points.size(); i += 2)
+    half.push_back(setup->points[i]);
+  std::vector<DistanceResult> out(half.size());
+  for (auto _ : state) setup->map.distance(half, out);
+  state.SetItemsProcessed(state.iterations() * static_cast<std::int64_t>(half.size()));
+  state.SetLabel(state.range(0) == 1 ? "near surfaces" : "uniform in the seen box");
+}
+
 void CastRays(benchmark::State& state) {
   std::vector<RayHit> out(setup->rays.size());
   for (auto _ : state) setup->map.castRays(setup->rays, out);
@@ -138,6 +151,7 @@ void CastView(benchmark::State& state) {
 BENCHMARK(SurfaceBuild)->Unit(benchmark::kMillisecond);
 BENCHMARK(Gate)->Unit(benchmark::kMillisecond);
 BENCHMARK(Distance)->Unit(benchmark::kMillisecond);
+BENCHMARK(DistanceHalf)->Arg(1)->Arg(0)->Unit(benchmark::kMillisecond);
 BENCHMARK(CastRays)->Unit(benchmark::kMillisecond);
 BENCHMARK(CastView)->Unit(benchmark::kMillisecond);
 

@@ -423,6 +423,11 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
           }
     });
     // Counting sort by voxel; filling in id order keeps each voxel's list ascending.
+    std::size_t pairs = 0;
+    for (const auto& t : touched) pairs += t.size();
+    if (pairs > std::numeric_limits<std::uint32_t>::max())  // ~16 GB of lists: thousands of keyframes
+      throw std::invalid_argument("the visibility index would list " + std::to_string(pairs) +
+                                  " (voxel, keyframe) pairs, more than it can address");
     impl->begin.assign(voxels + 1, 0);
     for (const auto& t : touched)
       for (std::uint32_t vox : t) ++impl->begin[vox + 1];

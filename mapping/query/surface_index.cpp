@@ -102,6 +102,7 @@ void gateBox(const EllipsoidGate& g, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
 struct SurfaceIndex::Impl {
   std::vector<EllipsoidGate> gates;
   std::vector<GateTest> tests;  // per gate
+  std::vector<Eigen::Vector4d> balls;  // per gate: mean, longest semi-axis
   std::vector<int> levels_used;  // the non-empty levels
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
@@ -118,8 +119,10 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
   impl->tests.resize(n);
+  impl->balls.resize(n);
   parallelFor(params.threads, n, [&](std::size_t i) {
     const EllipsoidGate& g = impl->gates[i];
+    impl->balls[i] = Eigen::Vector4d(g.mean.x(), g.mean.y(), g.mean.z(), g.semi_axes[0]);
     gateBox(g, &lo[i], &hi[i]);
     impl->tests[i] = {{g.mean.x(), g.mean.y(), g.mean.z()},
                       {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
@@ -194,6 +197,7 @@ std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0;
 std::size_t SurfaceIndex::memoryBytes() const {
   if (!impl_) return 0;
   std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
+                      impl_->balls.capacity() * sizeof(Eigen::Vector4d) +
                       impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
   // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
@@ -202,6 +206,8 @@ std::size_t SurfaceIndex::memoryBytes() const {
 }
 
 const EllipsoidGate& SurfaceIndex::gateOf(std::size_t i) const { return impl_->gates[i]; }
+
+const Eigen::Vector4d& SurfaceIndex::ballOf(std::size_t i) const { return impl_->balls[i]; }
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
   std::pair<std::int32_t, double> best{-1, kInf};

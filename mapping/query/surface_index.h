@@ -46,6 +46,8 @@ class SurfaceIndex {
 
   /// Ellipsoid i's gate (as built: the kernels' input).
   const EllipsoidGate& gateOf(std::size_t i) const;
+  /// A ball holding ellipsoid i's gate: its mean and longest semi-axis (packed, for culling).
+  const Eigen::Vector4d& ballOf(std::size_t i) const;
 
  private:
   struct Impl;
