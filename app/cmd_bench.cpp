@@ -22,6 +22,7 @@
 #include "app/bench/ndt_om_timing.h"
 #include "app/bench/octomap_timing.h"
 #include "app/bench/odometry_timing.h"
+#include "app/bench/query_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
 #include "app/commands.h"
@@ -90,6 +91,7 @@ void measure(const BenchInput& in, const std::filesystem::path& out_dir, BenchFi
 
 void runBench(BenchArgs args) {
   if (args.long_run) return runLongRun(std::move(args));
+  if (args.query) return runQueryBench(args, args.out);
   checkRefinementApplies(args.sequence, args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth);
   // Frames are held decoded, so the default is a short range: 0:30, or the whole sequence when
   // it is shorter (a range typed past the end is an error, as everywhere).
@@ -165,6 +167,34 @@ void addBenchCommand(CLI::App& app) {
   verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
       ->check(CLI::Range(1, std::numeric_limits<int>::max()))
       ->needs(long_run)
+      ->capture_default_str();
+  // --query: the point queries (docs/method.md 13) against OctoMap and ground truth.
+  auto* query = verb->add_flag(
+      "--query", args->query,
+      "the point queries instead: map every frame (or --frames) with vdmap (gt poses) and OctoMap 0.05/0.02 m, then "
+      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3); with "
+      "--mesh and --truth also their accuracy against ground truth");
+  query->excludes(long_run);
+  verb->add_option("--truth", args->truth,
+                   "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
+      ->needs(query)
+      ->needs(mesh);
+  verb->add_option("--truth-points", args->truth_points,
+                   "with --truth: occupied, free and unknown points scored each (free near the surface: half as many)")
+      ->needs(query)
+      ->check(CLI::Range(std::size_t{2}, std::size_t{10'000'000}))
+      ->capture_default_str();
+  verb->add_option("--query-points", args->query_points, "with --query: points classified per pass")
+      ->needs(query)
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}))
+      ->capture_default_str();
+  verb->add_option("--octomap-every", args->octomap_every,
+                   "with --query: frames between OctoMap insertions (default: ceil(frames / 500))")
+      ->needs(query)
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()));
+  verb->add_option("--views", args->views, "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
+      ->needs(query)
+      ->check(CLI::Range(0, 1000))
       ->capture_default_str();
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args] { runBench(*args); });

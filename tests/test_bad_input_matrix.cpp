@@ -564,6 +564,11 @@ const std::vector<BadCase>& badCases() {
        args("synth --builtin --builtin-frames 3 --noise kinect --out {dir}/out")},
       {"command_line", "bench_keyframe_every_zero", E::kCliUsage, "--keyframe-every: Value 0 not in range 1 to",
        args("bench {dir}/seq --out {dir}/out --keyframe-every 0")},
+      // bench --query (the point queries against OctoMap and ground truth)
+      {"command_line", "bench_query_points_zero", E::kCliUsage, "--query-points: Value 0 not in range",
+       args("bench {dir}/seq --query --query-points 0 --out {dir}/out")},
+      {"command_line", "bench_truth_without_mesh", E::kCliUsage, "--truth requires --mesh",
+       args("bench {dir}/seq --query --truth {dir}/seq --out {dir}/out")},
       {"command_line", "eval_mesh_missing", E::kCliError, "none.ply: cannot open the file",
        then(write("p.ply", kMeshPly), "eval --map {dir}/p.ply --mesh {dir}/none.ply")},
       // Thread counts, camera files and --refine: none is taken silently or printed on by a library.

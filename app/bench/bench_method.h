@@ -28,6 +28,13 @@ struct BenchArgs {
   bool long_run = false;
   LongRunOptions long_options;
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
+  // --query: the point queries against OctoMap and ground truth (app/bench/query_timing.h)
+  bool query = false;
+  std::string truth;                     ///< the same poses rendered without noise (--truth)
+  std::size_t query_points = 1'000'000;  ///< points classified per pass
+  int octomap_every = 0;                 ///< frames between OctoMap insertions (0: ceil(frames / 500))
+  int views = 10;                        ///< castView poses
+  std::size_t truth_points = 100'000;    ///< O, F and U points each (F_near: half as many)
 };
 
 /// One row of the comparison.

@@ -263,4 +263,17 @@ void writeBenchReport(const BenchFigures& figures, const BenchArgs& args, const 
   std::printf("\nwrote %s and %s\n", (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
 }
 
+void writeQueryBenchReport(const nlohmann::json& query, const std::string& text, const BenchArgs& args,
+                           const std::filesystem::path& out_dir) {
+  const nlohmann::json out = {{"sequence", args.sequence.folder}, {"poses", "gt"}, {"query", query}};
+  std::filesystem::create_directories(out_dir);
+  writeFileAtomically(out_dir / "bench.json", jsonText(out) + "\n");
+  writeFileAtomically(out_dir / "bench.md", "# vdmap bench --query\n\n```\n" + text + "```\n");
+  if (args.json) {
+    std::cout << jsonText(out) << "\n";
+    return;
+  }
+  std::printf("%s\nwrote %s and %s\n", text.c_str(), (out_dir / "bench.json").c_str(), (out_dir / "bench.md").c_str());
+}
+
 }  // namespace vdmap::app

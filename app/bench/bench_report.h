@@ -37,4 +37,9 @@ struct BenchFigures {
 /// text summary to stdout.
 void writeBenchReport(const BenchFigures& figures, const BenchArgs& args, const std::filesystem::path& out_dir);
 
+/// --query: writes bench.json (`query`: the figures) and bench.md (the table, `text`) into
+/// `out_dir` (created) and prints bench.json (--json) or `text` to stdout.
+void writeQueryBenchReport(const nlohmann::json& query, const std::string& text, const BenchArgs& args,
+                           const std::filesystem::path& out_dir);
+
 }  // namespace vdmap::app

@@ -6,9 +6,7 @@
 #include "app/timing.h"
 
 namespace vdmap::app {
-namespace {
 
-// The points the integrator uses (every pixel with depth in range), in world coordinates.
 octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam, const DepthRange& range) {
   const ColoredPointCloud cloud = toPointCloud(frame, cam, range);
   const Eigen::Isometry3f T = frame.T_W_C.cast<float>();
@@ -20,8 +18,6 @@ octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam,
   }
   return out;
 }
-
-}  // namespace
 
 MethodResult timeOctomap(const BenchInput& in, double res_m) {
   MethodResult r = peerRow("OctoMap", "octomap", res_m);

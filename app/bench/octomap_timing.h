@@ -1,5 +1,7 @@
 #pragma once
 // The OctoMap peer of `vdmap bench` (docs/method.md 12).
+#include <octomap/Pointcloud.h>
+
 #include "app/bench/bench_method.h"
 
 namespace vdmap::app {
@@ -9,5 +11,9 @@ namespace vdmap::app {
 /// their median and its elements the occupied voxels at the finest resolution, scored by their
 /// centres.
 MethodResult timeOctomap(const BenchInput& in, double res_m);
+
+/// The points the integrator uses (every pixel with depth in `range`), in the world frame: what
+/// every OctoMap of `vdmap bench` inserts for one frame.
+octomap::Pointcloud worldCloud(const RgbdFrame& frame, const PinholeCamera& cam, const DepthRange& range);
 
 }  // namespace vdmap::app

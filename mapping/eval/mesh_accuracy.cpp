@@ -91,7 +91,9 @@ std::vector<double> distancesToPoints(const std::vector<Eigen::Vector3f>& querie
   });
 }
 
-std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, std::size_t count, std::uint32_t seed) {
+std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, std::size_t count, std::uint32_t seed,
+                                               std::vector<std::uint32_t>* triangles) {
+  if (triangles) triangles->clear();
   std::vector<double> cumulative_area(mesh.triangles.size());
   double total = 0.0;
   for (std::size_t t = 0; t < mesh.triangles.size(); ++t) {
@@ -113,6 +115,7 @@ std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, 
     if (r1 + r2 > 1.0) r1 = 1.0 - r1, r2 = 1.0 - r2;  // fold the square onto the triangle
     const Eigen::Vector3d a = vertex(mesh, t, 0);
     out.push_back((a + r1 * (vertex(mesh, t, 1) - a) + r2 * (vertex(mesh, t, 2) - a)).cast<float>());
+    if (triangles) triangles->push_back(static_cast<std::uint32_t>(t));
   }
   return out;
 }

@@ -26,9 +26,10 @@ std::vector<double> distancesToMeshBruteForce(const std::vector<Eigen::Vector3f>
 std::vector<double> distancesToPoints(const std::vector<Eigen::Vector3f>& queries,
                                       const std::vector<Eigen::Vector3f>& points);
 
-/// `count` points uniformly distributed over the mesh surface by area (deterministic per seed).
+/// `count` points uniformly distributed over the mesh surface by area (deterministic per seed);
+/// with `triangles`, each point's triangle index there (the points do not depend on it).
 std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, std::size_t count,
-                                               std::uint32_t seed);
+                                               std::uint32_t seed, std::vector<std::uint32_t>* triangles = nullptr);
 
 struct AccuracyParams {
   std::size_t completion_samples = 200000;  ///< mesh samples for completion (docs/method.md 12)
