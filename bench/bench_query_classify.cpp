@@ -79,9 +79,9 @@ int main(int argc, char** argv) {
         }
       }));
     std::printf("keyframe views alone (kOccupied's free test): median %.1f ms CPU, %.2f M points/s; %.1f %% free; "
-                "%.1f candidate keyframes per point\n",
+                "%.1f candidate keyframes per point; %.1f MB\n",
                 median(ms), 1e-3 * static_cast<double>(n) / median(ms), 100.0 * static_cast<double>(free) / n,
-                static_cast<double>(candidates) / n);
+                static_cast<double>(candidates) / n, static_cast<double>(views.memoryBytes()) / 1e6);
   }
 
   // The global gates alone (SurfaceIndex::gate, what kOccupied asks first), on every point.
@@ -94,8 +94,9 @@ int main(int argc, char** argv) {
         inside = 0;
         for (std::size_t i = 0; i < n; ++i) inside += surface.gate(points[i]).first >= 0;
       }));
-    std::printf("global gates alone: median %.1f ms CPU, %.2f M points/s; %.1f %% inside a gate\n", median(ms),
-                1e-3 * static_cast<double>(n) / median(ms), 100.0 * static_cast<double>(inside) / n);
+    std::printf("global gates alone: median %.1f ms CPU, %.2f M points/s; %.1f %% inside a gate; %.1f MB\n", median(ms),
+                1e-3 * static_cast<double>(n) / median(ms), 100.0 * static_cast<double>(inside) / n,
+                static_cast<double>(surface.memoryBytes()) / 1e6);
   }
 
   for (const vdmap::ConflictRule rule : {vdmap::ConflictRule::kOccupied, vdmap::ConflictRule::kRecent, vdmap::ConflictRule::kPrecise}) {
