@@ -2,6 +2,7 @@
 // worker publishes with each global map, the probe through the Workbench, the query slice's
 // pixels, and `vdmap render --query-slice`.
 #include <cmath>
+#include <memory>
 #include <random>
 
 #include <gtest/gtest.h>
@@ -37,13 +38,22 @@ struct BuiltinBench {
   }
 };
 
-// The workbench's map, built once for the tests below (mapping 40 frames takes seconds).
-BuiltinBench& builtin() {
-  static BuiltinBench* b = new BuiltinBench;  // never destroyed: its worker lives to the end of the run
-  return *b;
-}
+// The workbench's map, built once for the tests that ask for it (mapping 40 frames takes seconds)
+// and destroyed after the suite, with its worker (the sanitizers' leak check sees the worker's
+// per-thread buffers as leaked when it outlives the run).
+class GuiQueries : public ::testing::Test {
+ protected:
+  static BuiltinBench& builtin() {
+    if (!bench_) bench_ = std::make_unique<BuiltinBench>();
+    return *bench_;
+  }
+  static void TearDownTestSuite() { bench_.reset(); }
 
-TEST(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
+ private:
+  static inline std::unique_ptr<BuiltinBench> bench_;
+};
+
+TEST_F(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
   Workbench& bench = builtin().bench;
   auto global = bench.global();
   auto query = bench.query();
@@ -97,7 +107,7 @@ TEST(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
 
 // The probe through the Workbench: points on the scene's surface (the built-in mesh, where the
 // map has an ellipsoid within 1 cm) are occupied, every keyframe's camera centre is not.
-TEST(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
+TEST_F(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
   Workbench& bench = builtin().bench;
   const auto global = bench.global();
   ASSERT_TRUE(global && bench.query());
@@ -138,7 +148,7 @@ TEST(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
 
 // The probe's point: the surface under the cursor moved toward the eye by the offset; on the
 // query slice's plane while the slice is shown.
-TEST(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
+TEST_F(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
   Workbench& bench = builtin().bench;
   UiState& ui = bench.ui();
   const int w = 640, h = 480;
@@ -172,7 +182,7 @@ TEST(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
 
 // The slice plane across z = 1.2 m (above the table, below the ceiling): red where it cuts the
 // wall x = -2.5 m, green in the open room in front of it; the same pixels for 1 and 2 threads.
-TEST(GuiQueries, SlicePixelsAreOccupiedAtTheWallAndFreeInFrontOfIt) {
+TEST_F(GuiQueries, SlicePixelsAreOccupiedAtTheWallAndFreeInFrontOfIt) {
   Workbench& bench = builtin().bench;
   const auto query = bench.query();
   ASSERT_TRUE(query);
@@ -229,7 +239,7 @@ TEST(GuiQueries, SlicePixelsAreOccupiedAtTheWallAndFreeInFrontOfIt) {
 
 // A map file (a `vdmap map` folder) has no local maps: its queries hold the ellipsoids alone, so
 // the probe finds its surfaces occupied with their distances and nothing free, and says why.
-TEST(GuiQueries, AMapFileAnswersFromItsEllipsoidsAlone) {
+TEST_F(GuiQueries, AMapFileAnswersFromItsEllipsoidsAlone) {
   test::TempDir dir;
   KeyframeGraph graph;
   test::addTwoBoxRoomViews(&graph, cameraPreset("tum-default"));
@@ -264,7 +274,7 @@ TEST(GuiQueries, AMapFileAnswersFromItsEllipsoidsAlone) {
   EXPECT_GT(bench.querySlice()->occupied, 0u);
 }
 
-TEST(GuiQueries, SlicePlaneAxesAndParsing) {
+TEST_F(GuiQueries, SlicePlaneAxesAndParsing) {
   const Eigen::Vector3d lo(-1, -2, 0), hi(3, 2, 1);
   render::HeightFrame tilted{glm::normalize(glm::vec3(0.f, 0.3f, 1.f)), 0.4f};
   const render::QuerySliceSpec up{.axis = render::QuerySliceAxis::kUp, .offset_m = 0.5, .samples = 100};
@@ -297,7 +307,7 @@ TEST(GuiQueries, SlicePlaneAxesAndParsing) {
 
 // `vdmap render S.vdmap --query-slice z=1.2` draws the slice headless: the image differs from
 // the same view without it, and the summary names the slice's samples.
-TEST(GuiQueries, RenderDrawsTheQuerySlice) {
+TEST_F(GuiQueries, RenderDrawsTheQuerySlice) {
   test::TempDir dir;
   render::writeBuiltinSequence(dir / "b", {.frames = 30});
   const fs::path session = dir / "b.vdmap";
