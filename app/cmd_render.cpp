@@ -9,7 +9,6 @@
 #include <random>
 
 #include <glm/gtc/matrix_transform.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "app/commands.h"
@@ -23,6 +22,7 @@
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/core/error.h"
+#include "mapping/io/image_codec.h"
 #include "mapping/io/ply_reader.h"
 #include "mapping/pipeline/session_file.h"
 #include "render/colormap.h"
@@ -63,12 +63,7 @@ ImageFormat imageFormat(const std::filesystem::path& file) {
 // Writes the image in the format its name says (atomically, as writePng does).
 void writeImage(const std::filesystem::path& file, const cv::Mat& rgb) {
   if (imageFormat(file) == ImageFormat::kPng) return render::writePng(file, rgb);
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<unsigned char> jpeg;
-  if (!cv::imencode(".jpg", bgr, jpeg, {cv::IMWRITE_JPEG_QUALITY, 95}))
-    throw std::runtime_error(file.string() + ": cannot encode the JPEG");
-  writeFileAtomically(file, std::string_view(reinterpret_cast<const char*>(jpeg.data()), jpeg.size()));
+  writeFileAtomically(file, encodeJpeg(rgb, 95));
 }
 
 void runBench(const RenderArgs& args) {

@@ -10,7 +10,7 @@
 
 #include "app/commands.h"
 #include "mapping/core/error.h"
-#include "mapping/io/image_decode.h"
+#include "mapping/io/image_codec.h"
 #include "render/framebuffer.h"
 
 namespace vdmap::app {

@@ -47,7 +47,7 @@ render::ImageTolerance tolerance(const RenderCheckArgs& args);
 /// --update, --expect can be written (std::invalid_argument).
 void checkRenderCheckArgs(const RenderCheckArgs& args, bool suite = false);
 
-/// A golden image as RGB (CV_8UC3), read and decoded through mapping/io/image_decode (libpng;
+/// A golden image as RGB (CV_8UC3), read and decoded through mapping/io/image_codec (libpng;
 /// never prints). Throws InputError naming the file: missing ("no such golden image: render it
 /// once with --update"), not a PNG, damaged. `size` given: also when the golden is of another
 /// size ("the golden is 320x240, the view 160x120 (--size, or --update)").

@@ -12,10 +12,10 @@
 
 #include <CLI/CLI.hpp>
 #include <nlohmann/json.hpp>
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "app/timing.h"
+#include "mapping/io/image_codec.h"
 
 namespace {
 
@@ -65,7 +65,7 @@ void barChart(const std::vector<Bar>& bars, const std::string& title, const std:
     std::snprintf(v, sizeof v, "%.2f", bars[i].value);
     text(img, v, {x(bars[i].value) + 5, y + row - 16});
   }
-  cv::imwrite(file, img);
+  vdmap::writeImageFile(file, img, vdmap::ChannelOrder::kBgr);
 }
 
 // RMSE (mm, linear y) against element count (log x).
@@ -95,7 +95,7 @@ void scatter(const std::vector<Point>& points, const std::string& title, const s
     cv::circle(img, p, 6, points[i].vdmap ? kVdmap : kPeer, cv::FILLED, cv::LINE_AA);
     text(img, points[i].name, p + cv::Point(9, (i % 2 ? 14 : -6)), 0.4);
   }
-  cv::imwrite(file, img);
+  vdmap::writeImageFile(file, img, vdmap::ChannelOrder::kBgr);
 }
 
 // The odometry table of `bench --poses track` runs: median over the runs of each peer's per-frame
@@ -194,7 +194,7 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
       cv::circle(img, {px(global_frame[i]), py(global_size[i], maxOf(global_size))}, 4, kVdmap, cv::FILLED, cv::LINE_AA);
   }
   for (int k = 0; k <= 4; ++k) text(img, std::to_string(static_cast<int>(frames * k / 4)), {px(frames * k / 4) - 12, h - 8}, 0.4);
-  if (!cv::imwrite(file, img)) throw std::runtime_error(file + ": cannot write");
+  vdmap::writeImageFile(file, img, vdmap::ChannelOrder::kBgr);
 }
 
 }  // namespace

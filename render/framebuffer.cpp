@@ -5,10 +5,10 @@
 #include <string>
 #include <vector>
 
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "mapping/core/atomic_file.h"
+#include "mapping/io/image_codec.h"
 
 namespace vdmap::render {
 
@@ -95,11 +95,7 @@ std::optional<float> readDepth(const Gl& gl, int x, int y) {
 }
 
 void writePng(const std::filesystem::path& file, const cv::Mat& rgb) {
-  cv::Mat bgr;
-  cv::cvtColor(rgb, bgr, cv::COLOR_RGB2BGR);
-  std::vector<unsigned char> png;
-  if (!cv::imencode(".png", bgr, png)) throw std::runtime_error(file.string() + ": cannot encode the PNG");
-  writeFileAtomically(file, std::string_view(reinterpret_cast<const char*>(png.data()), png.size()));
+  writeFileAtomically(file, encodePng(rgb));
 }
 
 }  // namespace vdmap::render

@@ -5,12 +5,11 @@
 #include <random>
 #include <stdexcept>
 
-#include <opencv2/imgcodecs.hpp>
-#include <opencv2/imgproc.hpp>
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_group.h>
 
 #include "mapping/export/ply_writer.h"
+#include "mapping/io/image_codec.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/framebuffer.h"
 #include "render/map_scene.h"
@@ -48,10 +47,6 @@ SyntheticView MeshViewRenderer::render(const Transform& T_W_C) {
 }
 
 namespace {
-
-void writeImage(const fs::path& file, const cv::Mat& image) {
-  if (!cv::imwrite(file.string(), image)) throw std::runtime_error(file.string() + ": cannot write the image");
-}
 
 std::string frameName(int index) {
   char name[32];
@@ -107,10 +102,8 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     tbb::task_group writers;
     auto writeFrame = [&](const Pending& f) {
       const std::string name = frameName(f.index);
-      cv::Mat bgr;
-      cv::cvtColor(f.view.rgb, bgr, cv::COLOR_RGB2BGR);
-      writeImage(tmp / "rgb" / name, bgr);
-      writeImage(tmp / "depth" / name, simulateDepth(f.view.z_cos, options.camera.depth_scale, options.noise, f.index));
+      writeImageFile(tmp / "rgb" / name, f.view.rgb);
+      writeImageFile(tmp / "depth" / name, simulateDepth(f.view.z_cos, options.camera.depth_scale, options.noise, f.index));
     };
     auto finishWriting = [&] {
       writers.wait();  // rethrows a writer's exception

@@ -25,11 +25,6 @@ const char kKinds[] =
     "expected a sequence folder (rgb.txt), a `vdmap map` folder (global_ellipsoids.ply), a session (.vdmap), an "
     "ellipsoid or point PLY, an OctoMap (.bt, .ot) or a view file (.json)";
 
-std::string lower(std::string s) {
-  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-  return s;
-}
-
 // The property names of a PLY's vertex element, from its header only (at most 1000 lines).
 // Throws InputError when the file does not start like a PLY.
 std::vector<std::string> plyVertexProperties(const fs::path& file) {
@@ -227,7 +222,7 @@ void colorByHeight(std::vector<Ellipsoid>& ellipsoids) {
 }
 
 StaticMap loadOctomap(const fs::path& file) {
-  const bool binary = lower(file.extension().string()) == ".bt";
+  const bool binary = asciiLower(file.extension().string()) == ".bt";
   OctomapFile f = readOctomapFile(file, binary);
   StaticMap map;
   map.sigma_m = f.resolution_m;
@@ -352,7 +347,7 @@ std::vector<FolderEntry> listFolder(const fs::path& dir) {
   }
   std::sort(entries.begin(), entries.end(), [](const FolderEntry& a, const FolderEntry& b) {
     if (a.folder != b.folder) return a.folder;
-    const std::string x = lower(a.path.filename().string()), y = lower(b.path.filename().string());
+    const std::string x = asciiLower(a.path.filename().string()), y = asciiLower(b.path.filename().string());
     return x != y ? x < y : a.path.filename() < b.path.filename();
   });
   return entries;
@@ -374,7 +369,7 @@ const char* mapFileKindName(MapFileKind kind) {
 MapFileKind detectMapFile(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "cannot open: no such file or folder");
-  const std::string ext = lower(path.extension().string());
+  const std::string ext = asciiLower(path.extension().string());
   if (fs::is_directory(path, ec)) {
     if (fs::exists(path / "rgb.txt", ec)) return MapFileKind::kSequence;
     if (fs::exists(path / "global_ellipsoids.ply", ec)) return MapFileKind::kMapFolder;

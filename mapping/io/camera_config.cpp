@@ -1,3 +1,4 @@
+#include "mapping/io/text_list.h"
 #include "mapping/io/camera_config.h"
 
 #include <algorithm>
@@ -46,11 +47,6 @@ const std::vector<Preset>& presets() {
       {"replica", {1200, 680, 600.0, 600.0, 599.5, 339.5, 6553.5}},
   };
   return kPresets;
-}
-
-std::string lower(std::string s) {
-  std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return std::tolower(c); });
-  return s;
 }
 
 // Reads a number under one of `keys` (first present wins); returns false when none is present.
@@ -209,7 +205,7 @@ CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string
     }
   }
   const std::string folder_name = std::filesystem::weakly_canonical(folder).filename().string();
-  const std::string name = lower(folder_name);
+  const std::string name = asciiLower(folder_name);
   struct Hint {
     const char* needle;
     const char* preset;

@@ -1,13 +1,9 @@
 #include "mapping/io/compressed_image.h"
 
 #include <cassert>
-#include <stdexcept>
-#include <vector>
-
-#include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "mapping/io/image_decode.h"
+#include "mapping/io/image_codec.h"
 
 namespace vdmap {
 
@@ -18,15 +14,12 @@ CompressedImage::CompressedImage(const cv::Mat& image, int jpeg_quality)
   if (image.empty()) return;
   assert(type_ == CV_8UC3 || type_ == CV_16UC1);
   assert(jpeg_quality >= 0 && jpeg_quality <= 100 && (jpeg_quality == 0 || type_ != CV_16UC1));
-  // imencode takes 3 channels as BGR: the file holds the image's blue as its red
-  // (swapped_red_blue_), which decode() undoes. Kept so, as keyframes of older versions did, so
-  // a JPEG's pixels stay those it has always given.
-  std::vector<std::uint8_t> encoded;
-  const bool jpeg = jpeg_quality > 0;
-  if (!cv::imencode(jpeg ? ".jpg" : ".png", image, encoded,
-                    {jpeg ? cv::IMWRITE_JPEG_QUALITY : cv::IMWRITE_PNG_COMPRESSION, jpeg ? jpeg_quality : 1}))
-    throw std::runtime_error("encoding of a keyframe image failed");
-  bytes_ = std::make_shared<const std::string>(encoded.begin(), encoded.end());
+  // The file holds the image's blue as its red (swapped_red_blue_), which decode() undoes: so
+  // keyframes have been written since OpenCV's encoder (which takes BGR) wrote them, and a
+  // JPEG's pixels stay those it has always given.
+  bytes_ = std::make_shared<const std::string>(jpeg_quality > 0
+                                                   ? encodeJpeg(image, jpeg_quality, ChannelOrder::kBgr)
+                                                   : encodePng(image, ChannelOrder::kBgr, PngCompression::kLevel1));
   swapped_red_blue_ = type_ == CV_8UC3;
 }
 

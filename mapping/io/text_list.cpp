@@ -1,5 +1,6 @@
 #include "mapping/io/text_list.h"
 
+#include <cctype>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
@@ -57,6 +58,11 @@ void checkIncreasing(double t, double* previous, const std::filesystem::path& fi
                      "timestamp " + std::to_string(t) + " is not after the previous one (" +
                          std::to_string(*previous) + "): timestamps must increase");
   *previous = t;
+}
+
+std::string asciiLower(std::string s) {
+  for (char& c : s) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  return s;
 }
 
 }  // namespace vdmap

@@ -25,6 +25,9 @@ double parseListNumber(const std::string& token, const std::filesystem::path& fi
 /// in nanoseconds (1.7e18) are refused instead of matching nothing.
 inline constexpr double kMaxTimestampS = 1e11;
 
+/// `s` with its ASCII letters in lower case (file extensions, preset names).
+std::string asciiLower(std::string s);
+
 /// Throws InputError unless |t| <= kMaxTimestampS.
 void checkTimestamp(double t, const std::filesystem::path& file, int line);
 

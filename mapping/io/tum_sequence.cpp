@@ -11,7 +11,7 @@
 
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/io/image_decode.h"
+#include "mapping/io/image_codec.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
 

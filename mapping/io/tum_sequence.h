@@ -98,7 +98,7 @@ class TumSequence {
   FrameRange frameRange() const { return range_; }
   const DropCounts& dropped() const { return dropped_; }
 
-  /// Decodes frame i (0 <= i < size()) through image_decode.h. Throws InputError naming the file
+  /// Decodes frame i (0 <= i < size()) through image_codec.h. Throws InputError naming the file
   /// on a damaged or truncated image, a depth image that is not 16-bit single channel, or an
   /// image whose size differs from the camera's. With a colour camera, the colour image is
   /// registered to the depth (and rgb_file left empty: the file holds the unregistered pixels).
