@@ -1,7 +1,7 @@
 #pragma once
 // The command line's and the settings' side of the parameter table (mapping/pipeline/parameters.h):
 // text to values, and the `vdmap map` options. A value is accepted or refused the same way by the
-// flags, settings.json, --set and the workbench's sliders (tests/test_gui_parameters.cpp).
+// flags, settings.json, --set and the workbench's sliders (tests/workbench/test_gui_parameters.cpp).
 #include <span>
 #include <string_view>
 

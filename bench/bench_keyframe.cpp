@@ -27,7 +27,7 @@
 #include "mapping/keyframe/keyframe_index.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
-#include "tests/test_util.h"
+#include "tests/support/test_util.h"
 
 namespace vdmap {
 namespace {

@@ -38,7 +38,7 @@ enum class RobustLoss { kHuber, kCauchy };
 
 struct PoseGraphOptions {
   /// Loss for edges with `robust` set. Cauchy's pull on a far outlier vanishes; Huber's stays
-  /// bounded but non-zero, so a wrong loop edge still bends the graph (tests/test_pose_graph.cpp).
+  /// bounded but non-zero, so a wrong loop edge still bends the graph (tests/mapping/test_pose_graph.cpp).
   RobustLoss robust_loss = RobustLoss::kCauchy;
   /// Scale of the robust loss in whitened units (sqrt of r^T * information * r): residuals below it
   /// count about fully, larger ones are down-weighted. 3.5 is about the 95% chi-square bound for

@@ -152,7 +152,7 @@ struct NdtRefinementResult {
   /// Smallest over largest eigenvalue of translation_information: near 0 where the surfaces
   /// leave a direction free (two walls: the pose can slide along their line). The photometric
   /// term is left out: from a prediction 0.3 m off, it settles wherever the image is locally
-  /// similar (the box room's textured walls, tests/test_tracking.cpp), so the frame's pixels
+  /// similar (the box room's textured walls, tests/mapping/test_tracking.cpp), so the frame's pixels
   /// can tell how well a pose is placed only where the surfaces could.
   double translationConditioning() const;
 };

@@ -1,0 +1,134 @@
+// End-to-end tests of the vdmap command line: exit codes and one-line errors.
+#include <algorithm>
+#include <regex>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/test_util.h"
+#include "vdmap_version.h"
+
+namespace vdmap {
+namespace {
+
+using test::runVdmap;
+
+TEST(Cli, HelpListsVerbs) {
+  const auto r = runVdmap("--help");
+  EXPECT_EQ(r.exit_code, 0);
+  for (const char* verb : {"info", "map", "render", "bench", "synth", "eval", "gui", "query"})
+    EXPECT_NE(r.out.find(verb), std::string::npos) << verb;
+  EXPECT_EQ(runVdmap("info --help").exit_code, 0);
+}
+
+TEST(Cli, InfoOnTinySequence) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 4);
+  const auto r = runVdmap("info '" + (dir / "seq").string() + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("\"frames\": 4"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("file camera.yaml"), std::string::npos) << r.out;
+}
+
+TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
+  const auto r = runVdmap("info /nonexistent/seq");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_EQ(r.err, "vdmap info: error: /nonexistent/seq: no such sequence folder\n");
+  test::TempDir dir;
+  test::writeTinySequence(dir.path());
+  EXPECT_NE(runVdmap("info '" + dir.path().string() + "' --camera nope").err.find("unknown camera preset 'nope'"),
+            std::string::npos);
+  EXPECT_NE(runVdmap("info '" + dir.path().string() + "' --frames 5:2").exit_code, 0);
+  EXPECT_NE(runVdmap("frobnicate").exit_code, 0);
+  // Command-line mistakes are one line too, naming the option or file.
+  const auto missing = runVdmap("eval --map x.ply");
+  EXPECT_NE(missing.exit_code, 0);
+  EXPECT_EQ(missing.err, "vdmap eval: error: --map requires --mesh (see --help)\n");
+  test::writeText(dir / "points.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                                      "property float z\nend_header\n0 0 1\n");
+  const auto no_file = runVdmap("eval --map '" + (dir / "points.ply").string() + "' --mesh /nonexistent/mesh.ply");
+  EXPECT_EQ(no_file.exit_code, 1) << "a missing file is exit 1, not a command-line error";
+  EXPECT_EQ(std::count(no_file.err.begin(), no_file.err.end(), '\n'), 1) << no_file.err;
+  EXPECT_NE(no_file.err.find("/nonexistent/mesh.ply"), std::string::npos) << no_file.err;
+}
+
+TEST(Cli, InfoOnSevenScenes) {
+  VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
+  const auto r = runVdmap("info '" + folder.string() + "'");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("500 usable (all with poses)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("preset 7scenes"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("colour     fx 525.000 fy 525.000 cx 320.000 cy 240.000, 25.6 mm"), std::string::npos) << r.out;
+}
+
+// render without --out is a command-line error with CLI11's code, as map's is.
+TEST(Cli, AMissingOutHasTheSameCodeInEveryVerb) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 2);
+  const auto map = runVdmap("map '" + (dir / "seq").string() + "'");
+  const auto render = runVdmap("render '" + (dir / "seq").string() + "'");
+  EXPECT_GT(map.exit_code, 1);
+  EXPECT_EQ(render.exit_code, map.exit_code) << render.err;
+  EXPECT_EQ(render.err, "vdmap render: error: --out is required (see --help)\n");
+}
+
+// The help says that the edge to the previous keyframe is always kept (docs/method.md 5).
+TEST(Cli, MapHelpSaysTheEdgeToThePreviousKeyframeIsKept) {
+  const auto r = runVdmap("map --help");
+  EXPECT_EQ(r.exit_code, 0);
+  EXPECT_NE(r.out.find("the edge to the previous keyframe is always kept"), std::string::npos) << r.out;
+}
+
+// vdmap info reports the range of valid depth and the share of invalid pixels;
+// 65535 (7-Scenes' invalid code, 65.535 m there) is not a depth.
+TEST(Cli, InfoReportsValidDepthAndTheShareOfInvalidPixels) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 2);  // 64x48, all 7500 (1.5 m at scale 5000)
+  for (const char* name : {"000000.png", "000001.png"}) {
+    cv::Mat depth(48, 64, CV_16UC1, cv::Scalar(7500));
+    depth.rowRange(0, 12).setTo(65535);  // a quarter invalid code
+    depth.rowRange(12, 24).setTo(0);     // a quarter no measurement
+    depth.at<std::uint16_t>(30, 30) = 10000;
+    test::writeImage((dir / "seq" / "depth" / name), depth);
+  }
+  const auto r = runVdmap("info '" + (dir / "seq").string() + "' --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out)["depth_m"];
+  EXPECT_EQ(j["min"], 1.5);
+  EXPECT_EQ(j["max"], 2.0);
+  EXPECT_EQ(j["invalid_fraction"], 0.5);
+  EXPECT_EQ(j["invalid_code_fraction"], 0.25);
+  EXPECT_EQ(j["no_depth_fraction"], 0.25);
+  const auto text = runVdmap("info '" + (dir / "seq").string() + "'");
+  EXPECT_NE(text.out.find("1.500 .. 2.000 m"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("50% invalid (25% 0 = no measurement, 25% 65535 = invalid code)"), std::string::npos) << text.out;
+}
+
+// `vdmap --version`: the CMake project version and, when the build was configured from a git
+// checkout, its commit; exit 0 (it was CLI11's "argument not expected", 109).
+TEST(Cli, VersionPrintsTheProjectVersionAndCommit) {
+  const auto r = runVdmap("--version");
+  EXPECT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_EQ(r.err, "");
+  EXPECT_TRUE(std::regex_match(r.out, std::regex(R"(vdmap \d+\.\d+\.\d+( \(git [0-9A-Za-z.+-]+\))?\n)"))) << r.out;
+  const std::string commit = kGitDescribe[0] ? std::string(" (git ") + kGitDescribe + ")" : "";
+  EXPECT_EQ(r.out, std::string("vdmap ") + kVersion + commit + "\n");
+}
+
+// render --out names the format: x.jpg is a JPEG (it held PNG bytes), x.png a PNG.
+TEST(Cli, RenderWritesTheFormatItsExtensionSays) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 3);
+  for (const char* name : {"o.jpg", "o.JPEG", "o.png"}) {
+    const auto r =
+        runVdmap("render '" + (dir / "seq").string() + "' --size 64x48 --out '" + (dir / name).string() + "'");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    const std::string bytes = test::readFile(dir / name);
+    const bool png = std::string(name) == "o.png";
+    EXPECT_EQ(bytes.substr(0, png ? 4 : 3), png ? std::string("\x89PNG") : std::string("\xff\xd8\xff")) << name;
+    EXPECT_EQ(test::readImage((dir / name)).cols, 64) << name;
+  }
+}
+
+}  // namespace
+}  // namespace vdmap

@@ -1,0 +1,70 @@
+// vdmap bench --query end to end on the built-in scene: a noisy render mapped, the same poses
+// rendered exactly as the truth; the report names every method's speed and accuracy, and a
+// truth of other frames is refused.
+#include <algorithm>
+
+#include <gtest/gtest.h>
+#include <nlohmann/json.hpp>
+
+#include "tests/support/test_util.h"
+
+namespace vdmap {
+namespace {
+
+using test::readFile;
+using test::RunResult;
+using test::runVdmap;
+using test::TempDir;
+
+// Appended rather than "'" + p.string(): GCC 12 warns (-Wrestrict) on that concatenation falsely.
+std::string q(const std::filesystem::path& p) {
+  std::string quoted = "'";
+  quoted += p.string();
+  quoted += '\'';
+  return quoted;
+}
+
+TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
+  TempDir tmp;
+  ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 12 --out " + q(tmp / "seq")).exit_code, 0);
+  ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 12 --noise none --out " + q(tmp / "exact")).exit_code, 0);
+  const RunResult r = runVdmap("bench " + q(tmp / "seq") + " --query --mesh " + q(tmp / "seq" / "mesh.ply") +
+                               " --truth " + q(tmp / "exact") +
+                               " --query-points 2000 --truth-points 300 --views 1 --octomap-every 3 --json --out " +
+                               q(tmp / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out).at("query");
+  EXPECT_EQ(j["frames"], 12);
+  EXPECT_EQ(j["octomap_frames"], 4);
+  for (const char* key : {"vdmap", "octomap_005", "octomap_002"}) {
+    EXPECT_GT(j["speed"][key]["classify_per_s"].get<double>(), 0.0) << key;
+    const auto& a = j["accuracy"][key];
+    // Every set is scored: the shares of each add up to one.
+    for (const char* set : {"O", "F", "F_near", "U"})
+      EXPECT_NEAR(a[set]["occupied"].get<double>() + a[set]["free"].get<double>() + a[set]["unknown"].get<double>(),
+                  1.0, 1e-4)
+          << key << " " << set;
+    // Any of these maps tells most of the room's free and occupied points from the unknown.
+    EXPECT_GT(a["balanced_accuracy"].get<double>(), 0.6) << key;
+    EXPECT_GT(a["memory_mb"].get<double>(), 0.0) << key;
+  }
+  EXPECT_GT(j["speed"]["vdmap"]["view_ms"].get<double>(), 0.0);
+  EXPECT_EQ(j["accuracy"]["sets"]["occupied"], 300);
+  EXPECT_EQ(j["accuracy"]["sets"]["free_near"], 150);
+  EXPECT_NE(readFile(tmp / "out" / "bench.md").find("bal.acc"), std::string::npos);
+}
+
+TEST(QueryBench, RefusesATruthOfOtherFrames) {
+  TempDir tmp;
+  ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 6 --out " + q(tmp / "seq")).exit_code, 0);
+  ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 5 --noise none --out " + q(tmp / "exact")).exit_code, 0);
+  const RunResult r = runVdmap("bench " + q(tmp / "seq") + " --query --mesh " + q(tmp / "seq" / "mesh.ply") +
+                               " --truth " + q(tmp / "exact") + " --out " + q(tmp / "out"));
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--truth"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  EXPECT_FALSE(std::filesystem::exists(tmp / "out" / "bench.json"));
+}
+
+}  // namespace
+}  // namespace vdmap
