@@ -5,12 +5,16 @@
 // and its validate() checks them with checkRanges(); pipeline/parameters.h joins them into the
 // table the command line, settings, workbench, session file and docs/parameters.md read.
 // The default of a parameter is its struct's in-class default, never repeated here.
+#include <limits>
 #include <span>
 #include <stdexcept>
 #include <string>
 #include <string_view>
 
 namespace vdmap {
+
+/// An open end of a parameter's range.
+inline constexpr double kInf = std::numeric_limits<double>::infinity();
 
 /// Everything about a parameter but where its value lives. Plain data, constant-initialised.
 struct ParameterSpec {

@@ -16,12 +16,12 @@ namespace {
 // once its path is complete.
 constexpr int kSlots = 256;
 enum SlotState : int { kFree = 0, kWriting = 1, kReady = 2 };
-struct Slot {
+struct PathSlot {
   std::atomic<int> state{kFree};
   bool folder = false;
   char path[PATH_MAX] = {};
 };
-Slot g_slots[kSlots];
+PathSlot g_slots[kSlots];
 static_assert(std::atomic<int>::is_always_lock_free, "the signal handler reads the slots' state");
 
 void onInterrupt(int signal) {
@@ -63,7 +63,7 @@ void removeTemporaryPaths() {
   // Files first; then folders, a few passes, so a folder holding another registered folder goes
   // whatever their slot order (rmdir removes only empty ones).
   for (const int pass : {0, 1, 2, 3})
-    for (Slot& slot : g_slots)
+    for (PathSlot& slot : g_slots)
       if (slot.state.load(std::memory_order_acquire) == kReady && slot.folder == (pass > 0))
         pass > 0 ? ::rmdir(slot.path) : ::unlink(slot.path);
 }

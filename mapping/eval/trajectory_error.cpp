@@ -14,7 +14,7 @@
 namespace vdmap {
 namespace {
 
-void checkIncreasing(std::span<const StampedPose> poses, const char* which) {
+void checkStampsIncrease(std::span<const StampedPose> poses, const char* which) {
   for (std::size_t i = 1; i < poses.size(); ++i)
     if (!(poses[i].t > poses[i - 1].t))
       throw std::invalid_argument(std::string("the ") + which + "'s timestamps must increase (pose " +
@@ -61,8 +61,8 @@ ErrorStats errorStats(std::vector<double> errors) {
 std::vector<std::pair<std::size_t, std::size_t>> associateTimestamps(std::span<const StampedPose> estimate,
                                                                      std::span<const StampedPose> groundtruth,
                                                                      const TrajectoryErrorParams& params) {
-  checkIncreasing(estimate, "estimate");
-  checkIncreasing(groundtruth, "ground truth");
+  checkStampsIncrease(estimate, "estimate");
+  checkStampsIncrease(groundtruth, "ground truth");
   // Every pair within the window, as (difference, t_gt, t_est) like the script's sort key.
   std::vector<std::tuple<double, double, double, std::size_t, std::size_t>> candidates;
   for (std::size_t i = 0; i < estimate.size(); ++i) {

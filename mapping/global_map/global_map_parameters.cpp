@@ -9,12 +9,11 @@
 namespace vdmap {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 constexpr const char* kSensorModels[] = {"nguyen2012", "belter2018"};
 using K = ParameterSpec::Kind;
 #define ACCESS(member) VDMAP_PARAMETER_ACCESS(GlobalMapParams, member)
 
-constexpr ParameterRow<GlobalMapParams> kRows[] = {
+constexpr ParameterRow<GlobalMapParams> kGlobalMapRows[] = {
     {.spec = {.key = "sensor_model", .flag = "--sensor-model", .label = "sensor model", .unit = "",
               .help = "The noise model giving each point's expected covariance (docs/method.md 3): nguyen2012, the "
                       "per-pixel Kinect model of Nguyen et al. 2012; belter2018, the authors' feature-point model. "
@@ -82,7 +81,7 @@ constexpr ParameterRow<GlobalMapParams> kRows[] = {
 
 }  // namespace
 
-std::span<const ParameterRow<GlobalMapParams>> globalMapParameters() { return kRows; }
+std::span<const ParameterRow<GlobalMapParams>> globalMapParameters() { return kGlobalMapRows; }
 
 void GlobalMapParams::validate() const {
   checkRanges(globalMapParameters(), *this);

@@ -6,11 +6,10 @@
 namespace vdmap {
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 using K = ParameterSpec::Kind;
 #define ACCESS(member) VDMAP_PARAMETER_ACCESS(MapperParams, member)
 
-constexpr ParameterRow<MapperParams> kRows[] = {
+constexpr ParameterRow<MapperParams> kMapperRows[] = {
     {.spec = {.key = "cell_size", .flag = "--cell-size", .label = "cell size s", .unit = "px",
               .help = "s (docs/method.md 2): side of a container cell in keyframe pixels; each cell holds one "
                       "ellipsoid, so near surfaces get small ellipsoids and far ones large. At most the image's "
@@ -95,7 +94,7 @@ constexpr ParameterRow<MapperParams> kRows[] = {
 
 }  // namespace
 
-std::span<const ParameterRow<MapperParams>> mapperParameters() { return kRows; }
+std::span<const ParameterRow<MapperParams>> mapperParameters() { return kMapperRows; }
 
 void MapperParams::validate() const {
   checkRanges(mapperParameters(), *this);

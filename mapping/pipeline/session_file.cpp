@@ -72,16 +72,16 @@ class Writer {
 
 // Reads fields of one region of the file; every failure is an InputError naming the file and
 // `where` (the header or a section).
-class Reader {
+class SessionReader {
  public:
-  Reader(std::string_view data, const std::string& file, std::string where)
+  SessionReader(std::string_view data, const std::string& file, std::string where)
       : data_(data), file_(file), where_(std::move(where)) {}
 
   [[noreturn]] void fail(const std::string& what) const { throw InputError(file_, where_ + ": " + what); }
   std::size_t left() const { return data_.size() - pos_; }
   void setWhere(std::string where) { where_ = std::move(where); }
   /// A reader of other bytes (unpacked from this region) that names the same file and region.
-  Reader over(std::string_view data) const { return Reader(data, file_, where_); }
+  SessionReader over(std::string_view data) const { return SessionReader(data, file_, where_); }
   /// "FILE: WHERE", to name this region in another reader's errors.
   std::string context() const { return file_ + ": " + where_; }
   void need(std::uint64_t n, const char* what) const {
@@ -196,7 +196,7 @@ void writeParams(Writer* w, const SessionInfo& info, std::size_t keyframes) {
   w->u32(static_cast<std::uint32_t>(keyframes));
 }
 
-double readField(Reader* r, const StoredParameter& s) {
+double readField(SessionReader* r, const StoredParameter& s) {
   switch (s.type) {
     case StoredParameter::Type::kI32: return r->i32(s.name);
     case StoredParameter::Type::kU32: {
@@ -213,7 +213,7 @@ double readField(Reader* r, const StoredParameter& s) {
 // Reads the fields of storedParameters(live) into `values`; a field newer than the file gets the
 // value such files were made with. `after_each` checks a field as soon as it is read.
 template <typename Check>
-void readStored(Reader* r, std::uint32_t version, bool live, ParameterValues* values, Check after_each) {
+void readStored(SessionReader* r, std::uint32_t version, bool live, ParameterValues* values, Check after_each) {
   for (const StoredParameter& s : storedParameters(live)) {
     if (version < s.since_version) {
       if (s.older) s.parameter->set(*values, *s.older);
@@ -224,7 +224,7 @@ void readStored(Reader* r, std::uint32_t version, bool live, ParameterValues* va
   }
 }
 
-std::uint32_t readParams(Reader* r, std::uint32_t version, SessionInfo* info) {
+std::uint32_t readParams(SessionReader* r, std::uint32_t version, SessionInfo* info) {
   PinholeCamera& c = info->camera;
   c.width = r->i32("camera width");
   c.height = r->i32("camera height");
@@ -273,7 +273,7 @@ void writeTransform(Writer* w, const Transform& T) {
     for (int col = 0; col < 4; ++col) w->f64(T.matrix()(row, col));
 }
 
-Transform readTransform(Reader* r, const char* what) {
+Transform readTransform(SessionReader* r, const char* what) {
   Transform T = Transform::Identity();
   for (int row = 0; row < 3; ++row)
     for (int col = 0; col < 4; ++col) T.matrix()(row, col) = r->f64(what);
@@ -318,7 +318,7 @@ void writeState(Writer* w, const SessionInfo& info) {
   w->i32(s.frames_relocalised);
 }
 
-void readState(Reader* r, std::uint32_t version, SessionInfo* info, std::uint32_t keyframes) {
+void readState(SessionReader* r, std::uint32_t version, SessionInfo* info, std::uint32_t keyframes) {
   MapperState& s = info->state;
   s.current_keyframe = r->i32("current keyframe");
   s.last_frame_index = r->i32("last frame index");
@@ -413,7 +413,7 @@ std::string pack(std::string_view raw) {
 }
 
 /// The `raw_bytes` bytes the zlib stream `packed` holds, which must be all of it.
-std::string unpack(const Reader& r, std::string_view packed, std::uint64_t raw_bytes, const char* what) {
+std::string unpack(const SessionReader& r, std::string_view packed, std::uint64_t raw_bytes, const char* what) {
   r.check(raw_bytes <= kMaxInflation * packed.size() + 64, std::string(what) + ": " + std::to_string(packed.size()) +
                                                               " packed bytes cannot hold " + std::to_string(raw_bytes));
   std::string raw(static_cast<std::size_t>(raw_bytes), '\0');
@@ -438,7 +438,7 @@ void writeImage(Writer* w, const CompressedImage& image) {
 
 /// Checks an image's header (h, w, t): either empty (0 x 0, of `type` or CV_8UC1) or of `type`
 /// and rows x cols (cols -1: any column count in 1..1024). True when it is not empty.
-bool checkImageHeader(const Reader& r, int h, int w, int t, int type, int rows, int cols, const char* what) {
+bool checkImageHeader(const SessionReader& r, int h, int w, int t, int type, int rows, int cols, const char* what) {
   if (h == 0 && w == 0) {
     r.check(t == type || t == CV_8UC1, std::string(what) + ": unexpected type of an empty image");
     return false;
@@ -450,7 +450,7 @@ bool checkImageHeader(const Reader& r, int h, int w, int t, int type, int rows, 
 }
 
 /// Version 6: an image's file, decoded here once so that a session that loads never fails to show one.
-CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, const char* what, bool decode) {
+CompressedImage readImage(SessionReader* r, int type, const PinholeCamera& camera, const char* what, bool decode) {
   const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
   if (!checkImageHeader(*r, h, w, t, type, camera.height, camera.width, what))
     return CompressedImage::fromEncoded(0, 0, t, {}, false);
@@ -464,7 +464,7 @@ CompressedImage readImage(Reader* r, int type, const PinholeCamera& camera, cons
 }
 
 /// Versions 1-5: an image of `type` that is either empty or rows x cols (cols -1: any column count).
-cv::Mat readMat(Reader* r, int type, int rows, int cols, const char* what) {
+cv::Mat readMat(SessionReader* r, int type, int rows, int cols, const char* what) {
   const int h = r->i32(what), w = r->i32(what), t = r->i32(what);
   if (!checkImageHeader(*r, h, w, t, type, rows, cols, what)) return cv::Mat(0, 0, t);
   cv::Mat m(h, w, type);
@@ -492,7 +492,7 @@ void writeKeypoints(Writer* w, const FrameFeatures& f) {
   }
 }
 
-void readKeypoints(Reader* r, std::uint32_t n, FrameFeatures* f) {
+void readKeypoints(SessionReader* r, std::uint32_t n, FrameFeatures* f) {
   f->keypoints.resize(n);
   f->depth_m.resize(n);
   for (std::uint32_t i = 0; i < n; ++i) {
@@ -519,7 +519,7 @@ void writeCells(Writer* w, const KeyframeContainer& container) {
   }
 }
 
-void readCells(Reader* r, std::uint32_t cells, KeyframeContainer* container) {
+void readCells(SessionReader* r, std::uint32_t cells, KeyframeContainer* container) {
   const int grid = container->cols() * container->rows();
   for (std::uint32_t i = 0; i < cells; ++i) {
     StoredCell c;
@@ -563,7 +563,7 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   w->bytes(packed);
 }
 
-Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t version, bool decode_images) {
+Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::uint32_t version, bool decode_images) {
   const PinholeCamera& camera = info.camera;
   Keyframe k{id, 0, 0.0, Transform::Identity(), {}, {}, {},
              KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
@@ -596,12 +596,12 @@ Keyframe readKeyframe(Reader* r, int id, const SessionInfo& info, std::uint32_t 
                                    "packed features and cells");
     const std::string_view rest(raw);
     const std::string keypoints = fromPlanes(rest.substr(0, keypoint_bytes), kKeypointBytes);
-    Reader keypoint_reader = r->over(keypoints);
+    SessionReader keypoint_reader = r->over(keypoints);
     readKeypoints(&keypoint_reader, n, &f);
     f.descriptors = cv::Mat(described ? h : 0, described ? w : 0, t);
     if (!f.descriptors.empty()) std::memcpy(f.descriptors.data, rest.data() + keypoint_bytes, descriptor_bytes);
     const std::string cell_records = fromPlanes(rest.substr(keypoint_bytes + descriptor_bytes), kCellBytes);
-    Reader cell_reader = r->over(cell_records);
+    SessionReader cell_reader = r->over(cell_records);
     readCells(&cell_reader, cells, &k.container);
   } else {
     k.rgb_image = CompressedImage(readMat(r, CV_8UC3, camera.height, camera.width, "rgb image"));
@@ -627,7 +627,7 @@ void writeEdges(Writer* w, const CovisibilityGraph& edges) {
   }
 }
 
-void readEdges(Reader* r, KeyframeGraph* graph) {
+void readEdges(SessionReader* r, KeyframeGraph* graph) {
   const int keyframes = static_cast<int>(graph->size());
   const std::uint32_t n = r->count(16, "edges");
   std::pair<int, int> previous{-1, -1};
@@ -711,7 +711,7 @@ void saveSession(const std::filesystem::path& file, const KeyframeGraph& graph, 
 }
 
 Session decodeSession(std::string_view bytes, const std::string& name, const SessionDecodeOptions& options) {
-  Reader header(bytes.substr(0, std::min(bytes.size(), kHeaderBytes)), name, "header");
+  SessionReader header(bytes.substr(0, std::min(bytes.size(), kHeaderBytes)), name, "header");
   const std::string_view magic = bytes.substr(0, std::min(bytes.size(), sizeof(kMagic)));
   if (magic != std::string_view(kMagic, magic.size()) || bytes.empty())
     throw InputError(name, "not a vdmap session file (wrong magic; expected it to start with 'VDMAPSES')");
@@ -737,7 +737,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     header.fail("a session has at least " + std::to_string(fixed_sections) + " sections, the header says " +
                 std::to_string(sections));
   const std::uint32_t first_keyframe = version >= 2 ? 2 : 1;
-  Reader body(bytes.substr(kHeaderBytes), name, "file");
+  SessionReader body(bytes.substr(kHeaderBytes), name, "file");
   Session session;
   session.info.format_version = version;
   std::uint32_t keyframes = 0;
@@ -749,7 +749,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     const std::string where = "section " + std::to_string(s) + " " + printable({expected.data(), 4});
     body.setWhere(where);
     const std::string_view head = body.bytes(kSectionHeaderBytes, "the section header");
-    Reader section_header(head, name, where);
+    SessionReader section_header(head, name, where);
     const std::string_view tag = section_header.bytes(4, "tag");
     const std::uint64_t length = section_header.u64("length");
     const std::uint32_t crc = section_header.u32("checksum");
@@ -758,7 +758,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     const std::string_view payload = body.bytes(length, "the section");
     if (options.verify_checksums && crc != crc32(payload, crc32(head.substr(0, 12))))
       body.fail("checksum mismatch (the file is corrupted)");
-    Reader r(payload, name, where);
+    SessionReader r(payload, name, where);
     if (s == 0) {
       keyframes = readParams(&r, version, &session.info);
       if (sections != keyframes + std::uint64_t{fixed_sections})

@@ -1,6 +1,7 @@
 #include "mapping/query/surface_index.h"
 
 #include <algorithm>
+#include <limits>
 #include <cmath>
 #include <optional>
 
@@ -12,7 +13,6 @@ namespace vdmap {
 
 namespace {
 
-constexpr double kInf = std::numeric_limits<double>::infinity();
 
 // Levels of the gate grid: voxel side g, 2g, 4g, ...; an ellipsoid sits at the finest level where
 // its gate box spans at most 2 voxels per axis (so in at most 8 voxels), larger ones in a list
@@ -135,7 +135,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   // The gate grid: finest side twice the median gate half-width (docs/method.md 13.4), at least
   // what keeps the map's extent within a key.
   std::vector<double> half(n);
-  Eigen::Vector3d lo_all = Eigen::Vector3d::Constant(kInf), hi_all = -lo_all;
+  Eigen::Vector3d lo_all = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi_all = -lo_all;
   for (std::size_t i = 0; i < n; ++i) {
     half[i] = impl->gates[i].half_extent.maxCoeff();
     lo_all = lo_all.cwiseMin(lo[i].cast<double>());
@@ -242,7 +242,7 @@ const EllipsoidGate& SurfaceIndex::gateOf(std::size_t i) const { return impl_->g
 const Eigen::Vector4d& SurfaceIndex::ballOf(std::size_t i) const { return impl_->balls[i]; }
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
-  std::pair<std::int32_t, double> best{-1, kInf};
+  std::pair<std::int32_t, double> best{-1, std::numeric_limits<double>::infinity()};
   if (!impl_) return best;
   const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
     const GateTest& g = impl_->tests[static_cast<std::size_t>(r)];
