@@ -21,7 +21,9 @@ namespace {
 #define REQUIRE_XVFB() \
   if (!haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (workbench end-to-end test skipped)"
 
-RunResult runInXvfb(const TempDir& home, const std::string& args) { return runVdmapInXvfb(home.path(), args); }
+RunResult runInXvfb(const TempDir& home, const std::string& args, BuiltinCache cache = BuiltinCache::kShared) {
+  return runVdmapInXvfb(home.path(), args, "3840x2160", cache);
+}
 
 nlohmann::json readJson(const fs::path& file) { return nlohmann::json::parse(readFile(file)); }
 
@@ -250,7 +252,8 @@ TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
   REQUIRE_XVFB();
   TempDir home;
   const fs::path json = home / "first.json";
-  const RunResult r = runInXvfb(home, "--frames 0:10 --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  const RunResult r =
+      runInXvfb(home, "--frames 0:10 --exit --measure-idle 1 --stats-json '" + json.string() + "'", BuiltinCache::kOwn);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
   // Then played, in the smallest window (each mapped frame is a picture between waits).
@@ -274,7 +277,7 @@ TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
   REQUIRE_XVFB();
   TempDir home;
   // Frames are drawn at the start and then after each batch of 8 rendered: the 5th comes after 16.
-  const RunResult r = runInXvfb(home, "--close-after-frames 5");
+  const RunResult r = runInXvfb(home, "--close-after-frames 5", BuiltinCache::kOwn);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"(closed while rendering the built-in scene \((\d+) of (\d+) frames done\): nothing kept)")))

@@ -53,12 +53,14 @@ TEST(BuiltinScene, JointRefinementOfTrackedPosesBringsTheMapCloserToTheMesh) {
   struct Outcome {
     double map_rmse_mm = 0, ate_mm = 0;
   };
+  // One tracked run; each refinement starts from a copy of its state.
+  MapperParams params;
+  params.poses = PoseSource::kTrack;
+  Mapper tracked_run(seq.camera(), params);
+  FramePrefetcher frames(seq, 4, tracked_run.featuresAhead());
+  while (auto f = frames.next()) tracked_run.addFrame(*f);
   const auto run = [&](std::optional<MapRefinementMethod> method) {
-    MapperParams params;
-    params.poses = PoseSource::kTrack;
-    Mapper mapper(seq.camera(), params);
-    FramePrefetcher frames(seq, 4, mapper.featuresAhead());
-    while (auto f = frames.next()) mapper.addFrame(*f);
+    Mapper mapper = tracked_run;
     if (method) {
       MapRefinementParams refine;
       refine.method = *method;

@@ -21,6 +21,7 @@
 #include "render/sequence_synth.h"
 #include "tests/support/box_room_keyframes.h"
 #include "tests/support/query_oracle.h"
+#include "tests/support/render_scenes.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -165,10 +166,8 @@ TEST(QueryClassify, FastPathMatchesTheOracleOnTheBoxRoom) {
 }
 
 TEST(QueryClassify, FastPathMatchesTheOracleOnABuiltinSceneMap) {
-  test::TempDir dir;
   // One lap in 40 frames: large steps between frames, so several keyframes around the table.
-  render::writeBuiltinSequence(dir / "builtin", {.frames = 40});
-  const TumSequence seq = TumSequence::open(dir / "builtin");
+  const TumSequence seq = TumSequence::open(test::builtinSequence(40));
   Mapper mapper(seq.camera());
   FramePrefetcher frames(seq);
   while (auto f = frames.next()) mapper.addFrame(*f);

@@ -4,6 +4,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include "render/sequence_synth.h"
+#include "tests/support/test_util.h"
+
 namespace vdmap::test {
 
 glm::mat3 covariance(float sx, float sy, float sz, float yaw) {
@@ -99,6 +102,18 @@ std::vector<Transform> ringOfKeyframes(int n) {
     poses.push_back(T);
   }
   return poses;
+}
+
+std::filesystem::path builtinSequence(int frames) {
+  namespace fs = std::filesystem;
+  const fs::path folder = sharedCache() / ("sequence-" + std::to_string(frames));
+  if (fs::exists(folder / "rgb.txt")) return folder;
+  try {
+    render::writeBuiltinSequence(folder, {.frames = frames});  // written beside, renamed into place
+  } catch (const std::exception&) {
+    if (!fs::exists(folder / "rgb.txt")) throw;  // another test process put it there first
+  }
+  return folder;
 }
 
 }  // namespace vdmap::test

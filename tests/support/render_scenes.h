@@ -1,5 +1,6 @@
 #pragma once
 // Small fixed scenes for the renderer's tests (golden images and projection checks).
+#include <filesystem>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -30,5 +31,11 @@ render::ColoredMesh cubeOnFloor();
 
 /// Six keyframes on a circle of radius 1.5 m at height 1 m looking at the origin.
 std::vector<Transform> ringOfKeyframes(int n = 6);
+
+/// The built-in scene's walk of `frames` poses a lap as a sequence folder (render::
+/// writeBuiltinSequence), rendered once for every test process of this build of vdmap: each test
+/// runs in a process of its own, and rendering the frames (the sensor noise above all) cost
+/// every one of them seconds. Read only: copy it to change it.
+std::filesystem::path builtinSequence(int frames);
 
 }  // namespace vdmap::test

@@ -203,9 +203,26 @@ cv::Mat readDepthImage(const fs::path& file) {
 
 void writeImage(const fs::path& file, const cv::Mat& image) { writeImageFile(file, image, ChannelOrder::kBgr); }
 
+fs::path sharedCache() {
+  const fs::path root(VDMAP_TEST_CACHE);
+  const std::string built = std::to_string(fs::last_write_time(VDMAP_BINARY).time_since_epoch().count());
+  if (!fs::exists(root / built)) {
+    std::error_code ec;  // another process may be removing the same folders
+    if (fs::is_directory(root))
+      for (const auto& entry : fs::directory_iterator(root, ec))
+        if (entry.path().filename() != built) fs::remove_all(entry.path(), ec);
+    fs::create_directories(root / built);
+  }
+  return root / built;
+}
+
 bool haveXvfb() { return std::system("command -v xvfb-run >/dev/null 2>&1") == 0; }
 
-RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const std::string& screen) {
+RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const std::string& screen, BuiltinCache cache) {
+  if (cache == BuiltinCache::kShared && !fs::exists(home / "cache" / "vdmap")) {
+    fs::create_directories(home / "cache");
+    fs::create_directory_symlink(sharedCache(), home / "cache" / "vdmap");
+  }
   const int first_display = 100 + static_cast<int>(getpid() % 5000) * 8;
   const std::string prefix = "XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
                              (home / "cache").string() + "' xvfb-run -a -n " + std::to_string(first_display) +

@@ -79,6 +79,11 @@ struct RunResult {
 /// variables or name a wrapper such as xvfb-run.
 RunResult runVdmap(const std::string& args, const std::string& prefix = "");
 
+/// A folder the test processes of this build of vdmap share for what is costly to make and
+/// never changes (build/tests/builtin-cache/<build time of vdmap>): folders of earlier builds
+/// are removed when it is first made.
+fs::path sharedCache();
+
 /// True when xvfb-run is installed: the workbench's end-to-end tests need it and skip without.
 bool haveXvfb();
 
@@ -89,7 +94,12 @@ bool haveXvfb();
 /// opening its window, and Xvfb resets when its last client leaves, refusing connections
 /// meanwhile. The authority file in `home`: without -f, xvfb-run makes a temporary folder for it
 /// and exits 5 instead of vdmap's code when removing that folder fails.
-RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const std::string& screen = "3840x2160");
+/// BuiltinCache::kShared: the built-in scene's frames are cached where every test run of this
+/// build of vdmap finds them (vdmap renders them once, atomically), so each run does not render
+/// them again; kOwn: `home` holds the run's own cache (first-start tests).
+enum class BuiltinCache { kShared, kOwn };
+RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const std::string& screen = "3840x2160",
+                         BuiltinCache cache = BuiltinCache::kShared);
 
 }  // namespace vdmap::test
 

@@ -15,6 +15,7 @@
 #include "render/query_slice.h"
 #include "render/sequence_synth.h"
 #include "tests/support/box_room_keyframes.h"
+#include "tests/support/render_scenes.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::app::gui {
@@ -24,11 +25,9 @@ namespace fs = std::filesystem;
 // One lap of the built-in walk in 40 frames (ground-truth poses), mapped to the end in the
 // workbench with the probe on, so the worker builds the queries with every global map.
 struct BuiltinBench {
-  test::TempDir dir;
   Workbench bench{Settings{}};
   BuiltinBench() {
-    render::writeBuiltinSequence(dir / "builtin", {.frames = 40});
-    EXPECT_TRUE(bench.open({(dir / "builtin").string(), "", "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.open({test::builtinSequence(40).string(), "", "", ""})) << bench.ui().status.text;
     bench.ui().probe = true;
     bench.sync();  // asks the worker for the queries
     bench.play();
@@ -308,9 +307,8 @@ TEST_F(GuiQueries, SlicePlaneAxesAndParsing) {
 // the same view without it, and the summary names the slice's samples.
 TEST_F(GuiQueries, RenderDrawsTheQuerySlice) {
   test::TempDir dir;
-  render::writeBuiltinSequence(dir / "b", {.frames = 30});
   const fs::path session = dir / "b.vdmap";
-  ASSERT_EQ(test::runVdmap("map '" + (dir / "b").string() + "' --out '" + (dir / "m").string() + "' --save '" +
+  ASSERT_EQ(test::runVdmap("map '" + test::builtinSequence(30).string() + "' --out '" + (dir / "m").string() + "' --save '" +
                            session.string() + "'")
                 .exit_code,
             0);
