@@ -7,7 +7,7 @@
 // wall-clock report. Single-threaded throughout (liboctomap on Debian has no
 // OpenMP, the integrator is sequential, the Open3D plugin pins OpenMP to one thread).
 // With --mesh every method's map is also scored against the reference (docs/method.md 12).
-// With --poses track the odometry peers (app/odometry_peers.h) estimate the poses of the same
+// With --poses track the odometry peers (app/bench/odometry_peers.h) estimate the poses of the same
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
 #include <algorithm>
@@ -25,9 +25,10 @@
 #include "app/bench/query_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
-#include "app/commands.h"
-#include "app/progress.h"
-#include "app/timing.h"
+#include "app/cli/sequence_args.h"
+#include "app/verbs.h"
+#include "app/view/progress.h"
+#include "mapping/core/timing.h"
 #include "mapping/export/map_export.h"
 #include "mapping/io/ply_reader.h"
 

@@ -7,8 +7,9 @@
 #include <iostream>
 #include <memory>
 
-#include "app/commands.h"
-#include "app/eval_report.h"
+#include "app/cli/command_line.h"
+#include "app/verbs.h"
+#include "app/cli/eval_report.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
 

@@ -4,8 +4,9 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/commands.h"
-#include "app/progress.h"
+#include "app/cli/sequence_args.h"
+#include "app/verbs.h"
+#include "app/view/progress.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"
 

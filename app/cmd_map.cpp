@@ -12,13 +12,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/commands.h"
-#include "app/map_sequence.h"
-#include "app/parameter_table.h"
-#include "app/progress.h"
-#include "app/provenance.h"
-#include "app/release_memory.h"
-#include "app/timing.h"
+#include "app/cli/command_line.h"
+#include "app/cli/sequence_args.h"
+#include "app/verbs.h"
+#include "app/view/map_sequence.h"
+#include "app/cli/parameter_table.h"
+#include "app/view/progress.h"
+#include "app/cli/provenance.h"
+#include "app/cli/release_memory.h"
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"

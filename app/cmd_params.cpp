@@ -6,8 +6,8 @@
 #include <sstream>
 #include <string>
 
-#include "app/commands.h"
-#include "app/parameter_table.h"
+#include "app/verbs.h"
+#include "app/cli/parameter_table.h"
 
 namespace vdmap::app {
 namespace {

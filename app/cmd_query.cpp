@@ -15,10 +15,10 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/commands.h"
-#include "app/progress.h"
-#include "app/query_io.h"
-#include "app/timing.h"
+#include "app/cli/command_line.h"
+#include "app/verbs.h"
+#include "app/view/progress.h"
+#include "app/query_files/query_io.h"
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"

@@ -11,13 +11,15 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <opencv2/imgproc.hpp>
 
-#include "app/commands.h"
-#include "app/map_sequence.h"
-#include "app/render_check.h"
-#include "app/render_suite.h"
-#include "app/render_view.h"
-#include "app/view_file.h"
-#include "app/timing.h"
+#include "app/cli/command_line.h"
+#include "app/cli/sequence_args.h"
+#include "app/verbs.h"
+#include "app/view/map_sequence.h"
+#include "app/view/render_check.h"
+#include "app/view/render_suite.h"
+#include "app/view/render_source.h"
+#include "app/view/render_view.h"
+#include "app/view/view_file.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
@@ -43,7 +45,7 @@ struct RenderArgs {
   std::string map, mesh, out;
   RenderViewArgs view;
   int bench_ellipsoids = 0;
-  RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --suite, --timings (app/render_check.h)
+  RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --suite, --timings (app/view/render_check.h)
   std::optional<render::QuerySliceSpec> query_slice;  // --query-slice AXIS=VALUE, --query-slice-color
   render::QuerySliceColor query_slice_color = render::QuerySliceColor::kOccupancy;
 };
@@ -211,7 +213,7 @@ void addRenderCommand(CLI::App& app) {
           "the nearest surface, viridis to 0.5 m; unknown grey)")
       ->check(parsedBy(render::parseQuerySliceColor, "occupancy|distance"));
   verb->callback([args, verb] {
-    if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/render_suite.h)
+    if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/view/render_suite.h)
   });
 }
 

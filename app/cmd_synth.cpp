@@ -3,8 +3,10 @@
 #include <cstdint>
 #include <cstdio>
 
-#include "app/commands.h"
-#include "app/progress.h"
+#include "app/cli/command_line.h"
+#include "app/cli/sequence_args.h"
+#include "app/verbs.h"
+#include "app/view/progress.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"

@@ -2,7 +2,8 @@
 // argument) the workbench on the built-in scene.
 #include <iostream>
 
-#include "app/commands.h"
+#include "app/cli/command_line.h"
+#include "app/verbs.h"
 #include "mapping/core/temporary_paths.h"
 #include "vdmap_version.h"
 

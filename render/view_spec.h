@@ -47,6 +47,13 @@ struct ViewLayers {
   bool operator==(const ViewLayers&) const = default;
 };
 
+/// The layers' names (--layers, view files) and their fields, in the same order.
+inline constexpr const char* kViewLayerNames[] = {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid",
+                                                  "bounds"};
+inline constexpr bool ViewLayers::*kViewLayerFields[] = {
+    &ViewLayers::frustums, &ViewLayers::graph,  &ViewLayers::trajectory, &ViewLayers::groundtruth,
+    &ViewLayers::legend,   &ViewLayers::grid,   &ViewLayers::bounds};
+
 /// One view, fully described.
 struct ViewSpec {
   ViewKind kind = ViewKind::kGlobal;

@@ -12,9 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/map_sequence.h"
-#include "app/release_memory.h"
-#include "app/timing.h"
+#include "app/view/map_sequence.h"
+#include "app/cli/release_memory.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"

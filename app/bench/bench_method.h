@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "app/bench/bench_long.h"
-#include "app/commands.h"
+#include "app/cli/sequence_args.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/local_map/local_map_integrator.h"
 

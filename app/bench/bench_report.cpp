@@ -1,5 +1,7 @@
 #include "app/bench/bench_report.h"
 
+#include "app/cli/command_line.h"
+
 #include <algorithm>
 #include <cstdio>
 #include <iostream>
@@ -7,8 +9,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/eval_report.h"
-#include "app/timing.h"
+#include "app/cli/eval_report.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"

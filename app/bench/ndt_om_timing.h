@@ -1,5 +1,5 @@
 #pragma once
-// The NDT-OM baseline of `vdmap bench` (mapping/baseline/ndt_om_baseline.h, docs/method.md 12).
+// The NDT-OM baseline of `vdmap bench` (app/bench/ndt_om_baseline.h, docs/method.md 12).
 #include "app/bench/bench_method.h"
 
 namespace vdmap::app {

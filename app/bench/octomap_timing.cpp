@@ -2,8 +2,8 @@
 
 #include <octomap/OcTree.h>
 
-#include "app/progress.h"
-#include "app/timing.h"
+#include "app/view/progress.h"
+#include "mapping/core/timing.h"
 
 namespace vdmap::app {
 

@@ -1,7 +1,7 @@
 #include "app/bench/odometry_timing.h"
 
-#include "app/progress.h"
-#include "app/timing.h"
+#include "app/view/progress.h"
+#include "mapping/core/timing.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/pipeline/mapper.h"
 

@@ -1,13 +1,13 @@
 #pragma once
 // The tracking rows of `vdmap bench --poses track` (docs/method.md 8, 12): vdmap's own tracking
-// with and without loop closure, and the odometry peers (app/odometry_peers.h), on the same
+// with and without loop closure, and the odometry peers (app/bench/odometry_peers.h), on the same
 // frames, scored against their ground truth.
 #include <filesystem>
 #include <optional>
 #include <vector>
 
 #include "app/bench/bench_method.h"
-#include "app/odometry_peers.h"
+#include "app/bench/odometry_peers.h"
 #include "mapping/eval/trajectory_error.h"
 
 namespace vdmap::app {

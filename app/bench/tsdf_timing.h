@@ -1,5 +1,5 @@
 #pragma once
-// The Open3D TSDF peer of `vdmap bench`, through its optional plugin (app/tsdf_peer.h).
+// The Open3D TSDF peer of `vdmap bench`, through its optional plugin (app/bench/tsdf_peer.h).
 #include "app/bench/bench_method.h"
 
 namespace vdmap::app {

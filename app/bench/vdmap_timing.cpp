@@ -3,8 +3,8 @@
 #include <cstdio>
 #include <memory>
 
-#include "app/progress.h"
-#include "app/timing.h"
+#include "app/view/progress.h"
+#include "mapping/core/timing.h"
 #include "mapping/local_map/local_map_integrator.h"
 
 namespace vdmap::app {

@@ -3,7 +3,7 @@
 // (global_map/global_map_parameters.cpp) and the re-run ones of the Mapper
 // (pipeline/mapper_parameters.cpp), each declared once there. Everything that names, checks,
 // stores or explains a parameter reads it from here: the structs' validate(), the command line
-// and settings.json (app/parameter_table.h, app/gui/settings.cpp), the workbench's sliders, the
+// and settings.json (app/cli/parameter_table.h, app/view/settings.cpp), the workbench's sliders, the
 // session file's PARM section (session_file.cpp) and docs/parameters.md (`vdmap params
 // --markdown`). The pose source is no parameter of the table: it belongs to the input (--poses).
 #include <cstdint>

@@ -13,7 +13,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "app/view_file.h"
+#include "app/view/view_file.h"
 
 #include "mapping/core/error.h"
 #include "mapping/eval/trajectory_error.h"

@@ -168,7 +168,7 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
 }
 
 // --- Tracking error figures and latency stages (global map / worker stream): a tracked run with
-// ground truth reports ATE and RPE (app/gui/figures.h) in its stats.
+// ground truth reports ATE and RPE (app/workbench/figures.h) in its stats.
 TEST(GuiCli, TrackedRunReportsAteAndRpe) {
   REQUIRE_XVFB();
   TempDir home;

@@ -1,4 +1,4 @@
-// app/junit_xml.h: the JUnit document of a render suite, its escaping and its atomic write.
+// app/view/junit_xml.h: the JUnit document of a render suite, its escaping and its atomic write.
 #include <gtest/gtest.h>
 
 #include <clocale>
@@ -6,7 +6,7 @@
 #include <stdexcept>
 #include <string>
 
-#include "app/junit_xml.h"
+#include "app/view/junit_xml.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::app {

@@ -1,4 +1,4 @@
-// The odometry peers of `vdmap bench --poses track` (app/odometry_peers.h) on a walk through the
+// The odometry peers of `vdmap bench --poses track` (app/bench/odometry_peers.h) on a walk through the
 // analytic box room whose poses are exact: each OpenCV method, frame to frame and against the
 // last keyframe, follows the walk closely; the keyframe rule holds. With the Open3D plugin built,
 // its odometry recovers a known motion through the plugin's C interface.
@@ -11,13 +11,13 @@
 #include <gtest/gtest.h>
 #include <opencv2/core.hpp>
 
-#include "app/odometry_peers.h"
+#include "app/bench/odometry_peers.h"
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/io/camera_config.h"
 #include "tests/support/test_util.h"
 
 #ifdef VDMAP_OPEN3D_PLUGIN
-#include "peers/odometry_peer_abi.h"
+#include "app/bench/open3d/odometry_peer_abi.h"
 #endif
 
 namespace vdmap {

@@ -15,7 +15,7 @@
 #include <nlohmann/json.hpp>
 #include <octomap/OcTree.h>
 
-#include "app/query_io.h"
+#include "app/query_files/query_io.h"
 #include "mapping/core/error.h"
 #include "mapping/export/occupancy_grid.h"
 #include "mapping/global_map/global_map.h"

@@ -6,7 +6,7 @@
 
 #include <regex>
 
-#include "app/view_file.h"
+#include "app/view/view_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/ply_reader.h"
 #include "mapping/io/tum_sequence.h"

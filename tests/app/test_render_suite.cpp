@@ -6,7 +6,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/view_file.h"
+#include "app/view/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/pipeline/session_file.h"
 #include "mapping/synth/builtin_scene.h"

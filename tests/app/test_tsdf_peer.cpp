@@ -10,7 +10,7 @@
 #include <Eigen/Core>
 #include <gtest/gtest.h>
 
-#include "peers/tsdf_peer_abi.h"
+#include "app/bench/open3d/tsdf_peer_abi.h"
 
 namespace {
 

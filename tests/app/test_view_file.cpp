@@ -1,12 +1,12 @@
-// View files (app/view_file.h): strict reading, writing, the render command of a view, and
+// View files (app/view/view_file.h): strict reading, writing, the render command of a view, and
 // --settings files (a settings.json or a view file).
 #include <regex>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "app/render_view.h"
-#include "app/view_file.h"
+#include "app/view/render_view.h"
+#include "app/view/view_file.h"
 #include "mapping/core/error.h"
 #include "tests/support/test_util.h"
 

@@ -1,4 +1,4 @@
-// Figures the workbench shows about its snapshots (app/gui/figures.h): the tracking error against
+// Figures the workbench shows about its snapshots (app/workbench/figures.h): the tracking error against
 // ground truth, and which optimisation "before" (B) undoes.
 #include <cmath>
 #include <cstdio>
@@ -6,7 +6,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "app/gui/figures.h"
+#include "app/workbench/figures.h"
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/io/trajectory_io.h"
 #include "tests/support/test_util.h"

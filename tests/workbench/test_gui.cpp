@@ -13,10 +13,10 @@
 #include <Eigen/Eigenvalues>
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "app/gui/settings.h"
-#include "app/gui/tg_parts.h"
-#include "app/gui/workbench.h"
-#include "app/view_file.h"
+#include "app/view/settings.h"
+#include "app/window/tg_parts.h"
+#include "app/workbench/workbench.h"
+#include "app/view/view_file.h"
 #include "render/colormap.h"
 #include "render/map_mirror.h"
 #include "render/map_scene.h"

@@ -1,12 +1,13 @@
-// Opening files in the workbench without a window (app/gui/workbench_files.cpp): a map file opens
+// Opening files in the workbench without a window (app/workbench/workbench_files.cpp): a map file opens
 // as a static map with what it lacks disabled, drops queue until the frame opens them, and the
 // opened paths go to the recent list.
 #include <gtest/gtest.h>
 
-#include "app/gui/settings.h"
-#include "app/gui/workbench.h"
-#include "app/render_view.h"
-#include "app/view_file.h"
+#include "app/view/settings.h"
+#include "app/workbench/workbench.h"
+#include "app/view/render_source.h"
+#include "app/view/render_view.h"
+#include "app/view/view_file.h"
 #include "mapping/export/map_export.h"
 #include "mapping/export/octomap_export.h"
 #include "mapping/export/ply_writer.h"

@@ -1,4 +1,4 @@
-// The parameter table (mapping/pipeline/parameters.h, app/parameter_table.h) and the four ways a
+// The parameter table (mapping/pipeline/parameters.h, app/cli/parameter_table.h) and the four ways a
 // value reaches it: `vdmap map` options (CLI11), settings.json, `vdmap gui --set` and the
 // workbench's sliders. For every parameter, values at and beyond its bounds are accepted or
 // refused by all four alike, the bounds are those its validate() enforces, and the slider's span
@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include "app/gui/settings.h"
-#include "app/gui/workbench.h"
-#include "app/parameter_table.h"
+#include "app/view/settings.h"
+#include "app/workbench/workbench.h"
+#include "app/cli/parameter_table.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::app {

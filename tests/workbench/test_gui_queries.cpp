@@ -7,7 +7,7 @@
 
 #include <gtest/gtest.h>
 
-#include "app/gui/workbench.h"
+#include "app/workbench/workbench.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/export/map_export.h"
 #include "mapping/io/camera_config.h"

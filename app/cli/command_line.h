@@ -1,0 +1,82 @@
+#pragma once
+// What the verbs share on the command line: the exit code of a verb that did its work but
+// found a difference, option checks run while the command line is parsed, output-file checks.
+
+#include <unistd.h>
+
+#include <cerrno>
+#include <cstring>
+#include <filesystem>
+#include <functional>
+#include <optional>
+#include <stdexcept>
+#include <string>
+
+#include <CLI/CLI.hpp>
+
+namespace vdmap::app {
+
+/// Ends a verb with an exit code other than 0 and 1 after it did its work: `vdmap render
+/// --expect/--suite` rendered, but an image differs from its golden (code 2, docs/cli.md "Exit
+/// codes and errors"). main() prints "vdmap VERB: differs: WHAT" (one line) and returns `code`.
+struct ExitWith : std::runtime_error {
+  ExitWith(int exit_code, const std::string& what) : std::runtime_error(what), code(exit_code) {}
+  int code;
+};
+
+/// "1 keyframe", "2 keyframes": a count with its noun (regular plurals only).
+inline std::string counted(long long n, const std::string& noun) {
+  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
+}
+
+// CLI11 checks of an option's value by itself, while the command line is parsed: a value that is
+// wrong whatever the files hold gets CLI11's error and code (docs/cli.md "Exit codes and
+// errors"); what needs a file or the data is checked by the verb (exit 1).
+
+/// A camera preset name (cameraPresetNames).
+CLI::Validator cameraPresetCheck();
+/// A --frames range's syntax (A:B, A:, :B or N; numbers within an int; B after A).
+CLI::Validator frameRangeCheck();
+/// A finite number > 0.
+CLI::Validator positiveFiniteCheck();
+/// A finite number.
+CLI::Validator finiteCheck();
+/// Accepts a value when `parse(value)` does not throw std::invalid_argument, whose message is
+/// then the error (CLI11 puts the option's name before it).
+template <typename Parse>
+CLI::Validator parsedBy(Parse parse, const std::string& description) {
+  return CLI::Validator(
+      [parse](std::string& text) -> std::string {
+        try {
+          parse(text);
+          return "";
+        } catch (const std::invalid_argument& e) {
+          return e.what();
+        }
+      },
+      description);
+}
+
+/// Fails before any work when `file`, given as `option`, cannot become an output file: it is a
+/// folder, its folder does not exist or cannot be written (permissions, a read-only file
+/// system), or a file stands where a folder of its path should be (throws std::invalid_argument).
+inline void checkOutputFile(const std::string& file, const std::string& option) {
+  namespace fs = std::filesystem;
+  if (fs::is_directory(file)) throw std::invalid_argument(file + ": is a folder (" + option + " wants a file)");
+  const fs::path folder = fs::absolute(file).parent_path();
+  if (fs::is_directory(folder)) {
+    // The file is written beside itself and renamed into place: the folder must take new files.
+    if (::access(folder.c_str(), W_OK | X_OK) != 0)
+      throw std::invalid_argument(file + ": cannot write into " + folder.string() + " (" + std::strerror(errno) + ", " +
+                                  option + ")");
+    return;
+  }
+  fs::path existing = folder;  // the nearest part of the path that exists
+  while (!fs::exists(existing) && existing.has_parent_path() && existing.parent_path() != existing)
+    existing = existing.parent_path();
+  if (fs::exists(existing) && !fs::is_directory(existing))
+    throw std::invalid_argument(file + ": " + existing.string() + " is a file, not a folder (" + option + ")");
+  throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
+}
+
+}  // namespace vdmap::app

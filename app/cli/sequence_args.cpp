@@ -1,0 +1,86 @@
+#include <cstdio>
+
+#include "app/cli/command_line.h"
+#include "app/cli/sequence_args.h"
+#include "mapping/io/camera_config.h"
+
+namespace vdmap::app {
+
+std::string cameraPresetList() {
+  std::string presets;
+  for (const std::string& n : cameraPresetNames()) presets += (presets.empty() ? "" : ", ") + n;
+  return presets;
+}
+
+void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
+  verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList())
+      ->check(cameraPresetCheck());
+  verb.add_option("--frames", args.frames,
+                  "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
+                  "a range past the end is an error")
+      ->check(frameRangeCheck());
+}
+
+void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("--poses", args.poses,
+                  "gt: the sequence's groundtruth.txt; track: estimate every pose (tracking, loop closure, "
+                  "pose graph). Default: gt when the sequence has groundtruth.txt, else track")
+      ->check(CLI::IsMember({"gt", "track"}));
+}
+
+void addRefineArg(CLI::App& verb, SequenceArgs& args) {
+  verb.add_option("--refine", args.refine,
+                  "with tracked poses, how the keyframe poses are refined from the settled local maps after the "
+                  "last frame: joint (all keyframe poses at once on every covisible pair's cost), pairwise (each "
+                  "covisible pair registered, then the pose graph) or none (as tracked and loop-closed); see "
+                  "docs/method.md 10")
+      ->check(CLI::IsMember({"joint", "pairwise", "none"}))
+      ->each([&args](const std::string&) { args.refine_given = true; })
+      ->capture_default_str();
+  verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
+}
+
+std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
+  if (args.refine == "none") return std::nullopt;
+  MapRefinementParams params;
+  params.method = args.refine == "pairwise" ? MapRefinementMethod::kPairwise : MapRefinementMethod::kJoint;
+  return params;
+}
+
+void checkRefinementApplies(const SequenceArgs& args, PoseSource poses) {
+  if (poses == PoseSource::kTrack || !args.refine_given || args.refine == "none") return;
+  throw std::invalid_argument("--refine " + args.refine +
+                              " refines tracked poses (--poses track); this run maps the ground-truth poses of "
+                              "groundtruth.txt, which it would leave as they are");
+}
+
+PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
+  if (args.poses.empty()) return sequence.hasGroundTruth() ? PoseSource::kGroundTruth : PoseSource::kTrack;
+  return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
+}
+
+void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
+  if (!sequence.cameraGuessed()) return;
+  const PinholeCamera& c = sequence.camera();
+  std::fprintf(stderr,
+               "vdmap %s: note: %s: no camera given, guessed %s: fx %g fy %g cx %g cy %g, depth scale %g; "
+               "--camera PRESET or a camera.yaml in the folder sets it\n",
+               verb.c_str(), sequence.folder().string().c_str(), sequence.cameraSource().c_str(), c.fx, c.fy, c.cx,
+               c.cy, c.depth_scale);
+}
+
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::optional<SequenceContinuation> continues) {
+  SequenceOptions options;
+  options.continues = std::move(continues);
+  options.camera_preset = args.camera;
+  options.cut_range_at_end = cut_range_at_end;
+  // No --poses: ground truth when there is some (frames without a pose are then dropped, as with
+  // --poses gt), else tracking.
+  options.require_poses =
+      args.poses == "gt" || (args.poses.empty() && std::filesystem::exists(std::filesystem::path(args.folder) / "groundtruth.txt"));
+  if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
+  return TumSequence::open(args.folder, options);
+}
+
+}  // namespace vdmap::app

@@ -1,0 +1,64 @@
+#pragma once
+// `vdmap render --suite views.yaml`: many views of one or more maps, each map loaded once, each
+// view compared with its golden; a table on stdout, JUnit XML and the images of failing views in
+// the suite's out folder (docs/cli.md "Render suites").
+#include <filesystem>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <CLI/CLI.hpp>
+
+#include "app/view/render_check.h"
+#include "render/image_compare.h"
+
+namespace vdmap::app {
+
+struct SuiteOptions {
+  bool update = false;   ///< write every view's golden instead of comparing
+  std::optional<render::ImageTolerance> tolerance;  ///< --tolerance: replaces the suite's default
+  bool timings = false;  ///< a note line with the stage times on stderr
+  bool table = true;     ///< print the table and the summary on stdout
+};
+
+/// One view's outcome. Times in seconds: the global map it needed built (0 when cached), the
+/// drawing, the comparison (and the writing of its images).
+struct SuiteViewResult {
+  std::string name, map, size;
+  bool updated = false, passed = true;
+  render::ImageComparison comparison{};
+  double build_s = 0, render_s = 0, check_s = 0;
+};
+
+/// A whole run: the views in the suite's order, what was loaded and built, stage times.
+struct SuiteResult {
+  std::vector<SuiteViewResult> views;
+  int maps_loaded = 0;        ///< maps and sessions opened (each once)
+  int global_maps_built = 0;  ///< distinct global maps built (one per map and thresholds)
+  double validate_s = 0;      ///< reading the suite, loading the maps, checking views and goldens
+  double load_s = 0;          ///< of validate_s: loading the maps
+  double context_s = 0;       ///< creating the offscreen GL context (first use in the process)
+  double total_s = 0;
+  int failed() const;
+};
+
+/// Runs the suite `file`. Validates all of it before anything is rendered or written: unknown
+/// keys, maps that are missing or do not load, bad view options, keyframes out of range, goldens
+/// missing (without --update), damaged or of another size throw InputError naming FILE:LINE.
+/// Then draws every view, compares it (or writes its golden with `update`), writes OUT/NAME.actual.png
+/// and OUT/NAME.diff.png of each failing view and OUT/junit.xml. Never throws for a differing
+/// view: the caller turns failed() into exit code 2.
+SuiteResult runSuite(const std::filesystem::path& file, const SuiteOptions& options);
+
+/// `vdmap render --suite`: runs it and throws ExitWith(2) when a view differs.
+void runSuiteCommand(const std::string& file, const SuiteOptions& options);
+
+/// With --suite: checks the options (checkSuiteExcludes), runs runSuiteCommand and returns true;
+/// without: false.
+bool runSuiteIfGiven(const CLI::App& verb, const RenderCheckArgs& args);
+
+/// Refuses (CLI::ExcludesError) every option of `verb` given with --suite besides --suite,
+/// --update, --tolerance and --timings: a suite's views carry their own options.
+void checkSuiteExcludes(const CLI::App& verb);
+
+}  // namespace vdmap::app

@@ -1,0 +1,178 @@
+#include "app/window/keyframe_panel.h"
+
+#include <algorithm>
+#include <cfloat>
+#include <cmath>
+#include <cstdio>
+
+#include <imgui_stdlib.h>
+
+#include <Eigen/Eigenvalues>
+
+#include "app/window/widgets.h"
+#include "render/colormap.h"
+
+namespace vdmap::app::gui {
+namespace {
+
+// The last item (a pose field) starts a drag: remember the pose for undo.
+void poseEditStarted(Workbench& bench) {
+  if (ImGui::IsItemActivated()) bench.beginPoseEdit();
+}
+
+// Every keyframe, its colour as a square; a click selects it.
+void drawKeyframeList(Workbench& bench, const WindowState& win) {
+  // A keyframe picked in the view or by a loop marker scrolls into the list's middle once.
+  const bool scroll = bench.takeScrollToSelected();
+  if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
+    for (const KeyframeInfo& k : win.mapping->keyframes) {
+      char text[96];
+      std::snprintf(text, sizeof text, "   K%d  frame %d  %zu cells%s", k.id, k.frame, k.ellipsoids,
+                    k.id == win.mapping->current_keyframe ? "  (current)" : "");
+      const ImVec2 at = ImGui::GetCursorScreenPos();
+      if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.selectKeyframe(k.id);
+      if (scroll && k.id == bench.ui().selected_keyframe) ImGui::SetScrollHereY(0.5f);
+      const float h = ImGui::GetTextLineHeight();
+      ImGui::GetWindowDrawList()->AddRectFilled({at.x + 2, at.y + 2}, {at.x + h - 2, at.y + h - 2},
+                                                rgbColor(render::keyframeColor(k.id)));
+    }
+    ImGui::EndListBox();
+  }
+  tip("Keyframes with the frame that created them and their container cells; the square is the keyframe's colour "
+      "(colour mode \"keyframe\"). Click to inspect.");
+}
+
+// Keyframe `id`'s figures, container view, neighbours and view buttons.
+void drawInspector(Workbench& bench, const render::MapMirror& mirror, WindowState& win, int id) {
+  UiState& ui = bench.ui();
+  const KeyframeInfo& k = win.mapping->keyframes[static_cast<std::size_t>(id)];
+  std::size_t kept = 0;
+  if (win.global && id < static_cast<int>(win.global->map.kept.size())) {
+    const std::vector<bool>& cells = win.global->map.kept[static_cast<std::size_t>(id)];
+    kept = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), true));
+  }
+  ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
+                     k.frames_integrated);
+  tip("Its local map: one ellipsoid per touched container cell (docs/method.md 2); of those, the ones the filter keeps with "
+      "the live thresholds (min points, k; docs/method.md 4); and the frames whose depth went into it.");
+  const render::Texture2D& container = mirror.containerTexture();
+  if (!mirror.containerImage().empty()) {
+    const float w = ImGui::GetContentRegionAvail().x;
+    ImGui::Image(textureId(container), {w, w * container.height() / std::max(1, container.width())});
+    tip("The container view (paper Fig. 1): the keyframe's image in the middle of its 2W x 2H container with its "
+        "kept ellipsoids projected as 2-sigma ellipses. Click to enlarge.");
+    if (ImGui::IsItemClicked()) ui.show_container = true;
+  }
+  std::string neighbours;
+  for (const CovisibilityEdge& e : win.mapping->edges)
+    if (e.a == id || e.b == id) {
+      char item[32];
+      std::snprintf(item, sizeof item, "K%d (%.2f) ", e.a == id ? e.b : e.a, e.weight);
+      neighbours += item;
+    }
+  ImGui::TextWrapped("neighbours (edge weight): %s", neighbours.empty() ? "none" : neighbours.c_str());
+  tip("Covisibility edges: the share of features one keyframe re-observes of the other (docs/method.md 5).");
+  if (ImGui::Button("View from keyframe")) ui.view_from_keyframe = id;
+  tip("Looks through the keyframe with its own intrinsics (its image's aspect kept; Esc or a drag leaves).");
+  ImGui::SameLine();
+  if (ImGui::Button("Container view")) ui.show_container = true;
+  tip("A larger container view with zoom, cell grid and image bounds.");
+  checkFits(win.check);
+}
+
+// The selected keyframe's pose as translation and roll, pitch, yaw: a drag sends it; undo.
+void drawPoseEdit(Workbench& bench, WindowState& win) {
+  UiState& ui = bench.ui();
+  ImGui::TextUnformatted("pose T_W_K (drag to correct):");
+  bool moved = false;
+  const bool before = ui.show_before_optimisation;
+  ImGui::BeginDisabled(before);
+  // A pixel of drag moves the keyframe as far as a pixel of the view spans at its depth.
+  const float speed = bench.poseDragSpeed();
+  if (beginRows("pose")) {
+    label(win.check, "t (m)",
+          "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
+          "A pixel of drag moves it " + metres(speed) + " (what a pixel of the view spans at the keyframe's depth); "
+          "hold Alt for 100x finer, Shift for 10x coarser (Dear ImGui's drag keys); double-click to type a value.");
+    moved |= ImGui::DragFloat3("##t", &ui.pose_translation_m.x, speed, -1000.f, 1000.f, "%.3f");
+    poseEditStarted(bench);
+    label(win.check, "roll, pitch, yaw (deg)",
+          "R = Rz(yaw) Ry(pitch) Rx(roll); pitch stays within +-90 degrees. 0.2 degrees per pixel of drag; Alt: 100x "
+          "finer, Shift: 10x coarser.");
+    glm::vec3& rpy = ui.pose_rotation_deg;
+    moved |= ImGui::DragFloat3("##rpy", &rpy.x, 0.2f, 0.f, 0.f, "%.1f");
+    poseEditStarted(bench);
+    ImGui::EndTable();
+    // Roll and yaw wrap around; pitch stops at +-90 (beyond it the same rotation has other angles).
+    for (float* a : {&rpy.x, &rpy.z}) *a = *a - 360.f * std::round(*a / 360.f);
+    rpy.y = std::clamp(rpy.y, -90.f, 90.f);
+  }
+  ImGui::EndDisabled();
+  if (before) tip("Showing the map before the last optimisation: poses are edited on the map after it (B).");
+  if (moved) bench.applyPoseEdit();
+  ImGui::BeginDisabled(!bench.canUndoPoseEdit());
+  if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench.undoPoseEdit();
+  tip(bench.canUndoPoseEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
+  ImGui::EndDisabled();
+}
+
+}  // namespace
+
+void drawKeyframes(Workbench& bench, const render::MapMirror& mirror, WindowState& win) {
+  if (win.mapping->keyframes.empty()) return ImGui::TextUnformatted("no keyframes yet");
+  drawKeyframeList(bench, win);
+  const int id = bench.ui().selected_keyframe;
+  if (id < 0 || id >= static_cast<int>(win.mapping->keyframes.size()))
+    return ImGui::TextWrapped("Select a keyframe to inspect it.");
+  if (bench.staticMap()) {  // opening files: a map file's keyframes are poses only
+    ImGui::TextDisabled("K%d: no inspector, container or pose edit", id);
+    return tip(std::string("A map file: ") + Workbench::kStaticMapWhy + ".");
+  }
+  drawInspector(bench, mirror, win, id);
+  drawPoseEdit(bench, win);
+}
+
+void drawPicked(Workbench& bench, WindowState& win) {
+  UiState& ui = bench.ui();
+  if (!ui.picked) return ImGui::TextWrapped("Click an ellipsoid in the view (it is marked magenta).");
+  const Ellipsoid& e = *ui.picked;
+  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(e.cov);
+  const Eigen::Vector3d axes = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() * 1000.0;
+  if (beginRows("picked")) {
+    label(win.check, "keyframe", "The keyframe it came from (for a merged one, its merge group's centre).");
+    ImGui::Text("K%d", e.keyframe);
+    label(win.check, "points n", "Depth points merged into it.");
+    ImGui::Text("%u", e.count);
+    label(win.check, "mean (m)", "Its centre in the world frame.");
+    char mean[96];
+    std::snprintf(mean, sizeof mean, "%.4f %.4f %.4f", e.mean.x(), e.mean.y(), e.mean.z());
+    ImGui::AlignTextToFramePadding();
+    ImGui::Text("%.3f, %.3f, %.3f", e.mean.x(), e.mean.y(), e.mean.z());
+    ImGui::SameLine();
+    if (ImGui::SmallButton("Copy##mean")) ImGui::SetClipboardText(mean);
+    tip(std::string("Copies \"") + mean + "\" (x y z, metres) to the clipboard.");
+    label(win.check, "sigma axes (mm)", "Standard deviations along its principal axes, largest last.");
+    ImGui::Text("%.1f, %.1f, %.1f", axes.x(), axes.y(), axes.z());
+    label(win.check, "colour", "Mean RGB of its points.");
+    ImGui::ColorButton("##colour", {e.color.x() / 255.f, e.color.y() / 255.f, e.color.z() / 255.f, 1.f});
+    ImGui::SameLine();
+    ImGui::Text("%.0f, %.0f, %.0f", e.color.x(), e.color.y(), e.color.z());
+    ImGui::EndTable();
+  }
+}
+
+void drawPoseFile(Workbench& bench) {
+  UiState& ui = bench.ui();
+  ImGui::SetNextItemWidth(-FLT_MIN);
+  ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui.trajectory_text);
+  tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
+  const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
+  ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
+  if (ImGui::Button("Load corrected trajectory")) bench.loadTrajectory();
+  tip(file ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
+      : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
+                                   : "Replaces the matching keyframes' poses; the map is rebuilt.");
+  ImGui::EndDisabled();
+}
+
+}  // namespace vdmap::app::gui
