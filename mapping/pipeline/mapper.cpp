@@ -387,7 +387,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   }
   report.T_W_C = frame.T_W_C;
   // The keyframe left behind stops growing (unless revisited): its cells then hold what they
-  // store, not the ~30 % more their vector's doubling had reserved.
+  // store, not the spare capacity their vector's doubling had reserved.
   if (state_.current_keyframe >= 0 && report.keyframe != state_.current_keyframe)
     graph_.keyframe(state_.current_keyframe).container.shrinkToFit();
   state_.current_keyframe = report.keyframe;
