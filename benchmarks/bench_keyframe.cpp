@@ -5,7 +5,7 @@
 // not run it); figures are medians of 3 repetitions of CPU time.
 //
 //   bench_keyframe [SEQ] [--benchmark_...]
-// Without SEQ it renders the built-in scene's 8-lap walk (2400 frames, ~130 keyframes) into a
+// Without SEQ it renders the built-in scene's 8-lap walk (2400 frames, over 100 keyframes) into a
 // temporary folder first, which takes minutes; `vdmap synth --builtin --builtin-laps 8 --out
 // DIR` makes the same folder once for repeated runs.
 //

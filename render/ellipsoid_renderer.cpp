@@ -215,7 +215,7 @@ void EllipsoidRenderer::draw(const ViewCamera& view) const {
   program_->set("u_point_below_px", style_.point_below_px);
   (lod ? near_vao_ : vao_).bind();
   // The back faces lie behind the front ones (closed, convex, right-handed axes): culling them
-  // halves the triangles llvmpipe sets up (the full pass's CPU time -22%, docs/performance.md).
+  // halves the triangles llvmpipe sets up (docs/performance.md).
   gl.Enable(GL_CULL_FACE);
   gl.CullFace(GL_BACK);
   if (mesh_count > 0)

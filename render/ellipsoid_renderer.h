@@ -19,8 +19,8 @@ struct EllipsoidStyle {
   /// Level of detail: an ellipsoid whose bounding sphere projects to a radius below this many
   /// pixels is drawn as a flat-shaded splat of its exact projected ellipse instead of the mesh
   /// (0: always the mesh). Decided per instance and per frame in the shaders. At 4 px the
-  /// mesh's shading gradient is a few pixels wide and hardly visible; 1 M ellipsoids in view
-  /// render ~20x faster under llvmpipe (docs/performance.md).
+  /// mesh's shading gradient is a few pixels wide and hardly visible, and splats draw a million
+  /// ellipsoids in view far faster under llvmpipe (docs/performance.md).
   float point_below_px = 4.f;
   /// ColorMode::kHeight: heights above `height`'s floor along its up axis, the ramp over the
   /// slice when it is on, else over the instances' 2-98 % height range (ellipsoidColors).

@@ -99,7 +99,7 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
 
 // The default sphere level 0 draws icosahedra (20 triangles) rather than level-1 spheres (80):
 // at 2 sigma an ellipsoid covers a few pixels, and with a software renderer (llvmpipe) the
-// view's frame time is 4x lower.
+// view's frame time falls with the triangles (docs/notes/performance.md).
 MapMirror::MapMirror(const Gl& gl, int sphere_level)
     : gl_(&gl), ellipsoids_(gl, {.sphere_subdivisions = sphere_level}), points_(gl), lines_(gl), paths_(gl),
       highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), query_slice_renderer_(gl), rgb_(gl), depth_(gl),

@@ -63,7 +63,7 @@ glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid
   // The largest plane of the map whose normal lies within 40 degrees of the cameras' up: the
   // floor, a table, a ceiling; each is level, so its normal is the true up. RANSAC over at most
   // ~3000 means (evenly strided), 2 cm inliers, a fixed seed (the same map gives the same up);
-  // ~5 ms on the UI thread, once per framing.
+  // cheap enough for the UI thread, once per framing.
   const std::size_t stride = std::max<std::size_t>(1, map.size() / 3000);
   std::vector<Eigen::Vector3d> points;
   for (std::size_t i = 0; i < map.size(); i += stride) points.push_back(map[i].mean);

@@ -76,7 +76,7 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
 
 /// Writes the built-in scene (mapping/synth/builtin_scene.h) as a sequence into `out_dir`
 /// with the nguyen2012 sensor model; `params` choose the walk (default: one lap of 300 frames;
-/// e.g. `.laps = 8`: 2400 frames, 133 keyframes).
+/// e.g. `.laps = 8`: 2400 frames, a long run).
 void writeBuiltinSequence(const std::filesystem::path& out_dir, const BuiltinSceneParams& params = {},
                           std::function<void(std::size_t, std::size_t)> progress = {},
                           std::function<bool()> cancelled = {});

@@ -73,7 +73,7 @@ class ViewCache {
 class ViewMotion {
  public:
   using Clock = std::chrono::steady_clock;
-  static constexpr double kSettleSeconds = 0.15, kTargetMs = 25.0;  // the panels and the swap take ~20 ms more
+  static constexpr double kSettleSeconds = 0.15, kTargetMs = 25.0;  // the panels and the swap come on top
   static constexpr std::size_t kMinBudget = 20000, kStartBudget = 100000;
   explicit ViewMotion(std::size_t fixed_budget = 0) : fixed_(fixed_budget), budget_(fixed_budget ? fixed_budget : kStartBudget) {}
 

@@ -17,9 +17,10 @@ namespace vdmap::app {
 
 /// The default tolerance of --expect and --suite: a pixel differs beyond 8 counts in a channel;
 /// up to 2.5 % of the pixels may. llvmpipe builds (128/256-bit vectors, 1 or 2 threads) drew the
-/// same pixels; softpipe, the nearest proxy for another driver, moved 1.24 % of a global view's
-/// pixels (docs/dev/testing.md): twice that lets a golden made on one driver pass on another,
-/// while a wrong camera, colour mode or map moves far more (docs/cli.md says why).
+/// same pixels; softpipe, the nearest proxy for another driver, moved about half as many of a
+/// global view's pixels (docs/dev/testing.md has the figures): twice that lets a golden made on
+/// one driver pass on another, while a wrong camera, colour mode or map moves far more
+/// (docs/cli.md says why).
 inline constexpr render::ImageTolerance kGoldenTolerance{.channel_counts = 8, .pixel_share = 0.025};
 
 /// --tolerance COUNTS,SHARE: counts in 0..255 and a share of the pixels as a fraction in 0..1 or

@@ -289,7 +289,7 @@ class MappingWorker {
   std::unique_ptr<Mapper> mapper_;     // worker thread only
   // Worker thread only: the global map's buffers and kept cells, reused by every rebuild (after
   // a loop closure it skips the filter and touches no new memory; costs the largest build's
-  // buffers in resident memory, ~0.45 GB at 100 keyframes of the built-in scene).
+  // buffers in resident memory, which grow with the map; docs/notes/performance.md has a figure).
   GlobalMapWorkspace global_workspace_;
   AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
   AppendLog<TrajectoryPoint> trajectory_;    // worker thread only (snapshots share it)

@@ -25,7 +25,8 @@ struct RgbdFrame {
   /// a new keyframe keeps these bytes instead of compressing the pixels again.
   std::shared_ptr<const std::string> rgb_file, depth_file;
   /// rgb was resampled from its file (colour registered to depth, colour_registration.h): a new
-  /// keyframe keeps it as a JPEG (quality 95; a lossless PNG would be ~4x the size).
+  /// keyframe keeps it as a JPEG (quality 95; a lossless PNG of these pixels would be several
+  /// times the size, docs/notes/performance.md).
   bool rgb_resampled = false;
   /// The frame's ORB features computed ahead, on the prefetch thread, by the function
   /// Mapper::featuresAhead() gave (for that Mapper, `features_for`); otherwise null and

@@ -19,7 +19,8 @@ struct MapExportOptions {
   double octomap_resolution_m = 0.0;
   /// Files written of the files before global.bt (the PLYs and text files), after each.
   ExportProgress progress;
-  /// Progress of the OctoMap export, its slow part (~20 s at 0.02 m for 300k ellipsoids).
+  /// Progress of the OctoMap export, its slow part (its time grows with the map and with a finer
+  /// resolution).
   ExportProgress octomap_progress;
   /// The caller's own figures (e.g. frames and per-frame times of the run), merged into
   /// stats.json; the global-map and export figures are added by exportMap.

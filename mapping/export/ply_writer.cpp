@@ -28,7 +28,7 @@ void put(std::string& buffer, T value) {
 }
 
 // A file's bytes built in pieces of about kPieceBytes, each handed to the sink when full: an
-// export of a million ellipsoids is never held whole (local_maps.ply alone is ~40 MB).
+// export of a million ellipsoids is never held whole (local_maps.ply alone is tens of MB).
 class Pieces {
  public:
   explicit Pieces(const ByteSink& sink) : sink_(sink) { bytes.reserve(kPieceBytes + 512); }

@@ -18,8 +18,8 @@ double shapeTerm(const SymmetricCov& S, const SymmetricCov& Sa, const SymmetricC
 }
 
 // fusionHalfWidth in median standard deviations. Copies of one surface cell lie within a fraction
-// of a cell of each other: on the Replica 3 px map (333 frames) 1, 1.5 and 3 sigmas leave 520k,
-// 508k and 505k ellipsoids.
+// of a cell of each other: a narrower cube misses some of them, a wider one finds few more and
+// searches more (docs/notes/global-map.md, "Fusion", has the counts).
 constexpr double kFusionCubeSigmas = 1.5;
 
 // Voxels (search) or ellipsoids (output) per task; each task fills its own list or slots.

@@ -103,8 +103,8 @@ std::vector<Ellipsoid> fuseAcrossGroups(const std::vector<Ellipsoid>& ellipsoids
                                         const GlobalMapParams& params);
 
 /// What buildGlobalMap keeps from one build to the next when it is given one: its large buffers
-/// (a build writes ~0.5 GB on the 8-lap built-in session; memory first touched costs a page fault
-/// and zeroing per 4 KiB, 15-20 % of a build), per keyframe the filter's kept cells while the
+/// (a build writes hundreds of MB on a long session; memory first touched costs a page fault
+/// and zeroing per 4 KiB, a sizeable share of a build), per keyframe the filter's kept cells while the
 /// container and the filter parameters are unchanged (a loop closure moves poses only), and each
 /// later stage's output with what it was computed from, so that a build re-runs only the stages
 /// after what changed (GlobalMap::reuse): each merge group's merge while its members, their kept

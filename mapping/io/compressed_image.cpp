@@ -7,8 +7,8 @@
 
 namespace vdmap {
 
-// PNG level 1 (zlib's fastest): on 7-Scenes keyframes it is ~4 ms for colour and depth
-// together, and the higher levels save only a few percent more.
+// PNG level 1 (zlib's fastest): the higher levels take longer on every keyframe and make the
+// files only slightly smaller (docs/notes/performance.md has the figures).
 CompressedImage::CompressedImage(const cv::Mat& image, int jpeg_quality)
     : rows_(image.rows), cols_(image.cols), type_(image.type()) {
   if (image.empty()) return;

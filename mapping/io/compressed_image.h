@@ -10,9 +10,9 @@ namespace vdmap {
 
 /// An image held compressed, decoded on demand (decode() gives back the pixels exactly, unless a
 /// JPEG was asked for) by the sequence decoders (image_codec.h). The bytes held are a PNG or
-/// JPEG file: either the file the image was read from (a sequence's JPEG or PNG: 7-Scenes keeps
-/// ~0.13 MB per keyframe) or, for pixels from elsewhere, one this class wrote (PNG: ~1/3 of the
-/// raw 1.5 MB at 640x480). A session stores those bytes as they are (docs/vdmap-format.md).
+/// JPEG file: either the file the image was read from (a sequence's JPEG or PNG, as it came) or,
+/// for pixels from elsewhere, one this class wrote (a PNG, a fraction of the raw pixels; sizes in
+/// docs/notes/performance.md). A session stores those bytes as they are (docs/vdmap-format.md).
 /// Copies share the bytes. Immutable; safe to read from any thread.
 class CompressedImage {
  public:

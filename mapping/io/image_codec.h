@@ -5,7 +5,7 @@
 // file", naming no file, and returned the grey-filled image as if it were whole.) Encoding gives
 // the bytes OpenCV's imencode gives for the same settings (tests hold them to it), without
 // loading OpenCV's image codecs, whose dependencies (GDAL, GDCM, ...) cost every process that
-// links them about 0.1 s at start.
+// links them a noticeable delay at start.
 #include <filesystem>
 #include <string>
 

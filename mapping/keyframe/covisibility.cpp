@@ -16,11 +16,11 @@ Eigen::Vector3d predictInFrame(const FrameFeatures& K, std::size_t i, const Tran
 
 // The neighbourhood of a projected keypoint whose best and second-best descriptor the ratio
 // test compares (the best must also lie within max_reprojection_px). docs/method.md 5 takes both
-// from the whole image; a window of 8 px made delta 0.05 higher on average (fewer rivals, so
-// more ratio tests pass) and agreed with the brute-force decision on 94 % of 7-Scenes frames
-// 0:200; 24 px 96.5 %, 32 px 97.0 %, 48 px 97.5 % (mean +0.020, max +0.049), 64 px 97.5 %
-// (+0.018), the whole image 100 %. 48 px holds ~25 keypoints of a 640x480 frame on average
-// (more in textured spots): far fewer distances than brute force's 1000.
+// from the whole image. A smaller window has fewer rivals, so more ratio tests pass and delta
+// rises above the brute-force decision's; the agreement with that decision grows with the window
+// and levels off at 48 px (docs/notes/performance.md, "The keyframe decision", has the
+// measurements). 48 px holds a couple of dozen keypoints of a 640x480 frame (more in textured
+// spots): far fewer distances than brute force's 1000.
 constexpr double kRatioContextPx = 48.0;
 
 }  // namespace

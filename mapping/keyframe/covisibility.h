@@ -25,13 +25,13 @@ struct PosePrefilter {
 /// of where the poses put it must lie within max_reprojection_px and pass the ratio test against
 /// the second best of those 48 px); one without depth against all of F's descriptors. The
 /// criteria of docs/method.md 5 keep their meaning; only the rivals of the ratio test come from 48 px
-/// instead of the whole image, so delta is slightly above covisibilityBruteForce()'s (7-Scenes
-/// 0:200: +0.020 on average, the same decision on 97.5 % of frames; test_projection_matcher).
+/// instead of the whole image, so delta is slightly above covisibilityBruteForce()'s and the
+/// decision nearly always the same (test_projection_matcher; docs/notes/performance.md).
 double covisibility(const FrameFeatures& keyframe, const Transform& T_W_K, const FrameFeatures& frame,
                     const Transform& T_W_F, const PinholeCamera& camera, const CovisibilityParams& params = {});
 
 /// delta(F, K) as docs/method.md 5 words it, kept as the tests' oracle: cv::BFMatcher 2-NN of every
-/// K descriptor over all of F's, ratio test, then the 8 px pose check. ~20x slower.
+/// K descriptor over all of F's, ratio test, then the 8 px pose check. Far slower.
 double covisibilityBruteForce(const FrameFeatures& keyframe, const Transform& T_W_K, const FrameFeatures& frame,
                               const Transform& T_W_F, const PinholeCamera& camera,
                               const CovisibilityParams& params = {});

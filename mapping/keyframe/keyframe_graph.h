@@ -24,8 +24,9 @@ struct KeyframeMemory {
 };
 
 /// A keyframe (docs/method.md 2): its pose, its own images and features, and its local map.
-/// The images are held PNG-compressed (~1/3 of their raw 1.5 MB at 640x480) and decoded by
-/// rgb() / depth() when shown or saved; nothing on the per-frame path reads them.
+/// The images are held compressed (CompressedImage: the files they were read from, or a PNG or
+/// JPEG) and decoded by rgb() / depth() when shown or saved; nothing on the per-frame path reads
+/// them.
 struct Keyframe {
   int id = 0;
   int frame_index = 0;    ///< the sequence frame that created it

@@ -30,10 +30,10 @@ struct StoredCell {
 static_assert(sizeof(StoredCell) <= 64, "an ellipsoid must take at most 64 bytes (one cache line)");
 
 /// Storage: sparse. An int32 slot per grid cell (-1 = empty) points into a vector of the cells
-/// that hold an ellipsoid. A 640x480 keyframe has 49152 cells of which a typical 7-Scenes
-/// keyframe of 10 frames fills ~45%; dense storage would cost 56 B per grid cell (2.7 MB per
-/// keyframe), sparse costs 4 B per grid cell plus 56 B per ellipsoid (~1.4 MB), and the extra
-/// indirection happens once per run of pixels, not per pixel (docs/performance.md).
+/// that hold an ellipsoid. A 640x480 keyframe has 49152 cells, of which a real keyframe fills
+/// only part; dense storage would cost 56 B per grid cell (2.7 MB per keyframe), sparse costs
+/// 4 B per grid cell plus 56 B per ellipsoid, and the extra indirection happens once per run of
+/// pixels, not per pixel (docs/performance.md; a 7-Scenes keyframe in docs/notes/performance.md).
 /// Not thread-safe for writing; concurrent const access is fine.
 class KeyframeContainer {
  public:

@@ -186,9 +186,9 @@ Mapper::LoopEdge Mapper::addLoopEdgeBeyondCovisibility(int created, int previous
   // this frame at all (covisibilityBound, with a drift-sized margin), ranked by the share of
   // their features re-observed within that margin (delta at the margin; ties to the lower id),
   // the first few verified by a relative-pose estimate (descriptor matching, PnP, dense
-  // refinement). Ranked by the bound, which saturates at 1 near a place seen again, the end of
-  // 7-Scenes RedKitchen 0:500 tried two keyframes PnP could not verify while keyframes 25 and 21
-  // could (31 and 39 inliers): two loops missed.
+  // refinement). Ranked by the bound, which saturates at 1 near a place seen again, the first few
+  // were no better than the rest: on 7-Scenes they could not be verified while lower-ranked
+  // keyframes could, and loops were missed (docs/notes/tracking.md, "Loop candidates").
   CovisibilityParams margin = params_.keyframes.covisibility;
   margin.max_reprojection_px = tracking_.loops.candidate_margin_px;
   const Keyframe& N = graph_.keyframe(created);
@@ -319,10 +319,9 @@ void Mapper::updateLocalMap(const RgbdFrame& frame, const TrackingOutcome& track
   Keyframe& keyframe = graph_.keyframe(state_.current_keyframe);
   // A frame placed on a weak estimate (the features or the local map alone) keeps its pose but
   // stays out of the local map it was placed against, unless it starts a keyframe: integrated, its
-  // error became the map the next frames were aligned to. On Replica office0's 2000 poses the
-  // camera looks into a textureless corner for 37 frames (1703-1739, no PnP), and the local map
-  // alone, fed by the frames it placed, carried them 87 mm from the truth (map 2.09 mm RMSE against
-  // the mesh; 1.11 mm with this rule, ATE 4.9 -> 2.4 mm, 9 -> 13 frames lost).
+  // error became the map the next frames were aligned to: through a textureless stretch with no
+  // PnP, the local map alone, fed by the frames it placed, carried them ever farther from the truth
+  // (docs/notes/tracking.md, "Weak frames", has the Replica office0 figures).
   report->integrated = !tracksPoses() || !tracked.weak || tracked.relocalised ||
                        report->decision.kind == FrameDecision::Kind::kNewKeyframe;
   if (report->integrated) {
@@ -388,7 +387,7 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   }
   report.T_W_C = frame.T_W_C;
   // The keyframe left behind stops growing (unless revisited): its cells then hold what they
-  // store, not the ~30 % more their vector's doubling had reserved.
+  // store, not the spare capacity their vector's doubling had reserved.
   if (state_.current_keyframe >= 0 && report.keyframe != state_.current_keyframe)
     graph_.keyframe(state_.current_keyframe).container.shrinkToFit();
   state_.current_keyframe = report.keyframe;

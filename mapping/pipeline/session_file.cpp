@@ -377,7 +377,7 @@ void readState(SessionReader* r, std::uint32_t version, SessionInfo* info, std::
 
 constexpr std::size_t kKeypointBytes = 32;  // one record: f32 x, y, size, angle, response, i32 octave, class, f32 depth
 constexpr std::size_t kCellBytes = 56;      // f32 mean[3], scatter[6], colour[3], u32 n, i32 grid index
-// zlib's level for the packed records: 9 packs ~1 % tighter than 6 and takes twice as long.
+// zlib's level for the packed records: 9 packs barely tighter than 6 and takes much longer.
 constexpr int kPackLevel = 6;
 // Deflate never packs more than 1032 bytes into one, so a packed length bounds what a
 // damaged count may make the reader allocate.

@@ -136,7 +136,7 @@ PoseGraphResult optimizePoseGraph(std::vector<Transform>* T_W_nodes, std::span<c
   ceres::Solver::Options solver;
   solver.linear_solver_type = ceres::SPARSE_NORMAL_CHOLESKY;
   solver.sparse_linear_algebra_library_type = ceres::EIGEN_SPARSE;
-  solver.num_threads = 1;  // deterministic and cheap enough (~100 ms for 1000 nodes, 3000 edges)
+  solver.num_threads = 1;  // deterministic, and cheap enough on one thread (bench_pose_graph)
   solver.max_num_iterations = options.max_iterations;
   solver.function_tolerance = options.function_tolerance;
   solver.logging_type = ceres::SILENT;

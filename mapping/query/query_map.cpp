@@ -41,8 +41,8 @@ void checkPoints(std::span<const Eigen::Vector3d> q_W, std::size_t out_size) {
     if (!q_W[i].allFinite()) throw std::invalid_argument("point " + std::to_string(i) + " is not finite");
 }
 
-/// body(i) for i in [0, n) through parallelFor in chunks of 1024 points (a point takes ~1 us:
-/// a task per point would cost as much as the point).
+/// body(i) for i in [0, n) through parallelFor in chunks of 1024 points (a point is cheap: a
+/// task per point would cost as much as the point).
 template <typename Body>
 void forEachPoint(int threads, std::size_t n, const Body& body) {
   constexpr std::size_t kChunk = 1024;

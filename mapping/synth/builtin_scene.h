@@ -15,8 +15,8 @@ struct BuiltinSceneParams {
   int frames = 300;          ///< poses per lap (10 s at 30 fps); a lap's last is next to its first
   /// Laps of the walk. Lap 0 is the default walk; every further lap circles the table at
   /// another radius, height and gaze (a cycle of 8 variants), so that it sees the room from new
-  /// viewpoints: a long run that keeps making keyframes (6 laps: 98, 8 laps: 133; for the
-  /// loop-closure cost) while still revisiting earlier ones.
+  /// viewpoints: a long run that keeps making keyframes (for the loop-closure cost) while still
+  /// revisiting earlier ones.
   int laps = 1;
   double fps = 30.0;
   double texture_tile_m = 0.05;  ///< size of one flat-coloured texture tile

@@ -13,8 +13,8 @@ namespace {
 
 // B's ellipsoid means (B's frame), what registerLocalMaps aligns. Tried instead: B's map rendered
 // at B's pixels (each pixel's ray cut with its cell's plane, no grid to line up) with B's
-// keypoints as feature terms (estimateRelativePose): Replica 0:800 map RMSE 1.99 mm instead of
-// 1.30, 7-Scenes ATE 2.85 cm instead of 2.48; the means with feature terms: 1.21 mm but 3.39 cm.
+// keypoints as feature terms (estimateRelativePose), and the means with feature terms: neither
+// did better on both Replica and 7-Scenes (docs/notes/tracking.md has the figures).
 DensePoints cellMeans(const KeyframeContainer& map, int min_points) {
   DensePoints points;
   for (const StoredCell& c : map.cells())
@@ -143,8 +143,8 @@ Eigen::VectorXd jointStep(const std::vector<CovisibilityEdge>& pairs, const Join
 // walls' line) keeps tracking's estimate. Each pair's points are the means of B that are inliers
 // of A's map at the starting poses, fixed for the whole refinement: with every mean counted, a
 // pose that brings more of them onto the map lowers the Tukey cost, and where the maps pin little
-// (a box room's walls) the keyframes slid towards more overlap, 2 -> 14 mm from the truth (2.9 mm
-// with the set fixed).
+// (a box room's walls) the keyframes slid towards more overlap and away from the truth, which the
+// fixed set stops (docs/notes/tracking.md).
 void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const std::vector<CovisibilityEdge>& pairs,
                    const std::vector<DensePoints>& means, const MapRefinementParams& params, MapRefinementResult* result) {
   const int n = static_cast<int>(graph->size());
@@ -196,10 +196,9 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
     ++result->rounds;
     if (largest_m < params.joint_converged_m) break;
   }
-  // Started from tracked poses, a pair's relative pose changes by millimetres (at most 10 mm and
-  // 0.27 degrees on the built-in walks, Replica and 7-Scenes); where the starting poses were too far
-  // off for the inlier sets, the refinement can run off (a lone pair moved 7.4 mm ended 0.5 m
-  // away): then nothing is kept.
+  // Started from tracked poses, a pair's relative pose changes by millimetres, well within
+  // max_jump; where the starting poses were too far off for the inlier sets, the refinement can
+  // run off (a lone pair ended far away): then nothing is kept (docs/notes/tracking.md).
   for (const CovisibilityEdge& e : pairs) {
     const Transform before = graph->keyframe(e.a).T_W_K.inverse() * graph->keyframe(e.b).T_W_K;
     const Transform after = T_W[static_cast<std::size_t>(e.a)].inverse() * T_W[static_cast<std::size_t>(e.b)];

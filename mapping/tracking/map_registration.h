@@ -5,10 +5,10 @@
 // the sum of the covisible pairs' map-to-map costs (one keyframe's ellipsoid means against the
 // other's distributions, docs/method.md 10's dense objective); kPairwise registers each pair on its
 // own, those relative poses replace the pair's frame-measured pose-graph edges, and the graph is
-// optimised, in rounds. Measured (map RMSE against the mesh with tracked poses; docs/results.md):
-// the built-in 2-lap walk 2.15 mm unrefined, 1.30 joint, 4.19 pairwise (0.93 with the true
-// poses); a single pair's registration is no better than tracking there, only summed in one cost
-// do the pairs' errors average out.
+// optimised, in rounds. A single pair's registration is no better than tracking; only summed in
+// one cost do the pairs' errors average out, so on the built-in walk the joint refinement brings
+// the map closer to the mesh and the pairwise one takes it farther (docs/results.md has the
+// figures, docs/notes/tracking.md their history).
 
 #include <optional>
 
@@ -19,8 +19,8 @@ namespace vdmap {
 
 enum class MapRefinementMethod {
   /// Each covisible pair registered on its own, its relative pose an edge of the pose graph,
-  /// which is then optimised; in rounds. Each edge's error (2.6 mm per pair from the truth on the
-  /// built-in walk) is claimed with a 1 mm floor, so the map can end worse than tracked.
+  /// which is then optimised; in rounds. Each edge is claimed with a 1 mm floor, tighter than a
+  /// pair's error from the truth on the built-in walk, so the map can end worse than tracked.
   kPairwise,
   /// Every keyframe pose at once on the sum of the covisible pairs' costs (Levenberg-Marquardt):
   /// a pair's directions its surfaces leave free are held by the other pairs instead of by an
@@ -32,7 +32,7 @@ enum class MapRefinementMethod {
 struct MapRefinementParams {
   MapRefinementMethod method = MapRefinementMethod::kJoint;
   /// The registration's dense refinement (tracking's, with 20 Gauss-Newton steps instead of 6:
-  /// Replica office0 0:800, map RMSE against the mesh 1.30 mm with 20, 1.56 with 6), and its
+  /// with 6 the Replica office0 map ended farther from the mesh, docs/notes/tracking.md), and its
   /// checks: at least min_dense_inliers inlier cells making min_dense_inlier_ratio of those
   /// associated, a move of at most max_jump from the graph's relative pose (kJoint: no covisible
   /// pair's relative pose may change more, else the refinement is refused).
@@ -45,9 +45,9 @@ struct MapRefinementParams {
   }();
   int min_cell_points = 20;  ///< cells of B with fewer points are not aligned
   /// Smallest over largest eigenvalue of the registration's normal matrix in translation: below
-  /// it the maps do not pin a direction (two walls: a box-room keyframe moved 15 mm slid 20 mm
-  /// the wrong way, at 0.02) and the pair gives no edge. Box-room pairs seeing only walls score
-  /// 0.016-0.03, Replica office0 pairs 0.064 and up, 7-Scenes RedKitchen 0.039 and up.
+  /// it the maps do not pin a direction (two walls: a box-room keyframe slid the wrong way at a
+  /// lower bound) and the pair gives no edge. It sits at the top of the scores of box-room pairs
+  /// that see only walls and below those of Replica's and 7-Scenes' pairs (docs/notes/tracking.md).
   double min_conditioning = 0.03;
   /// Noise floor of a map-to-map edge (one sigma), added to the registration's own information.
   EdgeNoise edge_noise{0.001, 0.05};

@@ -77,7 +77,7 @@ struct FeatureObservation {
 struct NdtRefinementParams {
   /// About this many frame points whatever the resolution: sampleDensePoints' pixel grid has
   /// the stride strideFor() (8 px at 640x480). A fixed stride left a 160x120 recording 300 points,
-  /// too few for the refinement to be trusted (min_dense_inliers), and it tracked to 7.5 cm.
+  /// too few for the refinement to be trusted (min_dense_inliers), and it tracked far off.
   int points = 4800;
   int strideFor(const PinholeCamera& camera) const {
     return std::max(1, static_cast<int>(std::lround(std::sqrt(double(camera.width) * camera.height / std::max(points, 1)))));
@@ -107,7 +107,7 @@ struct NdtRefinementParams {
   /// along the surface says little about the pose; at full weight it pulls points towards cell
   /// centres and slows convergence along the surface (feature terms constrain that instead).
   /// 10, not 3: with 3, the 4800 points of a 320x240 box-room frame still slid along the walls
-  /// after 6 steps (2.9 mm off), and more steps cost time.
+  /// after 6 steps (docs/notes/tracking.md), and more steps cost time.
   double in_plane_inflation = 10.0;
   /// Reprojection noise of a feature observation, px (one sigma), and its Tukey threshold in
   /// sigmas. 2 px, not 1: JPEG colour that is not registered to the depth (7-Scenes) biases

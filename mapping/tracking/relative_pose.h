@@ -43,8 +43,8 @@ struct RelativePoseParams {
   /// walls, one flat front): the frame's photometric term against the keyframe's image
   /// (NdtRefinementParams) then joins the refinement. Not with PnP: on 7-Scenes, whose colour and
   /// depth come from two unsynchronised cameras, the term on every frame raised the per-frame
-  /// pose error from 4.4 to 5.2 mm. Only tracking's estimate against its current keyframe asks
-  /// for it: elsewhere only a good estimate (PnP's) is used.
+  /// pose error (docs/notes/tracking.md). Only tracking's estimate against its current keyframe
+  /// asks for it: elsewhere only a good estimate (PnP's) is used.
   bool photometric = false;
   /// Motion check: a PnP pose farther than this from the prediction is a bad RANSAC draw and is
   /// not used (the anchors: one bad pose throws the whole trajectory off otherwise).
@@ -55,8 +55,8 @@ struct RelativePoseParams {
   /// with it within this; otherwise both are measured against the local map where they are and
   /// the one with the higher NdtRefinementResult::support is refined (the prior in steady
   /// motion, PnP after a jerk or when there is no velocity yet). Refining both and keeping the
-  /// better, as before, cost twice the time for no clear gain (7-Scenes 0:500 ATE 3.6 vs 3.8 cm,
-  /// within the spread other small changes give).
+  /// better, as before, cost twice the time for no gain beyond the spread other small changes
+  /// give (docs/notes/tracking.md).
   double seed_agreement_m = 0.005;
   double seed_agreement_deg = 0.3;
   /// The dense estimate is trusted when at least this share of the associated points are inliers

@@ -23,17 +23,17 @@ struct TrackerParams {
   /// min_dense_only_share of the frame's points and its surfaces pin the translation
   /// (NdtRefinementResult::translationConditioning() at least min_dense_only_conditioning, the
   /// map registration's bound). Such estimates stay near the stale prediction wherever the
-  /// surfaces fit: after the built-in 8-lap walk's 0.8 m jump between laps, 449 inliers of 4792
-  /// points (9 %, a patch of wall) placed frame 1500 0.65 m from the truth and the lap after it
-  /// was mapped there; a textureless box-room frame 0.3 m off the prediction fitted 90 % of its
-  /// points 0.3 m from the truth, at a conditioning of 0.019.
+  /// surfaces fit: after the built-in 8-lap walk's jump between laps, a patch of wall (a small
+  /// share of the frame's points) placed a frame far from the truth and the lap after it was
+  /// mapped there; a textureless box-room frame fitted most of its points at a pose far from the
+  /// truth, but its surfaces left the translation free (docs/notes/tracking.md, "Weak frames").
   double min_dense_only_share = 0.5;
   double min_dense_only_conditioning = 0.03;
   /// The current keyframe's estimate takes the photometric term when PnP fails
-  /// (RelativePoseParams::photometric). On office0's 2000 poses rendered with the 7-Scenes camera
-  /// (640x480, fx 585) the view slides along a white cabinet front (frames 284-319) and into a
-  /// painted corner (1690-1718) with no PnP; the local map alone carried the frames 0.39 m from
-  /// the truth (ATE 136 mm); with the term, 3.6 mm.
+  /// (RelativePoseParams::photometric). Where the view slides along a plain surface with no PnP
+  /// (a white cabinet front, a painted corner), the local map alone cannot see the slide and
+  /// carries the frames far from the truth; the image can (docs/notes/tracking.md has the Replica
+  /// office0 figures).
   bool photometric = true;
 };
 

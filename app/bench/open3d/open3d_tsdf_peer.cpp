@@ -35,8 +35,8 @@ void* vdmap_tsdf_create(double voxel_m, double sdf_trunc_m, int width, int heigh
   // integration loop is OpenMP. Open3D 0.16 sizes its parallel loops with
   // utility::EstimateMaxThreads(), which ignores omp_set_num_threads() and returns the number of
   // physical cores unless OMP_NUM_THREADS is set. Without the variable the "one-thread" TSDF ran
-  // on every core, and process CPU time counted the spinning workers (22 vs 14 ms per frame at
-  // 0.02 m quiet, 135 ms under load).
+  // on every core, and process CPU time counted the spinning workers, the more the busier the
+  // machine (docs/notes/performance.md).
   setenv("OMP_NUM_THREADS", "1", /*overwrite=*/0);
   omp_set_num_threads(1);
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
