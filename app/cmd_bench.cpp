@@ -29,8 +29,8 @@
 #include "app/verbs.h"
 #include "app/view/progress.h"
 #include "mapping/core/timing.h"
-#include "mapping/export/map_export.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/map_export.h"
+#include "mapping/files/ply_reader.h"
 
 namespace vdmap::app {
 namespace {

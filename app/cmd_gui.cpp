@@ -17,8 +17,8 @@
 #include "app/view/progress.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
-#include "mapping/export/map_file.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/map_file.h"
+#include "mapping/files/session_file.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 
@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 
 struct GuiArgs {
   SequenceArgs sequence;
-  std::string map;  ///< a saved session or a map file (mapping/export/map_file.h) instead of a sequence
+  std::string map;  ///< a saved session or a map file (mapping/files/map_file.h) instead of a sequence
   std::string settings;  ///< --settings: this file instead of the defaults or the user's settings
   std::string view_file;  ///< --view-file: read (strictly) before the window opens
   gui::ScriptOptions script;

@@ -23,11 +23,11 @@
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
-#include "mapping/export/map_export.h"
-#include "mapping/export/occupancy_grid.h"
+#include "mapping/files/map_export.h"
+#include "mapping/files/occupancy_grid.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 
 namespace vdmap::app {
 namespace {

@@ -16,7 +16,7 @@
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/parameters.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 
 namespace {
 

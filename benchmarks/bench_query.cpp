@@ -23,10 +23,10 @@
 #include <benchmark/benchmark.h>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/query_map.h"
-#include "mapping/query/surface_index.h"
+#include "mapping/query/detail/surface_index.h"
 
 namespace vdmap {
 namespace {

@@ -12,10 +12,10 @@
 
 #include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/pipeline/session_file.h"
-#include "mapping/query/keyframe_views.h"
+#include "mapping/files/session_file.h"
+#include "mapping/query/detail/keyframe_views.h"
 #include "mapping/query/query_map.h"
-#include "mapping/query/surface_index.h"
+#include "mapping/query/detail/surface_index.h"
 
 namespace {
 

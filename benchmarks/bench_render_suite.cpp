@@ -17,7 +17,7 @@
 
 #include "app/view/render_suite.h"
 #include "mapping/core/timing.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 
 namespace {
 

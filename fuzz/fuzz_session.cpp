@@ -7,7 +7,7 @@
 #include <string_view>
 
 #include "mapping/core/error.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace vdmap;

@@ -5,7 +5,7 @@
 #include <span>
 #include <vector>
 
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/pipeline/mapper.h"

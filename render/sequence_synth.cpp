@@ -8,7 +8,7 @@
 #include <tbb/parallel_for_each.h>
 #include <tbb/task_group.h>
 
-#include "mapping/export/ply_writer.h"
+#include "mapping/files/ply_writer.h"
 #include "mapping/io/image_codec.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/framebuffer.h"

@@ -11,7 +11,7 @@
 #include <opencv2/core.hpp>
 
 #include "mapping/core/camera.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/synth/builtin_scene.h"
 #include "mapping/synth/depth_noise.h"

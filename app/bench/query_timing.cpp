@@ -22,7 +22,7 @@
 #include "mapping/core/box_tree.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/occupancy_truth.h"
-#include "mapping/export/map_export.h"
+#include "mapping/files/map_export.h"
 #include "mapping/query/query_map.h"
 
 namespace vdmap::app {

@@ -12,7 +12,7 @@
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
 
 namespace vdmap::app {

@@ -6,9 +6,9 @@
 #include "app/view/map_sequence.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 #include "mapping/pipeline/parameters.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"
@@ -97,7 +97,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     name_ = map;
   } else if (!map.empty()) {
     // A map file (a `vdmap map` folder, an ellipsoid or point PLY, an OctoMap) is drawn by its
-    // ellipsoids (mapping/export/map_file.h, as the workbench opens it).
+    // ellipsoids (mapping/files/map_file.h, as the workbench opens it).
     StaticMap file = loadStaticMap(map);
     // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
     for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory) m.map_cameras.push_back(p.T_W_C);

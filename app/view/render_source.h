@@ -21,7 +21,7 @@ struct Gl;
 
 namespace vdmap::app {
 
-/// One thing to draw, loaded once: a session, a map file (mapping/export/map_file.h), a mesh, or
+/// One thing to draw, loaded once: a session, a map file (mapping/files/map_file.h), a mesh, or
 /// a sequence mapped with the default parameters. Caches what several views of it share.
 class RenderSource {
  public:

@@ -18,7 +18,7 @@
 #include "app/view/render_view.h"
 #include "mapping/core/timing.h"
 #include "mapping/core/error.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "render/framebuffer.h"
 
 namespace vdmap::app {

@@ -8,7 +8,7 @@
 #include "mapping/pipeline/parameters.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"

@@ -1,11 +1,11 @@
 #pragma once
 // A small file browser inside the window (Browse... beside Open): folders first, what each entry
 // opens as, a path field that lists what is typed (and filters by a partial name), a sequence or
-// map folder opened as a whole. std::filesystem only; mapping/export/map_file.h tells the kinds.
+// map folder opened as a whole. std::filesystem only; mapping/files/map_file.h tells the kinds.
 #include <string>
 #include <vector>
 
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 
 namespace vdmap::app::gui {
 

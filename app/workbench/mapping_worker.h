@@ -18,8 +18,8 @@
 
 #include "app/workbench/append_log.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/export/map_file.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/map_file.h"
+#include "mapping/files/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/query_map.h"

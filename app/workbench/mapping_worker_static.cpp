@@ -1,4 +1,4 @@
-// The MappingWorker of a map file (mapping/export/map_file.h): one mapping snapshot and one global
+// The MappingWorker of a map file (mapping/files/map_file.h): one mapping snapshot and one global
 // map, published at construction; nothing is ever rebuilt, since a map file has no local maps.
 // Its thread only answers commands: each is refused with that reason, so waitIdle and the
 // window's "busy" see them handled.

@@ -13,7 +13,7 @@
 
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
-#include "mapping/export/map_export.h"
+#include "mapping/files/map_export.h"
 #include "render/legend.h"
 #include "render/view_framing.h"
 

@@ -17,7 +17,7 @@
 #include "app/view/settings.h"
 #include "app/workbench/settings_autosave.h"
 #include "app/cli/parameter_table.h"
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 #include "render/map_mirror.h"
 #include "render/query_slice.h"
 #include "render/view_camera.h"

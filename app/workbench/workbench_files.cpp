@@ -1,5 +1,5 @@
 // Opening files in the workbench (docs/workbench.md "Opening files"): whatever a path holds
-// (mapping/export/map_file.h) opens as a sequence, a session, a static map or a view; drops queue
+// (mapping/files/map_file.h) opens as a sequence, a session, a static map or a view; drops queue
 // here and the next frame opens them; opened paths go to the recent list.
 #include <cstdio>
 #include <filesystem>

@@ -6,7 +6,7 @@
 
 #include <Eigen/Core>
 
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 
 namespace vdmap {
 

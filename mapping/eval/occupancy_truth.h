@@ -11,7 +11,7 @@
 
 #include "mapping/core/camera.h"
 #include "mapping/core/types.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 
 namespace vdmap {
 

@@ -14,9 +14,9 @@
 
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
-#include "mapping/global_map/fusion_across_groups.h"
-#include "mapping/global_map/merge_within_groups.h"
-#include "mapping/global_map/occlusion_removal.h"
+#include "mapping/global_map/detail/fusion_across_groups.h"
+#include "mapping/global_map/detail/merge_within_groups.h"
+#include "mapping/global_map/detail/occlusion_removal.h"
 
 // The build (docs/method.md 6.4): merge groups (6.1, merge_groups.cpp), merging within each group
 // (6.2, merge_within_groups.cpp), occlusion removal (6.3, occlusion_removal.cpp) and fusion across

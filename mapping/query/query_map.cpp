@@ -8,7 +8,7 @@
 #include <string>
 
 #include "mapping/core/parallel.h"
-#include "mapping/query/query_map_data.h"
+#include "mapping/query/detail/query_map_data.h"
 
 namespace vdmap {
 namespace {

@@ -9,7 +9,7 @@
 
 #include "mapping/core/parallel.h"
 #include "mapping/query/ellipsoid_geometry.h"
-#include "mapping/query/query_map_data.h"
+#include "mapping/query/detail/query_map_data.h"
 
 namespace vdmap {
 

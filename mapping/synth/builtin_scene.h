@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "mapping/core/camera.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/trajectory_io.h"
 
 namespace vdmap {

@@ -17,10 +17,10 @@
 
 #include "app/query_files/query_io.h"
 #include "mapping/core/error.h"
-#include "mapping/export/occupancy_grid.h"
+#include "mapping/files/occupancy_grid.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/ply_reader.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/ply_reader.h"
+#include "mapping/files/session_file.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::test {

@@ -8,9 +8,9 @@
 
 #include "app/view/view_file.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "render/colormap.h"
 #include "render/map_scene.h"
 #include "render/view_camera.h"

@@ -8,7 +8,7 @@
 
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"

@@ -15,12 +15,12 @@
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/temporary_paths.h"
-#include "mapping/export/map_export.h"
-#include "mapping/export/octomap_export.h"
-#include "mapping/export/ply_writer.h"
+#include "mapping/files/map_export.h"
+#include "mapping/files/octomap_export.h"
+#include "mapping/files/ply_writer.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/json_text.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "tests/support/box_room_keyframes.h"
 
 namespace vdmap {

@@ -109,4 +109,38 @@ TEST(Layering, TheRendererIncludesNoWindowToolkitOrApp) {
   EXPECT_EQ(bannedIncludes("render", {"GLFW/", "imgui", "app/"}), std::vector<std::string>{});
 }
 
+// app/'s rooms, lowest first: cli/ and query_files/ include no other room; view/ (the headless
+// view) only cli/; workbench/ (the window's model) and bench/ only cli/ and view/; window/ alone
+// includes GLFW and ImGui. The benchmark programs include nothing of app/.
+TEST(Layering, AppRoomsIncludeOnlyTheRoomsBelowThem) {
+  const std::vector<std::string> toolkit = {"GLFW/", "imgui"};
+  auto plus = [](std::vector<std::string> a, const std::vector<std::string>& b) {
+    a.insert(a.end(), b.begin(), b.end());
+    return a;
+  };
+  const std::vector<std::string> nothing;
+  EXPECT_EQ(bannedIncludes("app/cli", plus(toolkit, {"app/view", "app/query_files", "app/workbench", "app/window", "app/bench"})), nothing);
+  EXPECT_EQ(bannedIncludes("app/query_files", plus(toolkit, {"app/cli", "app/view", "app/workbench", "app/window", "app/bench"})), nothing);
+  EXPECT_EQ(bannedIncludes("app/view", plus(toolkit, {"app/query_files", "app/workbench", "app/window", "app/bench"})), nothing);
+  EXPECT_EQ(bannedIncludes("app/workbench", plus(toolkit, {"app/window", "app/bench"})), nothing);
+  EXPECT_EQ(bannedIncludes("app/bench", plus(toolkit, {"app/window", "app/workbench"})), nothing);
+  EXPECT_EQ(bannedIncludes("benchmarks", {"app/"}), nothing);
+}
+
+// A folder's detail/ headers are its own: other folders of the libraries do not include them
+// (tests and benchmarks may, to check and time the parts).
+TEST(Layering, DetailHeadersAreIncludedOnlyByTheirFolder) {
+  const fs::path root(VDMAP_SOURCE_DIR);
+  std::vector<std::string> outside;
+  for (const char* dir : {"mapping", "render", "app"})
+    for (const Include& inc : includesUnder(root / dir)) {
+      const auto detail = inc.target.find("/detail/");
+      if (detail == std::string::npos) continue;
+      const std::string owner = inc.target.substr(0, detail);  // e.g. mapping/query
+      const std::string from = fs::relative(inc.file, root).generic_string();
+      if (from.rfind(owner + "/", 0) != 0) outside.push_back(from + ": " + inc.target);
+    }
+  EXPECT_EQ(outside, std::vector<std::string>{});
+}
+
 }  // namespace

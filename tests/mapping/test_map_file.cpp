@@ -1,4 +1,4 @@
-// Map files (mapping/export/map_file.h): what detectMapFile tells apart, and loadStaticMap's reading
+// Map files (mapping/files/map_file.h): what detectMapFile tells apart, and loadStaticMap's reading
 // of a `vdmap map` folder, PLYs and OctoMaps written by vdmap's own exports.
 #include <algorithm>
 #include <cmath>
@@ -9,11 +9,11 @@
 #include <octomap/OcTree.h>
 
 #include "mapping/core/error.h"
-#include "mapping/export/map_export.h"
-#include "mapping/export/octomap_export.h"
-#include "mapping/export/ply_writer.h"
+#include "mapping/files/map_export.h"
+#include "mapping/files/octomap_export.h"
+#include "mapping/files/ply_writer.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 #include "tests/support/box_room_keyframes.h"
 #include "tests/support/test_util.h"
 

@@ -18,7 +18,7 @@
 #include "mapping/local_map/sensor_model.h"
 #include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/query_map.h"
-#include "mapping/query/surface_index.h"
+#include "mapping/query/detail/surface_index.h"
 #include "tests/support/box_room_keyframes.h"
 
 namespace vdmap {

@@ -15,7 +15,7 @@
 
 #include "mapping/core/error.h"
 #include "mapping/pipeline/parameters.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {

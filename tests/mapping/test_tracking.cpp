@@ -11,7 +11,7 @@
 
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/sensor_model.h"

@@ -8,7 +8,7 @@
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"

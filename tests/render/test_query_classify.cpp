@@ -16,7 +16,7 @@
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/pipeline/mapper.h"
-#include "mapping/query/keyframe_views.h"
+#include "mapping/query/detail/keyframe_views.h"
 #include "mapping/query/query_map.h"
 #include "render/sequence_synth.h"
 #include "tests/support/box_room_keyframes.h"

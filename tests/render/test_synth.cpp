@@ -8,7 +8,7 @@
 #include <tbb/task_arena.h>
 
 #include "mapping/io/camera_config.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/synth/builtin_scene.h"

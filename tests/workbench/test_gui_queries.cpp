@@ -9,7 +9,7 @@
 
 #include "app/workbench/workbench.h"
 #include "mapping/eval/mesh_accuracy.h"
-#include "mapping/export/map_export.h"
+#include "mapping/files/map_export.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/query_slice.h"

@@ -1,8 +1,7 @@
 #pragma once
 // The global map's ellipsoids as surfaces for point, distance and ray queries (docs/method.md 13):
 // each one's k-sigma gate (covariance + min_sigma^2 I), a grid for gate lookups and a box tree for
-// nearest-surface and first-hit searches. Internal to mapping/query (QueryMap is the interface).
-// Owner: the geometry code.
+// nearest-surface and first-hit searches. QueryMap is the interface; the geometry code owns this.
 #include <cstdint>
 #include <limits>
 #include <memory>

@@ -7,7 +7,7 @@
 
 #include <Eigen/Core>
 
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap {

@@ -1,7 +1,7 @@
 #pragma once
 // Free space from the keyframes' own views (docs/method.md 13): per keyframe, its kept cells as
 // Gaussians in the keyframe frame, and an index of which keyframes can see a world point.
-// Internal to mapping/query (QueryMap is the interface). Owner: the classification code.
+// QueryMap is the interface; the classification code owns this.
 #include <cstdint>
 #include <memory>
 #include <span>

@@ -1,4 +1,4 @@
-#include "mapping/export/occupancy_grid.h"
+#include "mapping/files/occupancy_grid.h"
 
 #include <algorithm>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "mapping/global_map/occlusion_removal.h"
+#include "mapping/global_map/detail/occlusion_removal.h"
 
 #include <algorithm>
 #include <cmath>

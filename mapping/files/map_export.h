@@ -6,7 +6,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "mapping/export/octomap_export.h"
+#include "mapping/files/octomap_export.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/keyframe_graph.h"

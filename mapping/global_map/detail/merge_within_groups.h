@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/global_map/global_map_helpers.h"
+#include "mapping/global_map/detail/global_map_helpers.h"
 
 namespace vdmap::global_map_detail {
 

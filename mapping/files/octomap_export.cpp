@@ -1,4 +1,4 @@
-#include "mapping/export/octomap_export.h"
+#include "mapping/files/octomap_export.h"
 
 #include <chrono>
 #include <cmath>

@@ -1,4 +1,4 @@
-#include "mapping/export/map_file.h"
+#include "mapping/files/map_file.h"
 
 #include <algorithm>
 #include <array>
@@ -13,7 +13,7 @@
 #include <octomap/OcTree.h>
 
 #include "mapping/core/error.h"
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
 
 namespace vdmap {

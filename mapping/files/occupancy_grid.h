@@ -13,7 +13,7 @@
 
 #include <Eigen/Core>
 
-#include "mapping/export/octomap_export.h"
+#include "mapping/files/octomap_export.h"
 #include "mapping/query/query_map.h"
 
 namespace vdmap {

@@ -1,4 +1,4 @@
-#include "mapping/global_map/global_map_helpers.h"
+#include "mapping/global_map/detail/global_map_helpers.h"
 
 #include <numeric>
 

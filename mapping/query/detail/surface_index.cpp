@@ -1,4 +1,4 @@
-#include "mapping/query/surface_index.h"
+#include "mapping/query/detail/surface_index.h"
 
 #include <algorithm>
 #include <limits>

@@ -1,4 +1,4 @@
-#include "mapping/io/ply_reader.h"
+#include "mapping/files/ply_reader.h"
 
 #include <algorithm>
 #include <bit>

@@ -1,4 +1,4 @@
-#include "mapping/pipeline/session_file.h"
+#include "mapping/files/session_file.h"
 
 #include <algorithm>
 #include <array>

@@ -1,4 +1,4 @@
-#include "mapping/global_map/merge_within_groups.h"
+#include "mapping/global_map/detail/merge_within_groups.h"
 
 #include <algorithm>
 

@@ -1,4 +1,4 @@
-#include "mapping/global_map/fusion_across_groups.h"
+#include "mapping/global_map/detail/fusion_across_groups.h"
 
 #include <algorithm>
 #include <cmath>

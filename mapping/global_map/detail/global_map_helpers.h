@@ -1,7 +1,6 @@
 #pragma once
 // Small pieces the stages of buildGlobalMap share (docs/method.md 6-7): the covariance floor,
-// lambda_max, and a stable counting sort of indices by key. Not part of the public API
-// (global_map.h).
+// lambda_max, and a stable counting sort of indices by key.
 #include <cstddef>
 #include <vector>
 

@@ -1,4 +1,4 @@
-#include "mapping/export/map_export.h"
+#include "mapping/files/map_export.h"
 
 #include <unistd.h>
 
@@ -15,8 +15,8 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/temporary_paths.h"
 #include "mapping/core/timing.h"
-#include "mapping/export/octomap_export.h"
-#include "mapping/export/ply_writer.h"
+#include "mapping/files/octomap_export.h"
+#include "mapping/files/ply_writer.h"
 #include "mapping/io/json_text.h"
 #include "mapping/io/trajectory_io.h"
 

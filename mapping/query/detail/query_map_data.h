@@ -1,8 +1,8 @@
 #pragma once
-// What QueryMap::build builds (internal to mapping/query).
-#include "mapping/query/keyframe_views.h"
+// What QueryMap::build builds.
+#include "mapping/query/detail/keyframe_views.h"
 #include "mapping/query/query_map.h"
-#include "mapping/query/surface_index.h"
+#include "mapping/query/detail/surface_index.h"
 
 namespace vdmap {
 

@@ -1,4 +1,4 @@
-#include "mapping/export/ply_writer.h"
+#include "mapping/files/ply_writer.h"
 
 #include <algorithm>
 #include <bit>

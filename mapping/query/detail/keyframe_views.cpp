@@ -1,4 +1,4 @@
-#include "mapping/query/keyframe_views.h"
+#include "mapping/query/detail/keyframe_views.h"
 
 #include <algorithm>
 #include <cmath>
