@@ -13,6 +13,8 @@ constexpr const char* kSensorModels[] = {"nguyen2012", "belter2018"};
 using K = ParameterSpec::Kind;
 #define ACCESS(member) VDMAP_PARAMETER_ACCESS(GlobalMapParams, member)
 
+// Rows are laid out by hand: a parameter's fields read as one record.
+// clang-format off
 constexpr ParameterRow<GlobalMapParams> kGlobalMapRows[] = {
     {.spec = {.key = "sensor_model", .flag = "--sensor-model", .label = "sensor model", .unit = "",
               .help = "The noise model giving each point's expected covariance (docs/method.md 3): nguyen2012, the "
@@ -77,6 +79,7 @@ constexpr ParameterRow<GlobalMapParams> kGlobalMapRows[] = {
               .enabled_by = "fuse_across_groups"},
      ACCESS(fusion_max_distance)},
 };
+// clang-format on
 #undef ACCESS
 
 }  // namespace

@@ -9,6 +9,8 @@ namespace {
 using K = ParameterSpec::Kind;
 #define ACCESS(member) VDMAP_PARAMETER_ACCESS(MapperParams, member)
 
+// Rows are laid out by hand: a parameter's fields read as one record.
+// clang-format off
 constexpr ParameterRow<MapperParams> kMapperRows[] = {
     {.spec = {.key = "cell_size", .flag = "--cell-size", .label = "cell size s", .unit = "px",
               .help = "s (docs/method.md 2): side of a container cell in keyframe pixels; each cell holds one "
@@ -90,6 +92,7 @@ constexpr ParameterRow<MapperParams> kMapperRows[] = {
               .kind = K::kReal, .lo = 0, .hi = kInf, .slider = false},
      ACCESS(keyframes.covisibility.max_reprojection_px)},
 };
+// clang-format on
 #undef ACCESS
 
 }  // namespace

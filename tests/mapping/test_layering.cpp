@@ -92,6 +92,33 @@ TEST(Layering, MappingFoldersIncludeEachOtherInOneDirection) {
   EXPECT_EQ(findCycle(graph), "") << "mapping/'s folders include each other in a cycle";
 }
 
+// mapping/'s folders in the order docs/dev/architecture.md's table lists them (rows "| `NAME/` |"
+// under "## `mapping/`").
+std::vector<std::string> documentedMappingOrder() {
+  std::ifstream in(fs::path(VDMAP_SOURCE_DIR) / "docs/dev/architecture.md");
+  static const std::regex kRow(R"(^\| `([a-z_]+)/` \|)");
+  std::vector<std::string> order;
+  bool in_section = false;
+  std::smatch m;
+  for (std::string line; std::getline(in, line);) {
+    if (line.rfind("## ", 0) == 0) in_section = line == "## `mapping/`";
+    if (in_section && std::regex_search(line, m, kRow)) order.push_back(m[1]);
+  }
+  return order;
+}
+
+TEST(Layering, MappingFoldersIncludeOnlyTheFoldersTheArchitectureListsBeforeThem) {
+  const FolderGraph graph = mappingFolderGraph();
+  const std::vector<std::string> order = documentedMappingOrder();
+  auto rank = [&](const std::string& folder) { return std::find(order.begin(), order.end(), folder) - order.begin(); };
+  for (const auto& [folder, includes] : graph) {
+    ASSERT_LT(rank(folder), static_cast<long>(order.size())) << "docs/dev/architecture.md does not list mapping/" << folder;
+    for (const std::string& to : includes)
+      EXPECT_LT(rank(to), rank(folder)) << "mapping/" << folder << " includes mapping/" << to
+                                        << ", which docs/dev/architecture.md lists after it";
+  }
+}
+
 // Files under `dir` that include a header whose path starts with one of `banned`.
 std::vector<std::string> bannedIncludes(const std::string& dir, const std::vector<std::string>& banned) {
   std::vector<std::string> out;
