@@ -1,7 +1,7 @@
 #pragma once
 // What one view of a map is, as the workbench shows it and `vdmap render` draws it: which view,
 // where the camera is, how the map is coloured and drawn, which layers, which background. Plain
-// structs without parsing (app/view_file.* reads and writes them as JSON). The defaults are the
+// structs without parsing (app/view/view_file.* reads and writes them as JSON). The defaults are the
 // window's, so the window and a render with no options draw the same picture.
 #include <array>
 #include <optional>

@@ -57,7 +57,7 @@ std::vector<std::string> plyVertexProperties(const fs::path& file) {
 }
 
 // The first non-blank character of a file is '{' and the text holds the key "vdmap_view"
-// (a view file; app/view_file.* reads it properly).
+// (a view file; app/view/view_file.* reads it properly).
 bool looksLikeViewFile(const fs::path& file) {
   std::ifstream in(file, std::ios::binary);
   std::string head(4096, '\0');

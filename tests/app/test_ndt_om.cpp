@@ -1,4 +1,4 @@
-// The NDT-OM baseline (mapping/baseline): its cells equal the batch statistics of every point
+// The NDT-OM baseline (app/bench/ndt_om_baseline.h): its cells equal the batch statistics of every point
 // ever assigned to them, as the local map's do (docs/method.md 2).
 #include <array>
 #include <cmath>
