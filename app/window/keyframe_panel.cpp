@@ -17,20 +17,20 @@ namespace {
 
 // The last item (a pose field) starts a drag: remember the pose for undo.
 void poseEditStarted(Workbench& bench) {
-  if (ImGui::IsItemActivated()) bench.beginPoseEdit();
+  if (ImGui::IsItemActivated()) bench.poses().beginEdit();
 }
 
 // Every keyframe, its colour as a square; a click selects it.
 void drawKeyframeList(Workbench& bench, const WindowState& win) {
   // A keyframe picked in the view or by a loop marker scrolls into the list's middle once.
-  const bool scroll = bench.takeScrollToSelected();
+  const bool scroll = bench.poses().takeScrollToSelected();
   if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
     for (const KeyframeInfo& k : win.mapping->keyframes) {
       char text[96];
       std::snprintf(text, sizeof text, "   K%d  frame %d  %zu cells%s", k.id, k.frame, k.ellipsoids,
                     k.id == win.mapping->current_keyframe ? "  (current)" : "");
       const ImVec2 at = ImGui::GetCursorScreenPos();
-      if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.selectKeyframe(k.id);
+      if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.poses().selectKeyframe(k.id);
       if (scroll && k.id == bench.ui().selected_keyframe) ImGui::SetScrollHereY(0.5f);
       const float h = ImGui::GetTextLineHeight();
       ImGui::GetWindowDrawList()->AddRectFilled({at.x + 2, at.y + 2}, {at.x + h - 2, at.y + h - 2},
@@ -88,7 +88,7 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   const bool before = ui.show_before_optimisation;
   ImGui::BeginDisabled(before);
   // A pixel of drag moves the keyframe as far as a pixel of the view spans at its depth.
-  const float speed = bench.poseDragSpeed();
+  const float speed = bench.view().poseDragSpeed();
   if (beginRows("pose")) {
     label(win.check, "t (m)",
           "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
@@ -109,10 +109,10 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   }
   ImGui::EndDisabled();
   if (before) tip("Showing the map before the last optimisation: poses are edited on the map after it (B).");
-  if (moved) bench.applyPoseEdit();
-  ImGui::BeginDisabled(!bench.canUndoPoseEdit());
-  if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench.undoPoseEdit();
-  tip(bench.canUndoPoseEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
+  if (moved) bench.poses().applyEdit();
+  ImGui::BeginDisabled(!bench.poses().canUndoEdit());
+  if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench.poses().undoEdit();
+  tip(bench.poses().canUndoEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
   ImGui::EndDisabled();
 }
 
@@ -126,7 +126,7 @@ void drawKeyframes(Workbench& bench, const render::MapMirror& mirror, WindowStat
     return ImGui::TextWrapped("Select a keyframe to inspect it.");
   if (bench.staticMap()) {  // opening files: a map file's keyframes are poses only
     ImGui::TextDisabled("K%d: no inspector, container or pose edit", id);
-    return tip(std::string("A map file: ") + Workbench::kStaticMapWhy + ".");
+    return tip(std::string("A map file: ") + kStaticMapWhy + ".");
   }
   drawInspector(bench, mirror, win, id);
   drawPoseEdit(bench, win);
@@ -168,8 +168,8 @@ void drawPoseFile(Workbench& bench) {
   tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
   const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
   ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
-  if (ImGui::Button("Load corrected trajectory")) bench.loadTrajectory();
-  tip(file ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
+  if (ImGui::Button("Load corrected trajectory")) bench.files().loadTrajectory();
+  tip(file ? std::string("A map file: ") + kStaticMapWhy + "."
       : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
                                    : "Replaces the matching keyframes' poses; the map is rebuilt.");
   ImGui::EndDisabled();

@@ -22,15 +22,15 @@ void drawExport(Workbench& bench, WindowState& win) {
     ImGui::InputText("##session", &ui.session_text);
     ImGui::EndTable();
   }
-  const std::string file = bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "." : "";
+  const std::string file = bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "." : "";
   ImGui::BeginDisabled(ui.export_text.empty() || !file.empty());
-  if (ImGui::Button("Export")) bench.exportMap();
+  if (ImGui::Button("Export")) bench.files().exportMap();
   tip(!file.empty() ? file
       : ui.export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
   ImGui::EndDisabled();
   ImGui::SameLine();
   ImGui::BeginDisabled(ui.session_text.empty() || !file.empty());
-  if (ImGui::Button("Save session")) bench.saveSession();
+  if (ImGui::Button("Save session")) bench.files().saveSession();
   tip(!file.empty() ? file
       : ui.session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
   ImGui::EndDisabled();
@@ -55,7 +55,7 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     if (section(win.check, "Export and save")) drawExport(bench, win);
   }
   if (section(win.check, "Settings")) {
-    if (ImGui::Button("Reset to defaults")) bench.resetToDefaults();
+    if (ImGui::Button("Reset to defaults")) bench.parameters().resetToDefaults();
     tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
     const UiState& ui = bench.ui();
     ImGui::TextWrapped("This run started with: %s.", ui.settings_source.c_str());

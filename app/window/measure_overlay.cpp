@@ -22,7 +22,7 @@ constexpr ImU32 kShadow = IM_COL32(0, 0, 0, 200);
 // Where a world point shows in ImGui coordinates (nullopt behind the camera).
 std::optional<ImVec2> toScreen(Workbench& bench, const WindowState& win, const glm::vec3& p) {
   const UiState& ui = bench.ui();
-  const ViewportView v = bench.view(ui.view_width, ui.view_height);
+  const ViewportView v = bench.view().viewport(ui.view_width, ui.view_height);
   const glm::vec4 q = v.camera.T_C_W * glm::vec4(p, 1.f);
   if (q.z <= v.camera.near_m) return std::nullopt;
   const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
@@ -106,7 +106,7 @@ std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const
   gl.ReadBuffer(GL_BACK);
   const std::optional<float> depth = render::readDepth(gl, vx + px, vy + (vh - 1 - py));
   if (!depth) return std::nullopt;
-  const ViewportView v = bench.view(vw, vh);
+  const ViewportView v = bench.view().viewport(vw, vh);
   return render::unproject(v.camera, static_cast<float>(px - v.image.x), static_cast<float>(py - v.image.y), *depth);
 }
 
@@ -118,18 +118,19 @@ bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
     switch (probe.purpose) {
       case ViewProbe::Purpose::kZoom:
         // Toward the surface under the cursor, else the point of the target's plane there.
-        bench.zoomAt(probe.wheel, p ? *p : bench.targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
+        bench.view().zoomAt(probe.wheel,
+                            p ? *p : bench.view().targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
         break;
       case ViewProbe::Purpose::kPivot:
-        if (p) bench.pivotAt(*p);
+        if (p) bench.view().pivotAt(*p);
         else bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to turn about");
         break;
       case ViewProbe::Purpose::kMeasure:
-        if (p) bench.addMeasurePoint(*p);
+        if (p) bench.view().addMeasurePoint(*p);
         else bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to measure at");
         break;
       case ViewProbe::Purpose::kQuery:
-        changed = bench.probeAt(probe.x_px, probe.y_px, ui.view_width, ui.view_height, p) || changed;
+        changed = bench.queries().probeAt(probe.x_px, probe.y_px, ui.view_width, ui.view_height, p) || changed;
         break;
     }
   }

@@ -61,14 +61,14 @@ bool measureLatency(ScriptRun& run, Workbench& bench, const WindowState& win) {
   }
   if (run.latency_shown_pending) return true;  // until that frame is on screen
   if (static_cast<int>(run.latency_ms.size()) >= run.options.latency_runs) return false;
-  if (bench.player().busy) return true;  // the previous build's follow-up work (the selection)
+  if (bench.player().status().busy) return true;  // the previous build's follow-up work (the selection)
   const std::size_t i = run.latency_ms.size();
   const LatencyEdit& edit = kLatencyEdits[(i / 2) % std::size(kLatencyEdits)];
   const Parameter& p = *findParameter(edit.key);
-  if (i % 2 == 0) run.latency_back = bench.inUse(p);
+  if (i % 2 == 0) run.latency_back = bench.parameters().inUse(p);
   run.latency_generation = global->generation;
   run.latency_start = Clock::now();
-  bench.editParameter(p, i % 2 == 0 ? edit.other : run.latency_back);
+  bench.parameters().edit(p, i % 2 == 0 ? edit.other : run.latency_back);
   return true;
 }
 // --- end latency
@@ -87,11 +87,11 @@ void recordLayout(ScriptRun& run, Workbench& bench, const WindowState& win) {
   if (!global || global->map.ellipsoids.empty()) return;
   // What the view draws of the map (each ellipsoid's extent at the sigma, strays left out and
   // counted), so a cut is seen here.
-  const render::DrawnBounds drawn = bench.drawnMap();
+  const render::DrawnBounds drawn = bench.view().drawnMap();
   run.layout["map_strays"] = drawn.strays;
   if (drawn.empty) return;
   const render::FrameBox box(drawn.lo, drawn.hi, drawn.axes);
-  const ViewportView v = bench.view(ui.view_width, ui.view_height);
+  const ViewportView v = bench.view().viewport(ui.view_width, ui.view_height);
   float x0 = INFINITY, y0 = INFINITY, x1 = -INFINITY, y1 = -INFINITY;
   for (int c = 0; c < 8; ++c) {
     const glm::vec3 p = box.corner(c);
@@ -114,8 +114,8 @@ void measureScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, con
                                                   : std::to_string(m[0]) + "," + std::to_string(m[1])));
     return;
   }
-  bench.addMeasurePoint(*a);
-  bench.addMeasurePoint(*b);
+  bench.view().addMeasurePoint(*a);
+  bench.view().addMeasurePoint(*b);
   run.measure = {{"a", {a->x, a->y, a->z}}, {"b", {b->x, b->y, b->z}}, {"distance_m", glm::length(*b - *a)}};
 }
 
@@ -124,7 +124,7 @@ void measureScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, con
 void probeScripted(ScriptRun& run, Workbench& bench, const render::Gl& gl, const WindowState& win) {
   const std::vector<float>& at = run.options.probe;
   const UiState& ui = bench.ui();
-  bench.probeAt(at[0], at[1], ui.view_width, ui.view_height, probeView(bench, gl, win, at[0], at[1]));
+  bench.queries().probeAt(at[0], at[1], ui.view_width, ui.view_height, probeView(bench, gl, win, at[0], at[1]));
   if (!ui.probe_result) {
     bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + std::to_string(at[0]) + "," +
                                                std::to_string(at[1]) + " (and no query slice there)");
@@ -183,7 +183,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
   stats["layout"] = run.layout;
   if (!run.measure.is_null()) stats["measure"] = run.measure;
   if (!run.probe.is_null()) stats["probe"] = run.probe;
-  if (const auto slice = bench.querySlice()) {
+  if (const auto slice = bench.queries().slice()) {
     stats["query_slice"] = {{"axis", render::querySliceAxisName(slice->spec.axis)},
                             {"offset_m", slice->spec.offset_m},
                             {"color", render::querySliceColorName(slice->spec.color)},
@@ -194,7 +194,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const WindowState& win, 
                             {"unknown", slice->unknown},
                             {"compute_ms", slice->compute_ms}};
   }
-  if (const auto query = bench.query())
+  if (const auto query = bench.queries().snapshot())
     stats["queries"] = {{"generation", query->generation}, {"build_ms", query->build_ms}, {"note", query->note},
                         {"keyframes", query->map->keyframes()}, {"ellipsoids", query->map->ellipsoids()},
                         {"memory_bytes", query->map->memoryBytes()}};
@@ -282,29 +282,29 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         UiState& ui = bench.ui();
         ui.probe = ui.probe || !run.options.probe.empty();
         if (run.options.query_slice && !ui.query_slice) ui.query_slice = true, ui.query_slice_spec = *run.options.query_slice;
-        const auto query = bench.query();
+        const auto query = bench.queries().snapshot();
         const auto global = bench.global();
-        if ((!query || !global || query->generation != global->generation) && bench.player().error.empty()) return;
+        if ((!query || !global || query->generation != global->generation) && bench.player().status().error.empty()) return;
       }
       if (bench.isOpen()) {
-        const PlayerStatus st = bench.player();
+        const PlayerStatus st = bench.player().status();
         const bool done =
             !st.busy && (st.target >= win.mapping->frames_total || !run.options.play_to_end || !st.error.empty());
         if (!done) return;
       }
-      if (run.options.view) bench.applyViewSpec(*run.options.view);
-      else bench.resetView();
-      if (run.options.keyframe >= 0) bench.selectKeyframe(run.options.keyframe);
+      if (run.options.view) bench.view().applySpec(*run.options.view);
+      else bench.view().resetView();
+      if (run.options.keyframe >= 0) bench.poses().selectKeyframe(run.options.keyframe);
       for (const int key : run.options.press) keys.presses.emplace_back(key, 0);  // as if typed now
-      for (const std::string& path : run.options.drop) bench.drop(path);  // as if dropped now (opened next frame)
+      for (const std::string& path : run.options.drop) bench.files().drop(path);  // as if dropped now (opened next frame)
       run.countdown = 3;  // frames to draw the final map before the screenshot
       run.phase = ScriptPhase::kSettle;
       return;
     }
     case ScriptPhase::kSettle:
-      if (bench.player().busy) return;  // a key pressed above may have asked for a rebuild
+      if (bench.player().status().busy) return;  // a key pressed above may have asked for a rebuild
       // A frame before the screenshot, so that it shows the measured line.
-      if (run.countdown == 3 && run.options.query_slice) bench.waitQuerySlice();  // drawn by the next frames
+      if (run.countdown == 3 && run.options.query_slice) bench.queries().waitSlice();  // drawn by the next frames
       if (run.countdown == 2 && run.options.measure.size() == 4) measureScripted(run, bench, gl, win);
       if (run.countdown == 2 && run.options.probe.size() == 2) probeScripted(run, bench, gl, win);
       if (--run.countdown > 0) return;
@@ -313,8 +313,8 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
         saveScreenshot(bench, gl, win, run.options.screenshot);
         run.screenshot_taken = true;
       }
-      if (run.options.view) bench.warnAboutTheViewsSize(*run.options.view);
-      if (!run.options.save_view.empty() && !failedRun(run, bench)) bench.saveView(run.options.save_view);
+      if (run.options.view) bench.viewFiles().warnAboutSize(*run.options.view);
+      if (!run.options.save_view.empty() && !failedRun(run, bench)) bench.viewFiles().save(run.options.save_view);
       run.view_files_taken = !run.options.save_view.empty() || !run.options.view_screenshot.empty();
       run.phase = ScriptPhase::kLatency;
       return;
@@ -330,12 +330,12 @@ void advanceScript(ScriptRun& run, Workbench& bench, const render::Gl& gl, const
           run.orbit_cpu_ms.push_back(1e3 * (cpu - run.orbit_cpu_start));
         }
         run.orbit_started = true;
-        bench.orbit(0.03f, 0.f);
+        bench.view().orbit(0.03f, 0.f);
         run.orbit_frame_start = run.last_move = Clock::now();
         run.orbit_cpu_start = cpu;
         return;
       }
-      if (bench.player().busy || settle_frames > 0) return;  // idle: the worker and the UI
+      if (bench.player().status().busy || settle_frames > 0) return;  // idle: the worker and the UI
       if (run.view_fast) return;  // the full-quality frame follows once the camera rests
       run.phase = ScriptPhase::kIdle;  // starts once this frame is on screen (scriptFrameShown)
       run.idle_until = Clock::time_point::max();
@@ -382,12 +382,12 @@ void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& w
 bool viewScreenshotDue(const ScriptRun& run, const Workbench& bench) {
   // advanceScript takes the screenshots in the frame whose settle countdown ends.
   return !run.options.view_screenshot.empty() && run.phase == ScriptPhase::kSettle && run.countdown == 1 &&
-         !bench.player().busy && !failedRun(run, bench);
+         !bench.player().status().busy && !failedRun(run, bench);
 }
 
 void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirror& mirror, const WindowState& win,
                         const std::string& file) {
-  const render::ViewSpec spec = bench.viewSpec();
+  const render::ViewSpec spec = bench.view().spec();
   cv::Mat image;
   const auto selection = bench.selection();
   if (spec.kind == render::ViewKind::kContainer && selection && selection->keyframe == spec.keyframe &&
@@ -412,7 +412,7 @@ void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirro
     const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
     const int vx = static_cast<int>(win.layout.view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
     const int vy = win.layout.fb_height - static_cast<int>(win.layout.view.y * scale.y) - vh;
-    const render::PixelRect r = bench.view(vw, vh).image;
+    const render::PixelRect r = bench.view().viewport(vw, vh).image;
     gl.BindFramebuffer(GL_FRAMEBUFFER, 0);
     gl.ReadBuffer(GL_BACK);
     image = render::readFramebufferRgb(gl, vx + r.x, vy + (vh - r.y - r.height), r.width, r.height);

@@ -73,7 +73,7 @@ void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& w
 /// Whether this frame is the one the script takes its screenshots of: the window then calls
 /// saveViewScreenshot after drawing the 3-D view and before drawing the panels over it.
 bool viewScreenshotDue(const ScriptRun& run, const Workbench& bench);
-/// Writes the 3-D view's own image (Workbench::viewSpec's view: the viewport, the letterbox of a
+/// Writes the 3-D view's own image (ViewController::spec's view: the viewport, the letterbox of a
 /// keyframe view, or the container drawn with the view's layers) as a PNG to `file`, read from
 /// the back buffer after the map is drawn and before ImGui draws; the outcome goes to the status
 /// line.

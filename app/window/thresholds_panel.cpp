@@ -23,11 +23,11 @@ namespace {
 // why_disabled is "".
 void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const std::string& why_disabled) {
   const bool disabled = !why_disabled.empty();
-  const bool pending = bench.pending(p);
+  const bool pending = bench.parameters().pending(p);
   std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
                      "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
   if (pending)
-    help += "\n\nPending: the map shown was made with " + formatValue(p, bench.inUse(p)) +
+    help += "\n\nPending: the map shown was made with " + formatValue(p, bench.parameters().inUse(p)) +
             (p.live ? " (rebuilding)." : "; Re-run applies the edited value.");
   if (disabled) help = why_disabled + "\n\n" + help;
   const std::string text =
@@ -61,7 +61,7 @@ void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const 
   }
   tip(help);
   ImGui::EndDisabled();
-  if (changed) bench.editParameter(p, v);
+  if (changed) bench.parameters().edit(p, v);
 }
 
 // The global map's figures (docs/method.md 6.4) under the thresholds, and a warning when the filter keeps
@@ -98,7 +98,7 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
         "%.0f / %.0f / %.0f / %.0f / %.0f ms", parts.groups_ms, parts.merge_ms, parts.occlusion_ms, parts.fusion_ms,
         parts.other_ms);
     row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
-        "%d frames%s", win.global->frames_mapped, bench.player().busy ? ", rebuilding" : "");
+        "%d frames%s", win.global->frames_mapped, bench.player().status().busy ? ", rebuilding" : "");
     ImGui::EndTable();
   }
   if (stored > 0 && m.sigma_e * 20 < stored) {
@@ -116,7 +116,7 @@ void drawThresholds(Workbench& bench, WindowState& win) {
   const bool file = bench.staticMap() != nullptr;  // opening files: a map file has nothing to rebuild
   if (beginRows("thresholds")) {
     for (const Parameter& p : parameterTable())
-      if (p.live) parameterRow(bench, win, p, file ? Workbench::kStaticMapWhy : whyDisabled(p, bench.ui().params));
+      if (p.live) parameterRow(bench, win, p, file ? kStaticMapWhy : whyDisabled(p, bench.ui().params));
     ImGui::EndTable();
   }
   if (file) return drawStaticMapFigures(bench, win);
@@ -126,7 +126,7 @@ void drawThresholds(Workbench& bench, WindowState& win) {
 
 void drawRerun(Workbench& bench, WindowState& win) {
   const bool saved = bench.savedSession();
-  const std::string why = bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
+  const std::string why = bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
                           : "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
   if (beginRows("rerun")) {
     for (const Parameter& p : parameterTable())
@@ -134,9 +134,9 @@ void drawRerun(Workbench& bench, WindowState& win) {
     ImGui::EndTable();
   }
   bool any_pending = false;
-  for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench.pending(p);
+  for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench.parameters().pending(p);
   ImGui::BeginDisabled(saved || !any_pending);
-  if (ImGui::Button("Re-run")) bench.rerun();
+  if (ImGui::Button("Re-run")) bench.parameters().rerun();
   tip(saved ? why
             : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
                           : "Nothing to apply: the sliders show the parameters the map was made with.");
@@ -231,7 +231,7 @@ void drawView(Workbench& bench, WindowState& win) {
     int up = static_cast<int>(s.up_axis);
     if (ImGui::Combo("##up", &up, kUpAxisNames, 4)) {
       s.up_axis = static_cast<UpAxis>(up);
-      bench.resetView();
+      bench.view().resetView();
     }
     label(win.check, "show",
           "Keyframe frustums (yellow: current, white: selected, red: the camera now), covisibility edges "
@@ -245,13 +245,13 @@ void drawView(Workbench& bench, WindowState& win) {
     ImGui::EndTable();
   }
   drawSliceControls(bench, win);
-  if (ImGui::Button("Frame map (F)")) bench.frameMap();
+  if (ImGui::Button("Frame map (F)")) bench.view().frameMap();
   tip("Fits the map in the view, keeping the direction; the view follows the map again as it grows.");
   ImGui::SameLine();
-  if (ImGui::Button("Frame paths (T)")) bench.frameTrajectories();
+  if (ImGui::Button("Frame paths (T)")) bench.view().frameTrajectories();
   tip("Fits the tracked trajectory (and the ground truth, when shown) in the view, not the map.");
   checkFits(win.check);
-  if (ImGui::Button("Reset view (R)")) bench.resetView();
+  if (ImGui::Button("Reset view (R)")) bench.view().resetView();
   tip("The default view of the whole map from above, about the up axis; follows the map again.");
   ImGui::SameLine();
   if (ImGui::Button("Help (H)")) bench.key(KeyAction::kHelp);
@@ -260,7 +260,7 @@ void drawView(Workbench& bench, WindowState& win) {
   // The view as a view file, and the command that draws it headless (docs/workbench.md "Save view").
   UiState& ui = bench.ui();
   ImGui::BeginDisabled(ui.view_file_text.empty());
-  if (ImGui::Button("Save view (S)")) bench.saveViewSafely(ui.view_file_text);
+  if (ImGui::Button("Save view (S)")) bench.viewFiles().saveSafely(ui.view_file_text);
   tip(ui.view_file_text.empty() ? "Type a file name on the right first."
                                 : "Writes the view shown (camera, size, colours, layers, thresholds) as a view file to the "
                                   "file named on the right; `vdmap render --view-file` draws the same picture. The status "
@@ -268,7 +268,7 @@ void drawView(Workbench& bench, WindowState& win) {
                                   "another name that exists asks first.");
   checkFits(win.check);
   ImGui::SameLine();
-  if (ImGui::Button("Load view")) bench.loadView(ui.view_file_text, ui.load_view_thresholds);
+  if (ImGui::Button("Load view")) bench.viewFiles().load(ui.view_file_text, ui.load_view_thresholds);
   tip("Shows the view file named on the right: its camera and view options (the window keeps its own size; a "
       "different size is named in the status line)" +
       std::string(ui.load_view_thresholds ? ", and its thresholds." : "; its thresholds only when ticked below."));
@@ -280,8 +280,8 @@ void drawView(Workbench& bench, WindowState& win) {
   ImGui::Checkbox("Load view: also its thresholds", &ui.load_view_thresholds);
   tip("Off: Load view changes the view alone (as --view-file); on: the file's thresholds are applied too (as --settings).");
   const std::string view_file = ui.confirm_view_replace;
-  if (askToReplace("Replace view file?", ui.confirm_view_replace)) bench.saveViewSafely(view_file, true);
-  std::string command = renderCommand(bench.viewSpec(), bench.viewSource());
+  if (askToReplace("Replace view file?", ui.confirm_view_replace)) bench.viewFiles().saveSafely(view_file, true);
+  std::string command = renderCommand(bench.view().spec(), bench.viewFiles().source());
   if (ImGui::Button("Copy")) ImGui::SetClipboardText(command.c_str());
   tip("Copies the `vdmap render` command that draws this view (every option spelled out) to the clipboard.");
   checkFits(win.check);

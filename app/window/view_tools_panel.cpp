@@ -28,7 +28,7 @@ void drawSliceControls(Workbench& bench, WindowState& win) {
   ImGui::EndDisabled();
   checkFits(win.check);
   ImGui::BeginDisabled(!slice.on);
-  if (ImGui::Button("Frame slice")) bench.frameMap();  // frameMap frames what is drawn: the slice
+  if (ImGui::Button("Frame slice")) bench.view().frameMap();  // frameMap frames what is drawn: the slice
   tip("Fits what the slice keeps in the view (F frames the same while the slice is on).");
   ImGui::EndDisabled();
   checkFits(win.check);
@@ -40,7 +40,7 @@ namespace vdmap::app::gui {
 
 void drawQueries(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
-  const auto query = bench.query();
+  const auto query = bench.queries().snapshot();
   ImGui::Checkbox("Probe (Q)", &ui.probe);
   tip("Under the cursor: occupied, free or unknown (docs/method.md 13) with p_occupied, and the distance to the "
       "nearest surface, beside the cursor and in the status line. The point stands the offset in front of the "
@@ -82,7 +82,7 @@ void drawQueries(Workbench& bench, WindowState& win) {
     ImGui::EndTable();
   }
   ImGui::EndDisabled();
-  if (const auto slice = bench.querySlice()) {
+  if (const auto slice = bench.queries().slice()) {
     const double n = std::max<double>(1.0, static_cast<double>(slice->occupied + slice->free + slice->unknown));
     ImGui::TextWrapped("%dx%d samples in %.0f ms: %.0f%% occupied, %.0f%% free, %.0f%% unknown", slice->plane.width,
                        slice->plane.height, slice->compute_ms, 100.0 * slice->occupied / n, 100.0 * slice->free / n,
