@@ -165,7 +165,7 @@ class WorkbenchWindow {
             [cancel] { return cancel->load(); });
       });
     } else {
-      startScript();
+      startScript(script_, bench_);
     }
   }
 
@@ -190,15 +190,6 @@ class WorkbenchWindow {
   int exitCode() const { return failedRun(script_, bench_) ? 1 : 0; }
 
  private:
-  void startScript() {
-    if (script_.options.play_to_end) bench_.player().play();
-    if (script_.options.keyframe >= 0) bench_.poses().preselectKeyframe(script_.options.keyframe);
-    if (script_.options.query_slice) {  // --query-slice: shown from the start (Queries section)
-      bench_.ui().query_slice = true;
-      bench_.ui().query_slice_spec = *script_.options.query_slice;
-    }
-  }
-
   // What the newest snapshots are, to notice news without drawing.
   struct Seen {
     int session = 0;
@@ -306,7 +297,8 @@ class WorkbenchWindow {
       saveScreenshot(bench_, gl_, win_, win_.screenshot_request);
       win_.screenshot_request.clear();
     }
-    advanceScript(script_, bench_, gl_, win_, keys_, settle_frames_);
+    ScriptedWindow scripted_window(bench_, gl_, win_, keys_);
+    advanceScript(script_, bench_, scripted_window, {win_.mapping, win_.global, win_.preparing, settle_frames_});
     glfwSwapBuffers(context_.window());
     const double frame_ms = msSince(t0);
     scriptFrameShown(script_, t0);
@@ -370,7 +362,7 @@ class WorkbenchWindow {
     } catch (const std::exception& e) {
       bench_.report(StatusLine::Kind::kError, preparing_.what + ": " + e.what());
     }
-    startScript();
+    startScript(script_, bench_);
   }
 
   // The preparation's progress as this frame shows it.
