@@ -1,11 +1,11 @@
-#include "app/window/tracking_panel.h"
-
+// The Map panel's "Tracking and loop closures" section (tracked poses only).
 #include <algorithm>
 #include <cfloat>
 #include <cstdio>
 
-#include "app/workbench/figures.h"
+#include "app/window/map_sections.h"
 #include "app/window/widgets.h"
+#include "app/workbench/figures.h"
 
 namespace vdmap::app::gui {
 namespace {

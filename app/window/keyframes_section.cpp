@@ -1,14 +1,11 @@
-#include "app/window/keyframe_panel.h"
-
+// The Map panel's "Keyframes" section: the keyframe list, the selected keyframe's inspector
+// (figures, container view, neighbours) and its pose edit.
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
 
-#include <imgui_stdlib.h>
-
-#include <Eigen/Eigenvalues>
-
+#include "app/window/map_sections.h"
 #include "app/window/widgets.h"
 #include "render/colormap.h"
 
@@ -130,49 +127,6 @@ void drawKeyframes(Workbench& bench, const render::MapMirror& mirror, WindowStat
   }
   drawInspector(bench, mirror, win, id);
   drawPoseEdit(bench, win);
-}
-
-void drawPicked(Workbench& bench, WindowState& win) {
-  UiState& ui = bench.ui();
-  if (!ui.picked) return ImGui::TextWrapped("Click an ellipsoid in the view (it is marked magenta).");
-  const Ellipsoid& e = *ui.picked;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(e.cov);
-  const Eigen::Vector3d axes = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() * 1000.0;
-  if (beginRows("picked")) {
-    label(win.check, "keyframe", "The keyframe it came from (for a merged one, its merge group's centre).");
-    ImGui::Text("K%d", e.keyframe);
-    label(win.check, "points n", "Depth points merged into it.");
-    ImGui::Text("%u", e.count);
-    label(win.check, "mean (m)", "Its centre in the world frame.");
-    char mean[96];
-    std::snprintf(mean, sizeof mean, "%.4f %.4f %.4f", e.mean.x(), e.mean.y(), e.mean.z());
-    ImGui::AlignTextToFramePadding();
-    ImGui::Text("%.3f, %.3f, %.3f", e.mean.x(), e.mean.y(), e.mean.z());
-    ImGui::SameLine();
-    if (ImGui::SmallButton("Copy##mean")) ImGui::SetClipboardText(mean);
-    tip(std::string("Copies \"") + mean + "\" (x y z, metres) to the clipboard.");
-    label(win.check, "sigma axes (mm)", "Standard deviations along its principal axes, largest last.");
-    ImGui::Text("%.1f, %.1f, %.1f", axes.x(), axes.y(), axes.z());
-    label(win.check, "colour", "Mean RGB of its points.");
-    ImGui::ColorButton("##colour", {e.color.x() / 255.f, e.color.y() / 255.f, e.color.z() / 255.f, 1.f});
-    ImGui::SameLine();
-    ImGui::Text("%.0f, %.0f, %.0f", e.color.x(), e.color.y(), e.color.z());
-    ImGui::EndTable();
-  }
-}
-
-void drawPoseFile(Workbench& bench) {
-  UiState& ui = bench.ui();
-  ImGui::SetNextItemWidth(-FLT_MIN);
-  ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui.trajectory_text);
-  tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
-  const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
-  ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
-  if (ImGui::Button("Load corrected trajectory")) bench.files().loadTrajectory();
-  tip(file ? std::string("A map file: ") + kStaticMapWhy + "."
-      : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
-                                   : "Replaces the matching keyframes' poses; the map is rebuilt.");
-  ImGui::EndDisabled();
 }
 
 }  // namespace vdmap::app::gui
