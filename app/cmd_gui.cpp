@@ -168,7 +168,7 @@ void runGui(GuiArgs args, bool builtin) {
   gui::requireDisplay();
   std::cerr << verb << ": note: settings: " << start.source << "\n";
   gui::Workbench bench(settings, warning);
-  if (!args.settings.empty()) bench.setSessionSettings(args.settings);
+  if (!args.settings.empty()) bench.files().setSessionSettings(args.settings);
   bench.ui().settings_source = start.source;
   bench.ui().settings_file = settings_file.string();
   // Saved 1 s after the last change while the window runs, and on close (below); scripted and
@@ -183,12 +183,12 @@ void runGui(GuiArgs args, bool builtin) {
                  [cache](const std::function<void(std::size_t, std::size_t)>& progress,
                          const std::function<bool()>& cancelled) { return renderBuiltin(cache, progress, cancelled); }};
   }
-  bench.setRefinement(refinement(args.sequence));
+  bench.files().setRefinement(refinement(args.sequence));
   // A failure shows in the window, which stays open.
   if (!prepare.run) {
-    if (static_map) bench.openMapFile(static_map);
-    else if (!args.map.empty()) bench.openSession(args.map);
-    else bench.open(args.sequence);
+    if (static_map) bench.files().openMapFile(static_map);
+    else if (!args.map.empty()) bench.files().openSession(args.map);
+    else bench.files().open(args.sequence);
   }
   const int code = gui::runWorkbenchWindow(bench, args.script, settings_file.string(), std::move(prepare));
   if (!settings_file.empty()) {

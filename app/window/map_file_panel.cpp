@@ -22,7 +22,7 @@ void drawOpenArea(Workbench& bench, WindowState& win) {
       "OctoMap (.bt, .ot) or a view file (.json: applied to the view). Files can also be dropped on the window.");
   ImGui::SameLine();
   ImGui::BeginDisabled(ui.sequence_text.empty());
-  if (ImGui::Button("Open") || (enter && !ui.sequence_text.empty())) bench.openPath(ui.sequence_text);
+  if (ImGui::Button("Open") || (enter && !ui.sequence_text.empty())) bench.files().openPath(ui.sequence_text);
   tip(ui.sequence_text.empty() ? "Type a path on the left first (or drop a file on the window)."
                                : "Opens what the path on the left holds; errors show in the status line below.");
   ImGui::EndDisabled();
@@ -46,21 +46,21 @@ void drawOpenArea(Workbench& bench, WindowState& win) {
     ImGui::EndCombo();
     if (!chosen.empty()) {
       ui.sequence_text = chosen;
-      bench.openPath(chosen);
+      bench.files().openPath(chosen);
     }
   }
   tip(ui.settings.recent.empty() ? "Nothing opened yet: the paths opened go here." : "Recently opened, newest first.");
   ImGui::EndDisabled();
   if (const std::string chosen = drawFileBrowser(win.browser); !chosen.empty()) {
     ui.sequence_text = chosen;
-    bench.openPath(chosen);
+    bench.files().openPath(chosen);
   }
 }
 
 void drawStaticMapFigures(const Workbench& bench, WindowState& win) {
   const StaticMap* m = bench.staticMap();
   if (!m) return;
-  ImGui::TextWrapped("%s: %s.", mapFileKindName(m->kind), Workbench::kStaticMapWhy);
+  ImGui::TextWrapped("%s: %s.", mapFileKindName(m->kind), kStaticMapWhy);
   if (beginRows("map file")) {
     const auto row = [&](const char* name, const std::string& help, const std::string& value) {
       label(win.check, name, help);

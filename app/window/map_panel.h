@@ -1,6 +1,5 @@
 #pragma once
-// The right panel: the thresholds, re-run parameters, tracking, view, keyframe, pick, pose
-// correction, export and settings sections.
+// The right panel ("Map"): its sections in order, each drawn in its own file (map_sections.h).
 #include "app/window/window_state.h"
 
 namespace vdmap::app::gui {

@@ -22,7 +22,7 @@ constexpr ImU32 kShadow = IM_COL32(0, 0, 0, 200);
 // Where a world point shows in ImGui coordinates (nullopt behind the camera).
 std::optional<ImVec2> toScreen(Workbench& bench, const WindowState& win, const glm::vec3& p) {
   const UiState& ui = bench.ui();
-  const ViewportView v = bench.view(ui.view_width, ui.view_height);
+  const ViewportView v = bench.view().viewport(ui.view_width, ui.view_height);
   const glm::vec4 q = v.camera.T_C_W * glm::vec4(p, 1.f);
   if (q.z <= v.camera.near_m) return std::nullopt;
   const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
@@ -41,20 +41,6 @@ ImU32 probeColor(const ProbeResult& r) {
   return IM_COL32(200, 200, 200, 255);
 }
 
-std::string pointText(const glm::vec3& p) {
-  char text[96];
-  std::snprintf(text, sizeof text, "%.4f %.4f %.4f", p.x, p.y, p.z);
-  return text;
-}
-
-// "0.842 m (dx dy dz)": the distance and its components along the world axes.
-std::string distanceText(const glm::vec3& a, const glm::vec3& b) {
-  const glm::vec3 d = b - a;
-  char text[128];
-  std::snprintf(text, sizeof text, "%.3f m (%+.3f %+.3f %+.3f)", glm::length(d), d.x, d.y, d.z);
-  return text;
-}
-
 void label(ImDrawList* draw, ImVec2 at, ImU32 color, const char* text) {
   const ImVec2 size = ImGui::CalcTextSize(text);
   draw->AddRectFilled({at.x - 3, at.y - 2}, {at.x + size.x + 3, at.y + size.y + 2}, kShadow, 3.f);
@@ -69,6 +55,13 @@ ImVec2 mouseInView(const WindowState& win) {
 }
 
 }  // namespace
+
+std::string distanceText(const glm::vec3& a, const glm::vec3& b) {
+  const glm::vec3 d = b - a;
+  char text[128];
+  std::snprintf(text, sizeof text, "%.3f m (%+.3f %+.3f %+.3f)", glm::length(d), d.x, d.y, d.z);
+  return text;
+}
 
 void handleViewTools(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
@@ -106,7 +99,7 @@ std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const
   gl.ReadBuffer(GL_BACK);
   const std::optional<float> depth = render::readDepth(gl, vx + px, vy + (vh - 1 - py));
   if (!depth) return std::nullopt;
-  const ViewportView v = bench.view(vw, vh);
+  const ViewportView v = bench.view().viewport(vw, vh);
   return render::unproject(v.camera, static_cast<float>(px - v.image.x), static_cast<float>(py - v.image.y), *depth);
 }
 
@@ -118,18 +111,19 @@ bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
     switch (probe.purpose) {
       case ViewProbe::Purpose::kZoom:
         // Toward the surface under the cursor, else the point of the target's plane there.
-        bench.zoomAt(probe.wheel, p ? *p : bench.targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
+        bench.view().zoomAt(probe.wheel,
+                            p ? *p : bench.view().targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
         break;
       case ViewProbe::Purpose::kPivot:
-        if (p) bench.pivotAt(*p);
+        if (p) bench.view().pivotAt(*p);
         else bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to turn about");
         break;
       case ViewProbe::Purpose::kMeasure:
-        if (p) bench.addMeasurePoint(*p);
+        if (p) bench.view().addMeasurePoint(*p);
         else bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to measure at");
         break;
       case ViewProbe::Purpose::kQuery:
-        changed = bench.probeAt(probe.x_px, probe.y_px, ui.view_width, ui.view_height, p) || changed;
+        changed = bench.queries().probeAt(probe.x_px, probe.y_px, ui.view_width, ui.view_height, p) || changed;
         break;
     }
   }
@@ -193,38 +187,6 @@ void drawViewMarks(Workbench& bench, const WindowState& win) {
     }
   }
   draw->PopClipRect();
-}
-
-void drawMeasure(Workbench& bench, WindowState& win) {
-  UiState& ui = bench.ui();
-  if (!ui.measure_a) ImGui::TextWrapped("Ctrl+click a surface in the view for point A, then for B.");
-  if (ui.measure_a && beginRows("measure")) {
-    label(win.check, "A (m)", "The first point: the surface drawn under the cursor (world frame, metres).");
-    ImGui::TextUnformatted(pointText(*ui.measure_a).c_str());
-    label(win.check, "B (m)", "The second point; the next Ctrl+click starts again at A.");
-    ImGui::TextUnformatted(ui.measure_b ? pointText(*ui.measure_b).c_str() : "Ctrl+click for B");
-    if (ui.measure_b) {
-      label(win.check, "distance", "|B - A| and its components along the world axes x, y, z.");
-      ImGui::TextUnformatted(distanceText(*ui.measure_a, *ui.measure_b).c_str());
-    }
-    ImGui::EndTable();
-  }
-  ImGui::BeginDisabled(!ui.measure_a);
-  if (ImGui::Button("Copy##measure")) {
-    std::string text = pointText(*ui.measure_a) + "\n";
-    if (ui.measure_b) text += pointText(*ui.measure_b) + "\n";
-    ImGui::SetClipboardText(text.c_str());
-  }
-  tip(ui.measure_a ? "Copies the points as \"x y z\" lines (metres) to the clipboard." : "Nothing measured yet.");
-  ImGui::SameLine();
-  if (ImGui::Button("Clear##measure")) ui.measure_a.reset(), ui.measure_b.reset();
-  tip("Forgets both points.");
-  ImGui::EndDisabled();
-  ImGui::SameLine();
-  ImGui::Checkbox("snap to ellipsoid centres", &ui.measure_snap);
-  tip("Measured points move to the nearest ellipsoid centre of the global map (its mean) instead of the drawn "
-      "surface under the cursor.");
-  checkFits(win.check);
 }
 
 }  // namespace vdmap::app::gui

@@ -3,6 +3,7 @@
 // (Ctrl+click A, then B), zoom toward the cursor and the pivot under it (wheel, double-click, P),
 // which read the view's depth under the cursor after the scene is drawn (render::readDepth).
 #include <optional>
+#include <string>
 
 #include <glm/glm.hpp>
 
@@ -23,7 +24,8 @@ std::optional<glm::vec3> probeView(Workbench& bench, const render::Gl& gl, const
 bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win);
 /// The pick marker and the measured line over the 3-D view.
 void drawViewMarks(Workbench& bench, const WindowState& win);
-/// The Measure section of the Map panel: both points, the distance, Copy, Clear, snap.
-void drawMeasure(Workbench& bench, WindowState& win);
+/// "0.842 m (dx dy dz)": the distance from `a` to `b` and its components along the world axes, as
+/// the measured line and the Measure section print it.
+std::string distanceText(const glm::vec3& a, const glm::vec3& b);
 
 }  // namespace vdmap::app::gui

@@ -54,7 +54,7 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banne
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
     line_y += 1.3f * font;
   }
-  if (!banner.empty())  // names the optimisation B undoes (Workbench::beforeOptimisationBanner)
+  if (!banner.empty())  // names the optimisation B undoes (PoseEditor::beforeOptimisationBanner)
     draw->AddText(ImGui::GetFont(), font, {view.x + pad, line_y}, rgbColor(render::kLoopEdgeColor), banner.c_str(),
                   nullptr, view.w - 2 * pad);  // wrapped in a narrow view
 }
@@ -90,7 +90,7 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   // hides the map), colours, sigma, layers.
   // The height frame only where it shows (its data up axis costs a pass over the map per mapped frame).
   const bool heights = s.color == render::ColorMode::kHeight || s.slice.on;
-  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), heights ? bench.heightFrame() : render::HeightFrame{}));
+  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), heights ? bench.view().heightFrame() : render::HeightFrame{}));
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
@@ -116,18 +116,18 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     mirrored.session_base += 1 << 20;
   }
   if (win.global && s.slice.on) {
-    // The slice's selection (Workbench::shownMap): negative generations, distinct from every
+    // The slice's selection (ViewController::shownMap): negative generations, distinct from every
     // session's, so a new selection re-uploads (and re-orders the fast pass, re-keys the cache).
-    const Workbench::ShownMap shown = bench.shownMap();
+    const ViewController::ShownMap shown = bench.view().shownMap();
     mirror.setMap(-2 - shown.serial, *shown.ellipsoids);
   } else if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
   else mirror.setMap(mirrored.session_base, {});
   const auto mapping = win.mapping;
   mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
-  const auto scene = [&] { return bench.graphScene(*mapping); };
+  const auto scene = [&] { return bench.view().graphScene(*mapping); };
   mirror.setGraph(mirrored.session_base + mapping->generation, ui.selected_keyframe, scene, ui.show_before_optimisation);
   mirror.setHighlight(ui.picked);
-  mirror.setQuerySlice(bench.querySlice());  // point queries: the slice computed for this map (or none)
+  mirror.setQuerySlice(bench.queries().slice());  // point queries: the slice computed for this map (or none)
   const auto selection = bench.selection();
   if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
     const int id = selection->keyframe;
@@ -165,7 +165,7 @@ void drawScene(Workbench& bench, const render::Gl& gl, const render::MapMirror& 
   const ImVec2 scale = ImGui::GetIO().DisplayFramebufferScale;
   const int vx = static_cast<int>(view.x * scale.x), vw = ui.view_width, vh = ui.view_height;
   const int vy = win.layout.fb_height - static_cast<int>(view.y * scale.y) - vh;  // GL counts rows from the bottom
-  const ViewportView v = bench.view(vw, vh);
+  const ViewportView v = bench.view().viewport(vw, vh);
   // The scene as `vdmap render` draws it (render/view_draw.h), through the view image cache.
   if (cache)
     cache->draw(mirror, {v.camera, v.image}, background, {vx, vy, vw, vh}, ui.view_from_keyframe < 0,
@@ -186,17 +186,18 @@ void handleMouse(Workbench& bench, WindowState& win) {
     if (ImGui::IsMouseClicked(b)) win.drag_in_view[b] = over_view;
   const ImVec2 scale = io.DisplayFramebufferScale;
   if (win.drag_in_view[0] && ImGui::IsMouseDragging(ImGuiMouseButton_Left)) {
-    if (io.KeyShift) bench.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
-    else if (io.MouseDelta.x != 0 || io.MouseDelta.y != 0) bench.orbit(-io.MouseDelta.x * 0.006f, io.MouseDelta.y * 0.006f);
+    if (io.KeyShift) bench.view().pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+    else if (io.MouseDelta.x != 0 || io.MouseDelta.y != 0)
+      bench.view().orbit(-io.MouseDelta.x * 0.006f, io.MouseDelta.y * 0.006f);
   }
   for (int b : {1, 2})
     if (win.drag_in_view[b] && ImGui::IsMouseDragging(b) && (io.MouseDelta.x != 0 || io.MouseDelta.y != 0))
-      bench.pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
+      bench.view().pan(io.MouseDelta.x * scale.x, io.MouseDelta.y * scale.y);
   // The wheel zooms toward the point under the cursor: measure_overlay.cpp (handleViewTools).
   if (win.drag_in_view[0] && ImGui::IsMouseReleased(ImGuiMouseButton_Left)) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
     if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view && !io.KeyCtrl)  // Ctrl+click measures
-      bench.pick((io.MousePos.x - view.x) * scale.x, (io.MousePos.y - view.y) * scale.y, ui.view_width,
+      bench.view().pick((io.MousePos.x - view.x) * scale.x, (io.MousePos.y - view.y) * scale.y, ui.view_width,
                  ui.view_height);
   }
 }
@@ -248,7 +249,7 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
     return;
   }
   const UiState& ui = bench.ui();
-  drawViewHints(draw, ui, bench.beforeOptimisationBanner(*win.mapping), view, bench.framedStrays());
+  drawViewHints(draw, ui, bench.poses().beforeOptimisationBanner(*win.mapping), view, bench.view().framedStrays());
   drawUpAxis(draw, ui, view);
 }
 

@@ -59,7 +59,7 @@ void drawLoopStrip(Workbench& bench, const WindowState& win, int total) {
                " (the newest one's revisited keyframe)";
     revisited = loops[static_cast<std::size_t>(c.members.back())].loop.to;
   }
-  if (clicked && revisited >= 0) bench.selectKeyframe(revisited, true);
+  if (clicked && revisited >= 0) bench.poses().selectKeyframe(revisited, true);
   tip(!hovered.empty() ? hovered
       : loops.empty()
           ? "Loop closures appear here (orange markers) when tracking re-observes a keyframe it is not linked to."
@@ -140,7 +140,7 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
     ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
     tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
         "they were mapped with (the Re-run parameters show them).");
-    if (!bench.whyPlayerOff().empty()) ImGui::TextWrapped("%s", bench.whyPlayerOff().c_str());
+    if (!bench.files().whyPlayerOff().empty()) ImGui::TextWrapped("%s", bench.files().whyPlayerOff().c_str());
   }
 }
 
@@ -178,7 +178,7 @@ void drawPlayer(Workbench& bench, WindowState& win, const PlayerStatus& status, 
     UiState& ui = bench.ui();
     label(win.check, "fps limit", "Playback speed limit in frames per second; 0: as fast as mapping goes.");
     if (ImGui::SliderFloat("##fps", &ui.settings.play_fps, 0.f, 60.f, ui.settings.play_fps > 0 ? "%.0f" : "max"))
-      bench.setFps(ui.settings.play_fps);
+      bench.player().setFps(ui.settings.play_fps);
     ImGui::EndTable();
   }
 }
@@ -190,7 +190,7 @@ void drawScrubber(Workbench& bench, WindowState& win, const std::string& why_sav
   ImGui::SetNextItemWidth(-FLT_MIN);
   ImGui::SliderInt("##frame", &win.scrub, 0, std::max(0, total - 1), "frame %d");
   win.scrubbing = ImGui::IsItemActive();
-  if (ImGui::IsItemDeactivatedAfterEdit()) bench.seek(win.scrub);
+  if (ImGui::IsItemDeactivatedAfterEdit()) bench.player().seek(win.scrub);
   tip(!why_saved.empty() ? why_saved
                          : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
   const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
@@ -239,15 +239,15 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
     ImGui::End();
     return;
   }
-  const PlayerStatus status = bench.player();
+  const PlayerStatus status = bench.player().status();
   const int total = win.mapping->frames_total, mapped = win.mapping->frames_mapped;
   const bool saved = bench.savedSession();
   drawWhatIsOpen(bench, win);
   const std::string why_saved =
       !saved ? ""
-      : bench.staticMap() ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
-      : bench.whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
-                                     : "A saved session: " + bench.whyPlayerOff() + ".";
+      : bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
+      : bench.files().whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
+                                     : "A saved session: " + bench.files().whyPlayerOff() + ".";
   if (bench.staticMap()) return ImGui::End();  // a map file: nothing to play (opening files)
   ImGui::BeginDisabled(saved);
   drawPlayer(bench, win, status, why_saved);

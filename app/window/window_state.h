@@ -36,7 +36,7 @@ struct Layout {
 struct KeyQueue {
   std::deque<std::pair<int, int>> presses;  ///< (GLFW key, modifiers)
   int events = 0;                           ///< any input at all since the last frame
-  std::vector<std::string> dropped;         ///< paths dropped on the window (Workbench::drop takes them)
+  std::vector<std::string> dropped;         ///< paths dropped on the window (FileActions::drop takes them)
 };
 
 /// What the GPU mirror was last given, to key its generations.

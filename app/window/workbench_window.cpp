@@ -53,7 +53,7 @@ void installInputCallbacks(GLFWwindow* window) {
   glfwSetCursorEnterCallback(window, [](GLFWwindow* w, int) { ++keyQueue(w).events; });
   glfwSetFramebufferSizeCallback(window, [](GLFWwindow* w, int, int) { ++keyQueue(w).events; });
   glfwSetWindowRefreshCallback(window, [](GLFWwindow* w) { ++keyQueue(w).events; });
-  // Opening files: paths dropped on the window wait for the next frame (Workbench::drop).
+  // Opening files: paths dropped on the window wait for the next frame (FileActions::drop).
   glfwSetDropCallback(window, [](GLFWwindow* w, int count, const char** paths) {
     ++keyQueue(w).events;
     for (int i = 0; i < count; ++i) keyQueue(w).dropped.emplace_back(paths[i]);
@@ -95,7 +95,8 @@ void handleKeys(Workbench& bench, KeyQueue& keys) {
     keys.presses.pop_front();
     if (typing && key != GLFW_KEY_F1) continue;  // the key belongs to a text field
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {  // quick views: Ctrl+N keeps the view, N shows it
-      (mods & GLFW_MOD_CONTROL) ? bench.storeQuickView(key - GLFW_KEY_0) : void(bench.recallQuickView(key - GLFW_KEY_0));
+      ViewFiles& views = bench.viewFiles();
+      (mods & GLFW_MOD_CONTROL) ? views.storeQuickView(key - GLFW_KEY_0) : void(views.recallQuickView(key - GLFW_KEY_0));
       continue;
     }
     if (const auto action = actionOf(key, mods)) bench.key(*action);
@@ -164,7 +165,7 @@ class WorkbenchWindow {
             [cancel] { return cancel->load(); });
       });
     } else {
-      startScript();
+      startScript(script_, bench_);
     }
   }
 
@@ -189,15 +190,6 @@ class WorkbenchWindow {
   int exitCode() const { return failedRun(script_, bench_) ? 1 : 0; }
 
  private:
-  void startScript() {
-    if (script_.options.play_to_end) bench_.play();
-    if (script_.options.keyframe >= 0) bench_.preselectKeyframe(script_.options.keyframe);
-    if (script_.options.query_slice) {  // --query-slice: shown from the start (Queries section)
-      bench_.ui().query_slice = true;
-      bench_.ui().query_slice_spec = *script_.options.query_slice;
-    }
-  }
-
   // What the newest snapshots are, to notice news without drawing.
   struct Seen {
     int session = 0;
@@ -214,7 +206,7 @@ class WorkbenchWindow {
       s.mapping = bench_.mapping().get();
       s.global = bench_.global().get();
       s.selection = bench_.selection().get();
-      s.busy = bench_.player().busy;
+      s.busy = bench_.player().status().busy;
     }
     return s;
   }
@@ -263,9 +255,9 @@ class WorkbenchWindow {
     layOut(win_.layout, bench_.ui());
     handleKeys(bench_, keys_);
     // Opening files: what was dropped (or --drop) opens before this frame reads the model.
-    for (std::string& path : keys_.dropped) bench_.drop(std::move(path));
+    for (std::string& path : keys_.dropped) bench_.files().drop(std::move(path));
     keys_.dropped.clear();
-    bench_.openDropped();
+    bench_.files().openDropped();
     bench_.sync();
     win_.mapping = bench_.mapping();
     win_.global = bench_.global();
@@ -305,13 +297,14 @@ class WorkbenchWindow {
       saveScreenshot(bench_, gl_, win_, win_.screenshot_request);
       win_.screenshot_request.clear();
     }
-    advanceScript(script_, bench_, gl_, win_, keys_, settle_frames_);
+    ScriptedWindow scripted_window(bench_, gl_, win_, keys_);
+    advanceScript(script_, bench_, scripted_window, {win_.mapping, win_.global, win_.preparing, settle_frames_});
     glfwSwapBuffers(context_.window());
     const double frame_ms = msSince(t0);
     scriptFrameShown(script_, t0);
     win_.frame_times.push_back(frame_ms);
     if (win_.frame_times.size() > 30) win_.frame_times.pop_front();
-    if (bench_.player().busy) script_.busy_frame_ms.push_back(frame_ms);
+    if (bench_.player().status().busy) script_.busy_frame_ms.push_back(frame_ms);
   }
 
   // Progressive drawing (docs/performance.md "Workbench"): while the camera moves (ViewMotion) the
@@ -325,7 +318,7 @@ class WorkbenchWindow {
       // A scripted run's screenshots are full quality: only its orbit may draw fast.
       const bool allowed = !scripted(script_) || script_.phase == ScriptPhase::kOrbit;
       const UiState& ui = bench_.ui();
-      budget = motion_.frame(bench_.view(ui.view_width, ui.view_height).camera, mirror_.contentSerial(),
+      budget = motion_.frame(bench_.view().viewport(ui.view_width, ui.view_height).camera, mirror_.contentSerial(),
                              mirror_.mapSize(), now, allowed);
     }
     mirror_.setFastBudget(budget);
@@ -365,11 +358,11 @@ class WorkbenchWindow {
     try {
       SequenceArgs args = preparing_.args;
       args.folder = preparing_.folder.get();
-      bench_.open(args);
+      bench_.files().open(args);
     } catch (const std::exception& e) {
       bench_.report(StatusLine::Kind::kError, preparing_.what + ": " + e.what());
     }
-    startScript();
+    startScript(script_, bench_);
   }
 
   // The preparation's progress as this frame shows it.

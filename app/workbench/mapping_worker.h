@@ -123,7 +123,7 @@ struct GlobalSnapshot {
   bool before_optimisation = false;
   /// Latency stages (steady clock): the newest threshold edit it includes (setThresholds; the
   /// epoch before the first), when its build started and ended, and when it was published to the
-  /// UI. The scripted latency measurement adds the first frame that draws it (script_driver.cpp).
+  /// UI. The scripted latency measurement adds the first frame that draws it (script_run.cpp).
   std::chrono::steady_clock::time_point t_edit{}, t_build_start{}, t_build_end{}, t_published{};
 };
 

@@ -5,7 +5,7 @@
 #include <algorithm>
 
 #include "app/workbench/mapping_worker.h"
-#include "app/workbench/workbench.h"
+#include "app/workbench/workbench_state.h"
 #include "mapping/io/camera_config.h"
 
 namespace vdmap::app::gui {
@@ -75,7 +75,7 @@ void MappingWorker::runStatic() {
     global_dirty_ = false;
     playing_ = stop_at_keyframe_ = false;
     target_ = mapped_;
-    if (refused) error_ = Workbench::kStaticMapWhy;
+    if (refused) error_ = kStaticMapWhy;
     if (selection_dirty_) {
       // The selected keyframe, with no local map to show.
       auto snap = std::make_shared<SelectionSnapshot>();

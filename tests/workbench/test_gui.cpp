@@ -35,7 +35,7 @@ struct TinyBench {
   Workbench bench{settings()};
   TinyBench() {
     test::writeTinySequence(dir / "seq", 10);
-    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   }
   static Settings settings() {
     Settings s;
@@ -48,7 +48,7 @@ struct TinyBench {
 // Selects keyframe `id` as the keyframe list does and returns the session's selection once the
 // worker has published it.
 std::shared_ptr<const SelectionSnapshot> selectAndWait(Workbench& bench, int id) {
-  bench.selectKeyframe(id);
+  bench.poses().selectKeyframe(id);
   bench.worker()->waitIdle();
   return bench.worker()->selection();
 }
@@ -202,12 +202,12 @@ TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
 TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;
-  EXPECT_FALSE(bench.open({(t.dir / "nowhere").string(), "", "", ""}));
+  EXPECT_FALSE(bench.files().open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
   ASSERT_NE(bench.worker(), nullptr);  // the sequence opened before is still there
   EXPECT_EQ(bench.worker()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
-  EXPECT_FALSE(empty.open({(t.dir / "nowhere").string(), "", "", ""}));
+  EXPECT_FALSE(empty.files().open({(t.dir / "nowhere").string(), "", "", ""}));
   EXPECT_EQ(empty.worker(), nullptr);
 }
 
@@ -250,7 +250,7 @@ TEST(GuiSession, KeyframesAreAtTheirScrubberPositionWithAFrameRange) {
   test::TempDir dir;
   test::writeTinySequence(dir / "seq", 10);
   Workbench bench{TinyBench::settings()};
-  ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "4:10", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "4:10", ""})) << bench.ui().status.text;
   bench.worker()->play();
   bench.worker()->waitIdle();
   const auto mapping = bench.worker()->mapping();
@@ -264,14 +264,14 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   TinyBench t;
   Workbench& bench = t.bench;
   bench.ui().params.global.filter.min_points = 3;
-  bench.applyThresholds();
+  bench.parameters().applyThresholds();
   t.worker().play();
   t.worker().waitIdle();
   const auto before = t.worker().global();
   // Cells of a 5 px grid over 3 frames of a plane hold ~75 points; 60 keeps only those of
   // keyframes that integrated three frames.
   bench.ui().params.global.filter.min_points = 60;
-  bench.applyThresholds();
+  bench.parameters().applyThresholds();
   t.worker().waitIdle();
   const auto after = t.worker().global();
   EXPECT_GT(after->generation, before->generation);
@@ -283,12 +283,12 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   EXPECT_EQ(local, after->map.sigma_e);
 
   bench.ui().params.global.merge_distance_m = -1;  // refused, shown, map kept
-  bench.applyThresholds();
+  bench.parameters().applyThresholds();
   EXPECT_NE(bench.ui().status.text.find("merge"), std::string::npos) << bench.ui().status.text;
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().global()->generation, after->generation);
 
-  bench.resetToDefaults();
+  bench.parameters().resetToDefaults();
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().global()->params.filter.min_points, FilterParams{}.min_points);
   EXPECT_TRUE(bench.ui().reset_layout);
@@ -330,10 +330,10 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
     return Eigen::Vector3d(sum / std::max<std::size_t>(selection->local.size(), 1));
   };
   const Eigen::Vector3d before0 = mean_of(0), before1 = mean_of(1);
-  bench.selectKeyframe(1);
+  bench.poses().selectKeyframe(1);
   EXPECT_NEAR(bench.ui().pose_translation_m.x, 0.03f, 1e-5f);  // frame 3 of the tiny walk
   bench.ui().pose_translation_m.z += 0.2f;
-  bench.applyPoseEdit();
+  bench.poses().applyEdit();
   t.worker().waitIdle();
   EXPECT_NEAR(t.worker().mapping()->keyframes[1].T_W_K.translation().z(), 0.2, 1e-6);
   EXPECT_NEAR((mean_of(1) - before1).z(), 0.2, 1e-4);
@@ -341,10 +341,10 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
   // Pitch 100 degrees reads back from the rotation as another triple (roll and yaw 180); the fields
   // keep what was typed while the snapshot holds the sent pose, so a drag does not jump.
   bench.ui().pose_rotation_deg.y = 100.f;
-  bench.applyPoseEdit();
+  bench.poses().applyEdit();
   t.worker().waitIdle();
   const glm::vec3 typed = bench.ui().pose_rotation_deg;
-  bench.syncPoseFields();
+  bench.poses().syncFields();
   EXPECT_EQ(bench.ui().pose_rotation_deg, typed);
   // While an edit waits behind other work, the snapshot still holds the pose before it: a drag
   // must not be pulled back to that pose every frame.
@@ -355,30 +355,30 @@ TEST(GuiSession, DraggingAKeyframePoseMovesItsEllipsoids) {
     return std::string();
   });
   bench.ui().pose_translation_m.x += 0.1f;
-  bench.applyPoseEdit();
+  bench.poses().applyEdit();
   const glm::vec3 dragged = bench.ui().pose_translation_m;
-  bench.syncPoseFields();
+  bench.poses().syncFields();
   EXPECT_EQ(bench.ui().pose_translation_m, dragged);
   release.set_value();
   t.worker().waitIdle();
-  bench.syncPoseFields();
+  bench.poses().syncFields();
   EXPECT_EQ(bench.ui().pose_translation_m, dragged);
   // A trajectory file that names no keyframe: the error is reported, the poses stay.
   test::writeText(t.dir / "wrong.txt", "5.0 0 0 0 0 0 0 1\n");
   bench.ui().trajectory_text = (t.dir / "wrong.txt").string();
-  bench.loadTrajectory();
+  bench.files().loadTrajectory();
   t.worker().waitIdle();
   EXPECT_NE(t.worker().status().error.find("wrong.txt"), std::string::npos) << t.worker().status().error;
   // The sequence's own ground truth puts keyframe 1 back.
   bench.ui().trajectory_text = (t.dir / "seq" / "groundtruth.txt").string();
-  bench.loadTrajectory();
+  bench.files().loadTrajectory();
   t.worker().waitIdle();
   EXPECT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   EXPECT_NE(t.worker().status().message.find("replaced"), std::string::npos);
   EXPECT_NEAR((mean_of(1) - before1).norm(), 0.0, 1e-4);
   // The pose fields follow the reloaded pose, so a further drag starts from it, not from the edit.
   EXPECT_NEAR(bench.ui().pose_translation_m.z, 0.2f, 1e-5f);
-  bench.syncPoseFields();
+  bench.poses().syncFields();
   EXPECT_NEAR(bench.ui().pose_translation_m.z, 0.f, 1e-5f);
   EXPECT_NEAR(bench.ui().pose_translation_m.x, 0.03f, 1e-5f);
 }
@@ -403,7 +403,7 @@ TEST(GuiSession, TheSelectionHoldsTheSelectedKeyframesLocalMapAndFollowsRebuilds
   expectSameEllipsoids(one->local, keptInWorld(s, 1));
 
   bench.ui().params.global.filter.min_points = 60;  // see LiveThresholdChangeSwapsInANewGlobalMap
-  bench.applyThresholds();
+  bench.parameters().applyThresholds();
   s.waitIdle();
   const auto after = s.selection();
   EXPECT_EQ(after->keyframe, 1);
@@ -423,9 +423,9 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   t.worker().waitIdle();
   const auto global = t.worker().global();
   bench.ui().export_text = (t.dir / "export").string();
-  bench.exportMap();
+  bench.files().exportMap();
   bench.ui().session_text = (t.dir / "map.vdmap").string();
-  bench.saveSession();
+  bench.files().saveSession();
   t.worker().waitIdle();
   EXPECT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   for (const char* file : {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",
@@ -433,7 +433,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
     EXPECT_TRUE(std::filesystem::exists(t.dir / "export" / file)) << file;
 
   Workbench reopened{Settings{}};
-  ASSERT_TRUE(reopened.openPath((t.dir / "map.vdmap").string())) << reopened.ui().status.text;
+  ASSERT_TRUE(reopened.files().openPath((t.dir / "map.vdmap").string())) << reopened.ui().status.text;
   EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << "a session to the sequence's end is no warning";
   MappingWorker& s = *reopened.worker();
   EXPECT_EQ(s.sequence(), nullptr);
@@ -447,7 +447,7 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   expectSameEllipsoids(selection->local, selectAndWait(bench, 1)->local);
 
   test::writeText(t.dir / "bad.vdmap", "not a session");
-  EXPECT_FALSE(reopened.openPath((t.dir / "bad.vdmap").string()));
+  EXPECT_FALSE(reopened.files().openPath((t.dir / "bad.vdmap").string()));
   EXPECT_NE(reopened.ui().status.text.find("bad.vdmap"), std::string::npos) << reopened.ui().status.text;
   EXPECT_NE(reopened.worker(), nullptr);  // the open session stays
 }
@@ -459,7 +459,7 @@ TEST(GuiWorkbench, ExportWritesTheTrajectoryAndProvenanceOfMap) {
   t.worker().seek(4);  // frames 0..4
   t.worker().waitIdle();
   t.bench.ui().export_text = (t.dir / "part").string();
-  t.bench.exportMap();
+  t.bench.files().exportMap();
   t.worker().waitIdle();
   ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   const auto part = nlohmann::json::parse(test::readFile(t.dir / "part" / "stats.json"));
@@ -469,7 +469,7 @@ TEST(GuiWorkbench, ExportWritesTheTrajectoryAndProvenanceOfMap) {
   t.worker().play();
   t.worker().waitIdle();
   t.bench.ui().export_text = (t.dir / "gui").string();
-  t.bench.exportMap();
+  t.bench.files().exportMap();
   t.worker().waitIdle();
   ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   const test::RunResult r = test::runVdmap("map '" + (t.dir / "seq").string() + "' --keyframe-every 3 --out '" +
@@ -494,23 +494,23 @@ TEST(GuiWorkbench, ASessionMappedToTheEndSaysSo) {
   t.worker().seek(4);
   t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "half.vdmap").string();
-  t.bench.saveSession();
+  t.bench.files().saveSession();
   t.worker().waitIdle();
   t.worker().play();
   t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "all.vdmap").string();
-  t.bench.saveSession();
+  t.bench.files().saveSession();
   t.worker().waitIdle();
   ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
 
   Workbench reopened{Settings{}};
-  ASSERT_TRUE(reopened.openPath((t.dir / "all.vdmap").string())) << reopened.ui().status.text;
+  ASSERT_TRUE(reopened.files().openPath((t.dir / "all.vdmap").string())) << reopened.ui().status.text;
   EXPECT_TRUE(reopened.savedSession());
   const std::string seq = fs::absolute(t.dir / "seq").lexically_normal().string();
-  EXPECT_EQ(reopened.whyPlayerOff(), "mapped to the end of " + seq + " (10 of 10 frames): nothing to continue");
-  ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
+  EXPECT_EQ(reopened.files().whyPlayerOff(), "mapped to the end of " + seq + " (10 of 10 frames): nothing to continue");
+  ASSERT_TRUE(reopened.files().openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
   EXPECT_FALSE(reopened.savedSession());
-  EXPECT_EQ(reopened.whyPlayerOff(), "");
+  EXPECT_EQ(reopened.files().whyPlayerOff(), "");
 }
 
 // An opened session whose sequence is still there continues in the player from the
@@ -521,14 +521,14 @@ TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
   t.worker().seek(4);  // frames 0..4
   t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "half.vdmap").string();
-  t.bench.saveSession();
+  t.bench.files().saveSession();
   t.worker().waitIdle();
   ASSERT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
   t.worker().play();
   t.worker().waitIdle();
 
   Workbench reopened{Settings{}};
-  ASSERT_TRUE(reopened.openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
+  ASSERT_TRUE(reopened.files().openPath((t.dir / "half.vdmap").string())) << reopened.ui().status.text;
   EXPECT_EQ(reopened.ui().status.kind, StatusLine::Kind::kSuccess) << reopened.ui().status.text;
   MappingWorker& s = *reopened.worker();
   ASSERT_NE(s.sequence(), nullptr);
@@ -600,9 +600,9 @@ TEST(GuiSession, TheTrajectoryFollowsAKeyframesPoseEdit) {
   t.worker().play();
   t.worker().waitIdle();
   const auto before = t.worker().mapping();
-  bench.selectKeyframe(1);
+  bench.poses().selectKeyframe(1);
   bench.ui().pose_translation_m.z += 0.2f;
-  bench.applyPoseEdit();
+  bench.poses().applyEdit();
   t.worker().waitIdle();
   const auto after = t.worker().mapping();
   ASSERT_EQ(after->trajectory.size(), 10u);
@@ -625,29 +625,29 @@ TEST(GuiWorkbench, APendingParameterIsNotUsedUntilApplied) {
   TinyBench t;
   Workbench& bench = t.bench;
   const Parameter& cell = *findParameter("cell_size");
-  ASSERT_TRUE(bench.editParameter(cell, 8));
-  EXPECT_TRUE(bench.pending(cell));
-  EXPECT_EQ(bench.inUse(cell), 5);
+  ASSERT_TRUE(bench.parameters().edit(cell, 8));
+  EXPECT_TRUE(bench.parameters().pending(cell));
+  EXPECT_EQ(bench.parameters().inUse(cell), 5);
   t.worker().play();
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().mapping()->mapper.local_map.cell_size_px, 5) << "a pending value was used";
-  EXPECT_TRUE(bench.pending(cell));
+  EXPECT_TRUE(bench.parameters().pending(cell));
   EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 5) << "not applied: not the user's setting yet";
   const std::size_t cells_at_5 = t.worker().mapping()->keyframes[0].ellipsoids;
-  bench.rerun();
+  bench.parameters().rerun();
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().mapping()->mapper.local_map.cell_size_px, 8);
   EXPECT_LT(t.worker().mapping()->keyframes[0].ellipsoids, cells_at_5);
-  EXPECT_FALSE(bench.pending(cell));
+  EXPECT_FALSE(bench.parameters().pending(cell));
   EXPECT_EQ(bench.ui().settings.mapper.local_map.cell_size_px, 8);
   // A live threshold applies at once; it is pending only until its map arrives.
   const Parameter& min_points = *findParameter("min_points");
-  ASSERT_TRUE(bench.editParameter(min_points, 60));
+  ASSERT_TRUE(bench.parameters().edit(min_points, 60));
   t.worker().waitIdle();
   EXPECT_EQ(t.worker().global()->params.filter.min_points, 60);
-  EXPECT_FALSE(bench.pending(min_points));
+  EXPECT_FALSE(bench.parameters().pending(min_points));
   // A refused value changes nothing.
-  EXPECT_FALSE(bench.editParameter(min_points, -1));
+  EXPECT_FALSE(bench.parameters().edit(min_points, -1));
   EXPECT_EQ(bench.ui().params.global.filter.min_points, 60);
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
   EXPECT_NE(bench.ui().status.text.find("min_points must be >= 0"), std::string::npos) << bench.ui().status.text;
@@ -655,27 +655,27 @@ TEST(GuiWorkbench, APendingParameterIsNotUsedUntilApplied) {
 
 TEST(GuiWorkbench, ASavedSessionShowsItsOwnParametersAndLeavesTheUsersSettingsAlone) {
   TinyBench t;
-  ASSERT_TRUE(t.bench.editParameter(*findParameter("merge_distance"), 0.4));
+  ASSERT_TRUE(t.bench.parameters().edit(*findParameter("merge_distance"), 0.4));
   t.worker().play();
   t.worker().waitIdle();
   t.bench.ui().session_text = (t.dir / "s.vdmap").string();
-  t.bench.saveSession();
+  t.bench.files().saveSession();
   t.worker().waitIdle();
   Settings user;
   user.thresholds.filter.min_points = 9;
   Workbench other{user};
-  ASSERT_TRUE(other.openPath((t.dir / "s.vdmap").string())) << other.ui().status.text;
+  ASSERT_TRUE(other.files().openPath((t.dir / "s.vdmap").string())) << other.ui().status.text;
   EXPECT_TRUE(other.savedSession());
   EXPECT_DOUBLE_EQ(other.ui().params.global.merge_distance_m, 0.4);  // the session's, not the user's 0.25
   EXPECT_EQ(other.ui().params.global.filter.min_points, 6);
   EXPECT_EQ(other.ui().params.mapper.keyframe_every, 3);
-  EXPECT_TRUE(other.editParameter(*findParameter("tau_group"), 0.5));
+  EXPECT_TRUE(other.parameters().edit(*findParameter("tau_group"), 0.5));
   other.worker()->waitIdle();
   EXPECT_DOUBLE_EQ(other.worker()->global()->params.tau_group, 0.5);
   EXPECT_DOUBLE_EQ(other.ui().settings.thresholds.tau_group, Settings{}.thresholds.tau_group) << "the user's settings changed";
   EXPECT_EQ(other.ui().settings.thresholds.filter.min_points, 9);
-  EXPECT_FALSE(other.pending(*findParameter("cell_size")));
-  other.rerun();  // nothing to re-map
+  EXPECT_FALSE(other.parameters().pending(*findParameter("cell_size")));
+  other.parameters().rerun();  // nothing to re-map
   other.worker()->waitIdle();
   EXPECT_EQ(other.worker()->mapping()->frames_mapped, 10);
   // Paths in messages are absolute.
@@ -735,10 +735,10 @@ TEST(GuiWorkbench, KeysDriveThePlayerAndTheViewFollowsTheMapUntilMoved) {
   bench.sync();  // frames the map
   EXPECT_TRUE(bench.ui().follow_map);
   const render::OrbitCamera framed = bench.ui().camera;
-  bench.orbit(0.3f, 0.f);
+  bench.view().orbit(0.3f, 0.f);
   EXPECT_FALSE(bench.ui().follow_map);
   const render::OrbitCamera moved = bench.ui().camera;
-  ASSERT_TRUE(bench.editParameter(*findParameter("min_points"), 3));  // a new map
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 3));  // a new map
   s.waitIdle();
   bench.sync();
   EXPECT_EQ(bench.ui().camera.yaw, moved.yaw) << "the view moved after the user moved it";
@@ -756,11 +756,11 @@ TEST(GuiWorkbench, PlayPauseFpsAndSeekGoThroughTheWorkbench) {
   Workbench closed{Settings{}};
   EXPECT_FALSE(closed.isOpen());
   EXPECT_EQ(closed.sessionSerial(), 0);
-  closed.play();
-  closed.seek(3);
-  closed.setFps(7.f);  // nothing to play: only the setting changes
-  EXPECT_FALSE(closed.player().playing);
-  EXPECT_EQ(closed.player().target, 0);
+  closed.player().play();
+  closed.player().seek(3);
+  closed.player().setFps(7.f);  // nothing to play: only the setting changes
+  EXPECT_FALSE(closed.player().status().playing);
+  EXPECT_EQ(closed.player().status().target, 0);
   EXPECT_EQ(closed.mapping(), nullptr);
   EXPECT_EQ(closed.global(), nullptr);
   EXPECT_EQ(closed.selection(), nullptr);
@@ -773,44 +773,44 @@ TEST(GuiWorkbench, PlayPauseFpsAndSeekGoThroughTheWorkbench) {
   EXPECT_EQ(bench.sessionSerial(), 1);
   ASSERT_NE(bench.sequence(), nullptr);
   EXPECT_EQ(bench.sequence()->folder(), t.dir / "seq");
-  bench.setFps(12.f);
-  EXPECT_FLOAT_EQ(bench.player().fps, 12.f) << "the fps limit did not reach the player";
+  bench.player().setFps(12.f);
+  EXPECT_FLOAT_EQ(bench.player().status().fps, 12.f) << "the fps limit did not reach the player";
   EXPECT_FLOAT_EQ(bench.ui().settings.play_fps, 12.f);
-  bench.setFps(0.f);
-  EXPECT_FLOAT_EQ(bench.player().fps, 0.f);
-  bench.play();
-  EXPECT_EQ(bench.player().target, 10);
+  bench.player().setFps(0.f);
+  EXPECT_FLOAT_EQ(bench.player().status().fps, 0.f);
+  bench.player().play();
+  EXPECT_EQ(bench.player().status().target, 10);
   t.worker().waitIdle();
   EXPECT_EQ(bench.mapping()->frames_mapped, 10);
   ASSERT_NE(bench.global(), nullptr);
   EXPECT_EQ(bench.global()->frames_mapped, 10);
-  EXPECT_FALSE(bench.player().playing) << "the player stops at the end";
+  EXPECT_FALSE(bench.player().status().playing) << "the player stops at the end";
 
-  bench.seek(4);  // backwards: re-mapped from the first frame up to frame 4
-  EXPECT_EQ(bench.player().target, 5);
+  bench.player().seek(4);  // backwards: re-mapped from the first frame up to frame 4
+  EXPECT_EQ(bench.player().status().target, 5);
   t.worker().waitIdle();
   EXPECT_EQ(bench.mapping()->frames_mapped, 5);
   EXPECT_EQ(bench.global()->frames_mapped, 5);
-  bench.seek(7);  // forwards: maps up to frame 7
+  bench.player().seek(7);  // forwards: maps up to frame 7
   t.worker().waitIdle();
   EXPECT_EQ(bench.mapping()->frames_mapped, 8);
-  EXPECT_TRUE(bench.player().error.empty()) << bench.player().error;
+  EXPECT_TRUE(bench.player().status().error.empty()) << bench.player().status().error;
 
   // The limit is a setting: a sequence opened later plays at it. Slow enough that play, then
   // pause, finds the player still playing.
-  bench.setFps(2.f);
-  ASSERT_TRUE(bench.open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  bench.player().setFps(2.f);
+  ASSERT_TRUE(bench.files().open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   EXPECT_EQ(bench.sessionSerial(), 2);
-  EXPECT_FLOAT_EQ(bench.player().fps, 2.f);
-  bench.play();
-  EXPECT_TRUE(bench.player().playing);
-  EXPECT_EQ(bench.player().target, 10);
-  bench.pause();
-  EXPECT_FALSE(bench.player().playing);
+  EXPECT_FLOAT_EQ(bench.player().status().fps, 2.f);
+  bench.player().play();
+  EXPECT_TRUE(bench.player().status().playing);
+  EXPECT_EQ(bench.player().status().target, 10);
+  bench.player().pause();
+  EXPECT_FALSE(bench.player().status().playing);
   t.worker().waitIdle();
   EXPECT_LT(bench.mapping()->frames_mapped, 10) << "paused, yet mapped to the end";
-  bench.resetToDefaults();
-  EXPECT_FLOAT_EQ(bench.player().fps, Settings{}.play_fps);
+  bench.parameters().resetToDefaults();
+  EXPECT_FLOAT_EQ(bench.player().status().fps, Settings{}.play_fps);
 }
 
 // The scripted run's --keyframe selects a keyframe before it is mapped; the inspector shows it once
@@ -818,11 +818,11 @@ TEST(GuiWorkbench, PlayPauseFpsAndSeekGoThroughTheWorkbench) {
 TEST(GuiWorkbench, APreselectedKeyframeIsShownOnceItIsMapped) {
   TinyBench t;
   Workbench& bench = t.bench;
-  bench.selectKeyframe(2);
+  bench.poses().selectKeyframe(2);
   EXPECT_EQ(bench.ui().selected_keyframe, -1) << "not mapped yet: no selection";
-  bench.preselectKeyframe(2);
+  bench.poses().preselectKeyframe(2);
   EXPECT_EQ(bench.ui().selected_keyframe, 2);
-  bench.play();
+  bench.player().play();
   t.worker().waitIdle();
   const auto selection = bench.selection();
   ASSERT_NE(selection, nullptr);
@@ -840,7 +840,7 @@ TEST(GuiWorkbench, TheOnChangeHookFollowsEverySessionOpened) {
   bench.key(KeyAction::kStepForward);
   t.worker().waitIdle();
   EXPECT_GT(calls.load(), 0);
-  ASSERT_TRUE(bench.open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   t.worker().waitIdle();
   calls = 0;
   bench.key(KeyAction::kStepForward);
@@ -869,15 +869,15 @@ TEST(GuiWorkbench, APickIsMarkedAndClearedWhenTheMapChanges) {
   t.worker().waitIdle();
   bench.sync();
   const auto global = t.worker().global();
-  const ViewportView v = bench.view(640, 480);
+  const ViewportView v = bench.view().viewport(640, 480);
   const Eigen::Vector3d& m = global->map.ellipsoids[global->map.ellipsoids.size() / 2].mean;
   const glm::vec4 p = v.camera.T_C_W * glm::vec4(m.x(), m.y(), m.z(), 1.f);
-  bench.pick(v.camera.fx * p.x / p.z + v.camera.cx, v.camera.fy * p.y / p.z + v.camera.cy, 640, 480);
+  bench.view().pick(v.camera.fx * p.x / p.z + v.camera.cx, v.camera.fy * p.y / p.z + v.camera.cy, 640, 480);
   ASSERT_TRUE(bench.ui().picked);
   EXPECT_EQ(bench.ui().selected_keyframe, bench.ui().picked->keyframe);
   bench.sync();
   EXPECT_TRUE(bench.ui().picked) << "the same map: the pick stays";
-  ASSERT_TRUE(bench.editParameter(*findParameter("merge_distance"), 0.1));
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("merge_distance"), 0.1));
   t.worker().waitIdle();
   bench.sync();
   EXPECT_FALSE(bench.ui().picked) << "a new map: the old pick may not exist in it";
@@ -888,21 +888,21 @@ TEST(GuiWorkbench, UndoPutsBackThePoseFromBeforeTheEdit) {
   Workbench& bench = t.bench;
   t.worker().play();
   t.worker().waitIdle();
-  bench.selectKeyframe(2);
+  bench.poses().selectKeyframe(2);
   const glm::vec3 start = bench.ui().pose_translation_m;
-  EXPECT_FALSE(bench.canUndoPoseEdit());
-  bench.beginPoseEdit();  // a drag starts
+  EXPECT_FALSE(bench.poses().canUndoEdit());
+  bench.poses().beginEdit();  // a drag starts
   for (int i = 0; i < 5; ++i) {
     bench.ui().pose_translation_m.y += 0.05f;
-    bench.applyPoseEdit();
+    bench.poses().applyEdit();
   }
   t.worker().waitIdle();
   EXPECT_NEAR(t.worker().mapping()->keyframes[2].T_W_K.translation().y(), start.y + 0.25, 1e-6);
-  EXPECT_TRUE(bench.undoPoseEdit());
+  EXPECT_TRUE(bench.poses().undoEdit());
   t.worker().waitIdle();
   EXPECT_NEAR(t.worker().mapping()->keyframes[2].T_W_K.translation().y(), start.y, 1e-6);
   EXPECT_NEAR(bench.ui().pose_translation_m.y, start.y, 1e-6);
-  EXPECT_FALSE(bench.undoPoseEdit());
+  EXPECT_FALSE(bench.poses().undoEdit());
 }
 
 TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
@@ -912,7 +912,7 @@ TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
   t.worker().play();
   t.worker().waitIdle();
   t.bench.ui().view_from_keyframe = 1;
-  const ViewportView v = t.bench.view(1000, 500);
+  const ViewportView v = t.bench.view().viewport(1000, 500);
   const PinholeCamera& c = t.worker().mapping()->camera;
   EXPECT_EQ(v.image.height, 500);
   EXPECT_NEAR(static_cast<double>(v.image.width) / v.image.height, static_cast<double>(c.width) / c.height, 0.01);
@@ -921,8 +921,8 @@ TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
   EXPECT_NEAR(v.camera.fy, c.fy * 500.0 / c.height, 1e-3);
 }
 
-// viewSpec describes what is shown (global with its camera, keyframe:K at the letterbox's size,
-// container:K at 2W x 2H) and applyViewSpec shows it again: the camera, the view options and the
+// ViewController::spec describes what is shown (global with its camera, keyframe:K at the letterbox's size,
+// container:K at 2W x 2H) and applySpec shows it again: the camera, the view options and the
 // selection come back as they were.
 TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   TinyBench t;
@@ -932,16 +932,16 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   UiState& ui = bench.ui();
   ui.view_width = 900, ui.view_height = 500;
   bench.sync();
-  bench.orbit(0.4f, -0.1f);
-  bench.zoom(2.f);
-  bench.pan(30.f, -12.f);
+  bench.view().orbit(0.4f, -0.1f);
+  bench.view().zoom(2.f);
+  bench.view().pan(30.f, -12.f);
   ui.settings.color = render::ColorMode::kUncertainty;
   ui.settings.ellipsoid_sigma = 1.5f;
   ui.settings.show_graph = false;
   ui.settings.up_axis = render::UpAxis::kPlusY;
-  bench.selectKeyframe(1);
+  bench.poses().selectKeyframe(1);
   const render::OrbitCamera camera = ui.camera;
-  const render::ViewSpec global = bench.viewSpec();
+  const render::ViewSpec global = bench.view().spec();
   EXPECT_EQ(global.kind, render::ViewKind::kGlobal);
   EXPECT_EQ(global.width, 900);
   EXPECT_EQ(global.height, 500);
@@ -957,16 +957,16 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   ui.settings.show_graph = defaults.show_graph;
   ui.settings.up_axis = defaults.up_axis;
   bench.key(KeyAction::kResetView);
-  bench.selectKeyframe(-1);
-  ASSERT_NE(bench.viewSpec(), global);
-  ASSERT_TRUE(bench.applyViewSpec(global));
+  bench.poses().selectKeyframe(-1);
+  ASSERT_NE(bench.view().spec(), global);
+  ASSERT_TRUE(bench.view().applySpec(global));
   EXPECT_FALSE(ui.follow_map);
   const glm::vec3 eye = ui.camera.eye(), eye0 = camera.eye();
   for (int i = 0; i < 3; ++i) {
     EXPECT_NEAR(eye[i], eye0[i], 1e-4f) << i;
     EXPECT_NEAR(ui.camera.target[i], camera.target[i], 1e-5f) << i;
   }
-  render::ViewSpec again = bench.viewSpec();
+  render::ViewSpec again = bench.view().spec();
   ASSERT_TRUE(again.look_at.has_value());
   for (int i = 0; i < 3; ++i) EXPECT_NEAR(again.look_at->eye[i], global.look_at->eye[i], 1e-4f);
   again.look_at = global.look_at;
@@ -974,7 +974,7 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
 
   // keyframe:1 at the letterbox of the 900 x 500 viewport.
   bench.key(KeyAction::kViewFromKeyframe);
-  const render::ViewSpec keyframe = bench.viewSpec();
+  const render::ViewSpec keyframe = bench.view().spec();
   const PinholeCamera& c = t.worker().mapping()->camera;
   const render::PixelRect box = render::letterbox(900, 500, c.width, c.height);
   EXPECT_EQ(keyframe.kind, render::ViewKind::kKeyframe);
@@ -984,24 +984,24 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   EXPECT_FALSE(keyframe.look_at.has_value());
   // container:1, 2W x 2H, while the container window is open.
   bench.key(KeyAction::kContainer);
-  const render::ViewSpec container = bench.viewSpec();
+  const render::ViewSpec container = bench.view().spec();
   EXPECT_EQ(container.kind, render::ViewKind::kContainer);
   EXPECT_EQ(container.keyframe, 1);
   EXPECT_EQ(container.width, 2 * c.width);
   EXPECT_EQ(container.height, 2 * c.height);
 
   bench.key(KeyAction::kEscape);
-  ASSERT_TRUE(bench.applyViewSpec(keyframe));
+  ASSERT_TRUE(bench.view().applySpec(keyframe));
   EXPECT_EQ(ui.view_from_keyframe, 1);
-  EXPECT_EQ(bench.viewSpec(), keyframe);
-  ASSERT_TRUE(bench.applyViewSpec(container));
+  EXPECT_EQ(bench.view().spec(), keyframe);
+  ASSERT_TRUE(bench.view().applySpec(container));
   EXPECT_TRUE(ui.show_container);
-  EXPECT_EQ(bench.viewSpec(), container);
+  EXPECT_EQ(bench.view().spec(), container);
   // A keyframe this session lacks: the global view, and an error saying so.
   render::ViewSpec missing = keyframe;
   missing.keyframe = 99;
-  EXPECT_FALSE(bench.applyViewSpec(missing));
-  EXPECT_EQ(bench.viewSpec().kind, render::ViewKind::kGlobal);
+  EXPECT_FALSE(bench.view().applySpec(missing));
+  EXPECT_EQ(bench.view().spec().kind, render::ViewKind::kGlobal);
   EXPECT_NE(ui.status.text.find("99"), std::string::npos) << ui.status.text;
 }
 
@@ -1013,7 +1013,7 @@ TEST(GuiView, SKeySavesTheViewFile) {
   t.worker().play();
   t.worker().waitIdle();
   bench.sync();
-  bench.orbit(0.2f, 0.1f);
+  bench.view().orbit(0.2f, 0.1f);
   const fs::path file = t.dir / "views" / "v.json";
   fs::create_directories(file.parent_path());
   bench.ui().view_file_text = file.string();
@@ -1026,7 +1026,7 @@ TEST(GuiView, SKeySavesTheViewFile) {
   GlobalMapParams thresholds;
   thresholds.merge_distance_m = -1;
   const render::ViewSpec read = readViewFile(file, &thresholds);
-  const render::ViewSpec shown = bench.viewSpec();
+  const render::ViewSpec shown = bench.view().spec();
   ASSERT_TRUE(read.look_at && shown.look_at);
   for (int i = 0; i < 3; ++i) EXPECT_FLOAT_EQ(read.look_at->eye[i], shown.look_at->eye[i]);
   EXPECT_EQ(read, shown);
@@ -1105,7 +1105,7 @@ Floor findFloor(const std::vector<Ellipsoid>& map, const std::vector<Transform>&
 // that the cameras are in view.
 void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.open({folder.string(), "", frames, ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({folder.string(), "", frames, ""})) << bench.ui().status.text;
   bench.worker()->play();
   bench.worker()->waitIdle();
   constexpr int kWidth = 602, kHeight = 685;  // the 3-D viewport of a 1280x720 window
@@ -1116,13 +1116,13 @@ void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   const std::vector<Transform> cameras = bench.worker()->mapping()->trajectoryWorld();
   const Floor floor = findFloor(global->map.ellipsoids, cameras);
   ASSERT_GT(floor.inliers, 0u) << "no floor found";
-  const glm::vec3 up = bench.upVector();
+  const glm::vec3 up = bench.view().upVector();
   const double angle_deg = std::acos(std::clamp(floor.normal.dot(Eigen::Vector3d(up.x, up.y, up.z)), -1.0, 1.0)) * 180 / M_PI;
   std::printf("%s: up (%.3f %.3f %.3f), floor normal (%.3f %.3f %.3f), %.1f deg apart; floor %zu of %zu ellipsoids\n",
               folder.filename().c_str(), up.x, up.y, up.z, floor.normal.x(), floor.normal.y(), floor.normal.z(),
               angle_deg, floor.inliers, global->map.ellipsoids.size());
   EXPECT_LT(angle_deg, 5.0);
-  const render::ViewCamera v = bench.view(kWidth, kHeight).camera;
+  const render::ViewCamera v = bench.view().viewport(kWidth, kHeight).camera;
   const auto project = [&](const Eigen::Vector3d& p) {
     const glm::vec4 q = v.T_C_W * glm::vec4(p.x(), p.y(), p.z(), 1.f);
     return Eigen::Vector2d(v.fx * q.x / q.z + v.cx, v.fy * q.y / q.z + v.cy);
@@ -1177,7 +1177,7 @@ struct TrackedLoopBench {
   Workbench bench{Settings{}};
   TrackedLoopBench() {
     test::writeBoxRoomSequence(dir / "seq", kFrames);
-    EXPECT_TRUE(bench.open({(dir / "seq").string(), "", "", "track"})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.files().open({(dir / "seq").string(), "", "", "track"})) << bench.ui().status.text;
     while (worker().mapping()->loops.empty() && worker().mapping()->frames_mapped < kFrames) {
       worker().step();
       worker().waitIdle();
@@ -1206,23 +1206,23 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
   EXPECT_GT(loop.loop.from, loop.loop.to);
   ASSERT_EQ(mapping->keyframes_before.size(), mapping->keyframes.size());
   // The 3-D view: a loop edge per loop, the ground truth beside the tracked trajectory.
-  const render::GraphScene after = bench.graphScene(*bench.worker()->mapping());
+  const render::GraphScene after = bench.view().graphScene(*bench.worker()->mapping());
   ASSERT_EQ(after.loops.size(), mapping->loops.size());
   EXPECT_EQ(after.loops.back().a, mapping->loops.back().loop.from);
   EXPECT_EQ(after.loops.back().b, mapping->loops.back().loop.to);
   EXPECT_EQ(after.groundtruth.size(), after.trajectory.size());
   bench.ui().settings.show_groundtruth = false;
-  EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
+  EXPECT_TRUE(bench.view().graphScene(*bench.worker()->mapping()).groundtruth.empty());
 
   // Before the last optimisation: other keyframe poses and trajectory, and a global map rebuilt
   // with them; after it again: the same map as before, bit for bit (the mapper's poses were
   // swapped for the build and put back).
   const auto map_after = t.worker().global();
   ASSERT_FALSE(map_after->before_optimisation);
-  ASSERT_TRUE(bench.canShowBeforeOptimisation());
-  ASSERT_TRUE(bench.showBeforeOptimisation(true));
+  ASSERT_TRUE(bench.poses().canShowBeforeOptimisation());
+  ASSERT_TRUE(bench.poses().showBeforeOptimisation(true));
   t.worker().waitIdle();
-  const render::GraphScene before = bench.graphScene(*bench.worker()->mapping());
+  const render::GraphScene before = bench.view().graphScene(*bench.worker()->mapping());
   const double moved = largestMove(before.keyframes, after.keyframes);
   std::printf("loop closed at frame %d (K%d -> K%d, correction %.2f mm); keyframes before it moved up to %.2f mm\n",
               loop.position, loop.loop.from, loop.loop.to, 1e3 * loop.loop.correction_m, 1e3 * moved);
@@ -1261,13 +1261,13 @@ TEST(GuiTracking, LoopClosuresAreEventsAndEdgesAndTheMapBeforeTheLastOptimisatio
     ASSERT_EQ(map_again->map.ellipsoids[i].mean, map_after->map.ellipsoids[i].mean) << i;
 
   // Seeking back before the loops forgets them: the toggle goes off and is refused.
-  ASSERT_TRUE(bench.showBeforeOptimisation(true));
+  ASSERT_TRUE(bench.poses().showBeforeOptimisation(true));
   t.worker().seek(5);
   t.worker().waitIdle();
   bench.sync();
   EXPECT_TRUE(t.worker().mapping()->loops.empty());
   EXPECT_FALSE(bench.ui().show_before_optimisation);
-  EXPECT_FALSE(bench.showBeforeOptimisation(true));
+  EXPECT_FALSE(bench.poses().showBeforeOptimisation(true));
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kWarning);
 }
 
@@ -1278,7 +1278,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   test::writeBoxRoomSequence(dir / "seq", 8);
   for (const char* poses : {"track", "gt"}) {
     Workbench bench{Settings{}};
-    ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", poses})) << bench.ui().status.text;
+    ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", poses})) << bench.ui().status.text;
     bench.worker()->play();
     bench.worker()->waitIdle();
     const auto mapping = bench.worker()->mapping();
@@ -1296,24 +1296,24 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
     EXPECT_EQ(mapping->frames_with_groundtruth, 8) << poses;  // the sequence has it, whatever mapped it
-    EXPECT_EQ(bench.graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
+    EXPECT_EQ(bench.view().graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
   bench.worker()->play();
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.worker()->mapping()->mapper.poses, PoseSource::kTrack);
   EXPECT_EQ(bench.worker()->mapping()->frames_mapped, 8);
   EXPECT_FALSE(bench.worker()->mapping()->hasGroundTruth());
   EXPECT_EQ(bench.worker()->mapping()->frames_with_groundtruth, 0);
-  EXPECT_TRUE(bench.graphScene(*bench.worker()->mapping()).groundtruth.empty());
+  EXPECT_TRUE(bench.view().graphScene(*bench.worker()->mapping()).groundtruth.empty());
   // No loop closed, but after the last frame the keyframe poses were refined from the local
   // maps (the status says so): B shows the map before that.
   const std::string message = bench.worker()->status().message;
   std::printf("status after the last tracked frame: %s\n", message.c_str());
-  EXPECT_EQ(bench.canShowBeforeOptimisation(), message.find("keyframe poses refined") != std::string::npos) << message;
-  EXPECT_TRUE(bench.canShowBeforeOptimisation());
+  EXPECT_EQ(bench.poses().canShowBeforeOptimisation(), message.find("keyframe poses refined") != std::string::npos) << message;
+  EXPECT_TRUE(bench.poses().canShowBeforeOptimisation());
   EXPECT_TRUE(bench.worker()->status().error.empty()) << bench.worker()->status().error;
 }
 
@@ -1342,8 +1342,8 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
     if (refine) reference.refineKeyframePoses(*refine);
 
     Workbench bench{Settings{}};
-    bench.setRefinement(refine);
-    ASSERT_TRUE(bench.open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+    bench.files().setRefinement(refine);
+    ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
     bench.worker()->play();
     bench.worker()->waitIdle();
     const std::string message = bench.worker()->status().message;  // before withMapper's replaces it
@@ -1363,7 +1363,7 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
     std::printf("%s: keyframes moved %.3f mm; status: %s\n", refine ? "joint" : "none", 1e3 * moved, message.c_str());
     EXPECT_EQ(moved > 0, refine.has_value());
     EXPECT_EQ(message.find("refined (joint)") != std::string::npos, refine.has_value()) << message;
-    EXPECT_EQ(bench.canShowBeforeOptimisation(), refine.has_value());
+    EXPECT_EQ(bench.poses().canShowBeforeOptimisation(), refine.has_value());
   }
 }
 
@@ -1375,12 +1375,13 @@ TEST(GuiTracking, AfterTheRefinementTheBannerNamesIt) {
   loop.loop.correction_m = 0.012;
   m.loops = {loop};
   m.last_optimisation = {LastOptimisation::Kind::kLoop, 0, "", 0, 0};
-  EXPECT_EQ(bench.beforeOptimisationBanner(m), "") << "only while B shows the map before it";
+  EXPECT_EQ(bench.poses().beforeOptimisationBanner(m), "") << "only while B shows the map before it";
   bench.ui().show_before_optimisation = true;
-  EXPECT_NE(bench.beforeOptimisationBanner(m).find("loop at frame 40"), std::string::npos) << bench.beforeOptimisationBanner(m);
+  EXPECT_NE(bench.poses().beforeOptimisationBanner(m).find("loop at frame 40"), std::string::npos)
+      << bench.poses().beforeOptimisationBanner(m);
   // After the sequence's last frame the refinement is the last optimisation, not the loop.
   m.last_optimisation = {LastOptimisation::Kind::kRefinement, -1, "joint", 41, 0.0032};
-  EXPECT_EQ(bench.beforeOptimisationBanner(m), "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
+  EXPECT_EQ(bench.poses().beforeOptimisationBanner(m), "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
 }
 
 
@@ -1389,7 +1390,7 @@ TEST(GuiTracking, AfterTheRefinementTheBannerNamesIt) {
 
 // The pixel of the 3-D view (640x480) where world point p shows.
 glm::vec2 projectInView(const Workbench& bench, const glm::vec3& p) {
-  const render::ViewCamera v = bench.view(640, 480).camera;
+  const render::ViewCamera v = bench.view().viewport(640, 480).camera;
   const glm::vec4 q = v.T_C_W * glm::vec4(p, 1.f);
   return {v.fx * q.x / q.z + v.cx, v.fy * q.y / q.z + v.cy};
 }
@@ -1411,45 +1412,45 @@ TEST(GuiViewTools, PickScrollsTheListOnce) {
   const auto global = t.worker().global();
   const Eigen::Vector3d& m = global->map.ellipsoids[global->map.ellipsoids.size() / 2].mean;
   const glm::vec2 at = projectInView(bench, {m.x(), m.y(), m.z()});
-  bench.pick(at.x, at.y, 640, 480);
+  bench.view().pick(at.x, at.y, 640, 480);
   ASSERT_TRUE(bench.ui().picked);
-  EXPECT_TRUE(bench.takeScrollToSelected()) << "a pick scrolls the keyframe list to its keyframe";
-  EXPECT_FALSE(bench.takeScrollToSelected()) << "once: the user may scroll away";
-  bench.selectKeyframe(0);  // a click in the list itself does not scroll it
-  EXPECT_FALSE(bench.takeScrollToSelected());
+  EXPECT_TRUE(bench.poses().takeScrollToSelected()) << "a pick scrolls the keyframe list to its keyframe";
+  EXPECT_FALSE(bench.poses().takeScrollToSelected()) << "once: the user may scroll away";
+  bench.poses().selectKeyframe(0);  // a click in the list itself does not scroll it
+  EXPECT_FALSE(bench.poses().takeScrollToSelected());
 }
 
 TEST(GuiViewTools, PoseDragSpeedFollowsTheViewDistance) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
-  bench.selectKeyframe(0);
-  const float near = bench.poseDragSpeed();
-  bench.zoom(-6.f);  // farther away: a pixel spans more
-  const float far = bench.poseDragSpeed();
+  bench.poses().selectKeyframe(0);
+  const float near = bench.view().poseDragSpeed();
+  bench.view().zoom(-6.f);  // farther away: a pixel spans more
+  const float far = bench.view().poseDragSpeed();
   EXPECT_GT(far, 1.5f * near);
   // A pixel of drag spans what a pixel of the view spans at the keyframe's depth.
-  const render::ViewCamera v = bench.view(640, 480).camera;
+  const render::ViewCamera v = bench.view().viewport(640, 480).camera;
   const Eigen::Vector3d k = t.worker().mapping()->keyframes[0].T_W_K.translation();
   const float depth = (v.T_C_W * glm::vec4(k.x(), k.y(), k.z(), 1.f)).z;
   EXPECT_NEAR(far, std::clamp(depth / v.fy, 1e-4f, 0.05f), 1e-6f);
-  bench.zoom(-60.f);
-  EXPECT_LE(bench.poseDragSpeed(), 0.05f) << "clamped";
+  bench.view().zoom(-60.f);
+  EXPECT_LE(bench.view().poseDragSpeed(), 0.05f) << "clamped";
 }
 
 TEST(GuiViewTools, ZoomAtKeepsThePointUnderTheCursor) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
-  const glm::vec3 p = bench.targetPlanePoint(100.f, 380.f, 640, 480) + glm::vec3(0.05f, -0.02f, 0.03f);
+  const glm::vec3 p = bench.view().targetPlanePoint(100.f, 380.f, 640, 480) + glm::vec3(0.05f, -0.02f, 0.03f);
   const glm::vec2 before = projectInView(bench, p);
   const float distance = bench.ui().camera.distance_m;
-  bench.zoomAt(2.f, p);
+  bench.view().zoomAt(2.f, p);
   const glm::vec2 after = projectInView(bench, p);
   EXPECT_NEAR(after.x, before.x, 0.5f);
   EXPECT_NEAR(after.y, before.y, 0.5f);
   EXPECT_LT(bench.ui().camera.distance_m, distance);
   EXPECT_FALSE(bench.ui().follow_map);
   // The target's plane point under a pixel projects back to that pixel.
-  const glm::vec2 back = projectInView(bench, bench.targetPlanePoint(200.f, 100.f, 640, 480));
+  const glm::vec2 back = projectInView(bench, bench.view().targetPlanePoint(200.f, 100.f, 640, 480));
   EXPECT_NEAR(back.x, 200.f, 0.5f);
   EXPECT_NEAR(back.y, 100.f, 0.5f);
 }
@@ -1458,8 +1459,8 @@ TEST(GuiViewTools, PivotHereKeepsTheEye) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
   const glm::vec3 eye = bench.ui().camera.eye();
-  const glm::vec3 p = bench.targetPlanePoint(500.f, 100.f, 640, 480);
-  bench.pivotAt(p);
+  const glm::vec3 p = bench.view().targetPlanePoint(500.f, 100.f, 640, 480);
+  bench.view().pivotAt(p);
   EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-4f);
   EXPECT_LT(glm::length(bench.ui().camera.target - p), 1e-4f);
   const glm::vec2 centre = projectInView(bench, p);
@@ -1492,7 +1493,7 @@ TEST(GuiViewTools, PickIgnoresSlicedAwayEllipsoids) {
   Workbench& bench = t.bench;
   const auto global = t.worker().global();
   const std::vector<Ellipsoid>& map = global->map.ellipsoids;
-  const render::HeightFrame frame = bench.heightFrame();
+  const render::HeightFrame frame = bench.view().heightFrame();
   const auto height = [&](const Ellipsoid& e) { return frame.height({e.mean.x(), e.mean.y(), e.mean.z()}); };
   std::vector<float> h;
   for (const Ellipsoid& e : map) h.push_back(height(e));
@@ -1502,30 +1503,30 @@ TEST(GuiViewTools, PickIgnoresSlicedAwayEllipsoids) {
   const Ellipsoid& top = *std::max_element(map.begin(), map.end(), [&](auto& a, auto& b) { return height(a) < height(b); });
   ASSERT_GT(height(top), median);
   const glm::vec2 at = projectInView(bench, {top.mean.x(), top.mean.y(), top.mean.z()});
-  bench.pick(at.x, at.y, 640, 480);
+  bench.view().pick(at.x, at.y, 640, 480);
   ASSERT_TRUE(bench.ui().picked);
-  EXPECT_EQ(bench.shownMap().ellipsoids->size(), map.size()) << "no slice: the whole map is drawn";
+  EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), map.size()) << "no slice: the whole map is drawn";
   // The lower half: the mirror gets only what it keeps, and a pick never returns the rest.
   bench.ui().settings.slice = {true, -100.f, median};
-  const Workbench::ShownMap shown = bench.shownMap();
+  const ViewController::ShownMap shown = bench.view().shownMap();
   EXPECT_LT(shown.ellipsoids->size(), map.size());
   EXPECT_GT(shown.ellipsoids->size(), 0u);
   for (const Ellipsoid& e : *shown.ellipsoids) EXPECT_LE(height(e), median);
-  bench.pick(at.x, at.y, 640, 480);
+  bench.view().pick(at.x, at.y, 640, 480);
   if (bench.ui().picked) {
     EXPECT_LE(height(*bench.ui().picked), median) << "a sliced-away ellipsoid was picked";
   }
-  EXPECT_EQ(bench.shownMap().serial, shown.serial) << "an unchanged slice keeps its selection (no re-upload)";
+  EXPECT_EQ(bench.view().shownMap().serial, shown.serial) << "an unchanged slice keeps its selection (no re-upload)";
   // PgUp / PgDn move the slice by its thickness; the selection is new.
   bench.key(KeyAction::kSliceUp);
   EXPECT_NEAR(bench.ui().settings.slice.lo_m, median, 1e-4f);
   EXPECT_NEAR(bench.ui().settings.slice.hi_m, 2.f * median + 100.f, 1e-4f);
-  EXPECT_NE(bench.shownMap().serial, shown.serial);
+  EXPECT_NE(bench.view().shownMap().serial, shown.serial);
   bench.key(KeyAction::kSliceDown);
   EXPECT_NEAR(bench.ui().settings.slice.hi_m, median, 1e-4f);
   // The slice is in the view spec a saved view file carries.
-  EXPECT_TRUE(bench.viewSpec().slice.on);
-  EXPECT_NEAR(bench.viewSpec().slice.hi_m, median, 1e-4f);
+  EXPECT_TRUE(bench.view().spec().slice.on);
+  EXPECT_NEAR(bench.view().spec().slice.hi_m, median, 1e-4f);
 }
 
 TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
@@ -1537,9 +1538,9 @@ TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
   EXPECT_FALSE(render::mirrorStyle(spec).map) << "the mirror draws no ellipsoids";
   // A view file's "draw": "none" hides the map in the window too, and "hidden" is not saved.
   Workbench bench{Settings{}};
-  bench.applyViewSpec(spec);
+  bench.view().applySpec(spec);
   EXPECT_TRUE(bench.ui().settings.hide_map);
-  EXPECT_EQ(bench.viewSpec().draw(), render::DrawMode::kNone);
+  EXPECT_EQ(bench.view().spec().draw(), render::DrawMode::kNone);
   EXPECT_TRUE(sameSettings(s, Settings{})) << "hidden lasts for the run only";
 }
 
@@ -1547,28 +1548,28 @@ TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
 TEST(GuiViewTools, LoadViewRestoresTheSavedCamera) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
-  bench.orbit(0.4f, 0.1f);
+  bench.view().orbit(0.4f, 0.1f);
   const glm::vec3 eye = bench.ui().camera.eye(), target = bench.ui().camera.target;
   const fs::path file = t.dir / "v.json";
-  ASSERT_TRUE(bench.saveViewSafely(file.string())) << bench.ui().status.text;
+  ASSERT_TRUE(bench.viewFiles().saveSafely(file.string())) << bench.ui().status.text;
   const GlobalMapParams saved_thresholds = bench.ui().params.global;
-  bench.orbit(-1.f, 0.3f);
-  bench.zoom(3.f);
-  ASSERT_TRUE(bench.editParameter(*findParameter("merge_distance"), 0.2));
+  bench.view().orbit(-1.f, 0.3f);
+  bench.view().zoom(3.f);
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("merge_distance"), 0.2));
   t.worker().waitIdle();
-  ASSERT_TRUE(bench.loadView(file.string(), false)) << bench.ui().status.text;
+  ASSERT_TRUE(bench.viewFiles().load(file.string(), false)) << bench.ui().status.text;
   EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-5f);
   EXPECT_LT(glm::length(bench.ui().camera.target - target), 1e-5f);
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kSuccess) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().params.global.merge_distance_m, 0.2) << "its thresholds only when asked";
-  ASSERT_TRUE(bench.loadView(file.string(), true));
+  ASSERT_TRUE(bench.viewFiles().load(file.string(), true));
   EXPECT_EQ(bench.ui().params.global.merge_distance_m, saved_thresholds.merge_distance_m);
   // The view's size differs from the viewport's: the status line says so.
   bench.ui().view_width = 500;
-  ASSERT_TRUE(bench.loadView(file.string(), false));
+  ASSERT_TRUE(bench.viewFiles().load(file.string(), false));
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kWarning);
   EXPECT_NE(bench.ui().status.text.find("640x480"), std::string::npos) << bench.ui().status.text;
-  EXPECT_FALSE(bench.loadView((t.dir / "none.json").string(), false));
+  EXPECT_FALSE(bench.viewFiles().load((t.dir / "none.json").string(), false));
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
 }
 
@@ -1576,31 +1577,31 @@ TEST(GuiViewTools, SaveViewAutoNumbersTheDefaultNameAndAsksForATypedOne) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
   const fs::path first = t.dir / "vdmap_view.json";
-  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  ASSERT_TRUE(bench.viewFiles().saveSafely(first.string()));
   const auto written = fs::last_write_time(first);
-  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  ASSERT_TRUE(bench.viewFiles().saveSafely(first.string()));
   EXPECT_TRUE(fs::exists(t.dir / "vdmap_view-2.json"));
-  ASSERT_TRUE(bench.saveViewSafely(first.string()));
+  ASSERT_TRUE(bench.viewFiles().saveSafely(first.string()));
   EXPECT_TRUE(fs::exists(t.dir / "vdmap_view-3.json"));
   EXPECT_EQ(fs::last_write_time(first), written) << "never overwritten";
   const fs::path typed = t.dir / "mine.json";
-  ASSERT_TRUE(bench.saveViewSafely(typed.string()));
-  EXPECT_FALSE(bench.saveViewSafely(typed.string())) << "a typed name that exists asks first";
+  ASSERT_TRUE(bench.viewFiles().saveSafely(typed.string()));
+  EXPECT_FALSE(bench.viewFiles().saveSafely(typed.string())) << "a typed name that exists asks first";
   EXPECT_EQ(bench.ui().confirm_view_replace, typed.string());
-  EXPECT_TRUE(bench.saveViewSafely(typed.string(), true));
+  EXPECT_TRUE(bench.viewFiles().saveSafely(typed.string(), true));
   EXPECT_TRUE(bench.ui().confirm_view_replace.empty());
 }
 
 TEST(GuiViewTools, QuickViewRecallsTheStoredCamera) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
-  EXPECT_FALSE(bench.recallQuickView(3)) << "nothing kept there yet";
-  bench.orbit(0.7f, -0.2f);
+  EXPECT_FALSE(bench.viewFiles().recallQuickView(3)) << "nothing kept there yet";
+  bench.view().orbit(0.7f, -0.2f);
   const glm::vec3 eye = bench.ui().camera.eye(), target = bench.ui().camera.target;
-  bench.storeQuickView(3);
-  bench.orbit(-1.5f, 0.4f);
-  bench.pan(40.f, 10.f);
-  ASSERT_TRUE(bench.recallQuickView(3));
+  bench.viewFiles().storeQuickView(3);
+  bench.view().orbit(-1.5f, 0.4f);
+  bench.view().pan(40.f, 10.f);
+  ASSERT_TRUE(bench.viewFiles().recallQuickView(3));
   EXPECT_LT(glm::length(bench.ui().camera.eye() - eye), 1e-4f);
   EXPECT_LT(glm::length(bench.ui().camera.target - target), 1e-4f);
 }
@@ -1608,15 +1609,15 @@ TEST(GuiViewTools, QuickViewRecallsTheStoredCamera) {
 TEST(GuiViewTools, MeasurePointsAlternateAndSnapToCentres) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
-  bench.addMeasurePoint({0.f, 0.f, 1.f});
+  bench.view().addMeasurePoint({0.f, 0.f, 1.f});
   ASSERT_TRUE(bench.ui().measure_a);
   EXPECT_FALSE(bench.ui().measure_b);
-  bench.addMeasurePoint({0.3f, 0.4f, 1.f});
+  bench.view().addMeasurePoint({0.3f, 0.4f, 1.f});
   ASSERT_TRUE(bench.ui().measure_b);
   EXPECT_FLOAT_EQ(glm::length(*bench.ui().measure_b - *bench.ui().measure_a), 0.5f);
   bench.ui().measure_snap = true;
   const Eigen::Vector3d m = t.worker().global()->map.ellipsoids.front().mean;
-  bench.addMeasurePoint(glm::vec3(m.x(), m.y(), m.z()) + glm::vec3(1e-4f));  // a third click: A again
+  bench.view().addMeasurePoint(glm::vec3(m.x(), m.y(), m.z()) + glm::vec3(1e-4f));  // a third click: A again
   EXPECT_FALSE(bench.ui().measure_b);
   EXPECT_LT(glm::length(*bench.ui().measure_a - glm::vec3(m.x(), m.y(), m.z())), 1e-6f);
 }

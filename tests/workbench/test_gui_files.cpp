@@ -1,4 +1,4 @@
-// Opening files in the workbench without a window (app/workbench/workbench_files.cpp): a map file opens
+// Opening files in the workbench without a window (app/workbench/file_actions.cpp): a map file opens
 // as a static map with what it lacks disabled, drops queue until the frame opens them, and the
 // opened paths go to the recent list.
 #include <gtest/gtest.h>
@@ -38,11 +38,11 @@ struct MapFolder {
 TEST(GuiFiles, AMapFolderOpensWithThresholdsDisabled) {
   const MapFolder m;
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.openPath(m.folder.string())) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().openPath(m.folder.string())) << bench.ui().status.text;
   ASSERT_NE(bench.staticMap(), nullptr);
   EXPECT_EQ(bench.staticMap()->kind, MapFileKind::kMapFolder);
   EXPECT_TRUE(bench.savedSession());  // nothing to play or re-map
-  EXPECT_EQ(bench.whyPlayerOff(), Workbench::kStaticMapWhy);
+  EXPECT_EQ(bench.files().whyPlayerOff(), kStaticMapWhy);
   const auto mapping = bench.mapping();
   const auto global = bench.global();
   ASSERT_TRUE(mapping && global);
@@ -53,24 +53,24 @@ TEST(GuiFiles, AMapFolderOpensWithThresholdsDisabled) {
   EXPECT_TRUE(mapping->framePose(4).isApprox(m.graph.keyframe(1).T_W_K, 1e-5));  // drawn where the file put it
   EXPECT_EQ(global->map.ellipsoids.size(), m.map.ellipsoids.size());
   EXPECT_EQ(global->map.sigma_e_prime, m.map.ellipsoids.size());
-  for (const Parameter& p : parameterTable()) EXPECT_FALSE(bench.pending(p)) << p.key;
+  for (const Parameter& p : parameterTable()) EXPECT_FALSE(bench.parameters().pending(p)) << p.key;
 
   // Nothing rebuilds it: Reset to defaults (which applies the thresholds) leaves it and says
   // nothing; thresholds sent to the worker anyway are refused with the reason; the map stays.
   bench.ui().settings.recent = {"/a", "/b"};
-  bench.resetToDefaults();
+  bench.parameters().resetToDefaults();
   bench.worker()->waitIdle();
-  EXPECT_EQ(bench.player().error, "");
+  EXPECT_EQ(bench.player().status().error, "");
   EXPECT_EQ(bench.ui().settings.recent, (std::vector<std::string>{"/a", "/b"}));  // a history, kept
   GlobalMapParams other;
   other.merge_distance_m = 0.01;
   bench.worker()->setThresholds(other);
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.global(), global);
-  EXPECT_EQ(bench.player().error, Workbench::kStaticMapWhy);
+  EXPECT_EQ(bench.player().status().error, kStaticMapWhy);
   // Play, a pose edit and the container do nothing; a selection is published without a local map.
-  bench.play();
-  bench.selectKeyframe(1);
+  bench.player().play();
+  bench.poses().selectKeyframe(1);
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.mapping(), mapping);
   ASSERT_TRUE(bench.selection());
@@ -79,7 +79,7 @@ TEST(GuiFiles, AMapFolderOpensWithThresholdsDisabled) {
   bench.key(KeyAction::kContainer);
   EXPECT_FALSE(bench.ui().show_container);
   bench.ui().pose_translation_m.x += 1.f;
-  bench.applyPoseEdit();
+  bench.poses().applyEdit();
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.mapping(), mapping);
 }
@@ -92,7 +92,7 @@ TEST(GuiFiles, OpenPathOpensEveryKindAndRemembersItNewestFirst) {
   const std::vector<fs::path> paths = {m.dir / "seq", m.folder / "global.bt", m.dir / "points.ply",
                                        m.folder / "global_ellipsoids.ply", m.folder};
   for (const fs::path& p : paths) {
-    ASSERT_TRUE(bench.openPath(p.string())) << p << ": " << bench.ui().status.text;
+    ASSERT_TRUE(bench.files().openPath(p.string())) << p << ": " << bench.ui().status.text;
     EXPECT_EQ(bench.sequence() != nullptr, p == m.dir / "seq") << p;
     EXPECT_EQ(bench.staticMap() != nullptr, p != m.dir / "seq") << p;
   }
@@ -102,13 +102,13 @@ TEST(GuiFiles, OpenPathOpensEveryKindAndRemembersItNewestFirst) {
   EXPECT_EQ(bench.ui().settings.recent, expected);
   // A failure keeps what is open and is not remembered.
   const int session = bench.sessionSerial();
-  EXPECT_FALSE(bench.openPath((m.dir / "nope.ply").string()));
+  EXPECT_FALSE(bench.files().openPath((m.dir / "nope.ply").string()));
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kError);
   EXPECT_NE(bench.ui().status.text.find("nope.ply"), std::string::npos);
   EXPECT_EQ(bench.sessionSerial(), session);
   EXPECT_EQ(bench.ui().settings.recent, expected);
   // Opening one again moves it to the front.
-  ASSERT_TRUE(bench.openPath((m.dir / "seq").string()));
+  ASSERT_TRUE(bench.files().openPath((m.dir / "seq").string()));
   EXPECT_EQ(bench.ui().settings.recent.front(), (m.dir / "seq").string());
   EXPECT_EQ(bench.ui().settings.recent.size(), paths.size());
 }
@@ -134,21 +134,21 @@ TEST(GuiFiles, RecentKeepsTenPathsAndRoundTripsThroughTheSettingsFile) {
 TEST(GuiFiles, DropsWaitForTheFrameAndAViewFileIsApplied) {
   const MapFolder m;
   Workbench bench{Settings{}};
-  bench.drop(m.folder.string());
+  bench.files().drop(m.folder.string());
   EXPECT_FALSE(bench.isOpen());  // queued, not opened while a frame is drawn
-  EXPECT_EQ(bench.openDropped(), 1);
+  EXPECT_EQ(bench.files().openDropped(), 1);
   ASSERT_NE(bench.staticMap(), nullptr);
-  EXPECT_EQ(bench.openDropped(), 0);
+  EXPECT_EQ(bench.files().openDropped(), 0);
 
   // A view file: its camera, not a new session.
-  render::ViewSpec spec = bench.viewSpec();
+  render::ViewSpec spec = bench.view().spec();
   spec.look_at = render::LookAt{{1.f, 2.f, 3.f}, {0.5f, 0.f, 1.f}, {0.f, 0.f, 1.f}, 50.f};
   writeViewFile(m.dir / "v.json", spec, GlobalMapParams{}, m.folder.string());
   const int session = bench.sessionSerial();
-  bench.drop((m.dir / "v.json").string());
-  EXPECT_EQ(bench.openDropped(), 1);
+  bench.files().drop((m.dir / "v.json").string());
+  EXPECT_EQ(bench.files().openDropped(), 1);
   EXPECT_EQ(bench.sessionSerial(), session);
-  const render::ViewSpec shown = bench.viewSpec();
+  const render::ViewSpec shown = bench.view().spec();
   ASSERT_TRUE(shown.look_at);
   EXPECT_NEAR(glm::distance(shown.look_at->eye, glm::vec3(1.f, 2.f, 3.f)), 0.f, 1e-5f);
   EXPECT_NEAR(glm::distance(shown.look_at->target, glm::vec3(0.5f, 0.f, 1.f)), 0.f, 1e-5f);
@@ -166,9 +166,9 @@ TEST(GuiFiles, RenderAndTheWindowAgreeOnAMapFoldersUpAxis) {
                          {{0.0, g.keyframe(0).T_W_K}, {0.5, g.keyframe(0).T_W_K}, {1.0, g.keyframe(1).T_W_K}}, "frames");
     }
     Workbench bench{Settings{}};
-    ASSERT_TRUE(bench.openPath(m.folder.string())) << bench.ui().status.text;
+    ASSERT_TRUE(bench.files().openPath(m.folder.string())) << bench.ui().status.text;
     RenderSource source({}, m.folder.string(), "");
-    const glm::vec3 window = bench.upVector(), render = source.up(render::UpAxis::kData, GlobalMapParams{});
+    const glm::vec3 window = bench.view().upVector(), render = source.up(render::UpAxis::kData, GlobalMapParams{});
     EXPECT_LT(glm::distance(window, render), 1e-6f) << trajectory;
     EXPECT_GT(glm::distance(window, glm::vec3(0.f, 0.f, 1.f)), 0.1f) << "the cameras were not used";
   }

@@ -84,7 +84,7 @@ bool acceptedBySet(const Parameter& p, const std::string& value) {
 
 bool acceptedBySlider(const Parameter& p, double v) {
   gui::Workbench bench{Settings{}};
-  const bool ok = bench.editParameter(p, v);
+  const bool ok = bench.parameters().edit(p, v);
   EXPECT_EQ(ok, p.get(bench.ui().params) == v) << p.key;
   if (!ok) {
     EXPECT_EQ(bench.ui().status.kind, gui::StatusLine::Kind::kError) << p.key;

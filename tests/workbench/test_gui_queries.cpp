@@ -27,10 +27,10 @@ namespace fs = std::filesystem;
 struct BuiltinBench {
   Workbench bench{Settings{}};
   BuiltinBench() {
-    EXPECT_TRUE(bench.open({test::builtinSequence(40).string(), "", "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.files().open({test::builtinSequence(40).string(), "", "", ""})) << bench.ui().status.text;
     bench.ui().probe = true;
     bench.sync();  // asks the worker for the queries
-    bench.play();
+    bench.player().play();
     bench.worker()->waitIdle();
     bench.sync();
   }
@@ -54,7 +54,7 @@ class GuiQueries : public ::testing::Test {
 TEST_F(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
   Workbench& bench = builtin().bench;
   auto global = bench.global();
-  auto query = bench.query();
+  auto query = bench.queries().snapshot();
   ASSERT_TRUE(global && query);
   EXPECT_EQ(query->generation, global->generation) << "the queries of the map shown";
   EXPECT_GE(query->map->keyframes(), 3u);
@@ -80,7 +80,7 @@ TEST_F(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
   worker.setKeyframePose(1, moved);
   worker.waitIdle();
   global = bench.global();
-  query = bench.query();
+  query = bench.queries().snapshot();
   ASSERT_EQ(query->generation, global->generation);
   std::vector<Classification> reference;
   worker.withMapper([&](const Mapper& mapper, const GlobalSnapshot& shown) {
@@ -108,7 +108,7 @@ TEST_F(GuiQueries, TheQueriesFollowEveryGlobalMapAndAnswerAtTheCorrectedPoses) {
 TEST_F(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
   Workbench& bench = builtin().bench;
   const auto global = bench.global();
-  ASSERT_TRUE(global && bench.query());
+  ASSERT_TRUE(global && bench.queries().snapshot());
   const ColoredTriangleMesh mesh = makeBuiltinScene().mesh;
   std::vector<Eigen::Vector3f> samples = sampleMeshSurface(mesh, 3000, 36);
   std::vector<Eigen::Vector3f> seen;
@@ -123,7 +123,7 @@ TEST_F(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
   ASSERT_GE(seen.size(), 100u);
   int occupied = 0;
   for (const Eigen::Vector3f& s : seen) {
-    const ProbeResult r = bench.probe({s.x(), s.y(), s.z()});
+    const ProbeResult r = bench.queries().probe({s.x(), s.y(), s.z()});
     EXPECT_TRUE(r.note.empty()) << r.note;
     EXPECT_EQ(r.generation, global->generation);
     if (r.state.state == Occupancy::kOccupied) {
@@ -136,7 +136,7 @@ TEST_F(GuiQueries, ProbeOnTheSceneSurfaceIsOccupiedAndAtTheCamerasNot) {
       << occupied << " of " << seen.size() << " surface points occupied";
   for (const KeyframeInfo& k : bench.mapping()->keyframes) {
     const Eigen::Vector3d c = k.T_W_K.translation();
-    const ProbeResult r = bench.probe(glm::vec3(c.x(), c.y(), c.z()));
+    const ProbeResult r = bench.queries().probe(glm::vec3(c.x(), c.y(), c.z()));
     EXPECT_NE(r.state.state, Occupancy::kOccupied) << "K" << k.id;
     EXPECT_GT(r.distance.distance_m, 0.1) << "K" << k.id << ": a camera is in free space";
     EXPECT_NE(r.text().find(r.state.state == Occupancy::kFree ? "free p" : "unknown p=0.500"), std::string::npos)
@@ -150,39 +150,39 @@ TEST_F(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
   Workbench& bench = builtin().bench;
   UiState& ui = bench.ui();
   const int w = 640, h = 480;
-  const glm::vec3 eye = bench.view(w, h).camera.eye();
+  const glm::vec3 eye = bench.view().viewport(w, h).camera.eye();
   const glm::vec3 surface = eye + 2.f * glm::normalize(glm::vec3(0.1f, 0.2f, 0.3f) - eye);
   ui.probe_offset_m = 0.05f;
-  const auto p = bench.probePoint(320, 240, w, h, surface);
+  const auto p = bench.queries().probePoint(320, 240, w, h, surface);
   ASSERT_TRUE(p);
   EXPECT_NEAR(glm::length(*p - surface), 0.05f, 1e-5f);
   EXPECT_NEAR(glm::length(eye - *p) + 0.05f, glm::length(eye - surface), 1e-4f) << "toward the eye";
-  EXPECT_FALSE(bench.probePoint(320, 240, w, h, std::nullopt)) << "no surface, no slice: no probe";
-  EXPECT_TRUE(bench.probeAt(320, 240, w, h, surface));
+  EXPECT_FALSE(bench.queries().probePoint(320, 240, w, h, std::nullopt)) << "no surface, no slice: no probe";
+  EXPECT_TRUE(bench.queries().probeAt(320, 240, w, h, surface));
   ASSERT_TRUE(ui.probe_result);
   EXPECT_FALSE(ui.probe_result->on_slice);
 
   ui.query_slice = true;
   ui.query_slice_spec = {.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2};
-  bench.waitQuerySlice();
-  ASSERT_TRUE(bench.querySlice());
-  const auto q = bench.probePoint(320, 240, w, h, std::nullopt);
+  bench.queries().waitSlice();
+  ASSERT_TRUE(bench.queries().slice());
+  const auto q = bench.queries().probePoint(320, 240, w, h, std::nullopt);
   ASSERT_TRUE(q) << "the cursor's ray meets the slice's plane";
   EXPECT_NEAR(q->z, 1.2f, 1e-4f);
-  bench.probeAt(320, 240, w, h, surface);
+  bench.queries().probeAt(320, 240, w, h, surface);
   ASSERT_TRUE(ui.probe_result);
   EXPECT_TRUE(ui.probe_result->on_slice);
   EXPECT_NE(ui.probe_result->text().find("(slice)"), std::string::npos);
   ui.query_slice = false;
   bench.sync();
-  EXPECT_FALSE(bench.querySlice());
+  EXPECT_FALSE(bench.queries().slice());
 }
 
 // The slice plane across z = 1.2 m (above the table, below the ceiling): red where it cuts the
 // wall x = -2.5 m, green in the open room in front of it; the same pixels for 1 and 2 threads.
 TEST_F(GuiQueries, SlicePixelsAreOccupiedAtTheWallAndFreeInFrontOfIt) {
   Workbench& bench = builtin().bench;
-  const auto query = bench.query();
+  const auto query = bench.queries().snapshot();
   ASSERT_TRUE(query);
   const render::QuerySliceSpec spec{.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2};
   const render::QuerySliceImage slice = render::computeQuerySlice(*query->map, spec, {});
@@ -244,32 +244,32 @@ TEST_F(GuiQueries, AMapFileAnswersFromItsEllipsoidsAlone) {
   const GlobalMap map = buildGlobalMap(graph, GlobalMapParams{});
   exportMap(dir / "map", graph, map, MapExportOptions{});
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.openPath((dir / "map").string())) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().openPath((dir / "map").string())) << bench.ui().status.text;
   bench.ui().probe = true;
   bench.ui().query_slice = true;
   bench.sync();
   bench.worker()->waitIdle();
-  const auto query = bench.query();
+  const auto query = bench.queries().snapshot();
   ASSERT_TRUE(query);
-  EXPECT_EQ(bench.player().error, "");
+  EXPECT_EQ(bench.player().status().error, "");
   EXPECT_EQ(query->map->keyframes(), 0u);
   EXPECT_EQ(query->map->ellipsoids(), map.ellipsoids.size());
   EXPECT_EQ(query->note, "no keyframes: free space unknown");
   const Eigen::Vector3d mean = map.ellipsoids[map.ellipsoids.size() / 2].mean;
-  const ProbeResult on = bench.probe(glm::vec3(mean.x(), mean.y(), mean.z()));
+  const ProbeResult on = bench.queries().probe(glm::vec3(mean.x(), mean.y(), mean.z()));
   EXPECT_EQ(on.state.state, Occupancy::kOccupied);
   EXPECT_EQ(on.distance.distance_m, 0.0);
   const Eigen::Vector3d c = graph.keyframe(0).T_W_K.translation();
-  const ProbeResult camera = bench.probe(glm::vec3(c.x(), c.y(), c.z()));
+  const ProbeResult camera = bench.queries().probe(glm::vec3(c.x(), c.y(), c.z()));
   EXPECT_EQ(camera.state.state, Occupancy::kUnknown) << "nothing is seen free without keyframes";
   EXPECT_GT(camera.distance.distance_m, 0.5);
   EXPECT_NE(camera.text().find("no keyframes: free space unknown"), std::string::npos) << camera.text();
   // The slice spans the map's box instead of what keyframes see.
-  bench.waitQuerySlice();
-  ASSERT_TRUE(bench.querySlice());
-  EXPECT_FALSE(bench.querySlice()->plane.empty());
-  EXPECT_EQ(bench.querySlice()->free, 0u);
-  EXPECT_GT(bench.querySlice()->occupied, 0u);
+  bench.queries().waitSlice();
+  ASSERT_TRUE(bench.queries().slice());
+  EXPECT_FALSE(bench.queries().slice()->plane.empty());
+  EXPECT_EQ(bench.queries().slice()->free, 0u);
+  EXPECT_GT(bench.queries().slice()->occupied, 0u);
 }
 
 TEST_F(GuiQueries, SlicePlaneAxesAndParsing) {

@@ -1,46 +1,16 @@
-#include "app/window/view_tools_panel.h"
-
+// The Map panel's "Queries" section (docs/workbench.md "Queries"): the probe and the query slice.
 #include <algorithm>
 
 #include <imgui.h>
 
+#include "app/window/map_sections.h"
 #include "app/window/widgets.h"
-
-namespace vdmap::app::gui {
-
-void drawSliceControls(Workbench& bench, WindowState& win) {
-  render::HeightSlice& slice = bench.ui().settings.slice;
-  ImGui::Checkbox("Slice", &slice.on);
-  tip("Draw only the ellipsoids whose centre lies between these heights above the floor (the 2nd percentile of "
-      "the map's heights along the up axis), whole; picking and framing ignore the rest. PgUp / PgDn move the "
-      "slice by its thickness.");
-  ImGui::SameLine();
-  // DragFloatRange2 places its (empty) label one inner spacing after the fields: leave room.
-  ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemInnerSpacing.x);
-  ImGui::BeginDisabled(!slice.on);
-  float lo = slice.lo_m, hi = slice.hi_m;
-  if (ImGui::DragFloatRange2("##slice", &lo, &hi, 0.01f, -100.f, 100.f, "%.2f m", "%.2f m", ImGuiSliderFlags_AlwaysClamp) &&
-      lo < hi) {
-    slice.lo_m = lo;
-    slice.hi_m = hi;
-  }
-  tip("Heights above the floor, metres: from, to.");
-  ImGui::EndDisabled();
-  checkFits(win.check);
-  ImGui::BeginDisabled(!slice.on);
-  if (ImGui::Button("Frame slice")) bench.frameMap();  // frameMap frames what is drawn: the slice
-  tip("Fits what the slice keeps in the view (F frames the same while the slice is on).");
-  ImGui::EndDisabled();
-  checkFits(win.check);
-}
-
-}  // namespace vdmap::app::gui
 
 namespace vdmap::app::gui {
 
 void drawQueries(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
-  const auto query = bench.query();
+  const auto query = bench.queries().snapshot();
   ImGui::Checkbox("Probe (Q)", &ui.probe);
   tip("Under the cursor: occupied, free or unknown (docs/method.md 13) with p_occupied, and the distance to the "
       "nearest surface, beside the cursor and in the status line. The point stands the offset in front of the "
@@ -82,7 +52,7 @@ void drawQueries(Workbench& bench, WindowState& win) {
     ImGui::EndTable();
   }
   ImGui::EndDisabled();
-  if (const auto slice = bench.querySlice()) {
+  if (const auto slice = bench.queries().slice()) {
     const double n = std::max<double>(1.0, static_cast<double>(slice->occupied + slice->free + slice->unknown));
     ImGui::TextWrapped("%dx%d samples in %.0f ms: %.0f%% occupied, %.0f%% free, %.0f%% unknown", slice->plane.width,
                        slice->plane.height, slice->compute_ms, 100.0 * slice->occupied / n, 100.0 * slice->free / n,

@@ -1,11 +1,11 @@
-#include "app/window/tracking_panel.h"
-
+// The Map panel's "Tracking and loop closures" section (tracked poses only).
 #include <algorithm>
 #include <cfloat>
 #include <cstdio>
 
-#include "app/workbench/figures.h"
+#include "app/window/map_sections.h"
 #include "app/window/widgets.h"
+#include "app/workbench/figures.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -66,10 +66,10 @@ void drawTracking(Workbench& bench, WindowState& win) {
   ImGui::Text("%zu loop closures", win.mapping->loops.size());
   tip("Loop-closure edges between the two keyframes (orange; covisibility edges are viridis) and markers above the "
       "scrubber. After each loop the keyframe pose graph is optimised and the global map rebuilt.");
-  const bool can = bench.canShowBeforeOptimisation();
+  const bool can = bench.poses().canShowBeforeOptimisation();
   ImGui::BeginDisabled(!can);
   bool before = ui.show_before_optimisation;
-  if (ImGui::Checkbox("show before last optimisation (B)", &before)) bench.showBeforeOptimisation(before);
+  if (ImGui::Checkbox("show before last optimisation (B)", &before)) bench.poses().showBeforeOptimisation(before);
   tip(!can ? "No pose-graph optimisation yet: it runs after a loop closure, and as the map refinement after the "
              "sequence's last frame."
            : "The keyframe poses, frustums, trajectory and global map as they were before the last pose-graph "
@@ -85,7 +85,7 @@ void drawTracking(Workbench& bench, WindowState& win) {
       char text[128];
       std::snprintf(text, sizeof text, "frame %d  K%d -> K%d  %s  %.1f ms##loop%zu", e.position, e.loop.from, e.loop.to,
                     metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms, i);
-      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.selectKeyframe(e.loop.to, true);
+      if (ImGui::Selectable(text, ui.selected_keyframe == e.loop.to)) bench.poses().selectKeyframe(e.loop.to, true);
     }
     ImGui::EndListBox();
   }

@@ -1,14 +1,11 @@
-#include "app/window/keyframe_panel.h"
-
+// The Map panel's "Keyframes" section: the keyframe list, the selected keyframe's inspector
+// (figures, container view, neighbours) and its pose edit.
 #include <algorithm>
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
 
-#include <imgui_stdlib.h>
-
-#include <Eigen/Eigenvalues>
-
+#include "app/window/map_sections.h"
 #include "app/window/widgets.h"
 #include "render/colormap.h"
 
@@ -17,20 +14,20 @@ namespace {
 
 // The last item (a pose field) starts a drag: remember the pose for undo.
 void poseEditStarted(Workbench& bench) {
-  if (ImGui::IsItemActivated()) bench.beginPoseEdit();
+  if (ImGui::IsItemActivated()) bench.poses().beginEdit();
 }
 
 // Every keyframe, its colour as a square; a click selects it.
 void drawKeyframeList(Workbench& bench, const WindowState& win) {
   // A keyframe picked in the view or by a loop marker scrolls into the list's middle once.
-  const bool scroll = bench.takeScrollToSelected();
+  const bool scroll = bench.poses().takeScrollToSelected();
   if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
     for (const KeyframeInfo& k : win.mapping->keyframes) {
       char text[96];
       std::snprintf(text, sizeof text, "   K%d  frame %d  %zu cells%s", k.id, k.frame, k.ellipsoids,
                     k.id == win.mapping->current_keyframe ? "  (current)" : "");
       const ImVec2 at = ImGui::GetCursorScreenPos();
-      if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.selectKeyframe(k.id);
+      if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.poses().selectKeyframe(k.id);
       if (scroll && k.id == bench.ui().selected_keyframe) ImGui::SetScrollHereY(0.5f);
       const float h = ImGui::GetTextLineHeight();
       ImGui::GetWindowDrawList()->AddRectFilled({at.x + 2, at.y + 2}, {at.x + h - 2, at.y + h - 2},
@@ -88,7 +85,7 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   const bool before = ui.show_before_optimisation;
   ImGui::BeginDisabled(before);
   // A pixel of drag moves the keyframe as far as a pixel of the view spans at its depth.
-  const float speed = bench.poseDragSpeed();
+  const float speed = bench.view().poseDragSpeed();
   if (beginRows("pose")) {
     label(win.check, "t (m)",
           "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
@@ -109,10 +106,10 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   }
   ImGui::EndDisabled();
   if (before) tip("Showing the map before the last optimisation: poses are edited on the map after it (B).");
-  if (moved) bench.applyPoseEdit();
-  ImGui::BeginDisabled(!bench.canUndoPoseEdit());
-  if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench.undoPoseEdit();
-  tip(bench.canUndoPoseEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
+  if (moved) bench.poses().applyEdit();
+  ImGui::BeginDisabled(!bench.poses().canUndoEdit());
+  if (ImGui::Button("Undo pose edit (Ctrl+Z)")) bench.poses().undoEdit();
+  tip(bench.poses().canUndoEdit() ? "Puts back the pose from before the last drag." : "No pose edit to undo.");
   ImGui::EndDisabled();
 }
 
@@ -126,53 +123,10 @@ void drawKeyframes(Workbench& bench, const render::MapMirror& mirror, WindowStat
     return ImGui::TextWrapped("Select a keyframe to inspect it.");
   if (bench.staticMap()) {  // opening files: a map file's keyframes are poses only
     ImGui::TextDisabled("K%d: no inspector, container or pose edit", id);
-    return tip(std::string("A map file: ") + Workbench::kStaticMapWhy + ".");
+    return tip(std::string("A map file: ") + kStaticMapWhy + ".");
   }
   drawInspector(bench, mirror, win, id);
   drawPoseEdit(bench, win);
-}
-
-void drawPicked(Workbench& bench, WindowState& win) {
-  UiState& ui = bench.ui();
-  if (!ui.picked) return ImGui::TextWrapped("Click an ellipsoid in the view (it is marked magenta).");
-  const Ellipsoid& e = *ui.picked;
-  const Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> eig(e.cov);
-  const Eigen::Vector3d axes = eig.eigenvalues().cwiseMax(0.0).cwiseSqrt() * 1000.0;
-  if (beginRows("picked")) {
-    label(win.check, "keyframe", "The keyframe it came from (for a merged one, its merge group's centre).");
-    ImGui::Text("K%d", e.keyframe);
-    label(win.check, "points n", "Depth points merged into it.");
-    ImGui::Text("%u", e.count);
-    label(win.check, "mean (m)", "Its centre in the world frame.");
-    char mean[96];
-    std::snprintf(mean, sizeof mean, "%.4f %.4f %.4f", e.mean.x(), e.mean.y(), e.mean.z());
-    ImGui::AlignTextToFramePadding();
-    ImGui::Text("%.3f, %.3f, %.3f", e.mean.x(), e.mean.y(), e.mean.z());
-    ImGui::SameLine();
-    if (ImGui::SmallButton("Copy##mean")) ImGui::SetClipboardText(mean);
-    tip(std::string("Copies \"") + mean + "\" (x y z, metres) to the clipboard.");
-    label(win.check, "sigma axes (mm)", "Standard deviations along its principal axes, largest last.");
-    ImGui::Text("%.1f, %.1f, %.1f", axes.x(), axes.y(), axes.z());
-    label(win.check, "colour", "Mean RGB of its points.");
-    ImGui::ColorButton("##colour", {e.color.x() / 255.f, e.color.y() / 255.f, e.color.z() / 255.f, 1.f});
-    ImGui::SameLine();
-    ImGui::Text("%.0f, %.0f, %.0f", e.color.x(), e.color.y(), e.color.z());
-    ImGui::EndTable();
-  }
-}
-
-void drawPoseFile(Workbench& bench) {
-  UiState& ui = bench.ui();
-  ImGui::SetNextItemWidth(-FLT_MIN);
-  ImGui::InputTextWithHint("##trajectory", "corrected TUM trajectory file", &ui.trajectory_text);
-  tip("A TUM trajectory (timestamp tx ty tz qx qy qz qw): keyframes whose timestamps it names take its poses.");
-  const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
-  ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
-  if (ImGui::Button("Load corrected trajectory")) bench.loadTrajectory();
-  tip(file ? std::string("A map file: ") + Workbench::kStaticMapWhy + "."
-      : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
-                                   : "Replaces the matching keyframes' poses; the map is rebuilt.");
-  ImGui::EndDisabled();
 }
 
 }  // namespace vdmap::app::gui

@@ -1,0 +1,146 @@
+// The Map panel's parameter sections: "Thresholds (live)" with the global map's figures, and
+// "Re-run parameters"; one row per parameter of the table (app/cli/parameter_table.h).
+#include <algorithm>
+#include <cmath>
+#include <vector>
+
+#include "app/window/map_file_panel.h"
+#include "app/window/map_sections.h"
+#include "app/window/tg_parts.h"
+#include "app/window/widgets.h"
+
+namespace vdmap::app::gui {
+namespace {
+
+// One parameter of the table as a slider, combo or checkbox; disabled, saying why, unless
+// why_disabled is "".
+void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const std::string& why_disabled) {
+  const bool disabled = !why_disabled.empty();
+  const bool pending = bench.parameters().pending(p);
+  std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
+                     "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
+  if (pending)
+    help += "\n\nPending: the map shown was made with " + formatValue(p, bench.parameters().inUse(p)) +
+            (p.live ? " (rebuilding)." : "; Re-run applies the edited value.");
+  if (disabled) help = why_disabled + "\n\n" + help;
+  const std::string text =
+      std::string(p.label) + (p.unit.empty() ? "" : " (" + std::string(p.unit) + ")") + (pending ? " *" : "");
+  label(win.check, text.c_str(), help, pending);
+  ImGui::BeginDisabled(disabled);
+  double v = p.get(bench.ui().params);
+  bool changed = false;
+  const std::string id = "##" + std::string(p.key);
+  switch (p.kind) {
+    case Parameter::Kind::kBool: {
+      bool b = v != 0;
+      changed = ImGui::Checkbox(id.c_str(), &b);
+      v = b;
+      break;
+    }
+    case Parameter::Kind::kChoice: {
+      int i = static_cast<int>(v);
+      std::vector<const char*> names(p.choices.begin(), p.choices.end());
+      changed = ImGui::Combo(id.c_str(), &i, names.data(), static_cast<int>(names.size()));
+      v = i;
+      break;
+    }
+    case Parameter::Kind::kInt:
+    case Parameter::Kind::kReal: {
+      const char* format = p.kind == Parameter::Kind::kInt ? "%.0f" : "%.3g";
+      changed = ImGui::SliderScalar(id.c_str(), ImGuiDataType_Double, &v, &p.slider_lo, &p.slider_hi, format);
+      if (p.kind == Parameter::Kind::kInt) v = std::round(v);
+      break;
+    }
+  }
+  tip(help);
+  ImGui::EndDisabled();
+  if (changed) bench.parameters().edit(p, v);
+}
+
+// The global map's figures (docs/method.md 6.4) under the thresholds, and a warning when the filter keeps
+// few of the local maps' ellipsoids.
+void drawMapFigures(Workbench& bench, WindowState& win) {
+  const GlobalMap& m = win.global->map;
+  std::size_t stored = 0;
+  for (const KeyframeInfo& k : win.mapping->keyframes) stored += k.ellipsoids;
+  if (beginRows("stats")) {
+    const auto row = [&](const char* name, const std::string& help, const char* format, auto... values) {
+      label(win.check, name, help);
+      ImGui::Text(format, values...);
+    };
+    row("local maps", "Ellipsoids stored in all keyframes' containers (one per touched cell), before filtering.", "%zu",
+        stored);
+    row("Sigma_e", "Sigma_e (docs/method.md 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
+                   "than k times the sensor model's expectation).",
+        "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
+    row("merged", "After mean-shift merging within each merge group (docs/method.md 6.2), before occlusion removal.", "%zu",
+        m.merged);
+    row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (docs/method.md 7).", "%zu",
+        m.merged_across_groups);
+    row("Sigma_e'", "Sigma_e' (docs/method.md 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+                    "fusion across groups.",
+        "%zu", m.sigma_e_prime);
+    row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (docs/method.md 6.1).",
+        "%zu", m.groups.size());
+    row("t_g", "t_g (docs/method.md 6.4): wall time of the global map build: grouping, filtering and merging, occlusion "
+               "removal, fusion across groups.",
+        "%.3f s", m.t_g_s);
+    const TgParts parts = tgParts(m);
+    row("of which", "Grouping / filtering and merging / occlusion removal / fusion across groups (docs/method.md 7) / "
+                    "other (the rest of the build), ms: they add up to t_g.",
+        "%.0f / %.0f / %.0f / %.0f / %.0f ms", parts.groups_ms, parts.merge_ms, parts.occlusion_ms, parts.fusion_ms,
+        parts.other_ms);
+    row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
+        "%d frames%s", win.global->frames_mapped, bench.player().status().busy ? ", rebuilding" : "");
+    ImGui::EndTable();
+  }
+  if (stored > 0 && m.sigma_e * 20 < stored) {
+    ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[2]);
+    ImGui::TextWrapped("The filter keeps only %.1f%% of the local maps' ellipsoids: raise the filter sigma factor k or "
+                       "lower min points to keep more.",
+                       100.0 * m.sigma_e / stored);
+    ImGui::PopStyleColor();
+  }
+}
+
+}  // namespace
+
+void drawThresholds(Workbench& bench, WindowState& win) {
+  const bool file = bench.staticMap() != nullptr;  // opening files: a map file has nothing to rebuild
+  if (beginRows("thresholds")) {
+    for (const Parameter& p : parameterTable())
+      if (p.live) parameterRow(bench, win, p, file ? kStaticMapWhy : whyDisabled(p, bench.ui().params));
+    ImGui::EndTable();
+  }
+  if (file) return drawStaticMapFigures(bench, win);
+  if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
+  drawMapFigures(bench, win);
+}
+
+void drawRerun(Workbench& bench, WindowState& win) {
+  const bool saved = bench.savedSession();
+  const std::string why = bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
+                          : "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
+  if (beginRows("rerun")) {
+    for (const Parameter& p : parameterTable())
+      if (!p.live) parameterRow(bench, win, p, saved ? why : "");
+    ImGui::EndTable();
+  }
+  bool any_pending = false;
+  for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench.parameters().pending(p);
+  ImGui::BeginDisabled(saved || !any_pending);
+  if (ImGui::Button("Re-run")) bench.parameters().rerun();
+  tip(saved ? why
+            : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
+                          : "Nothing to apply: the sliders show the parameters the map was made with.");
+  ImGui::SameLine();
+  if (ImGui::Button("Revert")) bench.ui().params.mapper = win.mapping->mapper;
+  tip("Puts the sliders back to the parameters the map was made with.");
+  ImGui::EndDisabled();
+  if (any_pending) {
+    ImGui::SameLine();
+    ImGui::TextColored(kPendingColor, "* pending");
+  }
+}
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,84 @@
+#include "app/workbench/parameter_editor.h"
+
+namespace vdmap::app::gui {
+
+bool ParameterEditor::edit(const Parameter& p, double value) {
+  UiState& ui = state_.ui;
+  ParameterValues edited = ui.params;
+  try {
+    checkValue(p, value);
+    p.set(edited, value);
+    validate(edited);
+  } catch (const std::exception& e) {
+    state_.report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  ui.params = edited;
+  if (p.live) applyThresholds();
+  return true;
+}
+
+void ParameterEditor::applyThresholds() {
+  if (!state_.worker || state_.staticMap()) return;  // a map file has nothing to rebuild
+  try {
+    state_.worker->setThresholds(state_.ui.params.global);
+  } catch (const std::exception& e) {
+    state_.report(StatusLine::Kind::kError, e.what());
+    return;
+  }
+  if (!state_.savedSession()) state_.ui.settings.thresholds = state_.ui.params.global;
+}
+
+void ParameterEditor::rerun() {
+  if (!state_.worker || state_.savedSession()) return;
+  UiState& ui = state_.ui;
+  try {
+    ui.params.mapper.validate();
+  } catch (const std::exception& e) {
+    state_.report(StatusLine::Kind::kError, e.what());
+    return;
+  }
+  state_.worker->rerun(ui.params.mapper);
+  ui.settings.mapper = ui.params.mapper;
+}
+
+double ParameterEditor::inUse(const Parameter& p) const {
+  const UiState& ui = state_.ui;
+  if (!state_.worker) return p.get(ui.params);
+  ParameterValues used = ui.params;
+  if (p.live) {
+    const auto global = state_.worker->global();
+    if (!global) return p.get(ui.params);
+    used.global = global->params;
+  } else {
+    used.mapper = state_.worker->mapping()->mapper;
+  }
+  return p.get(used);
+}
+
+bool ParameterEditor::pending(const Parameter& p) const { return p.get(state_.ui.params) != inUse(p); }
+
+void ParameterEditor::resetToDefaults() {
+  UiState& ui = state_.ui;
+  Settings defaults;
+  defaults.window_width = ui.settings.window_width;
+  defaults.window_height = ui.settings.window_height;
+  defaults.last_sequence = ui.settings.last_sequence;
+  defaults.recent = ui.settings.recent;  // opening files: a history, not a setting to reset
+  const bool saved = state_.savedSession();
+  const bool rerun_needed = state_.worker && !saved && !(ParameterValues{state_.worker->mapping()->mapper, {}} ==
+                                                          ParameterValues{defaults.mapper, {}});
+  ui.settings = defaults;
+  ui.params.global = defaults.thresholds;
+  if (!saved) {  // a saved session keeps the parameters it was mapped with
+    const PoseSource poses = ui.params.mapper.poses;  // the sequence's, not a setting
+    ui.params.mapper = defaults.mapper;
+    ui.params.mapper.poses = poses;
+  }
+  ui.reset_layout = true;
+  applyThresholds();
+  player_.setFps(ui.settings.play_fps);
+  if (rerun_needed) rerun();
+}
+
+}  // namespace vdmap::app::gui

@@ -1,0 +1,136 @@
+#include "app/workbench/view_files.h"
+
+#include <cstdlib>
+#include <iostream>
+
+#include "app/view/view_file.h"
+
+namespace vdmap::app::gui {
+namespace fs = std::filesystem;
+
+fs::path screenshotFolder() {
+  const char* pictures = std::getenv("XDG_PICTURES_DIR");
+  if (pictures && *pictures) return fs::path(pictures) / "vdmap";
+  const char* home = std::getenv("HOME");
+  if (home && *home) return fs::path(home) / "Pictures" / "vdmap";
+  return {};
+}
+
+fs::path freeTimestampedName(const fs::path& folder, std::time_t when, const std::string& stem) {
+  std::tm local{};
+  localtime_r(&when, &local);
+  char stamp[32];
+  std::strftime(stamp, sizeof stamp, "%Y%m%d-%H%M%S", &local);
+  return freeNumberedName(folder / (stem + "-" + stamp + ".png"));
+}
+
+fs::path defaultScreenshotFile(std::time_t when) {
+  fs::path folder = screenshotFolder();
+  std::error_code error;
+  if (!folder.empty()) fs::create_directories(folder, error);
+  if (folder.empty() || error) folder = fs::current_path(error);
+  return freeTimestampedName(folder, when);
+}
+
+fs::path freeNumberedName(const fs::path& file) {
+  std::error_code ignored;
+  if (!fs::exists(file, ignored)) return file;
+  const fs::path stem = file.parent_path() / file.stem();
+  for (int n = 2;; ++n) {
+    fs::path next = stem;
+    next += "-" + std::to_string(n) + file.extension().string();
+    if (!fs::exists(next, ignored)) return next;
+  }
+}
+
+bool ViewFiles::load(const std::string& file, bool thresholds) {
+  if (!state_.worker) {
+    state_.report(StatusLine::Kind::kError, "Load view: nothing is open");
+    return false;
+  }
+  const std::string path = absolutePath(file);
+  render::ViewSpec spec;
+  GlobalMapParams params = state_.ui.params.global;
+  try {
+    if (path.empty()) throw std::invalid_argument("Load view: type a file name first");
+    spec = readViewFile(path, &params);
+  } catch (const std::exception& e) {
+    state_.report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  if (!view_.applySpec(spec)) return false;
+  if (thresholds) {
+    state_.ui.params.global = params;
+    parameters_.applyThresholds();
+  }
+  if (!warnAboutSize(spec))
+    state_.report(StatusLine::Kind::kSuccess, "view loaded from " + path + (thresholds ? " with its thresholds" : ""));
+  return true;
+}
+
+bool ViewFiles::save(const std::string& file) {
+  if (!state_.worker) {
+    state_.report(StatusLine::Kind::kError, "Save view: nothing is open");
+    return false;
+  }
+  const std::string path = absolutePath(file);
+  try {
+    if (path.empty()) throw std::invalid_argument("Save view: type a file name first");
+    writeViewFile(path, view_.spec(), state_.ui.params.global, source());
+  } catch (const std::exception& e) {
+    state_.report(StatusLine::Kind::kError, e.what());
+    return false;
+  }
+  const std::string command = renderCommand(view_.spec(), source(), path);
+  std::cout << "vdmap: view saved to " << path << "; draw it with: " << command << std::endl;
+  state_.report(StatusLine::Kind::kSuccess, "view saved to " + path + "; " + command);
+  return true;
+}
+
+bool ViewFiles::saveSafely(const std::string& file, bool replace) {
+  std::error_code ignored;
+  std::string target = file;
+  if (!replace && !file.empty() && fs::exists(file, ignored)) {
+    if (fs::path(file).filename() == "vdmap_view.json") {
+      target = freeNumberedName(file).string();  // the default name numbers itself
+    } else {
+      state_.ui.confirm_view_replace = absolutePath(file);
+      state_.report(StatusLine::Kind::kWarning, state_.ui.confirm_view_replace + " exists: replace it?");
+      return false;
+    }
+  }
+  state_.ui.confirm_view_replace.clear();
+  return save(target);
+}
+
+bool ViewFiles::warnAboutSize(const render::ViewSpec& asked) {
+  // The view is drawn at the window's viewport, not at its own size: a size that differs gives
+  // another picture than `vdmap render --view-file` (another aspect), so say so.
+  const render::ViewSpec shown = view_.spec();
+  if (asked.width <= 0 || (asked.width == shown.width && asked.height == shown.height)) return false;
+  state_.report(StatusLine::Kind::kWarning, "the view file's view is " + std::to_string(asked.width) + "x" +
+                                                std::to_string(asked.height) + ", the window's " +
+                                                std::to_string(shown.width) + "x" + std::to_string(shown.height) +
+                                                " (--window-size changes it)");
+  return true;
+}
+
+void ViewFiles::storeQuickView(int slot) {
+  if (slot < 1 || slot > 9 || !state_.worker) return;
+  quick_views_[static_cast<std::size_t>(slot - 1)] = view_.spec();
+  state_.report(StatusLine::Kind::kInfo,
+                "view kept as quick view " + std::to_string(slot) + " (" + std::to_string(slot) + " shows it again)");
+}
+
+bool ViewFiles::recallQuickView(int slot) {
+  if (slot < 1 || slot > 9 || !state_.worker) return false;
+  const auto& spec = quick_views_[static_cast<std::size_t>(slot - 1)];
+  if (!spec) {
+    state_.report(StatusLine::Kind::kInfo, "no quick view " + std::to_string(slot) + " yet (Ctrl+" +
+                                               std::to_string(slot) + " keeps the view shown)");
+    return false;
+  }
+  return view_.applySpec(*spec);
+}
+
+}  // namespace vdmap::app::gui
