@@ -261,6 +261,9 @@ class WorkbenchWindow {
     bench_.sync();
     win_.mapping = bench_.mapping();
     win_.global = bench_.global();
+    // What this frame draws, read before drawing: news that arrives while it draws differs from
+    // it, so the loop draws again instead of waiting with a stale picture.
+    const Seen drawn = seen();
     syncMirror(bench_, mirror_, win_);
     win_.check.labels_cut = 0;
     drawSequencePanel(bench_, mirror_, win_);
@@ -273,10 +276,9 @@ class WorkbenchWindow {
     handleViewTools(bench_, win_);  // wheel, double-click, P, Ctrl+click: probes answered below
     drawViewMarks(bench_, win_);
     bench_.ui().reset_layout = false;
-    const Seen now = seen();
     // A new session draws panels and tables it has not drawn before: let them settle.
-    if (now.session != last_seen_.session) settle_frames_ = std::max(settle_frames_, 2);
-    last_seen_ = now;
+    if (drawn.session != last_seen_.session) settle_frames_ = std::max(settle_frames_, 2);
+    last_seen_ = drawn;
     // Tables still sizing their columns clip their labels in this frame: draw the next one too.
     if (takeTablesSettling() > 0) settle_frames_ = std::max(settle_frames_, 1);
     // The picture a user looks at is the frame after which the loop waits for input: the labels
