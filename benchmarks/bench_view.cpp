@@ -32,8 +32,6 @@ namespace {
 using namespace vdmap;
 using Clock = std::chrono::steady_clock;
 
-double msSince(Clock::time_point t0) { return std::chrono::duration<double, std::milli>(Clock::now() - t0).count(); }
-
 // The process's CPU time (all of llvmpipe's threads), ms: less sensitive to other load than the wall clock.
 double cpuMs() {
   timespec t{};
