@@ -10,24 +10,30 @@
 // With --poses track the odometry peers (app/bench/odometry_peers.h) estimate the poses of the same
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
+// The other modes time vdmap alone: --long (a whole sequence mapped), --query (the point queries
+// against OctoMap), --ellipsoids (the ellipsoid renderer, no sequence).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "app/bench/bench_long.h"
 #include "app/bench/bench_method.h"
 #include "app/bench/bench_report.h"
+#include "app/bench/ellipsoid_timing.h"
 #include "app/bench/ndt_om_timing.h"
 #include "app/bench/octomap_timing.h"
 #include "app/bench/odometry_timing.h"
 #include "app/bench/query_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
+#include "app/cli/command_line.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
 #include "app/view/progress.h"
+#include "app/view/render_view.h"
 #include "mapping/core/timing.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/ply_reader.h"
@@ -90,7 +96,24 @@ void measure(const BenchInput& in, const std::filesystem::path& out_dir, BenchFi
   if (in.args.poses == "track") f->tracking = timeTracking(in, out_dir);
 }
 
-void runBench(BenchArgs args) {
+// A mode that times the renderer or the 3-D view takes only its own options (and --json): any
+// other given with it would be ignored, so it is refused as CLI11 refuses excluded options.
+void checkModeOptions(const CLI::App& verb, const std::string& mode, const std::set<std::string>& own) {
+  for (const CLI::Option* option : verb.get_options()) {
+    const std::string name = option->get_name();
+    if (option->count() > 0 && name != mode && name != "--json" && own.count(name) == 0)
+      throw CLI::ExcludesError(mode, name);
+  }
+}
+
+void runBench(const CLI::App& verb, BenchArgs args) {
+  if (args.ellipsoids > 0) {
+    checkModeOptions(verb, "--ellipsoids", {"--size", "--points-below", "--sphere-level", "--png"});
+    return runEllipsoidBench(args.ellipsoids, args.sphere_level, args.draw, args.json);
+  }
+  for (const char* name : {"--size", "--points-below", "--png"})
+    if (verb.count(name) > 0) throw CLI::RequiresError(name, "--view or --ellipsoids");
+  if (args.sequence.folder.empty()) throw CLI::RequiredError("SEQ");
   if (args.long_run) return runLongRun(std::move(args));
   if (args.query) return runQueryBench(args, args.out);
   checkRefinementApplies(args.sequence, args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth);
@@ -124,9 +147,14 @@ void runBench(BenchArgs args) {
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("bench", "Compare vdmap with OctoMap, NDT-OM and Open3D's TSDF on the same frames");
+  auto* verb = app.add_subcommand(
+      "bench",
+      "Compare vdmap with OctoMap, NDT-OM and Open3D's TSDF on the same frames, or time its point queries, the "
+      "3-D view, render suites or the ellipsoid renderer");
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
+  verb->get_option("SEQ")->required(false)->description(
+      "sequence folder (TUM RGB-D layout); not with --suite or --ellipsoids");
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
       "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
@@ -197,8 +225,25 @@ void addBenchCommand(CLI::App& app) {
       ->needs(query)
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  // The renderer alone (docs/performance.md "Rendering").
+  auto* ellipsoids = verb->add_option(
+      "--ellipsoids", args->ellipsoids,
+      "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "
+      "(default 1280x720); prints the upload and the median of 5 frames (wall clock, glFinish)");
+  ellipsoids->check(CLI::Range(1, 100'000'000));
+  verb->add_option("--sphere-level", args->sphere_level,
+                   "with --ellipsoids: icosphere subdivisions of one ellipsoid (0..3; default 1)")
+      ->needs(ellipsoids)
+      ->check(CLI::Range(0, 3));
+  verb->add_option("--size", args->draw.size, "with --ellipsoids: image size WIDTHxHEIGHT")
+      ->check(parsedBy(parseViewSize, "WxH"));
+  verb->add_option("--points-below", args->draw.points_below,
+                   "with --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as flat "
+                   "splats (0: never; default 4)")
+      ->check(CLI::Range(0.f, 64.f));
+  verb->add_option("--png", args->draw.png, "with --ellipsoids: write the last frame to PREFIX.png, to look at");
   verb->add_flag("--json", args->json, "print JSON instead of text");
-  verb->callback([args] { runBench(*args); });
+  verb->callback([args, verb] { runBench(*verb, *args); });
 }
 
 }  // namespace vdmap::app

@@ -13,6 +13,13 @@
 
 namespace vdmap::app {
 
+/// The options the renderer's and the 3-D view's timings (--ellipsoids, --view) share.
+struct DrawTimingOptions {
+  std::string size;                   ///< --size WxH ("": the mode's default)
+  std::optional<float> points_below;  ///< --points-below PX: splats below this projected radius (nullopt: default)
+  std::string png;                    ///< --png PREFIX: the last frames as PNG files ("": none)
+};
+
 /// The options of `vdmap bench`.
 struct BenchArgs {
   SequenceArgs sequence;
@@ -35,6 +42,10 @@ struct BenchArgs {
   int octomap_every = 0;                 ///< frames between OctoMap insertions (0: ceil(frames / 500))
   int views = 10;                        ///< castView poses
   std::size_t truth_points = 100'000;    ///< O, F and U points each (F_near: half as many)
+  // --ellipsoids: the ellipsoid renderer alone (app/bench/ellipsoid_timing.h)
+  int ellipsoids = 0;
+  std::optional<int> sphere_level;
+  DrawTimingOptions draw;
 };
 
 /// One row of the comparison.
