@@ -11,7 +11,8 @@
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
 // The other modes time vdmap alone: --long (a whole sequence mapped), --query (the point queries
-// against OctoMap), --ellipsoids (the ellipsoid renderer, no sequence).
+// against OctoMap), --view (the 3-D view's frame times on a saved map), --ellipsoids (the
+// ellipsoid renderer, no sequence).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
@@ -27,6 +28,7 @@
 #include "app/bench/octomap_timing.h"
 #include "app/bench/odometry_timing.h"
 #include "app/bench/query_timing.h"
+#include "app/bench/view_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
 #include "app/cli/command_line.h"
@@ -111,6 +113,12 @@ void runBench(const CLI::App& verb, BenchArgs args) {
     checkModeOptions(verb, "--ellipsoids", {"--size", "--points-below", "--sphere-level", "--png"});
     return runEllipsoidBench(args.ellipsoids, args.sphere_level, args.draw, args.json);
   }
+  if (args.view) {
+    checkModeOptions(verb, "--view",
+                     {"SEQ", "--size", "--points-below", "--png", "--replicate", "--steps", "--zoom", "--fast-budget"});
+    if (args.sequence.folder.empty()) throw CLI::RequiredError("SEQ (a saved session or map)");
+    return runViewBench(args.sequence.folder, args.view_options, args.draw, args.json);
+  }
   for (const char* name : {"--size", "--points-below", "--png"})
     if (verb.count(name) > 0) throw CLI::RequiresError(name, "--view or --ellipsoids");
   if (args.sequence.folder.empty()) throw CLI::RequiredError("SEQ");
@@ -154,7 +162,7 @@ void addBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description(
-      "sequence folder (TUM RGB-D layout); not with --suite or --ellipsoids");
+      "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --ellipsoids");
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
       "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
@@ -225,7 +233,30 @@ void addBenchCommand(CLI::App& app) {
       ->needs(query)
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
-  // The renderer alone (docs/performance.md "Rendering").
+  // The renderer and the 3-D view (docs/performance.md "Rendering" and "Workbench").
+  auto* view = verb->add_flag(
+      "--view", args->view,
+      "the 3-D view's frame times instead, offscreen: SEQ is a saved session or map (anything render --map opens), "
+      "its global map drawn along --steps orbit steps at full quality and with the fast pass, then the settle frame "
+      "and a cached frame; medians, wall clock (glFinish) and process CPU");
+  verb->add_option("--replicate", args->view_options.replicate,
+                   "with --view: N copies of the map side by side along x (for paper-scale maps)")
+      ->needs(view)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  verb->add_option("--steps", args->view_options.steps, "with --view: orbit steps, 0.03 rad apart")
+      ->needs(view)
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
+  verb->add_option("--zoom", args->view_options.zoom,
+                   "with --view: the orbit's distance over the framed one (below 1: inside the map)")
+      ->needs(view)
+      ->check(CLI::Range(0.01f, 100.f))
+      ->capture_default_str();
+  verb->add_option("--fast-budget", args->view_options.fast_budgets,
+                   "with --view: the fast pass's ellipsoids K (repeatable; default 50000, 100000, 200000, 400000)")
+      ->needs(view)
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
   auto* ellipsoids = verb->add_option(
       "--ellipsoids", args->ellipsoids,
       "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "
@@ -235,13 +266,17 @@ void addBenchCommand(CLI::App& app) {
                    "with --ellipsoids: icosphere subdivisions of one ellipsoid (0..3; default 1)")
       ->needs(ellipsoids)
       ->check(CLI::Range(0, 3));
-  verb->add_option("--size", args->draw.size, "with --ellipsoids: image size WIDTHxHEIGHT")
+  verb->add_option("--size", args->draw.size,
+                   "with --view or --ellipsoids: image size WIDTHxHEIGHT (default 752x870, the 3-D viewport of a "
+                   "1600x900 window, with --view)")
       ->check(parsedBy(parseViewSize, "WxH"));
   verb->add_option("--points-below", args->draw.points_below,
-                   "with --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as flat "
-                   "splats (0: never; default 4)")
+                   "with --view or --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as "
+                   "flat splats (0: never; default 4)")
       ->check(CLI::Range(0.f, 64.f));
-  verb->add_option("--png", args->draw.png, "with --ellipsoids: write the last frame to PREFIX.png, to look at");
+  verb->add_option("--png", args->draw.png,
+                   "with --view or --ellipsoids: write the last frames, to look at: PREFIX_full.png and "
+                   "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)");
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args, verb] { runBench(*verb, *args); });
 }

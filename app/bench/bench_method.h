@@ -20,6 +20,14 @@ struct DrawTimingOptions {
   std::string png;                    ///< --png PREFIX: the last frames as PNG files ("": none)
 };
 
+/// What --view's own options set.
+struct ViewTimingOptions {
+  int replicate = 1;  ///< --replicate: copies of the map side by side along x (offset by its extent)
+  int steps = 20;     ///< --steps: orbit steps, 0.03 rad apart as the window's --measure-orbit
+  float zoom = 1.f;   ///< --zoom: the orbit's distance over the framed one (< 1: inside the map)
+  std::vector<std::size_t> fast_budgets;  ///< --fast-budget: fast-pass sizes K (empty: 50k, 100k, 200k, 400k)
+};
+
 /// The options of `vdmap bench`.
 struct BenchArgs {
   SequenceArgs sequence;
@@ -45,7 +53,10 @@ struct BenchArgs {
   // --ellipsoids: the ellipsoid renderer alone (app/bench/ellipsoid_timing.h)
   int ellipsoids = 0;
   std::optional<int> sphere_level;
-  DrawTimingOptions draw;
+  // --view: the 3-D view's frame times on a saved session or map (app/bench/view_timing.h)
+  bool view = false;
+  ViewTimingOptions view_options;
+  DrawTimingOptions draw;  ///< --ellipsoids and --view
 };
 
 /// One row of the comparison.

@@ -14,6 +14,9 @@ namespace {
 
 using test::RunResult;
 using test::runVdmap;
+using test::TempDir;
+
+std::string quoted(const std::filesystem::path& p) { return std::string("'").append(p.string()).append("'"); }
 
 // stderr holds exactly one line that names `what`.
 void expectOneLineError(const RunResult& r, const std::string& what) {
@@ -39,6 +42,55 @@ TEST(RenderBench, EllipsoidsRefusesBadInput) {
   expectOneLineError(runVdmap("bench --ellipsoids 0"), "--ellipsoids");
   expectOneLineError(runVdmap("bench --ellipsoids 10 --frames 3"), "--ellipsoids excludes --frames");
   expectOneLineError(runVdmap("bench --ellipsoids 10 --size 0x5"), "--size");
+}
+
+// A session of the built-in room's first 4 frames, made once for the tests that time a map.
+class RenderBenchOnASession : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 4 --out " + quoted(*dir_ / "seq")).exit_code, 0);
+    const RunResult r = runVdmap("map " + quoted(*dir_ / "seq") + " --out " + quoted(*dir_ / "map") + " --save " +
+                                 quoted(*dir_ / "s.vdmap"));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static std::string session() { return quoted(*dir_ / "s.vdmap"); }
+  static TempDir* dir_;
+};
+TempDir* RenderBenchOnASession::dir_ = nullptr;
+
+TEST_F(RenderBenchOnASession, ViewNamesEveryPassOfTheOrbit) {
+  TempDir tmp;
+  const std::string view = "bench " + session() + " --view --steps 2 --fast-budget 100 --size 64x48";
+  RunResult r = runVdmap(view + " --png " + quoted(tmp / "v"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* figure : {"map upload", "LOD order", "full:", "mesh selection", "fast:", "budget 100", "settle",
+                             "cached frame"})
+    EXPECT_NE(r.out.find(figure), std::string::npos) << figure << " in\n" << r.out;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "v_full.png"));
+  EXPECT_TRUE(std::filesystem::exists(tmp / "v_fast_100.png"));
+  r = runVdmap(view + " --replicate 2 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out).at("view");
+  EXPECT_EQ(j.at("replicate"), 2);
+  EXPECT_EQ(j.at("width"), 64);
+  EXPECT_GT(j.at("ellipsoids").get<int>(), 0);
+  for (const char* key : {"ms", "cpu_ms", "select_ms", "mesh_instances", "splat_instances"})
+    EXPECT_TRUE(j.at("full").contains(key)) << key;
+  ASSERT_EQ(j.at("fast").size(), 1u);
+  EXPECT_EQ(j.at("fast")[0].at("budget"), 100);
+  for (const char* key : {"upload_ms", "lod_order_ms", "settle_ms", "cached_ms"}) EXPECT_TRUE(j.contains(key)) << key;
+}
+
+TEST_F(RenderBenchOnASession, ViewRefusesWhatIsNoMap) {
+  TempDir tmp;
+  test::writeText(tmp / "notes.txt", "not a map\n");
+  expectOneLineError(runVdmap("bench " + quoted(tmp / "notes.txt") + " --view"),
+                     "vdmap bench: error: " + (tmp / "notes.txt").string() + ": ");
+  expectOneLineError(runVdmap("bench --view"), "SEQ");
+  expectOneLineError(runVdmap("bench " + session() + " --steps 3"), "--steps requires --view");
+  expectOneLineError(runVdmap("bench " + session() + " --view --frames 3"), "--view excludes --frames");
 }
 
 }  // namespace
