@@ -11,8 +11,8 @@
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
 // The other modes time vdmap alone: --long (a whole sequence mapped), --query (the point queries
-// against OctoMap), --view (the 3-D view's frame times on a saved map), --ellipsoids (the
-// ellipsoid renderer, no sequence).
+// against OctoMap), --view (the 3-D view's frame times on a saved map), --suite (a render
+// suite's stages) and --ellipsoids (the ellipsoid renderer).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
@@ -28,6 +28,7 @@
 #include "app/bench/octomap_timing.h"
 #include "app/bench/odometry_timing.h"
 #include "app/bench/query_timing.h"
+#include "app/bench/suite_timing.h"
 #include "app/bench/view_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
@@ -113,6 +114,10 @@ void runBench(const CLI::App& verb, BenchArgs args) {
     checkModeOptions(verb, "--ellipsoids", {"--size", "--points-below", "--sphere-level", "--png"});
     return runEllipsoidBench(args.ellipsoids, args.sphere_level, args.draw, args.json);
   }
+  if (!args.suite.empty()) {
+    checkModeOptions(verb, "--suite", {"--runs"});
+    return runSuiteBench(args.suite, args.runs, args.json);
+  }
   if (args.view) {
     checkModeOptions(verb, "--view",
                      {"SEQ", "--size", "--points-below", "--png", "--replicate", "--steps", "--zoom", "--fast-budget"});
@@ -162,7 +167,8 @@ void addBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description(
-      "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --ellipsoids");
+      "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --suite or "
+      "--ellipsoids");
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
       "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
@@ -257,6 +263,15 @@ void addBenchCommand(CLI::App& app) {
                    "with --view: the fast pass's ellipsoids K (repeatable; default 50000, 100000, 200000, 400000)")
       ->needs(view)
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
+  auto* suite = verb->add_option(
+      "--suite", args->suite,
+      "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
+      "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
+      "--runs comparing runs in this process, the medians of each stage");
+  verb->add_option("--runs", args->runs, "with --suite: comparing runs (and session loads)")
+      ->needs(suite)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
   auto* ellipsoids = verb->add_option(
       "--ellipsoids", args->ellipsoids,
       "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "

@@ -57,6 +57,9 @@ struct BenchArgs {
   bool view = false;
   ViewTimingOptions view_options;
   DrawTimingOptions draw;  ///< --ellipsoids and --view
+  // --suite: a render suite's speed (app/bench/suite_timing.h)
+  std::string suite;
+  int runs = 3;
 };
 
 /// One row of the comparison.

@@ -93,5 +93,45 @@ TEST_F(RenderBenchOnASession, ViewRefusesWhatIsNoMap) {
   expectOneLineError(runVdmap("bench " + session() + " --view --frames 3"), "--view excludes --frames");
 }
 
+TEST_F(RenderBenchOnASession, SuiteOfASessionNamesEveryStage) {
+  const RunResult r = runVdmap("bench --suite " + session() + " --runs 1 --json");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out).at("suite");
+  EXPECT_EQ(j.at("views"), 20);
+  EXPECT_EQ(j.at("differ"), 0) << "the goldens were written by the same process";
+  EXPECT_EQ(j.at("maps_loaded"), 1);
+  for (const char* key : {"decoded_s", "lazy_s"}) EXPECT_TRUE(j.at("session_load").contains(key)) << key;
+  for (const char* run : {"update", "compare"})
+    for (const char* key : {"validate_s", "load_s", "context_s", "build_s", "render_s_per_view", "check_s_per_view",
+                            "total_s"})
+      EXPECT_TRUE(j.at(run).contains(key)) << run << " " << key;
+}
+
+TEST_F(RenderBenchOnASession, SuiteFileIsTimedAsItIs) {
+  TempDir tmp;
+  test::writeText(tmp / "views.yaml", "version: 1\nmaps: {room: " + quoted(*dir_ / "s.vdmap") +
+                                          "}\nviews:\n  - {name: a, map: room, size: 64x48}\n"
+                                          "  - {name: b, map: room, size: 64x48, orbit: \"30,20\"}\n");
+  ASSERT_EQ(runVdmap("render --suite " + quoted(tmp / "views.yaml") + " --update").exit_code, 0);
+  const RunResult r = runVdmap("bench --suite " + quoted(tmp / "views.yaml") + " --runs 2");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  for (const char* figure : {"compare  validate", "context", "per view: render", "medians of 2 runs", "2 views, 0 differ",
+                             "maps loaded 1"})
+    EXPECT_NE(r.out.find(figure), std::string::npos) << figure << " in\n" << r.out;
+  EXPECT_EQ(r.out.find("update"), std::string::npos) << "a given suite's goldens are not rewritten";
+}
+
+TEST_F(RenderBenchOnASession, SuiteRefusesWhatIsNoSuite) {
+  TempDir tmp;
+  test::writeText(tmp / "notes.txt", "not a suite\n");
+  expectOneLineError(runVdmap("bench --suite " + quoted(tmp / "notes.txt")), (tmp / "notes.txt").string() + ": ");
+  // A suite whose goldens were never made is refused before anything is timed.
+  test::writeText(tmp / "views.yaml", "version: 1\nmaps: {room: " + quoted(*dir_ / "s.vdmap") +
+                                          "}\nviews:\n  - {name: a, map: room}\n");
+  expectOneLineError(runVdmap("bench --suite " + quoted(tmp / "views.yaml")), "golden");
+  expectOneLineError(runVdmap("bench --suite " + session() + " " + session()), "--suite excludes SEQ");
+  expectOneLineError(runVdmap("bench " + session() + " --runs 2"), "--runs requires --suite");
+}
+
 }  // namespace
 }  // namespace vdmap
