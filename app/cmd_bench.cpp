@@ -215,8 +215,9 @@ void addBenchCommand(CLI::App& app) {
   auto* query = verb->add_flag(
       "--query", args->query,
       "the point queries instead: map every frame (or --frames) with vdmap (gt poses) and OctoMap 0.05/0.02 m, then "
-      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3); with "
-      "--mesh and --truth also their accuracy against ground truth");
+      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3), then "
+      "vdmap alone: classify under each conflict rule, distance near surfaces and in open space, castRays, memory by "
+      "part; with --mesh and --truth also their accuracy against ground truth");
   query->excludes(long_run);
   verb->add_option("--truth", args->truth,
                    "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
