@@ -261,14 +261,15 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(0.01f, 100.f))
       ->capture_default_str();
   verb->add_option("--fast-budget", args->view_options.fast_budgets,
-                   "with --view: the fast pass's ellipsoids K (repeatable; default 50000, 100000, 200000, 400000)")
+                   "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
       ->needs(view)
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
   auto* suite = verb->add_option(
       "--suite", args->suite,
       "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
       "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
-      "--runs comparing runs in this process, the medians of each stage");
+      "--runs comparing runs in this process, the medians of each stage")
+      ->type_name("FILE");
   verb->add_option("--runs", args->runs, "with --suite: comparing runs (and session loads)")
       ->needs(suite)
       ->check(CLI::Range(1, 1000))
@@ -292,7 +293,8 @@ void addBenchCommand(CLI::App& app) {
       ->check(CLI::Range(0.f, 64.f));
   verb->add_option("--png", args->draw.png,
                    "with --view or --ellipsoids: write the last frames, to look at: PREFIX_full.png and "
-                   "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)");
+                   "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)")
+      ->type_name("PREFIX");
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args, verb] { runBench(*verb, *args); });
 }
