@@ -10,24 +10,33 @@
 // With --poses track the odometry peers (app/bench/odometry_peers.h) estimate the poses of the same
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
+// The other modes time vdmap alone: --long (a whole sequence mapped), --query (the point queries
+// against OctoMap), --view (the 3-D view's frame times on a saved map), --suite (a render
+// suite's stages) and --ellipsoids (the ellipsoid renderer).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
 #include <optional>
+#include <set>
 #include <stdexcept>
 
 #include "app/bench/bench_long.h"
 #include "app/bench/bench_method.h"
 #include "app/bench/bench_report.h"
+#include "app/bench/ellipsoid_timing.h"
 #include "app/bench/ndt_om_timing.h"
 #include "app/bench/octomap_timing.h"
 #include "app/bench/odometry_timing.h"
 #include "app/bench/query_timing.h"
+#include "app/bench/suite_timing.h"
+#include "app/bench/view_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
+#include "app/cli/command_line.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
 #include "app/view/progress.h"
+#include "app/view/render_view.h"
 #include "mapping/core/timing.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/ply_reader.h"
@@ -90,7 +99,34 @@ void measure(const BenchInput& in, const std::filesystem::path& out_dir, BenchFi
   if (in.args.poses == "track") f->tracking = timeTracking(in, out_dir);
 }
 
-void runBench(BenchArgs args) {
+// A mode that times the renderer or the 3-D view takes only its own options (and --json): any
+// other given with it would be ignored, so it is refused as CLI11 refuses excluded options.
+void checkModeOptions(const CLI::App& verb, const std::string& mode, const std::set<std::string>& own) {
+  for (const CLI::Option* option : verb.get_options()) {
+    const std::string name = option->get_name();
+    if (option->count() > 0 && name != mode && name != "--json" && own.count(name) == 0)
+      throw CLI::ExcludesError(mode, name);
+  }
+}
+
+void runBench(const CLI::App& verb, BenchArgs args) {
+  if (args.ellipsoids > 0) {
+    checkModeOptions(verb, "--ellipsoids", {"--size", "--points-below", "--sphere-level", "--png"});
+    return runEllipsoidBench(args.ellipsoids, args.sphere_level, args.draw, args.json);
+  }
+  if (!args.suite.empty()) {
+    checkModeOptions(verb, "--suite", {"--runs"});
+    return runSuiteBench(args.suite, args.runs, args.json);
+  }
+  if (args.view) {
+    checkModeOptions(verb, "--view",
+                     {"SEQ", "--size", "--points-below", "--png", "--replicate", "--steps", "--zoom", "--fast-budget"});
+    if (args.sequence.folder.empty()) throw CLI::RequiredError("SEQ (a saved session or map)");
+    return runViewBench(args.sequence.folder, args.view_options, args.draw, args.json);
+  }
+  for (const char* name : {"--size", "--points-below", "--png"})
+    if (verb.count(name) > 0) throw CLI::RequiresError(name, "--view or --ellipsoids");
+  if (args.sequence.folder.empty()) throw CLI::RequiredError("SEQ");
   if (args.long_run) return runLongRun(std::move(args));
   if (args.query) return runQueryBench(args, args.out);
   checkRefinementApplies(args.sequence, args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth);
@@ -124,9 +160,15 @@ void runBench(BenchArgs args) {
 }  // namespace
 
 void addBenchCommand(CLI::App& app) {
-  auto* verb = app.add_subcommand("bench", "Compare vdmap with OctoMap, NDT-OM and Open3D's TSDF on the same frames");
+  auto* verb = app.add_subcommand(
+      "bench",
+      "Compare vdmap with OctoMap, NDT-OM and Open3D's TSDF on the same frames, or time its point queries, the "
+      "3-D view, render suites or the ellipsoid renderer");
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
+  verb->get_option("SEQ")->required(false)->description(
+      "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --suite or "
+      "--ellipsoids");
   verb->get_option("--frames")->description(
       "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
       "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
@@ -173,8 +215,9 @@ void addBenchCommand(CLI::App& app) {
   auto* query = verb->add_flag(
       "--query", args->query,
       "the point queries instead: map every frame (or --frames) with vdmap (gt poses) and OctoMap 0.05/0.02 m, then "
-      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3); with "
-      "--mesh and --truth also their accuracy against ground truth");
+      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3), then "
+      "vdmap alone: classify under each conflict rule, distance near surfaces and in open space, castRays, memory by "
+      "part; with --mesh and --truth also their accuracy against ground truth");
   query->excludes(long_run);
   verb->add_option("--truth", args->truth,
                    "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
@@ -197,8 +240,63 @@ void addBenchCommand(CLI::App& app) {
       ->needs(query)
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
+  // The renderer and the 3-D view (docs/performance.md "Rendering" and "Workbench").
+  auto* view = verb->add_flag(
+      "--view", args->view,
+      "the 3-D view's frame times instead, offscreen: SEQ is a saved session or map (anything render --map opens), "
+      "its global map drawn along --steps orbit steps at full quality and with the fast pass, then the settle frame "
+      "and a cached frame; medians, wall clock (glFinish) and process CPU");
+  verb->add_option("--replicate", args->view_options.replicate,
+                   "with --view: N copies of the map side by side along x (for paper-scale maps)")
+      ->needs(view)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  verb->add_option("--steps", args->view_options.steps, "with --view: orbit steps, 0.03 rad apart")
+      ->needs(view)
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
+  verb->add_option("--zoom", args->view_options.zoom,
+                   "with --view: the orbit's distance over the framed one (below 1: inside the map)")
+      ->needs(view)
+      ->check(CLI::Range(0.01f, 100.f))
+      ->capture_default_str();
+  verb->add_option("--fast-budget", args->view_options.fast_budgets,
+                   "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
+      ->needs(view)
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
+  auto* suite = verb->add_option(
+      "--suite", args->suite,
+      "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
+      "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
+      "--runs comparing runs in this process, the medians of each stage")
+      ->type_name("FILE");
+  verb->add_option("--runs", args->runs, "with --suite: comparing runs (and session loads)")
+      ->needs(suite)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  auto* ellipsoids = verb->add_option(
+      "--ellipsoids", args->ellipsoids,
+      "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "
+      "(default 1280x720); prints the upload and the median of 5 frames (wall clock, glFinish)");
+  ellipsoids->check(CLI::Range(1, 100'000'000));
+  verb->add_option("--sphere-level", args->sphere_level,
+                   "with --ellipsoids: icosphere subdivisions of one ellipsoid (0..3; default 1)")
+      ->needs(ellipsoids)
+      ->check(CLI::Range(0, 3));
+  verb->add_option("--size", args->draw.size,
+                   "with --view or --ellipsoids: image size WIDTHxHEIGHT (default 752x870, the 3-D viewport of a "
+                   "1600x900 window, with --view)")
+      ->check(parsedBy(parseViewSize, "WxH"));
+  verb->add_option("--points-below", args->draw.points_below,
+                   "with --view or --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as "
+                   "flat splats (0: never; default 4)")
+      ->check(CLI::Range(0.f, 64.f));
+  verb->add_option("--png", args->draw.png,
+                   "with --view or --ellipsoids: write the last frames, to look at: PREFIX_full.png and "
+                   "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)")
+      ->type_name("PREFIX");
   verb->add_flag("--json", args->json, "print JSON instead of text");
-  verb->callback([args] { runBench(*args); });
+  verb->callback([args, verb] { runBench(*verb, *args); });
 }
 
 }  // namespace vdmap::app

@@ -1,14 +1,10 @@
 // vdmap render: maps a sequence (or reads a map and/or a mesh) and draws one view headless
-// with OSMesa into a PNG, or times the ellipsoid renderer (--bench-ellipsoids).
+// with OSMesa into a PNG.
 #include <algorithm>
-#include <chrono>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
-#include <limits>
-#include <random>
 
-#include <glm/gtc/matrix_transform.hpp>
 #include <opencv2/imgproc.hpp>
 
 #include "app/cli/command_line.h"
@@ -21,7 +17,6 @@
 #include "app/view/render_view.h"
 #include "app/view/view_file.h"
 #include "mapping/core/atomic_file.h"
-#include "mapping/core/timing.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/core/error.h"
 #include "mapping/io/image_codec.h"
@@ -29,8 +24,6 @@
 #include "mapping/files/session_file.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
-#include "render/context.h"
-#include "render/ellipsoid_renderer.h"
 #include "render/framebuffer.h"
 #include "render/map_scene.h"
 #include "render/mesh_renderer.h"
@@ -44,7 +37,6 @@ struct RenderArgs {
   SequenceArgs sequence;
   std::string map, mesh, out;
   RenderViewArgs view;
-  int bench_ellipsoids = 0;
   RenderCheckArgs check;  // --expect, --tolerance, --diff, --update, --suite, --timings (app/view/render_check.h)
   std::optional<render::QuerySliceSpec> query_slice;  // --query-slice AXIS=VALUE, --query-slice-color
   render::QuerySliceColor query_slice_color = render::QuerySliceColor::kOccupancy;
@@ -68,52 +60,7 @@ void writeImage(const std::filesystem::path& file, const cv::Mat& rgb) {
   writeFileAtomically(file, encodeJpeg(rgb, 95));
 }
 
-void runBench(const RenderArgs& args) {
-  const auto [w, h] = parseViewSize(args.view.size.empty() ? "1280x720" : args.view.size);
-  const float sigma = args.view.sigma.value_or(2.f), point_below_px = args.view.points_below.value_or(4.f);
-  const int sphere_subdivisions = args.view.sphere_level.value_or(1);
-  std::mt19937 rng(7);
-  std::uniform_real_distribution<float> pos(-5.f, 5.f), size(0.005f, 0.04f), angle(0.f, 6.2832f);
-  std::vector<render::EllipsoidInstance> set(static_cast<std::size_t>(args.bench_ellipsoids));
-  for (auto& e : set) {
-    e.mean = {pos(rng), pos(rng), pos(rng)};
-    const glm::mat3 R = glm::mat3(glm::rotate(glm::mat4(1.f), angle(rng), glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) + 1e-3f)));
-    const glm::vec3 s(size(rng), size(rng), size(rng) * 0.3f);
-    e.cov = R * glm::mat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R);
-    e.rgb = {static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng())};
-  }
-  auto context = render::createOffscreenContext();
-  const render::Gl& gl = context->gl();
-  render::Framebuffer fb(gl, w, h);
-  render::EllipsoidRenderer renderer(gl, {.sigma = sigma, .sphere_subdivisions = sphere_subdivisions,
-                                         .point_below_px = point_below_px});
-  auto t0 = std::chrono::steady_clock::now();
-  renderer.set(set);
-  gl.Finish();
-  const double upload_ms = msSince(t0);
-  std::vector<double> times;
-  for (int i = 0; i < 5; ++i) {
-    // The eye moves 1 mm per frame, as in an interactive view: an unchanged view would let the
-    // renderer reuse its mesh-pass selection and time less than a real frame.
-    const render::ViewCamera view =
-        render::ViewCamera::lookAt({12.f + 0.001f * i, -9.f, 7.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 60.f, w, h);
-    t0 = std::chrono::steady_clock::now();
-    fb.bindAndClear(1.f, 1.f, 1.f);
-    renderer.draw(view);
-    gl.Finish();
-    times.push_back(msSince(t0));
-  }
-  std::printf("renderer     %s\n", context->description().c_str());
-  std::printf("ellipsoids   %d instanced, icosphere level %d, points below %.1f px, %dx%d\n", args.bench_ellipsoids,
-              sphere_subdivisions, point_below_px, w, h);
-  std::printf("upload       %.1f ms (eigen-decomposition + buffer upload)\n", upload_ms);
-  std::printf("frame time   %.1f ms median of %zu frames (min %.1f ms)\n", median(times), times.size(),
-              *std::min_element(times.begin(), times.end()));
-  if (!args.out.empty()) writeImage(args.out, fb.readRgb());
-}
-
 void runRender(RenderArgs args) {
-  if (args.bench_ellipsoids > 0) return runBench(args);
   // A missing option is a command-line error like map's: CLI11's message and exit code.
   checkRenderCheckArgs(args.check);
   if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out");  // as every verb says it
@@ -196,9 +143,6 @@ void addRenderCommand(CLI::App& app) {
   verb->add_option("--out", args->out, "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says")
       ->check(parsedBy(imageFormat, "FILE.png|.jpg"));
   addRenderViewOptions(*verb, args->view);
-  verb->add_option("--bench-ellipsoids", args->bench_ellipsoids,
-                   "time N random instanced ellipsoids at --size instead of rendering a map")
-      ->check(CLI::Range(0, std::numeric_limits<int>::max()));
   addRenderCheckArgs(*verb, args->check);
   // The point queries' slice plane (docs/workbench.md "Queries"); not the height slice (--slice LO:HI).
   verb->add_option_function<std::string>(

@@ -46,8 +46,6 @@ struct Recording {
 };
 Recording* g_recording = nullptr;
 
-using median;
-
 // Decision cost of the frames mapped while the graph held [lo, hi] keyframes.
 void printRunCost(const std::vector<FrameReport>& reports, std::size_t lo, std::size_t hi,
                   const std::vector<std::size_t>& sizes) {

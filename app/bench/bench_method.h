@@ -13,6 +13,21 @@
 
 namespace vdmap::app {
 
+/// The options the renderer's and the 3-D view's timings (--ellipsoids, --view) share.
+struct DrawTimingOptions {
+  std::string size;                   ///< --size WxH ("": the mode's default)
+  std::optional<float> points_below;  ///< --points-below PX: splats below this projected radius (nullopt: default)
+  std::string png;                    ///< --png PREFIX: the last frames as PNG files ("": none)
+};
+
+/// What --view's own options set.
+struct ViewTimingOptions {
+  int replicate = 1;  ///< --replicate: copies of the map side by side along x (offset by its extent)
+  int steps = 20;     ///< --steps: orbit steps, 0.03 rad apart as the window's --measure-orbit
+  float zoom = 1.f;   ///< --zoom: the orbit's distance over the framed one (< 1: inside the map)
+  std::vector<std::size_t> fast_budgets;  ///< --fast-budget: fast-pass sizes K (empty: 50k, 100k, 200k, 400k)
+};
+
 /// The options of `vdmap bench`.
 struct BenchArgs {
   SequenceArgs sequence;
@@ -35,6 +50,16 @@ struct BenchArgs {
   int octomap_every = 0;                 ///< frames between OctoMap insertions (0: ceil(frames / 500))
   int views = 10;                        ///< castView poses
   std::size_t truth_points = 100'000;    ///< O, F and U points each (F_near: half as many)
+  // --ellipsoids: the ellipsoid renderer alone (app/bench/ellipsoid_timing.h)
+  int ellipsoids = 0;
+  std::optional<int> sphere_level;
+  // --view: the 3-D view's frame times on a saved session or map (app/bench/view_timing.h)
+  bool view = false;
+  ViewTimingOptions view_options;
+  DrawTimingOptions draw;  ///< --ellipsoids and --view
+  // --suite: a render suite's speed (app/bench/suite_timing.h)
+  std::string suite;
+  int runs = 3;
 };
 
 /// One row of the comparison.

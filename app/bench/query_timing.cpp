@@ -16,6 +16,7 @@
 
 #include "app/bench/bench_report.h"
 #include "app/bench/octomap_timing.h"
+#include "app/bench/query_detail.h"
 #include "app/bench/vdmap_timing.h"
 #include "app/view/progress.h"
 #include "mapping/core/timing.h"
@@ -138,7 +139,7 @@ Maps buildMaps(const BenchArgs& args) {
   m.global = buildGlobalMap(m.mapper->graph(), {});
   QueryParams qp;
   qp.threads = 1;
-  m.query_build_ms = cpuTimeMs([&] { m.query = QueryMap::build(m.mapper->graph(), m.global, qp); });
+  m.query_build_ms = medianCpuTimeMs(kPasses, [&] { m.query = QueryMap::build(m.mapper->graph(), m.global, qp); });
   for (auto& peer : m.peers) peer->indexOccupied();
   return m;
 }
@@ -168,13 +169,6 @@ std::vector<Eigen::Vector3d> speedPoints(const Maps& m, std::size_t n) {
   return points;
 }
 
-template <typename F>
-double medianMs(F&& f) {
-  std::vector<double> ms;
-  for (int pass = 0; pass < kPasses; ++pass) ms.push_back(cpuTimeMs(f));
-  return median(ms);
-}
-
 // The poses castView is timed from: `views` keyframes spread evenly over the map.
 std::vector<Transform> viewPoses(const KeyframeGraph& graph, int views) {
   std::vector<Transform> poses;
@@ -202,6 +196,8 @@ struct Speed {
   std::size_t points = 0, distance_points = 0, views = 0, octo_views = 0;
   double classify_ms = 0, distance_ms = 0, view_ms = 0;
   std::vector<double> octo_classify_ms, octo_distance_ms, octo_view_ms;
+  nlohmann::json detail;    // vdmap alone (query_detail.h)
+  std::string detail_text;
 };
 
 Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam) {
@@ -209,25 +205,30 @@ Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam
   const std::vector<Eigen::Vector3d> points = speedPoints(m, args.query_points);
   s.points = points.size();
   std::vector<Classification> cls(points.size());
-  s.classify_ms = medianMs([&] { m.query.classify(points, cls); });
+  s.classify_ms = medianCpuTimeMs(kPasses, [&] { m.query.classify(points, cls); });
   const std::span<const Eigen::Vector3d> near(points.data(), std::max<std::size_t>(1, points.size() / 10));
   s.distance_points = near.size();
   std::vector<DistanceResult> dist(near.size());
-  s.distance_ms = medianMs([&] { m.query.distance(near, dist); });
+  s.distance_ms = medianCpuTimeMs(kPasses, [&] { m.query.distance(near, dist); });
   const std::vector<Transform> poses = viewPoses(m.mapper->graph(), args.views);
   s.views = poses.size();
   if (!poses.empty())
-    s.view_ms = medianMs([&] {
+    s.view_ms = medianCpuTimeMs(kPasses, [&] {
                   for (const Transform& T : poses) (void)m.query.castView(cam, T, m.max_depth_m);
                 }) / static_cast<double>(poses.size());
+  std::ostringstream detail;
+  s.detail = timeQueryDetail({m.mapper->graph(), m.global, m.query, kPasses, points, cls, s.classify_ms, near, cam,
+                              poses, m.max_depth_m},
+                             &detail);
+  s.detail_text = detail.str();
   s.octo_views = std::min(kOctoViews, poses.size());
   for (const auto& peer : m.peers) {
     std::vector<std::uint8_t> states(points.size());
-    s.octo_classify_ms.push_back(medianMs([&] {
+    s.octo_classify_ms.push_back(medianCpuTimeMs(kPasses, [&] {
       for (std::size_t i = 0; i < points.size(); ++i) states[i] = static_cast<std::uint8_t>(peer->state(points[i]));
     }));
     std::vector<double> d(near.size());
-    s.octo_distance_ms.push_back(medianMs([&] {
+    s.octo_distance_ms.push_back(medianCpuTimeMs(kPasses, [&] {
       for (std::size_t i = 0; i < near.size(); ++i) d[i] = peer->distance(near[i]);
     }));
     std::vector<double> view_ms;
@@ -367,10 +368,10 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   char buf[512];
   std::snprintf(buf, sizeof buf,
                 "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; OctoMap "
-                "from every %d. frame (%zu frames); QueryMap built in %.0f ms (one thread)\n",
+                "from every %d. frame (%zu frames); QueryMap built in %.0f ms (one thread, median of %d)\n",
                 m.frames, args.sequence.folder.c_str(), m.mapper->graph().size(),
                 m.mapper->params().local_map.cell_size_px, m.global.ellipsoids.size(), m.octomap_every,
-                m.octomap_frames, m.query_build_ms);
+                m.octomap_frames, m.query_build_ms, kPasses);
   text << buf;
   std::snprintf(buf, sizeof buf,
                 "speed: one thread, process CPU, median of %d passes; classify %zu points, distance %zu, views %dx%d "
@@ -412,6 +413,7 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   }
   text << "(x vdmap: the peer's time over vdmap's; OctoMap's distance is to the nearest occupied leaf's box through "
           "a BoxTree)\n";
+  text << s.detail_text;
   nlohmann::json query = {{"frames", m.frames},
                           {"keyframes", m.mapper->graph().size()},
                           {"cell_size_px", m.mapper->params().local_map.cell_size_px},
@@ -419,7 +421,8 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
                           {"octomap_every", m.octomap_every},
                           {"octomap_frames", m.octomap_frames},
                           {"query_build_ms", rounded(m.query_build_ms)},
-                          {"speed", speed}};
+                          {"speed", speed},
+                          {"vdmap", s.detail}};
 
   if (m.truth && mesh) {
     ProgressBar progress("truth", 1);

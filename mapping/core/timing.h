@@ -45,4 +45,12 @@ double cpuTimeMs(F&& f) {
   return 1e3 * static_cast<double>(b.tv_sec - a.tv_sec) + 1e-6 * static_cast<double>(b.tv_nsec - a.tv_nsec);
 }
 
+/// The median of `passes` runs of cpuTimeMs(f), milliseconds.
+template <typename F>
+double medianCpuTimeMs(int passes, F&& f) {
+  std::vector<double> ms;
+  for (int pass = 0; pass < passes; ++pass) ms.push_back(cpuTimeMs(f));
+  return median(ms);
+}
+
 }  // namespace vdmap

@@ -95,7 +95,11 @@ bool QueryMap::empty() const { return keyframes() == 0 && ellipsoids() == 0; }
 std::size_t QueryMap::keyframes() const { return data_->views.size(); }
 std::size_t QueryMap::ellipsoids() const { return data_->surface.size(); }
 std::size_t QueryMap::memoryBytes() const {
-  return sizeof(Data) + data_->views.memoryBytes() + data_->surface.memoryBytes();
+  const MemoryParts parts = memoryParts();
+  return sizeof(Data) + parts.keyframe_views + parts.surface;
+}
+QueryMap::MemoryParts QueryMap::memoryParts() const {
+  return {data_->views.memoryBytes(), data_->surface.memoryBytes()};
 }
 void QueryMap::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const { data_->views.seenBounds(lo, hi); }
 

@@ -107,6 +107,13 @@ class QueryMap {
   std::size_t keyframes() const;
   std::size_t ellipsoids() const;
   std::size_t memoryBytes() const;  ///< heap bytes held by the built data
+  /// Heap bytes of the built data's two parts: the keyframes' views (what free is) and the
+  /// surface index of the global map's ellipsoids (occupied gates, distance, rays). memoryBytes()
+  /// is their sum plus the parameters.
+  struct MemoryParts {
+    std::size_t keyframe_views = 0, surface = 0;
+  };
+  MemoryParts memoryParts() const;
   /// Axis-aligned box of everything some keyframe sees (its frusta cut at their farthest surface);
   /// lo > hi when empty. Where grids and slices are laid out.
   void seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const;

@@ -1,6 +1,6 @@
 // vdmap bench --query end to end on the built-in scene: a noisy render mapped, the same poses
-// rendered exactly as the truth; the report names every method's speed and accuracy, and a
-// truth of other frames is refused.
+// rendered exactly as the truth; the report names every method's speed and accuracy and vdmap's
+// queries in detail, and a truth of other frames is refused.
 #include <algorithm>
 
 #include <gtest/gtest.h>
@@ -49,9 +49,28 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
     EXPECT_GT(a["memory_mb"].get<double>(), 0.0) << key;
   }
   EXPECT_GT(j["speed"]["vdmap"]["view_ms"].get<double>(), 0.0);
+  // vdmap alone: every conflict rule's classes, the distance halves, rays, memory by part.
+  const auto& v = j.at("vdmap");
+  for (const char* rule : {"occupied", "recent", "precise"}) {
+    const auto& r = v.at("classify_by_rule").at(rule);
+    EXPECT_GT(r.at("classify_per_s").get<double>(), 0.0) << rule;
+    EXPECT_NEAR(r.at("occupied").get<double>() + r.at("free").get<double>() + r.at("unknown").get<double>(), 1.0, 1e-4)
+        << rule;
+  }
+  EXPECT_GT(v.at("distance_near_per_s").get<double>(), 0.0);
+  EXPECT_GT(v.at("distance_uniform_per_s").get<double>(), 0.0);
+  EXPECT_EQ(v.at("rays"), 640 * 480);
+  EXPECT_EQ(v.at("view_rays_differ"), 0) << "castView answers as castRays on its pixel rays";
+  const auto& bytes = v.at("memory_bytes");
+  EXPECT_GT(bytes.at("keyframe_views").get<std::size_t>(), 0u);
+  EXPECT_GT(bytes.at("surface").get<std::size_t>(), 0u);
+  EXPECT_GE(bytes.at("total").get<std::size_t>(),
+            bytes.at("keyframe_views").get<std::size_t>() + bytes.at("surface").get<std::size_t>());
   EXPECT_EQ(j["accuracy"]["sets"]["occupied"], 300);
   EXPECT_EQ(j["accuracy"]["sets"]["free_near"], 150);
-  EXPECT_NE(readFile(tmp / "out" / "bench.md").find("bal.acc"), std::string::npos);
+  const std::string md = readFile(tmp / "out" / "bench.md");
+  for (const char* figure : {"bal.acc", "conflict rule", "near surfaces", "castRays", "keyframe views", "surface index"})
+    EXPECT_NE(md.find(figure), std::string::npos) << figure;
 }
 
 TEST(QueryBench, RefusesATruthOfOtherFrames) {

@@ -349,6 +349,18 @@ TEST(QueryClassify, OneAndTwoThreadsGiveBitIdenticalAnswers) {
   }
 }
 
+TEST(QueryClassify, MemoryIsTheSumOfItsParts) {
+  KeyframeGraph graph;
+  addBoxRoomViews(&graph, smallCamera());
+  const QueryMap map = QueryMap::build(graph, buildGlobalMap(graph, {}), {});
+  const QueryMap::MemoryParts parts = map.memoryParts();
+  EXPECT_GT(parts.keyframe_views, 0u);
+  EXPECT_GT(parts.surface, 0u);
+  // Beyond the parts: the parameters and the parts' handles, far below a kilobyte.
+  ASSERT_GE(map.memoryBytes(), parts.keyframe_views + parts.surface);
+  EXPECT_LT(map.memoryBytes() - parts.keyframe_views - parts.surface, 1024u);
+}
+
 TEST(QueryClassify, AnEmptyMapIsUnknownEverywhere) {
   const std::vector<Eigen::Vector3d> points{{0, 0, 0}, {1, 2, 3}};
   KeyframeGraph graph;
