@@ -10,9 +10,9 @@
 // With --poses track the odometry peers (app/bench/odometry_peers.h) estimate the poses of the same
 // frames: CPU ms per frame and ATE against the sequence's ground truth of each.
 // Each method's timing loop is in app/bench/ (one file per method, the report in bench_report.cpp).
-// The other modes time vdmap alone: --long (a whole sequence mapped), --query (the point queries
-// against OctoMap), --view (the 3-D view's frame times on a saved map), --suite (a render
-// suite's stages) and --ellipsoids (the ellipsoid renderer).
+// The other modes: --long (a whole sequence mapped), --query (the point queries, against
+// OctoMap), --view (the 3-D view's frame times on a saved map), --suite (a render suite's
+// stages) and --ellipsoids (the ellipsoid renderer).
 #include <algorithm>
 #include <filesystem>
 #include <limits>
@@ -29,9 +29,9 @@
 #include "app/bench/odometry_timing.h"
 #include "app/bench/query_timing.h"
 #include "app/bench/suite_timing.h"
-#include "app/bench/view_timing.h"
 #include "app/bench/tsdf_timing.h"
 #include "app/bench/vdmap_timing.h"
+#include "app/bench/view_timing.h"
 #include "app/cli/command_line.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
