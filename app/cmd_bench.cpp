@@ -169,9 +169,10 @@ void addBenchCommand(CLI::App& app) {
   verb->get_option("SEQ")->required(false)->description(
       "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --suite or "
       "--ellipsoids");
-  verb->get_option("--frames")->description(
-      "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
-      "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
+  verb->get_option("--frames")
+      ->description(
+          "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
+          "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
   verb->add_option("--keyframe-every", args->keyframe_every,
                    "the update row starts a keyframe every N frames (the pipeline row decides its own keyframes)")
       ->check(CLI::Range(1, std::numeric_limits<int>::max()))
@@ -236,7 +237,8 @@ void addBenchCommand(CLI::App& app) {
                    "with --query: frames between OctoMap insertions (default: ceil(frames / 500))")
       ->needs(query)
       ->check(CLI::Range(1, std::numeric_limits<int>::max()));
-  verb->add_option("--views", args->views, "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
+  verb->add_option("--views", args->views,
+                   "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
       ->needs(query)
       ->check(CLI::Range(0, 1000))
       ->capture_default_str();
@@ -260,16 +262,18 @@ void addBenchCommand(CLI::App& app) {
       ->needs(view)
       ->check(CLI::Range(0.01f, 100.f))
       ->capture_default_str();
-  verb->add_option("--fast-budget", args->view_options.fast_budgets,
-                   "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
+  verb->add_option(
+          "--fast-budget", args->view_options.fast_budgets,
+          "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
       ->needs(view)
       ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
-  auto* suite = verb->add_option(
-      "--suite", args->suite,
-      "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
-      "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
-      "--runs comparing runs in this process, the medians of each stage")
-      ->type_name("FILE");
+  auto* suite =
+      verb->add_option(
+              "--suite", args->suite,
+              "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
+              "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
+              "--runs comparing runs in this process, the medians of each stage")
+          ->type_name("FILE");
   verb->add_option("--runs", args->runs, "with --suite: comparing runs (and session loads)")
       ->needs(suite)
       ->check(CLI::Range(1, 1000))

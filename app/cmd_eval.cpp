@@ -8,8 +8,8 @@
 #include <memory>
 
 #include "app/cli/command_line.h"
-#include "app/verbs.h"
 #include "app/cli/eval_report.h"
+#include "app/verbs.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
 
@@ -71,8 +71,8 @@ void addEvalCommand(CLI::App& app) {
       "eval", "Reconstruction accuracy against a reference mesh (docs/method.md 12), or trajectory error against "
               "ground truth (ATE after rigid alignment, RPE; TUM benchmark definitions)");
   auto args = std::make_shared<EvalArgs>();
-  auto* map = verb->add_option("--map", args->map,
-                               "map to score: a PLY with vertex x y z (ellipsoids, points) or a `vdmap map` output folder");
+  auto* map = verb->add_option(
+      "--map", args->map, "map to score: a PLY with vertex x y z (ellipsoids, points) or a `vdmap map` output folder");
   // A missing mesh is a file's error (exit 1), read before any work.
   auto* mesh = verb->add_option("--mesh", args->mesh, "reference triangle mesh (PLY, same world frame, metres)");
   verb->add_option("--samples", args->accuracy.completion_samples, "mesh samples for completion")
@@ -94,7 +94,8 @@ void addEvalCommand(CLI::App& app) {
   verb->add_option("--offset", te.offset_s, "seconds added to the trajectory's timestamps before matching")
       ->check(finiteCheck())
       ->capture_default_str();
-  verb->add_flag("--align-scale", te.align_scale, "align with a similarity (fit a scale, e.g. monocular) instead of rigidly");
+  verb->add_flag("--align-scale", te.align_scale,
+                 "align with a similarity (fit a scale, e.g. monocular) instead of rigidly");
   verb->add_option("--delta", te.rpe_delta_s, "seconds between the poses of the per-second relative pose error")
       ->check(positiveFiniteCheck())
       ->capture_default_str();

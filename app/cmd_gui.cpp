@@ -10,12 +10,12 @@
 #include "app/cli/command_line.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
-#include "app/window/glfw_context.h"
-#include "app/view/settings.h"
-#include "app/workbench/workbench.h"
-#include "app/window/workbench_window.h"
 #include "app/view/progress.h"
+#include "app/view/settings.h"
 #include "app/view/view_file.h"
+#include "app/window/glfw_context.h"
+#include "app/window/workbench_window.h"
+#include "app/workbench/workbench.h"
 #include "mapping/core/error.h"
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
@@ -28,8 +28,8 @@ namespace fs = std::filesystem;
 
 struct GuiArgs {
   SequenceArgs sequence;
-  std::string map;  ///< a saved session or a map file (mapping/files/map_file.h) instead of a sequence
-  std::string settings;  ///< --settings: this file instead of the defaults or the user's settings
+  std::string map;        ///< a saved session or a map file (mapping/files/map_file.h) instead of a sequence
+  std::string settings;   ///< --settings: this file instead of the defaults or the user's settings
   std::string view_file;  ///< --view-file: read (strictly) before the window opens
   gui::ScriptOptions script;
   std::vector<std::string> set;
@@ -71,7 +71,9 @@ BuiltinCache builtinCache(const std::string& frames) {
   c.count = last < 0 ? total : std::min(last, total);
   const char* xdg = std::getenv("XDG_CACHE_HOME");
   const char* home = std::getenv("HOME");
-  const fs::path cache = xdg && *xdg ? fs::path(xdg) : home && *home ? fs::path(home) / ".cache" : fs::temp_directory_path();
+  const fs::path cache = xdg && *xdg     ? fs::path(xdg)
+                         : home && *home ? fs::path(home) / ".cache"
+                                         : fs::temp_directory_path();
   const auto fingerprint = static_cast<unsigned long long>(sceneFingerprint(c.scene));
   const auto folder = [&](int n) {
     char name[64];
@@ -125,7 +127,8 @@ StartSettings startSettings(const GuiArgs& args, bool session) {
   if (!args.script.exit) {
     start.user_file = gui::settingsPath();
     start.settings = gui::loadSettings(start.user_file, &start.warning);
-    const std::string user = start.user_file.string() + (fs::exists(start.user_file) ? "" : " (not there yet: defaults)");
+    const std::string user =
+        start.user_file.string() + (fs::exists(start.user_file) ? "" : " (not there yet: defaults)");
     start.source = session ? "the session's thresholds, view options from " + user : user;
     return start;
   }
@@ -147,7 +150,8 @@ void runGui(GuiArgs args, bool builtin) {
   if (!args.window_size.empty()) {
     int w = 0, h = 0;
     char rest = 0;
-    if (std::sscanf(args.window_size.c_str(), "%dx%d%c", &w, &h, &rest) != 2 || w < 320 || h < 240 || w > 16384 || h > 16384)
+    if (std::sscanf(args.window_size.c_str(), "%dx%d%c", &w, &h, &rest) != 2 || w < 320 || h < 240 || w > 16384 ||
+        h > 16384)
       throw CLI::ValidationError("--window-size",
                                  "'" + args.window_size + "': expected WxH within 320x240..16384x16384");
     settings.window_width = w;
@@ -221,8 +225,9 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option_function<std::string>(
       "--view-file", [&args](const std::string& file) { args.view_file = file; },
       "scripted: show this view file's view (camera, view options) once mapping is done, instead of the default view");
-  app.add_option("--save-view", args.script.save_view,
-                 "scripted: save the view shown as a view file once mapping is done (as S does), for vdmap render --view-file");
+  app.add_option(
+      "--save-view", args.script.save_view,
+      "scripted: save the view shown as a view file once mapping is done (as S does), for vdmap render --view-file");
   app.add_option("--view-screenshot", args.script.view_screenshot,
                  "scripted: a PNG of the 3-D view alone (no panels) at the view's size, once mapping is done");
   app.add_option("--settings", args.settings,
@@ -272,7 +277,8 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option_function<std::string>(
       "--query-slice",
       [&args](const std::string& text) {
-        const auto color = args.script.query_slice ? args.script.query_slice->color : render::QuerySliceColor::kOccupancy;
+        const auto color =
+            args.script.query_slice ? args.script.query_slice->color : render::QuerySliceColor::kOccupancy;
         try {
           args.script.query_slice = render::parseQuerySlice(text);
         } catch (const std::invalid_argument& e) {
@@ -316,7 +322,7 @@ void addGuiCommand(CLI::App& app) {
     // `vdmap gui S.vdmap` (or a map folder, PLY, OctoMap) opens it, as the workbench's Open field does.
     const fs::path& seq = args->sequence.folder;
     if (args->map.empty() && (fs::is_regular_file(seq) || (fs::is_directory(seq) && !fs::exists(seq / "rgb.txt") &&
-                                                            fs::exists(seq / "global_ellipsoids.ply"))))
+                                                           fs::exists(seq / "global_ellipsoids.ply"))))
       std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
       throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE (one of them)");

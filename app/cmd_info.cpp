@@ -74,7 +74,8 @@ void runInfo(const SequenceArgs& args, bool json) {
   const DepthStats depth = sampleDepth(seq, 10);
   const double t0 = seq.entries().front().t_depth, t1 = seq.entries().back().t_depth;
   const DropCounts& d = seq.dropped();
-  const auto with_pose = std::count_if(seq.entries().begin(), seq.entries().end(), [](const FrameEntry& e) { return e.has_pose; });
+  const auto with_pose =
+      std::count_if(seq.entries().begin(), seq.entries().end(), [](const FrameEntry& e) { return e.has_pose; });
   if (json) {
     nlohmann::json out = {
         {"folder", seq.folder().string()},
@@ -84,16 +85,25 @@ void runInfo(const SequenceArgs& args, bool json) {
         {"frames_with_pose", with_pose},
         {"groundtruth", seq.hasGroundTruth()},
         {"time_span_s", {t0, t1}},
-        {"camera", {{"source", seq.cameraSource()}, {"width", cam.width}, {"height", cam.height},
-                    {"fx", cam.fx}, {"fy", cam.fy}, {"cx", cam.cx}, {"cy", cam.cy},
-                    {"depth_scale", cam.depth_scale}}},
+        {"camera",
+         {{"source", seq.cameraSource()},
+          {"width", cam.width},
+          {"height", cam.height},
+          {"fx", cam.fx},
+          {"fy", cam.fy},
+          {"cx", cam.cx},
+          {"cy", cam.cy},
+          {"depth_scale", cam.depth_scale}}},
         {"colour_camera", colourJson(seq.colourCamera())},
-        {"depth_m", {{"frames_sampled", depth.frames_sampled}, {"min", depth.min_m},
-                     {"median", depth.median_m}, {"max", depth.max_m},
-                     {"valid_fraction", rounded(depth.valid_fraction)},
-                     {"invalid_fraction", rounded(1.0 - depth.valid_fraction)},
-                     {"no_depth_fraction", rounded(depth.no_depth_fraction)},
-                     {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
+        {"depth_m",
+         {{"frames_sampled", depth.frames_sampled},
+          {"min", depth.min_m},
+          {"median", depth.median_m},
+          {"max", depth.max_m},
+          {"valid_fraction", rounded(depth.valid_fraction)},
+          {"invalid_fraction", rounded(1.0 - depth.valid_fraction)},
+          {"no_depth_fraction", rounded(depth.no_depth_fraction)},
+          {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
         {"dropped", {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}}},
     };
     std::cout << jsonText(out) << "\n";
@@ -105,20 +115,23 @@ void runInfo(const SequenceArgs& args, bool json) {
                 seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   else
     std::printf("frames     %zu usable of %d listed depth frames; frames %s; no groundtruth.txt (vdmap tracks the "
-                "poses)\n", seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+                "poses)\n",
+                seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
-  std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width,
-              cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
+  std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width, cam.height, cam.fx,
+              cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
   if (const auto& c = seq.colourCamera())
     std::printf("colour     fx %.3f fy %.3f cx %.3f cy %.3f, %.1f mm and %.2f deg from the depth camera: registered "
-                "to the depth when loaded\n", c->fx, c->fy, c->cx, c->cy, 1000.0 * c->T_colour_depth.translation().norm(),
+                "to the depth when loaded\n",
+                c->fx, c->fy, c->cx, c->cy, 1000.0 * c->T_colour_depth.translation().norm(),
                 Eigen::AngleAxisd(c->T_colour_depth.linear()).angle() * 180.0 / M_PI);
   std::printf("depth      %.3f .. %.3f m, median %.3f m over valid pixels; %.3g%% invalid (%.3g%% 0 = no "
               "measurement, %.3g%% 65535 = invalid code) (%d frames sampled)\n",
               depth.min_m, depth.max_m, depth.median_m, 100.0 * (1.0 - depth.valid_fraction),
               100.0 * depth.no_depth_fraction, 100.0 * depth.invalid_code_fraction, depth.frames_sampled);
   std::printf("dropped    %d without an rgb frame within 0.02 s, %d without a pose within 0.1 s, "
-              "%d outside --frames\n", d.no_rgb, d.no_pose, d.outside_range);
+              "%d outside --frames\n",
+              d.no_rgb, d.no_pose, d.outside_range);
 }
 
 }  // namespace

@@ -13,21 +13,21 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/command_line.h"
+#include "app/cli/parameter_table.h"
+#include "app/cli/provenance.h"
+#include "app/cli/release_memory.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
 #include "app/view/map_sequence.h"
-#include "app/cli/parameter_table.h"
 #include "app/view/progress.h"
-#include "app/cli/provenance.h"
-#include "app/cli/release_memory.h"
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/occupancy_grid.h"
+#include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
-#include "mapping/files/session_file.h"
 
 namespace vdmap::app {
 namespace {
@@ -38,7 +38,7 @@ struct MapArgs {
   std::string save;
   std::string load;
   bool json = false;
-  ParameterValues params;  // every parameter of the table (mapping/pipeline/parameters.h)
+  ParameterValues params;             // every parameter of the table (mapping/pipeline/parameters.h)
   double octomap_resolution_m = 0.0;  // 0: no OctoMap (a given value is checked by octomapResolutionCheck)
   // point queries (docs/method.md 13): --grid RES --grid-band LO:HI [--grid-up AXIS], a ROS map_server grid
   double grid_resolution_m = 0.0;  // 0: no grid
@@ -62,7 +62,8 @@ CLI::Validator octomapResolutionCheck() {
           throw std::invalid_argument("expected a resolution in metres, got '" + text + "'");
         if (!(v > 0.0 && v <= kMaxOctomapResolutionM))
           throw std::invalid_argument("the resolution must be > 0 and at most 1 m (OctoMap needs voxels finer than "
-                                      "the camera's depth range to carve free space), got " + text);
+                                      "the camera's depth range to carve free space), got " +
+                                      text);
       },
       "RES in (0, 1]");
 }
@@ -98,7 +99,8 @@ Session loadSessionToContinue(MapArgs* args) {
                                      "can still be rendered or opened)");
   if (!sameMapperParams(args->params.mapper, MapperParams{}) && !sameMapperParams(args->params.mapper, info.mapper))
     throw std::invalid_argument("--load: the mapping parameters are the session's; drop the options that change "
-                                "them (" + rerunFlags() + ")");
+                                "them (" +
+                                rerunFlags() + ")");
   args->params.mapper = info.mapper;
   // The pose source is the session's too (its keyframes were placed that way).
   const std::string session_poses = info.mapper.poses == PoseSource::kTrack ? "track" : "gt";
@@ -138,8 +140,8 @@ void printKeyframeTable(const KeyframeGraph& graph, const GlobalMap& global) {
   std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
   for (const Keyframe& k : graph.keyframes()) {
     const std::vector<bool>& kept = global.kept[static_cast<std::size_t>(k.id)];
-    std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated,
-                k.container.size(), std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
+    std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated, k.container.size(),
+                std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
   }
 }
 
@@ -160,9 +162,9 @@ nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames
   if (!tracking) return stats;
   stats["tracking_ms"] = rounded(median(t.tracking_ms));
   addTrackingStats(mapper, trajectory, seq, &stats);
-  stats["map_refinement"] = {{"pairs", refined.pairs}, {"edges", refined.edges}, {"rounds", refined.rounds},
-                             {"moved_m", rounded(refined.moved_m)}, {"ms", rounded(refined.ms)},
-                             {"refused", refined.refused}};
+  stats["map_refinement"] = {{"pairs", refined.pairs},    {"edges", refined.edges},
+                             {"rounds", refined.rounds},  {"moved_m", rounded(refined.moved_m)},
+                             {"ms", rounded(refined.ms)}, {"refused", refined.refused}};
   return stats;
 }
 
@@ -199,18 +201,21 @@ void printTrackingSummary(const Mapper& mapper, const MapRefinementResult& refin
   else
     std::printf(", keyframe poses refined from %d of %d covisible local-map pairs (%d rounds, %.1f mm at most, %.1f s)",
                 refined.edges, refined.pairs, refined.rounds, 1e3 * refined.moved_m, 1e-3 * refined.ms);
-  if (stats.contains("ate_rmse_m")) std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
+  if (stats.contains("ate_rmse_m"))
+    std::printf(", ATE %.2f cm against groundtruth.txt", 100 * stats["ate_rmse_m"].get<double>());
   std::printf("\n");
 }
 
-void printSummary(const Mapper& mapper, const GlobalMap& global, const FrameTimes& t, const std::filesystem::path& out_dir) {
+void printSummary(const Mapper& mapper, const GlobalMap& global, const FrameTimes& t,
+                  const std::filesystem::path& out_dir) {
   const KeyframeGraph& graph = mapper.graph();
   const std::string counts = counted(mapper.framesMapped(), "frame") + ", " + counted(graph.size(), "keyframe") + ", " +
                              counted(graph.edges().size(), "edge") + ", " + counted(mapper.revisits(), "revisit");
   std::printf("%s; %zu kept ellipsoids -> %zu in the global map (t_g %.3f s)\nmedian per frame: mapping thread "
               "%.2f ms (ORB %.2f on the prefetch thread, tracking %.2f, decision %.2f, update %.2f) -> %s\n",
               counts.c_str(), global.sigma_e, global.sigma_e_prime, global.t_g_s, median(t.pipeline_ms),
-              median(t.features_ms), median(t.tracking_ms), median(t.decision_ms), median(t.update_ms), out_dir.c_str());
+              median(t.features_ms), median(t.tracking_ms), median(t.decision_ms), median(t.update_ms),
+              out_dir.c_str());
 }
 
 void runMap(MapArgs args) {
@@ -225,17 +230,15 @@ void runMap(MapArgs args) {
   noteCameraGuess(seq, "map");
   if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
     std::cerr << "vdmap map: warning: " << dropped << "\n";
-  if (loaded)
-    checkContinues(seq, *loaded, args.load);
-  else
-    args.params.mapper.poses = poseSource(args.sequence, seq);
+  if (loaded) checkContinues(seq, *loaded, args.load);
+  else args.params.mapper.poses = poseSource(args.sequence, seq);
   checkRefinementApplies(args.sequence, args.params.mapper.poses);
   Mapper mapper = loaded ? Mapper(loaded->info.camera, args.params.mapper, std::move(loaded->graph), loaded->info.state)
                          : Mapper(seq.camera(), args.params.mapper);
   const int frames_loaded = mapper.framesMapped();
   FrameTimes times;
-  const MapRefinementResult refined =
-      mapSequence(seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
+  const MapRefinementResult refined = mapSequence(
+      seq, mapper, [&](const FrameReport& r) { times.add(r); }, refinement(args.sequence));
   const KeyframeGraph& graph = mapper.graph();
   releaseFreedMemory();  // the frames' freed buffers, before the build's peak
   const GlobalMap global = withStageBar("global map", [&] { return buildGlobalMap(graph, args.params.global); });
@@ -265,7 +268,8 @@ void runMap(MapArgs args) {
   // Once the export is staged and before it is put in place: a run that fails keeps neither.
   if (!args.save.empty())
     options.before_commit = [&] {
-      withStageBar("session save", [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
+      withStageBar("session save",
+                   [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
     };
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   if (grid) writeOccupancyGrid(std::filesystem::path(args.out) / "grid.yaml", *grid);
@@ -298,10 +302,11 @@ void addMapCommand(CLI::App& app) {
                    "global map; the map must fit in OctoMap's 16-bit keys (32767 voxels each way from the origin)")
       ->check(octomapResolutionCheck());
   // point queries (docs/method.md 13): the occupancy grid planners read, as `vdmap query --op grid`
-  auto* grid = verb->add_option("--grid", args->grid_resolution_m,
-                                "also write grid.pgm + grid.yaml, a ROS map_server occupancy grid of this cell size (m) "
-                                "of the --grid-band height band (vdmap query --op grid)")
-                   ->check(positiveFiniteCheck());
+  auto* grid =
+      verb->add_option("--grid", args->grid_resolution_m,
+                       "also write grid.pgm + grid.yaml, a ROS map_server occupancy grid of this cell size (m) "
+                       "of the --grid-band height band (vdmap query --op grid)")
+          ->check(positiveFiniteCheck());
   auto* band = verb->add_option("--grid-band", args->grid_band, "the grid's height band LO:HI (m along --grid-up)")
                    ->check(parsedBy(parseGridBand, "LO:HI"));
   verb->add_option("--grid-up", args->grid_up, "the axis the grid's band runs along")

@@ -6,8 +6,8 @@
 #include <sstream>
 #include <string>
 
-#include "app/verbs.h"
 #include "app/cli/parameter_table.h"
+#include "app/verbs.h"
 
 namespace vdmap::app {
 namespace {
@@ -51,8 +51,8 @@ void printPlain(std::ostream& out) {
                  : "\nRe-run parameters: changing one re-maps the sequence (settings.json \"rerun\").\n");
     for (const Parameter& p : parameters()) {
       if (p.live != live) continue;
-      out << "\n  " << p.key << " = " << defaultText(p) << "    " << p.flag << (p.slider ? "" : "    (advanced: no slider)")
-          << "\n";
+      out << "\n  " << p.key << " = " << defaultText(p) << "    " << p.flag
+          << (p.slider ? "" : "    (advanced: no slider)") << "\n";
       const std::string rule = enableRule(p, false);
       out << "      valid: " << validityText(p) << (rule.empty() ? "" : "; " + rule) << "\n";
       out << wrapped(std::string(p.help), 6);
@@ -97,7 +97,8 @@ void printMarkdown(std::ostream& out) {
 void addParamsCommand(CLI::App& app) {
   auto* verb = app.add_subcommand("params", "List the mapping parameters: key, flag, default, valid range and help");
   auto markdown = std::make_shared<bool>(false);
-  verb->add_flag("--markdown", *markdown, "print docs/parameters.md instead (vdmap params --markdown > docs/parameters.md)");
+  verb->add_flag("--markdown", *markdown,
+                 "print docs/parameters.md instead (vdmap params --markdown > docs/parameters.md)");
   verb->callback([markdown] { *markdown ? printMarkdown(std::cout) : printPlain(std::cout); });
 }
 

@@ -16,17 +16,17 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/command_line.h"
+#include "app/query_files/query_io.h"
 #include "app/verbs.h"
 #include "app/view/progress.h"
-#include "app/query_files/query_io.h"
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
 #include "mapping/core/timing.h"
 #include "mapping/files/occupancy_grid.h"
 #include "mapping/files/octomap_export.h"
+#include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
-#include "mapping/files/session_file.h"
 
 namespace vdmap::app {
 namespace {
@@ -80,7 +80,8 @@ void checkQueryArgs(const QueryArgs& args, QueryOp op, const CLI::App& verb) {
   only("--band", op == QueryOp::kGrid, "grid");
   only("--up", op == QueryOp::kGrid, "grid");
   if (op == QueryOp::kGrid && args.band.empty())
-    throw CLI::RequiredError("--op grid needs --band LO:HI (the height band, m along --up)", CLI::ExitCodes::RequiredError);
+    throw CLI::RequiredError("--op grid needs --band LO:HI (the height band, m along --up)",
+                             CLI::ExitCodes::RequiredError);
   const std::string ext = fs::path(args.out).extension().string();
   const char* wanted = op == QueryOp::kGrid ? ".yaml" : op == QueryOp::kOctomap ? ".bt" : nullptr;
   if (wanted ? ext != wanted : (ext != ".txt" && ext != ".ply"))
@@ -96,7 +97,8 @@ std::vector<int> lastObservedRank(const Session& session) {
   for (std::size_t k = 0; k < graph.size(); ++k) last[k] = graph.keyframe(static_cast<int>(k)).frame_index;
   for (const FramePose& f : session.info.state.frame_poses)
     if (f.keyframe >= 0 && static_cast<std::size_t>(f.keyframe) < last.size())
-      last[static_cast<std::size_t>(f.keyframe)] = std::max<long long>(last[static_cast<std::size_t>(f.keyframe)], f.frame_index);
+      last[static_cast<std::size_t>(f.keyframe)] =
+          std::max<long long>(last[static_cast<std::size_t>(f.keyframe)], f.frame_index);
   std::vector<int> order(graph.size());
   std::iota(order.begin(), order.end(), 0);
   std::sort(order.begin(), order.end(), [&last](int a, int b) {
@@ -119,22 +121,26 @@ struct LoadedMap {
 
 LoadedMap loadQueryMap(const QueryArgs& args) {
   if (!isSessionPath(args.map)) {
-    if (!fs::exists(args.map)) throw InputError(args.map, "no such session file (expected a .vdmap session: vdmap map --save)");
-    throw InputError(args.map, std::string(fs::is_directory(args.map) ? "a folder, " : "") +
-                                   "not a session: vdmap query reads a session file (.vdmap, written by vdmap map --save)");
+    if (!fs::exists(args.map))
+      throw InputError(args.map, "no such session file (expected a .vdmap session: vdmap map --save)");
+    throw InputError(args.map,
+                     std::string(fs::is_directory(args.map) ? "a folder, " : "") +
+                         "not a session: vdmap query reads a session file (.vdmap, written by vdmap map --save)");
   }
   LoadedMap loaded;
   const auto start = std::chrono::steady_clock::now();
   SessionDecodeOptions decode;
   decode.decode_images = false;  // the queries need the local maps and poses, not the images
   Session session = loadSession(args.map, decode);
-  if (!args.keyframe_poses.empty()) loaded.poses_matched = applyTrajectoryFile(session.graph, args.keyframe_poses).matched;
+  if (!args.keyframe_poses.empty())
+    loaded.poses_matched = applyTrajectoryFile(session.graph, args.keyframe_poses).matched;
   loaded.load_ms = msSince(start);
   loaded.keyframes = session.graph.size();
   if (args.keyframe >= 0 && static_cast<std::size_t>(args.keyframe) >= session.graph.size())
-    throw InputError(args.map, "--keyframe " + std::to_string(args.keyframe) + ": the session has " +
-                                   counted(static_cast<long long>(session.graph.size()), "keyframe") +
-                                   (session.graph.size() ? " (0.." + std::to_string(session.graph.size() - 1) + ")" : ""));
+    throw InputError(args.map,
+                     "--keyframe " + std::to_string(args.keyframe) + ": the session has " +
+                         counted(static_cast<long long>(session.graph.size()), "keyframe") +
+                         (session.graph.size() ? " (0.." + std::to_string(session.graph.size() - 1) + ")" : ""));
   const auto build_start = std::chrono::steady_clock::now();
   if (session.graph.size() > 0) {
     GlobalMapParams global = session.info.global;
@@ -163,7 +169,9 @@ void inChunks(const char* label, std::size_t n, const Ask& ask) {
 double rounded6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
 
 // JSON has no infinity: null stands for "no surface".
-nlohmann::json finiteOrNull(double v) { return std::isfinite(v) ? nlohmann::json(rounded6(v)) : nlohmann::json(nullptr); }
+nlohmann::json finiteOrNull(double v) {
+  return std::isfinite(v) ? nlohmann::json(rounded6(v)) : nlohmann::json(nullptr);
+}
 
 // Asks the map, writes the answers, and returns the summary's figures.
 nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& map, const QueryInput& input) {
@@ -177,10 +185,8 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
       inChunks("classify", n, [&](std::size_t b, std::size_t e) {
         const std::span<const Eigen::Vector3d> q(input.points.data() + b, e - b);
         const std::span<Classification> out(answers.classes.data() + b, e - b);
-        if (args.keyframe >= 0)
-          map.classifyInKeyframe(args.keyframe, q, out);
-        else
-          map.classify(q, out);
+        if (args.keyframe >= 0) map.classifyInKeyframe(args.keyframe, q, out);
+        else map.classify(q, out);
       });
       break;
     case QueryOp::kDistance:
@@ -190,17 +196,15 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
                      std::span<DistanceResult>(answers.distances.data() + b, e - b), args.max_distance_m);
       });
       break;
-    case QueryOp::kCollide:
-      answers.bodies = map.collide(input.spheres, args.clearance_m);
-      break;
+    case QueryOp::kCollide: answers.bodies = map.collide(input.spheres, args.clearance_m); break;
     case QueryOp::kRay:
       answers.hits.resize(n);
       inChunks("ray", n, [&](std::size_t b, std::size_t e) {
-        map.castRays(std::span<const Ray>(input.rays.data() + b, e - b), std::span<RayHit>(answers.hits.data() + b, e - b));
+        map.castRays(std::span<const Ray>(input.rays.data() + b, e - b),
+                     std::span<RayHit>(answers.hits.data() + b, e - b));
       });
       break;
-    default:
-      break;
+    default: break;
   }
   const double ms = msSince(start);
   writeQueryAnswers(args.out, op, input, answers);
@@ -255,8 +259,7 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
       summary["median_t_m"] = t.empty() ? nlohmann::json(nullptr) : nlohmann::json(rounded6(median(t)));
       break;
     }
-    default:
-      break;
+    default: break;
   }
   return summary;
 }
@@ -290,14 +293,19 @@ nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map) {
 
 nlohmann::json runOctomap(const QueryArgs& args, const QueryMap& map) {
   std::unique_ptr<ProgressBar> bar;
-  const QueryOctomapReport r = writeOctomapBtFromQuery(args.out, map, args.resolution_m, [&bar](std::size_t done, std::size_t total) {
-    if (!bar) bar = std::make_unique<ProgressBar>("OctoMap", total);
-    bar->update(done);
-  });
+  const QueryOctomapReport r =
+      writeOctomapBtFromQuery(args.out, map, args.resolution_m, [&bar](std::size_t done, std::size_t total) {
+        if (!bar) bar = std::make_unique<ProgressBar>("OctoMap", total);
+        bar->update(done);
+      });
   bar.reset();
   const double ms = 1e3 * r.seconds;
-  return {{"resolution_m", args.resolution_m}, {"voxels", r.voxels}, {"occupied_voxels", r.occupied_voxels},
-          {"free_voxels", r.free_voxels},      {"leaves", r.leaves}, {"query_ms", rounded6(ms)},
+  return {{"resolution_m", args.resolution_m},
+          {"voxels", r.voxels},
+          {"occupied_voxels", r.occupied_voxels},
+          {"free_voxels", r.free_voxels},
+          {"leaves", r.leaves},
+          {"query_ms", rounded6(ms)},
           {"records_per_s", ms > 0 ? std::round(1e3 * static_cast<double>(r.voxels) / ms) : 0.0}};
 }
 
@@ -318,8 +326,8 @@ void printSummary(QueryOp op, const nlohmann::json& s, const std::string& out) {
       break;
     case QueryOp::kCollide:
       std::printf("collide %zu spheres in %s: %zu colliding, %zu touching unknown space, min clearance %s",
-                  count("records"), counted(static_cast<long long>(count("bodies")), "body").c_str(), count("colliding"),
-                  count("touching_unknown"), metres("min_clearance_m").c_str());
+                  count("records"), counted(static_cast<long long>(count("bodies")), "body").c_str(),
+                  count("colliding"), count("touching_unknown"), metres("min_clearance_m").c_str());
       break;
     case QueryOp::kRay:
       std::printf("ray %zu rays: %zu hits, %zu misses, median range %s", count("records"), count("hits"),
@@ -328,7 +336,8 @@ void printSummary(QueryOp op, const nlohmann::json& s, const std::string& out) {
     case QueryOp::kGrid:
       std::printf("grid %d x %d cells of %g m (up %s): %zu occupied, %zu free, %zu unknown; %zu samples",
                   s["width"].get<int>(), s["height"].get<int>(), s["resolution_m"].get<double>(),
-                  s["up"].get<std::string>().c_str(), count("occupied"), count("free"), count("unknown"), count("samples"));
+                  s["up"].get<std::string>().c_str(), count("occupied"), count("free"), count("unknown"),
+                  count("samples"));
       break;
     case QueryOp::kOctomap:
       std::printf("octomap of %g m: %zu voxels asked, %zu occupied, %zu free, %zu leaves after pruning",
@@ -336,7 +345,8 @@ void printSummary(QueryOp op, const nlohmann::json& s, const std::string& out) {
                   count("leaves"));
       break;
   }
-  std::printf("; %.1f ms (%.3g per s) -> %s\n", s["query_ms"].get<double>(), s["records_per_s"].get<double>(), out.c_str());
+  std::printf("; %.1f ms (%.3g per s) -> %s\n", s["query_ms"].get<double>(), s["records_per_s"].get<double>(),
+              out.c_str());
 }
 
 void runQuery(QueryArgs args, const CLI::App& verb) {
@@ -384,20 +394,24 @@ void addQueryCommand(CLI::App& app) {
                "or an OctoMap .bt with the keyframes' free space");
   auto args = std::make_shared<QueryArgs>();
   verb->add_option("MAP", args->map, "the map: a session file (.vdmap, vdmap map --save)")->required();
-  verb->add_option("--op", args->op, "what to ask: classify, distance, collide, ray (of --points), grid, octomap (exports)")
+  verb->add_option("--op", args->op,
+                   "what to ask: classify, distance, collide, ray (of --points), grid, octomap (exports)")
       ->required()
       ->check(CLI::IsMember({"classify", "distance", "collide", "ray", "grid", "octomap"}));
-  verb->add_option("--out", args->out,
-                   "output file: .txt or .ply (classify, distance, collide, ray), NAME.yaml (grid; NAME.pgm beside it), "
-                   ".bt (octomap); written atomically")
+  verb->add_option(
+          "--out", args->out,
+          "output file: .txt or .ply (classify, distance, collide, ray), NAME.yaml (grid; NAME.pgm beside it), "
+          ".bt (octomap); written atomically")
       ->required();
   verb->add_option("--points", args->points,
                    "the records asked about, .txt columns or .ply vertices: classify/distance x y z; collide x y z r "
                    "[body] (PLY: radius [body]); ray ox oy oz dx dy dz [max_range] (PLY: x y z nx ny nz)");
   verb->add_flag("--json", args->json, "print the summary as JSON");
-  verb->add_option("--keyframe", args->keyframe, "classify in keyframe K's local map alone (the paper's arm-planning case)")
+  verb->add_option("--keyframe", args->keyframe,
+                   "classify in keyframe K's local map alone (the paper's arm-planning case)")
       ->check(CLI::NonNegativeNumber);
-  verb->add_option("--clearance", args->clearance_m, "collide: a sphere collides closer than its radius + M to a surface")
+  verb->add_option("--clearance", args->clearance_m,
+                   "collide: a sphere collides closer than its radius + M to a surface")
       ->check(CLI::NonNegativeNumber & finiteCheck())
       ->capture_default_str();
   verb->add_option("--max-range", args->max_range_m, "ray: the range of rays without their own max_range (m)")

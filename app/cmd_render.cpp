@@ -12,16 +12,16 @@
 #include "app/verbs.h"
 #include "app/view/map_sequence.h"
 #include "app/view/render_check.h"
-#include "app/view/render_suite.h"
 #include "app/view/render_source.h"
+#include "app/view/render_suite.h"
 #include "app/view/render_view.h"
 #include "app/view/view_file.h"
 #include "mapping/core/atomic_file.h"
-#include "mapping/global_map/global_map.h"
 #include "mapping/core/error.h"
-#include "mapping/io/image_codec.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/files/session_file.h"
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/image_codec.h"
 #include "render/colormap.h"
 #include "render/container_renderer.h"
 #include "render/framebuffer.h"
@@ -66,7 +66,8 @@ void runRender(RenderArgs args) {
   if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out");  // as every verb says it
   if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
-                             "--mesh PLY, or --map and --mesh", CLI::ExitCodes::RequiredError);
+                             "--mesh PLY, or --map and --mesh",
+                             CLI::ExitCodes::RequiredError);
   if (!args.out.empty()) checkOutputFile(args.out, "--out");
   StageTimes times(args.check.timings);
   // The golden decodes before any work; its size is checked once the view's is known.
@@ -94,7 +95,8 @@ void runRender(RenderArgs args) {
   // --settings, --view-file and the flags.
   if (const auto thresholds = source.sessionThresholds()) view = resolveViewSpec(args.view, thresholds);
   source.checkView(view.spec);
-  if (const auto [w, h] = source.imageSize(view.spec); !golden.empty()) checkGoldenSize(args.check.expect, golden.size(), {w, h});
+  if (const auto [w, h] = source.imageSize(view.spec); !golden.empty())
+    checkGoldenSize(args.check.expect, golden.size(), {w, h});
   if (args.check.timings && view.spec.kind != render::ViewKind::kContainer) source.globalMap(view.thresholds);
   times.mark("build");
   const cv::Mat image = source.render(view.spec, view.thresholds);
@@ -146,9 +148,9 @@ void addRenderCommand(CLI::App& app) {
   addRenderCheckArgs(*verb, args->check);
   // The point queries' slice plane (docs/workbench.md "Queries"); not the height slice (--slice LO:HI).
   verb->add_option_function<std::string>(
-      "--query-slice", [args](const std::string& text) { args->query_slice = render::parseQuerySlice(text); },
-      "draw the query slice: a plane across AXIS (up: VALUE m above the floor; x, y, z: at that world coordinate), "
-      "coloured by what the map answers there (free, occupied, unknown), e.g. up=1.0")
+          "--query-slice", [args](const std::string& text) { args->query_slice = render::parseQuerySlice(text); },
+          "draw the query slice: a plane across AXIS (up: VALUE m above the floor; x, y, z: at that world coordinate), "
+          "coloured by what the map answers there (free, occupied, unknown), e.g. up=1.0")
       ->check(parsedBy(render::parseQuerySlice, "AXIS=VALUE"));
   verb->add_option_function<std::string>(
           "--query-slice-color",

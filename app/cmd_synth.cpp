@@ -62,8 +62,8 @@ void runSynth(const SynthArgs& args) {
   const int poses = static_cast<int>(trajectory.size());
   const FrameRange range{options.first_frame, options.last_frame < 0 ? poses : options.last_frame};
   if (range.first >= poses || range.last > poses)
-    throw std::invalid_argument("--frames " + args.frames + " ends past the trajectory: it has " + std::to_string(poses) +
-                                " poses (0:" + std::to_string(poses) + ")");
+    throw std::invalid_argument("--frames " + args.frames + " ends past the trajectory: it has " +
+                                std::to_string(poses) + " poses (0:" + std::to_string(poses) + ")");
   options.last_frame = range.last;
   ProgressBar progress("rendering", static_cast<std::size_t>(range.last - range.first));
   options.progress = [&progress](std::size_t done, std::size_t) { progress.update(done); };

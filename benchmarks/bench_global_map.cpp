@@ -14,9 +14,9 @@
 #include <sys/resource.h>
 
 #include "mapping/core/timing.h"
+#include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/parameters.h"
-#include "mapping/files/session_file.h"
 
 namespace {
 
@@ -74,7 +74,8 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
     if (!p.live) continue;
     const double was = p.get(values);
     double other = was * 0.8;
-    if (p.kind == vdmap::ParameterSpec::Kind::kBool || p.kind == vdmap::ParameterSpec::Kind::kChoice) other = was == 0 ? 1 : 0;
+    if (p.kind == vdmap::ParameterSpec::Kind::kBool || p.kind == vdmap::ParameterSpec::Kind::kChoice)
+      other = was == 0 ? 1 : 0;
     else if (p.kind == vdmap::ParameterSpec::Kind::kInt) other = was + 2;
     else if (std::string(p.key) == "tau_group") other = was + 0.05;
     std::vector<double> t_g, groups, merge, occlusion, fusion, t_g_before, cpu, cpu_before;
@@ -85,9 +86,8 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
       // Before the stage cache: the same edit with every stage re-run (in turns, under the same load).
       p.set(values, r % 2 == 0 ? other : was);
       workspace.forgetStages();
-      cpu_before.push_back(vdmap::cpuTimeMs([&] {
-        t_g_before.push_back(1e3 * vdmap::buildGlobalMap(session.graph, values.global, &workspace).t_g_s);
-      }));
+      cpu_before.push_back(vdmap::cpuTimeMs(
+          [&] { t_g_before.push_back(1e3 * vdmap::buildGlobalMap(session.graph, values.global, &workspace).t_g_s); }));
       p.set(values, r % 2 == 0 ? was : other);
       vdmap::buildGlobalMap(session.graph, values.global, &workspace);
       p.set(values, r % 2 == 0 ? other : was);
@@ -98,7 +98,8 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
       merge.push_back(map.merge_ms);
       occlusion.push_back(map.occlusion_ms);
       fusion.push_back(map.fusion_ms);
-      merged_groups.push_back(static_cast<double>(map.reuse.merged_groups) / std::max<std::size_t>(map.groups.size(), 1));
+      merged_groups.push_back(static_cast<double>(map.reuse.merged_groups) /
+                              std::max<std::size_t>(map.groups.size(), 1));
       occlusion_reused += map.reuse.occlusion;
       fusion_reused += map.reuse.fusion;
       if (r < 2) hash[r] = mapHash(map);
@@ -110,12 +111,12 @@ bool editSeries(const vdmap::Session& session, int runs, int threads = 2) {
     }
     p.set(values, was);
     all_same = all_same && same;
-    std::printf("edit %-20s threads %d: t_g median %7.1f ms (CPU %7.1f), all stages %7.1f ms (CPU %7.1f) (groups %.1f, merge %.1f, occlusion %.1f, fusion %.1f ms); "
-                "merge groups kept %3.0f %%, occlusion kept %d/%d, fusion kept %d/%d; fresh build's map: %s\n",
-                std::string(p.key).c_str(), threads, median(t_g), median(cpu), median(t_g_before), median(cpu_before),
-                median(groups), median(merge), median(occlusion),
-                median(fusion), 100 * median(merged_groups), occlusion_reused, 2 * runs, fusion_reused, 2 * runs,
-                same ? "yes" : "NO");
+    std::printf(
+        "edit %-20s threads %d: t_g median %7.1f ms (CPU %7.1f), all stages %7.1f ms (CPU %7.1f) (groups %.1f, merge %.1f, occlusion %.1f, fusion %.1f ms); "
+        "merge groups kept %3.0f %%, occlusion kept %d/%d, fusion kept %d/%d; fresh build's map: %s\n",
+        std::string(p.key).c_str(), threads, median(t_g), median(cpu), median(t_g_before), median(cpu_before),
+        median(groups), median(merge), median(occlusion), median(fusion), 100 * median(merged_groups), occlusion_reused,
+        2 * runs, fusion_reused, 2 * runs, same ? "yes" : "NO");
   }
   return all_same;
 }
@@ -163,14 +164,14 @@ int main(int argc, char** argv) {
     }
     for (Series* s : {&cold, &warm}) {
       const vdmap::GlobalMap& map = s->map;
-      std::printf("threads %d %s: %zu keyframes, sigma_e %zu -> merged %zu -> sigma_e' %zu; t_g median %.3f s "
-                  "(%.3f us/ellipsoid; CPU %.3f s, of it system %.3f s, %.0fk page faults; groups %.1f, merge %.1f, fusion %.1f, "
-                  "occlusion %.1f ms; %d runs)\n",
-                  threads, s == &cold ? "cold" : "warm", session.graph.size(), map.sigma_e, map.merged,
-                  map.sigma_e_prime, median(s->t_g),
-                  median(s->t_g) * 1e6 / static_cast<double>(std::max<std::size_t>(map.sigma_e, 1)), median(s->cpu),
-                  median(s->sys), 1e-3 * median(s->faults),
-                  median(s->groups), median(s->merge), median(s->fusion), median(s->occlusion), runs);
+      std::printf(
+          "threads %d %s: %zu keyframes, sigma_e %zu -> merged %zu -> sigma_e' %zu; t_g median %.3f s "
+          "(%.3f us/ellipsoid; CPU %.3f s, of it system %.3f s, %.0fk page faults; groups %.1f, merge %.1f, fusion %.1f, "
+          "occlusion %.1f ms; %d runs)\n",
+          threads, s == &cold ? "cold" : "warm", session.graph.size(), map.sigma_e, map.merged, map.sigma_e_prime,
+          median(s->t_g), median(s->t_g) * 1e6 / static_cast<double>(std::max<std::size_t>(map.sigma_e, 1)),
+          median(s->cpu), median(s->sys), 1e-3 * median(s->faults), median(s->groups), median(s->merge),
+          median(s->fusion), median(s->occlusion), runs);
       first.push_back(std::move(s->map));
     }
   }

@@ -42,7 +42,7 @@ struct Recording {
   std::vector<KeyframeView> views;  ///< the mapper's keyframes
   std::deque<Posed> dense;          ///< every 2nd frame
   std::vector<KeyframeView> dense_views;
-  std::vector<Posed> queries;       ///< every 100th frame (spread over all laps)
+  std::vector<Posed> queries;  ///< every 100th frame (spread over all laps)
 };
 Recording* g_recording = nullptr;
 
@@ -96,8 +96,8 @@ Recording record(const std::filesystem::path& folder) {
     }
     if (reports.size() % 2 == 1) {
       rec.dense.push_back({features, f->T_W_C});
-      rec.dense_views.push_back({static_cast<int>(rec.dense_views.size()), &rec.dense.back().T_W_C,
-                                 &rec.dense.back().features});
+      rec.dense_views.push_back(
+          {static_cast<int>(rec.dense_views.size()), &rec.dense.back().T_W_C, &rec.dense.back().features});
     }
     if (reports.size() % 100 == 0) rec.queries.push_back({features, f->T_W_C});
   }
@@ -105,7 +105,8 @@ Recording record(const std::filesystem::path& folder) {
   std::printf("%s: %zu frames, %zu keyframes, %d revisits, %zu query frames, dense graph of %zu\n", folder.c_str(),
               reports.size(), rec.views.size(), m.revisits(), rec.queries.size(), rec.dense.size());
   std::printf("index vs exhaustive search: %d of %d searching frames decided otherwise; %d of %d new keyframes "
-              "got other edges\n", differ, searches, edges_differ, new_keyframes);
+              "got other edges\n",
+              differ, searches, edges_differ, new_keyframes);
   printRunCost(reports, 8, 12, sizes);
   printRunCost(reports, 90, 110, sizes);
   return rec;
@@ -120,7 +121,8 @@ struct SearchSetup {
 SearchSetup searchSetup(const benchmark::State& state, const Recording& rec, bool dense) {
   const std::vector<KeyframeView>& views = dense ? rec.dense_views : rec.views;
   SearchSetup s{{views.data(), std::min<std::size_t>(state.range(0), views.size())},
-                rec.mapper->params().keyframes, std::make_unique<KeyframeIndex>()};
+                rec.mapper->params().keyframes,
+                std::make_unique<KeyframeIndex>()};
   s.index->sync(s.keyframes);
   return s;
 }
@@ -164,12 +166,26 @@ void BM_LoopClosureSearch(benchmark::State& state) { loopClosureSearch(state, fa
 void BM_LoopClosureSearchDense(benchmark::State& state) { loopClosureSearch(state, true); }
 BENCHMARK(BM_LoopClosureSearch)
     ->ArgNames({"keyframes", "index"})
-    ->Args({10, 0})->Args({10, 1})->Args({100, 0})->Args({100, 1})
-    ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
+    ->Args({10, 0})
+    ->Args({10, 1})
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 BENCHMARK(BM_LoopClosureSearchDense)
     ->ArgNames({"keyframes", "index"})
-    ->Args({10, 0})->Args({10, 1})->Args({100, 0})->Args({100, 1})->Args({1000, 0})->Args({1000, 1})
-    ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
+    ->Args({10, 0})
+    ->Args({10, 1})
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 
 // The index's query alone (vocabulary descent and inverted file), on the dense graph.
 void BM_IndexQueryDense(benchmark::State& state) {
@@ -181,8 +197,14 @@ void BM_IndexQueryDense(benchmark::State& state) {
   state.counters["time_per_search"] = perSearch(rec);
 }
 BENCHMARK(BM_IndexQueryDense)
-    ->ArgNames({"keyframes"})->Arg(10)->Arg(100)->Arg(1000)
-    ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
+    ->ArgNames({"keyframes"})
+    ->Arg(10)
+    ->Arg(100)
+    ->Arg(1000)
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 
 // The edges of a new keyframe (docs/method.md 5): the other search that visits every keyframe.
 void BM_NewKeyframeEdgesDense(benchmark::State& state) {
@@ -191,15 +213,21 @@ void BM_NewKeyframeEdgesDense(benchmark::State& state) {
   const bool use_index = state.range(1) != 0;
   for (auto _ : state)
     for (const Posed& q : rec.queries)
-      benchmark::DoNotOptimize(edgesOfNewKeyframe(q.features, q.T_W_C, -1, considered(s, q, use_index),
-                                                  rec.mapper->camera(), s.params));
+      benchmark::DoNotOptimize(
+          edgesOfNewKeyframe(q.features, q.T_W_C, -1, considered(s, q, use_index), rec.mapper->camera(), s.params));
   state.counters["keyframes"] = static_cast<double>(s.keyframes.size());
   state.counters["time_per_search"] = perSearch(rec);
 }
 BENCHMARK(BM_NewKeyframeEdgesDense)
     ->ArgNames({"keyframes", "index"})
-    ->Args({100, 0})->Args({100, 1})->Args({1000, 0})->Args({1000, 1})
-    ->Unit(benchmark::kMillisecond)->Iterations(1)->Repetitions(3)->ReportAggregatesOnly(true);
+    ->Args({100, 0})
+    ->Args({100, 1})
+    ->Args({1000, 0})
+    ->Args({1000, 1})
+    ->Unit(benchmark::kMillisecond)
+    ->Iterations(1)
+    ->Repetitions(3)
+    ->ReportAggregatesOnly(true);
 
 }  // namespace
 }  // namespace vdmap

@@ -51,7 +51,9 @@ void barChart(const std::vector<Bar>& bars, const std::string& title, const std:
   const int h = top + row * static_cast<int>(bars.size()) + 50;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const double lo = -1, hi = 4;
-  const auto x = [&](double v) { return left + static_cast<int>((std::log10(std::max(v, 0.1)) - lo) / (hi - lo) * (w - left - right)); };
+  const auto x = [&](double v) {
+    return left + static_cast<int>((std::log10(std::max(v, 0.1)) - lo) / (hi - lo) * (w - left - right));
+  };
   for (int e = -1; e <= 4; ++e) {
     cv::line(img, {x(std::pow(10, e)), top - 10}, {x(std::pow(10, e)), h - 40}, kGrid);
     text(img, e < 0 ? "0.1" : std::to_string(static_cast<int>(std::pow(10, e))), {x(std::pow(10, e)) - 10, h - 20});
@@ -76,7 +78,9 @@ void scatter(const std::vector<Point>& points, const std::string& title, const s
   for (const Point& p : points) ymax = std::max(ymax, p.rmse_mm);
   ymax = std::ceil(ymax / 5) * 5;
   const double lo = 3, hi = 7;  // 10^3 .. 10^7 elements
-  const auto px = [&](double n) { return left + static_cast<int>((std::log10(std::max(n, 1.0)) - lo) / (hi - lo) * (w - left - right)); };
+  const auto px = [&](double n) {
+    return left + static_cast<int>((std::log10(std::max(n, 1.0)) - lo) / (hi - lo) * (w - left - right));
+  };
   const auto py = [&](double r) { return h - bottom - static_cast<int>(r / ymax * (h - top - bottom)); };
   for (int e = 3; e <= 7; ++e) {
     cv::line(img, {px(std::pow(10, e)), top}, {px(std::pow(10, e)), h - bottom}, kGrid);
@@ -102,7 +106,8 @@ void scatter(const std::vector<Point>& points, const std::string& title, const s
 // median; ATE, failures and keyframes from the first run (the peers are deterministic).
 void trackingTable(const std::vector<json>& runs) {
   std::printf("| method | t [ms/frame], median of %zu runs | runs (min-max) | ATE RMSE [cm] | frames not registered | "
-              "keyframes |\n|---|---:|---:|---:|---:|---:|\n", runs.size());
+              "keyframes |\n|---|---:|---:|---:|---:|---:|\n",
+              runs.size());
   for (const std::string& k : runs[0]["odometry_order"].get<std::vector<std::string>>()) {
     const json& m = runs[0]["odometry"][k];
     if (m.contains("note")) {
@@ -111,8 +116,8 @@ void trackingTable(const std::vector<json>& runs) {
     }
     std::vector<double> ms;
     for (const json& r : runs) ms.push_back(r["odometry"][k]["ms_per_frame"].get<double>());
-    std::printf("| %s | %.2f | %.2f-%.2f | %.2f | %d | %s |\n", m["name"].get<std::string>().c_str(),
-                vdmap::median(ms), *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
+    std::printf("| %s | %.2f | %.2f-%.2f | %.2f | %d | %s |\n", m["name"].get<std::string>().c_str(), vdmap::median(ms),
+                *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
                 m["ate_rmse_m"].is_number() ? 100 * m["ate_rmse_m"].get<double>() : NAN, m["failures"].get<int>(),
                 m.contains("keyframes") ? std::to_string(m["keyframes"].get<int>()).c_str() : "-");
   }
@@ -136,20 +141,25 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
     rss.push_back(std::stod(f[3]));
     keyframes.push_back(std::stod(f[4]));
     if (f.size() > 7) heap.push_back(std::stod(f[7]));
-    if (f.size() > 5 && !f[5].empty()) global_frame.push_back(static_cast<double>(cpu.size() - 1)), global_size.push_back(std::stod(f[5]));
+    if (f.size() > 5 && !f[5].empty())
+      global_frame.push_back(static_cast<double>(cpu.size() - 1)), global_size.push_back(std::stod(f[5]));
   }
   if (cpu.empty()) throw std::runtime_error(csv_file + ": no frames");
   std::vector<double> running(cpu.size());
   for (std::size_t i = 0; i < cpu.size(); ++i) {
     const std::size_t a = i >= 50 ? i - 50 : 0, b = std::min(cpu.size(), i + 51);
-    running[i] = vdmap::median(std::vector<double>(cpu.begin() + static_cast<long>(a), cpu.begin() + static_cast<long>(b)));
+    running[i] =
+        vdmap::median(std::vector<double>(cpu.begin() + static_cast<long>(a), cpu.begin() + static_cast<long>(b)));
   }
   const int w = 1000, left = 80, right = 30, top = 70, panel = 150, gap = 40;
   const int h = top + 4 * (panel + gap) + 20;
   cv::Mat img(h, w, CV_8UC3, cv::Scalar(255, 255, 255));
   const double frames = static_cast<double>(cpu.size());
   const auto px = [&](double frame) { return left + static_cast<int>(frame / frames * (w - left - right)); };
-  text(img, "long run: " + std::to_string(cpu.size()) + " frames; CPU of the mapping thread (decoding and ORB run on the prefetch thread)", {10, 25}, 0.6);
+  text(img,
+       "long run: " + std::to_string(cpu.size()) +
+           " frames; CPU of the mapping thread (decoding and ORB run on the prefetch thread)",
+       {10, 25}, 0.6);
   int y0 = top;
   // One panel: y from 0 to the largest value (of `clip` if given, so a few slow frames do not
   // flatten the rest), a dot or a line per series.
@@ -169,14 +179,17 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
     for (std::size_t i = 0; i < v.size(); ++i) {
       const cv::Point p(px(x.empty() ? static_cast<double>(i) : x[i]), py(v[i], ymax));
       if (dots) cv::circle(img, p, 1, c, cv::FILLED);
-      if (i > 0 && !dots) cv::line(img, {px(x.empty() ? static_cast<double>(i - 1) : x[i - 1]), py(v[i - 1], ymax)}, p, c, 2, cv::LINE_AA);
+      if (i > 0 && !dots)
+        cv::line(img, {px(x.empty() ? static_cast<double>(i - 1) : x[i - 1]), py(v[i - 1], ymax)}, p, c, 2,
+                 cv::LINE_AA);
     }
   };
   auto maxOf = [](const std::vector<double>& v) { return std::max(1e-9, *std::max_element(v.begin(), v.end())) * 1.1; };
   std::vector<double> sorted = cpu;
   std::sort(sorted.begin(), sorted.end());
   const double cpu_max = sorted[sorted.size() * 99 / 100] * 1.5;  // the 99th percentile sets the scale
-  axes("mapping thread CPU ms per frame (grey: each frame, blue: running median of 101; the slowest 1% may be cut)", cpu_max);
+  axes("mapping thread CPU ms per frame (grey: each frame, blue: running median of 101; the slowest 1% may be cut)",
+       cpu_max);
   series({}, cpu, cpu_max, cv::Scalar(190, 190, 190), true);
   series({}, running, cpu_max, kVdmap, false);
   y0 += panel + gap;
@@ -191,9 +204,11 @@ void longRunPlot(const std::string& csv_file, const std::string& file) {
     axes("global map ellipsoids", maxOf(global_size));
     series(global_frame, global_size, maxOf(global_size), kVdmap, false);
     for (std::size_t i = 0; i < global_size.size(); ++i)
-      cv::circle(img, {px(global_frame[i]), py(global_size[i], maxOf(global_size))}, 4, kVdmap, cv::FILLED, cv::LINE_AA);
+      cv::circle(img, {px(global_frame[i]), py(global_size[i], maxOf(global_size))}, 4, kVdmap, cv::FILLED,
+                 cv::LINE_AA);
   }
-  for (int k = 0; k <= 4; ++k) text(img, std::to_string(static_cast<int>(frames * k / 4)), {px(frames * k / 4) - 12, h - 8}, 0.4);
+  for (int k = 0; k <= 4; ++k)
+    text(img, std::to_string(static_cast<int>(frames * k / 4)), {px(frames * k / 4) - 12, h - 8}, 0.4);
   vdmap::writeImageFile(file, img, vdmap::ChannelOrder::kBgr);
 }
 
@@ -228,8 +243,9 @@ int main(int argc, char** argv) {
     for (const auto& f : speed) runs.push_back(load(f));
     // Methods in the order of the first run; medians over the runs.
     std::vector<Bar> bars;
-    std::printf("| method | t_u [ms/frame], median of %zu runs | runs (min-max) | x vdmap update | elements |\n|---|---:|---:|---:|---:|\n",
-                runs.size());
+    std::printf(
+        "| method | t_u [ms/frame], median of %zu runs | runs (min-max) | x vdmap update | elements |\n|---|---:|---:|---:|---:|\n",
+        runs.size());
     double vd = 0;
     std::vector<std::string> order = runs[0]["method_order"];
     // Not timed: a peer that did not run (note) and the accuracy-only cell sizes (0 ms).
@@ -244,16 +260,18 @@ int main(int argc, char** argv) {
       if (k == "vd_update") vd = med;
       const json& m = runs[0]["methods"][k];
       std::printf("| %s | %.2f | %.2f-%.2f | %.1f | %zu |\n", m["name"].get<std::string>().c_str(), med,
-                  *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()), vd > 0 ? med / vd : 0.0,
-                  m["elements"].get<std::size_t>());
+                  *std::min_element(ms.begin(), ms.end()), *std::max_element(ms.begin(), ms.end()),
+                  vd > 0 ? med / vd : 0.0, m["elements"].get<std::size_t>());
       bars.push_back({m["name"].get<std::string>(), med, k.rfind("vd_", 0) == 0});
     }
     std::vector<double> tg;
     for (const json& r : runs) tg.push_back(r["t_g_us_per_ellipsoid"].get<double>());
     std::printf("\nt_g: median %.2f us per input ellipsoid (Sigma_e %zu -> Sigma_e' %zu in the first run)\n",
                 vdmap::median(tg), runs[0]["sigma_e"].get<std::size_t>(), runs[0]["sigma_e_prime"].get<std::size_t>());
-    barChart(bars, "update time per frame, ms (log scale), 7-Scenes RedKitchen, " +
-                       std::to_string(runs[0]["frames"].get<int>()) + " frames, one thread", png_dir + "/speed.png");
+    barChart(bars,
+             "update time per frame, ms (log scale), 7-Scenes RedKitchen, " +
+                 std::to_string(runs[0]["frames"].get<int>()) + " frames, one thread",
+             png_dir + "/speed.png");
     if (accuracy.empty()) return 0;
     const json a = load(accuracy);
     std::printf("\n| method | elements | RMSE [mm] | mean [mm] | median [mm] | completion [mm] | within 5 cm |\n"
@@ -279,7 +297,8 @@ int main(int argc, char** argv) {
                   r["completion_mean_mm"].get<double>(), 100 * r["completion_ratio_5cm"].get<double>());
       pts.push_back({name, r["elements"].get<double>(), r["rmse_mm"].get<double>(), key.rfind("vd_", 0) == 0});
     }
-    scatter(pts, "RMSE vs elements, noisy Replica office0 render (" + std::to_string(a["frames"].get<int>()) + " frames)",
+    scatter(pts,
+            "RMSE vs elements, noisy Replica office0 render (" + std::to_string(a["frames"].get<int>()) + " frames)",
             png_dir + "/accuracy.png");
   } catch (const std::exception& e) {
     std::fprintf(stderr, "plot_bench: %s\n", e.what());

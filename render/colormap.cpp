@@ -24,8 +24,7 @@ std::vector<glm::u8vec4> rampColors(const std::vector<float>& values) {
   if (values.empty()) return colors;
   const auto [lo, hi] = std::minmax_element(values.begin(), values.end());
   const float span = *hi - *lo > 1e-9f ? *hi - *lo : 1.f;
-  for (std::size_t i = 0; i < values.size(); ++i)
-    colors[i] = glm::u8vec4(colormap((values[i] - *lo) / span), 255);
+  for (std::size_t i = 0; i < values.size(); ++i) colors[i] = glm::u8vec4(colormap((values[i] - *lo) / span), 255);
   return colors;
 }
 
@@ -33,9 +32,8 @@ std::vector<glm::u8vec4> rampColors(const std::vector<float>& values) {
 
 glm::u8vec3 colormap(float t) {
   // Viridis sampled at 9 stops, linearly interpolated.
-  static const float kStops[9][3] = {{68, 1, 84},    {71, 44, 122},  {59, 81, 139},
-                                     {44, 113, 142}, {33, 144, 141}, {39, 173, 129},
-                                     {92, 200, 99},  {170, 220, 50}, {253, 231, 37}};
+  static const float kStops[9][3] = {{68, 1, 84},    {71, 44, 122}, {59, 81, 139},  {44, 113, 142}, {33, 144, 141},
+                                     {39, 173, 129}, {92, 200, 99}, {170, 220, 50}, {253, 231, 37}};
   t = std::clamp(std::isfinite(t) ? t : 0.f, 0.f, 1.f) * 8.f;
   const int i = std::min(7, static_cast<int>(t));
   const float f = t - i;

@@ -34,8 +34,8 @@ std::optional<ProjectedEllipse> projectEllipsoid(const EllipsoidInstance& e, con
   const Eigen::Matrix3d R = T_K_W.linear();
   const Eigen::Matrix3d cov_K = R * cov_W * R.transpose();
   Eigen::Matrix<double, 2, 3> J;
-  J << camera.fx / p.z(), 0, -camera.fx * p.x() / (p.z() * p.z()),
-       0, camera.fy / p.z(), -camera.fy * p.y() / (p.z() * p.z());
+  J << camera.fx / p.z(), 0, -camera.fx * p.x() / (p.z() * p.z()), 0, camera.fy / p.z(),
+      -camera.fy * p.y() / (p.z() * p.z());
   const Eigen::Matrix2d cov2 = J * cov_K * J.transpose();
   const Eigen::Vector2d uv = camera.project(p);
   ProjectedEllipse out;
@@ -48,8 +48,8 @@ std::optional<ProjectedEllipse> projectEllipsoid(const EllipsoidInstance& e, con
 ContainerRenderer::ContainerRenderer(const Gl& gl)
     : gl_(&gl),
       background_(std::make_unique<ShaderProgram>(gl, "container_background.vert", "container_background.frag")),
-      ellipses_(std::make_unique<ShaderProgram>(gl, "ellipse2d.vert", "ellipse2d.frag")),
-      background_vao_(gl), ellipse_vao_(gl), instances_(gl), texture_(gl) {
+      ellipses_(std::make_unique<ShaderProgram>(gl, "ellipse2d.vert", "ellipse2d.frag")), background_vao_(gl),
+      ellipse_vao_(gl), instances_(gl), texture_(gl) {
   ellipse_vao_.bind();
   instances_.upload(nullptr, 0);
   const std::size_t stride = sizeof(EllipseGpu);

@@ -32,11 +32,11 @@ std::optional<ProjectedEllipse> projectEllipsoid(const EllipsoidInstance& e, con
                                                  const Transform& T_K_W);
 
 struct ContainerStyle {
-  float sigma = 2.f;        ///< ellipses drawn out to this Mahalanobis radius
+  float sigma = 2.f;  ///< ellipses drawn out to this Mahalanobis radius
   ColorMode color = ColorMode::kRgb;
-  int cell_size_px = 5;     ///< grid spacing (default s = 5 px)
+  int cell_size_px = 5;  ///< grid spacing (default s = 5 px)
   bool show_grid = false;
-  bool show_bounds = false; ///< the keyframe image's outline (yellow, about 1.5 output pixels)
+  bool show_bounds = false;  ///< the keyframe image's outline (yellow, about 1.5 output pixels)
   bool operator==(const ContainerStyle&) const = default;
 };
 

@@ -51,13 +51,12 @@ std::vector<float> geometryOf(std::span<const EllipsoidInstance> ellipsoids, flo
 }  // namespace
 
 EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
-    : gl_(&gl), style_(style),
-      program_(std::make_unique<ShaderProgram>(gl, "ellipsoid.vert", "shaded.frag")),
+    : gl_(&gl), style_(style), program_(std::make_unique<ShaderProgram>(gl, "ellipsoid.vert", "shaded.frag")),
       point_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_point.vert", "ellipsoid_point.frag")),
-      fast_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_fast.vert", "ellipsoid_fast.frag")),
-      vao_(gl), near_vao_(gl), point_vao_(gl), fast_vao_(gl), sphere_vertices_(gl),
-      sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER), geometry_(gl), colors_(gl), lod_order_(gl, GL_ELEMENT_ARRAY_BUFFER),
-      near_geometry_(gl), near_colors_(gl), far_indices_(gl, GL_ELEMENT_ARRAY_BUFFER) {
+      fast_program_(std::make_unique<ShaderProgram>(gl, "ellipsoid_fast.vert", "ellipsoid_fast.frag")), vao_(gl),
+      near_vao_(gl), point_vao_(gl), fast_vao_(gl), sphere_vertices_(gl), sphere_indices_(gl, GL_ELEMENT_ARRAY_BUFFER),
+      geometry_(gl), colors_(gl), lod_order_(gl, GL_ELEMENT_ARRAY_BUFFER), near_geometry_(gl), near_colors_(gl),
+      far_indices_(gl, GL_ELEMENT_ARRAY_BUFFER) {
   const Icosphere sphere = makeIcosphere(style.sphere_subdivisions);
   index_count_ = static_cast<GLsizei>(sphere.triangles.size() * 3);
   sphere_vertices_.upload(sphere.vertices.data(), sphere.vertices.size() * sizeof(glm::vec3));
@@ -69,7 +68,8 @@ EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
     sphere_vertices_.attribute(0, 3, GL_FLOAT, false, sizeof(glm::vec3), 0);
     sphere_indices_.bind();
     geometry.upload(nullptr, 0);
-    for (GLuint k = 0; k < 4; ++k) geometry.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k, 1);
+    for (GLuint k = 0; k < 4; ++k)
+      geometry.attribute(1 + k, 3, GL_FLOAT, false, kGeometryStride, 3 * sizeof(float) * k, 1);
     colors.upload(nullptr, 0);
     colors.attribute(5, 4, GL_UNSIGNED_BYTE, true, 4, 0, 1);
   };
@@ -108,8 +108,9 @@ void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
 
 void EllipsoidRenderer::setStyle(const EllipsoidStyle& style) {
   const bool geometry_changed = style.sigma != style_.sigma;
-  const bool colors_changed = style.color != style_.color ||
-                              (style.color == ColorMode::kHeight && (style.height != style_.height || style.slice != style_.slice));
+  const bool colors_changed =
+      style.color != style_.color ||
+      (style.color == ColorMode::kHeight && (style.height != style_.height || style.slice != style_.slice));
   style_.sigma = style.sigma;
   style_.color = style.color;  // the sphere level is fixed at construction
   style_.height = style.height;
@@ -134,8 +135,8 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
   // centre projects further outside the image than its half-width (`reach`) touches none of its
   // pixels.
   const glm::mat4& V = view.T_C_W;
-  const MeshSelectionKey key{V, {view.fx, view.fy, view.cx, view.cy}, {view.width, view.height}, view.near_m,
-                             style_.point_below_px};
+  const MeshSelectionKey key{
+      V, {view.fx, view.fy, view.cx, view.cy}, {view.width, view.height}, view.near_m, style_.point_below_px};
   if (near_key_ == key) return near_colors_cpu_.size();
   near_key_ = key;
   const glm::vec4 row_x(V[0][0], V[1][0], V[2][0], V[3][0]), row_y(V[0][1], V[1][1], V[2][1], V[3][1]);
@@ -161,7 +162,8 @@ std::size_t EllipsoidRenderer::selectMeshInstances(const ViewCamera& view) const
     const float* g = &geometry_cpu_[12 * i];
     const float z = row_z.x * g[0] + row_z.y * g[1] + row_z.z * g[2] + row_z.w;
     float r2 = 0.f;
-    for (int k = 0; k < 3; ++k) r2 = std::max(r2, g[3 + 3 * k] * g[3 + 3 * k] + g[4 + 3 * k] * g[4 + 3 * k] + g[5 + 3 * k] * g[5 + 3 * k]);
+    for (int k = 0; k < 3; ++k)
+      r2 = std::max(r2, g[3 + 3 * k] * g[3 + 3 * k] + g[4 + 3 * k] * g[4 + 3 * k] + g[5 + 3 * k] * g[5 + 3 * k]);
     const float r = std::sqrt(r2);
     if (z + r < view.near_m) continue;
     const glm::vec3 c(row_x.x * g[0] + row_x.y * g[1] + row_x.z * g[2] + row_x.w,

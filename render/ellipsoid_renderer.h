@@ -13,7 +13,7 @@
 namespace vdmap::render {
 
 struct EllipsoidStyle {
-  float sigma = 2.f;            ///< drawn surface at this many standard deviations
+  float sigma = 2.f;  ///< drawn surface at this many standard deviations
   ColorMode color = ColorMode::kRgb;
   int sphere_subdivisions = 1;  ///< icosphere level of the instanced mesh (42 vertices at 1)
   /// Level of detail: an ellipsoid whose bounding sphere projects to a radius below this many

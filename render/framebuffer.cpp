@@ -19,8 +19,7 @@ Framebuffer::Framebuffer(const Gl& gl, int width, int height, bool with_float_ta
   const int max_side = std::min<int>(kMaxImageSide, limit > 0 ? limit : kMaxImageSide);
   if (width < 1 || height < 1 || width > max_side || height > max_side)
     throw std::invalid_argument("image size " + std::to_string(width) + "x" + std::to_string(height) +
-                                " is outside 1x1 .. " + std::to_string(max_side) + "x" +
-                                std::to_string(max_side));
+                                " is outside 1x1 .. " + std::to_string(max_side) + "x" + std::to_string(max_side));
   gl.GenFramebuffers(1, &fbo_);
   gl.BindFramebuffer(GL_FRAMEBUFFER, fbo_);
   auto attach = [&](GLuint& rb, GLenum format, GLenum attachment) {
@@ -94,8 +93,6 @@ std::optional<float> readDepth(const Gl& gl, int x, int y) {
   return depth;
 }
 
-void writePng(const std::filesystem::path& file, const cv::Mat& rgb) {
-  writeFileAtomically(file, encodePng(rgb));
-}
+void writePng(const std::filesystem::path& file, const cv::Mat& rgb) { writeFileAtomically(file, encodePng(rgb)); }
 
 }  // namespace vdmap::render

@@ -7,8 +7,8 @@ namespace vdmap::render {
 
 Gl loadGl(const GetProcFn& get_proc) {
   Gl gl;
-#define X(ret, name, args)                                                          \
-  gl.name = reinterpret_cast<ret(APIENTRYP) args>(get_proc("gl" #name));            \
+#define X(ret, name, args)                                               \
+  gl.name = reinterpret_cast<ret(APIENTRYP) args>(get_proc("gl" #name)); \
   if (!gl.name) throw std::runtime_error("OpenGL context lacks gl" #name " (need OpenGL 3.3 core)");
 #include "render/gl_functions.inc"
 #undef X

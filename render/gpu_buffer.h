@@ -27,12 +27,12 @@ class GpuBuffer {
     }
   }
   /// Binds and describes float attribute `index` (components, stride and offset in bytes).
-  void attribute(GLuint index, GLint components, GLenum type, bool normalized, std::size_t stride,
-                 std::size_t offset, GLuint divisor = 0) const {
+  void attribute(GLuint index, GLint components, GLenum type, bool normalized, std::size_t stride, std::size_t offset,
+                 GLuint divisor = 0) const {
     bind();
     gl_->EnableVertexAttribArray(index);
-    gl_->VertexAttribPointer(index, components, type, normalized ? GL_TRUE : GL_FALSE,
-                             static_cast<GLsizei>(stride), reinterpret_cast<const void*>(offset));
+    gl_->VertexAttribPointer(index, components, type, normalized ? GL_TRUE : GL_FALSE, static_cast<GLsizei>(stride),
+                             reinterpret_cast<const void*>(offset));
     gl_->VertexAttribDivisor(index, divisor);
   }
 

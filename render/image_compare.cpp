@@ -11,9 +11,7 @@
 namespace vdmap::render {
 namespace {
 
-std::string sizeText(const cv::Mat& image) {
-  return std::to_string(image.cols) + "x" + std::to_string(image.rows);
-}
+std::string sizeText(const cv::Mat& image) { return std::to_string(image.cols) + "x" + std::to_string(image.rows); }
 
 void requireComparable(const cv::Mat& expected, const cv::Mat& actual, const ImageTolerance& tolerance) {
   if (expected.empty() || actual.empty()) throw std::invalid_argument("compareImages: an image is empty");

@@ -22,14 +22,14 @@ struct ImageTolerance {
 /// How two images of the same size differ. Counts are of pixels; a pixel's difference is the
 /// largest absolute difference of its three channels.
 struct ImageComparison {
-  long pixels = 0;       ///< width x height
-  long differing = 0;    ///< pixels differing by more than tolerance.channel_counts
-  long over1 = 0;        ///< pixels differing by more than 1 count
-  long over32 = 0;       ///< pixels differing by more than 32 counts
-  int worst = 0;         ///< the largest difference, in counts (0: identical)
-  double share = 0;      ///< differing / pixels
-  cv::Rect where;        ///< bounding box of the differing pixels (empty when none differ)
-  bool matches = true;   ///< share <= tolerance.pixel_share
+  long pixels = 0;      ///< width x height
+  long differing = 0;   ///< pixels differing by more than tolerance.channel_counts
+  long over1 = 0;       ///< pixels differing by more than 1 count
+  long over32 = 0;      ///< pixels differing by more than 32 counts
+  int worst = 0;        ///< the largest difference, in counts (0: identical)
+  double share = 0;     ///< differing / pixels
+  cv::Rect where;       ///< bounding box of the differing pixels (empty when none differ)
+  bool matches = true;  ///< share <= tolerance.pixel_share
   ImageTolerance tolerance;
 
   /// One line: "1532 of 76800 pixels (2%, allowed 0.5%) differ by more than 8 counts; 2011 by
@@ -42,7 +42,8 @@ struct ImageComparison {
 /// as both share it). Throws std::invalid_argument for empty images, another type, a tolerance
 /// out of range, or images of different sizes ("the expected image is 320x240, the actual one
 /// 160x120").
-ImageComparison compareImages(const cv::Mat& expected_rgb, const cv::Mat& actual_rgb, const ImageTolerance& tolerance = {});
+ImageComparison compareImages(const cv::Mat& expected_rgb, const cv::Mat& actual_rgb,
+                              const ImageTolerance& tolerance = {});
 
 /// An RGB picture of where two images differ: `expected` in grey at half contrast
 /// (64 + luma / 2), the pixels that differ beyond `tolerance` in red (255, 0, 0), and a 1 px

@@ -58,8 +58,8 @@ std::string metresText(double m) {
   return text;
 }
 
-Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const GraphScene& graph,
-                 bool trajectory_shown, bool groundtruth_shown, bool loops_shown) {
+Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const GraphScene& graph, bool trajectory_shown,
+                 bool groundtruth_shown, bool loops_shown) {
   Legend legend;
   if (graph.tracked) {
     if (trajectory_shown) legend.lines.push_back({kTrajectoryColor, "tracked"});
@@ -174,7 +174,8 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
       if (strip_rows == 1) {
         const std::string& mid = legend.swatches[n / 2].text;
         const int mid_x = pad + (n / 2) * strip_cell + strip_cell / 2 - m.textWidth(mid) / 2;
-        if (mid_x > pad + m.textWidth(first) + m.px(6) && mid_x + m.textWidth(mid) + m.px(6) < last_x - m.textWidth(end))
+        if (mid_x > pad + m.textWidth(first) + m.px(6) &&
+            mid_x + m.textWidth(mid) + m.px(6) < last_x - m.textWidth(end))
           c.text(mid, mid_x, y + ascent);
       }
     } else {

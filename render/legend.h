@@ -30,10 +30,10 @@ struct LegendKey {
 
 /// What the legend says. Empty parts are not drawn; an empty legend draws nothing.
 struct Legend {
-  std::vector<LegendKey> lines;   ///< tracking key: the trajectory, ground truth, loop closures
-  std::string ramp_title;         ///< "largest std. deviation (log scale)"; empty: no ramp
-  std::string ramp_lo, ramp_hi;   ///< the ramp's ends, in the title's units
-  std::string swatch_title;       ///< "keyframe colours"; empty: no swatches
+  std::vector<LegendKey> lines;     ///< tracking key: the trajectory, ground truth, loop closures
+  std::string ramp_title;           ///< "largest std. deviation (log scale)"; empty: no ramp
+  std::string ramp_lo, ramp_hi;     ///< the ramp's ends, in the title's units
+  std::string swatch_title;         ///< "keyframe colours"; empty: no swatches
   std::vector<LegendKey> swatches;  ///< one per keyframe, K0, K1, ...
   bool empty() const { return lines.empty() && ramp_title.empty() && swatch_title.empty(); }
   bool operator==(const Legend&) const = default;

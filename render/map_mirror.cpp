@@ -49,7 +49,8 @@ GraphLines graphLines(const GraphScene& scene, const MirrorStyle& style) {
     addFrustum(lines, scene.camera, scene.keyframes[i], kKeyframeFrustumDepthM, color);
   }
   if (style.graph) addEdges(lines, scene.keyframes, scene.edges);
-  if (!scene.trajectory.empty()) addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
+  if (!scene.trajectory.empty())
+    addFrustum(lines, scene.camera, scene.trajectory.back(), kCameraFrustumDepthM, kCamera);
   if (style.graph) addEdges(out.paths, scene.keyframes, scene.loops, kLoopEdgeColor);
   if (style.groundtruth) addTrajectory(out.paths, scene.groundtruth, kGroundTruthColor);
   if (style.trajectory) addTrajectory(out.paths, scene.trajectory, kTrajectoryColor);
@@ -102,8 +103,8 @@ cv::Mat readFramebufferRgb(const Gl& gl, int x, int y, int width, int height) {
 // view's frame time falls with the triangles (docs/notes/performance.md).
 MapMirror::MapMirror(const Gl& gl, int sphere_level)
     : gl_(&gl), ellipsoids_(gl, {.sphere_subdivisions = sphere_level}), points_(gl), lines_(gl), paths_(gl),
-      highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), query_slice_renderer_(gl), rgb_(gl), depth_(gl),
-      container_image_(gl) {
+      highlight_(gl), container_(gl), legend_(std::make_unique<OverlayRenderer>(gl)), query_slice_renderer_(gl),
+      rgb_(gl), depth_(gl), container_image_(gl) {
   lines_.setWidth(1.5f);
   // The trajectories and loop edges are what one compares: drawn over the map, never hidden by
   // it, and wider where the context allows (a core profile draws 1 px).
@@ -124,7 +125,8 @@ void MapMirror::setStyle(const MirrorStyle& style) {
                         .height = style.height,
                         .slice = style.slice});
   if (style.color != points_style_.color ||
-      (style.color == ColorMode::kHeight && (style.height != points_style_.height || style.slice != points_style_.slice))) {
+      (style.color == ColorMode::kHeight &&
+       (style.height != points_style_.height || style.slice != points_style_.slice))) {
     points_.set(instances_, style.color, style.height, style.slice);
     points_style_ = style;
   }
@@ -143,8 +145,10 @@ void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
 
 void MapMirror::setGraph(int generation, int selected_keyframe, const std::function<GraphScene()>& build, int variant) {
   const bool toggles_same = style_.frustums == graph_style_.frustums && style_.graph == graph_style_.graph &&
-                            style_.trajectory == graph_style_.trajectory && style_.groundtruth == graph_style_.groundtruth;
-  if (generation == graph_generation_ && selected_keyframe == graph_selected_ && variant == graph_variant_ && toggles_same)
+                            style_.trajectory == graph_style_.trajectory &&
+                            style_.groundtruth == graph_style_.groundtruth;
+  if (generation == graph_generation_ && selected_keyframe == graph_selected_ && variant == graph_variant_ &&
+      toggles_same)
     return;
   graph_generation_ = generation;
   graph_selected_ = selected_keyframe;
@@ -166,7 +170,8 @@ void MapMirror::setFrame(int generation, const cv::Mat& rgb, const cv::Mat& dept
 }
 
 void MapMirror::setContainer(int generation, int keyframe, const cv::Mat& rgb, const PinholeCamera& camera,
-                             const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids, const ContainerStyle& style) {
+                             const Transform& T_W_K, std::span<const Ellipsoid> ellipsoids,
+                             const ContainerStyle& style) {
   if (generation == container_generation_ && style == container_style_) return;
   container_generation_ = generation;
   container_style_ = style;
@@ -241,6 +246,8 @@ void MapMirror::setQuerySlice(std::shared_ptr<const QuerySliceImage> slice) {
   ++content_serial_;
 }
 
-std::optional<ColorRange> MapMirror::mapColorRange() const { return colorRange(instances_, style_.color, style_.height, style_.slice); }
+std::optional<ColorRange> MapMirror::mapColorRange() const {
+  return colorRange(instances_, style_.color, style_.height, style_.slice);
+}
 
 }  // namespace vdmap::render

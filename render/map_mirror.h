@@ -19,8 +19,8 @@
 #include "render/container_renderer.h"
 #include "render/ellipsoid_renderer.h"
 #include "render/framebuffer.h"
-#include "render/overlay_renderer.h"
 #include "render/legend.h"
+#include "render/overlay_renderer.h"
 #include "render/primitive_renderer.h"
 #include "render/query_slice.h"
 #include "render/scene_lines.h"
@@ -31,14 +31,14 @@ namespace vdmap::render {
 /// How the 3-D view draws the mirror.
 struct MirrorStyle {
   ColorMode color = ColorMode::kRgb;
-  float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
-  bool ellipsoids = true;             ///< false: the ellipsoid centres as points
-  bool map = true;                    ///< false: draw mode "none", the map hidden (lines still drawn)
+  float sigma = 2.f;       ///< ellipsoid surfaces at this many standard deviations
+  bool ellipsoids = true;  ///< false: the ellipsoid centres as points
+  bool map = true;         ///< false: draw mode "none", the map hidden (lines still drawn)
   bool frustums = true, graph = true, trajectory = true;
-  bool groundtruth = true;            ///< GraphScene::groundtruth
-  float points_below_px = 4.f;        ///< EllipsoidStyle::point_below_px
-  HeightFrame height{};               ///< height colours: up axis and floor (heightFrame of the whole map)
-  HeightSlice slice{};                ///< height colours: the ramp spans the slice when it is on
+  bool groundtruth = true;      ///< GraphScene::groundtruth
+  float points_below_px = 4.f;  ///< EllipsoidStyle::point_below_px
+  HeightFrame height{};         ///< height colours: up axis and floor (heightFrame of the whole map)
+  HeightSlice slice{};          ///< height colours: the ramp spans the slice when it is on
   bool operator==(const MirrorStyle&) const = default;
 };
 

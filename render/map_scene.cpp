@@ -120,7 +120,8 @@ GraphScene graphSceneOf(const KeyframeGraph& graph, const MapperState& state, co
   GraphScene scene;
   scene.camera = camera;
   for (const Keyframe& k : graph.keyframes()) scene.keyframes.push_back(k.T_W_K);
-  for (const CovisibilityEdge& e : graph.edges().edges()) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  for (const CovisibilityEdge& e : graph.edges().edges())
+    scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
   for (const LoopClosure& l : state.loops) scene.loops.push_back({l.from, l.to, 1.f});
   // Sessions since format 4 store every mapped frame's pose; older ones only the keyframes'.
   const int n = static_cast<int>(scene.keyframes.size());

@@ -6,8 +6,8 @@
 namespace vdmap::render {
 
 MeshRenderer::MeshRenderer(const Gl& gl)
-    : gl_(&gl), program_(std::make_unique<ShaderProgram>(gl, "mesh.vert", "mesh.frag")), vao_(gl),
-      positions_(gl), colors_(gl), indices_(gl, GL_ELEMENT_ARRAY_BUFFER) {
+    : gl_(&gl), program_(std::make_unique<ShaderProgram>(gl, "mesh.vert", "mesh.frag")), vao_(gl), positions_(gl),
+      colors_(gl), indices_(gl, GL_ELEMENT_ARRAY_BUFFER) {
   vao_.bind();
   positions_.upload(nullptr, 0);
   positions_.attribute(0, 3, GL_FLOAT, false, sizeof(glm::vec3), 0);

@@ -14,9 +14,9 @@ namespace {
 
 // From GL/osmesa.h (not included: it pulls in GL/gl.h with linked prototypes).
 using OSMesaContext = void*;
-constexpr int kOsmesaFormat = 0x22, kOsmesaRgba = 0x1908, kOsmesaDepthBits = 0x30,
-              kOsmesaStencilBits = 0x31, kOsmesaAccumBits = 0x32, kOsmesaProfile = 0x33,
-              kOsmesaCoreProfile = 0x34, kOsmesaMajor = 0x36, kOsmesaMinor = 0x37;
+constexpr int kOsmesaFormat = 0x22, kOsmesaRgba = 0x1908, kOsmesaDepthBits = 0x30, kOsmesaStencilBits = 0x31,
+              kOsmesaAccumBits = 0x32, kOsmesaProfile = 0x33, kOsmesaCoreProfile = 0x34, kOsmesaMajor = 0x36,
+              kOsmesaMinor = 0x37;
 using CreateAttribsFn = OSMesaContext (*)(const int*, OSMesaContext);
 using MakeCurrentFn = unsigned char (*)(OSMesaContext, void*, GLenum, GLsizei, GLsizei);
 using DestroyFn = void (*)(OSMesaContext);
@@ -32,9 +32,8 @@ class OsmesaContext final : public Context {
     for (const std::string& name : names)
       if ((lib_ = dlopen(name.c_str(), RTLD_NOW | RTLD_LOCAL))) break;
     if (!lib_)
-      throw std::runtime_error("off-screen rendering needs OSMesa, which is not available (" +
-                               names.front() + ": " + dlerror() +
-                               "); install libosmesa6 (Debian) or set VDMAP_OSMESA_LIBRARY");
+      throw std::runtime_error("off-screen rendering needs OSMesa, which is not available (" + names.front() + ": " +
+                               dlerror() + "); install libosmesa6 (Debian) or set VDMAP_OSMESA_LIBRARY");
     create_ = reinterpret_cast<CreateAttribsFn>(dlsym(lib_, "OSMesaCreateContextAttribs"));
     make_current_ = reinterpret_cast<MakeCurrentFn>(dlsym(lib_, "OSMesaMakeCurrent"));
     destroy_ = reinterpret_cast<DestroyFn>(dlsym(lib_, "OSMesaDestroyContext"));
@@ -43,9 +42,21 @@ class OsmesaContext final : public Context {
       dlclose(lib_);
       throw std::runtime_error("the OSMesa library found lacks OSMesaCreateContextAttribs (need Mesa >= 12)");
     }
-    const int attribs[] = {kOsmesaFormat, kOsmesaRgba, kOsmesaDepthBits, 24, kOsmesaStencilBits, 0,
-                           kOsmesaAccumBits, 0, kOsmesaProfile, kOsmesaCoreProfile,
-                           kOsmesaMajor, 3, kOsmesaMinor, 3, 0};
+    const int attribs[] = {kOsmesaFormat,
+                           kOsmesaRgba,
+                           kOsmesaDepthBits,
+                           24,
+                           kOsmesaStencilBits,
+                           0,
+                           kOsmesaAccumBits,
+                           0,
+                           kOsmesaProfile,
+                           kOsmesaCoreProfile,
+                           kOsmesaMajor,
+                           3,
+                           kOsmesaMinor,
+                           3,
+                           0};
     ctx_ = create_(attribs, nullptr);
     if (!ctx_) {
       dlclose(lib_);
@@ -61,8 +72,7 @@ class OsmesaContext final : public Context {
   }
   void makeCurrent() override {
     // Everything is drawn into framebuffer objects; the window-system buffer is a 1x1 dummy.
-    if (!make_current_(ctx_, &dummy_, GL_UNSIGNED_BYTE, 1, 1))
-      throw std::runtime_error("OSMesaMakeCurrent failed");
+    if (!make_current_(ctx_, &dummy_, GL_UNSIGNED_BYTE, 1, 1)) throw std::runtime_error("OSMesaMakeCurrent failed");
   }
   const Gl& gl() const override { return gl_; }
 

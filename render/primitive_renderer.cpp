@@ -8,9 +8,8 @@
 namespace vdmap::render {
 
 PrimitiveRenderer::PrimitiveRenderer(const Gl& gl, GLenum primitive)
-    : gl_(&gl), primitive_(primitive),
-      program_(std::make_unique<ShaderProgram>(gl, "colored.vert", "colored.frag")), vao_(gl),
-      positions_(gl), colors_(gl) {
+    : gl_(&gl), primitive_(primitive), program_(std::make_unique<ShaderProgram>(gl, "colored.vert", "colored.frag")),
+      vao_(gl), positions_(gl), colors_(gl) {
   vao_.bind();
   positions_.upload(nullptr, 0);
   positions_.attribute(0, 3, GL_FLOAT, false, sizeof(glm::vec3), 0);

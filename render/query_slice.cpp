@@ -50,9 +50,15 @@ QuerySlicePlane querySlicePlane(const QuerySliceSpec& spec, const Eigen::Vector3
   QuerySlicePlane plane;
   Eigen::Vector3d n = Eigen::Vector3d::UnitZ(), u = Eigen::Vector3d::UnitX(), v = Eigen::Vector3d::UnitY();
   switch (spec.axis) {
-    case QuerySliceAxis::kX: n = Eigen::Vector3d::UnitX(), u = Eigen::Vector3d::UnitY(), v = Eigen::Vector3d::UnitZ(); break;
-    case QuerySliceAxis::kY: n = Eigen::Vector3d::UnitY(), u = Eigen::Vector3d::UnitX(), v = Eigen::Vector3d::UnitZ(); break;
-    case QuerySliceAxis::kZ: n = Eigen::Vector3d::UnitZ(), u = Eigen::Vector3d::UnitX(), v = Eigen::Vector3d::UnitY(); break;
+    case QuerySliceAxis::kX:
+      n = Eigen::Vector3d::UnitX(), u = Eigen::Vector3d::UnitY(), v = Eigen::Vector3d::UnitZ();
+      break;
+    case QuerySliceAxis::kY:
+      n = Eigen::Vector3d::UnitY(), u = Eigen::Vector3d::UnitX(), v = Eigen::Vector3d::UnitZ();
+      break;
+    case QuerySliceAxis::kZ:
+      n = Eigen::Vector3d::UnitZ(), u = Eigen::Vector3d::UnitX(), v = Eigen::Vector3d::UnitY();
+      break;
     case QuerySliceAxis::kUp: {
       n = Eigen::Vector3d(height.up.x, height.up.y, height.up.z).normalized();
       // In-plane axes from the world axis least along the up axis.

@@ -7,8 +7,8 @@ namespace {
 glm::vec3 toGlm(const Eigen::Vector3d& p) { return {float(p.x()), float(p.y()), float(p.z())}; }
 }  // namespace
 
-void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transform& T_W_K,
-                float depth_m, const glm::u8vec3& color) {
+void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transform& T_W_K, float depth_m,
+                const glm::u8vec3& color) {
   const glm::vec3 c = toGlm(T_W_K.translation());
   const double u[4] = {-0.5, camera.width - 0.5, camera.width - 0.5, -0.5};
   const double v[4] = {-0.5, -0.5, camera.height - 0.5, camera.height - 0.5};

@@ -19,14 +19,14 @@ struct GraphEdge {
 /// The keyframe graph as the 3-D view draws it (world frame).
 struct GraphScene {
   PinholeCamera camera;
-  std::vector<Transform> keyframes;   ///< T_W_K by keyframe id
-  std::vector<GraphEdge> edges;       ///< covisibility edges, viridis by weight
-  std::vector<GraphEdge> loops;       ///< loop-closure edges (kLoopEdgeColor), drawn with the graph
-  std::vector<Transform> trajectory;  ///< T_W_C per mapped frame; the last one is the current camera
-  std::vector<Transform> groundtruth; ///< T_W_C of the sequence's ground truth (kGroundTruthColor), if shown
-  int current_keyframe = -1;          ///< drawn yellow
-  int selected_keyframe = -1;         ///< drawn white
-  bool tracked = false;               ///< tracked poses (PoseSource::kTrack): the legend keys the lines
+  std::vector<Transform> keyframes;    ///< T_W_K by keyframe id
+  std::vector<GraphEdge> edges;        ///< covisibility edges, viridis by weight
+  std::vector<GraphEdge> loops;        ///< loop-closure edges (kLoopEdgeColor), drawn with the graph
+  std::vector<Transform> trajectory;   ///< T_W_C per mapped frame; the last one is the current camera
+  std::vector<Transform> groundtruth;  ///< T_W_C of the sequence's ground truth (kGroundTruthColor), if shown
+  int current_keyframe = -1;           ///< drawn yellow
+  int selected_keyframe = -1;          ///< drawn white
+  bool tracked = false;                ///< tracked poses (PoseSource::kTrack): the legend keys the lines
 };
 
 /// Line colours the window's legend names: the (estimated) trajectory, the ground-truth
@@ -37,8 +37,8 @@ constexpr glm::u8vec3 kTrajectoryColor{90, 200, 255}, kGroundTruthColor{120, 235
 constexpr float kKeyframeFrustumDepthM = 0.25f, kCameraFrustumDepthM = 0.15f;
 
 /// Adds the frustum of a camera at T_W_K: the image corners at `depth_m`, joined to the centre.
-void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transform& T_W_K,
-                float depth_m, const glm::u8vec3& color);
+void addFrustum(ColoredLines& lines, const PinholeCamera& camera, const Transform& T_W_K, float depth_m,
+                const glm::u8vec3& color);
 /// Adds one segment per edge between the keyframe centres, coloured by weight on the viridis
 /// ramp (weak edges dark, strong ones bright) or all in `color`. Edges naming unknown keyframes
 /// are skipped.

@@ -87,7 +87,8 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     MeshViewRenderer renderer(*context, mesh, options.camera);
     std::ofstream rgb_list(tmp / "rgb.txt"), depth_list(tmp / "depth.txt");
     rgb_list << "# color images (vdmap synth)\n# timestamp filename\n";
-    depth_list << "# depth images (vdmap synth), depth_scale " << options.camera.depth_scale << "\n# timestamp filename\n";
+    depth_list << "# depth images (vdmap synth), depth_scale " << options.camera.depth_scale
+               << "\n# timestamp filename\n";
     rgb_list.precision(6);
     depth_list.precision(6);
     // The main thread renders (the GL context is current only there) while the previous batch
@@ -103,7 +104,8 @@ void synthesizeSequence(const ColoredTriangleMesh& mesh, const std::vector<Stamp
     auto writeFrame = [&](const Pending& f) {
       const std::string name = frameName(f.index);
       writeImageFile(tmp / "rgb" / name, f.view.rgb);
-      writeImageFile(tmp / "depth" / name, simulateDepth(f.view.z_cos, options.camera.depth_scale, options.noise, f.index));
+      writeImageFile(tmp / "depth" / name,
+                     simulateDepth(f.view.z_cos, options.camera.depth_scale, options.noise, f.index));
     };
     auto finishWriting = [&] {
       writers.wait();  // rethrows a writer's exception

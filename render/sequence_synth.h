@@ -42,8 +42,8 @@ class MeshViewRenderer {
 struct SynthOptions {
   PinholeCamera camera;
   DepthNoiseParams noise;
-  int first_frame = 0;   ///< of the trajectory, half-open [first, last)
-  int last_frame = -1;   ///< -1: to the end
+  int first_frame = 0;  ///< of the trajectory, half-open [first, last)
+  int last_frame = -1;  ///< -1: to the end
   /// Written into the folder as camera.yaml so the sequence opens with the right intrinsics.
   bool write_camera_file = true;
   /// Also mesh.ply, the rendered mesh (the built-in scene's is made in code: with it `vdmap eval

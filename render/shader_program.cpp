@@ -30,8 +30,7 @@ GLuint compile(const Gl& gl, GLenum type, const std::string& name) {
 
 }  // namespace
 
-ShaderProgram::ShaderProgram(const Gl& gl, const std::string& vertex_name,
-                             const std::string& fragment_name)
+ShaderProgram::ShaderProgram(const Gl& gl, const std::string& vertex_name, const std::string& fragment_name)
     : gl_(&gl) {
   const GLuint vs = compile(gl, GL_VERTEX_SHADER, vertex_name);
   const GLuint fs = compile(gl, GL_FRAGMENT_SHADER, fragment_name);

@@ -75,7 +75,8 @@ class ViewMotion {
   using Clock = std::chrono::steady_clock;
   static constexpr double kSettleSeconds = 0.15, kTargetMs = 25.0;  // the panels and the swap come on top
   static constexpr std::size_t kMinBudget = 20000, kStartBudget = 100000;
-  explicit ViewMotion(std::size_t fixed_budget = 0) : fixed_(fixed_budget), budget_(fixed_budget ? fixed_budget : kStartBudget) {}
+  explicit ViewMotion(std::size_t fixed_budget = 0)
+      : fixed_(fixed_budget), budget_(fixed_budget ? fixed_budget : kStartBudget) {}
 
   /// The camera and the mirror's content serial of the frame about to be drawn at `now`, and
   /// whether the fast pass may be used at all; returns the budget to draw with (0: full

@@ -22,8 +22,8 @@ glm::mat4 ViewCamera::projection() const {
 
 glm::vec3 ViewCamera::eye() const { return glm::vec3(glm::inverse(T_C_W)[3]); }
 
-ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
-                              float fov_y_deg, int width, int height) {
+ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov_y_deg,
+                              int width, int height) {
   ViewCamera v;
   v.width = width;
   v.height = height;
@@ -47,8 +47,7 @@ ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, con
   return v;
 }
 
-ViewCamera ViewCamera::fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width,
-                                   int height) {
+ViewCamera ViewCamera::fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width, int height) {
   ViewCamera v;
   v.width = width;
   v.height = height;
@@ -196,7 +195,8 @@ std::optional<glm::vec3> unproject(const ViewCamera& view, float x_px, float y_p
 }
 
 PixelRect letterbox(int width, int height, int image_width, int image_height) {
-  if (width <= 0 || height <= 0 || image_width <= 0 || image_height <= 0) return {0, 0, std::max(width, 0), std::max(height, 0)};
+  if (width <= 0 || height <= 0 || image_width <= 0 || image_height <= 0)
+    return {0, 0, std::max(width, 0), std::max(height, 0)};
   PixelRect r;
   if (static_cast<long>(width) * image_height <= static_cast<long>(height) * image_width) {
     r.width = width;

@@ -29,12 +29,11 @@ struct ViewCamera {
 
   /// Looks from `eye` at `target` with `up` pointing up in the image; vertical field of view
   /// in degrees, square pixels, principal point at the image centre.
-  static ViewCamera lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up,
-                           float fov_y_deg, int width, int height);
+  static ViewCamera lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov_y_deg,
+                           int width, int height);
   /// The view of a real camera at pose T_W_C ("view from keyframe K"), rescaled to
   /// width x height (aspect kept by scaling the intrinsics per axis).
-  static ViewCamera fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width,
-                                int height);
+  static ViewCamera fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width, int height);
 };
 
 /// A box to frame: lo..hi along the columns of `axes` (orthonormal; the identity: axis-aligned).
@@ -87,8 +86,8 @@ struct OrbitCamera {
   }
   /// The default view of a bounding box: from 35 degrees above the horizon, framed as frame().
   static OrbitCamera framing(const FrameBox& box, const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f);
-  static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max,
-                             const glm::vec3& up = {0.f, 0.f, 1.f}, float aspect = 1.f) {
+  static OrbitCamera framing(const glm::vec3& box_min, const glm::vec3& box_max, const glm::vec3& up = {0.f, 0.f, 1.f},
+                             float aspect = 1.f) {
     return framing(FrameBox(box_min, box_max), up, aspect);
   }
   /// The orbit camera looking from `eye` at `target` about the axis `up`: distance |eye - target|,

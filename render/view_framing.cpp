@@ -149,8 +149,8 @@ OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspe
 }
 
 OrbitCamera orbitCamera(const ViewSpec& spec, const ViewScene& scene, int width, int height) {
-  if (spec.look_at) return OrbitCamera::fromLookAt(spec.look_at->eye, spec.look_at->target, spec.look_at->up,
-                                                   spec.look_at->fov_y_deg);
+  if (spec.look_at)
+    return OrbitCamera::fromLookAt(spec.look_at->eye, spec.look_at->target, spec.look_at->up, spec.look_at->fov_y_deg);
   const float aspect = static_cast<float>(width) / static_cast<float>(std::max(1, height));
   OrbitCamera cam = defaultOrbit(scene.bounds, scene.up, aspect, spec.fov_y_deg);
   if (spec.orbit) {

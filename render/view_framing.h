@@ -26,9 +26,9 @@ std::pair<glm::vec3, glm::vec3> frameBounds(std::span<const glm::vec3> means, co
 struct DrawnBounds {
   glm::vec3 lo{0.f}, hi{0.f};  ///< along the columns of `axes`
   glm::mat3 axes{1.f};
-  bool empty = true;        ///< nothing drawn (an empty or hidden map, or all sliced away)
-  std::size_t drawn = 0;    ///< ellipsoids whose extent the box holds
-  std::size_t strays = 0;   ///< left out: centres beyond 1x the robust box's diagonal from its centre
+  bool empty = true;       ///< nothing drawn (an empty or hidden map, or all sliced away)
+  std::size_t drawn = 0;   ///< ellipsoids whose extent the box holds
+  std::size_t strays = 0;  ///< left out: centres beyond 1x the robust box's diagonal from its centre
 };
 
 /// The box of what the view draws of `map`: per ellipsoid, mean +- sigma sqrt(diag cov) (the
@@ -63,16 +63,15 @@ glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span
 
 /// The default view of `bounds`: OrbitCamera::framing (yaw -60, pitch 35 degrees about `up`,
 /// the box fitted to a width/height `aspect`).
-OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect,
-                         float fov_y_deg = 60.f);
+OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect, float fov_y_deg = 60.f);
 
 /// What a view's camera is framed from.
 struct ViewScene {
-  FrameBox bounds;                   ///< frameBounds
-  glm::vec3 up{0.f, 0.f, 1.f};       ///< upDirection of the spec's axis
-  PinholeCamera camera;              ///< the keyframes' camera (keyframe views)
+  FrameBox bounds;                          ///< frameBounds
+  glm::vec3 up{0.f, 0.f, 1.f};              ///< upDirection of the spec's axis
+  PinholeCamera camera;                     ///< the keyframes' camera (keyframe views)
   Transform T_W_K = Transform::Identity();  ///< keyframe:K's pose
-  HeightFrame height{};              ///< the map's heightFrame about `up` (height colours, slice)
+  HeightFrame height{};                     ///< the map's heightFrame about `up` (height colours, slice)
 };
 
 /// A view's camera and where its image lies in the viewport (the letterbox of a keyframe view;

@@ -48,35 +48,37 @@ struct ViewLayers {
 };
 
 /// The layers' names (--layers, view files) and their fields, in the same order.
-inline constexpr const char* kViewLayerNames[] = {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid",
-                                                  "bounds"};
+inline constexpr const char* kViewLayerNames[] = {"frustums", "graph", "trajectory", "groundtruth",
+                                                  "legend",   "grid",  "bounds"};
 inline constexpr bool ViewLayers::*kViewLayerFields[] = {
-    &ViewLayers::frustums, &ViewLayers::graph,  &ViewLayers::trajectory, &ViewLayers::groundtruth,
-    &ViewLayers::legend,   &ViewLayers::grid,   &ViewLayers::bounds};
+    &ViewLayers::frustums, &ViewLayers::graph, &ViewLayers::trajectory, &ViewLayers::groundtruth,
+    &ViewLayers::legend,   &ViewLayers::grid,  &ViewLayers::bounds};
 
 /// One view, fully described.
 struct ViewSpec {
   ViewKind kind = ViewKind::kGlobal;
-  int keyframe = -1;                  ///< keyframe:K and container:K
-  int width = 0, height = 0;          ///< 0: the kind's default size
-  std::optional<LookAt> look_at;      ///< an explicit camera (global view); excludes orbit
-  std::optional<Orbit> orbit;         ///< the default view turned (global view)
+  int keyframe = -1;              ///< keyframe:K and container:K
+  int width = 0, height = 0;      ///< 0: the kind's default size
+  std::optional<LookAt> look_at;  ///< an explicit camera (global view); excludes orbit
+  std::optional<Orbit> orbit;     ///< the default view turned (global view)
   UpAxis up = UpAxis::kData;
-  float fov_y_deg = 60.f;             ///< the framed and orbit views' vertical field of view
+  float fov_y_deg = 60.f;  ///< the framed and orbit views' vertical field of view
   ColorMode color = ColorMode::kRgb;
-  bool ellipsoids = true;             ///< false: the ellipsoid centres as points
-  bool map_hidden = false;            ///< draw "none": no map at all (overrides `ellipsoids`)
-  HeightSlice slice;                  ///< heights above the floor drawn (view file v2 "slice")
-  float sigma = 2.f;                  ///< ellipsoid surfaces at this many standard deviations
-  int sphere_level = 0;               ///< icosphere subdivisions (0: icosahedra, as the window)
-  float points_below_px = 4.f;        ///< ellipsoids smaller than this are drawn as splats
+  bool ellipsoids = true;       ///< false: the ellipsoid centres as points
+  bool map_hidden = false;      ///< draw "none": no map at all (overrides `ellipsoids`)
+  HeightSlice slice;            ///< heights above the floor drawn (view file v2 "slice")
+  float sigma = 2.f;            ///< ellipsoid surfaces at this many standard deviations
+  int sphere_level = 0;         ///< icosphere subdivisions (0: icosahedra, as the window)
+  float points_below_px = 4.f;  ///< ellipsoids smaller than this are drawn as splats
   ViewLayers layers;
   glm::vec3 background = kDarkBackground;
-  int selected_keyframe = -1;         ///< drawn white (the window's selection)
+  int selected_keyframe = -1;  ///< drawn white (the window's selection)
   bool operator==(const ViewSpec&) const = default;
 
   /// The draw mode `ellipsoids` and `map_hidden` spell (kDrawModeNames), and setting it.
-  DrawMode draw() const { return map_hidden ? DrawMode::kNone : ellipsoids ? DrawMode::kEllipsoids : DrawMode::kCentres; }
+  DrawMode draw() const {
+    return map_hidden ? DrawMode::kNone : ellipsoids ? DrawMode::kEllipsoids : DrawMode::kCentres;
+  }
   void setDraw(DrawMode mode) {
     map_hidden = mode == DrawMode::kNone;
     if (!map_hidden) ellipsoids = mode == DrawMode::kEllipsoids;

@@ -12,8 +12,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "app/view/map_sequence.h"
 #include "app/cli/release_memory.h"
+#include "app/view/map_sequence.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"
@@ -70,17 +70,20 @@ std::vector<FrameRow> mapAndRecord(const TumSequence& seq, Mapper& mapper, const
     releaseFreedMemory();  // as the workbench does after each build
   };
   double last = threadCpuMs();
-  mapSequence(seq, mapper, [&](const FrameReport& report) {
-    FrameRow row;
-    row.cpu_ms = threadCpuMs() - last;  // the frame's mapping, and the progress bar's update
-    row.wall_ms = report.ms.total_ms;
-    row.rss_mb = residentMb();
-    row.heap_mb = liveHeapMb();
-    row.keyframes = mapper.graph().size();
-    if (static_cast<int>(rows.size() + 1) % global_every == 0) buildGlobal(row);
-    rows.push_back(row);
-    last = threadCpuMs();  // a global-map build is not the next frame's cost
-  }, refine);
+  mapSequence(
+      seq, mapper,
+      [&](const FrameReport& report) {
+        FrameRow row;
+        row.cpu_ms = threadCpuMs() - last;  // the frame's mapping, and the progress bar's update
+        row.wall_ms = report.ms.total_ms;
+        row.rss_mb = residentMb();
+        row.heap_mb = liveHeapMb();
+        row.keyframes = mapper.graph().size();
+        if (static_cast<int>(rows.size() + 1) % global_every == 0) buildGlobal(row);
+        rows.push_back(row);
+        last = threadCpuMs();  // a global-map build is not the next frame's cost
+      },
+      refine);
   if (!rows.empty() && rows.back().global_ellipsoids < 0) buildGlobal(rows.back());
   return rows;
 }
@@ -153,7 +156,8 @@ void printLongSummary(const std::vector<FrameRow>& rows, const LongFigures& f, c
               f.heap_half > 0 ? 100.0 * (f.heap_end / f.heap_half - 1.0) : 0.0);
   if (mapper.params().poses == PoseSource::kTrack) {
     std::printf("tracked poses: %d frames lost, %d placed on a weak estimate, %d relocalised, %zu loop closures",
-                mapper.framesLost(), mapper.framesWeak(), mapper.framesRelocalised(), mapper.poseGraph().loops().size());
+                mapper.framesLost(), mapper.framesWeak(), mapper.framesRelocalised(),
+                mapper.poseGraph().loops().size());
     if (summary.contains("ate_rmse_m")) std::printf(", ATE %.2f cm", 100 * summary["ate_rmse_m"].get<double>());
     std::printf("\n");
   }

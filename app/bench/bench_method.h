@@ -64,12 +64,12 @@ struct BenchArgs {
 
 /// One row of the comparison.
 struct MethodResult {
-  std::string name;   ///< e.g. "OctoMap 0.05 m"
-  std::string key;    ///< JSON prefix, e.g. "octomap_005"
-  double ms = 0.0;    ///< median update time per frame
+  std::string name;  ///< e.g. "OctoMap 0.05 m"
+  std::string key;   ///< JSON prefix, e.g. "octomap_005"
+  double ms = 0.0;   ///< median update time per frame
   std::size_t elements = 0;
   std::optional<AccuracyReport> accuracy;
-  std::string note;   ///< why a peer did not run
+  std::string note;  ///< why a peer did not run
 
   MethodResult(std::string n, std::string k, double t = 0.0, std::string why = "")
       : name(std::move(n)), key(std::move(k)), ms(t), note(std::move(why)) {}

@@ -117,15 +117,19 @@ nlohmann::json runJson(const BenchFigures& f, const BenchArgs& args, const Media
       {"frames", f.frames},
       {"frame_range", f.frame_range},
       {"vd_update_ms", rounded(m.update)},
-      {"vd_update_ms_max", rounded(f.update.ms.empty() ? 0.0 : *std::max_element(f.update.ms.begin(), f.update.ms.end()))},
+      {"vd_update_ms_max",
+       rounded(f.update.ms.empty() ? 0.0 : *std::max_element(f.update.ms.begin(), f.update.ms.end()))},
       {"cell_size_px", args.local_map.cell_size_px},
       {"keyframe_every", args.keyframe_every},
       {"ellipsoids", f.update.cells},
       {"bytes_per_ellipsoid", sizeof(StoredCell)},
       {"container_bytes", f.update.bytes},
       {"vd_pipeline_ms", rounded(m.pipeline)},
-      {"pipeline_stage_ms", {{"features", rounded(m.features)}, {"decision", rounded(m.decision)},
-                             {"update", rounded(m.stage_update)}, {"decode", rounded(m.decode)}}},
+      {"pipeline_stage_ms",
+       {{"features", rounded(m.features)},
+        {"decision", rounded(m.decision)},
+        {"update", rounded(m.stage_update)},
+        {"decode", rounded(m.decode)}}},
       {"vd_pipeline_latency_ms", rounded(m.mapping)},
       {"vd_pipeline_fps", rounded(m.fps)},
       {"revisits", f.revisits},
@@ -154,7 +158,8 @@ void addMethods(const BenchFigures& f, const Medians& m, nlohmann::json* out) {
 }
 
 // The tracking rows (--poses track).
-void addTracking(const TrackingRows& t, const BenchArgs& args, std::size_t frames, const Medians& m, nlohmann::json* out) {
+void addTracking(const TrackingRows& t, const BenchArgs& args, std::size_t frames, const Medians& m,
+                 nlohmann::json* out) {
   nlohmann::json& j = *out;
   j["odometry"] = nlohmann::json::object();
   j["odometry_order"] = nlohmann::json::array();
@@ -186,18 +191,25 @@ std::string benchMarkdown(const BenchFigures& f, const BenchArgs& args, const Me
                 "Global map of the pipeline's %s, Sigma_e %zu -> Sigma_e' %zu in %.3f s (%.2f us per ellipsoid).\n",
                 counted(f.keyframes, "keyframe").c_str(), f.global.sigma_e, f.global.sigma_e_prime, f.global.t_g_s,
                 out["t_g_us_per_ellipsoid"].get<double>());
-  md << "# vdmap bench\n\n" << f.frames << " frames of `" << args.sequence.folder << "` (" << f.width << "x"
-     << f.height << "), frames " << f.frame_range << "; the update row starts a keyframe every "
-     << args.keyframe_every << " frames, the pipeline by covisibility (" << counted(f.keyframes, "keyframe")
+  md << "# vdmap bench\n\n"
+     << f.frames << " frames of `" << args.sequence.folder << "` (" << f.width << "x" << f.height << "), frames "
+     << f.frame_range << "; the update row starts a keyframe every " << args.keyframe_every
+     << " frames, the pipeline by covisibility (" << counted(f.keyframes, "keyframe")
      << "), one thread. Times are medians of CPU time per frame.\n\n"
-     << markdownTable(f.rows, m.update, f.mesh_scored) << "\n" << m.pipeline_line << "\n\n" << global_line;
+     << markdownTable(f.rows, m.update, f.mesh_scored) << "\n"
+     << m.pipeline_line << "\n\n"
+     << global_line;
   if (f.tracking && !f.tracking->rows.empty())
     md << "\nTracking (--poses track) on the same frames, one thread: median CPU time per frame (vdmap: its whole "
-          "pipeline, which tracking makes " << out["vd_tracking_added_ms"].get<double>() << " ms slower than with "
+          "pipeline, which tracking makes "
+       << out["vd_tracking_added_ms"].get<double>()
+       << " ms slower than with "
           "ground-truth poses; the peers: registration only), ATE after the rigid alignment against the sequence's "
-          "ground truth. vdmap closed " << f.tracking->loop_closures << " loops; with loop closure its keyframe poses are "
-          "refined from the local maps after the last frame (--refine " << args.sequence.refine << ", "
-       << rounded(f.tracking->refinement.ms) << " ms, not in the per-frame time).\n\n"
+          "ground truth. vdmap closed "
+       << f.tracking->loop_closures
+       << " loops; with loop closure its keyframe poses are "
+          "refined from the local maps after the last frame (--refine "
+       << args.sequence.refine << ", " << rounded(f.tracking->refinement.ms) << " ms, not in the per-frame time).\n\n"
        << odometryTable(f.tracking->rows);
   return md.str();
 }
@@ -215,7 +227,8 @@ void printMethods(const std::vector<MethodResult>& rows, const Medians& m) {
 }
 
 void printTracking(const TrackingRows& t, const BenchArgs& args, const nlohmann::json& out) {
-  std::printf("\n%-48s %12s %10s %10s %10s\n", "tracking (vdmap: whole pipeline)", "ms/frame", "ATE [cm]", "lost", "keyframes");
+  std::printf("\n%-48s %12s %10s %10s %10s\n", "tracking (vdmap: whole pipeline)", "ms/frame", "ATE [cm]", "lost",
+              "keyframes");
   for (const OdometryRow& r : t.rows) {
     if (!r.run.note.empty()) {
       std::printf("%-44s not run: %s\n", r.run.name.c_str(), r.run.note.c_str());
@@ -228,7 +241,8 @@ void printTracking(const TrackingRows& t, const BenchArgs& args, const nlohmann:
   }
   std::printf("tracking adds %.2f ms per frame to vdmap's pipeline (CPU medians); %d loop closures; keyframe poses "
               "refined from the local maps after the last frame (--refine %s) in %.0f ms (wall)\n",
-              out["vd_tracking_added_ms"].get<double>(), t.loop_closures, args.sequence.refine.c_str(), t.refinement.ms);
+              out["vd_tracking_added_ms"].get<double>(), t.loop_closures, args.sequence.refine.c_str(),
+              t.refinement.ms);
 }
 
 void printBench(const BenchFigures& f, const BenchArgs& args, const Medians& m, const nlohmann::json& out) {

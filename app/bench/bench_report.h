@@ -20,14 +20,14 @@ struct BenchFigures {
   std::size_t frames = 0;
   std::string frame_range;  ///< as frameRangeText writes it
   int width = 0, height = 0;
-  bool mesh_scored = false;  ///< --mesh: the rows carry their accuracy against it
+  bool mesh_scored = false;       ///< --mesh: the rows carry their accuracy against it
   std::vector<double> decode_ms;  ///< per frame, CPU
   UpdateTiming update;
   PipelineTiming pipeline;
-  int revisits = 0;            ///< the pipeline's Mapper's
-  std::size_t keyframes = 0;   ///< the pipeline's keyframes
-  GlobalMap global;            ///< of those keyframes
-  nlohmann::json global_stats;  ///< globalMapStats of the pipeline's graph and `global`
+  int revisits = 0;                ///< the pipeline's Mapper's
+  std::size_t keyframes = 0;       ///< the pipeline's keyframes
+  GlobalMap global;                ///< of those keyframes
+  nlohmann::json global_stats;     ///< globalMapStats of the pipeline's graph and `global`
   std::vector<MethodResult> rows;  ///< vdmap's, then the peers' from rows[first_peer]
   std::size_t first_peer = 0;
   std::optional<TrackingRows> tracking;  ///< --poses track

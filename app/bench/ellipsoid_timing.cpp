@@ -29,7 +29,8 @@ void runEllipsoidBench(int count, std::optional<int> sphere_level, const DrawTim
   std::vector<render::EllipsoidInstance> set(static_cast<std::size_t>(count));
   for (auto& e : set) {
     e.mean = {pos(rng), pos(rng), pos(rng)};
-    const glm::mat3 R = glm::mat3(glm::rotate(glm::mat4(1.f), angle(rng), glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) + 1e-3f)));
+    const glm::mat3 R = glm::mat3(
+        glm::rotate(glm::mat4(1.f), angle(rng), glm::normalize(glm::vec3(pos(rng), pos(rng), pos(rng)) + 1e-3f)));
     const glm::vec3 s(size(rng), size(rng), size(rng) * 0.3f);
     e.cov = R * glm::mat3(s.x * s.x, 0, 0, 0, s.y * s.y, 0, 0, 0, s.z * s.z) * glm::transpose(R);
     e.rgb = {static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng()), static_cast<std::uint8_t>(rng())};
@@ -57,16 +58,17 @@ void runEllipsoidBench(int count, std::optional<int> sphere_level, const DrawTim
   if (!draw.png.empty()) render::writePng(draw.png + ".png", fb.readRgb());
   const double min_ms = *std::min_element(times.begin(), times.end());
   if (json) {
-    const nlohmann::json out = {{"ellipsoids", {{"renderer", context->description()},
-                                                {"count", count},
-                                                {"sphere_level", style.sphere_subdivisions},
-                                                {"points_below_px", style.point_below_px},
-                                                {"width", w},
-                                                {"height", h},
-                                                {"upload_ms", rounded(upload_ms)},
-                                                {"frames", times.size()},
-                                                {"frame_ms_median", rounded(median(times))},
-                                                {"frame_ms_min", rounded(min_ms)}}}};
+    const nlohmann::json out = {{"ellipsoids",
+                                 {{"renderer", context->description()},
+                                  {"count", count},
+                                  {"sphere_level", style.sphere_subdivisions},
+                                  {"points_below_px", style.point_below_px},
+                                  {"width", w},
+                                  {"height", h},
+                                  {"upload_ms", rounded(upload_ms)},
+                                  {"frames", times.size()},
+                                  {"frame_ms_median", rounded(median(times))},
+                                  {"frame_ms_min", rounded(min_ms)}}}};
     std::cout << jsonText(out) << "\n";
     return;
   }

@@ -1,7 +1,7 @@
 #include "app/bench/ndt_om_timing.h"
 
-#include "mapping/core/timing.h"
 #include "app/bench/ndt_om_baseline.h"
+#include "mapping/core/timing.h"
 
 namespace vdmap::app {
 

@@ -8,9 +8,9 @@
 #include <opencv2/imgproc.hpp>
 #include <opencv2/rgbd.hpp>
 
+#include "app/bench/open3d/odometry_peer_abi.h"
 #include "app/bench/peer_plugin.h"
 #include "mapping/core/timing.h"
-#include "app/bench/open3d/odometry_peer_abi.h"
 
 namespace vdmap::app {
 namespace {
@@ -29,7 +29,8 @@ class Registration {
 
 class OpenCvRegistration : public Registration {
  public:
-  OpenCvRegistration(OdometryMethod method, const PinholeCamera& cam) : photometric_(method == OdometryMethod::kOpenCvRgbd) {
+  OpenCvRegistration(OdometryMethod method, const PinholeCamera& cam)
+      : photometric_(method == OdometryMethod::kOpenCvRgbd) {
     const cv::Mat K = (cv::Mat_<double>(3, 3) << cam.fx, 0, cam.cx, 0, cam.fy, cam.cy, 0, 0, 1);
     if (photometric_) odometry_ = cv::rgbd::RgbdOdometry::create(K);
     else odometry_ = cv::rgbd::ICPOdometry::create(K);

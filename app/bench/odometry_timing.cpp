@@ -60,7 +60,8 @@ OdometryRow trackVdmap(const BenchInput& in, bool loops, const std::filesystem::
   tracking.loops.enabled = loops;
   Mapper mapper(in.cam, params, tracking);
   OdometryRow row;
-  row.run.name = loops ? "vdmap tracking + loop closure (whole pipeline)" : "vdmap tracking, no loop closure (whole pipeline)";
+  row.run.name =
+      loops ? "vdmap tracking + loop closure (whole pipeline)" : "vdmap tracking, no loop closure (whole pipeline)";
   row.run.key = loops ? "vdmap_track" : "vdmap_track_no_loops";
   ProgressBar progress(row.run.name, in.frames.size());
   for (std::size_t i = 0; i < in.frames.size(); ++i) {

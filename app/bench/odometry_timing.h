@@ -21,7 +21,7 @@ struct OdometryRow {
 /// The tracking table's rows in order, and what vdmap's loop-closure row adds beside them.
 struct TrackingRows {
   std::vector<OdometryRow> rows;
-  int loop_closures = 0;            ///< closed by vdmap with loop closure (the first row)
+  int loop_closures = 0;           ///< closed by vdmap with loop closure (the first row)
   MapRefinementResult refinement;  ///< its keyframe poses refined after the last frame (--refine)
 };
 

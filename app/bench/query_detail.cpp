@@ -95,9 +95,8 @@ nlohmann::json timeQueryDetail(const QueryDetailInput& in, std::ostringstream* t
   std::snprintf(buf, sizeof buf, "QueryMap memory [MB]: %.1f (keyframe views %.1f, surface index %.1f)\n",
                 mb(in.query.memoryBytes()), mb(parts.keyframe_views), mb(parts.surface));
   *text << buf;
-  out["memory_bytes"] = {{"total", in.query.memoryBytes()},
-                         {"keyframe_views", parts.keyframe_views},
-                         {"surface", parts.surface}};
+  out["memory_bytes"] = {
+      {"total", in.query.memoryBytes()}, {"keyframe_views", parts.keyframe_views}, {"surface", parts.surface}};
   return out;
 }
 

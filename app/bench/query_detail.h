@@ -16,11 +16,11 @@ namespace vdmap::app {
 struct QueryDetailInput {
   const KeyframeGraph& graph;
   const GlobalMap& global;
-  const QueryMap& query;  ///< built from graph and global, ConflictRule::kOccupied, one thread
-  int passes;             ///< every figure is the median of this many passes
-  std::span<const Eigen::Vector3d> points;         ///< even indices uniform in the seen box, odd near surfaces
-  std::span<const Classification> classified;      ///< query.classify(points)
-  double classify_ms;                               ///< its median time
+  const QueryMap& query;                       ///< built from graph and global, ConflictRule::kOccupied, one thread
+  int passes;                                  ///< every figure is the median of this many passes
+  std::span<const Eigen::Vector3d> points;     ///< even indices uniform in the seen box, odd near surfaces
+  std::span<const Classification> classified;  ///< query.classify(points)
+  double classify_ms;                          ///< its median time
   std::span<const Eigen::Vector3d> distance_points;  ///< a prefix of `points`
   const PinholeCamera& camera;
   std::span<const Transform> views;  ///< castView poses (the first one's pixel rays are cast as rays)

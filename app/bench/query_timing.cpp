@@ -19,8 +19,8 @@
 #include "app/bench/query_detail.h"
 #include "app/bench/vdmap_timing.h"
 #include "app/view/progress.h"
-#include "mapping/core/timing.h"
 #include "mapping/core/box_tree.h"
+#include "mapping/core/timing.h"
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/occupancy_truth.h"
 #include "mapping/files/map_export.h"
@@ -196,7 +196,7 @@ struct Speed {
   std::size_t points = 0, distance_points = 0, views = 0, octo_views = 0;
   double classify_ms = 0, distance_ms = 0, view_ms = 0;
   std::vector<double> octo_classify_ms, octo_distance_ms, octo_view_ms;
-  nlohmann::json detail;    // vdmap alone (query_detail.h)
+  nlohmann::json detail;  // vdmap alone (query_detail.h)
   std::string detail_text;
 };
 
@@ -213,13 +213,15 @@ Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam
   const std::vector<Transform> poses = viewPoses(m.mapper->graph(), args.views);
   s.views = poses.size();
   if (!poses.empty())
-    s.view_ms = medianCpuTimeMs(kPasses, [&] {
-                  for (const Transform& T : poses) (void)m.query.castView(cam, T, m.max_depth_m);
-                }) / static_cast<double>(poses.size());
+    s.view_ms = medianCpuTimeMs(kPasses,
+                                [&] {
+                                  for (const Transform& T : poses) (void)m.query.castView(cam, T, m.max_depth_m);
+                                }) /
+                static_cast<double>(poses.size());
   std::ostringstream detail;
-  s.detail = timeQueryDetail({m.mapper->graph(), m.global, m.query, kPasses, points, cls, s.classify_ms, near, cam,
-                              poses, m.max_depth_m},
-                             &detail);
+  s.detail = timeQueryDetail(
+      {m.mapper->graph(), m.global, m.query, kPasses, points, cls, s.classify_ms, near, cam, poses, m.max_depth_m},
+      &detail);
   s.detail_text = detail.str();
   s.octo_views = std::min(kOctoViews, poses.size());
   for (const auto& peer : m.peers) {
@@ -383,24 +385,25 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   text << buf;
   const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };  // 0: not timed
   const auto perSec = [](std::size_t n, double ms) { return ms > 0 ? 1e3 * static_cast<double>(n) / ms : 0.0; };
-  std::snprintf(buf, sizeof buf, "%-16s %14.0f %10s %14.0f %10s %12.2f %10s\n", "vdmap", perSec(s.points, s.classify_ms),
-                "1", perSec(s.distance_points, s.distance_ms), "1", s.view_ms, "1");
+  std::snprintf(buf, sizeof buf, "%-16s %14.0f %10s %14.0f %10s %12.2f %10s\n", "vdmap",
+                perSec(s.points, s.classify_ms), "1", perSec(s.distance_points, s.distance_ms), "1", s.view_ms, "1");
   text << buf;
   nlohmann::json speed = {{"points", s.points},
                           {"distance_points", s.distance_points},
                           {"views", s.views},
                           {"octomap_views", s.octo_views},
                           {"view_max_range_m", rounded(m.max_depth_m)},
-                          {"vdmap", {{"classify_ms", rounded(s.classify_ms)},
-                                     {"classify_per_s", rounded(perSec(s.points, s.classify_ms))},
-                                     {"distance_ms", rounded(s.distance_ms)},
-                                     {"distance_per_s", rounded(perSec(s.distance_points, s.distance_ms))},
-                                     {"view_ms", rounded(s.view_ms)}}}};
+                          {"vdmap",
+                           {{"classify_ms", rounded(s.classify_ms)},
+                            {"classify_per_s", rounded(perSec(s.points, s.classify_ms))},
+                            {"distance_ms", rounded(s.distance_ms)},
+                            {"distance_per_s", rounded(perSec(s.distance_points, s.distance_ms))},
+                            {"view_ms", rounded(s.view_ms)}}}};
   for (std::size_t p = 0; p < m.peers.size(); ++p) {
     const double c = s.octo_classify_ms[p], d = s.octo_distance_ms[p], v = s.octo_view_ms[p];
     std::snprintf(buf, sizeof buf, "%-16s %14.0f %10.2f %14.0f %10.2f %12.2f %10.2f\n", m.peers[p]->name().c_str(),
-                  perSec(s.points, c), ratio(c, s.classify_ms), perSec(s.distance_points, d), ratio(d, s.distance_ms), v,
-                  ratio(v, s.view_ms));
+                  perSec(s.points, c), ratio(c, s.classify_ms), perSec(s.distance_points, d), ratio(d, s.distance_ms),
+                  v, ratio(v, s.view_ms));
     text << buf;
     speed[m.peers[p]->key()] = {{"classify_ms", rounded(c)},
                                 {"classify_per_s", rounded(perSec(s.points, c))},
@@ -429,18 +432,22 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
     const OccupancyTruthSets sets = m.truth->sample(*mesh);
     progress.update(1);
     const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
-    std::snprintf(buf, sizeof buf,
-                  "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
-                  "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
-                  args.mesh.c_str(), m.truth->frames(), sets.occupied.size(), sets.free.size(), sets.free_near.size(),
-                  sets.unknown.size(), sets.ambiguous_occupied, sets.seen_triangles, mesh->triangles.size());
+    std::snprintf(
+        buf, sizeof buf,
+        "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
+        "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
+        args.mesh.c_str(), m.truth->frames(), sets.occupied.size(), sets.free.size(), sets.free_near.size(),
+        sets.unknown.size(), sets.ambiguous_occupied, sets.seen_triangles, mesh->triangles.size());
     text << buf;
     std::snprintf(buf, sizeof buf, "%-16s %8s %7s %7s %8s %7s %8s %9s %9s %8s %11s\n", "method", "bal.acc", "rec O",
                   "rec F", "rec Fnear", "rec U", "O free", "|d| med", "|d| p95", "over 1cm", "memory [MB]");
     text << buf;
-    nlohmann::json acc = {{"sets", {{"occupied", sets.occupied.size()}, {"free", sets.free.size()},
-                                    {"free_near", sets.free_near.size()}, {"unknown", sets.unknown.size()},
-                                    {"ambiguous_occupied", sets.ambiguous_occupied}}},
+    nlohmann::json acc = {{"sets",
+                           {{"occupied", sets.occupied.size()},
+                            {"free", sets.free.size()},
+                            {"free_near", sets.free_near.size()},
+                            {"unknown", sets.unknown.size()},
+                            {"ambiguous_occupied", sets.ambiguous_occupied}}},
                           {"seen_triangles", sets.seen_triangles},
                           {"truth_frames", m.truth->frames()},
                           {"vdmap_query_bytes", m.query.memoryBytes()},

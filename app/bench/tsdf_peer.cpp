@@ -1,7 +1,7 @@
 #include "app/bench/tsdf_peer.h"
 
-#include "app/bench/peer_plugin.h"
 #include "app/bench/open3d/tsdf_peer_abi.h"
+#include "app/bench/peer_plugin.h"
 
 namespace vdmap::app {
 
@@ -30,8 +30,8 @@ std::unique_ptr<TsdfVolume> TsdfVolume::open(double voxel_m, double sdf_trunc_m,
                                              double depth_max_m, std::string* why) {
   std::shared_ptr<const TsdfPeerApi> api = loadApi(why);
   if (!api) return nullptr;
-  void* v = api->create(voxel_m, sdf_trunc_m, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy,
-                        cam.depth_scale, depth_max_m);
+  void* v = api->create(voxel_m, sdf_trunc_m, cam.width, cam.height, cam.fx, cam.fy, cam.cx, cam.cy, cam.depth_scale,
+                        depth_max_m);
   if (!v) {
     *why = "Open3D could not create the TSDF volume";
     return nullptr;

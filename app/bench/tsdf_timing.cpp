@@ -2,9 +2,9 @@
 
 #include <memory>
 
+#include "app/bench/tsdf_peer.h"
 #include "app/view/progress.h"
 #include "mapping/core/timing.h"
-#include "app/bench/tsdf_peer.h"
 
 namespace vdmap::app {
 

@@ -47,7 +47,8 @@ UpdateTiming timeVdmapUpdate(const BenchInput& in) {
       container = std::make_unique<KeyframeContainer>(in.cam, in.args.local_map.cell_size_px);
       T_W_K = in.frames[i].T_W_C;
     }
-    t.ms.push_back(cpuTimeMs([&] { integrator.integrateFrame(in.frames[i], in.cam, T_W_K, container.get(), &touched); }));
+    t.ms.push_back(
+        cpuTimeMs([&] { integrator.integrateFrame(in.frames[i], in.cam, T_W_K, container.get(), &touched); }));
   }
   if (container) t.cells += container->size(), t.bytes += container->memoryBytes();
   return t;
@@ -75,7 +76,8 @@ PipelineTiming timeVdmapPipeline(const BenchInput& in, Mapper* mapper) {
   return t;
 }
 
-std::vector<MethodResult> vdmapRows(const BenchInput& in, double update_ms, double pipeline_ms, const GlobalMap& global) {
+std::vector<MethodResult> vdmapRows(const BenchInput& in, double update_ms, double pipeline_ms,
+                                    const GlobalMap& global) {
   std::vector<MethodResult> rows;
   rows.emplace_back("vdmap update " + std::to_string(in.args.local_map.cell_size_px) + " px", "vd_update", update_ms);
   in.score(&rows.back(), means(global.ellipsoids));

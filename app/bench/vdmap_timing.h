@@ -37,7 +37,8 @@ PipelineTiming timeVdmapPipeline(const BenchInput& in, Mapper* mapper);
 /// vdmap's rows: the update's median time and the pipeline's, both with the global map's
 /// ellipsoid means as their elements (scored once), then with args.accuracy_cell_sizes one
 /// untimed row per other cell size (the whole pipeline again, accuracy only).
-std::vector<MethodResult> vdmapRows(const BenchInput& in, double update_ms, double pipeline_ms, const GlobalMap& global);
+std::vector<MethodResult> vdmapRows(const BenchInput& in, double update_ms, double pipeline_ms,
+                                    const GlobalMap& global);
 
 /// The pipeline's CPU per frame (medians) as one line: all of it on one thread, the mapping
 /// thread's share (latency once the features are ready) and the frame rate with decoding and ORB

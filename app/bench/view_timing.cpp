@@ -61,7 +61,8 @@ void runViewBench(const std::string& map_path, const ViewTimingOptions& options,
   render::GraphScene graph;
   if (source.graph()) graph = render::graphSceneOf(*source.graph(), MapperState{}, PinholeCamera{}, false);
   mirror.setGraph(1, -1, [&] { return graph; });
-  mirror.setLegend(render::legendFor(spec.color, mirror.mapColorRange(), graph, true, true, true), spec.background, width);
+  mirror.setLegend(render::legendFor(spec.color, mirror.mapColorRange(), graph, true, true, true), spec.background,
+                   width);
   std::vector<glm::vec3> means;
   for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
   t0 = Clock::now();

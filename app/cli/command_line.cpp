@@ -3,8 +3,8 @@
 #include <cstdlib>
 
 #include "app/cli/command_line.h"
-#include "mapping/io/tum_sequence.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/io/tum_sequence.h"
 
 namespace vdmap::app {
 namespace {

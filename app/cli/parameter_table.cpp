@@ -65,15 +65,17 @@ void addParameterOptions(CLI::App& verb, ParameterValues& params) {
     if (p.flag.empty()) continue;
     const std::string flag(p.flag);
     if (p.kind == K::kBool) {
-      const std::string help = std::string(p.help) + (p.get(defaults) != 0 ? " [on by default; this flag turns it off]"
-                                                                              : " [off by default; this flag turns it on]");
+      const std::string help =
+          std::string(p.help) + (p.get(defaults) != 0 ? " [on by default; this flag turns it off]"
+                                                      : " [off by default; this flag turns it on]");
       // The flag flips the default (--no-occlusion-removal turns a default-on step off).
-      verb.add_flag_callback(flag, [&params, &p, defaults] { p.set(params, p.get(defaults) != 0 ? 0 : 1); }, help);
+      verb.add_flag_callback(
+          flag, [&params, &p, defaults] { p.set(params, p.get(defaults) != 0 ? 0 : 1); }, help);
       continue;
     }
     const Parameter* rule = p.enabled_by.empty() ? nullptr : findParameter(p.enabled_by);
     const std::string help = std::string(p.help) + " [" + validityText(p) +
-                             (!rule                     ? ""
+                             (!rule                      ? ""
                               : rule->get(defaults) != 0 ? "; no effect with " + std::string(rule->flag)
                                                          : "; only with " + std::string(rule->flag)) +
                              "]";
@@ -90,7 +92,9 @@ void addParameterOptions(CLI::App& verb, ParameterValues& params) {
             },
             help)
         ->default_str(formatValue(p, p.get(defaults)))
-        ->type_name(p.kind == K::kChoice ? "NAME" : p.kind == K::kInt ? "INT" : "NUMBER");
+        ->type_name(p.kind == K::kChoice ? "NAME"
+                    : p.kind == K::kInt  ? "INT"
+                                         : "NUMBER");
   }
 }
 

@@ -48,8 +48,14 @@ nlohmann::json provenanceStats(const Provenance& p) {
       {"sequence", absoluteFolder(p.sequence)},
       {"camera", p.camera_source},
       {"camera_source", cameraSourceKind(p.camera_source)},
-      {"camera_intrinsics", {{"width", c.width}, {"height", c.height}, {"fx", c.fx}, {"fy", c.fy}, {"cx", c.cx},
-                             {"cy", c.cy}, {"depth_scale", c.depth_scale}}},
+      {"camera_intrinsics",
+       {{"width", c.width},
+        {"height", c.height},
+        {"fx", c.fx},
+        {"fy", c.fy},
+        {"cx", c.cx},
+        {"cy", c.cy},
+        {"depth_scale", c.depth_scale}}},
       {"poses", tracking ? "track" : "gt"},
       // Ground-truth poses are never refined.
       {"refine", tracking ? refineName(p.refine) : "none"},
@@ -76,9 +82,8 @@ std::string droppedFramesWarning(const TumSequence& seq) {
   std::string why;
   if (d.no_pose > 0)
     why = std::to_string(d.no_pose) + " without a ground-truth pose within 0.1 s (groundtruth.txt does not cover "
-          "them; --poses track maps every frame)";
-  if (d.no_rgb > 0)
-    why += (why.empty() ? "" : ", ") + std::to_string(d.no_rgb) + " without an rgb frame within 0.02 s";
+                                      "them; --poses track maps every frame)";
+  if (d.no_rgb > 0) why += (why.empty() ? "" : ", ") + std::to_string(d.no_rgb) + " without an rgb frame within 0.02 s";
   // More than half of the range gone is rarely what the user meant: say so before the details.
   const std::string most = 2 * dropped > in_range ? "MOST FRAMES DROPPED: " : "";
   return most + std::to_string(dropped) + " of the " + std::to_string(in_range) + " frames of " +

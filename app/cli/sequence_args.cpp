@@ -38,7 +38,8 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
       ->check(CLI::IsMember({"joint", "pairwise", "none"}))
       ->each([&args](const std::string&) { args.refine_given = true; })
       ->capture_default_str();
-  verb.add_flag_callback("--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
+  verb.add_flag_callback(
+      "--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
 }
 
 std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
@@ -70,7 +71,8 @@ void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
                c.cy, c.depth_scale);
 }
 
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::optional<SequenceContinuation> continues) {
+TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end,
+                         std::optional<SequenceContinuation> continues) {
   SequenceOptions options;
   options.continues = std::move(continues);
   options.camera_preset = args.camera;
@@ -78,7 +80,8 @@ TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::o
   // No --poses: ground truth when there is some (frames without a pose are then dropped, as with
   // --poses gt), else tracking.
   options.require_poses =
-      args.poses == "gt" || (args.poses.empty() && std::filesystem::exists(std::filesystem::path(args.folder) / "groundtruth.txt"));
+      args.poses == "gt" ||
+      (args.poses.empty() && std::filesystem::exists(std::filesystem::path(args.folder) / "groundtruth.txt"));
   if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
   return TumSequence::open(args.folder, options);
 }

@@ -17,8 +17,9 @@ struct SequenceArgs {
   std::string camera;
   std::string frames;
   std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
-  std::string refine = "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
-  bool refine_given = false;     ///< --refine was on the command line
+  std::string refine =
+      "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
+  bool refine_given = false;  ///< --refine was on the command line
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
 /// parsing; whether the sequence has those frames when it is opened).

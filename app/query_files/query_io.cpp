@@ -2,11 +2,11 @@
 
 #include <algorithm>
 #include <cmath>
-#include <limits>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <stdexcept>
 
@@ -62,8 +62,7 @@ void addRecord(QueryOp op, const std::vector<double>& v, double max_range_m, Que
       input->rays.push_back({p, d, range});
       return;
     }
-    default:
-      input->points.push_back(p);
+    default: input->points.push_back(p);
   }
 }
 
@@ -101,12 +100,13 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
     values.clear();
     for (std::size_t i = 0; i < tokens.size(); ++i) {
       // parseListNumber's messages name the column ("x is not finite ('nan')").
-      static const char* const kNames[3][7] = {{"x", "y", "z"}, {"x", "y", "z", "r", "body"},
-                                               {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
+      static const char* const kNames[3][7] = {
+          {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
       const int kind = op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0;
       values.push_back(parseListNumber(tokens[i], file, line, kNames[kind][i]));
     }
-    addRecord(op, values, max_range_m, &input, [&](const std::string& what) { throw InputError(file.string(), line, what); });
+    addRecord(op, values, max_range_m, &input,
+              [&](const std::string& what) { throw InputError(file.string(), line, what); });
   }
   if (in.bad()) throw InputError(file.string(), "cannot be read");
   return input;
@@ -139,7 +139,8 @@ QueryInput readPly(const fs::path& file, QueryOp op, double max_range_m) {
     values.clear();
     for (std::size_t k = 0; k < columns.size(); ++k) {
       const double v = table.at(i, columns[k]);
-      if (!std::isfinite(v)) fail(table.names[static_cast<std::size_t>(columns[k])] + " is not finite (" + number(v) + ")");
+      if (!std::isfinite(v))
+        fail(table.names[static_cast<std::size_t>(columns[k])] + " is not finite (" + number(v) + ")");
       values.push_back(v);
     }
     addRecord(op, values, max_range_m, &input, fail);
@@ -179,7 +180,8 @@ const char* queryOpName(QueryOp op) { return kOpNames[static_cast<int>(op)]; }
 QueryOp parseQueryOp(const std::string& name) {
   for (int i = 0; i < 6; ++i)
     if (name == kOpNames[i]) return static_cast<QueryOp>(i);
-  throw std::invalid_argument("unknown query '" + name + "' (expected classify, distance, collide, ray, grid or octomap)");
+  throw std::invalid_argument("unknown query '" + name +
+                              "' (expected classify, distance, collide, ray, grid or octomap)");
 }
 
 QueryInput readQueryInput(const fs::path& file, QueryOp op, double max_range_m) {
@@ -187,12 +189,9 @@ QueryInput readQueryInput(const fs::path& file, QueryOp op, double max_range_m) 
   if (!fs::exists(file)) throw InputError(file.string(), "no such file (--points)");
   const std::string ext = file.extension().string();
   QueryInput input;
-  if (ext == ".txt")
-    input = readText(file, op, max_range_m);
-  else if (ext == ".ply")
-    input = readPly(file, op, max_range_m);
-  else
-    throw InputError(file.string(), "--points reads .txt (columns) or .ply (vertices), not '" + ext + "'");
+  if (ext == ".txt") input = readText(file, op, max_range_m);
+  else if (ext == ".ply") input = readPly(file, op, max_range_m);
+  else throw InputError(file.string(), "--points reads .txt (columns) or .ply (vertices), not '" + ext + "'");
   if (input.size() == 0)
     throw InputError(file.string(), std::string("has no records (expected lines of ") + recordColumns(op) + ")");
   return input;
@@ -237,16 +236,15 @@ std::string queryAnswersText(QueryOp op, const QueryInput& input, const QueryAns
         out += line;
       }
       break;
-    default:
-      throw std::logic_error("queryAnswersText: no records for this op");
+    default: throw std::logic_error("queryAnswersText: no records for this op");
   }
   (void)input;
   return out;
 }
 
 std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnswers& a) {
-  std::string header = "ply\nformat binary_little_endian 1.0\ncomment vdmap query --op " + std::string(queryOpName(op)) +
-                       "\nelement vertex " + std::to_string(input.size()) +
+  std::string header = "ply\nformat binary_little_endian 1.0\ncomment vdmap query --op " +
+                       std::string(queryOpName(op)) + "\nelement vertex " + std::to_string(input.size()) +
                        "\nproperty float x\nproperty float y\nproperty float z\n";
   PlyBody body;
   switch (op) {
@@ -289,12 +287,9 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
         body.put(static_cast<std::uint8_t>(b->collides));
         body.put(static_cast<std::uint8_t>(b->touches_unknown));
         body.putDistance(b->clearance_m);
-        if (b->collides)
-          body.rgb(220, 40, 40);
-        else if (b->touches_unknown)
-          body.rgb(240, 150, 30);
-        else
-          body.rgb(40, 190, 70);
+        if (b->collides) body.rgb(220, 40, 40);
+        else if (b->touches_unknown) body.rgb(240, 150, 30);
+        else body.rgb(40, 190, 70);
       }
       break;
     }
@@ -308,14 +303,11 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
         body.put(static_cast<std::uint8_t>(h.hit));
         body.putDistance(h.t_m);
         body.put3(h.point_W);
-        if (h.hit)
-          body.rgb(220, 40, 40);
-        else
-          body.rgb(150, 150, 150);
+        if (h.hit) body.rgb(220, 40, 40);
+        else body.rgb(150, 150, 150);
       }
       break;
-    default:
-      throw std::logic_error("queryAnswersPly: no records for this op");
+    default: throw std::logic_error("queryAnswersPly: no records for this op");
   }
   header += "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
   return header + body.bytes;
@@ -323,10 +315,8 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
 
 void writeQueryAnswers(const fs::path& file, QueryOp op, const QueryInput& input, const QueryAnswers& answers) {
   const std::string ext = file.extension().string();
-  if (ext == ".ply")
-    writeFileAtomically(file, queryAnswersPly(op, input, answers));
-  else
-    writeFileAtomically(file, queryAnswersText(op, input, answers));
+  if (ext == ".ply") writeFileAtomically(file, queryAnswersPly(op, input, answers));
+  else writeFileAtomically(file, queryAnswersText(op, input, answers));
 }
 
 }  // namespace vdmap::app

@@ -39,10 +39,10 @@ QueryInput readQueryInput(const std::filesystem::path& file, QueryOp op, double 
 
 /// The answers, one vector filled per op.
 struct QueryAnswers {
-  std::vector<Classification> classes;   ///< classify
-  std::vector<DistanceResult> distances; ///< distance
-  std::vector<BodyCollision> bodies;     ///< collide: one per body, ascending body number
-  std::vector<RayHit> hits;              ///< ray
+  std::vector<Classification> classes;    ///< classify
+  std::vector<DistanceResult> distances;  ///< distance
+  std::vector<BodyCollision> bodies;      ///< collide: one per body, ascending body number
+  std::vector<RayHit> hits;               ///< ray
 };
 
 /// The text output (%.9g): classify `CLASS p keyframe ellipsoid`; distance `d gx gy gz` (`inf 0 0
@@ -60,6 +60,7 @@ std::string queryAnswersText(QueryOp op, const QueryInput& input, const QueryAns
 std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnswers& answers);
 
 /// Writes the answers by `file`'s extension (.txt or .ply) atomically.
-void writeQueryAnswers(const std::filesystem::path& file, QueryOp op, const QueryInput& input, const QueryAnswers& answers);
+void writeQueryAnswers(const std::filesystem::path& file, QueryOp op, const QueryInput& input,
+                       const QueryAnswers& answers);
 
 }  // namespace vdmap::app

@@ -39,8 +39,7 @@ CodePoint decodeUtf8(std::string_view text, std::size_t i) {
 
 // Whether XML 1.0 may carry the character at all (its Char production).
 bool isXmlChar(std::uint32_t c) {
-  return c == 0x9 || c == 0xA || c == 0xD || (c >= 0x20 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) ||
-         c >= 0x10000;
+  return c == 0x9 || c == 0xA || c == 0xD || (c >= 0x20 && c <= 0xD7FF) || (c >= 0xE000 && c <= 0xFFFD) || c >= 0x10000;
 }
 
 // Seconds with three decimals whatever the locale (a comma would break every JUnit reader).

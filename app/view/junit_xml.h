@@ -11,18 +11,18 @@ namespace vdmap::app {
 
 /// One view of a suite and its verdict.
 struct SuiteCase {
-  std::string map{};     ///< the suite's name of the map or session it shows (classname vdmap.render.MAP)
-  std::string view{};    ///< the view's name (the testcase's name)
-  double seconds = 0;    ///< wall time spent rendering and comparing it
+  std::string map{};   ///< the suite's name of the map or session it shows (classname vdmap.render.MAP)
+  std::string view{};  ///< the view's name (the testcase's name)
+  double seconds = 0;  ///< wall time spent rendering and comparing it
   bool passed = true;
-  std::string message{}; ///< a failure's one line (ImageComparison::summary()); empty when passed
-  std::string details{}; ///< a failure's body, e.g. where its actual and diff images were written
+  std::string message{};  ///< a failure's one line (ImageComparison::summary()); empty when passed
+  std::string details{};  ///< a failure's body, e.g. where its actual and diff images were written
 };
 
 /// A whole suite run.
 struct SuiteReport {
-  std::string name{};    ///< the suite file's name, e.g. "views.yaml"
-  double seconds = 0;    ///< wall time of the whole run
+  std::string name{};  ///< the suite file's name, e.g. "views.yaml"
+  double seconds = 0;  ///< wall time of the whole run
   std::vector<SuiteCase> cases{};
 };
 

@@ -20,7 +20,8 @@ MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
     if (on_frame) on_frame(report);
     progress.update(++done);
   }
-  return refine && mapper.params().poses == PoseSource::kTrack ? mapper.refineKeyframePoses(*refine) : MapRefinementResult{};
+  return refine && mapper.params().poses == PoseSource::kTrack ? mapper.refineKeyframePoses(*refine)
+                                                               : MapRefinementResult{};
 }
 
 std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {

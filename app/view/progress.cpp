@@ -30,8 +30,8 @@ void ProgressBar::draw(std::size_t done) {
   constexpr int kWidth = 40;
   const double fraction = total_ == 0 ? 1.0 : std::min(1.0, static_cast<double>(done) / static_cast<double>(total_));
   const int filled = static_cast<int>(fraction * kWidth);
-  std::fprintf(stderr, "\r%s [%.*s%*s] %zu/%zu", label_.c_str(), filled,
-               "########################################", kWidth - filled, "", done, total_);
+  std::fprintf(stderr, "\r%s [%.*s%*s] %zu/%zu", label_.c_str(), filled, "########################################",
+               kWidth - filled, "", done, total_);
   std::fflush(stderr);
 }
 

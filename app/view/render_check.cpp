@@ -51,8 +51,13 @@ render::ImageTolerance tolerance(const RenderCheckArgs& args) {
 
 void checkRenderCheckArgs(const RenderCheckArgs& args, bool suite) {
   if (args.expect.empty() && !suite) {
-    const char* alone = args.update ? "--update" : !args.tolerance.empty() ? "--tolerance" : !args.diff.empty() ? "--diff" : nullptr;
-    if (alone) throw CLI::RequiredError(std::string(alone) + " needs --expect GOLDEN.png (or --suite)", CLI::ExitCodes::RequiredError);
+    const char* alone = args.update               ? "--update"
+                        : !args.tolerance.empty() ? "--tolerance"
+                        : !args.diff.empty()      ? "--diff"
+                                                  : nullptr;
+    if (alone)
+      throw CLI::RequiredError(std::string(alone) + " needs --expect GOLDEN.png (or --suite)",
+                               CLI::ExitCodes::RequiredError);
   }
   if (!args.diff.empty()) checkOutputFile(args.diff, "--diff");
   if (args.update && !args.expect.empty()) checkOutputFile(args.expect, "--expect");
@@ -65,7 +70,8 @@ std::string sizeText(cv::Size s) { return std::to_string(s.width) + "x" + std::t
 // The size a PNG's header (IHDR, the first chunk) gives, or nullopt when it is not a PNG.
 std::optional<cv::Size> pngSize(const std::string& bytes) {
   static const char kMagic[] = "\x89PNG\r\n\x1a\nxxxxIHDR";
-  if (bytes.size() < 24 || bytes.compare(0, 8, kMagic, 8) != 0 || bytes.compare(12, 4, "IHDR") != 0) return std::nullopt;
+  if (bytes.size() < 24 || bytes.compare(0, 8, kMagic, 8) != 0 || bytes.compare(12, 4, "IHDR") != 0)
+    return std::nullopt;
   const auto u32 = [&](std::size_t at) {
     std::uint32_t v = 0;
     for (std::size_t i = 0; i < 4; ++i) v = v << 8 | static_cast<std::uint8_t>(bytes[at + i]);
@@ -80,13 +86,13 @@ std::optional<cv::Size> pngSize(const std::string& bytes) {
 
 void checkGoldenSize(const std::string& file, cv::Size golden, cv::Size view) {
   if (golden != view)
-    throw InputError(file, "the golden is " + sizeText(golden) + ", the view " + sizeText(view) + " (--size, or --update)");
+    throw InputError(file,
+                     "the golden is " + sizeText(golden) + ", the view " + sizeText(view) + " (--size, or --update)");
 }
 
 cv::Mat readGolden(const std::string& file, std::optional<cv::Size> size) {
   std::error_code ec;
-  if (!std::filesystem::exists(file, ec))
-    throw InputError(file, "no such golden image (render it once with --update)");
+  if (!std::filesystem::exists(file, ec)) throw InputError(file, "no such golden image (render it once with --update)");
   if (std::filesystem::is_directory(file, ec)) throw InputError(file, "is a folder, not a golden PNG");
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file, "cannot open the golden image");

@@ -7,8 +7,8 @@
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/files/map_file.h"
-#include "mapping/pipeline/parameters.h"
 #include "mapping/files/session_file.h"
+#include "mapping/pipeline/parameters.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"
@@ -36,7 +36,6 @@ std::vector<double> paramsKey(const GlobalMapParams& params) {
   return key;
 }
 
-
 // Whether `path` is a map file loadStaticMap reads (a sequence folder, a typo and the rest: no,
 // and they keep their own errors).
 bool isStaticMapFile(const std::string& path) {
@@ -61,7 +60,7 @@ struct RenderSource::Impl {
   int frames = 0;
   bool tracked = false;
   std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
-  std::vector<Transform> map_cameras;  // a map folder's trajectory (else keyframes): the data up axis
+  std::vector<Transform> map_cameras;              // a map folder's trajectory (else keyframes): the data up axis
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, GlobalMap>> maps;  // by paramsKey
   // The query slice (--query-slice): the point queries of the last map asked for, and the slice.
@@ -100,7 +99,8 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     // ellipsoids (mapping/files/map_file.h, as the workbench opens it).
     StaticMap file = loadStaticMap(map);
     // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
-    for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory) m.map_cameras.push_back(p.T_W_C);
+    for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory)
+      m.map_cameras.push_back(p.T_W_C);
     m.map_file = std::move(file.ellipsoids);
     name_ = map;
   }
@@ -170,7 +170,8 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
     GlobalMap file_map;
     if (!global) file_map.ellipsoids = map, global = &file_map;
     const KeyframeGraph none;
-    m.query = std::make_shared<const QueryMap>(QueryMap::build(global == &file_map ? none : *m.graph, *global, QueryParams{}));
+    m.query = std::make_shared<const QueryMap>(
+        QueryMap::build(global == &file_map ? none : *m.graph, *global, QueryParams{}));
     m.query_for = &map;
     m.slice_image.reset();
   }
@@ -239,8 +240,11 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     const Keyframe& k = m.graph->keyframe(spec.keyframe);
     const std::vector<Ellipsoid> kept = keptEllipsoids(k.container, params.filter, k.T_W_K, k.id);
     mirror.setContainer(++m.container_serial, spec.keyframe, keyframeImage(k, name_), m.camera, k.T_W_K, kept,
-                        {.sigma = spec.sigma, .color = spec.color, .cell_size_px = m.cell_size_px,
-                         .show_grid = spec.layers.grid, .show_bounds = spec.layers.bounds});
+                        {.sigma = spec.sigma,
+                         .color = spec.color,
+                         .cell_size_px = m.cell_size_px,
+                         .show_grid = spec.layers.grid,
+                         .show_bounds = spec.layers.bounds});
     last_drawn_ = kept.size();
     return render::renderView(gl, mirror, spec, scene, w, h);
   }
@@ -272,8 +276,8 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   }
   // The frame holds what is drawn: each ellipsoid's extent at the sigma (strays left out), and a
   // mesh whole.
-  render::DrawnBounds drawn = render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height,
-                                                  render::frameAxes(map, scene.up));
+  render::DrawnBounds drawn =
+      render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, render::frameAxes(map, scene.up));
   for (const auto& p : m.mesh.positions) {
     const glm::vec3 q = glm::transpose(drawn.axes) * glm::vec3(p.x(), p.y(), p.z());
     drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
@@ -284,10 +288,10 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;
   last_up_ = spec.look_at ? glm::normalize(spec.look_at->up) : scene.up;
-  mirror.setLegend(spec.layers.legend ? render::legendFor(spec.color, mirror.mapColorRange(), graph,
-                                                          spec.layers.trajectory, spec.layers.groundtruth,
-                                                          spec.layers.graph)
-                                      : render::Legend{},
+  mirror.setLegend(spec.layers.legend
+                       ? render::legendFor(spec.color, mirror.mapColorRange(), graph, spec.layers.trajectory,
+                                           spec.layers.groundtruth, spec.layers.graph)
+                       : render::Legend{},
                    spec.background, w);
   if (!m.mesh.triangles.empty() && !m.mesh_renderer) {
     m.mesh_renderer = std::make_unique<render::MeshRenderer>(gl);

@@ -16,8 +16,8 @@
 #include "app/view/render_check.h"
 #include "app/view/render_source.h"
 #include "app/view/render_view.h"
-#include "mapping/core/timing.h"
 #include "mapping/core/error.h"
+#include "mapping/core/timing.h"
 #include "mapping/files/session_file.h"
 #include "render/framebuffer.h"
 
@@ -26,7 +26,8 @@ namespace vdmap::app {
 namespace fs = std::filesystem;
 
 int SuiteResult::failed() const {
-  return static_cast<int>(std::count_if(views.begin(), views.end(), [](const SuiteViewResult& v) { return !v.passed; }));
+  return static_cast<int>(
+      std::count_if(views.begin(), views.end(), [](const SuiteViewResult& v) { return !v.passed; }));
 }
 
 namespace {
@@ -86,7 +87,9 @@ render::ImageTolerance readTolerance(const YAML::Node& node, const std::string& 
         throw InputError(file, line, "unknown tolerance key '" + key + "' (expected counts, share)");
       }
     } catch (const YAML::Exception&) {
-      throw InputError(file, line, "tolerance " + key + (key == "counts" ? " must be an integer in 0..255" : " must be a number in 0..1"));
+      throw InputError(
+          file, line,
+          "tolerance " + key + (key == "counts" ? " must be an integer in 0..255" : " must be a number in 0..1"));
     }
   }
   return base;
@@ -121,8 +124,10 @@ ViewEntry readView(const YAML::Node& node, const SuiteFile& suite, const std::st
     } else {
       const CLI::Option* option = known.app.get_option_no_throw("--" + key);
       if (!option || key == "help")
-        throw InputError(file, line, "unknown view key '" + key + "' (a view has name, map, tolerance and render's view "
-                                     "options without --, e.g. view, size, color, orbit, view-file)");
+        throw InputError(file, line,
+                         "unknown view key '" + key +
+                             "' (a view has name, map, tolerance and render's view "
+                             "options without --, e.g. view, size, color, orbit, view-file)");
       const bool flag = option->get_expected_max() == 0;  // a flag takes no value
       const bool path = key == "view-file" || key == "settings";
       settings_given = settings_given || key == "settings";
@@ -146,7 +151,8 @@ ViewEntry readView(const YAML::Node& node, const SuiteFile& suite, const std::st
   if (view.name.empty()) throw InputError(file, view.line, "a view needs a name (its golden is GOLDENS/NAME.png)");
   static const std::regex name_pattern(R"([A-Za-z0-9][A-Za-z0-9._+-]*)");
   if (!std::regex_match(view.name, name_pattern))
-    throw InputError(file, view.line, "view name '" + view.name + "': letters, digits, '.', '_', '+' and '-' only (it names files)");
+    throw InputError(file, view.line,
+                     "view name '" + view.name + "': letters, digits, '.', '_', '+' and '-' only (it names files)");
   if (view.map.empty()) throw InputError(file, view.line, "view '" + view.name + "' needs a map (a name under maps)");
   if (!settings_given && !suite.settings.empty()) {
     argv.push_back("--settings");
@@ -182,8 +188,9 @@ SuiteFile readSuite(const fs::path& file_path) {
   static const std::set<std::string> keys = {"version", "tolerance", "goldens", "out", "settings", "maps", "views"};
   for (const auto& entry : root)
     if (!keys.count(entry.first.Scalar()))
-      throw InputError(file, lineOf(entry.first), "unknown key '" + entry.first.Scalar() +
-                                                      "' (expected version, tolerance, goldens, out, settings, maps, views)");
+      throw InputError(file, lineOf(entry.first),
+                       "unknown key '" + entry.first.Scalar() +
+                           "' (expected version, tolerance, goldens, out, settings, maps, views)");
   if (!root["version"] || scalar(root["version"], file, "version") != "1")
     throw InputError(file, root["version"] ? lineOf(root["version"]) : 1, "expected version: 1");
   if (root["tolerance"]) suite.tolerance = readTolerance(root["tolerance"], file, suite.tolerance);
@@ -194,8 +201,8 @@ SuiteFile readSuite(const fs::path& file_path) {
   if (!maps || !maps.IsMap() || maps.size() == 0)
     throw InputError(file, maps ? lineOf(maps) : 1, "maps must name at least one map: {NAME: PATH, ...}");
   for (const auto& entry : maps)
-    suite.maps.push_back({entry.first.Scalar(), relativeTo(suite.folder, scalar(entry.second, file, "map path")),
-                          lineOf(entry.first)});
+    suite.maps.push_back(
+        {entry.first.Scalar(), relativeTo(suite.folder, scalar(entry.second, file, "map path")), lineOf(entry.first)});
   const YAML::Node views = root["views"];
   if (!views || !views.IsSequence() || views.size() == 0)
     throw InputError(file, views ? lineOf(views) : 1, "views must be a list of at least one view");
@@ -251,9 +258,11 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     if (!fs::exists(m.path, ec))
       throw InputError(file, m.line, "map '" + m.name + "': no such file or folder " + m.path.string());
     if (fs::is_directory(m.path, ec) && !fs::exists(m.path / "global_ellipsoids.ply", ec))
-      throw InputError(file, m.line, "map '" + m.name + "': " + m.path.string() +
-                                         " is not a `vdmap map` folder (a sequence? map it once with `vdmap map --save`)");
-    const bool used = std::any_of(suite.views.begin(), suite.views.end(), [&](const ViewEntry& v) { return v.map == m.name; });
+      throw InputError(file, m.line,
+                       "map '" + m.name + "': " + m.path.string() +
+                           " is not a `vdmap map` folder (a sequence? map it once with `vdmap map --save`)");
+    const bool used =
+        std::any_of(suite.views.begin(), suite.views.end(), [&](const ViewEntry& v) { return v.map == m.name; });
     if (!used) continue;  // named but not drawn: checked, not loaded
     const auto t0 = std::chrono::steady_clock::now();
     try {
@@ -312,7 +321,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     r.size = sizeText(p.width, p.height);
     RenderSource& source = *p.map->source;
     t0 = std::chrono::steady_clock::now();
-    if (p.resolved.spec.kind != render::ViewKind::kContainer && source.graph())  // a map file's is read, not built
+    if (p.resolved.spec.kind != render::ViewKind::kContainer && source.graph())   // a map file's is read, not built
       p.map->global_maps.insert(source.globalMap(p.resolved.thresholds).data());  // one buffer per map built
     r.build_s = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
@@ -320,7 +329,8 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     r.render_s = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
     const fs::path actual = suite.out / (r.name + ".actual.png"), diff = suite.out / (r.name + ".diff.png");
-    const CheckResult check = checkRender(rgb, p.golden_rgb, p.golden.string(), p.tolerance, options.update, diff.string());
+    const CheckResult check =
+        checkRender(rgb, p.golden_rgb, p.golden.string(), p.tolerance, options.update, diff.string());
     r.updated = check.updated;
     r.comparison = check.comparison;
     r.passed = check.updated || check.comparison.matches;
@@ -364,8 +374,9 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
         std::printf("%-*s | %-*s | %-9s | %12s | %7s | %5s | %-7s | %6.0f\n", nw, r.name.c_str(), mw, r.map.c_str(),
                     r.size.c_str(), "-", "-", "-", verdict, ms);
       else
-        std::printf("%-*s | %-*s | %-9s | %12ld | %6.2f%% | %5d | %-7s | %6.0f\n", nw, r.name.c_str(), mw, r.map.c_str(),
-                    r.size.c_str(), r.comparison.differing, 100.0 * r.comparison.share, r.comparison.worst, verdict, ms);
+        std::printf("%-*s | %-*s | %-9s | %12ld | %6.2f%% | %5d | %-7s | %6.0f\n", nw, r.name.c_str(), mw,
+                    r.map.c_str(), r.size.c_str(), r.comparison.differing, 100.0 * r.comparison.share,
+                    r.comparison.worst, verdict, ms);
     }
     std::printf("%d views: %d %s, %d differ; maps loaded: %d, global maps built: %d; %.2f s; report %s\n",
                 static_cast<int>(result.views.size()), static_cast<int>(result.views.size()) - result.failed(),
@@ -403,10 +414,10 @@ void runSuiteCommand(const std::string& file, const SuiteOptions& options) {
 bool runSuiteIfGiven(const CLI::App& verb, const RenderCheckArgs& args) {
   if (args.suite.empty()) return false;
   checkSuiteExcludes(verb);
-  runSuiteCommand(args.suite, {.update = args.update,
-                               .tolerance = args.tolerance.empty() ? std::nullopt
-                                                                   : std::optional(parseTolerance(args.tolerance)),
-                               .timings = args.timings});
+  runSuiteCommand(args.suite,
+                  {.update = args.update,
+                   .tolerance = args.tolerance.empty() ? std::nullopt : std::optional(parseTolerance(args.tolerance)),
+                   .timings = args.timings});
   return true;
 }
 

@@ -15,10 +15,10 @@
 namespace vdmap::app {
 
 struct SuiteOptions {
-  bool update = false;   ///< write every view's golden instead of comparing
+  bool update = false;                              ///< write every view's golden instead of comparing
   std::optional<render::ImageTolerance> tolerance;  ///< --tolerance: replaces the suite's default
-  bool timings = false;  ///< a note line with the stage times on stderr
-  bool table = true;     ///< print the table and the summary on stdout
+  bool timings = false;                             ///< a note line with the stage times on stderr
+  bool table = true;                                ///< print the table and the summary on stdout
 };
 
 /// One view's outcome. Times in seconds: the global map it needed built (0 when cached), the

@@ -3,12 +3,12 @@
 #include <cmath>
 #include <regex>
 
-#include "app/view/map_sequence.h"
 #include "app/cli/parameter_table.h"
-#include "mapping/pipeline/parameters.h"
+#include "app/view/map_sequence.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/files/map_file.h"
+#include "mapping/pipeline/parameters.h"
 #include "render/colormap.h"
 #include "render/context.h"
 #include "render/map_mirror.h"
@@ -58,7 +58,8 @@ render::ViewLayers parseLayers(const std::string& text) {
     for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
       if (item == render::kViewLayerNames[i]) layers.*render::kViewLayerFields[i] = known = true;
     if (!known)
-      throw std::invalid_argument("'" + item + "': expected none or a comma-separated list of frustums, graph, "
+      throw std::invalid_argument("'" + item +
+                                  "': expected none or a comma-separated list of frustums, graph, "
                                   "trajectory, groundtruth, legend, grid, bounds");
     if (comma == std::string::npos) break;
     start = comma + 1;
@@ -129,13 +130,19 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
   verb.add_option("--view", a.view,
                   "global (map, frustums, covisibility edges coloured by weight, trajectory) | keyframe:K (the map "
                   "from keyframe K with its intrinsics) | container:K (K's image with its ellipses); default global")
-      ->check(parsedBy([](const std::string& t) { render::ViewSpec s; parseViewName(t, &s); }, "VIEW"));
+      ->check(parsedBy(
+          [](const std::string& t) {
+            render::ViewSpec s;
+            parseViewName(t, &s);
+          },
+          "VIEW"));
   verb.add_option("--size", a.size,
                   "image size WIDTHxHEIGHT (default: 1280x720 global, the camera's for keyframe:K, the "
                   "container's 2W x 2H for container:K)")
       ->check(parsedBy(parseViewSize, "WxH"));
   std::string color_modes;
-  for (const char* name : render::kColorModeNames) color_modes += (color_modes.empty() ? "" : " | ") + std::string(name);
+  for (const char* name : render::kColorModeNames)
+    color_modes += (color_modes.empty() ? "" : " | ") + std::string(name);
   verb.add_option("--color", a.color, color_modes + " (default rgb; uncertainty, count and keyframe draw a legend)")
       ->check(parsedBy(render::parseColorMode, "MODE"));
   verb.add_option("--background", a.background, "dark (the window's, the default) | white | #rrggbb")
@@ -267,7 +274,8 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
     spec.orbit.reset();
   }
   if (up_vector) {
-    if (!spec.look_at) throw std::invalid_argument("--up " + a.up + ": a vector needs --look-at (or a view file's camera)");
+    if (!spec.look_at)
+      throw std::invalid_argument("--up " + a.up + ": a vector needs --look-at (or a view file's camera)");
     spec.look_at->up = *up_vector;
   } else if (!a.up.empty() && spec.look_at && a.look_at.empty()) {
     spec.look_at->up = glm::vec3(0.f);  // an axis name: the view file's camera keeps up that axis

@@ -17,22 +17,22 @@ namespace vdmap::app {
 /// The view flags of `vdmap render` as given (text, checked while parsing, resolved by
 /// resolveViewSpec). Empty / unset: not given, the lower layers of the precedence apply.
 struct RenderViewArgs {
-  std::string view;              ///< --view global|keyframe:K|container:K (empty: global)
-  std::string size;              ///< --size WxH
-  std::string color;             ///< --color MODE
-  std::string background;        ///< --background dark|white|#rrggbb
-  std::string layers;            ///< --layers LIST|none
-  std::string up;                ///< --up data|+z|+y|-y, or X,Y,Z with --look-at
-  std::string draw;              ///< --draw ellipsoids|centres|none
-  std::string slice;             ///< --slice LO:HI
-  std::string look_at;           ///< --look-at EX,EY,EZ,TX,TY,TZ
-  std::string orbit;             ///< --orbit AZ,EL[,DIST]
-  std::string view_file;         ///< --view-file V.json
-  std::string settings;          ///< --settings FILE (settings.json or view file: thresholds)
-  std::vector<std::string> set;  ///< --set KEY=VALUE
+  std::string view;                               ///< --view global|keyframe:K|container:K (empty: global)
+  std::string size;                               ///< --size WxH
+  std::string color;                              ///< --color MODE
+  std::string background;                         ///< --background dark|white|#rrggbb
+  std::string layers;                             ///< --layers LIST|none
+  std::string up;                                 ///< --up data|+z|+y|-y, or X,Y,Z with --look-at
+  std::string draw;                               ///< --draw ellipsoids|centres|none
+  std::string slice;                              ///< --slice LO:HI
+  std::string look_at;                            ///< --look-at EX,EY,EZ,TX,TY,TZ
+  std::string orbit;                              ///< --orbit AZ,EL[,DIST]
+  std::string view_file;                          ///< --view-file V.json
+  std::string settings;                           ///< --settings FILE (settings.json or view file: thresholds)
+  std::vector<std::string> set;                   ///< --set KEY=VALUE
   std::optional<float> fov, sigma, points_below;  ///< --fov, --sigma, --points-below
   std::optional<int> sphere_level, select;        ///< --sphere-level, --select K
-  bool grid = false;             ///< --grid (container view's cell grid; as --layers +grid)
+  bool grid = false;                              ///< --grid (container view's cell grid; as --layers +grid)
 };
 
 /// Parses --size WIDTHxHEIGHT (each side 1..kMaxImageSide); throws std::invalid_argument.

@@ -76,7 +76,9 @@ void read(const json& section, const char* section_name, const char* key, T& out
   try {
     out = section.at(key).get<T>();
   } catch (const json::exception&) {
-    const char* expected = std::is_same_v<T, bool> ? "true or false" : std::is_arithmetic_v<T> ? "a number" : "a string";
+    const char* expected = std::is_same_v<T, bool>   ? "true or false"
+                           : std::is_arithmetic_v<T> ? "a number"
+                                                     : "a string";
     throw std::invalid_argument(std::string(section_name) + "." + key + ": expected " + expected + ", got " +
                                 section.at(key).dump());
   }
@@ -114,7 +116,8 @@ Settings fromJson(const json& j, const Settings& base = {}) {
     read(v, "view", "play_fps", s.play_fps);
     read(v, "view", "up_axis", up);
     const auto it = std::find(std::begin(kUpAxisNames), std::end(kUpAxisNames), up);
-    if (it == std::end(kUpAxisNames)) throw std::invalid_argument("view.up_axis must be data, +z, +y or -y, got '" + up + "'");
+    if (it == std::end(kUpAxisNames))
+      throw std::invalid_argument("view.up_axis must be data, +z, +y or -y, got '" + up + "'");
     s.up_axis = static_cast<UpAxis>(it - std::begin(kUpAxisNames));
     read(v, "view", "container_grid", s.container_grid);
     read(v, "view", "container_bounds", s.container_bounds);
@@ -131,7 +134,8 @@ Settings fromJson(const json& j, const Settings& base = {}) {
     read(v, "view", "slice_hi", s.slice.hi_m);
     if (!(s.slice.lo_m < s.slice.hi_m && s.slice.lo_m >= -1e4f && s.slice.hi_m <= 1e4f))
       throw std::invalid_argument("view.slice_lo must be below view.slice_hi (metres above the floor, within 1e4)");
-    if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10)) throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
+    if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10))
+      throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
     if (!(s.play_fps >= 0 && s.play_fps <= 1000)) throw std::invalid_argument("view.play_fps must be in [0, 1000]");
   }
   if (j.contains("window")) {
@@ -285,8 +289,7 @@ std::string settingKeyList() {
   std::string list;
   for (const char* section : kSetSections) {
     list += std::string(list.empty() ? "" : "; ") + section + ":";
-    for (const auto& [key, value] : defaults.at(section).items())
-      list += (list.back() == ':' ? " " : ", ") + key;
+    for (const auto& [key, value] : defaults.at(section).items()) list += (list.back() == ':' ? " " : ", ") + key;
   }
   return list;
 }

@@ -16,26 +16,26 @@
 namespace vdmap::app::gui {
 
 /// Which world direction the 3-D view keeps up (render/view_spec.h, shared with `vdmap render`).
-using render::UpAxis;
 using render::kUpAxisNames;
+using render::UpAxis;
 
 /// Everything that persists between runs. Defaults are the library's defaults.
 struct Settings {
-  GlobalMapParams thresholds;           ///< live: changing one rebuilds the global map
-  MapperParams mapper;                  ///< re-run: changing one re-maps the sequence
+  GlobalMapParams thresholds;  ///< live: changing one rebuilds the global map
+  MapperParams mapper;         ///< re-run: changing one re-maps the sequence
   render::ColorMode color = render::ColorMode::kRgb;
-  bool show_ellipsoids = true;          ///< false: ellipsoid centres as points
+  bool show_ellipsoids = true;  ///< false: ellipsoid centres as points
   /// Draw "hidden": no map at all (the paths and cameras alone). Not saved: a run starts with the map.
   bool hide_map = false;
   bool show_frustums = true, show_graph = true, show_trajectory = true;
-  bool show_groundtruth = true;         ///< tracked poses: the ground-truth trajectory beside them
+  bool show_groundtruth = true;  ///< tracked poses: the ground-truth trajectory beside them
   float ellipsoid_sigma = 2.f;
-  float play_fps = 0.f;                 ///< playback limit, frames per second; 0: as fast as mapping goes
-  UpAxis up_axis = UpAxis::kData;       ///< kData: estimated from the cameras and the map's floor
-  bool container_grid = false;          ///< the container view's cell grid
-  bool container_bounds = true;         ///< the container view's image outline
+  float play_fps = 0.f;                            ///< playback limit, frames per second; 0: as fast as mapping goes
+  UpAxis up_axis = UpAxis::kData;                  ///< kData: estimated from the cameras and the map's floor
+  bool container_grid = false;                     ///< the container view's cell grid
+  bool container_bounds = true;                    ///< the container view's image outline
   glm::vec3 background = render::kDarkBackground;  ///< "dark", "white" or "#rrggbb"
-  bool show_legend = true;              ///< the colour legend and tracking key over the 3-D view
+  bool show_legend = true;                         ///< the colour legend and tracking key over the 3-D view
   /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
   /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
   render::HeightSlice slice;

@@ -4,8 +4,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
-#include <iterator>
 #include <fstream>
+#include <iterator>
 #include <regex>
 #include <set>
 
@@ -117,15 +117,15 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   using R = Reader;
   if (!j.is_object()) R::fail("expected a JSON object (a view file)");
   const int version = R::integer(R::key(j, "", "vdmap_view"), "vdmap_view", 1, 1000);
-  if (version > kVersion)
-    R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads versions 1 and 2");
+  if (version > kVersion) R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads versions 1 and 2");
   if (version == 1)
-    R::onlyKeys(j, "", {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma",
-                        "sphere_level", "points_below_px", "background", "layers", "selected_keyframe", "thresholds"});
+    R::onlyKeys(j, "",
+                {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
+                 "points_below_px", "background", "layers", "selected_keyframe", "thresholds"});
   else
-    R::onlyKeys(j, "", {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma",
-                        "sphere_level", "points_below_px", "background", "layers", "selected_keyframe", "thresholds",
-                        "slice"});
+    R::onlyKeys(j, "",
+                {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
+                 "points_below_px", "background", "layers", "selected_keyframe", "thresholds", "slice"});
   R::string(R::key(j, "", "source"), "source");
   render::ViewSpec spec;
   try {
@@ -138,7 +138,8 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   // [0, 0]: the view kind's default size.
   spec.width = R::integer(size[0], "size[0]", 0, 16384);
   spec.height = R::integer(size[1], "size[1]", 0, 16384);
-  if ((spec.width == 0) != (spec.height == 0)) R::fail("size must be [W, H] with both > 0, or [0, 0], got " + size.dump());
+  if ((spec.width == 0) != (spec.height == 0))
+    R::fail("size must be [W, H] with both > 0, or [0, 0], got " + size.dump());
   const json& camera = R::key(j, "", "camera");
   if (!camera.is_null()) {
     if (!camera.is_object()) R::fail("camera must be an object or null, got " + camera.dump());
@@ -190,8 +191,8 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   if (!layers.is_object()) R::fail("layers must be an object, got " + layers.dump());
   R::onlyKeys(layers, "layers.", {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid", "bounds"});
   for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
-    spec.layers.*render::kViewLayerFields[i] =
-        R::boolean(R::key(layers, "layers.", render::kViewLayerNames[i]), std::string("layers.") + render::kViewLayerNames[i]);
+    spec.layers.*render::kViewLayerFields[i] = R::boolean(R::key(layers, "layers.", render::kViewLayerNames[i]),
+                                                          std::string("layers.") + render::kViewLayerNames[i]);
   spec.selected_keyframe = R::integer(R::key(j, "", "selected_keyframe"), "selected_keyframe", -1, 1 << 30);
   const json& t = R::key(j, "", "thresholds");
   if (!t.is_object()) R::fail("thresholds must be an object, got " + t.dump());
@@ -298,7 +299,8 @@ void writeViewFile(const fs::path& file, const render::ViewSpec& spec, const Glo
   j["points_below_px"] = spec.points_below_px;
   j["background"] = gui::backgroundName(spec.background);
   json layers = json::object();
-  for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i) layers[render::kViewLayerNames[i]] = spec.layers.*render::kViewLayerFields[i];
+  for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
+    layers[render::kViewLayerNames[i]] = spec.layers.*render::kViewLayerFields[i];
   j["layers"] = layers;
   j["selected_keyframe"] = spec.selected_keyframe;
   ParameterValues params;
@@ -316,7 +318,8 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
   if (!view_file.empty()) return cmd + " --view-file " + quoted(view_file) + " --out " + quoted(out);
   const render::ViewSpec defaults;
   cmd += " --view " + viewName(spec);
-  if (spec.width > 0 && spec.height > 0) cmd += " --size " + std::to_string(spec.width) + "x" + std::to_string(spec.height);
+  if (spec.width > 0 && spec.height > 0)
+    cmd += " --size " + std::to_string(spec.width) + "x" + std::to_string(spec.height);
   if (spec.look_at) {
     const render::LookAt& l = *spec.look_at;
     cmd += " --look-at " + number(l.eye.x) + "," + number(l.eye.y) + "," + number(l.eye.z) + "," + number(l.target.x) +
@@ -344,7 +347,8 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
   if (spec.layers != defaults.layers) {
     std::string list;
     for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
-      if (spec.layers.*render::kViewLayerFields[i]) list += (list.empty() ? "" : ",") + std::string(render::kViewLayerNames[i]);
+      if (spec.layers.*render::kViewLayerFields[i])
+        list += (list.empty() ? "" : ",") + std::string(render::kViewLayerNames[i]);
     cmd += " --layers " + (list.empty() ? std::string("none") : list);
   }
   if (spec.selected_keyframe >= 0) cmd += " --select " + std::to_string(spec.selected_keyframe);

@@ -33,7 +33,8 @@ void drawContainerWindow(Workbench& bench, const render::MapMirror& mirror, Wind
   const render::Texture2D& t = mirror.containerTexture();
   const ImVec2 avail = ImGui::GetContentRegionAvail();
   const float aspect = static_cast<float>(t.width()) / std::max(1, t.height());
-  const ImVec2 size = avail.x / aspect <= avail.y ? ImVec2(avail.x, avail.x / aspect) : ImVec2(avail.y * aspect, avail.y);
+  const ImVec2 size =
+      avail.x / aspect <= avail.y ? ImVec2(avail.x, avail.x / aspect) : ImVec2(avail.y * aspect, avail.y);
   const ImVec2 at = ImGui::GetCursorScreenPos();
   // The visible part of the container, in texture coordinates.
   const float half = 0.5f / zoom;
@@ -59,7 +60,8 @@ void drawContainerWindow(Workbench& bench, const render::MapMirror& mirror, Wind
   // Overlays in container pixels -> screen.
   const float cw = static_cast<float>(t.width()), ch = static_cast<float>(t.height());
   const auto screen = [&](float u, float v) {
-    return ImVec2(at.x + (u / cw - uv0.x) / (uv1.x - uv0.x) * size.x, at.y + (v / ch - uv0.y) / (uv1.y - uv0.y) * size.y);
+    return ImVec2(at.x + (u / cw - uv0.x) / (uv1.x - uv0.x) * size.x,
+                  at.y + (v / ch - uv0.y) / (uv1.y - uv0.y) * size.y);
   };
   ImDrawList* draw = ImGui::GetWindowDrawList();
   draw->PushClipRect(at, {at.x + size.x, at.y + size.y}, true);
@@ -68,8 +70,10 @@ void drawContainerWindow(Workbench& bench, const render::MapMirror& mirror, Wind
   if (s.container_grid && cell * px >= 4.f) {
     const int c0 = static_cast<int>(uv0.x * cw / cell), c1 = static_cast<int>(uv1.x * cw / cell) + 1;
     const int r0 = static_cast<int>(uv0.y * ch / cell), r1 = static_cast<int>(uv1.y * ch / cell) + 1;
-    for (int c = c0; c <= c1; ++c) draw->AddLine(screen(c * cell, 0), screen(c * cell, ch), IM_COL32(255, 255, 255, 50));
-    for (int r = r0; r <= r1; ++r) draw->AddLine(screen(0, r * cell), screen(cw, r * cell), IM_COL32(255, 255, 255, 50));
+    for (int c = c0; c <= c1; ++c)
+      draw->AddLine(screen(c * cell, 0), screen(c * cell, ch), IM_COL32(255, 255, 255, 50));
+    for (int r = r0; r <= r1; ++r)
+      draw->AddLine(screen(0, r * cell), screen(cw, r * cell), IM_COL32(255, 255, 255, 50));
   }
   if (s.container_bounds)
     draw->AddRect(screen(cw / 4, ch / 4), screen(cw * 3 / 4, ch * 3 / 4), IM_COL32(255, 220, 0, 200), 0.f, 0, 1.5f);

@@ -21,14 +21,16 @@ void drawExport(Workbench& bench, WindowState& win) {
   const std::string file = bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "." : "";
   ImGui::BeginDisabled(ui.export_text.empty() || !file.empty());
   if (ImGui::Button("Export")) bench.files().exportMap();
-  tip(!file.empty() ? file
-      : ui.export_text.empty() ? "Type a folder above first." : "Writes the global map, local maps, poses and graph.");
+  tip(!file.empty()            ? file
+      : ui.export_text.empty() ? "Type a folder above first."
+                               : "Writes the global map, local maps, poses and graph.");
   ImGui::EndDisabled();
   ImGui::SameLine();
   ImGui::BeginDisabled(ui.session_text.empty() || !file.empty());
   if (ImGui::Button("Save session")) bench.files().saveSession();
-  tip(!file.empty() ? file
-      : ui.session_text.empty() ? "Type a file name above first." : "Writes the whole session to one .vdmap file.");
+  tip(!file.empty()             ? file
+      : ui.session_text.empty() ? "Type a file name above first."
+                                : "Writes the whole session to one .vdmap file.");
   ImGui::EndDisabled();
   checkFits(win.check);
 }

@@ -53,7 +53,8 @@ std::string withSlash(const fs::path& p) {
 void openFileBrowser(FileBrowser& b, const std::string& start) {
   std::error_code ec;
   fs::path folder = start.empty() ? fs::current_path(ec) : fs::absolute(start, ec);
-  while (!folder.empty() && !fs::is_directory(folder, ec) && folder != folder.parent_path()) folder = folder.parent_path();
+  while (!folder.empty() && !fs::is_directory(folder, ec) && folder != folder.parent_path())
+    folder = folder.parent_path();
   if (folder.empty()) folder = fs::current_path(ec);
   b.path = withSlash(clean(folder));
   b.listed.clear();
@@ -101,8 +102,8 @@ std::string drawFileBrowser(FileBrowser& b) {
       ImGui::TableNextColumn();
       const std::string name = e.path.filename().string() + (e.folder ? "/" : "");
       if (!e.folder && !e.kind) ImGui::PushStyleColor(ImGuiCol_Text, ImGui::GetStyle().Colors[ImGuiCol_TextDisabled]);
-      const bool clicked = ImGui::Selectable(name.c_str(), b.selected == i,
-                                             ImGuiSelectableFlags_SpanAllColumns | ImGuiSelectableFlags_AllowDoubleClick);
+      const bool clicked = ImGui::Selectable(
+          name.c_str(), b.selected == i, ImGuiSelectableFlags_SpanAllColumns | ImGuiSelectableFlags_AllowDoubleClick);
       if (!e.folder && !e.kind) ImGui::PopStyleColor();
       if (clicked) {
         b.selected = i;
@@ -117,8 +118,9 @@ std::string drawFileBrowser(FileBrowser& b) {
     }
     ImGui::EndTable();
   }
-  const FolderEntry* sel =
-      b.selected >= 0 && b.selected < static_cast<int>(b.entries.size()) ? &b.entries[static_cast<std::size_t>(b.selected)] : nullptr;
+  const FolderEntry* sel = b.selected >= 0 && b.selected < static_cast<int>(b.entries.size())
+                               ? &b.entries[static_cast<std::size_t>(b.selected)]
+                               : nullptr;
   ImGui::BeginDisabled(!sel || !sel->kind);
   if (ImGui::Button("Open") && sel && sel->kind) chosen = sel->path.string();
   tip(sel && sel->kind ? "Opens the entry selected." : "Select something vdmap opens (a kind is shown beside it).");

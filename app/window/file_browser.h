@@ -11,12 +11,12 @@ namespace vdmap::app::gui {
 
 /// The browser's state (UI thread only).
 struct FileBrowser {
-  bool open = false;          ///< its window is shown
-  std::string path;           ///< the path field: a folder, or a folder and the start of a name
-  std::string listed;         ///< the folder `entries` lists ("" : none yet)
+  bool open = false;   ///< its window is shown
+  std::string path;    ///< the path field: a folder, or a folder and the start of a name
+  std::string listed;  ///< the folder `entries` lists ("" : none yet)
   std::vector<FolderEntry> entries;
-  std::string error;          ///< why `listed` cannot be listed
-  int selected = -1;          ///< index into entries
+  std::string error;  ///< why `listed` cannot be listed
+  int selected = -1;  ///< index into entries
 };
 
 /// Shows the browser at `start` (a path whose folder is listed; "" : the working folder).

@@ -87,10 +87,13 @@ void drawPoseEdit(Workbench& bench, WindowState& win) {
   // A pixel of drag moves the keyframe as far as a pixel of the view spans at its depth.
   const float speed = bench.view().poseDragSpeed();
   if (beginRows("pose")) {
-    label(win.check, "t (m)",
-          "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
-          "A pixel of drag moves it " + metres(speed) + " (what a pixel of the view spans at the keyframe's depth); "
-          "hold Alt for 100x finer, Shift for 10x coarser (Dear ImGui's drag keys); double-click to type a value.");
+    label(
+        win.check, "t (m)",
+        "The keyframe's position in the world, metres. Dragging moves its whole local map; the global map is rebuilt. "
+        "A pixel of drag moves it " +
+            metres(speed) +
+            " (what a pixel of the view spans at the keyframe's depth); "
+            "hold Alt for 100x finer, Shift for 10x coarser (Dear ImGui's drag keys); double-click to type a value.");
     moved |= ImGui::DragFloat3("##t", &ui.pose_translation_m.x, speed, -1000.f, 1000.f, "%.3f");
     poseEditStarted(bench);
     label(win.check, "roll, pitch, yaw (deg)",

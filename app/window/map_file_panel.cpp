@@ -66,12 +66,14 @@ void drawStaticMapFigures(const Workbench& bench, WindowState& win) {
       label(win.check, name, help);
       ImGui::TextUnformatted(value.c_str());
     };
-    row("ellipsoids", "Drawn from the file: a PLY's vertices, a map folder's global_ellipsoids.ply, or an OctoMap's "
-                      "occupied leaves (each a cube's covariance, size^2/12).",
+    row("ellipsoids",
+        "Drawn from the file: a PLY's vertices, a map folder's global_ellipsoids.ply, or an OctoMap's "
+        "occupied leaves (each a cube's covariance, size^2/12).",
         std::to_string(m->ellipsoids.size()));
     if (m->kind == MapFileKind::kPointPly)
-      row("point sigma", "Each point drawn as a sphere of this standard deviation: half the median distance to the "
-                         "nearest point.",
+      row("point sigma",
+          "Each point drawn as a sphere of this standard deviation: half the median distance to the "
+          "nearest point.",
           metres(m->sigma_m));
     if (m->kind == MapFileKind::kOctomap)
       row("resolution", "The OctoMap's finest voxel size; pruned leaves are 2^k voxels wide.", metres(m->sigma_m));
@@ -85,7 +87,8 @@ void drawStaticMapFigures(const Workbench& bench, WindowState& win) {
       if (stats.is_object())
         for (const char* key : {"frames", "sigma_e", "sigma_e_prime", "t_g_s"})
           if (stats.contains(key) && stats.at(key).is_number())
-            row(key, std::string("stats.json: ") + key + " of the `vdmap map` run that wrote the folder.", stats.at(key).dump());
+            row(key, std::string("stats.json: ") + key + " of the `vdmap map` run that wrote the folder.",
+                stats.at(key).dump());
     }
     ImGui::EndTable();
   }

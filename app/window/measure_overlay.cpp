@@ -111,8 +111,8 @@ bool answerProbes(Workbench& bench, const render::Gl& gl, WindowState& win) {
     switch (probe.purpose) {
       case ViewProbe::Purpose::kZoom:
         // Toward the surface under the cursor, else the point of the target's plane there.
-        bench.view().zoomAt(probe.wheel,
-                            p ? *p : bench.view().targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
+        bench.view().zoomAt(
+            probe.wheel, p ? *p : bench.view().targetPlanePoint(probe.x_px, probe.y_px, ui.view_width, ui.view_height));
         break;
       case ViewProbe::Purpose::kPivot:
         if (p) bench.view().pivotAt(*p);

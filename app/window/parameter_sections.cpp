@@ -70,24 +70,29 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
     };
     row("local maps", "Ellipsoids stored in all keyframes' containers (one per touched cell), before filtering.", "%zu",
         stored);
-    row("Sigma_e", "Sigma_e (docs/method.md 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
-                   "than k times the sensor model's expectation).",
+    row("Sigma_e",
+        "Sigma_e (docs/method.md 6.4): ellipsoids the filter keeps in the local maps (enough points, not longer "
+        "than k times the sensor model's expectation).",
         "%zu (%.0f%%)", m.sigma_e, 100.0 * m.sigma_e / std::max<std::size_t>(1, stored));
-    row("merged", "After mean-shift merging within each merge group (docs/method.md 6.2), before occlusion removal.", "%zu",
-        m.merged);
+    row("merged", "After mean-shift merging within each merge group (docs/method.md 6.2), before occlusion removal.",
+        "%zu", m.merged);
     row("fused", "Ellipsoids fused into a copy of the same surface from another merge group (docs/method.md 7).", "%zu",
         m.merged_across_groups);
-    row("Sigma_e'", "Sigma_e' (docs/method.md 6.4): ellipsoids of the global map, after merging, occlusion removal and "
-                    "fusion across groups.",
+    row("Sigma_e'",
+        "Sigma_e' (docs/method.md 6.4): ellipsoids of the global map, after merging, occlusion removal and "
+        "fusion across groups.",
         "%zu", m.sigma_e_prime);
-    row("merge groups", "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (docs/method.md 6.1).",
-        "%zu", m.groups.size());
-    row("t_g", "t_g (docs/method.md 6.4): wall time of the global map build: grouping, filtering and merging, occlusion "
-               "removal, fusion across groups.",
+    row("merge groups",
+        "Groups of a centre keyframe and its neighbours with edge weight >= tau_group (docs/method.md 6.1).", "%zu",
+        m.groups.size());
+    row("t_g",
+        "t_g (docs/method.md 6.4): wall time of the global map build: grouping, filtering and merging, occlusion "
+        "removal, fusion across groups.",
         "%.3f s", m.t_g_s);
     const TgParts parts = tgParts(m);
-    row("of which", "Grouping / filtering and merging / occlusion removal / fusion across groups (docs/method.md 7) / "
-                    "other (the rest of the build), ms: they add up to t_g.",
+    row("of which",
+        "Grouping / filtering and merging / occlusion removal / fusion across groups (docs/method.md 7) / "
+        "other (the rest of the build), ms: they add up to t_g.",
         "%.0f / %.0f / %.0f / %.0f / %.0f ms", parts.groups_ms, parts.merge_ms, parts.occlusion_ms, parts.fusion_ms,
         parts.other_ms);
     row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
@@ -119,8 +124,9 @@ void drawThresholds(Workbench& bench, WindowState& win) {
 
 void drawRerun(Workbench& bench, WindowState& win) {
   const bool saved = bench.savedSession();
-  const std::string why = bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
-                          : "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
+  const std::string why =
+      bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
+                        : "A saved session keeps the parameters it was mapped with: there is no sequence to re-map.";
   if (beginRows("rerun")) {
     for (const Parameter& p : parameterTable())
       if (!p.live) parameterRow(bench, win, p, saved ? why : "");
@@ -130,9 +136,9 @@ void drawRerun(Workbench& bench, WindowState& win) {
   for (const Parameter& p : parameterTable()) any_pending |= !p.live && bench.parameters().pending(p);
   ImGui::BeginDisabled(saved || !any_pending);
   if (ImGui::Button("Re-run")) bench.parameters().rerun();
-  tip(saved ? why
-            : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
-                          : "Nothing to apply: the sliders show the parameters the map was made with.");
+  tip(saved         ? why
+      : any_pending ? "Re-maps the sequence from the first frame with the values marked * (up to the frame reached)."
+                    : "Nothing to apply: the sliders show the parameters the map was made with.");
   ImGui::SameLine();
   if (ImGui::Button("Revert")) bench.ui().params.mapper = win.mapping->mapper;
   tip("Puts the sliders back to the parameters the map was made with.");

@@ -18,7 +18,7 @@ void drawPoseCorrection(Workbench& bench) {
   const bool file = bench.staticMap() != nullptr;  // opening files: nothing to rebuild
   ImGui::BeginDisabled(ui.trajectory_text.empty() || file);
   if (ImGui::Button("Load corrected trajectory")) bench.files().loadTrajectory();
-  tip(file ? std::string("A map file: ") + kStaticMapWhy + "."
+  tip(file                         ? std::string("A map file: ") + kStaticMapWhy + "."
       : ui.trajectory_text.empty() ? "Type the trajectory file's path above first."
                                    : "Replaces the matching keyframes' poses; the map is rebuilt.");
   ImGui::EndDisabled();

@@ -17,7 +17,8 @@ void drawQueries(Workbench& bench, WindowState& win) {
       "surface under the cursor (Alt+wheel changes it), or on the query slice while it is shown.");
   checkFits(win.check);
   if (beginRows("queries")) {
-    label(win.check, "probe offset", "How far in front of the surface under the cursor (toward the eye) the probe stands.");
+    label(win.check, "probe offset",
+          "How far in front of the surface under the cursor (toward the eye) the probe stands.");
     ImGui::DragFloat("##probe_offset", &ui.probe_offset_m, 0.002f, 0.f, 1.f, "%.3f m", ImGuiSliderFlags_AlwaysClamp);
     ImGui::EndTable();
   }
@@ -30,17 +31,20 @@ void drawQueries(Workbench& bench, WindowState& win) {
   render::QuerySliceSpec& spec = ui.query_slice_spec;
   ImGui::BeginDisabled(!ui.query_slice);
   if (beginRows("query_slice")) {
-    label(win.check, "axis", "The plane's normal: the map's up axis (offset = height above the floor, as the height "
-                              "slice measures), or a world axis (offset = that coordinate).");
+    label(win.check, "axis",
+          "The plane's normal: the map's up axis (offset = height above the floor, as the height "
+          "slice measures), or a world axis (offset = that coordinate).");
     int axis = static_cast<int>(spec.axis);
     if (ImGui::Combo("##qs_axis", &axis, "up\0x\0y\0z\0")) spec.axis = static_cast<render::QuerySliceAxis>(axis);
     label(win.check, "offset", "Where the plane lies along its axis, metres.");
     float offset = static_cast<float>(spec.offset_m);
     if (ImGui::DragFloat("##qs_offset", &offset, 0.01f, -100.f, 100.f, "%.2f m")) spec.offset_m = offset;
-    label(win.check, "colour", "occupancy: free green, occupied red, unknown grey; distance: viridis from 0 (dark) "
-                                "to the max distance (yellow), unknown grey.");
+    label(win.check, "colour",
+          "occupancy: free green, occupied red, unknown grey; distance: viridis from 0 (dark) "
+          "to the max distance (yellow), unknown grey.");
     int color = static_cast<int>(spec.color);
-    if (ImGui::Combo("##qs_color", &color, "occupancy\0distance\0")) spec.color = static_cast<render::QuerySliceColor>(color);
+    if (ImGui::Combo("##qs_color", &color, "occupancy\0distance\0"))
+      spec.color = static_cast<render::QuerySliceColor>(color);
     if (spec.color == render::QuerySliceColor::kDistance) {
       label(win.check, "max distance", "The distance the colour ramp ends at (yellow), metres.");
       float max_m = static_cast<float>(spec.max_distance_m);

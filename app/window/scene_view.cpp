@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <cmath>
-#include <string>
 #include <cstdio>
+#include <string>
 
 #include "app/window/widgets.h"
 #include "mapping/core/timing.h"
@@ -13,7 +13,6 @@
 
 namespace vdmap::app::gui {
 namespace {
-
 
 constexpr ImU32 kOverlayText = IM_COL32(230, 230, 230, 255), kOverlayDim = IM_COL32(170, 170, 170, 255);
 
@@ -63,8 +62,8 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banne
 std::string upAxisText(const UiState& ui) {
   const glm::vec3 up = ui.camera.up;
   char text[96];
-  std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui.settings.up_axis)], up.x,
-                up.y, up.z);
+  std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui.settings.up_axis)],
+                up.x, up.y, up.z);
   return text;
 }
 
@@ -107,7 +106,8 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
                      // Left of the up label at the bottom-right (framebuffer pixels).
                      const float fb_scale = ImGui::GetIO().DisplayFramebufferScale.x;
                      const float em = ImGui::GetFontSize() * fb_scale;
-                     const int up_w = static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
+                     const int up_w =
+                         static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
                      return render::legendPlace(ui.view_width, up_w, em).max_width;
                    }());
   if (!bench.isOpen()) return;
@@ -123,15 +123,18 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   } else if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
   else mirror.setMap(mirrored.session_base, {});
   const auto mapping = win.mapping;
-  mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth, mapping->camera.depth_scale);
+  mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth,
+                  mapping->camera.depth_scale);
   const auto scene = [&] { return bench.view().graphScene(*mapping); };
-  mirror.setGraph(mirrored.session_base + mapping->generation, ui.selected_keyframe, scene, ui.show_before_optimisation);
+  mirror.setGraph(mirrored.session_base + mapping->generation, ui.selected_keyframe, scene,
+                  ui.show_before_optimisation);
   mirror.setHighlight(ui.picked);
   mirror.setQuerySlice(bench.queries().slice());  // point queries: the slice computed for this map (or none)
   const auto selection = bench.selection();
   if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
     const int id = selection->keyframe;
-    const render::ContainerStyle style{.sigma = kContainerSigma, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
+    const render::ContainerStyle style{
+        .sigma = kContainerSigma, .color = s.color, .cell_size_px = mapping->mapper.local_map.cell_size_px};
     if (id >= 0) {
       const KeyframeInfo& k = mapping->keyframes[static_cast<std::size_t>(id)];
       // Keyed by the selection and the keyframe's pose (a pose edit re-projects nothing in the
@@ -142,7 +145,8 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
         mirrored.decoded_rgb = k.rgb.decode();
         mirrored.decoded_rgb_for = generation;
       }
-      mirror.setContainer(generation, id, mirrored.decoded_rgb, mapping->camera, selection->T_W_K, selection->local, style);
+      mirror.setContainer(generation, id, mirrored.decoded_rgb, mapping->camera, selection->T_W_K, selection->local,
+                          style);
     } else {
       mirror.setContainer(mirrored.session_base + selection->serial, -1, {}, mapping->camera, Transform::Identity(), {},
                           style);
@@ -198,7 +202,7 @@ void handleMouse(Workbench& bench, WindowState& win) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
     if (drag.x * drag.x + drag.y * drag.y < 9.f && over_view && !io.KeyCtrl)  // Ctrl+click measures
       bench.view().pick((io.MousePos.x - view.x) * scale.x, (io.MousePos.y - view.y) * scale.y, ui.view_width,
-                 ui.view_height);
+                        ui.view_height);
   }
 }
 
@@ -222,7 +226,8 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
   if (!st.text.empty()) {
     ImGui::PushStyleColor(ImGuiCol_Text, kKindColor[static_cast<int>(st.kind)]);
     const float avail = ImGui::GetContentRegionAvail().x - right_w - 3 * ImGui::GetFontSize();
-    ImGui::PushClipRect(ImGui::GetCursorScreenPos(), {ImGui::GetCursorScreenPos().x + avail, status.y + status.h}, true);
+    ImGui::PushClipRect(ImGui::GetCursorScreenPos(), {ImGui::GetCursorScreenPos().x + avail, status.y + status.h},
+                        true);
     ImGui::TextUnformatted(st.text.c_str());
     ImGui::PopClipRect();
     ImGui::PopStyleColor();
@@ -245,7 +250,8 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
   const Rect& view = win.layout.view;
   if (!bench.isOpen()) {
     const float pad = 0.6f * ImGui::GetFontSize();
-    draw->AddText({view.x + pad, view.y + pad}, kOverlayDim, "Open a TUM RGB-D folder or a .vdmap session (left panel).");
+    draw->AddText({view.x + pad, view.y + pad}, kOverlayDim,
+                  "Open a TUM RGB-D folder or a .vdmap session (left panel).");
     return;
   }
   const UiState& ui = bench.ui();
@@ -281,7 +287,8 @@ void drawHelp(Workbench& bench, WindowState& win) {
     ImGui::EndTable();
   }
   ImGui::TextDisabled("Hover over any control or figure for what it means.");
-  win.layout.help = {ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowWidth(), ImGui::GetWindowHeight()};
+  win.layout.help = {ImGui::GetWindowPos().x, ImGui::GetWindowPos().y, ImGui::GetWindowWidth(),
+                     ImGui::GetWindowHeight()};
   ImGui::End();
 }
 

@@ -24,13 +24,13 @@ nlohmann::json ScriptedWindow::layout() {
   const auto& global = win_.global;
   const UiState& ui = bench_.ui();
   const Layout& at = win_.layout;
-  nlohmann::json layout = {{"window", {at.fb_width, at.fb_height}},
-                           {"viewport", toJson(at.view)},
-                           {"panels",
-                            {{"Sequence", toJson(at.left)}, {"Map", toJson(at.right)}, {"Status", toJson(at.status)}}},
-                           {"labels_cut", win_.check.labels_cut},
-                           {"help", toJson(at.help)},  // all zero while the help is closed
-                           {"up", {ui.camera.up.x, ui.camera.up.y, ui.camera.up.z}}};
+  nlohmann::json layout = {
+      {"window", {at.fb_width, at.fb_height}},
+      {"viewport", toJson(at.view)},
+      {"panels", {{"Sequence", toJson(at.left)}, {"Map", toJson(at.right)}, {"Status", toJson(at.status)}}},
+      {"labels_cut", win_.check.labels_cut},
+      {"help", toJson(at.help)},  // all zero while the help is closed
+      {"up", {ui.camera.up.x, ui.camera.up.y, ui.camera.up.z}}};
   if (!global || global->map.ellipsoids.empty()) return layout;
   // What the view draws of the map (each ellipsoid's extent at the sigma, strays left out and
   // counted), so a cut is seen here.

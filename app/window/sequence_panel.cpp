@@ -22,7 +22,8 @@ namespace {
 // one selects the newest loop's revisited keyframe.
 void drawLoopStrip(Workbench& bench, const WindowState& win, int total) {
   const float font = ImGui::GetFontSize();
-  const bool clicked = ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
+  const bool clicked =
+      ImGui::InvisibleButton("##loops", {std::max(1.f, ImGui::GetContentRegionAvail().x), 0.75f * font});
   const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
   ImDrawList* draw = ImGui::GetWindowDrawList();
   const ImU32 color = rgbColor(render::kLoopEdgeColor);
@@ -35,7 +36,8 @@ void drawLoopStrip(Workbench& bench, const WindowState& win, int total) {
   int revisited = -1;  // the newest loop of the marker under the mouse
   std::string hovered;
   for (const MarkerCluster& c : clusterMarkers(xs, 0.8f * font)) {
-    const float left = xs[static_cast<std::size_t>(c.members.front())], right = xs[static_cast<std::size_t>(c.members.back())];
+    const float left = xs[static_cast<std::size_t>(c.members.front())],
+                right = xs[static_cast<std::size_t>(c.members.back())];
     const float half = 0.35f * font;
     draw->AddTriangleFilled({left - half, lo.y}, {right + half, lo.y}, {c.x, hi.y}, color);
     if (c.members.size() > 1) {
@@ -49,7 +51,8 @@ void drawLoopStrip(Workbench& bench, const WindowState& win, int total) {
     for (std::size_t j = 0; j < std::min(n, kListed); ++j) {  // newest first
       const LoopEvent& e = loops[static_cast<std::size_t>(c.members[n - 1 - j])];
       char text[200];
-      std::snprintf(text, sizeof text, "%sloop closed at frame %d: K%d -> K%d, %d inliers, correction %s, pose graph %.1f ms",
+      std::snprintf(text, sizeof text,
+                    "%sloop closed at frame %d: K%d -> K%d, %d inliers, correction %s, pose graph %.1f ms",
                     hovered.empty() ? "" : "\n", e.position, e.loop.from, e.loop.to, e.loop.inliers,
                     metres(e.loop.correction_m).c_str(), e.loop.pose_graph_ms);
       hovered += text;
@@ -107,14 +110,18 @@ void drawTimes(WindowState& win, float width) {
       label(win.check, name, help);
       ImGui::Text("%.1f ms", ms);
     };
-    row("features", "ORB detection and the depth under each keypoint, median per frame (docs/method.md 5).", median(features));
+    row("features", "ORB detection and the depth under each keypoint, median per frame (docs/method.md 5).",
+        median(features));
     if (win.mapping->mapper.poses == PoseSource::kTrack)
-      row("tracking", "The frame's pose against the current keyframe: matches by projection (or brute force and PnP "
+      row("tracking",
+          "The frame's pose against the current keyframe: matches by projection (or brute force and PnP "
           "RANSAC), then the dense refinement against its local map; relocalisation when weak. Median per frame.",
           median(tracking));
-    row("keyframe decision", "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
+    row("keyframe decision",
+        "Covisibility with the current keyframe, the revisit search and new edges, median per frame.",
         median(decision));
-    row("local-map update", "Integrating the frame's depth into the keyframe's container (docs/method.md 2), median per frame.",
+    row("local-map update",
+        "Integrating the frame's depth into the keyframe's container (docs/method.md 2), median per frame.",
         median(update));
     ImGui::EndTable();
   }
@@ -151,10 +158,13 @@ void drawPlayer(Workbench& bench, WindowState& win, const PlayerStatus& status, 
   const int total = win.mapping->frames_total;
   // Play, Step and Next keyframe cannot act once every frame is asked for (Pause still can).
   const bool at_end = status.target >= total;
-  const std::string why_end = "All " + std::to_string(total) + " frames are mapped: Back (Left) or the scrubber go back.";
+  const std::string why_end =
+      "All " + std::to_string(total) + " frames are mapped: Back (Left) or the scrubber go back.";
   ImGui::BeginDisabled(at_end && !status.playing);
   if (ImGui::Button(status.playing ? "Pause" : "Play")) bench.key(KeyAction::kPlayPause);
-  tip(saved ? why_saved : at_end && !status.playing ? why_end : "Maps the frames one after another up to the end (Space).");
+  tip(saved                       ? why_saved
+      : at_end && !status.playing ? why_end
+                                  : "Maps the frames one after another up to the end (Space).");
   ImGui::EndDisabled();
   ImGui::SameLine();
   ImGui::BeginDisabled(at_end);
@@ -164,7 +174,7 @@ void drawPlayer(Workbench& bench, WindowState& win, const PlayerStatus& status, 
   ImGui::SameLine();
   ImGui::BeginDisabled(status.target < 2);
   if (ImGui::Button("Back")) bench.key(KeyAction::kStepBack);
-  tip(saved ? why_saved
+  tip(saved               ? why_saved
       : status.target < 2 ? "Nothing to go back to: fewer than two frames mapped."
                           : "One frame back (Left): the map is rebuilt from the first frame.");
   ImGui::EndDisabled();
@@ -191,8 +201,9 @@ void drawScrubber(Workbench& bench, WindowState& win, const std::string& why_sav
   ImGui::SliderInt("##frame", &win.scrub, 0, std::max(0, total - 1), "frame %d");
   win.scrubbing = ImGui::IsItemActive();
   if (ImGui::IsItemDeactivatedAfterEdit()) bench.player().seek(win.scrub);
-  tip(!why_saved.empty() ? why_saved
-                         : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
+  tip(!why_saved.empty()
+          ? why_saved
+          : "Drag to a frame: forward maps up to it, backward re-maps from the start. Ticks: keyframes.");
   const ImVec2 lo = ImGui::GetItemRectMin(), hi = ImGui::GetItemRectMax();
   ImDrawList* draw = ImGui::GetWindowDrawList();
   for (const KeyframeInfo& k : win.mapping->keyframes) {
@@ -209,7 +220,8 @@ void drawFrameImages(const render::MapMirror& mirror, WindowState& win, bool sho
   // The two images take what the panel has left above the depth scale and the stage times
   // (their height as drawn last frame), so the whole panel shows without scrolling (at
   // 1280x720 too); they keep their aspect and at least a third of the panel's width.
-  const float each_h = (ImGui::GetContentRegionAvail().y - win.below_images_px - 2 * ImGui::GetStyle().ItemSpacing.y) / 2;
+  const float each_h =
+      (ImGui::GetContentRegionAvail().y - win.below_images_px - 2 * ImGui::GetStyle().ItemSpacing.y) / 2;
   const auto imageSize = [&](const render::Texture2D& t) {  // centred when narrower than the panel
     const float aspect = static_cast<float>(t.height()) / std::max(1, t.width());
     const float w = std::clamp(each_h / aspect, image_width / 3, image_width);
@@ -243,11 +255,11 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   const int total = win.mapping->frames_total, mapped = win.mapping->frames_mapped;
   const bool saved = bench.savedSession();
   drawWhatIsOpen(bench, win);
-  const std::string why_saved =
-      !saved ? ""
-      : bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
-      : bench.files().whyPlayerOff().empty() ? "A saved session has its keyframes but no sequence to play or re-map."
-                                     : "A saved session: " + bench.files().whyPlayerOff() + ".";
+  const std::string why_saved = !saved              ? ""
+                                : bench.staticMap() ? std::string("A map file: ") + kStaticMapWhy + "."
+                                : bench.files().whyPlayerOff().empty()
+                                    ? "A saved session has its keyframes but no sequence to play or re-map."
+                                    : "A saved session: " + bench.files().whyPlayerOff() + ".";
   if (bench.staticMap()) return ImGui::End();  // a map file: nothing to play (opening files)
   ImGui::BeginDisabled(saved);
   drawPlayer(bench, win, status, why_saved);

@@ -17,8 +17,9 @@ void drawTrackingError(WindowState& win) {
   if (beginRows("tracking error")) {
     label(win.check, "ATE rmse",
           "Absolute trajectory error (TUM RGB-D benchmark, Sturm et al. 2012): the tracked camera positions after the "
-          "least-squares SE(3) alignment to the ground truth (Horn), rmse over the " + std::to_string(e.matched) +
-          " frames both have (matched by timestamp). The gap drawn in the view is not aligned.");
+          "least-squares SE(3) alignment to the ground truth (Horn), rmse over the " +
+              std::to_string(e.matched) +
+              " frames both have (matched by timestamp). The gap drawn in the view is not aligned.");
     ImGui::TextUnformatted(metres(e.ate_rmse_m).c_str());
     label(win.check, "ATE median, max", "The same aligned position errors' median and largest.");
     ImGui::Text("%s, %s", metres(e.ate_median_m).c_str(), metres(e.ate_max_m).c_str());
@@ -28,7 +29,8 @@ void drawTrackingError(WindowState& win) {
     ImGui::Text("%s, %.2f deg", metres(e.rpe_frame_m).c_str(), e.rpe_frame_deg);
     label(win.check, "RPE / second",
           "Relative pose error over frames 1 s apart (TUM RGB-D benchmark, delta = 1 s): the drift per second, rmse "
-          "over " + std::to_string(e.rpe_second_pairs) + " pairs.");
+          "over " +
+              std::to_string(e.rpe_second_pairs) + " pairs.");
     if (e.rpe_second_pairs > 0) ImGui::Text("%s, %.2f deg", metres(e.rpe_second_m).c_str(), e.rpe_second_deg);
     else ImGui::TextDisabled("under 1 s mapped");
     ImGui::EndTable();

@@ -81,7 +81,8 @@ void drawSliceControls(Workbench& bench, WindowState& win) {
   ImGui::SetNextItemWidth(ImGui::GetContentRegionAvail().x - ImGui::GetStyle().ItemInnerSpacing.x);
   ImGui::BeginDisabled(!slice.on);
   float lo = slice.lo_m, hi = slice.hi_m;
-  if (ImGui::DragFloatRange2("##slice", &lo, &hi, 0.01f, -100.f, 100.f, "%.2f m", "%.2f m", ImGuiSliderFlags_AlwaysClamp) &&
+  if (ImGui::DragFloatRange2("##slice", &lo, &hi, 0.01f, -100.f, 100.f, "%.2f m", "%.2f m",
+                             ImGuiSliderFlags_AlwaysClamp) &&
       lo < hi) {
     slice.lo_m = lo;
     slice.hi_m = hi;
@@ -106,7 +107,8 @@ void drawView(Workbench& bench, WindowState& win) {
           "uncertainty: the largest standard deviation; count: points merged into it; height: height above the "
           "floor along the up axis, over the slice when it is on (colour bars in the view).");
     int color = static_cast<int>(s.color);
-    if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(), static_cast<int>(render::kColorModeNames.size())))
+    if (ImGui::Combo("##colour", &color, render::kColorModeNames.data(),
+                     static_cast<int>(render::kColorModeNames.size())))
       s.color = static_cast<render::ColorMode>(color);
     label(win.check, "draw",
           "Ellipsoids as surfaces at sigma standard deviations, their centres as points (faster), or hidden: no map, "
@@ -158,11 +160,12 @@ void drawView(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
   ImGui::BeginDisabled(ui.view_file_text.empty());
   if (ImGui::Button("Save view (S)")) bench.viewFiles().saveSafely(ui.view_file_text);
-  tip(ui.view_file_text.empty() ? "Type a file name on the right first."
-                                : "Writes the view shown (camera, size, colours, layers, thresholds) as a view file to the "
-                                  "file named on the right; `vdmap render --view-file` draws the same picture. The status "
-                                  "line gives the command. The default name numbers itself (vdmap_view-2.json ...); "
-                                  "another name that exists asks first.");
+  tip(ui.view_file_text.empty()
+          ? "Type a file name on the right first."
+          : "Writes the view shown (camera, size, colours, layers, thresholds) as a view file to the "
+            "file named on the right; `vdmap render --view-file` draws the same picture. The status "
+            "line gives the command. The default name numbers itself (vdmap_view-2.json ...); "
+            "another name that exists asks first.");
   checkFits(win.check);
   ImGui::SameLine();
   if (ImGui::Button("Load view")) bench.viewFiles().load(ui.view_file_text, ui.load_view_thresholds);
@@ -187,6 +190,5 @@ void drawView(Workbench& bench, WindowState& win) {
   ImGui::InputText("##command", &command, ImGuiInputTextFlags_ReadOnly);
   tip(command);
 }
-
 
 }  // namespace vdmap::app::gui

@@ -44,7 +44,8 @@ void beginPanel(const char* name, Rect& r, float& width, float display_width) {
   ImGui::SetNextWindowPos({r.x, r.y}, ImGuiCond_Always);
   ImGui::SetNextWindowSize({r.w, r.h}, ImGuiCond_Always);
   ImGui::SetNextWindowSizeConstraints({18.f * font, r.h}, {std::max(18.f * font, display_width * 0.45f), r.h});
-  ImGui::Begin(name, nullptr, ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
+  ImGui::Begin(name, nullptr,
+               ImGuiWindowFlags_NoMove | ImGuiWindowFlags_NoCollapse | ImGuiWindowFlags_NoBringToFrontOnFocus);
   const ImVec2 pos = ImGui::GetWindowPos(), size = ImGui::GetWindowSize();
   if (size.x != r.w) width = size.x;  // dragged: next frame re-docks with the new width
   r = {pos.x, pos.y, size.x, size.y};

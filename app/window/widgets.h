@@ -14,7 +14,8 @@ namespace vdmap::app::gui {
 /// The text colour of a parameter edited but not yet in the map shown.
 inline const ImVec4 kPendingColor(1.f, 0.7f, 0.25f, 1.f);
 /// The status line's text colours by StatusLine::Kind (info, success, warning, error).
-inline const ImVec4 kKindColor[] = {{0.85f, 0.85f, 0.85f, 1}, {0.45f, 0.9f, 0.45f, 1}, {1.f, 0.8f, 0.3f, 1}, {1.f, 0.42f, 0.42f, 1}};
+inline const ImVec4 kKindColor[] = {
+    {0.85f, 0.85f, 0.85f, 1}, {0.45f, 0.9f, 0.45f, 1}, {1.f, 0.8f, 0.3f, 1}, {1.f, 0.42f, 0.42f, 1}};
 
 /// A rectangle in ImGui coordinates (top-left origin, pixels of the display).
 struct Rect {

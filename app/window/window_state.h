@@ -9,14 +9,13 @@
 #include <deque>
 #include <memory>
 #include <string>
-#include <vector>
 #include <utility>
 #include <vector>
 
 #include <imgui.h>
 
-#include "app/window/widgets.h"
 #include "app/window/file_browser.h"
+#include "app/window/widgets.h"
 #include "app/workbench/workbench.h"
 #include "render/map_mirror.h"
 
@@ -41,10 +40,10 @@ struct KeyQueue {
 
 /// What the GPU mirror was last given, to key its generations.
 struct Mirrored {
-  int session = 0;            ///< the Workbench::sessionSerial mirrored
-  int session_base = 0;       ///< added to the snapshots' generations, which restart with every session
-  int decoded_rgb_for = -1;   ///< the container generation decoded_rgb was decoded for
-  cv::Mat decoded_rgb;        ///< the selected keyframe's image, decoded once per selection
+  int session = 0;           ///< the Workbench::sessionSerial mirrored
+  int session_base = 0;      ///< added to the snapshots' generations, which restart with every session
+  int decoded_rgb_for = -1;  ///< the container generation decoded_rgb was decoded for
+  cv::Mat decoded_rgb;       ///< the selected keyframe's image, decoded once per selection
 };
 
 /// A question about the point under a pixel of the 3-D view, answered once the scene is drawn

@@ -27,9 +27,9 @@
 #include "app/window/script_driver.h"
 #include "app/window/sequence_panel.h"
 #include "app/window/widgets.h"
-#include "render/view_cache.h"
 #include "app/window/window_state.h"
 #include "mapping/core/timing.h"
+#include "render/view_cache.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -93,10 +93,11 @@ void handleKeys(Workbench& bench, KeyQueue& keys) {
   while (!keys.presses.empty()) {
     const auto [key, mods] = keys.presses.front();
     keys.presses.pop_front();
-    if (typing && key != GLFW_KEY_F1) continue;  // the key belongs to a text field
+    if (typing && key != GLFW_KEY_F1) continue;    // the key belongs to a text field
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {  // quick views: Ctrl+N keeps the view, N shows it
       ViewFiles& views = bench.viewFiles();
-      (mods & GLFW_MOD_CONTROL) ? views.storeQuickView(key - GLFW_KEY_0) : void(views.recallQuickView(key - GLFW_KEY_0));
+      (mods & GLFW_MOD_CONTROL) ? views.storeQuickView(key - GLFW_KEY_0)
+                                : void(views.recallQuickView(key - GLFW_KEY_0));
       continue;
     }
     if (const auto action = actionOf(key, mods)) bench.key(*action);
@@ -289,7 +290,8 @@ class WorkbenchWindow {
     drawView();
     // The drawn scene's depth under the cursor; a probe whose text changed shows in the next frame.
     if (answerProbes(bench_, gl_, win_)) settle_frames_ = std::max(settle_frames_, 1);
-    if (viewScreenshotDue(script_, bench_)) saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
+    if (viewScreenshotDue(script_, bench_))
+      saveViewScreenshot(bench_, gl_, mirror_, win_, script_.options.view_screenshot);
     if (!win_.screenshot_request.empty() && win_.screenshot_request_view) {  // the 3-D view alone
       saveViewScreenshot(bench_, gl_, mirror_, win_, win_.screenshot_request);
       win_.screenshot_request.clear();
@@ -351,7 +353,8 @@ class WorkbenchWindow {
     } catch (const std::exception&) {
       const std::size_t done = preparing_.progress->first, total = preparing_.progress->second;
       std::cerr << "vdmap: note: closed while " << preparing_.what << " ("
-                << (total > 0 ? std::to_string(done) + " of " + std::to_string(total) + " frames done" : "before its first frames")
+                << (total > 0 ? std::to_string(done) + " of " + std::to_string(total) + " frames done"
+                              : "before its first frames")
                 << "): nothing kept\n";
     }
   }
@@ -404,12 +407,14 @@ std::vector<int> parseKeyNames(const std::string& comma_separated) {
     else if (name == "esc") keys.push_back(GLFW_KEY_ESCAPE);
     else if (name == "pgup") keys.push_back(GLFW_KEY_PAGE_UP);
     else if (name == "pgdn") keys.push_back(GLFW_KEY_PAGE_DOWN);
-    else throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc, pgup, pgdn)");
+    else
+      throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc, pgup, pgdn)");
   }
   return keys;
 }
 
-int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file, Preparation prepare) {
+int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std::string& settings_file,
+                       Preparation prepare) {
   Settings& s = bench.ui().settings;
   GlfwWindowContext context(s.window_width, s.window_height, "vdmap workbench");
   KeyQueue keys;
@@ -417,7 +422,8 @@ int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std:
   installInputCallbacks(context.window());
   IMGUI_CHECKVERSION();
   ImGui::CreateContext();
-  const std::string ini = settings_file.empty() ? "" : (std::filesystem::path(settings_file).parent_path() / "imgui.ini").string();
+  const std::string ini =
+      settings_file.empty() ? "" : (std::filesystem::path(settings_file).parent_path() / "imgui.ini").string();
   ImGui::GetIO().IniFilename = ini.empty() ? nullptr : ini.c_str();
   ImGui::GetIO().ConfigInputTextCursorBlink = false;  // a blinking cursor would need frames while idle
   std::error_code ignored;  // ImGui writes imgui.ini at DestroyContext, before the settings make the folder

@@ -10,8 +10,8 @@ namespace vdmap::app::gui {
 /// snapshot's tracked frame poses (framePose, the current keyframe poses) and the ground-truth
 /// T_W_C of the same frames, matched by their timestamps.
 struct TrackingError {
-  bool valid = false;        ///< tracked poses with ground truth for at least 3 frames
-  std::size_t matched = 0;   ///< frames both trajectories have (every figure is over these)
+  bool valid = false;       ///< tracked poses with ground truth for at least 3 frames
+  std::size_t matched = 0;  ///< frames both trajectories have (every figure is over these)
   /// Absolute trajectory error after the SE(3) alignment (m): rmse, median, max.
   double ate_rmse_m = 0, ate_median_m = 0, ate_max_m = 0;
   /// Relative pose error (rmse) between consecutive matched frames (m, deg) and frames 1 s apart.

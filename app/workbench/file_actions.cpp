@@ -46,8 +46,7 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, s
     SequenceOptions options;
     options.frames.first = info.state.last_frame_index + 1;
     TumSequence rest = TumSequence::open(info.sequence, options);
-    if (!(rest.camera() == info.camera))
-      throw std::invalid_argument("its camera is not the session's");
+    if (!(rest.camera() == info.camera)) throw std::invalid_argument("its camera is not the session's");
     return rest;
   } catch (const std::exception& e) {
     *off = *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
@@ -143,7 +142,7 @@ bool FileActions::openPath(const std::string& path_in) {
         // through --settings).
         const bool whole = view_.applySpec(readViewFile(path));
         state_.report(whole ? StatusLine::Kind::kSuccess : StatusLine::Kind::kWarning,
-               "view " + path + " applied" + (whole ? "" : " (its keyframe is not mapped: the global view)"));
+                      "view " + path + " applied" + (whole ? "" : " (its keyframe is not mapped: the global view)"));
         ok = true;
       } catch (const std::exception& e) {
         state_.report(StatusLine::Kind::kError, e.what());
@@ -218,13 +217,17 @@ void FileActions::exportMap() {
     if (seq) {
       // The range the player has reached: from the sequence's first frame to the last one mapped.
       const int last = mapper.state().last_frame_index;
-      options.run_stats["frame_range"] = frameRangeText({seq->frameRange().first, std::max(last + 1, seq->frameRange().first)});
+      options.run_stats["frame_range"] =
+          frameRangeText({seq->frameRange().first, std::max(last + 1, seq->frameRange().first)});
       options.run_stats.update(frameCounts(*seq));
       options.run_stats.erase("frames_mapped");  // of the whole range, which the player may not have reached
     }
     options.run_stats.update(provenanceStats({seq ? seq->folder().string() : std::string(),
-                                              seq ? seq->cameraSource() : "session " + session, mapper.camera(),
-                                              mapper.params().poses, refine, {mapper.params(), global.params}}));
+                                              seq ? seq->cameraSource() : "session " + session,
+                                              mapper.camera(),
+                                              mapper.params().poses,
+                                              refine,
+                                              {mapper.params(), global.params}}));
     vdmap::exportMap(dir, mapper.graph(), global.map, options);
     return "exported the map into " + dir;
   });

@@ -48,11 +48,12 @@ std::vector<Transform> MappingSnapshot::groundTruthWorld() const {
 }
 
 bool MappingSnapshot::hasGroundTruth() const {
-  return std::any_of(trajectory.begin(), trajectory.end(), [](const TrajectoryPoint& f) { return f.T_W_C_truth.has_value(); });
+  return std::any_of(trajectory.begin(), trajectory.end(),
+                     [](const TrajectoryPoint& f) { return f.T_W_C_truth.has_value(); });
 }
 
 MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
-                       std::optional<MapRefinementParams> refine)
+                             std::optional<MapRefinementParams> refine)
     : sequence_(std::move(sequence)), sequence_folder_(sequence_->folder().string()), mapper_params_(mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
   thresholds_.validate();
@@ -61,7 +62,7 @@ MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, c
 }
 
 MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
-                       std::optional<MapRefinementParams> refine, std::vector<FrameEntry> truth)
+                             std::optional<MapRefinementParams> refine, std::vector<FrameEntry> truth)
     : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
   for (FrameEntry& e : truth)
@@ -96,7 +97,8 @@ void MappingWorker::trajectoryOfSession() {
     }
     return;
   }
-  for (const Keyframe& k : mapper_->graph().keyframes()) trajectory_.push_back({k.id, k.timestamp, Transform::Identity(), std::nullopt});
+  for (const Keyframe& k : mapper_->graph().keyframes())
+    trajectory_.push_back({k.id, k.timestamp, Transform::Identity(), std::nullopt});
 }
 
 void MappingWorker::start() {
@@ -176,13 +178,15 @@ void MappingWorker::publishMapping() {
   snap->times = times_.view();
   snap->trajectory = trajectory_.view();
   for (const Keyframe& k : mapper_->graph().keyframes())
-    snap->keyframes.push_back({k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
+    snap->keyframes.push_back(
+        {k.id, positionOf(k.frame_index), k.T_W_K, k.rgb_image, k.container.size(), k.frames_integrated});
   snap->edges = mapper_->graph().edges().edges();
   snap->frames_with_groundtruth = frames_with_groundtruth_;
   snap->frames_lost = mapper_->framesLost();
   snap->frames_weak = mapper_->framesWeak();
   snap->frames_relocalised = mapper_->framesRelocalised();
-  for (const LoopClosure& loop : mapper_->poseGraph().loops()) snap->loops.push_back({loop, positionOf(loop.frame_index)});
+  for (const LoopClosure& loop : mapper_->poseGraph().loops())
+    snap->loops.push_back({loop, positionOf(loop.frame_index)});
   snap->keyframes_before = posesBeforeOptimisation();
   // The final refinement comes after every loop closure (it runs after the sequence's last frame).
   if (!snap->keyframes_before.empty()) {
@@ -219,13 +223,18 @@ void MappingWorker::mapOneFrame() {
       const char* method = refine_->method == MapRefinementMethod::kJoint ? "joint" : "pairwise";
       char text[200] = "";
       if (r.refused)
-        std::snprintf(text, sizeof text, "keyframe poses kept as tracked: the joint refinement of %d local-map pairs ran "
-                      "too far (%.1f s)", r.pairs, 1e-3 * r.ms);
+        std::snprintf(text, sizeof text,
+                      "keyframe poses kept as tracked: the joint refinement of %d local-map pairs ran "
+                      "too far (%.1f s)",
+                      r.pairs, 1e-3 * r.ms);
       else if (r.rounds > 0)
-        std::snprintf(text, sizeof text, "keyframe poses refined (%s) from %d of %d covisible pairs' local maps (%.1f mm "
-                      "at most, %.1f s)", method, r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
+        std::snprintf(text, sizeof text,
+                      "keyframe poses refined (%s) from %d of %d covisible pairs' local maps (%.1f mm "
+                      "at most, %.1f s)",
+                      method, r.edges, r.pairs, 1e3 * r.moved_m, 1e-3 * r.ms);
       refined = text;
-      if (!r.refused && r.rounds > 0) refinement_ = {LastOptimisation::Kind::kRefinement, -1, method, r.pairs, r.moved_m};
+      if (!r.refused && r.rounds > 0)
+        refinement_ = {LastOptimisation::Kind::kRefinement, -1, method, r.pairs, r.moved_m};
     }
     last_rgb_ = frame.rgb;
     last_depth_ = frame.depth;
@@ -253,7 +262,8 @@ std::vector<Transform> MappingWorker::posesBeforeOptimisation() const {
   if (n == 0) return {};
   std::vector<Transform> out(before.begin(), before.begin() + static_cast<std::ptrdiff_t>(n));
   const Transform correction = before[n - 1] * graph.keyframe(static_cast<int>(n - 1)).T_W_K.inverse();
-  for (std::size_t id = n; id < graph.size(); ++id) out.push_back(correction * graph.keyframe(static_cast<int>(id)).T_W_K);
+  for (std::size_t id = n; id < graph.size(); ++id)
+    out.push_back(correction * graph.keyframe(static_cast<int>(id)).T_W_K);
   return out;
 }
 
@@ -376,7 +386,8 @@ void MappingWorker::publishSelection() {
     // the build, and one keyframe's filter costs little. At the pose the global map was built with.
     const Keyframe& k = graph.keyframe(snap->keyframe);
     const auto id = static_cast<std::size_t>(k.id);
-    const std::vector<Transform> before = global->before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
+    const std::vector<Transform> before =
+        global->before_optimisation ? posesBeforeOptimisation() : std::vector<Transform>();
     snap->T_W_K = id < before.size() ? before[id] : k.T_W_K;
     snap->local = keptEllipsoids(k.container, global->params.filter, snap->T_W_K, k.id);
   }

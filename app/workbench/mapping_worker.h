@@ -17,9 +17,9 @@
 #include <thread>
 
 #include "app/workbench/append_log.h"
-#include "mapping/global_map/global_map.h"
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
+#include "mapping/global_map/global_map.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/query_map.h"
@@ -29,7 +29,7 @@ namespace vdmap::app::gui {
 /// One keyframe as the UI sees it.
 struct KeyframeInfo {
   int id = 0;
-  int frame = 0;               ///< position in the sequence (on the scrubber, after --frames) of the frame that created it
+  int frame = 0;  ///< position in the sequence (on the scrubber, after --frames) of the frame that created it
   Transform T_W_K = Transform::Identity();
   CompressedImage rgb;         ///< shared with the keyframe; decode() when shown
   std::size_t ellipsoids = 0;  ///< stored in its container
@@ -59,7 +59,7 @@ struct LoopEvent {
 struct LastOptimisation {
   enum class Kind { kNone, kLoop, kRefinement };
   Kind kind = Kind::kNone;
-  int loop = -1;             ///< kLoop: its index in MappingSnapshot::loops
+  int loop = -1;  ///< kLoop: its index in MappingSnapshot::loops
   /// kRefinement: "joint" or "pairwise", the covisible pairs registered (MapRefinementResult::pairs)
   /// and the largest keyframe move (m, MapRefinementResult::moved_m).
   std::string method;
@@ -69,24 +69,24 @@ struct LastOptimisation {
 
 /// The mapping state after the last mapped frame (replaced after every frame).
 struct MappingSnapshot {
-  int generation = 0;          ///< 1, 2, ... per snapshot published by this session
+  int generation = 0;  ///< 1, 2, ... per snapshot published by this session
   PinholeCamera camera;
-  MapperParams mapper;         ///< the parameters the keyframes were mapped with
+  MapperParams mapper;  ///< the parameters the keyframes were mapped with
   int frames_total = 0;
-  int frames_mapped = 0;       ///< frames [0, frames_mapped) of the sequence are in the map
+  int frames_mapped = 0;  ///< frames [0, frames_mapped) of the sequence are in the map
   int current_keyframe = -1;
-  cv::Mat rgb, depth;          ///< the last mapped frame (RGB order / raw 16-bit depth)
-  SharedSpan<StageTimes> times;        ///< per mapped frame
+  cv::Mat rgb, depth;            ///< the last mapped frame (RGB order / raw 16-bit depth)
+  SharedSpan<StageTimes> times;  ///< per mapped frame
   std::vector<KeyframeInfo> keyframes;
   std::vector<CovisibilityEdge> edges;
-  SharedSpan<TrajectoryPoint> trajectory;    ///< per mapped frame that was placed (lost ones have none)
-  int pose_edits = 0;          ///< setKeyframePose calls handled so far (applied or refused)
+  SharedSpan<TrajectoryPoint> trajectory;  ///< per mapped frame that was placed (lost ones have none)
+  int pose_edits = 0;                      ///< setKeyframePose calls handled so far (applied or refused)
   /// Mapped frames the sequence has a ground-truth pose for, whatever the poses were mapped with
   /// (mapper.poses: with ground-truth poses every mapped frame had one).
   int frames_with_groundtruth = 0;
-  int frames_lost = 0;         ///< frames the tracker could not place (skipped, not integrated)
-  int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (Mapper::framesWeak)
-  int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
+  int frames_lost = 0;           ///< frames the tracker could not place (skipped, not integrated)
+  int frames_weak = 0;           ///< placed on the current keyframe's weak estimate (Mapper::framesWeak)
+  int frames_relocalised = 0;    ///< placed against another keyframe after a weak estimate
   std::vector<LoopEvent> loops;  ///< loop closures so far, oldest first
   /// T_W_K of every keyframe as it was before the last pose-graph optimisation; empty when there
   /// was none. Keyframes made after it are moved by the correction of the newest keyframe that
@@ -116,8 +116,8 @@ struct MappingSnapshot {
 struct GlobalSnapshot {
   GlobalMap map;
   GlobalMapParams params;
-  int frames_mapped = 0;         ///< the mapping state it was built from
-  int generation = 0;            ///< 1, 2, ... per build
+  int frames_mapped = 0;  ///< the mapping state it was built from
+  int generation = 0;     ///< 1, 2, ... per build
   /// Built with the keyframe poses before the last pose-graph optimisation
   /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;
@@ -131,18 +131,18 @@ struct GlobalSnapshot {
 /// the map while queries are wanted (MappingWorker::wantQueries), and published just after it, so
 /// a pose edit, loop closure or threshold change answers at the corrected poses.
 struct QuerySnapshot {
-  int generation = 0;  ///< the GlobalSnapshot's it was built with
+  int generation = 0;                   ///< the GlobalSnapshot's it was built with
   std::shared_ptr<const QueryMap> map;  ///< never null
-  double build_ms = 0;  ///< QueryMap::build's time
+  double build_ms = 0;                  ///< QueryMap::build's time
   /// Why some answers are missing ("" when none): a map file has no keyframes, so no free space.
   std::string note;
 };
 
 /// The selected keyframe's local map (replaced after a selection change and after every rebuild).
 struct SelectionSnapshot {
-  int serial = 0;       ///< 1, 2, ... per selection published by this session
-  int keyframe = -1;    ///< -1: none selected
-  int generation = 0;   ///< the GlobalSnapshot whose thresholds filtered it (0: none built yet)
+  int serial = 0;      ///< 1, 2, ... per selection published by this session
+  int keyframe = -1;   ///< -1: none selected
+  int generation = 0;  ///< the GlobalSnapshot whose thresholds filtered it (0: none built yet)
   /// The keyframe's ellipsoids kept by those thresholds, world frame, container order; empty while
   /// the keyframe does not exist (yet).
   std::vector<Ellipsoid> local;
@@ -154,11 +154,11 @@ struct SelectionSnapshot {
 /// Playback state as the UI shows it.
 struct PlayerStatus {
   bool playing = false;
-  bool busy = false;   ///< mapping, re-running or rebuilding the global map
-  int target = 0;      ///< frames the worker maps up to
-  std::string error;   ///< the last failure (a bad frame, a pose file), empty when none
-  std::string message; ///< the last command's outcome, e.g. "12 keyframe poses replaced"
-  float fps = 0.f;     ///< the playback limit (setFps) in frames per second; 0: none
+  bool busy = false;    ///< mapping, re-running or rebuilding the global map
+  int target = 0;       ///< frames the worker maps up to
+  std::string error;    ///< the last failure (a bad frame, a pose file), empty when none
+  std::string message;  ///< the last command's outcome, e.g. "12 keyframe poses replaced"
+  float fps = 0.f;      ///< the playback limit (setFps) in frames per second; 0: none
 };
 
 class MappingWorker {
@@ -167,7 +167,7 @@ class MappingWorker {
   /// With tracked poses, `refine` (nullopt: none) refines the keyframe poses after the last frame
   /// as `vdmap map --refine` does.
   MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
-             std::optional<MapRefinementParams> refine = MapRefinementParams{});
+                std::optional<MapRefinementParams> refine = MapRefinementParams{});
   /// A saved session (.vdmap): its keyframes are there; thresholds and poses are live as usual.
   /// With `rest`, the frames of its sequence after the session's last one, the player continues
   /// mapping from the session's state (seeking back to before the session's end restores it);
@@ -176,7 +176,7 @@ class MappingWorker {
   /// poses, matched to the session's frames by timestamp) when the folder has them, so the
   /// tracking error and the ground-truth line show as they did while it was mapped.
   MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
-             std::optional<MapRefinementParams> refine = MapRefinementParams{}, std::vector<FrameEntry> truth = {});
+                std::optional<MapRefinementParams> refine = MapRefinementParams{}, std::vector<FrameEntry> truth = {});
   // --- Static maps (mapping_worker_static.cpp) ---
   /// A map file read whole (loadStaticMap): publishes one mapping snapshot (its keyframe poses,
   /// edges and trajectory) and one global snapshot, and nothing after. The player, thresholds,
@@ -280,22 +280,22 @@ class MappingWorker {
 
   std::optional<TumSequence> sequence_;
   std::shared_ptr<const Session> origin_;  // the saved session the mapper started from, if any
-  std::vector<FrameEntry> session_truth_;   // its sequence's frames with ground truth, by time
+  std::vector<FrameEntry> session_truth_;  // its sequence's frames with ground truth, by time
   int base_frames_ = 0;                    // frames in the map before sequence_'s first entry
   int frames_with_groundtruth_ = 0;        // MappingSnapshot::frames_with_groundtruth
   std::string sequence_folder_;
   MapperParams mapper_params_;
   std::optional<MapRefinementParams> refine_;
-  std::unique_ptr<Mapper> mapper_;     // worker thread only
+  std::unique_ptr<Mapper> mapper_;  // worker thread only
   // Worker thread only: the global map's buffers and kept cells, reused by every rebuild (after
   // a loop closure it skips the filter and touches no new memory; costs the largest build's
   // buffers in resident memory, which grow with the map; docs/notes/performance.md has a figure).
   GlobalMapWorkspace global_workspace_;
-  AppendLog<StageTimes> times_;        // worker thread only (snapshots share it)
-  AppendLog<TrajectoryPoint> trajectory_;    // worker thread only (snapshots share it)
-  cv::Mat last_rgb_, last_depth_;      // worker thread only
-  int pose_edits_ = 0;                 // worker thread only
-  LastOptimisation refinement_;        // worker thread only: the final refinement, once it moved poses
+  AppendLog<StageTimes> times_;                        // worker thread only (snapshots share it)
+  AppendLog<TrajectoryPoint> trajectory_;              // worker thread only (snapshots share it)
+  cv::Mat last_rgb_, last_depth_;                      // worker thread only
+  int pose_edits_ = 0;                                 // worker thread only
+  LastOptimisation refinement_;                        // worker thread only: the final refinement, once it moved poses
   int mapping_generation_ = 0, selection_serial_ = 0;  // worker thread only
 
   mutable std::mutex mutex_;
@@ -319,14 +319,14 @@ class MappingWorker {
   std::shared_ptr<const SelectionSnapshot> selection_;
   std::shared_ptr<const QuerySnapshot> query_;
   bool queries_wanted_ = false;
-  int queries_tried_ = -1;  // static maps: the generation the queries were last built for (mutex_ held)
+  int queries_tried_ = -1;         // static maps: the generation the queries were last built for (mutex_ held)
   bool staticQueriesDue() const {  // mutex_ held
     return static_map_ && queries_wanted_ && global_ && queries_tried_ != global_->generation;
   }
   std::function<void()> on_change_;
   int generation_ = 0;
   std::shared_ptr<const StaticMap> static_map_;  // static maps: what the worker shows
-  void runStatic();                               // static maps: the worker's loop
+  void runStatic();                              // static maps: the worker's loop
   std::thread worker_;
 };
 

@@ -123,8 +123,8 @@ void MappingWorker::loadTrajectory(const std::string& file) {
     publishMapping();
     std::lock_guard lock(mutex_);
     global_dirty_ = true;
-    message_ = file + ": " + std::to_string(m.matched) + " keyframe poses replaced, " +
-               std::to_string(m.untouched) + " kept, " + std::to_string(m.unknown) + " unmatched poses ignored";
+    message_ = file + ": " + std::to_string(m.matched) + " keyframe poses replaced, " + std::to_string(m.untouched) +
+               " kept, " + std::to_string(m.unknown) + " unmatched poses ignored";
   });
 }
 

@@ -24,7 +24,8 @@ MappingWorker::MappingWorker(std::shared_ptr<const StaticMap> map) : static_map_
   snap->frames_total = snap->frames_mapped = mapped_;
   std::vector<std::size_t> per_keyframe(m.keyframes.size(), 0);
   for (const Ellipsoid& e : m.ellipsoids)
-    if (e.keyframe >= 0 && static_cast<std::size_t>(e.keyframe) < per_keyframe.size()) ++per_keyframe[static_cast<std::size_t>(e.keyframe)];
+    if (e.keyframe >= 0 && static_cast<std::size_t>(e.keyframe) < per_keyframe.size())
+      ++per_keyframe[static_cast<std::size_t>(e.keyframe)];
   for (std::size_t id = 0; id < m.keyframes.size(); ++id) {
     KeyframeInfo k;
     k.id = static_cast<int>(id);

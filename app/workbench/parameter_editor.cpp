@@ -66,11 +66,12 @@ void ParameterEditor::resetToDefaults() {
   defaults.last_sequence = ui.settings.last_sequence;
   defaults.recent = ui.settings.recent;  // opening files: a history, not a setting to reset
   const bool saved = state_.savedSession();
-  const bool rerun_needed = state_.worker && !saved && !(ParameterValues{state_.worker->mapping()->mapper, {}} ==
-                                                          ParameterValues{defaults.mapper, {}});
+  const bool rerun_needed =
+      state_.worker && !saved &&
+      !(ParameterValues{state_.worker->mapping()->mapper, {}} == ParameterValues{defaults.mapper, {}});
   ui.settings = defaults;
   ui.params.global = defaults.thresholds;
-  if (!saved) {  // a saved session keeps the parameters it was mapped with
+  if (!saved) {                                       // a saved session keeps the parameters it was mapped with
     const PoseSource poses = ui.params.mapper.poses;  // the sequence's, not a setting
     ui.params.mapper = defaults.mapper;
     ui.params.mapper.poses = poses;

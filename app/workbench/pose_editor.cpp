@@ -132,8 +132,9 @@ std::string PoseEditor::beforeOptimisationBanner(const MappingSnapshot& mapping)
   const int i = last.kind == LastOptimisation::Kind::kLoop ? last.loop : static_cast<int>(mapping.loops.size()) - 1;
   if (i < 0 || i >= static_cast<int>(mapping.loops.size())) return "BEFORE the last pose-graph optimisation (B: after)";
   const LoopEvent& loop = mapping.loops[static_cast<std::size_t>(i)];
-  std::snprintf(text, sizeof text, "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)",
-                loop.position, render::metresText(loop.loop.correction_m).c_str());
+  std::snprintf(text, sizeof text,
+                "BEFORE the last pose-graph optimisation (loop at frame %d, correction %s; B: after)", loop.position,
+                render::metresText(loop.loop.correction_m).c_str());
   return text;
 }
 

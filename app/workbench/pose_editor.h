@@ -63,8 +63,8 @@ class PoseEditor {
 
   WorkbenchState& state_;
   Transform pose_shown_ = Transform::Identity();  // what ui().pose_* were filled from or sent as
-  int pose_edits_sent_ = 0;                        // to this session (MappingSnapshot::pose_edits)
-  std::vector<std::pair<int, Transform>> undo_;    // (keyframe, pose before the edit)
+  int pose_edits_sent_ = 0;                       // to this session (MappingSnapshot::pose_edits)
+  std::vector<std::pair<int, Transform>> undo_;   // (keyframe, pose before the edit)
 };
 
 }  // namespace vdmap::app::gui

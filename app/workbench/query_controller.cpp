@@ -18,8 +18,8 @@ std::optional<glm::vec3> QueryController::probePoint(float x_px, float y_px, int
     const std::optional<glm::vec3> far = render::unproject(v.camera, x, y, 0.5f);
     if (!far) return std::nullopt;
     const glm::vec3 d = *far - eye;
-    const auto hit = render::intersectPlane(shown->plane, Eigen::Vector3d(eye.x, eye.y, eye.z),
-                                            Eigen::Vector3d(d.x, d.y, d.z));
+    const auto hit =
+        render::intersectPlane(shown->plane, Eigen::Vector3d(eye.x, eye.y, eye.z), Eigen::Vector3d(d.x, d.y, d.z));
     if (!hit) return std::nullopt;
     return glm::vec3(static_cast<float>(hit->x()), static_cast<float>(hit->y()), static_cast<float>(hit->z()));
   }
@@ -52,8 +52,7 @@ ProbeResult QueryController::probe(const glm::vec3& p, bool on_slice) const {
   return r;
 }
 
-bool QueryController::probeAt(float x_px, float y_px, int width, int height,
-                              const std::optional<glm::vec3>& surface) {
+bool QueryController::probeAt(float x_px, float y_px, int width, int height, const std::optional<glm::vec3>& surface) {
   const std::string before = ui_.probe_result ? ui_.probe_result->text() : "";
   const std::optional<glm::vec3> p = probePoint(x_px, y_px, width, height, surface);
   if (p) ui_.probe_result = probe(*p, slice() != nullptr);
@@ -73,8 +72,9 @@ void QueryController::sync() {
   const auto q = worker_->query();
   if (!q) slice_image_.reset(), slice_key_ = {};  // another session's, or queries turned off
   if (!ui_.query_slice || slice_job_.valid() || !q) return;
-  const SliceKey key{q->map, ui_.query_slice_spec,
-                     ui_.query_slice_spec.axis == render::QuerySliceAxis::kUp ? view_.heightFrame() : render::HeightFrame{}};
+  const SliceKey key{
+      q->map, ui_.query_slice_spec,
+      ui_.query_slice_spec.axis == render::QuerySliceAxis::kUp ? view_.heightFrame() : render::HeightFrame{}};
   if (key == slice_key_ && slice_image_) return;
   slice_job_key_ = key;
   // A map file's keyframes see nothing: the slice spans the map's robust box instead.

@@ -24,10 +24,9 @@ struct LatencyEdit {
   double other;  // the value edited to; the edit after it goes back
 };
 constexpr LatencyEdit kLatencyEdits[] = {
-    {"merge_distance", 0.2},       {"fusion_max_distance", 0.7}, {"occlusion_distance", 0.4},
-    {"occlusion_angle", 25},       {"tau_group", 0.15},          {"filter_sigma_factor", 2.5},
-    {"min_points", 8},             {"occlusion_removal", 0},     {"fuse_across_groups", 0},
-    {"sensor_model", 1},
+    {"merge_distance", 0.2},   {"fusion_max_distance", 0.7}, {"occlusion_distance", 0.4}, {"occlusion_angle", 25},
+    {"tau_group", 0.15},       {"filter_sigma_factor", 2.5}, {"min_points", 8},           {"occlusion_removal", 0},
+    {"fuse_across_groups", 0}, {"sensor_model", 1},
 };
 
 // The process's CPU time (all threads), seconds.
@@ -37,7 +36,9 @@ double processCpuSeconds() {
   return static_cast<double>(t.tv_sec) + 1e-9 * static_cast<double>(t.tv_nsec);
 }
 
-double msBetween(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double, std::milli>(b - a).count(); }
+double msBetween(Clock::time_point a, Clock::time_point b) {
+  return std::chrono::duration<double, std::milli>(b - a).count();
+}
 
 // Returns true while runs remain.
 bool measureLatency(ScriptRun& run, Workbench& bench, const std::shared_ptr<const GlobalSnapshot>& global) {
@@ -48,16 +49,18 @@ bool measureLatency(ScriptRun& run, Workbench& bench, const std::shared_ptr<cons
     // or, when the map was published after the frame began, from then.
     const GlobalSnapshot& g = *global;
     run.latency_pick = std::max(run.frame_start, g.t_published);
-    run.latency_stages.push_back({{"parameter", kLatencyEdits[(run.latency_ms.size() / 2) % std::size(kLatencyEdits)].key},
-                                  {"edit", msBetween(run.latency_start, g.t_edit)},
-                                  {"queue", msBetween(g.t_edit, g.t_build_start)},
-                                  {"build", msBetween(g.t_build_start, g.t_build_end)},
-                                  {"after_build", msBetween(g.t_build_end, g.t_published)},
-                                  {"to_ui", msBetween(g.t_published, run.latency_pick)},
-                                  {"t_g", 1e3 * g.map.t_g_s},
-                                  {"t_g_parts", {g.map.groups_ms, g.map.merge_ms, g.map.occlusion_ms, g.map.fusion_ms}},
-                                  {"reused", {g.map.reuse.groups, g.map.reuse.merged_groups, g.map.groups.size(),
-                                              g.map.reuse.occlusion, g.map.reuse.fusion}}});
+    run.latency_stages.push_back(
+        {{"parameter", kLatencyEdits[(run.latency_ms.size() / 2) % std::size(kLatencyEdits)].key},
+         {"edit", msBetween(run.latency_start, g.t_edit)},
+         {"queue", msBetween(g.t_edit, g.t_build_start)},
+         {"build", msBetween(g.t_build_start, g.t_build_end)},
+         {"after_build", msBetween(g.t_build_end, g.t_published)},
+         {"to_ui", msBetween(g.t_published, run.latency_pick)},
+         {"t_g", 1e3 * g.map.t_g_s},
+         {"t_g_parts", {g.map.groups_ms, g.map.merge_ms, g.map.occlusion_ms, g.map.fusion_ms}},
+         {"reused",
+          {g.map.reuse.groups, g.map.reuse.merged_groups, g.map.groups.size(), g.map.reuse.occlusion,
+           g.map.reuse.fusion}}});
     run.latency_generation = -1;
     run.latency_shown_pending = true;
     return true;
@@ -104,17 +107,18 @@ void probeScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
     return;
   }
   const ProbeResult& r = *ui.probe_result;
-  run.probe = {{"class", occupancyName(r.state.state)},
-               {"p", r.state.p_occupied},
-               {"distance_m", std::isfinite(r.distance.distance_m) ? nlohmann::json(r.distance.distance_m) : nlohmann::json()},
-               {"point", {r.point.x, r.point.y, r.point.z}},
-               {"on_slice", r.on_slice},
-               {"keyframe", r.state.keyframe},
-               {"ellipsoid", r.state.ellipsoid},
-               {"generation", r.generation},
-               {"query_us", r.query_us},
-               {"note", r.note},
-               {"text", r.text()}};
+  run.probe = {
+      {"class", occupancyName(r.state.state)},
+      {"p", r.state.p_occupied},
+      {"distance_m", std::isfinite(r.distance.distance_m) ? nlohmann::json(r.distance.distance_m) : nlohmann::json()},
+      {"point", {r.point.x, r.point.y, r.point.z}},
+      {"on_slice", r.on_slice},
+      {"keyframe", r.state.keyframe},
+      {"ellipsoid", r.state.ellipsoid},
+      {"generation", r.generation},
+      {"query_us", r.query_us},
+      {"note", r.note},
+      {"text", r.text()}};
 }
 
 void writeStats(const ScriptRun& run, Workbench& bench, const ScriptFrame& frame, const std::string& file) {
@@ -168,8 +172,11 @@ void writeStats(const ScriptRun& run, Workbench& bench, const ScriptFrame& frame
                             {"compute_ms", slice->compute_ms}};
   }
   if (const auto query = bench.queries().snapshot())
-    stats["queries"] = {{"generation", query->generation}, {"build_ms", query->build_ms}, {"note", query->note},
-                        {"keyframes", query->map->keyframes()}, {"ellipsoids", query->map->ellipsoids()},
+    stats["queries"] = {{"generation", query->generation},
+                        {"build_ms", query->build_ms},
+                        {"note", query->note},
+                        {"keyframes", query->map->keyframes()},
+                        {"ellipsoids", query->map->ellipsoids()},
                         {"memory_bytes", query->map->memoryBytes()}};
   stats["labels_cut_before_wait"] = run.labels_cut_before_wait;
   stats["show_help"] = ui.show_help;
@@ -256,10 +263,12 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
       if (queries && bench.isOpen()) {
         UiState& ui = bench.ui();
         ui.probe = ui.probe || !run.options.probe.empty();
-        if (run.options.query_slice && !ui.query_slice) ui.query_slice = true, ui.query_slice_spec = *run.options.query_slice;
+        if (run.options.query_slice && !ui.query_slice)
+          ui.query_slice = true, ui.query_slice_spec = *run.options.query_slice;
         const auto query = bench.queries().snapshot();
         const auto global = bench.global();
-        if ((!query || !global || query->generation != global->generation) && bench.player().status().error.empty()) return;
+        if ((!query || !global || query->generation != global->generation) && bench.player().status().error.empty())
+          return;
       }
       if (bench.isOpen()) {
         const PlayerStatus st = bench.player().status();
@@ -271,8 +280,9 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
       else bench.view().resetView();
       if (run.options.keyframe >= 0) bench.poses().selectKeyframe(run.options.keyframe);
       for (const int key : run.options.press) window.press(key);  // as if typed now
-      for (const std::string& path : run.options.drop) bench.files().drop(path);  // as if dropped now (opened next frame)
-      run.countdown = 3;  // frames to draw the final map before the screenshot
+      for (const std::string& path : run.options.drop)
+        bench.files().drop(path);  // as if dropped now (opened next frame)
+      run.countdown = 3;           // frames to draw the final map before the screenshot
       run.phase = ScriptPhase::kSettle;
       return;
     }
@@ -311,7 +321,7 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
         return;
       }
       if (bench.player().status().busy || frame.settle_frames > 0) return;  // idle: the worker and the UI
-      if (run.view_fast) return;  // the full-quality frame follows once the camera rests
+      if (run.view_fast) return;       // the full-quality frame follows once the camera rests
       run.phase = ScriptPhase::kIdle;  // starts once this frame is on screen (scriptFrameShown)
       run.idle_until = Clock::time_point::max();
       return;
@@ -323,7 +333,8 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
       // A failed scripted run (--exit with an error, e.g. a bad session) writes neither file:
       // a screenshot of the error would pass for a result. One taken before a
       // later failure is removed.
-      if (!failedRun(run, bench) && !run.options.stats_json.empty()) writeStats(run, bench, frame, run.options.stats_json);
+      if (!failedRun(run, bench) && !run.options.stats_json.empty())
+        writeStats(run, bench, frame, run.options.stats_json);
       if (failedRun(run, bench) && run.screenshot_taken) {
         std::error_code ignored;
         std::filesystem::remove(run.options.screenshot, ignored);

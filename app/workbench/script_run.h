@@ -21,22 +21,22 @@ namespace vdmap::app::gui {
 
 /// The scripted path for tests and documentation screenshots.
 struct ScriptOptions {
-  bool play_to_end = false;   ///< press Play at start
-  int keyframe = -1;          ///< select this keyframe in the inspector before the screenshot
-  std::vector<int> press;     ///< keys pressed then, before the screenshot (the window's codes, parseKeyNames)
+  bool play_to_end = false;      ///< press Play at start
+  int keyframe = -1;             ///< select this keyframe in the inspector before the screenshot
+  std::vector<int> press;        ///< keys pressed then, before the screenshot (the window's codes, parseKeyNames)
   bool expand_sections = false;  ///< every collapsible section of the panels open (layout checks)
-  std::string screenshot;     ///< PNG of the window, taken once mapping and map building are done
-  std::string stats_json;     ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
+  std::string screenshot;        ///< PNG of the window, taken once mapping and map building are done
+  std::string stats_json;        ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too
   /// The headless twin (docs/workbench.md "Save view"): a view shown instead of the default one
   /// once mapping is done (--view-file), the view then saved as a view file (--save-view) and
   /// the 3-D view's own image, without the panels, at the view's size (--view-screenshot).
   std::optional<render::ViewSpec> view;
   std::string save_view, view_screenshot;
-  bool exit = false;          ///< close the window once the above are written
+  bool exit = false;  ///< close the window once the above are written
   /// Measurements, in this order after the screenshot, into the stats file:
-  int latency_runs = 0;       ///< slider-to-map latency: merge-distance edits until the new map is drawn, ms
-  int orbit_frames = 0;       ///< UI frame time while orbiting, ms per frame
-  double idle_seconds = 0;    ///< process CPU time over this many seconds of nothing happening
+  int latency_runs = 0;     ///< slider-to-map latency: merge-distance edits until the new map is drawn, ms
+  int orbit_frames = 0;     ///< UI frame time while orbiting, ms per frame
+  double idle_seconds = 0;  ///< process CPU time over this many seconds of nothing happening
   /// Close the window as a user would after this many frames drawn (0: never); a test of
   /// closing during the preparation.
   int close_after_frames = 0;
@@ -65,14 +65,14 @@ struct ScriptRun {
   using Clock = std::chrono::steady_clock;
   ScriptOptions options;
   ScriptPhase phase = ScriptPhase::kWaitDone;
-  int countdown = 0;               ///< frames to draw before the screenshot
-  bool finished = false;           ///< done, and the window should close (options.exit)
-  bool screenshot_taken = false;   ///< by the script, so a failure removes it (and no older file)
-  bool view_files_taken = false;   ///< --save-view / --view-screenshot, likewise
+  int countdown = 0;                                 ///< frames to draw before the screenshot
+  bool finished = false;                             ///< done, and the window should close (options.exit)
+  bool screenshot_taken = false;                     ///< by the script, so a failure removes it (and no older file)
+  bool view_files_taken = false;                     ///< --save-view / --view-screenshot, likewise
   nlohmann::json layout = nlohmann::json::object();  ///< recordLayout's figures
-  nlohmann::json measure;          ///< --measure's points and distance (null: none asked or found)
-  nlohmann::json probe;            ///< --probe's answer (null: none asked)
-  int latency_generation = -1;     ///< the global map an edit waits to replace (-1: no edit pending)
+  nlohmann::json measure;                            ///< --measure's points and distance (null: none asked or found)
+  nlohmann::json probe;                              ///< --probe's answer (null: none asked)
+  int latency_generation = -1;                       ///< the global map an edit waits to replace (-1: no edit pending)
   Clock::time_point latency_start, orbit_frame_start, idle_until;
   std::vector<double> latency_ms, orbit_ms, orbit_cpu_ms;
   // Latency stages (global map stream): per edit, from the GlobalSnapshot's stamps.
@@ -87,12 +87,12 @@ struct ScriptRun {
   int idle_frames = 0;
   std::vector<double> busy_frame_ms;  ///< UI frame times while the worker was busy
   // Progressive drawing (the window fills these in; the orbit phase waits for the full frame):
-  bool view_fast = false;            ///< the 3-D view shown is the fast pass's
-  std::vector<double> fast_ms;       ///< glFinish-timed fast frames of the orbit, ms
-  std::size_t fast_instances = 0;    ///< ellipsoids the last fast frame drew
-  std::size_t map_drawn = 0;         ///< height slice: ellipsoids the mirror holds (what the slice keeps)
-  Clock::time_point last_move{};     ///< the orbit's last camera step
-  double settle_ms = -1;             ///< the last orbit step until the full frame was shown
+  bool view_fast = false;          ///< the 3-D view shown is the fast pass's
+  std::vector<double> fast_ms;     ///< glFinish-timed fast frames of the orbit, ms
+  std::size_t fast_instances = 0;  ///< ellipsoids the last fast frame drew
+  std::size_t map_drawn = 0;       ///< height slice: ellipsoids the mirror holds (what the slice keeps)
+  Clock::time_point last_move{};   ///< the orbit's last camera step
+  double settle_ms = -1;           ///< the last orbit step until the full frame was shown
   /// The most labels cut in a frame after which the event loop, unscripted, would wait for input
   /// (the picture left on screen).
   int labels_cut_before_wait = 0;

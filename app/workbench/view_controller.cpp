@@ -84,7 +84,8 @@ void ViewController::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
-  ui_.camera = render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera =
+      render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -163,15 +164,14 @@ glm::vec3 ViewController::upVector() const {
   const auto mapping = worker_->mapping();
   const auto global = worker_->global();
   const std::vector<Transform> cameras = mapping->trajectoryWorld();
-  return render::upDirection(UpAxis::kData, cameras,
-                             global ? std::span<const Ellipsoid>(global->map.ellipsoids) : std::span<const Ellipsoid>());
+  return render::upDirection(
+      UpAxis::kData, cameras,
+      global ? std::span<const Ellipsoid>(global->map.ellipsoids) : std::span<const Ellipsoid>());
 }
 
 // The up axis framing just used: heightFrame() holds it for the current snapshots, so the data
 // up axis (a fit over every camera and the map) is not estimated a second time per framing.
-glm::vec3 ViewController::framingUp() const {
-  return worker_ && worker_->global() ? heightFrame().up : upVector();
-}
+glm::vec3 ViewController::framingUp() const { return worker_ && worker_->global() ? heightFrame().up : upVector(); }
 
 ViewportView ViewController::viewport(int width, int height) const {
   if (worker_ && ui_.view_from_keyframe >= 0) {
@@ -248,7 +248,8 @@ render::ViewSpec ViewController::spec() const {
   } else if (mapped(ui_.view_from_keyframe)) {
     spec.kind = render::ViewKind::kKeyframe;
     spec.keyframe = ui_.view_from_keyframe;
-    const render::PixelRect r = render::letterbox(ui_.view_width, ui_.view_height, mapping->camera.width, mapping->camera.height);
+    const render::PixelRect r =
+        render::letterbox(ui_.view_width, ui_.view_height, mapping->camera.width, mapping->camera.height);
     spec.width = r.width;
     spec.height = r.height;
   } else {
@@ -324,9 +325,10 @@ ViewController::ShownMap ViewController::shownMap() const {
   if (!c.shown.ellipsoids || !(slice == c.slice)) {
     c.slice = slice;
     c.shown.serial = ++c.serial;
-    c.shown.ellipsoids = slice.on ? std::make_shared<const std::vector<Ellipsoid>>(
-                                        render::slicedMap(global->map.ellipsoids, frame, slice))
-                                  : std::shared_ptr<const std::vector<Ellipsoid>>(global, &global->map.ellipsoids);
+    c.shown.ellipsoids =
+        slice.on
+            ? std::make_shared<const std::vector<Ellipsoid>>(render::slicedMap(global->map.ellipsoids, frame, slice))
+            : std::shared_ptr<const std::vector<Ellipsoid>>(global, &global->map.ellipsoids);
   }
   return c.shown;
 }

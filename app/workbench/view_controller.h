@@ -15,8 +15,8 @@ namespace vdmap::app::gui {
 
 /// Picks the ellipsoid whose mean projects nearest to pixel (x, y) of `view` within
 /// `radius_px`, preferring the nearer one among those within a pixel of the best; -1 if none.
-int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px,
-                  float y_px, float radius_px = 8.f);
+int pickEllipsoid(const std::vector<Ellipsoid>& ellipsoids, const render::ViewCamera& view, float x_px, float y_px,
+                  float radius_px = 8.f);
 
 /// The 3-D view's camera in a viewport, and where its image lies in the viewport (all of it,
 /// or the letterbox of "view from keyframe").
@@ -117,7 +117,7 @@ class ViewController {
   WorkbenchState& state_;
   UiState& ui_ = state_.ui;
   const std::unique_ptr<MappingWorker>& worker_ = state_.worker;
-  PoseEditor& poses_;  // a pick or a keyframe view selects its keyframe
+  PoseEditor& poses_;                      // a pick or a keyframe view selects its keyframe
   int framed_generation_ = -1;             // the global map the view was last framed on
   std::pair<int, int> framed_size_{0, 0};  // and the viewport it was framed in
   std::size_t framed_strays_ = 0;          // left out of that frame

@@ -24,10 +24,24 @@ namespace vdmap::app::gui {
 
 /// Keyboard actions (the window maps keys to them; the help overlay lists them).
 enum class KeyAction {
-  kPlayPause, kStepForward, kStepBack, kNextKeyframe, kFrameMap, kResetView, kViewFromKeyframe, kContainer, kHelp,
-  kEscape, kUndo, kBeforeOptimisation, kSaveView, kFrameTrajectories, kPivotHere,
-  kSliceUp, kSliceDown,  // height slice: PgUp / PgDn
-  kProbe                 // point queries: Q
+  kPlayPause,
+  kStepForward,
+  kStepBack,
+  kNextKeyframe,
+  kFrameMap,
+  kResetView,
+  kViewFromKeyframe,
+  kContainer,
+  kHelp,
+  kEscape,
+  kUndo,
+  kBeforeOptimisation,
+  kSaveView,
+  kFrameTrajectories,
+  kPivotHere,
+  kSliceUp,
+  kSliceDown,  // height slice: PgUp / PgDn
+  kProbe       // point queries: Q
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.

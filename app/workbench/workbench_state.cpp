@@ -24,7 +24,7 @@ std::string ProbeResult::text() const {
   // p below 0.0005 (free well in front of a surface) would print as 0.000: say "<0.001".
   const double p = state.p_occupied;
   int n = p < 0.0005 ? std::snprintf(text, sizeof text, "%s p<0.001", name)
-                              : std::snprintf(text, sizeof text, "%s p=%.3f", name, p);
+                     : std::snprintf(text, sizeof text, "%s p=%.3f", name, p);
   const auto more = [&](const char* format, auto... args) {
     if (n >= 0 && n < static_cast<int>(sizeof text)) n += std::snprintf(text + n, sizeof text - n, format, args...);
   };

@@ -28,9 +28,9 @@ struct ProbeResult {
   bool on_slice = false;  ///< on the query slice's plane (else in front of the surface under the cursor)
   Classification state;
   DistanceResult distance;
-  int generation = 0;     ///< the global map whose queries answered (0: none built yet)
-  std::string note;       ///< what is missing ("" when nothing): queries being built, no keyframes
-  double query_us = 0;    ///< classify + distance of the point
+  int generation = 0;   ///< the global map whose queries answered (0: none built yet)
+  std::string note;     ///< what is missing ("" when nothing): queries being built, no keyframes
+  double query_us = 0;  ///< classify + distance of the point
   /// "free p=0.001 · 0.212 m to surface (kf 17) · x y z" (and the note).
   std::string text() const;
 };
@@ -47,44 +47,44 @@ struct UiState {
   /// The view frames the map whenever it grows, until the user orbits, pans or zooms;
   /// F (frame) and R (reset) turn it back on.
   bool follow_map = true;
-  int view_from_keyframe = -1;    ///< >= 0: the 3-D view looks through this keyframe
+  int view_from_keyframe = -1;  ///< >= 0: the 3-D view looks through this keyframe
   int selected_keyframe = -1;
   std::optional<Ellipsoid> picked;
-  int picked_generation = 0;      ///< the global map it was picked in (a new map clears it)
-  glm::vec3 pose_translation_m{0.f};  ///< the selected keyframe's pose as edited
-  glm::vec3 pose_rotation_deg{0.f};   ///< roll (x), pitch (y, within +-90), yaw (z): R = Rz Ry Rx
-  std::string sequence_text;      ///< the "open sequence" field
-  std::string trajectory_text;    ///< the "load corrected trajectory" field
-  std::string export_text = "vdmap_export";   ///< export folder
-  std::string session_text = "map.vdmap";     ///< "save session" file
+  int picked_generation = 0;                       ///< the global map it was picked in (a new map clears it)
+  glm::vec3 pose_translation_m{0.f};               ///< the selected keyframe's pose as edited
+  glm::vec3 pose_rotation_deg{0.f};                ///< roll (x), pitch (y, within +-90), yaw (z): R = Rz Ry Rx
+  std::string sequence_text;                       ///< the "open sequence" field
+  std::string trajectory_text;                     ///< the "load corrected trajectory" field
+  std::string export_text = "vdmap_export";        ///< export folder
+  std::string session_text = "map.vdmap";          ///< "save session" file
   std::string view_file_text = "vdmap_view.json";  ///< "save view" file (S)
   StatusLine status;
   /// Which settings this run started with (the note cmd_gui prints) and the file they are saved
   /// to on exit ("": not saved, a scripted run or --settings).
   std::string settings_source = "defaults", settings_file;
-  bool show_help = false;         ///< the key and mouse overlay (H, F1)
-  bool show_container = false;    ///< the large container view window (C)
+  bool show_help = false;       ///< the key and mouse overlay (H, F1)
+  bool show_container = false;  ///< the large container view window (C)
   /// The map, keyframes and trajectory as they were before the last pose-graph optimisation
   /// (PoseEditor::showBeforeOptimisation); off again when there is none (after seeking back).
   bool show_before_optimisation = false;
-  bool reset_layout = false;      ///< panels go back to their default widths next frame
+  bool reset_layout = false;  ///< panels go back to their default widths next frame
   // The view tools: pick marker, keyframe list, measuring, quick views.
   /// The keyframe list scrolls to the selected keyframe once (set by a pick or a loop marker;
   /// PoseEditor::takeScrollToSelected clears it).
   bool scroll_to_selected = false;
   /// Measuring (Ctrl+click): point A, then B (world, metres); a third click starts again at A.
   std::optional<glm::vec3> measure_a, measure_b;
-  bool measure_snap = false;      ///< measured points snap to the nearest ellipsoid centre
-  bool pivot_requested = false;   ///< P: the window turns the view about the point under the cursor
+  bool measure_snap = false;     ///< measured points snap to the nearest ellipsoid centre
+  bool pivot_requested = false;  ///< P: the window turns the view about the point under the cursor
   /// A file Save view was asked to write that exists: the window asks "Replace?" ("": none).
   std::string confirm_view_replace;
-  bool load_view_thresholds = false;  ///< Load view: also its thresholds (as --settings does)
+  bool load_view_thresholds = false;         ///< Load view: also its thresholds (as --settings does)
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
   // Point queries (docs/workbench.md "Queries").
-  bool probe = false;                ///< Q: what the map says under the cursor
-  float probe_offset_m = 0.05f;      ///< the probe stands this far in front of the surface under the cursor
+  bool probe = false;                       ///< Q: what the map says under the cursor
+  float probe_offset_m = 0.05f;             ///< the probe stands this far in front of the surface under the cursor
   std::optional<ProbeResult> probe_result;  ///< the last probe (cleared when the probe is turned off)
-  bool query_slice = false;          ///< the query slice is drawn
+  bool query_slice = false;                 ///< the query slice is drawn
   render::QuerySliceSpec query_slice_spec;
 };
 

@@ -91,8 +91,7 @@ std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDis
         double d2;
         if constexpr (std::is_invocable_v<SqDist, std::uint32_t, const Eigen::Vector3d&, double>)
           d2 = sq_dist(items_[j], q, best_d2);
-        else
-          d2 = sq_dist(items_[j], q);
+        else d2 = sq_dist(items_[j], q);
         if (d2 < best_d2 || (d2 == best_d2 && items_[j] < best)) best_d2 = d2, best = items_[j];
       }
       continue;

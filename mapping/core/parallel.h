@@ -19,8 +19,7 @@ inline constexpr int kMaxThreads = 256;
 /// process (its cores, or a tbb::global_control limit). TBB would ignore the extra ones anyway, but
 /// an arena asking for more prints a warning on stderr.
 inline int arenaThreads(int threads) {
-  const int allowed =
-      static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
+  const int allowed = static_cast<int>(tbb::global_control::active_value(tbb::global_control::max_allowed_parallelism));
   return threads > 0 ? std::min(threads, std::max(allowed, 1)) : tbb::task_arena::automatic;
 }
 

@@ -25,7 +25,7 @@ struct ParameterSpec {
   std::string_view unit;   ///< "m", "px", "deg", "frames" or ""
   std::string_view help;   ///< what it does, in the method's words (tooltip, --help, docs/parameters.md)
   Kind kind = Kind::kReal;
-  double lo = 0, hi = 0;   ///< valid range (+-inf: unbounded); a value must also be finite
+  double lo = 0, hi = 0;  ///< valid range (+-inf: unbounded); a value must also be finite
   bool lo_open = false, hi_open = false;
   /// false: an advanced parameter, set by flag, settings.json or --set but given no slider.
   bool slider = true;
@@ -73,6 +73,6 @@ void checkRanges(std::span<const ParameterRow<Params>> rows, const Params& param
 }  // namespace vdmap
 
 /// A ParameterRow's accessors for the struct member `member` (a path such as filter.min_points).
-#define VDMAP_PARAMETER_ACCESS(Params, member)                                              \
-  .get = [](const Params& p) { return static_cast<double>(p.member); },                     \
+#define VDMAP_PARAMETER_ACCESS(Params, member)                          \
+  .get = [](const Params& p) { return static_cast<double>(p.member); }, \
   .set = [](Params& p, double v) { p.member = static_cast<decltype(p.member)>(v); }

@@ -2,8 +2,7 @@
 
 namespace vdmap {
 
-ColoredPointCloud toPointCloud(const RgbdFrame& frame, const PinholeCamera& camera,
-                               const DepthRange& range) {
+ColoredPointCloud toPointCloud(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range) {
   ColoredPointCloud cloud;
   const bool has_rgb = !frame.rgb.empty();
   const double inv_scale = 1.0 / camera.depth_scale;

@@ -1,8 +1,8 @@
 #pragma once
-#include <memory>
-#include <string>
 #include <array>
 #include <cstdint>
+#include <memory>
+#include <string>
 #include <vector>
 
 #include <opencv2/core.hpp>
@@ -44,7 +44,6 @@ struct ColoredPointCloud {
 };
 
 /// Back-projects every pixel whose depth lies in `range` into the camera frame (points_C).
-ColoredPointCloud toPointCloud(const RgbdFrame& frame, const PinholeCamera& camera,
-                               const DepthRange& range = {});
+ColoredPointCloud toPointCloud(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range = {});
 
 }  // namespace vdmap

@@ -70,10 +70,10 @@ void removeTemporaryPaths() {
 
 void installTemporaryPathCleanup() {
   for (const int signal : {SIGINT, SIGTERM, SIGHUP}) {
-    struct sigaction old{};
+    struct sigaction old {};
     ::sigaction(signal, nullptr, &old);
     if (old.sa_handler == SIG_IGN) continue;  // e.g. SIGHUP under nohup: stay immune
-    struct sigaction action{};
+    struct sigaction action {};
     action.sa_handler = onInterrupt;
     action.sa_flags = SA_RESETHAND;
     sigemptyset(&action.sa_mask);

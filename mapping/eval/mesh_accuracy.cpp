@@ -33,8 +33,8 @@ std::vector<double> parallelMap(std::size_t n, F&& f) {
 
 }  // namespace
 
-Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c) {
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c) {
   const Eigen::Vector3d ab = b - a, ac = c - a, ap = p - a;
   const double d1 = ab.dot(ap), d2 = ac.dot(ap);
   if (d1 <= 0 && d2 <= 0) return a;
@@ -76,7 +76,8 @@ std::vector<double> distancesToMeshBruteForce(const std::vector<Eigen::Vector3f>
   std::vector<double> out;
   for (const Eigen::Vector3f& p : points) {
     double best = std::numeric_limits<double>::infinity();
-    for (std::size_t t = 0; t < mesh.triangles.size(); ++t) best = std::min(best, sqDistToTriangle(mesh, t, p.cast<double>()));
+    for (std::size_t t = 0; t < mesh.triangles.size(); ++t)
+      best = std::min(best, sqDistToTriangle(mesh, t, p.cast<double>()));
     out.push_back(std::sqrt(best));
   }
   return out;
@@ -86,7 +87,9 @@ std::vector<double> distancesToPoints(const std::vector<Eigen::Vector3f>& querie
                                       const std::vector<Eigen::Vector3f>& points) {
   const BoxTree tree(points, points);
   return parallelMap(queries.size(), [&](std::size_t i) {
-    const auto sq = [&](std::uint32_t j, const Eigen::Vector3d& q) { return (points[j].cast<double>() - q).squaredNorm(); };
+    const auto sq = [&](std::uint32_t j, const Eigen::Vector3d& q) {
+      return (points[j].cast<double>() - q).squaredNorm();
+    };
     return std::sqrt(tree.nearest(queries[i].cast<double>(), sq).second);
   });
 }

@@ -11,8 +11,8 @@
 namespace vdmap {
 
 /// The point of triangle (a, b, c) closest to p (Ericson, Real-Time Collision Detection 5.1.5).
-Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a,
-                                       const Eigen::Vector3d& b, const Eigen::Vector3d& c);
+Eigen::Vector3d closestPointOnTriangle(const Eigen::Vector3d& p, const Eigen::Vector3d& a, const Eigen::Vector3d& b,
+                                       const Eigen::Vector3d& c);
 
 /// Exact distance (m) from each point to the nearest triangle of the mesh, through a bounding-
 /// volume hierarchy. Same frame and unit as the mesh. Runs on all cores; results do not depend on that.
@@ -28,20 +28,20 @@ std::vector<double> distancesToPoints(const std::vector<Eigen::Vector3f>& querie
 
 /// `count` points uniformly distributed over the mesh surface by area (deterministic per seed);
 /// with `triangles`, each point's triangle index there (the points do not depend on it).
-std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, std::size_t count,
-                                               std::uint32_t seed, std::vector<std::uint32_t>* triangles = nullptr);
+std::vector<Eigen::Vector3f> sampleMeshSurface(const ColoredTriangleMesh& mesh, std::size_t count, std::uint32_t seed,
+                                               std::vector<std::uint32_t>* triangles = nullptr);
 
 struct AccuracyParams {
   std::size_t completion_samples = 200000;  ///< mesh samples for completion (docs/method.md 12)
   static constexpr std::size_t kMaxCompletionSamples = 100'000'000;  ///< what --samples accepts
-  std::uint32_t seed = 8;                   ///< fixed, so the same map always scores the same
-  double completion_within_m = 0.05;        ///< "complete" when a map element is this close
+  std::uint32_t seed = 8;                                            ///< fixed, so the same map always scores the same
+  double completion_within_m = 0.05;                                 ///< "complete" when a map element is this close
 };
 
 /// docs/method.md 12 figures. Distances in millimetres.
 struct AccuracyReport {
-  std::size_t elements = 0;   ///< map elements evaluated
-  double rmse_mm = 0.0;       ///< of element-centre to mesh distances
+  std::size_t elements = 0;  ///< map elements evaluated
+  double rmse_mm = 0.0;      ///< of element-centre to mesh distances
   double mean_mm = 0.0;
   double median_mm = 0.0;
   double completion_mean_mm = 0.0;  ///< mean distance from mesh samples to the nearest element

@@ -190,7 +190,8 @@ OccupancyTruthSets OccupancyTruth::sample(const ColoredTriangleMesh& mesh) const
   // U: uniform in the mesh's box, never seen (free or surface) by any frame, more than
   // `clearance` from the mesh.
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi = -lo;
-  for (const Eigen::Vector3f& p : mesh.positions) lo = lo.cwiseMin(p.cast<double>()), hi = hi.cwiseMax(p.cast<double>());
+  for (const Eigen::Vector3f& p : mesh.positions)
+    lo = lo.cwiseMin(p.cast<double>()), hi = hi.cwiseMax(p.cast<double>());
   for (int round = 0; round < kRounds && sets.unknown.size() < P.unknown; ++round) {
     std::vector<Eigen::Vector3d> candidates(4 * P.unknown);
     for (Eigen::Vector3d& c : candidates)
@@ -224,7 +225,8 @@ OccupancyTruthSets OccupancyTruth::sample(const ColoredTriangleMesh& mesh) const
       if (seen_triangle[t]) seen_mesh.triangles.push_back(mesh.triangles[t]);
     sets.seen_triangles = seen_mesh.triangles.size();
     const auto toSeen = [&](const std::vector<Eigen::Vector3d>& points) {
-      if (seen_mesh.triangles.empty()) return std::vector<double>(points.size(), std::numeric_limits<double>::infinity());
+      if (seen_mesh.triangles.empty())
+        return std::vector<double>(points.size(), std::numeric_limits<double>::infinity());
       return distancesToMesh(asFloat(points), seen_mesh);
     };
     sets.free_seen_distance_m = toSeen(sets.free);

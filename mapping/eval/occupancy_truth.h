@@ -23,12 +23,12 @@ enum class FrameSight : std::uint8_t {
 };
 
 struct OccupancyTruthParams {
-  double free_margin_m = 0.02;       ///< seen free: this far in front of the pixel's and its neighbours' depths
+  double free_margin_m = 0.02;         ///< seen free: this far in front of the pixel's and its neighbours' depths
   double surface_tolerance_m = 0.005;  ///< seen on the surface: within this of the pixel's depth
-  double min_range_m = 0.1;          ///< F: nearest depth sampled on a ray
-  double clearance_m = 0.05;         ///< F and U: mesh distance above this; F: at most D - this
+  double min_range_m = 0.1;            ///< F: nearest depth sampled on a ray
+  double clearance_m = 0.05;           ///< F and U: mesh distance above this; F: at most D - this
   double near_min_m = 0.005, near_max_m = 0.05;  ///< F_near: mesh distance (and range before the surface)
-  double occupied_offset_m = 0.005;  ///< O: moved along the normal by U[-this, this]
+  double occupied_offset_m = 0.005;              ///< O: moved along the normal by U[-this, this]
   std::size_t occupied = 100000, free = 100000, free_near = 50000, unknown = 100000;
   /// Mesh samples that decide which triangles were seen (one of its samples seen on the surface).
   std::size_t seen_mesh_samples = 1000000;
@@ -40,16 +40,16 @@ struct OccupancyTruthParams {
 /// and to its seen part (the triangles with a sample some frame sees on the surface), which is all
 /// a map of these frames can know.
 struct OccupancyTruthSets {
-  std::vector<Eigen::Vector3d> occupied;   ///< O: truth occupied
-  std::vector<double> occupied_offset_m;   ///< O: signed offset along the normal, + towards the camera that saw it
-  std::vector<Eigen::Vector3d> free;       ///< F: truth free
+  std::vector<Eigen::Vector3d> occupied;  ///< O: truth occupied
+  std::vector<double> occupied_offset_m;  ///< O: signed offset along the normal, + towards the camera that saw it
+  std::vector<Eigen::Vector3d> free;      ///< F: truth free
   std::vector<double> free_distance_m;
   std::vector<double> free_seen_distance_m;
   std::vector<Eigen::Vector3d> free_near;  ///< F_near: truth free, near_min..near_max from the mesh
   std::vector<double> free_near_distance_m;
   std::vector<double> free_near_seen_distance_m;
-  std::size_t seen_triangles = 0;  ///< of the mesh's
-  std::vector<Eigen::Vector3d> unknown;    ///< U: truth unknown (never seen, away from the mesh)
+  std::size_t seen_triangles = 0;        ///< of the mesh's
+  std::vector<Eigen::Vector3d> unknown;  ///< U: truth unknown (never seen, away from the mesh)
   /// O candidates dropped because some frame sees them free (grazing views): neither class is sure.
   std::size_t ambiguous_occupied = 0;
 };

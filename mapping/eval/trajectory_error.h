@@ -49,8 +49,8 @@ struct TrajectoryError {
   ErrorStats ate_m;
   Transform T_gt_est = Transform::Identity();  ///< the rigid part of the alignment
   double scale = 1.0;                          ///< the alignment's scale (1 unless align_scale)
-  RelativePoseError rpe_per_frame;   ///< consecutive matched poses
-  RelativePoseError rpe_per_second;  ///< matched poses rpe_delta_s apart
+  RelativePoseError rpe_per_frame;             ///< consecutive matched poses
+  RelativePoseError rpe_per_second;            ///< matched poses rpe_delta_s apart
 };
 
 /// associate.py: all pairs (i, j) of estimate[i] and groundtruth[j] whose timestamps differ by

@@ -27,7 +27,7 @@ namespace fs = std::filesystem;
 
 // Every file an export can write; a new export removes those of an older one it does not write
 // (a global.bt from a run with --octomap), so the folder never mixes two runs.
-const char* const kExportFiles[] = {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply",
+const char* const kExportFiles[] = {"local_maps.ply",        "keyframes.txt",        "graph.txt", "global_points.ply",
                                     "global_ellipsoids.ply", "global_gaussians.ply", "global.bt", "stats.json"};
 constexpr char kStagingPrefix[] = ".vdmap-export-";
 
@@ -55,9 +55,11 @@ void checkWritable(const fs::path& dir, const char* which, const EllipsoidSource
       return;
     }
     throw std::runtime_error(dir.string() + ": nothing exported: " + which + " ellipsoid " + std::to_string(i) +
-                             " (keyframe " + std::to_string(e.keyframe) + ") has a mean or covariance that is not a "
-                             "finite float (mean " + std::to_string(e.mean.x()) + " " + std::to_string(e.mean.y()) +
-                             " " + std::to_string(e.mean.z()) + ")");
+                             " (keyframe " + std::to_string(e.keyframe) +
+                             ") has a mean or covariance that is not a "
+                             "finite float (mean " +
+                             std::to_string(e.mean.x()) + " " + std::to_string(e.mean.y()) + " " +
+                             std::to_string(e.mean.z()) + ")");
   });
 }
 
@@ -74,8 +76,7 @@ void checkWritable(const fs::path& dir, const char* which, const std::vector<Sta
 // are registered as temporary paths, so an interrupt (SIGINT, SIGTERM) removes them as well.
 class StagingFolder {
  public:
-  explicit StagingFolder(const fs::path& dir)
-      : dir_(dir), path_(dir / (kStagingPrefix + std::to_string(::getpid()))) {
+  explicit StagingFolder(const fs::path& dir) : dir_(dir), path_(dir / (kStagingPrefix + std::to_string(::getpid()))) {
     checkExportFolder(dir);
     std::error_code ec;
     if (!fs::exists(dir, ec)) created_ = std::make_unique<TemporaryPath>(dir, true);
@@ -207,8 +208,8 @@ nlohmann::json exportMap(const fs::path& dir, const KeyframeGraph& graph, const 
   nlohmann::json stats = options.run_stats.is_object() ? options.run_stats : nlohmann::json::object();
   stats.update(globalMapStats(graph, map));
   if (options.octomap_resolution_m > 0.0) {
-    const OctomapExportReport r = writeOctomapBt(stage / "global.bt", graph, map.ellipsoids, options.octomap_resolution_m,
-                                                   options.octomap_progress);
+    const OctomapExportReport r = writeOctomapBt(stage / "global.bt", graph, map.ellipsoids,
+                                                 options.octomap_resolution_m, options.octomap_progress);
     stats["octomap"] = {{"resolution_m", options.octomap_resolution_m},
                         {"points", r.points},
                         {"occupied_leaves", r.occupied_leaves},

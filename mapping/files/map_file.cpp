@@ -90,8 +90,9 @@ OctomapFile readOctomapFile(const fs::path& file, bool binary) {
     if (n == 1) {
       const std::string expected = binary ? "# Octomap OcTree binary file" : "# Octomap OcTree file";
       if (line.rfind(expected, 0) != 0)
-        throw InputError(file.string(), 1, "not an OctoMap " + std::string(binary ? ".bt" : ".ot") + " file (expected '" +
-                                               expected + "' on the first line)");
+        throw InputError(file.string(), 1,
+                         "not an OctoMap " + std::string(binary ? ".bt" : ".ot") + " file (expected '" + expected +
+                             "' on the first line)");
       continue;
     }
     if (line.empty() || line[0] == '#') continue;
@@ -143,7 +144,9 @@ class OctomapStreamCheck {
  private:
   static constexpr int kDepth = 16;  // octomap's tree_depth: leaves at depth 16 at most
 
-  [[noreturn]] void fail(const std::string& what) const { throw InputError(file_.string(), "corrupt OctoMap: " + what); }
+  [[noreturn]] void fail(const std::string& what) const {
+    throw InputError(file_.string(), "corrupt OctoMap: " + what);
+  }
 
   std::uint8_t byte() {
     if (at_ >= data_.size()) fail("the tree data ends early (truncated?)");
@@ -182,9 +185,9 @@ class OctomapStreamCheck {
 
 // A colour for height t in [0, 1]: viridis, five stops (its ends and quarters), 0..255.
 Eigen::Vector3f heightColor(double t) {
-  static const std::array<Eigen::Vector3f, 5> kStops = {
-      Eigen::Vector3f(68, 1, 84), Eigen::Vector3f(59, 82, 139), Eigen::Vector3f(33, 145, 140),
-      Eigen::Vector3f(94, 201, 98), Eigen::Vector3f(253, 231, 37)};
+  static const std::array<Eigen::Vector3f, 5> kStops = {Eigen::Vector3f(68, 1, 84), Eigen::Vector3f(59, 82, 139),
+                                                        Eigen::Vector3f(33, 145, 140), Eigen::Vector3f(94, 201, 98),
+                                                        Eigen::Vector3f(253, 231, 37)};
   const double x = std::clamp(t, 0.0, 1.0) * 4.0;
   const int i = std::min(3, static_cast<int>(x));
   const float f = static_cast<float>(x - i);
@@ -294,8 +297,9 @@ double medianNearestNeighbourSpacing(const std::vector<Eigen::Vector3d>& points)
     };
     std::vector<std::pair<std::uint64_t, std::uint32_t>> sorted(n);
     for (std::size_t i = 0; i < n; ++i)
-      sorted[i] = {key(axis(points[i].x(), lo.x()) + 1, axis(points[i].y(), lo.y()) + 1, axis(points[i].z(), lo.z()) + 1),
-                   static_cast<std::uint32_t>(i)};
+      sorted[i] = {
+          key(axis(points[i].x(), lo.x()) + 1, axis(points[i].y(), lo.y()) + 1, axis(points[i].z(), lo.z()) + 1),
+          static_cast<std::uint32_t>(i)};
     std::sort(sorted.begin(), sorted.end());
     std::vector<double> nearest;
     nearest.reserve(n);
@@ -374,8 +378,8 @@ MapFileKind detectMapFile(const fs::path& path) {
     if (fs::exists(path / "rgb.txt", ec)) return MapFileKind::kSequence;
     if (fs::exists(path / "global_ellipsoids.ply", ec)) return MapFileKind::kMapFolder;
     // A saved session may be stored as a folder in a later format; today it is a file.
-    throw InputError(path.string(), std::string("is a folder with neither rgb.txt nor global_ellipsoids.ply (") + kKinds +
-                                        ")");
+    throw InputError(path.string(),
+                     std::string("is a folder with neither rgb.txt nor global_ellipsoids.ply (") + kKinds + ")");
   }
   if (ext == ".vdmap") return MapFileKind::kSession;
   if (ext == ".bt" || ext == ".ot") return MapFileKind::kOctomap;
@@ -452,7 +456,8 @@ StaticMap loadStaticMap(const fs::path& path) {
         e.mean = points[i];
         e.cov = Eigen::Matrix3d::Identity() * (map.sigma_m * map.sigma_m);
         e.count = 1;
-        e.color = r >= 0 ? Eigen::Vector3f(static_cast<float>(table.at(i, r) * scale), static_cast<float>(table.at(i, g) * scale),
+        e.color = r >= 0 ? Eigen::Vector3f(static_cast<float>(table.at(i, r) * scale),
+                                           static_cast<float>(table.at(i, g) * scale),
                                            static_cast<float>(table.at(i, b) * scale))
                          : Eigen::Vector3f(180, 180, 180);
       }

@@ -16,13 +16,13 @@ namespace vdmap {
 
 /// The kinds detectMapFile tells apart.
 enum class MapFileKind {
-  kSequence,       ///< a folder with rgb.txt (TUM RGB-D layout)
-  kMapFolder,      ///< a folder with global_ellipsoids.ply (`vdmap map` output)
-  kSession,        ///< a .vdmap file (saved session)
-  kEllipsoidPly,   ///< a PLY whose vertices carry covariance fields (cxx ... czz)
-  kPointPly,       ///< a PLY whose vertices have x y z but no covariance
-  kOctomap,        ///< an OctoMap .bt (binary) or .ot file
-  kViewFile,       ///< a JSON view file (`vdmap_view` key)
+  kSequence,      ///< a folder with rgb.txt (TUM RGB-D layout)
+  kMapFolder,     ///< a folder with global_ellipsoids.ply (`vdmap map` output)
+  kSession,       ///< a .vdmap file (saved session)
+  kEllipsoidPly,  ///< a PLY whose vertices carry covariance fields (cxx ... czz)
+  kPointPly,      ///< a PLY whose vertices have x y z but no covariance
+  kOctomap,       ///< an OctoMap .bt (binary) or .ot file
+  kViewFile,      ///< a JSON view file (`vdmap_view` key)
 };
 
 /// A short name for messages and the file browser: "sequence", "map folder", "session",
@@ -39,15 +39,15 @@ MapFileKind detectMapFile(const std::filesystem::path& path);
 struct StaticMap {
   MapFileKind kind = MapFileKind::kMapFolder;
   std::filesystem::path path;
-  std::vector<Ellipsoid> ellipsoids;         ///< world frame; colour 0..255; keyframe -1 when unknown
-  std::vector<StampedPose> keyframes;        ///< T_W_K by keyframe id (map folder's keyframes.txt)
-  std::vector<CovisibilityEdge> edges;       ///< map folder's graph.txt
-  std::vector<StampedPose> trajectory;       ///< T_W_C per mapped frame (map folder's trajectory.txt)
+  std::vector<Ellipsoid> ellipsoids;    ///< world frame; colour 0..255; keyframe -1 when unknown
+  std::vector<StampedPose> keyframes;   ///< T_W_K by keyframe id (map folder's keyframes.txt)
+  std::vector<CovisibilityEdge> edges;  ///< map folder's graph.txt
+  std::vector<StampedPose> trajectory;  ///< T_W_C per mapped frame (map folder's trajectory.txt)
   /// Point PLY: the isotropic standard deviation given to every point (m); OctoMap: the leaf
   /// resolution of the finest level (m); 0 otherwise.
   double sigma_m = 0;
-  std::size_t source_elements = 0;           ///< vertices of a PLY, occupied leaves of an OctoMap
-  std::string stats_json;                    ///< a map folder's stats.json text ("" when none)
+  std::size_t source_elements = 0;  ///< vertices of a PLY, occupied leaves of an OctoMap
+  std::string stats_json;           ///< a map folder's stats.json text ("" when none)
 };
 
 /// Reads a map folder, ellipsoid PLY, point PLY or OctoMap into a StaticMap:

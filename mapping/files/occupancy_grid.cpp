@@ -23,7 +23,8 @@ const char* upAxisName(UpAxis up) {
 }
 
 UpAxis parseUpAxis(const std::string& text) {
-  for (const UpAxis up : {UpAxis::kPlusZ, UpAxis::kMinusZ, UpAxis::kPlusY, UpAxis::kMinusY, UpAxis::kPlusX, UpAxis::kMinusX})
+  for (const UpAxis up :
+       {UpAxis::kPlusZ, UpAxis::kMinusZ, UpAxis::kPlusY, UpAxis::kMinusY, UpAxis::kPlusX, UpAxis::kMinusX})
     if (text == upAxisName(up)) return up;
   throw std::invalid_argument("expected one of +z, -z, +y, -y, +x, -x, got '" + text + "'");
 }
@@ -67,13 +68,15 @@ OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec&
   Eigen::Vector3d lo, hi;
   map.seenBounds(&lo, &hi);
   if (!(lo.array() <= hi.array()).all())
-    throw std::invalid_argument("the map sees nothing (no keyframe with a kept cell): there is no extent to lay a grid over");
+    throw std::invalid_argument(
+        "the map sees nothing (no keyframe with a kept cell): there is no extent to lay a grid over");
   Eigen::Vector3d au, av, aw;
   gridAxes(spec.up, &au, &av, &aw);
   // The seen box's extent along u and v (the axes are signed unit axes, so its corners' extremes).
   double u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
   for (int corner = 0; corner < 8; ++corner) {
-    const Eigen::Vector3d c((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(), (corner & 4) ? hi.z() : lo.z());
+    const Eigen::Vector3d c((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
+                            (corner & 4) ? hi.z() : lo.z());
     u_lo = std::min(u_lo, au.dot(c)), u_hi = std::max(u_hi, au.dot(c));
     v_lo = std::min(v_lo, av.dot(c)), v_hi = std::max(v_hi, av.dot(c));
   }
@@ -132,7 +135,8 @@ OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec&
         continue;
       }
       open_cells.push_back(i);
-      for (std::size_t k = 0; k < per_cell; ++k) open_samples.push_back(samples[static_cast<std::size_t>(i) * per_cell + k]);
+      for (std::size_t k = 0; k < per_cell; ++k)
+        open_samples.push_back(samples[static_cast<std::size_t>(i) * per_cell + k]);
     }
     classes.resize(open_samples.size());
     map.classify(open_samples, classes);

@@ -51,13 +51,13 @@ inline constexpr std::uint8_t kGridUnknown = 205;
 inline constexpr std::size_t kMaxGridCells = std::size_t{1} << 28;
 
 struct OccupancyGrid {
-  int width = 0, height = 0;        ///< cells along u and v
+  int width = 0, height = 0;  ///< cells along u and v
   double resolution_m = 0;
-  Eigen::Vector2d origin_m{0, 0};   ///< (u, v) of the lower-left corner of cell (column 0, last row)
+  Eigen::Vector2d origin_m{0, 0};  ///< (u, v) of the lower-left corner of cell (column 0, last row)
   UpAxis up = UpAxis::kPlusZ;
   std::vector<std::uint8_t> cells;  ///< height x width, row 0 = largest v (the image's top row)
   std::size_t occupied = 0, free = 0, unknown = 0;
-  std::size_t samples = 0;          ///< points QueryMap was asked about
+  std::size_t samples = 0;  ///< points QueryMap was asked about
 };
 
 /// The column rule: each cell's column box [u, u + res] x [v, v + res] x [lo, hi] is cut into

@@ -81,7 +81,8 @@ OctomapExportReport writeOctomapBt(const std::filesystem::path& file, const Keyf
   }
   std::partial_sum(first.begin(), first.end(), first.begin());
   std::vector<std::size_t> fill(first.begin(), first.end() - 1);
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i) order[fill[static_cast<std::size_t>(ellipsoids[i].keyframe)]++] = i;
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i)
+    order[fill[static_cast<std::size_t>(ellipsoids[i].keyframe)]++] = i;
   octomap::OcTree tree(resolution_m);
   octomap::Pointcloud scan;
   for (std::size_t k = 0; k < keyframes; ++k) {
@@ -126,11 +127,13 @@ void writeOctreeFile(const std::filesystem::path& file, const octomap::OcTree& t
 
 QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, const QueryMap& map, double resolution_m,
                                            const ExportProgress& progress) {
-  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m)) throw std::invalid_argument("octomap resolution must be > 0 m");
+  if (!(resolution_m > 0.0) || !std::isfinite(resolution_m))
+    throw std::invalid_argument("octomap resolution must be > 0 m");
   Eigen::Vector3d lo, hi;
   map.seenBounds(&lo, &hi);
   if (!(lo.array() <= hi.array()).all())
-    throw std::invalid_argument("the map sees nothing (no keyframe with a kept cell): there is no region to fill an OctoMap with");
+    throw std::invalid_argument(
+        "the map sees nothing (no keyframe with a kept cell): there is no region to fill an OctoMap with");
   checkOctomapResolutionForExtent(resolution_m, std::max(lo.cwiseAbs().maxCoeff(), hi.cwiseAbs().maxCoeff()));
   const auto start = std::chrono::steady_clock::now();
   octomap::OcTree tree(resolution_m);
@@ -142,11 +145,12 @@ QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, co
   const std::size_t nx = k_hi[0] - k_lo[0] + 1u, ny = k_hi[1] - k_lo[1] + 1u, nz = k_hi[2] - k_lo[2] + 1u;
   if (static_cast<double>(nx) * ny * nz > static_cast<double>(kMaxQueryOctomapVoxels)) {
     char text[256];
-    std::snprintf(text, sizeof text,
-                  "octomap resolution %g m over the seen %.3g x %.3g x %.3g m would ask about %.3g voxels (at most %zu): "
-                  "give a coarser resolution",
-                  resolution_m, hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z(), static_cast<double>(nx) * ny * nz,
-                  kMaxQueryOctomapVoxels);
+    std::snprintf(
+        text, sizeof text,
+        "octomap resolution %g m over the seen %.3g x %.3g x %.3g m would ask about %.3g voxels (at most %zu): "
+        "give a coarser resolution",
+        resolution_m, hi.x() - lo.x(), hi.y() - lo.y(), hi.z() - lo.z(), static_cast<double>(nx) * ny * nz,
+        kMaxQueryOctomapVoxels);
     throw std::invalid_argument(text);
   }
   const double half_diagonal = resolution_m * std::sqrt(3.0) / 2;
@@ -160,7 +164,8 @@ QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, co
     // One layer of voxels at a time: their centres, then occupied, then free among the others.
     for (std::size_t y = 0; y < ny; ++y)
       for (std::size_t x = 0; x < nx; ++x) {
-        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x), static_cast<octomap::key_type>(k_lo[1] + y),
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x),
+                                     static_cast<octomap::key_type>(k_lo[1] + y),
                                      static_cast<octomap::key_type>(k_lo[2] + z));
         const octomap::point3d c = tree.keyToCoord(key);
         centres[y * nx + x] = {c.x(), c.y(), c.z()};
@@ -171,7 +176,8 @@ QueryOctomapReport writeOctomapBtFromQuery(const std::filesystem::path& file, co
     open_keys.clear();
     for (std::size_t y = 0; y < ny; ++y)
       for (std::size_t x = 0; x < nx; ++x) {
-        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x), static_cast<octomap::key_type>(k_lo[1] + y),
+        const octomap::OcTreeKey key(static_cast<octomap::key_type>(k_lo[0] + x),
+                                     static_cast<octomap::key_type>(k_lo[1] + y),
                                      static_cast<octomap::key_type>(k_lo[2] + z));
         if (distances[y * nx + x].distance_m <= half_diagonal) {
           tree.setNodeValue(key, occupied_value, true);

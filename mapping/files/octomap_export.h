@@ -21,10 +21,10 @@ using ExportProgress = std::function<void(std::size_t done, std::size_t total)>;
 
 /// What writeOctomapBt built.
 struct OctomapExportReport {
-  std::size_t points = 0;          ///< points sampled from the ellipsoids and inserted
-  std::size_t occupied_leaves = 0; ///< occupied leaves of the pruned tree
-  double means_occupied = 0;       ///< fraction of the ellipsoid means in an occupied voxel
-  double seconds = 0;              ///< wall time of building and serialising
+  std::size_t points = 0;           ///< points sampled from the ellipsoids and inserted
+  std::size_t occupied_leaves = 0;  ///< occupied leaves of the pruned tree
+  double means_occupied = 0;        ///< fraction of the ellipsoid means in an occupied voxel
+  double seconds = 0;               ///< wall time of building and serialising
 };
 
 /// The points an ellipsoid contributes to the OctoMap: its mean and the mean +- one standard
@@ -65,7 +65,7 @@ struct QueryOctomapReport {
   std::size_t voxels = 0;           ///< voxel centres of the seen region asked about
   std::size_t occupied_voxels = 0;  ///< before pruning
   std::size_t free_voxels = 0;
-  std::size_t leaves = 0;           ///< leaves of the pruned tree
+  std::size_t leaves = 0;  ///< leaves of the pruned tree
   double seconds = 0;
 };
 

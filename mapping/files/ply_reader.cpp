@@ -39,23 +39,21 @@ struct Element {
     return -1;
   }
   int scalarCount() const {
-    return static_cast<int>(std::count_if(properties.begin(), properties.end(),
-                                          [](const Property& p) { return p.count_type.empty(); }));
+    return static_cast<int>(
+        std::count_if(properties.begin(), properties.end(), [](const Property& p) { return p.count_type.empty(); }));
   }
 };
 
 int typeSize(const std::string& t) {
-  static const std::map<std::string, int> sizes = {
-      {"char", 1}, {"uchar", 1}, {"int8", 1},   {"uint8", 1},   {"short", 2},   {"ushort", 2},
-      {"int16", 2}, {"uint16", 2}, {"int", 4},  {"uint", 4},    {"int32", 4},   {"uint32", 4},
-      {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
+  static const std::map<std::string, int> sizes = {{"char", 1},  {"uchar", 1},   {"int8", 1},   {"uint8", 1},
+                                                   {"short", 2}, {"ushort", 2},  {"int16", 2},  {"uint16", 2},
+                                                   {"int", 4},   {"uint", 4},    {"int32", 4},  {"uint32", 4},
+                                                   {"float", 4}, {"float32", 4}, {"double", 8}, {"float64", 8}};
   const auto it = sizes.find(t);
   return it == sizes.end() ? 0 : it->second;
 }
 
-bool isFloatType(const std::string& t) {
-  return t == "float" || t == "float32" || t == "double" || t == "float64";
-}
+bool isFloatType(const std::string& t) { return t == "float" || t == "float32" || t == "double" || t == "float64"; }
 
 class Reader {
  public:
@@ -111,7 +109,10 @@ class Reader {
         std::string type;
         words >> type;
         if (type == "list") words >> p.count_type >> p.type >> p.name;
-        else { p.type = type; words >> p.name; }
+        else {
+          p.type = type;
+          words >> p.name;
+        }
         if (p.name.empty() || typeSize(p.type) == 0 || (!p.count_type.empty() && typeSize(p.count_type) == 0))
           fail("expected 'property TYPE NAME' or 'property list TYPE TYPE NAME' with a known type", n);
         elements_.back().properties.push_back(p);
@@ -139,8 +140,8 @@ class Reader {
       for (const Property& p : e.properties)
         record += format_ != Format::kAscii ? typeSize(p.count_type.empty() ? p.type : p.count_type) : 1;
       if (e.count > bytes / record)
-        fail("element " + printable(e.name) + " has " + std::to_string(e.count) + " records but only " + std::to_string(bytes) +
-             " bytes follow the header (truncated?)");
+        fail("element " + printable(e.name) + " has " + std::to_string(e.count) + " records but only " +
+             std::to_string(bytes) + " bytes follow the header (truncated?)");
     }
   }
 
@@ -186,7 +187,8 @@ class Reader {
         std::vector<std::int64_t> items(static_cast<std::size_t>(n));
         for (auto& item : items) {
           const double v = readScalar(p.type);
-          if (!(std::abs(v) < 9e18)) fail("element " + printable(e.name) + " has a list item out of range (" + std::to_string(v) + ")");
+          if (!(std::abs(v) < 9e18))
+            fail("element " + printable(e.name) + " has a list item out of range (" + std::to_string(v) + ")");
           item = static_cast<std::int64_t>(v);
         }
         if (!list_taken) e.lists.push_back(std::move(items));
@@ -208,8 +210,8 @@ const Element* findElement(const std::vector<Element>& elements, const std::stri
 }
 
 // Column indices of `names` in `e`; throws naming the first missing one.
-std::vector<int> columns(const std::filesystem::path& file, const Element& e,
-                         const std::vector<std::string>& names, const std::string& what) {
+std::vector<int> columns(const std::filesystem::path& file, const Element& e, const std::vector<std::string>& names,
+                         const std::string& what) {
   std::vector<int> cols;
   for (const auto& n : names) {
     const int c = e.scalarIndex(n);
@@ -221,8 +223,8 @@ std::vector<int> columns(const std::filesystem::path& file, const Element& e,
 
 std::vector<std::array<std::uint8_t, 3>> readColors(const std::filesystem::path& file, const Element& v) {
   const std::vector<int> c = columns(file, v, {"red", "green", "blue"}, "the file has no vertex colours");
-  const bool unit = isFloatType(std::find_if(v.properties.begin(), v.properties.end(),
-                                             [](const Property& p) { return p.name == "red"; })->type);
+  const bool unit = isFloatType(
+      std::find_if(v.properties.begin(), v.properties.end(), [](const Property& p) { return p.name == "red"; })->type);
   const int stride = v.scalarCount();
   std::vector<std::array<std::uint8_t, 3>> colors(v.count);
   for (std::size_t i = 0; i < v.count; ++i)
@@ -268,7 +270,8 @@ ColoredTriangleMesh readPlyMesh(const std::filesystem::path& file) {
       mesh.triangles.push_back({static_cast<std::uint32_t>(poly[0]), static_cast<std::uint32_t>(poly[k - 1]),
                                 static_cast<std::uint32_t>(poly[k])});
   }
-  if (mesh.triangles.empty()) throw InputError(file.string(), "the mesh has no triangles (all faces have < 3 vertices)");
+  if (mesh.triangles.empty())
+    throw InputError(file.string(), "the mesh has no triangles (all faces have < 3 vertices)");
   return mesh;
 }
 

@@ -57,9 +57,7 @@ void writeInPieces(const std::filesystem::path& file, const Write& write) {
   });
 }
 
-std::uint8_t toByte(float c) {
-  return static_cast<std::uint8_t>(std::clamp(std::lround(c), 0L, 255L));
-}
+std::uint8_t toByte(float c) { return static_cast<std::uint8_t>(std::clamp(std::lround(c), 0L, 255L)); }
 
 // The header of a binary PLY of `count` vertices with x y z float, red green blue uchar and then
 // the `extra` property lines.
@@ -67,7 +65,8 @@ std::string vertexHeader(const char* comment, std::size_t count, const char* ext
   return std::string("ply\nformat binary_little_endian 1.0\ncomment ") + comment + "\nelement vertex " +
          std::to_string(count) +
          "\nproperty float x\nproperty float y\nproperty float z\n"
-         "property uchar red\nproperty uchar green\nproperty uchar blue\n" + extra + "end_header\n";
+         "property uchar red\nproperty uchar green\nproperty uchar blue\n" +
+         extra + "end_header\n";
 }
 
 double smallestEigenvalue(const Eigen::Matrix3f& m) {
@@ -112,7 +111,8 @@ void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& 
                "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\n");
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
     for (int k = 0; k < 3; ++k) put(bytes, mesh.positions[i](k));
-    for (int k = 0; k < 3; ++k) put(bytes, i < mesh.colors.size() ? mesh.colors[i][static_cast<std::size_t>(k)] : std::uint8_t{200});
+    for (int k = 0; k < 3; ++k)
+      put(bytes, i < mesh.colors.size() ? mesh.colors[i][static_cast<std::size_t>(k)] : std::uint8_t{200});
   }
   for (const auto& t : mesh.triangles) {
     put(bytes, std::uint8_t{3});
@@ -174,7 +174,8 @@ void writeGaussianPly(const std::filesystem::path& file, const std::vector<Ellip
       for (int k = 0; k < kGaussianRestCoefficients; ++k) put(bytes, 0.f);
       put(bytes, kGaussianOpacityLogit);
       for (int k = 0; k < 3; ++k)
-        put(bytes, static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));
+        put(bytes,
+            static_cast<float>(std::log(std::max(std::sqrt(std::max(eig.eigenvalues()(k), 0.0)), kGaussianMinSigma))));
       for (double v : {q.w(), q.x(), q.y(), q.z()}) put(bytes, static_cast<float>(v));
       out.next();
     }

@@ -25,7 +25,8 @@ static_assert(sizeof(MapperParams) == 112, "MapperParams changed: store the new 
 static_assert(sizeof(GlobalMapParams) == 88, "GlobalMapParams changed: store the new field in the .vdmap file");
 static_assert(sizeof(StoredCell) == 56, "StoredCell changed: store the new field in the .vdmap file");
 static_assert(sizeof(MapperState) == 400, "MapperState changed: store the new field in the .vdmap file");
-static_assert(sizeof(LoopClosure) == 32, "LoopClosure changed: store the new field in the .vdmap file (not a wall time)");
+static_assert(sizeof(LoopClosure) == 32,
+              "LoopClosure changed: store the new field in the .vdmap file (not a wall time)");
 
 constexpr char kMagic[8] = {'V', 'D', 'M', 'A', 'P', 'S', 'E', 'S'};
 constexpr std::uint32_t kEndianMark = 0x01020304;  // written little-endian: 04 03 02 01
@@ -86,8 +87,8 @@ class SessionReader {
   std::string context() const { return file_ + ": " + where_; }
   void need(std::uint64_t n, const char* what) const {
     if (n > left())
-      fail(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " +
-           std::to_string(left()) + " left");
+      fail(std::string("truncated: ") + what + " needs " + std::to_string(n) + " bytes, " + std::to_string(left()) +
+           " left");
   }
   std::string_view bytes(std::uint64_t n, const char* what) {
     need(n, what);
@@ -348,7 +349,8 @@ void readState(SessionReader* r, std::uint32_t version, SessionInfo* info, std::
       e.to = r->i32("edge to");
       e.T_from_to = readTransform(r, "edge measurement");
       for (int row = 0; row < 6; ++row)
-        for (int col = row; col < 6; ++col) e.information(row, col) = e.information(col, row) = r->f64("edge information");
+        for (int col = row; col < 6; ++col)
+          e.information(row, col) = e.information(col, row) = r->f64("edge information");
       e.robust = r->boolean("edge robust");
     }
     // Versions 4 and 5 stored each optimisation's wall time: read and dropped, as version 6
@@ -415,14 +417,16 @@ std::string pack(std::string_view raw) {
 /// The `raw_bytes` bytes the zlib stream `packed` holds, which must be all of it.
 std::string unpack(const SessionReader& r, std::string_view packed, std::uint64_t raw_bytes, const char* what) {
   r.check(raw_bytes <= kMaxInflation * packed.size() + 64, std::string(what) + ": " + std::to_string(packed.size()) +
-                                                              " packed bytes cannot hold " + std::to_string(raw_bytes));
+                                                               " packed bytes cannot hold " +
+                                                               std::to_string(raw_bytes));
   std::string raw(static_cast<std::size_t>(raw_bytes), '\0');
   uLongf out = raw.size();
   uLong in = packed.size();
-  const int rc = uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out, reinterpret_cast<const Bytef*>(packed.data()), &in);
-  r.check(rc == Z_OK && out == raw.size() && in == packed.size(),
-          std::string(what) + ": not a zlib stream of " + std::to_string(raw_bytes) + " bytes (" +
-              (rc == Z_OK ? "other length" : zError(rc)) + ")");
+  const int rc =
+      uncompress2(reinterpret_cast<Bytef*>(raw.data()), &out, reinterpret_cast<const Bytef*>(packed.data()), &in);
+  r.check(rc == Z_OK && out == raw.size() && in == packed.size(), std::string(what) + ": not a zlib stream of " +
+                                                                      std::to_string(raw_bytes) + " bytes (" +
+                                                                      (rc == Z_OK ? "other length" : zError(rc)) + ")");
   return raw;
 }
 
@@ -476,8 +480,8 @@ cv::Mat readMat(SessionReader* r, int type, int rows, int cols, const char* what
   } else {
     auto* p = reinterpret_cast<std::uint16_t*>(m.data);
     for (std::size_t i = 0; i < b.size() / 2; ++i)
-      p[i] = static_cast<std::uint16_t>(static_cast<std::uint8_t>(b[2 * i]) |
-                                        static_cast<std::uint8_t>(b[2 * i + 1]) << 8);
+      p[i] = static_cast<std::uint16_t>(static_cast<std::uint8_t>(b[2 * i]) | static_cast<std::uint8_t>(b[2 * i + 1])
+                                                                                  << 8);
   }
   return m;
 }
@@ -556,7 +560,8 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   writeKeypoints(&keypoints, f);
   writeCells(&cells, k.container);
   std::string raw = toPlanes(keypoints.str(), kKeypointBytes);
-  if (!descriptors.empty()) raw.append(reinterpret_cast<const char*>(descriptors.data), descriptors.total() * descriptors.elemSize());
+  if (!descriptors.empty())
+    raw.append(reinterpret_cast<const char*>(descriptors.data), descriptors.total() * descriptors.elemSize());
   raw += toPlanes(cells.str(), kCellBytes);
   const std::string packed = pack(raw);
   w->u32(static_cast<std::uint32_t>(packed.size()));
@@ -565,8 +570,8 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
 
 Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::uint32_t version, bool decode_images) {
   const PinholeCamera& camera = info.camera;
-  Keyframe k{id, 0, 0.0, Transform::Identity(), {}, {}, {},
-             KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
+  Keyframe k{
+      id, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
   r->check(r->i32("keyframe id") == id, "keyframe ids must be 0, 1, 2, ... in order");
   k.frame_index = r->i32("frame index");
   r->check(k.frame_index >= 0, "frame index must be >= 0");
@@ -581,7 +586,8 @@ Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::ui
     k.rgb_image = readImage(r, CV_8UC3, camera, "rgb image", decode_images);
     k.depth_image = readImage(r, CV_16UC1, camera, "depth image", decode_images);
     const std::uint32_t n = r->u32("keypoint count");
-    r->check(n <= static_cast<std::uint32_t>(std::numeric_limits<int>::max()), "keypoint count " + std::to_string(n) + " is too large");
+    r->check(n <= static_cast<std::uint32_t>(std::numeric_limits<int>::max()),
+             "keypoint count " + std::to_string(n) + " is too large");
     const int h = r->i32("descriptors"), w = r->i32("descriptors"), t = r->i32("descriptors");
     const bool described = checkImageHeader(*r, h, w, t, CV_8UC1, static_cast<int>(n), -1, "descriptors");
     const std::uint32_t cells = r->u32("cell count");
@@ -591,9 +597,9 @@ Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::ui
     const std::uint64_t keypoint_bytes = std::uint64_t{n} * kKeypointBytes,
                         descriptor_bytes = described ? std::uint64_t(h) * static_cast<std::uint64_t>(w) : 0;
     const std::uint32_t packed_bytes = r->count(1, "packed features and cells");
-    const std::string raw = unpack(*r, r->bytes(packed_bytes, "packed features and cells"),
-                                   keypoint_bytes + descriptor_bytes + std::uint64_t{cells} * kCellBytes,
-                                   "packed features and cells");
+    const std::string raw =
+        unpack(*r, r->bytes(packed_bytes, "packed features and cells"),
+               keypoint_bytes + descriptor_bytes + std::uint64_t{cells} * kCellBytes, "packed features and cells");
     const std::string_view rest(raw);
     const std::string keypoints = fromPlanes(rest.substr(0, keypoint_bytes), kKeypointBytes);
     SessionReader keypoint_reader = r->over(keypoints);
@@ -656,7 +662,8 @@ std::uint32_t crc32(std::string_view bytes, std::uint32_t crc) {
 SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global, const std::filesystem::path& sequence) {
   std::error_code ec;
   const std::filesystem::path absolute = sequence.empty() ? sequence : std::filesystem::absolute(sequence, ec);
-  return {mapper.camera(), mapper.params(), global, mapper.state(), (ec ? sequence : absolute).lexically_normal().string()};
+  return {mapper.camera(), mapper.params(), global, mapper.state(),
+          (ec ? sequence : absolute).lexically_normal().string()};
 }
 
 bool sameMapperParams(const MapperParams& a, const MapperParams& b) {
@@ -687,8 +694,8 @@ void encodeSession(const KeyframeGraph& graph, const SessionInfo& info, const By
   for (const Keyframe& k : graph.keyframes()) {
     const PinholeCamera& c = k.container.camera();
     if (k.container.cellSizePx() != info.mapper.local_map.cell_size_px || c.width != info.camera.width ||
-        c.height != info.camera.height || c.fx != info.camera.fx || c.fy != info.camera.fy ||
-        c.cx != info.camera.cx || c.cy != info.camera.cy)
+        c.height != info.camera.height || c.fx != info.camera.fx || c.fy != info.camera.fy || c.cx != info.camera.cx ||
+        c.cy != info.camera.cy)
       throw std::invalid_argument("keyframe " + std::to_string(k.id) +
                                   ": its container does not use the session's camera and cell size");
     Writer w;
@@ -742,10 +749,10 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
   session.info.format_version = version;
   std::uint32_t keyframes = 0;
   for (std::uint32_t s = 0; s < sections; ++s) {
-    const std::array<char, 4>& expected = s == 0                    ? kParams
-                                          : s + 1 == sections       ? kEdges
-                                          : s < first_keyframe      ? kState
-                                                                    : kKeyframe;
+    const std::array<char, 4>& expected = s == 0               ? kParams
+                                          : s + 1 == sections  ? kEdges
+                                          : s < first_keyframe ? kState
+                                                               : kKeyframe;
     const std::string where = "section " + std::to_string(s) + " " + printable({expected.data(), 4});
     body.setWhere(where);
     const std::string_view head = body.bytes(kSectionHeaderBytes, "the section header");
@@ -762,14 +769,16 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     if (s == 0) {
       keyframes = readParams(&r, version, &session.info);
       if (sections != keyframes + std::uint64_t{fixed_sections})
-        r.fail(std::to_string(keyframes) + " keyframes need " + std::to_string(keyframes + std::uint64_t{fixed_sections}) +
-               " sections, the header says " + std::to_string(sections));
+        r.fail(std::to_string(keyframes) + " keyframes need " +
+               std::to_string(keyframes + std::uint64_t{fixed_sections}) + " sections, the header says " +
+               std::to_string(sections));
     } else if (s + 1 == sections) {
       readEdges(&r, &session.graph);
     } else if (s < first_keyframe) {
       readState(&r, version, &session.info, keyframes);
     } else {
-      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version, options.decode_images));
+      session.graph.add(
+          readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version, options.decode_images));
     }
   }
   body.setWhere("file");
@@ -796,8 +805,9 @@ Session loadSession(const std::filesystem::path& file, const SessionDecodeOption
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
   if (in.bad()) throw InputError(file.string(), "cannot read the session file");
   if (file.extension() == ".vdmap" && bytes.compare(0, sizeof(kMagic), std::string_view(kMagic, sizeof(kMagic))) != 0)
-    throw InputError(file.string(), bytes.empty() ? "a damaged session file: it is empty (wrong magic)"
-                                                  : "a damaged session file: it does not start with 'VDMAPSES' (wrong magic)");
+    throw InputError(file.string(), bytes.empty()
+                                        ? "a damaged session file: it is empty (wrong magic)"
+                                        : "a damaged session file: it does not start with 'VDMAPSES' (wrong magic)");
   return decodeSession(bytes, file.string(), options);
 }
 

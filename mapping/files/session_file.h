@@ -45,7 +45,8 @@ struct Session {
 
 /// The info of a Mapper's session with the given global-map settings and sequence folder (made
 /// absolute).
-SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global, const std::filesystem::path& sequence = {});
+SessionInfo sessionInfo(const Mapper& mapper, const GlobalMapParams& global,
+                        const std::filesystem::path& sequence = {});
 
 /// True when the parameters store as the same bytes (every field equal), e.g. to check that a
 /// run's parameters are a loaded session's.

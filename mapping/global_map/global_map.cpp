@@ -72,7 +72,7 @@ struct WorkspaceBuffers {
     std::vector<std::uint64_t> containers;  // every keyframe's container id
     std::vector<double> edges;              // a, b, weight per covisibility edge
     bool on = false;
-    double distance_m = 0, angle_deg = 0;   // 0 when off
+    double distance_m = 0, angle_deg = 0;  // 0 when off
   };
   std::optional<OcclusionKey> occlusion_key;
   struct FusionKey {
@@ -265,14 +265,13 @@ void removeOccluded(const KeyframeGraph& graph, const GlobalMapParams& params, W
   const std::size_t n = ws->merged_at.size(), groups = ws->merged.size();
   if (params.occlusion_removal)
     occludingEllipsoids(graph, ws->merged_at, ws->lambda_max, params, &ws->occlusion, &ws->removed);
-  else
-    ws->removed.assign(n, 0);
+  else ws->removed.assign(n, 0);
   if (!ws->keep) releaseOcclusionBuffers(&ws->occlusion);
   ws->kept_offset.assign(groups + 1, 0);
   parallelFor(params.threads, groups, [&](std::size_t g) {
-    ws->kept_offset[g + 1] = static_cast<std::size_t>(
-        std::count(ws->removed.begin() + static_cast<std::ptrdiff_t>(ws->offset[g]),
-                   ws->removed.begin() + static_cast<std::ptrdiff_t>(ws->offset[g + 1]), 0));
+    ws->kept_offset[g + 1] =
+        static_cast<std::size_t>(std::count(ws->removed.begin() + static_cast<std::ptrdiff_t>(ws->offset[g]),
+                                            ws->removed.begin() + static_cast<std::ptrdiff_t>(ws->offset[g + 1]), 0));
   });
   std::partial_sum(ws->kept_offset.begin(), ws->kept_offset.end(), ws->kept_offset.begin());
   const std::size_t kept = ws->kept_offset.back();
@@ -285,10 +284,8 @@ void removeOccluded(const KeyframeGraph& graph, const GlobalMapParams& params, W
     std::vector<Ellipsoid>& merged = ws->merged[g];
     for (std::size_t i = ws->offset[g]; i < ws->offset[g + 1]; ++i) {
       if (ws->removed[i]) continue;
-      if (ws->keep)
-        ws->survivor[to] = ws->merged_at[i];
-      else
-        merged[to - ws->kept_offset[g]] = merged[i - ws->offset[g]];  // forward: never overwrites one still to move
+      if (ws->keep) ws->survivor[to] = ws->merged_at[i];
+      else merged[to - ws->kept_offset[g]] = merged[i - ws->offset[g]];  // forward: never overwrites one still to move
       ws->kept_group_of[to] = static_cast<int>(g);
       if (need_lambda) ws->kept_lambda_max[to] = ws->lambda_max[i];
       ++to;

@@ -15,9 +15,9 @@ namespace vdmap {
 /// The live parameters of the global map (docs/parameters.md). Their ranges, units and help texts are
 /// rows of the parameter table (global_map_parameters.cpp, docs/parameters.md).
 struct GlobalMapParams {
-  FilterParams filter;                 ///< which local-map ellipsoids are kept
-  double tau_group = 0.1;              ///< edge weight that puts a neighbour in a merge group
-  double merge_distance_m = 0.25;      ///< mean-shift kernel radius h
+  FilterParams filter;             ///< which local-map ellipsoids are kept
+  double tau_group = 0.1;          ///< edge weight that puts a neighbour in a merge group
+  double merge_distance_m = 0.25;  ///< mean-shift kernel radius h
   bool occlusion_removal = true;
   double occlusion_distance_m = 0.5;
   double occlusion_angle_deg = 30.0;
@@ -27,7 +27,7 @@ struct GlobalMapParams {
   /// Two ellipsoids of different groups are the same surface when their Bhattacharyya distance
   /// (bhattacharyyaDistance) is at most this.
   double fusion_max_distance = 1.0;
-  int threads = 0;                     ///< 0: all cores; at most kMaxThreads. The result does not depend on it.
+  int threads = 0;  ///< 0: all cores; at most kMaxThreads. The result does not depend on it.
   /// Throws std::invalid_argument naming the first parameter out of range (the table's ranges,
   /// and threads within 0..kMaxThreads).
   void validate() const;
@@ -46,11 +46,11 @@ struct GlobalMap {
   /// Per keyframe id, which container cells passed the filter (keptCells): with
   /// forEachKeptEllipsoid, the local maps this map was built from, without filtering again.
   std::vector<std::vector<bool>> kept;
-  std::size_t sigma_e = 0;            ///< ellipsoids kept in the local maps
-  std::size_t merged = 0;             ///< after merging within groups, before occlusion removal and fusion
+  std::size_t sigma_e = 0;               ///< ellipsoids kept in the local maps
+  std::size_t merged = 0;                ///< after merging within groups, before occlusion removal and fusion
   std::size_t merged_across_groups = 0;  ///< ellipsoids fused into one of another group (docs/method.md 7)
-  std::size_t sigma_e_prime = 0;      ///< after merging, occlusion removal and fusion
-  double t_g_s = 0;                   ///< wall time of grouping, merging, occlusion removal and fusion
+  std::size_t sigma_e_prime = 0;         ///< after merging, occlusion removal and fusion
+  double t_g_s = 0;                      ///< wall time of grouping, merging, occlusion removal and fusion
   double groups_ms = 0, merge_ms = 0, fusion_ms = 0, occlusion_ms = 0;
   /// What this build took over from the previous build with the same GlobalMapWorkspace instead
   /// of computing it again (all zero without a workspace). The map is the same either way.

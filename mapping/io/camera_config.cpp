@@ -1,9 +1,9 @@
-#include "mapping/io/text_list.h"
 #include "mapping/io/camera_config.h"
+#include "mapping/io/text_list.h"
 
 #include <algorithm>
-#include <cmath>
 #include <cctype>
+#include <cmath>
 #include <fstream>
 #include <stdexcept>
 
@@ -31,7 +31,8 @@ ColourCamera sevenScenesColour() {
       7.8819942130445332e-03, 8.1718328771890631e-03, 9.9993554558014031e-01;
   ColourCamera c{525.0, 525.0, 320.0, 240.0, Transform::Identity()};
   c.T_colour_depth.linear() = Eigen::Quaterniond(R).normalized().toRotationMatrix();
-  c.T_colour_depth.translation() = Eigen::Vector3d(-2.5558943178152542e-02, 1.0109636268061706e-04, 2.0318321729487039e-03);
+  c.T_colour_depth.translation() =
+      Eigen::Vector3d(-2.5558943178152542e-02, 1.0109636268061706e-04, 2.0318321729487039e-03);
   return c;
 }
 
@@ -50,8 +51,7 @@ const std::vector<Preset>& presets() {
 }
 
 // Reads a number under one of `keys` (first present wins); returns false when none is present.
-bool readNumber(const YAML::Node& node, std::initializer_list<const char*> keys,
-                const std::string& file, double* out) {
+bool readNumber(const YAML::Node& node, std::initializer_list<const char*> keys, const std::string& file, double* out) {
   for (const char* key : keys) {
     const YAML::Node value = node[key];
     if (!value) continue;
@@ -73,7 +73,8 @@ void checkKeys(const YAML::Node& node, std::initializer_list<const char*> valid,
     if (std::any_of(valid.begin(), valid.end(), [&](const char* v) { return key == v; })) continue;
     std::string list;
     for (const char* v : valid) list += (list.empty() ? "" : ", ") + std::string(v);
-    throw InputError(file, entry.first.Mark().line + 1, "unknown key '" + key + "'" + block + " (valid keys: " + list + ")");
+    throw InputError(file, entry.first.Mark().line + 1,
+                     "unknown key '" + key + "'" + block + " (valid keys: " + list + ")");
   }
 }
 
@@ -108,7 +109,8 @@ std::optional<ColourCamera> readColour(const YAML::Node& node, const std::string
   for (auto [key, value] : {std::pair{"fx", &c.fx}, {"fy", &c.fy}, {"cx", &c.cx}, {"cy", &c.cy}})
     if (!readNumber(node, {key}, file, value))
       throw InputError(file, line, std::string("colour: missing key '") + key + "'");
-  if (!(c.fx > 0 && c.fy > 0 && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) && std::isfinite(c.cy)))
+  if (!(c.fx > 0 && c.fy > 0 && std::isfinite(c.fx) && std::isfinite(c.fy) && std::isfinite(c.cx) &&
+        std::isfinite(c.cy)))
     throw InputError(file, line, "colour: fx and fy must be > 0 and fx, fy, cx, cy finite");
   if (const YAML::Node T = node["T_colour_depth"]) {
     Eigen::Matrix<double, 3, 4> m;
@@ -116,11 +118,13 @@ std::optional<ColourCamera> readColour(const YAML::Node& node, const std::string
       if (!T.IsSequence() || T.size() != 12) throw YAML::Exception(T.Mark(), "");
       for (int i = 0; i < 12; ++i) m(i / 4, i % 4) = T[i].as<double>();
     } catch (const YAML::Exception&) {
-      throw InputError(file, T.Mark().line + 1, "colour: T_colour_depth must be 12 numbers (the 3x4 [R|t], row by row)");
+      throw InputError(file, T.Mark().line + 1,
+                       "colour: T_colour_depth must be 12 numbers (the 3x4 [R|t], row by row)");
     }
     c.T_colour_depth.matrix().topRows<3>() = m;
     if (!isValidTransform(c.T_colour_depth, 1e-4))
-      throw InputError(file, T.Mark().line + 1, "colour: T_colour_depth is not a finite rigid transform (R must be a rotation)");
+      throw InputError(file, T.Mark().line + 1,
+                       "colour: T_colour_depth is not a finite rigid transform (R must be a rotation)");
     c.T_colour_depth.linear() = Eigen::Quaterniond(c.T_colour_depth.linear()).normalized().toRotationMatrix();
   }
   return c;
@@ -195,7 +199,8 @@ PinholeCamera readCameraFile(const std::filesystem::path& file, std::optional<Co
 
 CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string& preset_override) {
   if (!preset_override.empty())
-    return {cameraPreset(preset_override), "preset " + preset_override + " (--camera)", cameraPresetColour(preset_override)};
+    return {cameraPreset(preset_override), "preset " + preset_override + " (--camera)",
+            cameraPresetColour(preset_override)};
   for (const char* file : {"camera.yaml", "camera.yml", "camera.json", "cam_params.json"}) {
     const auto path = folder / file;
     if (std::filesystem::exists(path)) {
@@ -210,11 +215,10 @@ CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string
     const char* needle;
     const char* preset;
   };
-  for (const Hint& hint : {Hint{"7scenes", "7scenes"}, Hint{"7-scenes", "7scenes"},
-                           Hint{"icl", "icl-nuim"}, Hint{"replica", "replica"},
-                           Hint{"freiburg1", "tum-fr1"}, Hint{"freiburg2", "tum-fr2"},
-                           Hint{"freiburg3", "tum-fr3"}, Hint{"fr1_", "tum-fr1"},
-                           Hint{"fr2_", "tum-fr2"}, Hint{"fr3_", "tum-fr3"}}) {
+  for (const Hint& hint :
+       {Hint{"7scenes", "7scenes"}, Hint{"7-scenes", "7scenes"}, Hint{"icl", "icl-nuim"}, Hint{"replica", "replica"},
+        Hint{"freiburg1", "tum-fr1"}, Hint{"freiburg2", "tum-fr2"}, Hint{"freiburg3", "tum-fr3"},
+        Hint{"fr1_", "tum-fr1"}, Hint{"fr2_", "tum-fr2"}, Hint{"fr3_", "tum-fr3"}}) {
     if (name.find(hint.needle) != std::string::npos)
       return {cameraPreset(hint.preset), std::string("preset ") + hint.preset + " (folder name '" + folder_name + "')",
               cameraPresetColour(hint.preset), true};
@@ -224,7 +228,8 @@ CameraChoice chooseCamera(const std::filesystem::path& folder, const std::string
   for (std::string line; std::getline(depth_list, line);) {
     if (line.empty() || line[0] == '#') continue;
     if (line.find(".depth.png") != std::string::npos)
-      return {cameraPreset("7scenes"), "preset 7scenes (7-Scenes depth file names)", cameraPresetColour("7scenes"), true};
+      return {cameraPreset("7scenes"), "preset 7scenes (7-Scenes depth file names)", cameraPresetColour("7scenes"),
+              true};
     break;
   }
   return {cameraPreset("tum-default"), "preset tum-default (no camera file or hint in the folder)", {}, true};

@@ -35,7 +35,7 @@ struct CameraChoice {
   PinholeCamera camera;
   std::string source;
   std::optional<ColourCamera> colour = {};  ///< set when the colour images need registering
-  bool guessed = false;  ///< a preset guessed from the folder's name or file names, or the default
+  bool guessed = false;                     ///< a preset guessed from the folder's name or file names, or the default
 };
 
 /// Chooses the camera of a sequence folder: `preset_override` when not empty; else a

@@ -11,9 +11,9 @@
 #include <cctype>
 #include <cstdlib>
 #include <cstring>
-#include <stdexcept>
 #include <fstream>
 #include <iterator>
+#include <stdexcept>
 #include <string>
 #include <vector>
 
@@ -27,9 +27,9 @@ namespace {
 // has a destructor a longjmp could skip, and nothing it holds is a register-held local.
 struct Decoded {
   cv::Mat image;
-  int bits = 8;      // per channel, of the file
-  int channels = 0;  // of the file
-  cv::Size size;     // of the file
+  int bits = 8;                      // per channel, of the file
+  int channels = 0;                  // of the file
+  cv::Size size;                     // of the file
   std::vector<unsigned char*> rows;  // PNG row pointers into image
   char error[JMSG_LENGTH_MAX + 200] = {};
 };
@@ -141,7 +141,8 @@ bool decodePng(const std::string& bytes, bool as_depth, cv::Size expected, Decod
   out->bits = png_get_bit_depth(png, info) == 16 ? 16 : 8;
   out->channels = png_get_channels(png, info);
   if (color == PNG_COLOR_TYPE_PALETTE) out->channels = png_get_valid(png, info, PNG_INFO_tRNS) ? 4 : 3;
-  out->size = cv::Size(static_cast<int>(png_get_image_width(png, info)), static_cast<int>(png_get_image_height(png, info)));
+  out->size =
+      cv::Size(static_cast<int>(png_get_image_width(png, info)), static_cast<int>(png_get_image_height(png, info)));
   const bool decode = out->size == expected && (!as_depth || (out->bits == 16 && color == PNG_COLOR_TYPE_GRAY));
   if (decode) {
     if (as_depth) {
@@ -196,8 +197,8 @@ cv::Mat decodeImage(const std::string& bytes, const std::filesystem::path& file,
   if (format == ImageFormat::kOther)
     throw InputError(file.string(), "cannot decode " + what + ": not a " + (depth ? "PNG" : "PNG or JPEG") + " file");
   Decoded out;
-  const bool ok = format == ImageFormat::kPng ? decodePng(bytes, depth, expected, &out)
-                                         : decodeJpeg(bytes, !depth, expected, &out);
+  const bool ok =
+      format == ImageFormat::kPng ? decodePng(bytes, depth, expected, &out) : decodeJpeg(bytes, !depth, expected, &out);
   if (!ok) throw InputError(file.string(), "cannot decode " + what + ": " + out.error + " (damaged or truncated)");
   if (depth && (out.bits != 16 || out.channels != 1 || format != ImageFormat::kPng))
     throw InputError(file.string(), "depth image must be 16-bit single-channel, got " + std::to_string(out.bits) +
@@ -231,8 +232,8 @@ void pngWrite(png_structp png, png_bytep data, png_size_t n) {
 void pngFlush(png_structp) {}
 
 // Fills `bytes`; false with sink->error on failure. `rows` outlives the setjmp (see Decoded).
-bool writePng(const cv::Mat& image, ChannelOrder order, PngCompression compression,
-              std::vector<unsigned char*>* rows, PngSink* sink) {
+bool writePng(const cv::Mat& image, ChannelOrder order, PngCompression compression, std::vector<unsigned char*>* rows,
+              PngSink* sink) {
   png_structp png = png_create_write_struct(PNG_LIBPNG_VER_STRING, sink, pngWriteFail, pngWarning);
   if (!png) return false;
   png_infop info = png_create_info_struct(png);
@@ -320,7 +321,7 @@ cv::Size headerSize(const std::string& bytes) {
   const ImageFormat format = formatOf(bytes);
   const bool ok = format == ImageFormat::kPng    ? decodePng(bytes, false, cv::Size(-1, -1), &header)
                   : format == ImageFormat::kJpeg ? decodeJpeg(bytes, false, cv::Size(), &header)
-                                            : false;
+                                                 : false;
   return ok ? header.size : cv::Size();
 }
 

@@ -24,9 +24,9 @@ std::vector<ListLine> readListFile(const std::filesystem::path& file, int column
     ListLine line{number, {}};
     for (std::string w; words >> w;) line.tokens.push_back(w);
     if (static_cast<int>(line.tokens.size()) != columns)
-      throw InputError(file.string(), number,
-                       "expected '" + std::string(expected) + "', got " + std::to_string(line.tokens.size()) +
-                           " fields");
+      throw InputError(
+          file.string(), number,
+          "expected '" + std::string(expected) + "', got " + std::to_string(line.tokens.size()) + " fields");
     lines.push_back(std::move(line));
   }
   return lines;
@@ -55,8 +55,8 @@ void checkIncreasing(double t, double* previous, const std::filesystem::path& fi
   checkTimestamp(t, file, line);
   if (t <= *previous)
     throw InputError(file.string(), line,
-                     "timestamp " + std::to_string(t) + " is not after the previous one (" +
-                         std::to_string(*previous) + "): timestamps must increase");
+                     "timestamp " + std::to_string(t) + " is not after the previous one (" + std::to_string(*previous) +
+                         "): timestamps must increase");
   *previous = t;
 }
 

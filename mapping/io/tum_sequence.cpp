@@ -8,7 +8,6 @@
 #include <optional>
 #include <stdexcept>
 
-
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/image_codec.h"
@@ -42,8 +41,8 @@ std::vector<Stamped> readImageList(const fs::path& folder, const char* name) {
 // Pose at time t: interpolated between the ground-truth poses around t (linear translation,
 // slerp rotation), or nothing when either is more than max_dt away.
 std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t, double max_dt) {
-  auto next = std::lower_bound(poses.begin(), poses.end(), t,
-                               [](const StampedPose& p, double time) { return p.t < time; });
+  auto next =
+      std::lower_bound(poses.begin(), poses.end(), t, [](const StampedPose& p, double time) { return p.t < time; });
   constexpr double kSameTime = 1e-6;
   if (next != poses.end() && next->t - t < kSameTime) return next->T_W_C;
   if (next != poses.begin() && t - std::prev(next)->t < kSameTime) return std::prev(next)->T_W_C;
@@ -130,7 +129,8 @@ FrameRange parseFrameRange(const std::string& text) {
   FrameRange range;
   if (colon == std::string::npos) {
     range.last = number(text);
-    if (range.last == 0) throw std::invalid_argument("--frames '" + text + "': N means the first N frames (0:N); give N >= 1");
+    if (range.last == 0)
+      throw std::invalid_argument("--frames '" + text + "': N means the first N frames (0:N); give N >= 1");
     return range;
   }
   const std::string a = text.substr(0, colon), b = text.substr(colon + 1);
@@ -185,8 +185,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
     const std::vector<Stamped> rgb = readImageList(folder, "rgb.txt");
     if (rgb.empty()) throw InputError((folder / "rgb.txt").string(), "lists no frames");
     for (const Stamped& depth : readImageList(folder, "depth.txt")) {
-      auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t,
-                                 [](const Stamped& s, double t) { return s.t < t; });
+      auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t, [](const Stamped& s, double t) { return s.t < t; });
       std::optional<Stamped> best;
       for (auto c : {it, it == rgb.begin() ? rgb.end() : std::prev(it)}) {
         if (c == rgb.end() || std::abs(c->t - depth.t) > options.max_rgb_dt_s) continue;
@@ -198,8 +197,10 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   const fs::path gt_file = folder / "groundtruth.txt";
   seq.has_ground_truth_ = fs::exists(gt_file);
   if (!seq.has_ground_truth_ && options.require_poses)
-    throw InputError(gt_file.string(), "no such file; --poses gt needs ground-truth poses (--poses track estimates them)");
-  const std::vector<StampedPose> poses = seq.has_ground_truth_ ? readTumTrajectory(gt_file) : std::vector<StampedPose>{};
+    throw InputError(gt_file.string(),
+                     "no such file; --poses gt needs ground-truth poses (--poses track estimates them)");
+  const std::vector<StampedPose> poses =
+      seq.has_ground_truth_ ? readTumTrajectory(gt_file) : std::vector<StampedPose>{};
 
   seq.listed_ = static_cast<int>(pairs.size());
   if (pairs.empty())
@@ -215,10 +216,11 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
                                           " but the sequence lists only " + std::to_string(seq.listed_) +
                                           " depth frames");
   if (options.frames.last > seq.listed_ && !options.cut_range_at_end)
-    throw InputError(folder.string(), "--frames " + frameRangeText(options.frames) + " ends past the sequence: it lists " +
-                                          std::to_string(seq.listed_) + " depth frames (0:" +
-                                          std::to_string(seq.listed_) + ")");
-  seq.range_ = {options.frames.first, options.frames.last < 0 ? seq.listed_ : std::min(options.frames.last, seq.listed_)};
+    throw InputError(folder.string(), "--frames " + frameRangeText(options.frames) +
+                                          " ends past the sequence: it lists " + std::to_string(seq.listed_) +
+                                          " depth frames (0:" + std::to_string(seq.listed_) + ")");
+  seq.range_ = {options.frames.first,
+                options.frames.last < 0 ? seq.listed_ : std::min(options.frames.last, seq.listed_)};
   for (int i = 0; i < seq.listed_; ++i) {
     const Pair& pair = pairs[i];
     if (i < options.frames.first || (options.frames.last >= 0 && i >= options.frames.last)) {
@@ -243,8 +245,8 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
                      "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
                          std::to_string(seq.dropped_.no_rgb) + " without an rgb frame within " +
                          std::to_string(options.max_rgb_dt_s) + " s, " + std::to_string(seq.dropped_.no_pose) +
-                         " without a ground-truth pose within " + std::to_string(options.max_pose_dt_s) +
-                         " s, " + std::to_string(seq.dropped_.outside_range) + " outside --frames");
+                         " without a ground-truth pose within " + std::to_string(options.max_pose_dt_s) + " s, " +
+                         std::to_string(seq.dropped_.outside_range) + " outside --frames");
   return seq;
 } catch (const fs::filesystem_error& e) {
   throw InputError(e.path1().string(), e.code().message());

@@ -35,13 +35,13 @@ struct SequenceContinuation {
 };
 
 struct SequenceOptions {
-  std::string camera_preset;      ///< empty: choose from the folder (chooseCamera)
-  FrameRange frames;              ///< which depth frames to keep
+  std::string camera_preset;  ///< empty: choose from the folder (chooseCamera)
+  FrameRange frames;          ///< which depth frames to keep
   /// A range that ends past the last listed frame is an error (it names the sequence's range);
   /// true cuts it there instead (for a verb's default range, such as bench's 0:30).
   bool cut_range_at_end = false;
-  double max_rgb_dt_s = 0.02;     ///< depth-rgb association window (docs/method.md 1)
-  double max_pose_dt_s = 0.1;     ///< pose interpolation window
+  double max_rgb_dt_s = 0.02;  ///< depth-rgb association window (docs/method.md 1)
+  double max_pose_dt_s = 0.1;  ///< pose interpolation window
   /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
   /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
   /// ground-truth pose with has_pose = false and the identity.
@@ -65,9 +65,9 @@ struct FrameEntry {
 
 /// How many listed depth frames were not kept, by reason.
 struct DropCounts {
-  int no_rgb = 0;           ///< no rgb frame within max_rgb_dt_s
-  int no_pose = 0;          ///< no ground-truth poses within max_pose_dt_s on both sides
-  int outside_range = 0;    ///< outside --frames
+  int no_rgb = 0;         ///< no rgb frame within max_rgb_dt_s
+  int no_pose = 0;        ///< no ground-truth poses within max_pose_dt_s on both sides
+  int outside_range = 0;  ///< outside --frames
 };
 
 /// A TUM RGB-D layout sequence (docs/method.md 1). Opening parses the lists, associates and

@@ -58,9 +58,8 @@ double covisibility(const FrameFeatures& K, const Transform& T_W_K, const FrameF
                                       params.lowe_ratio};
   std::size_t reobserved = matchByProjection(K, T_W_F.inverse() * T_W_K, F, grid, camera, search).size();
   for (std::size_t i = 0; i < K.size(); ++i)
-    if (K.depth_m[i] <= 0.0f &&
-        bestTwoOf(K.descriptors.ptr<std::uint8_t>(static_cast<int>(i)), F.descriptors)
-            .passes(params.max_hamming, params.lowe_ratio))
+    if (K.depth_m[i] <= 0.0f && bestTwoOf(K.descriptors.ptr<std::uint8_t>(static_cast<int>(i)), F.descriptors)
+                                    .passes(params.max_hamming, params.lowe_ratio))
       ++reobserved;
   return static_cast<double>(reobserved) / static_cast<double>(K.size());
 }
@@ -83,8 +82,7 @@ std::vector<cv::DMatch> ratioTestMatches(const FrameFeatures& K, const FrameFeat
 }
 
 double covisibilityBruteForce(const FrameFeatures& K, const Transform& T_W_K, const FrameFeatures& F,
-                              const Transform& T_W_F, const PinholeCamera& camera,
-                              const CovisibilityParams& params) {
+                              const Transform& T_W_F, const PinholeCamera& camera, const CovisibilityParams& params) {
   if (K.size() == 0 || F.size() < 2) return 0.0;
   const Transform T_F_K = T_W_F.inverse() * T_W_K;
   const double max_sq = params.max_reprojection_px * params.max_reprojection_px;

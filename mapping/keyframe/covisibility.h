@@ -6,9 +6,9 @@ namespace vdmap {
 
 /// docs/method.md 5: when a keyframe's feature counts as re-observed in a frame.
 struct CovisibilityParams {
-  int max_hamming = 64;             ///< descriptor distance limit
-  double lowe_ratio = 0.8;          ///< best / second-best distance must be below this
-  double max_reprojection_px = 8.0; ///< pose-consistency check for keypoints with depth
+  int max_hamming = 64;              ///< descriptor distance limit
+  double lowe_ratio = 0.8;           ///< best / second-best distance must be below this
+  double max_reprojection_px = 8.0;  ///< pose-consistency check for keypoints with depth
 };
 
 /// Pose pre-filter of the loop-closure and edge search (docs/method.md 5).
@@ -44,8 +44,8 @@ std::vector<cv::DMatch> ratioTestMatches(const FrameFeatures& K, const FrameFeat
                                          double lowe_ratio);
 
 /// Either of the two above (the decision takes the measure, so tests can run the oracle).
-using CovisibilityMeasure = double (*)(const FrameFeatures&, const Transform&, const FrameFeatures&,
-                                       const Transform&, const PinholeCamera&, const CovisibilityParams&);
+using CovisibilityMeasure = double (*)(const FrameFeatures&, const Transform&, const FrameFeatures&, const Transform&,
+                                       const PinholeCamera&, const CovisibilityParams&);
 
 /// An upper bound of covisibility() computed without matching: the fraction of K's features
 /// that could be re-observed at all (without depth, or projecting in front of F's camera within

@@ -6,8 +6,7 @@
 
 namespace vdmap {
 
-FeatureExtractor::FeatureExtractor(const FeatureParams& params)
-    : orb_(cv::ORB::create(params.orb_features)) {}
+FeatureExtractor::FeatureExtractor(const FeatureParams& params) : orb_(cv::ORB::create(params.orb_features)) {}
 
 FrameFeatures FeatureExtractor::extract(const RgbdFrame& frame, const PinholeCamera& camera,
                                         const DepthRange& range) const {

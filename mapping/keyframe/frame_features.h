@@ -11,8 +11,8 @@ namespace vdmap {
 /// ORB keypoints of one frame with the depth measured at each (docs/method.md 5).
 struct FrameFeatures {
   std::vector<cv::KeyPoint> keypoints;
-  cv::Mat descriptors;           ///< CV_8U, one 32-byte row per keypoint
-  std::vector<float> depth_m;    ///< per keypoint; 0 when the depth image has no valid value there
+  cv::Mat descriptors;         ///< CV_8U, one 32-byte row per keypoint
+  std::vector<float> depth_m;  ///< per keypoint; 0 when the depth image has no valid value there
   std::size_t size() const { return keypoints.size(); }
 };
 
@@ -25,8 +25,7 @@ struct FeatureParams {
 class FeatureExtractor {
  public:
   explicit FeatureExtractor(const FeatureParams& params = {});
-  FrameFeatures extract(const RgbdFrame& frame, const PinholeCamera& camera,
-                        const DepthRange& range = {}) const;
+  FrameFeatures extract(const RgbdFrame& frame, const PinholeCamera& camera, const DepthRange& range = {}) const;
 
  private:
   cv::Ptr<cv::ORB> orb_;

@@ -29,8 +29,8 @@ struct KeyframeMemory {
 /// them.
 struct Keyframe {
   int id = 0;
-  int frame_index = 0;    ///< the sequence frame that created it
-  double timestamp = 0;   ///< s, that frame's depth timestamp
+  int frame_index = 0;   ///< the sequence frame that created it
+  double timestamp = 0;  ///< s, that frame's depth timestamp
   Transform T_W_K = Transform::Identity();
   CompressedImage rgb_image;    ///< CV_8UC3 RGB, for the container view
   CompressedImage depth_image;  ///< CV_16UC1 raw units
@@ -46,9 +46,9 @@ struct Keyframe {
 
 /// What applyTrajectory() matched.
 struct TrajectoryMatch {
-  int matched = 0;          ///< keyframes whose pose was replaced
-  int unknown = 0;          ///< file poses whose timestamp is no keyframe's (ignored)
-  int untouched = 0;        ///< keyframes the file does not mention (pose kept)
+  int matched = 0;    ///< keyframes whose pose was replaced
+  int unknown = 0;    ///< file poses whose timestamp is no keyframe's (ignored)
+  int untouched = 0;  ///< keyframes the file does not mention (pose kept)
 };
 
 /// The keyframes (ids 0..size-1, in creation order) and their covisibility edges. Keyframe

@@ -59,7 +59,7 @@ void KeyframeIndex::sync(std::span<const KeyframeView> keyframes) {
 }
 
 std::vector<int> KeyframeIndex::ranked(const FrameFeatures& frame, const Transform& T_W_F,
-                                      std::span<const KeyframeView> keyframes, const PosePrefilter& prefilter) const {
+                                       std::span<const KeyframeView> keyframes, const PosePrefilter& prefilter) const {
   assert(keyframes.size() == bows_.size());
   if (!vocabulary_) return {};
   // DBoW2's L1 score of two normalised vectors: the sum over shared words of the smaller weight.

@@ -59,16 +59,15 @@ FrameDecision decideKeyframe(const FrameFeatures& frame, const Transform& T_W_F,
   int best_id = -1;
   for (const Candidate& c : candidates(keyframes, current, T_W_F, params.tau, camera, params, &decision.pruned)) {
     // Bounds only fall from here on; one below the best cannot win (an equal one can, on id).
-    if (best_id >= 0 && (c.bound < decision.delta_best ||
-                         (c.bound == decision.delta_best && c.keyframe->id > best_id))) {
+    if (best_id >= 0 &&
+        (c.bound < decision.delta_best || (c.bound == decision.delta_best && c.keyframe->id > best_id))) {
       ++decision.pruned;
       continue;
     }
-    const double delta = measure(*c.keyframe->features, *c.keyframe->T_W_K, frame, T_W_F, camera,
-                                      params.covisibility);
+    const double delta = measure(*c.keyframe->features, *c.keyframe->T_W_K, frame, T_W_F, camera, params.covisibility);
     ++decision.matched;
-    if (delta >= params.tau && (best_id < 0 || delta > decision.delta_best ||
-                                (delta == decision.delta_best && c.keyframe->id < best_id))) {
+    if (delta >= params.tau &&
+        (best_id < 0 || delta > decision.delta_best || (delta == decision.delta_best && c.keyframe->id < best_id))) {
       decision.delta_best = delta;
       best_id = c.keyframe->id;
     }
@@ -88,8 +87,7 @@ std::vector<std::pair<int, double>> edgesOfNewKeyframe(const FrameFeatures& feat
   for (const KeyframeView& k : keyframes) {
     const bool is_previous = k.id == previous;
     if (!is_previous && !params.prefilter.accepts(*k.T_W_K, T_W_N)) continue;
-    if (!is_previous &&
-        covisibilityBound(*k.features, *k.T_W_K, T_W_N, camera, params.covisibility) < params.tau_edge)
+    if (!is_previous && covisibilityBound(*k.features, *k.T_W_K, T_W_N, camera, params.covisibility) < params.tau_edge)
       continue;
     const double delta = measure(*k.features, *k.T_W_K, features, T_W_N, camera, params.covisibility);
     if (is_previous || delta >= params.tau_edge) edges.emplace_back(k.id, delta);

@@ -9,9 +9,9 @@ namespace vdmap {
 
 /// docs/method.md 5 thresholds of the per-frame keyframe decision.
 struct KeyframeParams {
-  double tau = 0.25;       ///< update the current keyframe when delta(F, K_current) >= tau
-  double tau_edge = 0.1;   ///< a new keyframe gets an edge to K when delta >= tau_edge
-  PosePrefilter prefilter; ///< skips far / turned-away keyframes in the searches
+  double tau = 0.25;        ///< update the current keyframe when delta(F, K_current) >= tau
+  double tau_edge = 0.1;    ///< a new keyframe gets an edge to K when delta >= tau_edge
+  PosePrefilter prefilter;  ///< skips far / turned-away keyframes in the searches
   /// A frame with fewer keypoints (a textureless view) cannot be judged by covisibility: it
   /// updates the current keyframe when the pose pre-filter accepts that keyframe, else starts a
   /// new one. This keeps blank walls from spawning a keyframe per frame.
@@ -30,11 +30,11 @@ struct KeyframeView {
 struct FrameDecision {
   enum class Kind { kUpdate, kRevisit, kNewKeyframe };
   Kind kind = Kind::kNewKeyframe;
-  int keyframe = -1;          ///< the keyframe to update (kUpdate, kRevisit)
-  double delta_current = 0;   ///< delta(F, K_current)
-  double delta_best = 0;      ///< best delta of the loop-closure search (0 when not searched)
-  int matched = 0;            ///< keyframes matched descriptor by descriptor
-  int pruned = 0;             ///< keyframes skipped by the pre-filter or the covisibility bound
+  int keyframe = -1;         ///< the keyframe to update (kUpdate, kRevisit)
+  double delta_current = 0;  ///< delta(F, K_current)
+  double delta_best = 0;     ///< best delta of the loop-closure search (0 when not searched)
+  int matched = 0;           ///< keyframes matched descriptor by descriptor
+  int pruned = 0;            ///< keyframes skipped by the pre-filter or the covisibility bound
 };
 
 /// Decides what frame F does (docs/method.md 5): update `current` when delta >= tau; otherwise

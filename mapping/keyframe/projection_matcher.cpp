@@ -33,9 +33,7 @@ BestTwo bestTwoOf(const std::uint8_t* query, const cv::Mat& descriptors) {
 }
 
 KeypointGrid::KeypointGrid(const std::vector<cv::KeyPoint>& keypoints, const PinholeCamera& camera, int cell_px)
-    : keypoints_(&keypoints),
-      cell_px_(cell_px),
-      cols_((camera.width + cell_px - 1) / cell_px),
+    : keypoints_(&keypoints), cell_px_(cell_px), cols_((camera.width + cell_px - 1) / cell_px),
       rows_((camera.height + cell_px - 1) / cell_px) {
   // Counting sort by bucket; a stable pass keeps each bucket's indices ascending.
   auto bucket = [&](const cv::KeyPoint& k) {

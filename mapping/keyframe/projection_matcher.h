@@ -18,8 +18,8 @@ inline int orbDistance(const std::uint8_t* a, const std::uint8_t* b) {
   std::uint64_t x[4], y[4];
   std::memcpy(x, a, 32);
   std::memcpy(y, b, 32);
-  return __builtin_popcountll(x[0] ^ y[0]) + __builtin_popcountll(x[1] ^ y[1]) +
-         __builtin_popcountll(x[2] ^ y[2]) + __builtin_popcountll(x[3] ^ y[3]);
+  return __builtin_popcountll(x[0] ^ y[0]) + __builtin_popcountll(x[1] ^ y[1]) + __builtin_popcountll(x[2] ^ y[2]) +
+         __builtin_popcountll(x[3] ^ y[3]);
 }
 
 /// The best and second-best distance of a descriptor to a set (kNoDistance when absent).
@@ -65,13 +65,13 @@ class KeypointGrid {
  private:
   const std::vector<cv::KeyPoint>* keypoints_;
   int cell_px_, cols_, rows_;
-  std::vector<int> start_;    ///< cols_ * rows_ + 1 offsets into index_
-  std::vector<int> index_;    ///< keypoint indices, bucket by bucket, ascending in each
+  std::vector<int> start_;  ///< cols_ * rows_ + 1 offsets into index_
+  std::vector<int> index_;  ///< keypoint indices, bucket by bucket, ascending in each
 };
 
 /// How a projected keypoint is matched (docs/method.md 5 criteria by default).
 struct ProjectionSearchParams {
-  double radius_px = 8.0;   ///< the match must lie this close to the predicted pixel
+  double radius_px = 8.0;  ///< the match must lie this close to the predicted pixel
   /// The neighbourhood the best and second-best descriptor are taken from (>= radius_px): the
   /// best there must lie within radius_px and pass the ratio test against the second. Equal to
   /// radius_px it is ORB-SLAM's window search; the whole image is docs/method.md 5's brute-force

@@ -16,9 +16,9 @@ using Centroid = std::array<std::uint8_t, 32>;
 const std::uint8_t* row(const cv::Mat& m, int i) { return m.ptr<std::uint8_t>(i); }
 
 // Nearest of `centroids` (lower index on ties) for every member; returns whether any changed.
-__attribute__((target_clones("popcnt", "default")))
-bool assign(const cv::Mat& d, const std::vector<int>& members, const std::vector<Centroid>& centroids,
-            std::vector<int>* label) {
+__attribute__((target_clones("popcnt", "default"))) bool assign(const cv::Mat& d, const std::vector<int>& members,
+                                                                const std::vector<Centroid>& centroids,
+                                                                std::vector<int>* label) {
   bool changed = false;
   for (std::size_t m = 0; m < members.size(); ++m) {
     int best = 0, best_d = 257;
@@ -34,8 +34,9 @@ bool assign(const cv::Mat& d, const std::vector<int>& members, const std::vector
 
 // k-means++ seeding: the first seed at random, then each next one with probability
 // proportional to the squared distance to the nearest seed so far.
-__attribute__((target_clones("popcnt", "default")))
-std::vector<Centroid> seeds(const cv::Mat& d, const std::vector<int>& members, int k, std::mt19937* rng) {
+__attribute__((target_clones("popcnt", "default"))) std::vector<Centroid> seeds(const cv::Mat& d,
+                                                                                const std::vector<int>& members, int k,
+                                                                                std::mt19937* rng) {
   std::vector<Centroid> out;
   std::vector<double> nearest_sq(members.size(), 1e300);
   int next = static_cast<int>((*rng)() % members.size());
@@ -109,7 +110,8 @@ Vocabulary Vocabulary::train(const cv::Mat& d, const std::vector<std::pair<int, 
     std::vector<Centroid> centroids = seeds(d, p.members, k, &rng);
     std::vector<int> label(p.members.size(), -1);
     for (int it = 0; it < params.max_iterations && assign(d, p.members, centroids, &label); ++it)
-      for (std::size_t c = 0; c < centroids.size(); ++c) centroids[c] = majority(d, p.members, label, static_cast<int>(c));
+      for (std::size_t c = 0; c < centroids.size(); ++c)
+        centroids[c] = majority(d, p.members, label, static_cast<int>(c));
     // Children: the non-empty clusters, in cluster order.
     std::vector<std::vector<int>> split(centroids.size());
     for (std::size_t m = 0; m < p.members.size(); ++m) split[label[m]].push_back(p.members[m]);
@@ -142,8 +144,7 @@ Vocabulary Vocabulary::train(const cv::Mat& d, const std::vector<std::pair<int, 
   return v;
 }
 
-__attribute__((target_clones("popcnt", "default")))
-int Vocabulary::wordOf(const std::uint8_t* descriptor) const {
+__attribute__((target_clones("popcnt", "default"))) int Vocabulary::wordOf(const std::uint8_t* descriptor) const {
   int node = 0;
   while (nodes_[node].children > 0) {
     const Node& n = nodes_[node];

@@ -42,7 +42,7 @@ class Vocabulary {
     std::array<std::uint8_t, 32> centroid{};
     int first_child = -1;  ///< children are nodes [first_child, first_child + children)
     int children = 0;
-    int word = -1;         ///< leaves only
+    int word = -1;  ///< leaves only
   };
   std::vector<Node> nodes_;  ///< nodes_[0] is the root
   std::vector<float> idf_;   ///< per word

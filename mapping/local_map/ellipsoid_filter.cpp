@@ -30,8 +30,8 @@ bool keepCell(const StoredCell& cell, const KeyframeContainer& container, const 
   if (stats.n < std::max(filter.min_points, 2)) return false;
   if (!(stats.mean.z() > 0.0)) return false;
   const Eigen::Vector2d uv = container.camera().project(stats.mean);
-  const Eigen::Matrix3d expected = expectedCellCovariance(
-      filter.model, container.camera(), uv.x(), uv.y(), stats.mean.z(), container.cellSizePx());
+  const Eigen::Matrix3d expected =
+      expectedCellCovariance(filter.model, container.camera(), uv.x(), uv.y(), stats.mean.z(), container.cellSizePx());
   // Compare variances: sqrt(a) <= k sqrt(b)  <=>  a <= k^2 b for a, b >= 0.
   const double k2 = filter.filter_sigma_factor * filter.filter_sigma_factor;
   const Eigen::Matrix3d cov = stats.covariance();
@@ -52,10 +52,10 @@ std::vector<bool> keptCells(const KeyframeContainer& container, const FilterPara
   return kept;
 }
 
-void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept,
-                          const Transform& T_X_K, int keyframe_id,
-                          const std::function<void(const Ellipsoid&)>& visit) {
-  if (kept.size() != container.size()) throw std::invalid_argument("forEachKeptEllipsoid: kept does not fit the container");
+void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept, const Transform& T_X_K,
+                          int keyframe_id, const std::function<void(const Ellipsoid&)>& visit) {
+  if (kept.size() != container.size())
+    throw std::invalid_argument("forEachKeptEllipsoid: kept does not fit the container");
   for (std::size_t i = 0; i < kept.size(); ++i)
     if (kept[i]) visit(cellEllipsoid(container.cells()[i], T_X_K, keyframe_id));
 }

@@ -24,12 +24,12 @@ struct FilterParams {
 
 /// One ellipsoid as the global map, exports and the renderer see it.
 struct Ellipsoid {
-  Eigen::Vector3d mean = Eigen::Vector3d::Zero();      ///< metres, in the frame asked for
-  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();       ///< Sigma = S / (n - 1), m^2
-  Eigen::Vector3f color = Eigen::Vector3f::Zero();     ///< mean RGB, 0..255
-  std::uint32_t count = 0;                             ///< points merged into it
-  int keyframe = -1;                                   ///< id of the keyframe it belongs to
-  int grid_index = -1;                                 ///< its cell in that keyframe's container
+  Eigen::Vector3d mean = Eigen::Vector3d::Zero();   ///< metres, in the frame asked for
+  Eigen::Matrix3d cov = Eigen::Matrix3d::Zero();    ///< Sigma = S / (n - 1), m^2
+  Eigen::Vector3f color = Eigen::Vector3f::Zero();  ///< mean RGB, 0..255
+  std::uint32_t count = 0;                          ///< points merged into it
+  int keyframe = -1;                                ///< id of the keyframe it belongs to
+  int grid_index = -1;                              ///< its cell in that keyframe's container
 };
 
 /// The largest eigenvalue of a symmetric 3x3 matrix (closed form).
@@ -50,9 +50,8 @@ Ellipsoid cellEllipsoid(const StoredCell& cell, const Transform& T_X_K, int keyf
 /// Calls `visit` for every cell of `container` whose `kept` entry is set (keptCells' answer), as an
 /// ellipsoid with mean and covariance moved into the frame of T_X_K (Identity: keyframe frame;
 /// T_W_K: world), in container order.
-void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept,
-                          const Transform& T_X_K, int keyframe_id,
-                          const std::function<void(const Ellipsoid&)>& visit);
+void forEachKeptEllipsoid(const KeyframeContainer& container, const std::vector<bool>& kept, const Transform& T_X_K,
+                          int keyframe_id, const std::function<void(const Ellipsoid&)>& visit);
 
 /// The kept ellipsoids of a container in the frame of T_X_K (keptCells, then forEachKeptEllipsoid).
 std::vector<Ellipsoid> keptEllipsoids(const KeyframeContainer& container, const FilterParams& filter,

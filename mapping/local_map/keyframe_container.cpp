@@ -35,10 +35,8 @@ KeyframeContainer::KeyframeContainer(const PinholeCamera& camera, int cell_size_
     : camera_(camera), cell_size_px_(cell_size_px) {
   camera_.validate();
   if (cell_size_px < 1 || cell_size_px > std::min(camera.width, camera.height))
-    throw std::invalid_argument("cell size " + std::to_string(cell_size_px) +
-                                " px must be within 1.." +
-                                std::to_string(std::min(camera.width, camera.height)) +
-                                " (the image's smaller side)");
+    throw std::invalid_argument("cell size " + std::to_string(cell_size_px) + " px must be within 1.." +
+                                std::to_string(std::min(camera.width, camera.height)) + " (the image's smaller side)");
   cols_ = (2 * camera.width + cell_size_px - 1) / cell_size_px;
   rows_ = (2 * camera.height + cell_size_px - 1) / cell_size_px;
   slot_.assign(static_cast<std::size_t>(cols_) * rows_, -1);

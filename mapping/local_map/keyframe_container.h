@@ -19,7 +19,7 @@ namespace vdmap {
 /// double, stored in float). Keyframe frame K, metres.
 struct StoredCell {
   Eigen::Vector3f mean = Eigen::Vector3f::Zero();
-  std::array<float, 6> scatter{};  ///< S: xx xy xz yy yz zz
+  std::array<float, 6> scatter{};                   ///< S: xx xy xz yy yz zz
   Eigen::Vector3f color = Eigen::Vector3f::Zero();  ///< mean RGB, 0..255
   std::uint32_t n = 0;
   std::int32_t grid_index = -1;  ///< row * cols + col of the cell in its container
@@ -92,8 +92,15 @@ class KeyframeContainer {
     UniqueId() = default;
     UniqueId(const UniqueId&) : value(next()) {}
     UniqueId(UniqueId&& other) noexcept : value(other.value) { other.value = next(); }
-    UniqueId& operator=(const UniqueId&) { value = next(); return *this; }
-    UniqueId& operator=(UniqueId&& other) noexcept { value = other.value; other.value = next(); return *this; }
+    UniqueId& operator=(const UniqueId&) {
+      value = next();
+      return *this;
+    }
+    UniqueId& operator=(UniqueId&& other) noexcept {
+      value = other.value;
+      other.value = next();
+      return *this;
+    }
   };
 
   PinholeCamera camera_;

@@ -1,7 +1,7 @@
 #include "mapping/local_map/local_map_integrator.h"
 
-#include <cassert>
 #include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <stdexcept>
 
@@ -12,19 +12,15 @@ using detail::FrameSums;
 using detail::V4d;
 
 void checkInputs(const RgbdFrame& frame, const PinholeCamera& camera, const Transform& T_W_K) {
-  if (!isValidTransform(T_W_K))
-    throw std::invalid_argument("keyframe pose T_W_K is not a finite rigid transform");
+  if (!isValidTransform(T_W_K)) throw std::invalid_argument("keyframe pose T_W_K is not a finite rigid transform");
   if (!isValidTransform(frame.T_W_C))
     throw std::invalid_argument("pose of frame " + std::to_string(frame.index) +
                                 " is not a finite rigid transform (NaN or not a rotation)");
-  if (frame.depth.type() != CV_16UC1 || frame.depth.cols != camera.width ||
-      frame.depth.rows != camera.height)
+  if (frame.depth.type() != CV_16UC1 || frame.depth.cols != camera.width || frame.depth.rows != camera.height)
     throw std::invalid_argument(
-        "depth image of frame " + std::to_string(frame.index) + " is " +
-        std::to_string(frame.depth.cols) + "x" + std::to_string(frame.depth.rows) +
-        (frame.depth.type() == CV_16UC1 ? "" : " and not 16-bit single channel") +
-        "; the camera expects 16-bit " + std::to_string(camera.width) + "x" +
-        std::to_string(camera.height));
+        "depth image of frame " + std::to_string(frame.index) + " is " + std::to_string(frame.depth.cols) + "x" +
+        std::to_string(frame.depth.rows) + (frame.depth.type() == CV_16UC1 ? "" : " and not 16-bit single channel") +
+        "; the camera expects 16-bit " + std::to_string(camera.width) + "x" + std::to_string(camera.height));
   if (!frame.rgb.empty() && (frame.rgb.type() != CV_8UC3 || frame.rgb.size() != frame.depth.size()))
     throw std::invalid_argument("colour image of frame " + std::to_string(frame.index) +
                                 " is not 8-bit RGB of the depth image's size");
@@ -47,9 +43,9 @@ struct RowGeometry {
 // with runtime dispatch, so the binary stays portable. The cell is floor(container px / s),
 // computed as a product with 1/s: it may differ from integer division only for points within
 // 1e-13 px of a cell border (a measure-zero set; the cell is clamped to the grid).
-__attribute__((target_clones("arch=x86-64-v4", "avx2", "default")))
-void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int width,
-                double* __restrict px, double* __restrict py, double* __restrict pz, int* __restrict cell) {
+__attribute__((target_clones("arch=x86-64-v4", "avx2", "default"))) void computeRow(
+    const RowGeometry& g, const std::uint16_t* __restrict depth, int width, double* __restrict px,
+    double* __restrict py, double* __restrict pz, int* __restrict cell) {
   const double* __restrict ray_x = g.ray_x;
   const double* __restrict ray_y = g.ray_y;
   const double* __restrict ray_z = g.ray_z;
@@ -65,8 +61,8 @@ void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int
     const double x = rx + tx, y = ry + ty, z = rz + tz;
     const double iz = 1.0 / z;
     const double up = fx * x * iz + cx, vp = fy * y * iz + cy;
-    const bool ok = (raw >= raw_min) & (raw <= raw_max) & (z > 0.0) & (up >= 0.0) & (vp >= 0.0) &
-                    (up < u_end) & (vp < v_end);
+    const bool ok =
+        (raw >= raw_min) & (raw <= raw_max) & (z > 0.0) & (up >= 0.0) & (vp >= 0.0) & (up < u_end) & (vp < v_end);
     const int col = std::min(static_cast<int>((ok ? up : 0.0) * inv_cell), last_col);
     const int row = std::min(static_cast<int>((ok ? vp : 0.0) * inv_cell), last_row);
     px[u] = rx, py[u] = ry, pz[u] = rz;
@@ -79,10 +75,10 @@ void computeRow(const RowGeometry& g, const std::uint16_t* __restrict depth, int
 // the four-wide sums of p, x p and y p give n, s and five scatter entries in three vector
 // operations; zz is the sixth. `cell` ends with a -1 sentinel. A cell's first run of the frame
 // initialises its sums.
-__attribute__((target_clones("arch=x86-64-v3", "default")))
-void sumRuns(const double* __restrict px, const double* __restrict py, const double* __restrict pz,
-             const std::uint8_t* __restrict rgb, int rgb_step, const int* __restrict cell, int width,
-             std::int32_t* __restrict slots, FrameSums* __restrict sums, std::vector<int>* used_cells) {
+__attribute__((target_clones("arch=x86-64-v3", "default"))) void sumRuns(
+    const double* __restrict px, const double* __restrict py, const double* __restrict pz,
+    const std::uint8_t* __restrict rgb, int rgb_step, const int* __restrict cell, int width,
+    std::int32_t* __restrict slots, FrameSums* __restrict sums, std::vector<int>* used_cells) {
   int u = 0;
   while (u < width) {
     const int c = cell[u];
@@ -115,9 +111,8 @@ void sumRuns(const double* __restrict px, const double* __restrict py, const dou
 
 }  // namespace
 
-void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCamera& camera,
-                                        const Transform& T_W_K, KeyframeContainer* container,
-                                        std::vector<int>* touched_cells) {
+void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCamera& camera, const Transform& T_W_K,
+                                        KeyframeContainer* container, std::vector<int>* touched_cells) {
   assert(container != nullptr);
   if (touched_cells) touched_cells->clear();
   checkInputs(frame, camera, T_W_K);
@@ -154,7 +149,6 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
   const unsigned raw_min = static_cast<unsigned>(raw_min_d);
   const unsigned raw_max = static_cast<unsigned>(std::min(raw_max_d, 65535.0));
 
-
   // Two passes per row. Pass 1 is branch-free arithmetic the compiler vectorises: each pixel's
   // p_K - t and its cell (-1 when the pixel is invalid, behind the keyframe or outside its
   // container). Pass 2 walks the row: runs of neighbouring pixels in the same cell are summed
@@ -169,7 +163,7 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
   g.raw_min = raw_min, g.raw_max = raw_max;
   g.cols = container->cols(), g.rows = container->rows();
   row_x_.resize(width), row_y_.resize(width), row_z_.resize(width), row_cell_.resize(width + 1);
-  double* const px = row_x_.data(), * const py = row_y_.data(), * const pz = row_z_.data();
+  double *const px = row_x_.data(), *const py = row_y_.data(), *const pz = row_z_.data();
   int* const pcell = row_cell_.data();
   std::int32_t* const slots = sums_slot_.data();
   FrameSums* const sums = sums_.data();
@@ -181,8 +175,8 @@ void LocalMapIntegrator::integrateFrame(const RgbdFrame& frame, const PinholeCam
     g.b[0] = yf * R(0, 1) + R(0, 2), g.b[1] = yf * R(1, 1) + R(1, 2), g.b[2] = yf * R(2, 1) + R(2, 2);
     computeRow(g, frame.depth.ptr<std::uint16_t>(v), width, px, py, pz, pcell);
     pcell[width] = -1;  // sentinel: ends the last run without a bounds test
-    sumRuns(px, py, pz, has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : kWhite, has_rgb ? 3 : 0, pcell, width, slots,
-            sums, &used_cells_);
+    sumRuns(px, py, pz, has_rgb ? frame.rgb.ptr<std::uint8_t>(v) : kWhite, has_rgb ? 3 : 0, pcell, width, slots, sums,
+            &used_cells_);
   }
 
   // Merge each cell's batch into the container (docs/method.md 2: the arithmetic of mergeBatch

@@ -56,9 +56,9 @@ class LocalMapIntegrator {
 
  private:
   LocalMapParams params_;
-  std::vector<std::int32_t> sums_slot_;  // per grid cell: index into sums_, or -1
-  std::vector<detail::FrameSums> sums_;  // sized to the grid once; the first used_cells_.size() are live
-  std::vector<int> used_cells_;          // grid index of sums_[i]
+  std::vector<std::int32_t> sums_slot_;        // per grid cell: index into sums_, or -1
+  std::vector<detail::FrameSums> sums_;        // sized to the grid once; the first used_cells_.size() are live
+  std::vector<int> used_cells_;                // grid index of sums_[i]
   std::vector<double> ray_x_, ray_y_, ray_z_;  // per column: ((u - cx) / fx) * R.col(0)
   std::vector<double> row_x_, row_y_, row_z_;  // one row's p_K - t
   std::vector<int> row_cell_;                  // one row's cells (-1: no point)

@@ -8,8 +8,7 @@ namespace vdmap {
 SensorModel parseSensorModel(const std::string& name) {
   if (name == "nguyen2012") return SensorModel::kNguyen2012;
   if (name == "belter2018") return SensorModel::kBelter2018;
-  throw std::invalid_argument("unknown sensor model '" + name +
-                              "' (expected nguyen2012 or belter2018)");
+  throw std::invalid_argument("unknown sensor model '" + name + "' (expected nguyen2012 or belter2018)");
 }
 
 const char* sensorModelName(SensorModel model) {
@@ -30,8 +29,8 @@ PixelVariance pixelVariance(SensorModel model, double d) {
   return var;
 }
 
-Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, double u, double v,
-                                double depth_m, double extra_px2) {
+Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, double u, double v, double depth_m,
+                                double extra_px2) {
   const PixelVariance var = pixelVariance(model, depth_m);
   const Eigen::Matrix3d J = camera.backProjectJacobian(u, v, depth_m);
   const Eigen::Vector3d diag(var.u_px2 + extra_px2, var.v_px2 + extra_px2, var.depth_m2);

@@ -31,17 +31,15 @@ inline double nguyenAxialSd(double depth_m) { return 0.0012 + 0.0019 * (depth_m 
 
 /// Covariance (camera frame, m^2) of the point back-projected from pixel (u, v) at depth d:
 /// J diag(su2 + extra_px2, sv2 + extra_px2, sd2(d)) J^T with J = camera.backProjectJacobian.
-Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, double u, double v,
-                                double depth_m, double extra_px2 = 0.0);
+Eigen::Matrix3d pointCovariance(SensorModel model, const PinholeCamera& camera, double u, double v, double depth_m,
+                                double extra_px2 = 0.0);
 
 /// Expected covariance of a cell of `cell_size_px` whose ellipsoid centre projects to (u, v)
 /// at depth d in its keyframe: the point covariance with the cell footprint s^2/12 added to
 /// both pixel variances (docs/method.md 3).
-inline Eigen::Matrix3d expectedCellCovariance(SensorModel model, const PinholeCamera& camera,
-                                              double u, double v, double depth_m,
-                                              int cell_size_px) {
-  return pointCovariance(model, camera, u, v, depth_m,
-                         static_cast<double>(cell_size_px) * cell_size_px / 12.0);
+inline Eigen::Matrix3d expectedCellCovariance(SensorModel model, const PinholeCamera& camera, double u, double v,
+                                              double depth_m, int cell_size_px) {
+  return pointCovariance(model, camera, u, v, depth_m, static_cast<double>(cell_size_px) * cell_size_px / 12.0);
 }
 
 }  // namespace vdmap

@@ -2,8 +2,8 @@
 
 #include <algorithm>
 #include <chrono>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <stdexcept>
 #include <string>
 
@@ -28,7 +28,8 @@ void MapperState::validate(std::size_t keyframes) const {
   const auto keyframe = [keyframes](int k) { return k >= 0 && k < static_cast<long long>(keyframes); };
   for (const FramePose& f : frame_poses)
     if (!keyframe(f.keyframe) || !isValidTransform(f.T_K_C) || !std::isfinite(f.timestamp))
-      throw std::invalid_argument("frame " + std::to_string(f.frame_index) + ": its pose is not a rigid transform in a keyframe");
+      throw std::invalid_argument("frame " + std::to_string(f.frame_index) +
+                                  ": its pose is not a rigid transform in a keyframe");
   if ((tracker.keyframe != -1 && !keyframe(tracker.keyframe)) || !isValidTransform(tracker.T_K_C) ||
       !isValidTransform(tracker.velocity) || tracker.frames_lost < 0)
     throw std::invalid_argument("the tracker's state does not fit the keyframes");
@@ -41,8 +42,8 @@ void MapperState::validate(std::size_t keyframes) const {
 }
 
 Mapper::Mapper(const PinholeCamera& camera, const MapperParams& params, const TrackingParams& tracking)
-    : camera_(camera), params_(params), tracking_(tracking), extractor_(params.features),
-      integrator_(params.local_map), tracker_(tracking.tracker) {
+    : camera_(camera), params_(params), tracking_(tracking), extractor_(params.features), integrator_(params.local_map),
+      tracker_(tracking.tracker) {
   camera_.validate();
   params_.validate();
   // Fail on a bad cell size now rather than at the first keyframe.
@@ -77,22 +78,29 @@ MapperState Mapper::state() const {
 constexpr int kResampledJpegQuality = 95;
 
 int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
-  Keyframe k{0, frame.index, frame.timestamp, frame.T_W_C,
-             frame.rgb_resampled ? CompressedImage(frame.rgb, kResampledJpegQuality) : CompressedImage(frame.rgb, frame.rgb_file),
+  Keyframe k{0,
+             frame.index,
+             frame.timestamp,
+             frame.T_W_C,
+             frame.rgb_resampled ? CompressedImage(frame.rgb, kResampledJpegQuality)
+                                 : CompressedImage(frame.rgb, frame.rgb_file),
              CompressedImage(frame.depth, frame.depth_file),
-             std::move(features), KeyframeContainer(camera_, params_.local_map.cell_size_px), 0};
+             std::move(features),
+             KeyframeContainer(camera_, params_.local_map.cell_size_px),
+             0};
   return graph_.add(std::move(k)).id;
 }
 
 std::vector<StampedPose> Mapper::trajectory() const {
   std::vector<StampedPose> out;
   out.reserve(state_.frame_poses.size());
-  for (const FramePose& f : state_.frame_poses) out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
+  for (const FramePose& f : state_.frame_poses)
+    out.push_back({f.timestamp, graph_.keyframe(f.keyframe).T_W_K * f.T_K_C});
   return out;
 }
 
 std::optional<TrackingOutcome> Mapper::trackFrame(const TrackingFrame& observed, RgbdFrame* frame,
-                                                 FrameReport* report) {
+                                                  FrameReport* report) {
   // The first frame anchors the world frame at its given pose (the ground truth's when the
   // sequence has one, so maps and trajectories overlay it; else the identity).
   if (state_.current_keyframe < 0) return TrackingOutcome{};
@@ -146,15 +154,16 @@ bool Mapper::closeLoop(int revisited, const TrackingFrame& observed, RgbdFrame* 
   const Keyframe& R = graph_.keyframe(revisited);
   const RelativePose estimate =
       estimateRelativePose(R, observed, camera_, R.T_W_K.inverse() * frame->T_W_C, loopEstimateParams());
-  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers) return false;
+  if (estimate.status != RelativePose::Status::kGood || estimate.pnp_inliers < tracking_.loops.min_inliers)
+    return false;
   // Edge R -> current from the frame: T_R_cur = T_R_C (measured) * T_C_cur (tracked). The
   // information of T_R_C moves into the current keyframe's frame.
   const Transform T_cur_C = graph_.keyframe(state_.current_keyframe).T_W_K.inverse() * frame->T_W_C;
   const Matrix6d info = informationInFrame(edgeInformation(estimate, tracking_.loops.edge_noise), T_cur_C.inverse());
   pose_graph_.add({revisited, state_.current_keyframe, estimate.T_K_C * T_cur_C.inverse(), info, true});
   optimisePoseGraph(frame, revisited, estimate.T_K_C, report);
-  pose_graph_.recordLoop({frame->index, state_.current_keyframe, revisited, estimate.pnp_inliers, report->loop_correction_m,
-                          report->ms.pose_graph_ms});
+  pose_graph_.recordLoop({frame->index, state_.current_keyframe, revisited, estimate.pnp_inliers,
+                          report->loop_correction_m, report->ms.pose_graph_ms});
   return true;
 }
 
@@ -170,7 +179,8 @@ Mapper::LoopEdge Mapper::addCovisibleEdges(int created, int previous, const Trac
     const Keyframe& K = graph_.keyframe(other);
     const RelativePose estimate = estimateRelativePose(K, observed, camera_, K.T_W_K.inverse() * frame.T_W_C,
                                                        is_loop ? loopEstimateParams() : tracking_.tracker.relative);
-    if (estimate.status != RelativePose::Status::kGood || (is_loop && estimate.pnp_inliers < tracking_.loops.min_inliers))
+    if (estimate.status != RelativePose::Status::kGood ||
+        (is_loop && estimate.pnp_inliers < tracking_.loops.min_inliers))
       continue;
     pose_graph_.add({other, created, estimate.T_K_C, edgeInformation(estimate, tracking_.loops.edge_noise), is_loop});
     if (is_loop && estimate.pnp_inliers > loop.inliers) loop.inliers = estimate.pnp_inliers, loop.to = other;
@@ -201,7 +211,8 @@ Mapper::LoopEdge Mapper::addLoopEdgeBeyondCovisibility(int created, int previous
     candidates.emplace_back(-covisibility(K.features, K.T_W_K, N.features, N.T_W_K, camera_, margin), K.id);
   }
   std::sort(candidates.begin(), candidates.end());
-  const std::size_t tried = std::min(candidates.size(), static_cast<std::size_t>(std::max(tracking_.loops.candidates, 0)));
+  const std::size_t tried =
+      std::min(candidates.size(), static_cast<std::size_t>(std::max(tracking_.loops.candidates, 0)));
   for (std::size_t i = 0; i < tried; ++i) {
     const int other = candidates[i].second;
     const Keyframe& K = graph_.keyframe(other);
@@ -221,16 +232,18 @@ void Mapper::addKeyframeEdges(int created, int previous, const TrackingOutcome& 
     pose_graph_.add({tracked.keyframe, created, tracked.estimate.T_K_C,
                      edgeInformation(tracked.estimate, tracking_.loops.edge_noise), false});
   LoopEdge loop = addCovisibleEdges(created, previous, tracked, covisible, observed, *frame);
-  if (!loop.closed && tracking_.loops.enabled) loop = addLoopEdgeBeyondCovisibility(created, previous, observed, *frame);
+  if (!loop.closed && tracking_.loops.enabled)
+    loop = addLoopEdgeBeyondCovisibility(created, previous, observed, *frame);
   if (!loop.closed) return;
   optimisePoseGraph(frame, created, Transform::Identity(), report);
   // The covisibility edge of the loop, weighted by delta at the corrected poses.
   const Keyframe& N = graph_.keyframe(created);
   const Keyframe& L = graph_.keyframe(loop.to);
-  graph_.edges().strengthen(created, loop.to,
-                            covisibility(L.features, L.T_W_K, N.features, N.T_W_K, camera_, params_.keyframes.covisibility));
-  pose_graph_.recordLoop({frame->index, previous, loop.to, loop.inliers, report->loop_correction_m,
-                          report->ms.pose_graph_ms});
+  graph_.edges().strengthen(
+      created, loop.to,
+      covisibility(L.features, L.T_W_K, N.features, N.T_W_K, camera_, params_.keyframes.covisibility));
+  pose_graph_.recordLoop(
+      {frame->index, previous, loop.to, loop.inliers, report->loop_correction_m, report->ms.pose_graph_ms});
 }
 
 std::function<void(RgbdFrame&)> Mapper::featuresAhead() const {
@@ -257,7 +270,8 @@ FrameFeatures Mapper::frameFeatures(const RgbdFrame& input, std::chrono::steady_
 std::optional<TrackingOutcome> Mapper::placeFrame(const TrackingFrame& observed, DensePoints* points, RgbdFrame* frame,
                                                   FrameReport* report) {
   const auto track_start = std::chrono::steady_clock::now();
-  *points = sampleDensePoints(*frame, camera_, params_.local_map.depth_range, tracking_.tracker.relative.dense.strideFor(camera_));
+  *points = sampleDensePoints(*frame, camera_, params_.local_map.depth_range,
+                              tracking_.tracker.relative.dense.strideFor(camera_));
   const std::optional<TrackingOutcome> outcome = trackFrame(observed, frame, report);
   report->ms.tracking_ms = msSince(track_start);
   return outcome;
@@ -299,13 +313,13 @@ void Mapper::revisitKeyframe(const TrackingFrame& observed, RgbdFrame* frame, Fr
 void Mapper::startKeyframe(FrameFeatures features, const DensePoints& points, const TrackingOutcome& tracked,
                            const std::vector<KeyframeView>& views, RgbdFrame* frame, FrameReport* report) {
   const int current = state_.current_keyframe;
-  const auto edges = params_.keyframe_every > 0
-                         ? std::vector<std::pair<int, double>>{}
-                         : edgesOfNewKeyframe(features, frame->T_W_C, current,
-                                              index_.candidates(features, frame->T_W_C, views,
-                                                                params_.keyframes.prefilter, {current},
-                                                                index_.params().max_edge_candidates),
-                                              camera_, params_.keyframes);
+  const auto edges =
+      params_.keyframe_every > 0
+          ? std::vector<std::pair<int, double>>{}
+          : edgesOfNewKeyframe(features, frame->T_W_C, current,
+                               index_.candidates(features, frame->T_W_C, views, params_.keyframes.prefilter, {current},
+                                                 index_.params().max_edge_candidates),
+                               camera_, params_.keyframes);
   // The keyframe keeps the features (the estimates below only read them through `kept`).
   report->keyframe = newKeyframe(*frame, std::move(features));
   const FrameFeatures* kept = &graph_.keyframe(report->keyframe).features;
@@ -362,8 +376,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   std::optional<PhotometricPoints> photometric;
   const TrackingFrame observed{&features, &points, [&]() -> const PhotometricPoints& {
                                  if (!photometric)
-                                   photometric = samplePhotometricPoints(frame, camera_, params_.local_map.depth_range,
-                                                                         tracking_.tracker.relative.dense.strideFor(camera_));
+                                   photometric =
+                                       samplePhotometricPoints(frame, camera_, params_.local_map.depth_range,
+                                                               tracking_.tracker.relative.dense.strideFor(camera_));
                                  return *photometric;
                                }};
   TrackingOutcome tracked;
@@ -383,7 +398,9 @@ FrameReport Mapper::addFrame(const RgbdFrame& input) {
   switch (report.decision.kind) {
     case FrameDecision::Kind::kUpdate: report.keyframe = report.decision.keyframe; break;
     case FrameDecision::Kind::kRevisit: revisitKeyframe(observed, &frame, &report); break;
-    case FrameDecision::Kind::kNewKeyframe: startKeyframe(std::move(features), points, tracked, views, &frame, &report); break;
+    case FrameDecision::Kind::kNewKeyframe:
+      startKeyframe(std::move(features), points, tracked, views, &frame, &report);
+      break;
   }
   report.T_W_C = frame.T_W_C;
   // The keyframe left behind stops growing (unless revisited): its cells then hold what they

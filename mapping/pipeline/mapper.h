@@ -47,10 +47,10 @@ struct TrackingParams {
 
 /// Wall time of each stage of one frame, milliseconds.
 struct StageTimes {
-  double features_ms = 0;  ///< ORB, on this thread or, computed ahead, on the prefetch thread (then not in total_ms)
-  double decision_ms = 0;  ///< covisibility against the current keyframe, loop search, edges
-  double update_ms = 0;    ///< local-map integration
-  double tracking_ms = 0;  ///< pose estimate (PoseSource::kTrack): dense sampling, PnP, refinement
+  double features_ms = 0;    ///< ORB, on this thread or, computed ahead, on the prefetch thread (then not in total_ms)
+  double decision_ms = 0;    ///< covisibility against the current keyframe, loop search, edges
+  double update_ms = 0;      ///< local-map integration
+  double tracking_ms = 0;    ///< pose estimate (PoseSource::kTrack): dense sampling, PnP, refinement
   double pose_graph_ms = 0;  ///< pose-graph optimisation after a loop closure (part of decision_ms)
   double total_ms = 0;
 };
@@ -58,10 +58,10 @@ struct StageTimes {
 /// What happened to one frame.
 struct FrameReport {
   int frame_index = 0;
-  FrameDecision decision;   ///< kind, deltas, and the search's matched / pruned counts
-  int keyframe = -1;        ///< the keyframe the frame went into (new or existing)
+  FrameDecision decision;  ///< kind, deltas, and the search's matched / pruned counts
+  int keyframe = -1;       ///< the keyframe the frame went into (new or existing)
   std::size_t features = 0;
-  std::vector<int> touched_cells;  ///< grid indices of `keyframe`'s container that changed
+  std::vector<int> touched_cells;           ///< grid indices of `keyframe`'s container that changed
   Transform T_W_C = Transform::Identity();  ///< the pose the frame was mapped at
   /// PoseSource::kTrack: the current keyframe gave a weak estimate (few inliers, a large residual)
   bool weak = false;
@@ -96,11 +96,11 @@ struct MapperState {
   int current_keyframe = -1;
   int frames_mapped = 0;
   int revisits = 0;
-  int last_frame_index = -1;  ///< depth-list index of the last frame mapped (-1: none)
-  double last_timestamp = 0;  ///< s, its depth timestamp
-  int frames_lost = 0;        ///< frames PoseSource::kTrack could not place (skipped, not integrated)
-  int frames_weak = 0;        ///< placed on the current keyframe's weak estimate (not relocalised)
-  int frames_relocalised = 0; ///< placed against another keyframe after a weak estimate
+  int last_frame_index = -1;   ///< depth-list index of the last frame mapped (-1: none)
+  double last_timestamp = 0;   ///< s, its depth timestamp
+  int frames_lost = 0;         ///< frames PoseSource::kTrack could not place (skipped, not integrated)
+  int frames_weak = 0;         ///< placed on the current keyframe's weak estimate (not relocalised)
+  int frames_relocalised = 0;  ///< placed against another keyframe after a weak estimate
   /// One pose per placed frame (integrated or not), relative to the keyframe it was placed in, so
   /// the trajectory follows every keyframe pose correction.
   std::vector<FramePose> frame_poses;
@@ -191,7 +191,8 @@ class Mapper {
                                             FrameReport* report);
   // Update, revisit or new keyframe: the fixed schedule (keyframe_every), else covisibility with
   // the current keyframe and, when that fails, with the index's candidates.
-  FrameDecision decideFrame(const FrameFeatures& features, const Transform& T_W_C, const std::vector<KeyframeView>& views);
+  FrameDecision decideFrame(const FrameFeatures& features, const Transform& T_W_C,
+                            const std::vector<KeyframeView>& views);
   // FrameDecision::Kind::kRevisit: counts it, closes a loop when the place is not linked to the
   // current keyframe, and links the two.
   void revisitKeyframe(const TrackingFrame& observed, RgbdFrame* frame, FrameReport* report);
@@ -225,7 +226,8 @@ class Mapper {
                              const RgbdFrame& frame);
   // addKeyframeEdges when no covisible keyframe closed a loop: the first verified of the keyframes
   // whose features could project into the frame with a drift-sized margin.
-  LoopEdge addLoopEdgeBeyondCovisibility(int created, int previous, const TrackingFrame& observed, const RgbdFrame& frame);
+  LoopEdge addLoopEdgeBeyondCovisibility(int created, int previous, const TrackingFrame& observed,
+                                         const RgbdFrame& frame);
 
   PinholeCamera camera_;
   MapperParams params_;

@@ -97,10 +97,8 @@ double Parameter::get(const ParameterValues& values) const {
 }
 
 void Parameter::set(ParameterValues& values, double value) const {
-  if (live)
-    global_row->set(values.global, value);
-  else
-    mapper_row->set(values.mapper, value);
+  if (live) global_row->set(values.global, value);
+  else mapper_row->set(values.mapper, value);
 }
 
 bool ParameterValues::operator==(const ParameterValues& other) const {
@@ -120,8 +118,8 @@ const Parameter* findParameter(std::string_view key) {
 std::string whyDisabled(const Parameter& p, const ParameterValues& values) {
   if (p.enabled_by.empty()) return "";
   const Parameter* rule = findParameter(p.enabled_by);
-  if (rule == nullptr) throw std::logic_error(std::string(p.key) + " is enabled by no parameter '" +
-                                              std::string(p.enabled_by) + "'");
+  if (rule == nullptr)
+    throw std::logic_error(std::string(p.key) + " is enabled by no parameter '" + std::string(p.enabled_by) + "'");
   if (rule->get(values) != 0) return "";
   std::string text(rule->label);
   if (!text.empty()) text[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(text[0])));

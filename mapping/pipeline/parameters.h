@@ -59,7 +59,7 @@ struct StoredParameter {
   enum class Type { kI32, kU32, kF64, kBool };  ///< little-endian; kU32 stores a choice's index
   const Parameter* parameter = nullptr;
   Type type = Type::kF64;
-  const char* name = "";           ///< what a read error calls the field
+  const char* name = "";            ///< what a read error calls the field
   std::uint32_t since_version = 1;  ///< the format version that added it
   /// Its value in files older than since_version; none: the struct's default.
   std::optional<double> older = std::nullopt;

@@ -5,8 +5,8 @@
 #include <stdexcept>
 #include <string>
 
-#include <ceres/ceres.h>
 #include <Eigen/Cholesky>
+#include <ceres/ceres.h>
 
 #include "mapping/core/timing.h"
 
@@ -18,8 +18,7 @@ namespace {
 class RelativePoseCost {
  public:
   RelativePoseCost(const Transform& T_from_to, const Matrix6d& sqrt_information)
-      : q_meas_inv_(Eigen::Quaterniond(T_from_to.linear()).conjugate()),
-        p_meas_(T_from_to.translation()),
+      : q_meas_inv_(Eigen::Quaterniond(T_from_to.linear()).conjugate()), p_meas_(T_from_to.translation()),
         sqrt_information_(sqrt_information) {}
 
   template <typename T>

@@ -149,7 +149,8 @@ EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m
   return g;
 }
 
-double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y, Eigen::Vector3d* closest) {
+double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y,
+                                  Eigen::Vector3d* closest) {
   const double e[3] = {semi_axes[0], semi_axes[1], semi_axes[2]};
   const double ya[3] = {std::abs(y[0]), std::abs(y[1]), std::abs(y[2])};
   double x[3];
@@ -202,7 +203,8 @@ bool gateImageBounds(const EllipsoidGate& g, const PinholeCamera& camera, const 
     *hi = std::min(size - 1, static_cast<int>(std::ceil(std::min(p_hi, static_cast<double>(size)))));
     return true;
   };
-  return bounds(camera.fx, camera.cx, 0, camera.width, u0, u1) && bounds(camera.fy, camera.cy, 1, camera.height, v0, v1);
+  return bounds(camera.fx, camera.cx, 0, camera.width, u0, u1) &&
+         bounds(camera.fy, camera.cy, 1, camera.height, v0, v1);
 }
 
 }  // namespace vdmap

@@ -73,7 +73,9 @@ inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d
 /// the ray misses it or enters it beyond max_t. alpha = d^T A d, beta = d^T A (o - mean), the root
 /// gamma / (sqrt(beta^2 - alpha gamma) - beta) (the smaller root, without cancellation).
 /// True when gamma / (-2 beta) > max_t by more than rounding (beta < 0).
-inline bool gateEntryBeyond(double gamma, double beta, double max_t) { return gamma > max_t * (-2.0 * beta) * (1 + 1e-9); }
+inline bool gateEntryBeyond(double gamma, double beta, double max_t) {
+  return gamma > max_t * (-2.0 * beta) * (1 + 1e-9);
+}
 
 inline double gateRayEntry(const double a[6], const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
   constexpr double kInf = std::numeric_limits<double>::infinity();

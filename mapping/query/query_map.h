@@ -37,7 +37,7 @@ struct QueryParams {
   double gate_sigma = 3.0;     ///< k: occupied within k sigma of an ellipsoid; free more than k sigma in front
   double min_sigma_m = 0.001;  ///< added as min_sigma^2 I to every covariance before it is inverted
   ConflictRule conflict = ConflictRule::kOccupied;
-  int threads = 0;             ///< 0: all cores; the answers do not depend on it
+  int threads = 0;  ///< 0: all cores; the answers do not depend on it
   /// Throws std::invalid_argument naming the first parameter out of range.
   void validate() const;
 };
@@ -70,7 +70,7 @@ struct BodyCollision {
   bool collides = false;         ///< some sphere comes closer than its radius + clearance to a surface
   bool touches_unknown = false;  ///< some sphere's probe points (docs/method.md 13) lie in unknown space
   double clearance_m = std::numeric_limits<double>::infinity();  ///< min over spheres of distance - radius
-  int sphere = -1;               ///< index (into the input) of the sphere that gave clearance_m
+  int sphere = -1;                                      ///< index (into the input) of the sphere that gave clearance_m
   Eigen::Vector3d closest_W = Eigen::Vector3d::Zero();  ///< that sphere's nearest surface point
 };
 
@@ -84,7 +84,7 @@ struct RayHit {
   bool hit = false;
   double t_m = std::numeric_limits<double>::infinity();  ///< range along the unit direction
   Eigen::Vector3d point_W = Eigen::Vector3d::Zero();
-  Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();    ///< the gate surface's outward normal at the hit
+  Eigen::Vector3d normal_W = Eigen::Vector3d::Zero();  ///< the gate surface's outward normal at the hit
   std::int32_t ellipsoid = -1;
 };
 

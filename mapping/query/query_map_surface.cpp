@@ -8,8 +8,8 @@
 #include <string>
 
 #include "mapping/core/parallel.h"
-#include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/detail/query_map_data.h"
+#include "mapping/query/ellipsoid_geometry.h"
 
 namespace vdmap {
 
@@ -44,8 +44,7 @@ RayHit makeHit(const SurfaceIndex& surface, const Eigen::Vector3d& o, const Eige
 void QueryMap::distance(std::span<const Eigen::Vector3d> q_W, std::span<DistanceResult> out,
                         double max_distance_m) const {
   checkSizes(q_W.size(), out.size());
-  if (std::isnan(max_distance_m) || max_distance_m < 0)
-    throw std::invalid_argument("max_distance_m must be >= 0");
+  if (std::isnan(max_distance_m) || max_distance_m < 0) throw std::invalid_argument("max_distance_m must be >= 0");
   for (std::size_t i = 0; i < q_W.size(); ++i)
     if (!finite(q_W[i])) badInput("point", i, "expected finite coordinates");
   if (!data_) {
@@ -192,7 +191,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
     double t_lo = 0;
     std::int32_t index = -1;
     int u0 = 0, u1 = -1, v0 = 0, v1 = -1;
-    double a[6];          // the gate's A, upper triangle
+    double a[6];  // the gate's A, upper triangle
     GateRayOrigin origin;
     // The silhouette's span per row (see below): w = R A (o - mean), B = R A R^T (upper), qa.
     Eigen::Vector3d w;

@@ -61,7 +61,8 @@ class MeshBuilder {
     const int nlat = 16, nlon = 32, surface = surfaces_++;
     auto point = [&](int i, int j) {
       const double th = M_PI * i / nlat, ph = 2 * M_PI * j / nlon;
-      return Eigen::Vector3f(c + r * Eigen::Vector3f(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
+      return Eigen::Vector3f(
+          c + r * Eigen::Vector3f(std::sin(th) * std::cos(ph), std::sin(th) * std::sin(ph), std::cos(th)));
     };
     for (int i = 0; i < nlat; ++i)
       for (int j = 0; j < nlon; ++j)
@@ -118,7 +119,7 @@ class MeshBuilder {
 Transform lookAt(const Eigen::Vector3d& eye, const Eigen::Vector3d& target) {
   const Eigen::Vector3d z = (target - eye).normalized();
   const Eigen::Vector3d x = z.cross(Eigen::Vector3d::UnitZ()).normalized();  // image right
-  const Eigen::Vector3d y = z.cross(x);                                       // image down
+  const Eigen::Vector3d y = z.cross(x);                                      // image down
   Transform T = Transform::Identity();
   T.linear() << x, y, z;
   T.translation() = eye;
@@ -151,7 +152,8 @@ BuiltinScene makeBuiltinScene(const BuiltinSceneParams& params) {
   // A shelf against the wall x = +X: two sides and four boards.
   b.box(V(2.1f, 0.2f, 0), V(2.45f, 0.24f, 1.8f), {120, 100, 80});
   b.box(V(2.1f, 1.36f, 0), V(2.45f, 1.4f, 1.8f), {120, 100, 80});
-  for (int k = 0; k < 4; ++k) b.box(V(2.1f, 0.24f, 0.1f + 0.55f * k), V(2.45f, 1.36f, 0.13f + 0.55f * k), {140, 110, 85});
+  for (int k = 0; k < 4; ++k)
+    b.box(V(2.1f, 0.24f, 0.1f + 0.55f * k), V(2.45f, 1.36f, 0.13f + 0.55f * k), {140, 110, 85});
   b.box(V(2.15f, 0.35f, 0.13f), V(2.4f, 0.6f, 0.45f), {60, 150, 90});
   b.box(V(2.15f, 0.8f, 0.68f), V(2.4f, 1.2f, 0.9f), {200, 60, 80});
   // Round objects.
@@ -169,9 +171,9 @@ BuiltinScene makeBuiltinScene(const BuiltinSceneParams& params) {
   struct Lap {
     double radius, eye_dz, gaze_rad, target_z, direction;
   };
-  static const Lap kLaps[8] = {{1.0, 0.0, 0.9, 0.75, 1},   {0.65, 0.3, 2.4, 0.4, -1}, {1.35, -0.3, -0.9, 1.3, 1},
-                               {0.8, 0.5, 3.4, 0.1, -1},   {1.3, 0.25, 1.6, 2.3, 1},  {0.7, -0.15, -2.2, 0.9, -1},
-                               {1.15, 0.55, 0.2, 0.2, 1},  {0.9, -0.2, 4.4, 1.6, -1}};
+  static const Lap kLaps[8] = {{1.0, 0.0, 0.9, 0.75, 1},  {0.65, 0.3, 2.4, 0.4, -1}, {1.35, -0.3, -0.9, 1.3, 1},
+                               {0.8, 0.5, 3.4, 0.1, -1},  {1.3, 0.25, 1.6, 2.3, 1},  {0.7, -0.15, -2.2, 0.9, -1},
+                               {1.15, 0.55, 0.2, 0.2, 1}, {0.9, -0.2, 4.4, 1.6, -1}};
   const int n = params.frames;
   for (int lap = 0; lap < params.laps; ++lap) {
     const Lap& l = kLaps[lap % 8];

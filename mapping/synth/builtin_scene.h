@@ -12,7 +12,7 @@
 namespace vdmap {
 
 struct BuiltinSceneParams {
-  int frames = 300;          ///< poses per lap (10 s at 30 fps); a lap's last is next to its first
+  int frames = 300;  ///< poses per lap (10 s at 30 fps); a lap's last is next to its first
   /// Laps of the walk. Lap 0 is the default walk; every further lap circles the table at
   /// another radius, height and gaze (a cycle of 8 variants), so that it sees the room from new
   /// viewpoints: a long run that keeps making keyframes (for the loop-closure cost) while still

@@ -53,7 +53,8 @@ Matrix6d informationInFrame(const Matrix6d& info_B, const Transform& T_B_X) {
 void KeyframePoseGraph::replaceMeasuredEdges(std::span<const PoseGraphEdge> edges) {
   std::set<std::pair<int, int>> pairs;
   for (const PoseGraphEdge& e : edges) pairs.insert(std::minmax(e.from, e.to));
-  std::erase_if(edges_, [&pairs](const PoseGraphEdge& e) { return !e.robust && pairs.contains(std::minmax(e.from, e.to)); });
+  std::erase_if(edges_,
+                [&pairs](const PoseGraphEdge& e) { return !e.robust && pairs.contains(std::minmax(e.from, e.to)); });
   edges_.insert(edges_.end(), edges.begin(), edges.end());
 }
 

@@ -25,7 +25,7 @@ struct EdgeNoise {
 /// When and how loops are closed (PoseSource::kTrack).
 struct LoopClosureParams {
   bool enabled = true;
-  int min_inliers = 30;         ///< PnP inliers a loop's relative pose needs (besides a good estimate)
+  int min_inliers = 30;  ///< PnP inliers a loop's relative pose needs (besides a good estimate)
   /// How far the drift may have put a revisited keyframe from where tracking expects it.
   double max_drift_m = 0.5;
   double max_drift_deg = 20.0;
@@ -52,12 +52,12 @@ Matrix6d informationInFrame(const Matrix6d& info_B, const Transform& T_B_X);
 
 /// One accepted loop closure.
 struct LoopClosure {
-  int frame_index = 0;   ///< the frame that closed it
-  int from = 0;          ///< keyframe the frame was tracked in
-  int to = 0;            ///< the revisited keyframe
-  int inliers = 0;       ///< PnP inliers of the verifying estimate
-  double correction_m = 0;    ///< the largest keyframe move the optimisation made
-  double pose_graph_ms = 0;   ///< wall time of the optimisation
+  int frame_index = 0;       ///< the frame that closed it
+  int from = 0;              ///< keyframe the frame was tracked in
+  int to = 0;                ///< the revisited keyframe
+  int inliers = 0;           ///< PnP inliers of the verifying estimate
+  double correction_m = 0;   ///< the largest keyframe move the optimisation made
+  double pose_graph_ms = 0;  ///< wall time of the optimisation
 };
 
 /// Edges and the record of optimisations. Not thread-safe: the mapping thread owns it.

@@ -42,7 +42,8 @@ std::optional<PoseGraphEdge> registerMeans(const Keyframe& A, const Keyframe& B,
 // A pose-graph edge's residual at the poses T_W (pose_graph.h: the translation and the rotation
 // of E = T_from_to^-1 T_W_from^-1 T_W_to, translation first).
 Eigen::Matrix<double, 6, 1> edgeResidual(const PoseGraphEdge& e, const std::vector<Transform>& T_W) {
-  const Transform E = e.T_from_to.inverse() * T_W[static_cast<std::size_t>(e.from)].inverse() * T_W[static_cast<std::size_t>(e.to)];
+  const Transform E =
+      e.T_from_to.inverse() * T_W[static_cast<std::size_t>(e.from)].inverse() * T_W[static_cast<std::size_t>(e.to)];
   Eigen::Quaterniond q(E.linear());
   if (q.w() < 0) q.coeffs() = -q.coeffs();
   Eigen::Matrix<double, 6, 1> r;
@@ -146,12 +147,14 @@ Eigen::VectorXd jointStep(const std::vector<CovisibilityEdge>& pairs, const Join
 // (a box room's walls) the keyframes slid towards more overlap and away from the truth, which the
 // fixed set stops (docs/notes/tracking.md).
 void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const std::vector<CovisibilityEdge>& pairs,
-                   const std::vector<DensePoints>& means, const MapRefinementParams& params, MapRefinementResult* result) {
+                   const std::vector<DensePoints>& means, const MapRefinementParams& params,
+                   MapRefinementResult* result) {
   const int n = static_cast<int>(graph->size());
   if (n < 2) return;
   std::vector<Transform> T_W;
   for (const Keyframe& k : graph->keyframes()) T_W.push_back(k.T_W_K);
-  JointTerms terms{pairs, std::vector<DensePoints>(pairs.size()), std::vector<std::vector<CellDistribution>>(graph->size())};
+  JointTerms terms{pairs, std::vector<DensePoints>(pairs.size()),
+                   std::vector<std::vector<CellDistribution>>(graph->size())};
   std::vector<char> is_a(graph->size(), 0);
   for (const CovisibilityEdge& e : pairs) is_a[static_cast<std::size_t>(e.a)] = 1;
   parallelFor(params.threads, terms.cells.size(), [&](std::size_t k) {
@@ -202,7 +205,8 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
   for (const CovisibilityEdge& e : pairs) {
     const Transform before = graph->keyframe(e.a).T_W_K.inverse() * graph->keyframe(e.b).T_W_K;
     const Transform after = T_W[static_cast<std::size_t>(e.a)].inverse() * T_W[static_cast<std::size_t>(e.b)];
-    if (translationBetween(before, after) > params.relative.max_jump_m || degreesBetween(before, after) > params.relative.max_jump_deg) {
+    if (translationBetween(before, after) > params.relative.max_jump_m ||
+        degreesBetween(before, after) > params.relative.max_jump_deg) {
       result->refused = true;
       return;
     }
@@ -226,7 +230,8 @@ void refineJointly(KeyframeGraph* graph, KeyframePoseGraph* pose_graph, const st
 
 }  // namespace
 
-std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe& B, const MapRefinementParams& params) {
+std::optional<PoseGraphEdge> registerLocalMaps(const Keyframe& A, const Keyframe& B,
+                                               const MapRefinementParams& params) {
   return registerMeans(A, B, cellMeans(B.container, params.min_cell_points), params);
 }
 
@@ -251,7 +256,8 @@ MapRefinementResult refineKeyframePoses(KeyframeGraph* graph, KeyframePoseGraph*
     std::vector<std::optional<PoseGraphEdge>> measured(pairs.size());
     parallelFor(params.threads, pairs.size(), [&](std::size_t i) {
       const CovisibilityEdge& e = pairs[i];
-      measured[i] = registerMeans(graph->keyframe(e.a), graph->keyframe(e.b), means[static_cast<std::size_t>(e.b)], params);
+      measured[i] =
+          registerMeans(graph->keyframe(e.a), graph->keyframe(e.b), means[static_cast<std::size_t>(e.b)], params);
     });
     std::vector<PoseGraphEdge> edges;
     for (const auto& e : measured)
@@ -263,7 +269,8 @@ MapRefinementResult refineKeyframePoses(KeyframeGraph* graph, KeyframePoseGraph*
     if (pose_graph->optimise(graph, options, nullptr, round > 0) < params.converged_m) break;
   }
   for (std::size_t i = 0; i < initial.size(); ++i)
-    result.moved_m = std::max(result.moved_m, (graph->keyframe(static_cast<int>(i)).T_W_K.translation() - initial[i].translation()).norm());
+    result.moved_m = std::max(
+        result.moved_m, (graph->keyframe(static_cast<int>(i)).T_W_K.translation() - initial[i].translation()).norm());
   result.ms = msSince(start);
   return result;
 }

@@ -65,7 +65,7 @@ struct MapRefinementParams {
   }();
   int joint_iterations = 100;
   double joint_converged_m = 1e-5;
-  int threads = 0;              ///< registrations in parallel (0: all cores); the result does not depend on it
+  int threads = 0;  ///< registrations in parallel (0: all cores); the result does not depend on it
 };
 
 /// Refines T_A_B from the keyframes' current poses by aligning B's local map (its ellipsoid

@@ -134,7 +134,7 @@ CellDistribution distributionOf(const StoredCell& cell, const NdtRefinementParam
   const double inv_n1 = 1.0 / (cell.n - 1.0);
   Eigen::Matrix3d sigma;
   sigma << s[0] * inv_n1, s[1] * inv_n1, s[2] * inv_n1,  //
-      s[1] * inv_n1, s[3] * inv_n1, s[4] * inv_n1,      //
+      s[1] * inv_n1, s[3] * inv_n1, s[4] * inv_n1,       //
       s[2] * inv_n1, s[4] * inv_n1, s[5] * inv_n1;
   double isotropic = params.min_variance_m2;
   if (params.axial_noise) {
@@ -149,7 +149,8 @@ CellDistribution distributionOf(const StoredCell& cell, const NdtRefinementParam
   lambda(1) *= params.in_plane_inflation;
   lambda(2) *= params.in_plane_inflation;
   const Eigen::Matrix3d o = es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
-  const float values[6] = {float(o(0, 0)), float(o(0, 1)), float(o(0, 2)), float(o(1, 1)), float(o(1, 2)), float(o(2, 2))};
+  const float values[6] = {float(o(0, 0)), float(o(0, 1)), float(o(0, 2)),
+                           float(o(1, 1)), float(o(1, 2)), float(o(2, 2))};
   std::copy(values, values + 6, out.omega);
   return out;
 }
@@ -232,9 +233,9 @@ Linearisation linearise(const KeyframeContainer& map, const DensePoints& frame, 
     const float c11 = qz * b01 - qx * b21, c12 = qz * b02 - qx * b22;
     const float c22 = -qy * b02 + qx * b12;
     const float terms[21] = {o[0], o[1], o[2], b00, b01, b02,  //
-                             o[3], o[4], b10, b11, b12,        //
-                             o[5], b20, b21, b22,              //
-                             c00, c01, c02, c11, c12, c22};
+                             o[3], o[4], b10,  b11, b12,       //
+                             o[5], b20,  b21,  b22,            //
+                             c00,  c01,  c02,  c11, c12, c22};
     for (int k = 0; k < 21; ++k) H[k] += w * terms[k];
   }
   Linearisation lin;
@@ -354,7 +355,8 @@ void addPhotometricTerms(const PhotometricTerm& term, const PinholeCamera& cam, 
 auto cachedDistributions(const KeyframeContainer& map, const NdtRefinementParams& params) {
   static thread_local Scratch scratch;
   scratch.use(map, params);
-  return [&map, &params, base = map.cells().data(), cells = scratch.cells.data()](const StoredCell* cell) -> const CellDistribution& {
+  return [&map, &params, base = map.cells().data(),
+          cells = scratch.cells.data()](const StoredCell* cell) -> const CellDistribution& {
     return cellInfo(*cell, &cells[static_cast<std::size_t>(cell - base)], map.id(), params);
   };
 }
@@ -421,8 +423,9 @@ NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& map, std::
     return cells[static_cast<std::size_t>(cell - base)];
   };
   if (inliers) inliers->assign(frame.size(), 0);
-  return resultOf(linearise(map, frame, T_K_C, params, params.robust_k, distribution, inliers ? inliers->data() : nullptr),
-                  frame.size());
+  return resultOf(
+      linearise(map, frame, T_K_C, params, params.robust_k, distribution, inliers ? inliers->data() : nullptr),
+      frame.size());
 }
 
 std::vector<CellDistribution> cellDistributions(const KeyframeContainer& map, const NdtRefinementParams& params) {

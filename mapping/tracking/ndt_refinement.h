@@ -80,7 +80,8 @@ struct NdtRefinementParams {
   /// too few for the refinement to be trusted (min_dense_inliers), and it tracked far off.
   int points = 4800;
   int strideFor(const PinholeCamera& camera) const {
-    return std::max(1, static_cast<int>(std::lround(std::sqrt(double(camera.width) * camera.height / std::max(points, 1)))));
+    return std::max(
+        1, static_cast<int>(std::lround(std::sqrt(double(camera.width) * camera.height / std::max(points, 1)))));
   }
   int iterations = 6;           ///< Gauss-Newton steps at most
   int min_cell_points = 6;      ///< cells with fewer points give no distribution (min_points, docs/method.md 4)
@@ -127,16 +128,16 @@ struct NdtRefinementParams {
 };
 
 struct NdtRefinementResult {
-  int points = 0;       ///< points of the frame
-  int associated = 0;   ///< of those, landing on a cell with an ellipsoid within max_distance_m (last step)
-  int inliers = 0;      ///< of those, within robust_k (Mahalanobis)
+  int points = 0;                ///< points of the frame
+  int associated = 0;            ///< of those, landing on a cell with an ellipsoid within max_distance_m (last step)
+  int inliers = 0;               ///< of those, within robust_k (Mahalanobis)
   double rms_mahalanobis = 0.0;  ///< over the inliers
   /// Sum over the points and the features of 1 - rho(d) / rho_max (Tukey's loss of the
   /// Mahalanobis distance d, or of the reprojection error): a soft inlier count, higher where the
   /// frame fits the local map and the matched keypoints better. The features count: the dense
   /// points alone favour a pose slid along a wall that puts more of them inside the map.
   double support = 0.0;
-  int iterations = 0;   ///< Gauss-Newton steps taken
+  int iterations = 0;  ///< Gauss-Newton steps taken
   /// The photometric term at the solution (0 without it): its points that project into the
   /// keyframe's image and the spread of their grey-level differences (sigma, grey levels).
   int photometric_points = 0;
@@ -144,7 +145,8 @@ struct NdtRefinementResult {
   /// Gauss-Newton normal matrix at the solution for a perturbation T_K_C <- exp(xi) T_K_C,
   /// xi = (translation, rotation) in the keyframe frame: the estimate's information matrix.
   Eigen::Matrix<double, 6, 6> information = Eigen::Matrix<double, 6, 6>::Zero();
-  Eigen::Matrix<double, 6, 1> gradient = Eigen::Matrix<double, 6, 1>::Zero();  ///< of the cost at the solution, same perturbation
+  Eigen::Matrix<double, 6, 1> gradient =
+      Eigen::Matrix<double, 6, 1>::Zero();  ///< of the cost at the solution, same perturbation
   double inlierRatio() const { return associated > 0 ? static_cast<double>(inliers) / associated : 0.0; }
   /// The translation block of `information` without the photometric term: the surfaces' and
   /// the features' hold on the position.
@@ -177,9 +179,9 @@ std::vector<CellDistribution> cellDistributions(const KeyframeContainer& local_m
 /// perturbation exp(xi) T_K_C, `support` the soft inlier count the step should raise; what
 /// refineAgainstLocalMap measures with 0 iterations, bit for bit. `inliers`, when given, gets a
 /// flag per point of `frame`: set for the points within robust_k (NdtRefinementResult::inliers).
-NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map, std::span<const CellDistribution> cells,
-                                             const DensePoints& frame, const Transform& T_K_C,
-                                             const NdtRefinementParams& params = {},
+NdtRefinementResult lineariseAgainstLocalMap(const KeyframeContainer& local_map,
+                                             std::span<const CellDistribution> cells, const DensePoints& frame,
+                                             const Transform& T_K_C, const NdtRefinementParams& params = {},
                                              std::vector<std::uint8_t>* inliers = nullptr);
 
 /// Refines T_K_C (the frame's pose in the keyframe frame) in place: NDT distances of the frame's

@@ -3,8 +3,8 @@
 #include <cmath>
 #include <functional>
 
-#include <opencv2/calib3d.hpp>
 #include <Eigen/Cholesky>
+#include <opencv2/calib3d.hpp>
 #include <opencv2/core/eigen.hpp>
 
 #include "mapping/keyframe/covisibility.h"
@@ -33,7 +33,8 @@ Correspondences bruteForceMatches(const FrameFeatures& K, const FrameFeatures& F
   if (K.size() == 0 || F.size() < 2) return out;
   for (const cv::DMatch& best : ratioTestMatches(K, F, params.max_hamming, params.lowe_ratio))
     if (K.depth_m[static_cast<std::size_t>(best.queryIdx)] > 0.0f)
-      out.add(K, static_cast<std::size_t>(best.queryIdx), F.keypoints[static_cast<std::size_t>(best.trainIdx)].pt, camera);
+      out.add(K, static_cast<std::size_t>(best.queryIdx), F.keypoints[static_cast<std::size_t>(best.trainIdx)].pt,
+              camera);
   return out;
 }
 
@@ -78,7 +79,7 @@ std::vector<int> inliersAt(const Transform& T_F_K, const Correspondences& c, con
 // does, without its cv::Mat overhead, which made it a sixth of the tracking's time): steps
 // T_F_K <- exp(xi) T_F_K until a step is below 1e-7 or 10 steps; a singular system stops it.
 Transform refineReprojection(const Transform& T_F_K, const Correspondences& c, const PinholeCamera& camera,
-                   const std::vector<int>& inliers) {
+                             const std::vector<int>& inliers) {
   Transform T = T_F_K;
   for (int step = 0; step < 10; ++step) {
     Eigen::Matrix<double, 6, 6> H = Eigen::Matrix<double, 6, 6>::Zero();
@@ -187,9 +188,7 @@ Transform orthonormalised(const Transform& T) {
 
 }  // namespace
 
-double translationBetween(const Transform& a, const Transform& b) {
-  return (a.translation() - b.translation()).norm();
-}
+double translationBetween(const Transform& a, const Transform& b) { return (a.translation() - b.translation()).norm(); }
 
 double degreesBetween(const Transform& a, const Transform& b) {
   return Eigen::AngleAxisd(a.linear().transpose() * b.linear()).angle() * 180.0 / M_PI;
@@ -240,7 +239,8 @@ RelativePose estimateRelativePose(const Keyframe& K, const TrackingFrame& frame,
   if (params.dense_refinement && frame.points) {
     Transform seed = prior_T_K_C ? *prior_T_K_C : *pnp;
     if (pnp && prior_T_K_C &&
-        (translationBetween(*pnp, seed) > params.seed_agreement_m || degreesBetween(*pnp, seed) > params.seed_agreement_deg)) {
+        (translationBetween(*pnp, seed) > params.seed_agreement_m ||
+         degreesBetween(*pnp, seed) > params.seed_agreement_deg)) {
       // Both measured where they are (no step); the one the local map and the features support better is refined.
       NdtRefinementParams measure = params.dense;
       measure.iterations = 0;

@@ -13,12 +13,12 @@
 namespace vdmap {
 
 struct PnpParams {
-  int max_hamming = 64;          ///< descriptor distance limit (docs/method.md 5)
-  double lowe_ratio = 0.8;       ///< best / second-best distance must be below this
-  int min_matches = 12;          ///< fewer matches with depth: no PnP
+  int max_hamming = 64;     ///< descriptor distance limit (docs/method.md 5)
+  double lowe_ratio = 0.8;  ///< best / second-best distance must be below this
+  int min_matches = 12;     ///< fewer matches with depth: no PnP
   int ransac_iterations = 100;
   double ransac_reprojection_px = 3.0;
-  int min_inliers = 20;          ///< fewer RANSAC inliers: the PnP pose is not used
+  int min_inliers = 20;  ///< fewer RANSAC inliers: the PnP pose is not used
   /// With a prior, the keyframe's keypoints are matched by projection (matchByProjection) at
   /// the prior within this radius, and PnP refines the prior on those matches without RANSAC;
   /// when that explains fewer than min_inliers, the brute-force 2-NN matches and RANSAC decide.
@@ -73,9 +73,9 @@ struct RelativePose {
   enum class Status { kGood, kWeak, kLost };
   Status status = Status::kLost;
   Transform T_K_C = Transform::Identity();
-  int matches = 0;       ///< descriptor matches to keypoints with depth
-  int pnp_inliers = 0;   ///< RANSAC inliers (0: PnP not run or failed)
-  bool pnp_used = false; ///< the PnP pose passed the inlier and motion checks and seeded the refinement
+  int matches = 0;        ///< descriptor matches to keypoints with depth
+  int pnp_inliers = 0;    ///< RANSAC inliers (0: PnP not run or failed)
+  bool pnp_used = false;  ///< the PnP pose passed the inlier and motion checks and seeded the refinement
   NdtRefinementResult dense;
   bool dense_trusted = false;
   bool usable() const { return status != Status::kLost; }

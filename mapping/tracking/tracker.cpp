@@ -50,7 +50,8 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
       int proposed = 0;
       for (const int id : recognised) {
         if (proposed >= params_.recognition_candidates) break;
-        if (id == current || std::any_of(candidates.begin(), candidates.end(), [id](const auto& c) { return c.second == id; }))
+        if (id == current ||
+            std::any_of(candidates.begin(), candidates.end(), [id](const auto& c) { return c.second == id; }))
           continue;
         candidates.emplace_back(1.0, id);  // after the pose-based ones; no prior (see below)
         ++proposed;
@@ -74,8 +75,9 @@ TrackingOutcome Tracker::track(const KeyframeGraph& graph, int current, const Tr
   // as likely a wrong place that fits (the box-like rooms of the built-in scene): not used; nor
   // is the local map's alone when it explains only a patch of the frame or leaves it free to slide.
   const RelativePose& e = out.estimate;
-  const bool supported = e.pnp_used || (e.dense.inliers >= params_.min_dense_only_share * static_cast<double>(e.dense.points) &&
-                                        e.dense.translationConditioning() >= params_.min_dense_only_conditioning);
+  const bool supported =
+      e.pnp_used || (e.dense.inliers >= params_.min_dense_only_share * static_cast<double>(e.dense.points) &&
+                     e.dense.translationConditioning() >= params_.min_dense_only_conditioning);
   if (e.usable() && supported && state_.frames_lost == 0) out.keyframe = current;
   return out;
 }

@@ -40,18 +40,18 @@ struct TrackerParams {
 /// What the tracker carries from frame to frame (a saved session needs it to continue). The last
 /// pose is kept relative to its keyframe, so a pose-graph correction moves the prediction too.
 struct TrackerState {
-  int keyframe = -1;                         ///< keyframe of the last placed frame (-1: none yet)
-  Transform T_K_C = Transform::Identity();   ///< the last placed frame in that keyframe
-  Transform velocity = Transform::Identity();///< T_Cprev_Ccur of the last two placed frames
-  int frames_lost = 0;                       ///< frames skipped since the last placed one
+  int keyframe = -1;                           ///< keyframe of the last placed frame (-1: none yet)
+  Transform T_K_C = Transform::Identity();     ///< the last placed frame in that keyframe
+  Transform velocity = Transform::Identity();  ///< T_Cprev_Ccur of the last two placed frames
+  int frames_lost = 0;                         ///< frames skipped since the last placed one
 };
 
 /// The outcome for one frame.
 struct TrackingOutcome {
-  RelativePose estimate;       ///< against `keyframe`
-  int keyframe = -1;           ///< the keyframe the pose is relative to (-1: lost)
-  bool relocalised = false;    ///< placed against another keyframe than the current one
-  bool weak = false;           ///< the current keyframe's estimate was not good
+  RelativePose estimate;     ///< against `keyframe`
+  int keyframe = -1;         ///< the keyframe the pose is relative to (-1: lost)
+  bool relocalised = false;  ///< placed against another keyframe than the current one
+  bool weak = false;         ///< the current keyframe's estimate was not good
   bool lost() const { return keyframe < 0; }
 };
 
@@ -80,7 +80,10 @@ class Tracker {
   /// The frame was placed at T_K_C in keyframe `keyframe` (updates the velocity).
   void accept(const KeyframeGraph& graph, int keyframe, const Transform& T_K_C);
   /// The frame could not be placed: the next prediction has no velocity and a wider motion check.
-  void lose() { ++state_.frames_lost; state_.velocity = Transform::Identity(); }
+  void lose() {
+    ++state_.frames_lost;
+    state_.velocity = Transform::Identity();
+  }
 
   const TrackerState& state() const { return state_; }
   void restore(const TrackerState& state) { state_ = state; }

@@ -17,11 +17,11 @@
 
 #include "mapping/core/error.h"
 #include "mapping/eval/trajectory_error.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/files/ply_writer.h"
+#include "mapping/files/session_file.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/image_codec.h"
-#include "mapping/files/ply_reader.h"
-#include "mapping/files/session_file.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/io/tum_sequence.h"
 #include "tests/support/test_util.h"
@@ -44,8 +44,8 @@ enum class Expect {
 /// line has no `read`: its bad cases return the arguments (with {dir} for the folder).
 struct Input {
   const char* name;
-  const char* path;        ///< the file read, relative to the folder ("" for the command line)
-  const char* fuzz_target; ///< seed corpus folder, or nullptr
+  const char* path;         ///< the file read, relative to the folder ("" for the command line)
+  const char* fuzz_target;  ///< seed corpus folder, or nullptr
   std::function<void(const fs::path& dir)> make_good;
   std::function<void(const fs::path& file)> read;
 };
@@ -97,7 +97,8 @@ const std::vector<Input>& inputs() {
        [](const fs::path& f) { evaluateTrajectoryFiles(f, f.parent_path() / "gt.txt"); }},
       {"camera_yaml", "camera.yaml", "camera",
        [](const fs::path& d) {
-         writeText(d / "camera.yaml", "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640\nheight: 480\n");
+         writeText(d / "camera.yaml",
+                   "fx: 500\nfy: 501\ncx: 320\ncy: 240\ndepth_scale: 1000\nwidth: 640\nheight: 480\n");
        },
        [](const fs::path& f) { readCameraFile(f); }},
       {"camera_json", "camera.json", "camera",
@@ -133,7 +134,8 @@ struct BadCase {
 };
 
 std::string replaceAll(std::string s, const std::string& from, const std::string& to) {
-  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size())) s.replace(at, from.size(), to);
+  for (std::size_t at = s.find(from); at != std::string::npos; at = s.find(from, at + to.size()))
+    s.replace(at, from.size(), to);
   return s;
 }
 
@@ -156,8 +158,8 @@ std::function<std::string(const fs::path&)> image(const char* file, cv::Mat pixe
 std::function<std::string(const fs::path&)> cutImage(const char* file, cv::Mat pixels, const char* ext,
                                                      double fraction) {
   return [=](const fs::path& d) {
-    const std::string bytes = std::string(ext) == ".png" ? encodePng(pixels, ChannelOrder::kBgr)
-                                                         : encodeJpeg(pixels, 95, ChannelOrder::kBgr);
+    const std::string bytes =
+        std::string(ext) == ".png" ? encodePng(pixels, ChannelOrder::kBgr) : encodeJpeg(pixels, 95, ChannelOrder::kBgr);
     writeText(d / file, bytes.substr(0, static_cast<std::size_t>(bytes.size() * fraction)));
     return std::string();
   };

@@ -101,7 +101,8 @@ TEST(Cli, InfoReportsValidDepthAndTheShareOfInvalidPixels) {
   EXPECT_EQ(j["no_depth_fraction"], 0.25);
   const auto text = runVdmap("info '" + (dir / "seq").string() + "'");
   EXPECT_NE(text.out.find("1.500 .. 2.000 m"), std::string::npos) << text.out;
-  EXPECT_NE(text.out.find("50% invalid (25% 0 = no measurement, 25% 65535 = invalid code)"), std::string::npos) << text.out;
+  EXPECT_NE(text.out.find("50% invalid (25% 0 = no measurement, 25% 65535 = invalid code)"), std::string::npos)
+      << text.out;
 }
 
 // `vdmap --version`: the CMake project version and, when the build was configured from a git

@@ -56,8 +56,8 @@ TEST(GuiCli, BuiltinScenePlayedToTheEndShowsAMapAndMergeDistanceChangesSigmaEPri
   const double coverage = mapCoverage(home / "a.png");
   EXPECT_GT(coverage, 0.05) << "the 3-D view looks empty";
 
-  const RunResult b = runInXvfb(home, common + " --set merge_distance=0.01 --stats-json '" +
-                                          (home / "b.json").string() + "'");
+  const RunResult b =
+      runInXvfb(home, common + " --set merge_distance=0.01 --stats-json '" + (home / "b.json").string() + "'");
   ASSERT_EQ(b.exit_code, 0) << b.err;
   const nlohmann::json sb = readJson(home / "b.json");
   EXPECT_DOUBLE_EQ(sb["merge_distance_m"].get<double>(), 0.01);
@@ -84,7 +84,8 @@ void expectLayoutFits(const nlohmann::json& stats, int width, int height) {
   EXPECT_LE(vx + vw, layout["panels"]["Map"][0].get<double>() + 0.5) << "the view ends under the right panel";
   ASSERT_TRUE(layout.contains("map_bbox_px")) << layout.dump();
   const nlohmann::json& b = layout["map_bbox_px"];
-  EXPECT_TRUE(b[0] >= vx && b[1] >= vy && b[2] <= vx + vw && b[3] <= vy + vh) << "map " << b.dump() << " view " << v.dump();
+  EXPECT_TRUE(b[0] >= vx && b[1] >= vy && b[2] <= vx + vw && b[3] <= vy + vh)
+      << "map " << b.dump() << " view " << v.dump();
   EXPECT_GT(b[2].get<double>() - b[0].get<double>(), 0.4 * vw) << "the map fills the view";
   EXPECT_EQ(layout["labels_cut"], 0);
 }
@@ -98,8 +99,9 @@ TEST(GuiCli, PanelsDockAndTheMapFitsTheViewFrom1280x720To3840x2160) {
     // The largest window draws its many pixels with llvmpipe: fewer frames keep the test short.
     const std::string frames = w > 2000 ? "0:10" : "0:30";
     // Every section open and a keyframe in the inspector: each label of the panels is drawn and checked.
-    const RunResult r = runInXvfb(home, "--frames " + frames + " --play-to-end --exit --expand-sections --keyframe 1 --window-size " +
-                                            size + " --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
+    const RunResult r =
+        runInXvfb(home, "--frames " + frames + " --play-to-end --exit --expand-sections --keyframe 1 --window-size " +
+                            size + " --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const cv::Mat image = test::readImage(png);
     EXPECT_EQ(image.cols, w);
@@ -115,8 +117,10 @@ TEST(GuiCli, AnIdleWindowCostsNoCpuAndKeyTapsWithinOneFrameAreAllHandled) {
   writeTinySequence(home / "seq", 6);
   // Three Right taps arrive together (one UI frame): each maps one frame. H opens the help (in the
   // smallest window, whose 3-D view is narrowest).
-  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --exit --window-size 1280x720 --press right,right,right,h "
-                                      "--measure-idle 3 --stats-json '" + (home / "s.json").string() + "'");
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() +
+                                          "' --exit --window-size 1280x720 --press right,right,right,h "
+                                          "--measure-idle 3 --stats-json '" +
+                                          (home / "s.json").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(home / "s.json");
   EXPECT_EQ(stats["frames_mapped"], 3);
@@ -139,7 +143,8 @@ int pixelsNear(const cv::Mat& bgr, const nlohmann::json& r, cv::Vec3b rgb, int t
   const cv::Vec3b color(rgb[2], rgb[1], rgb[0]);
   int n = 0;
   for (int y = rect.y; y < rect.y + rect.height && y < bgr.rows; ++y)
-    for (int x = rect.x; x < rect.x + rect.width && x < bgr.cols; ++x) n += cv::norm(bgr.at<cv::Vec3b>(y, x), color, cv::NORM_L1) <= tolerance;
+    for (int x = rect.x; x < rect.x + rect.width && x < bgr.cols; ++x)
+      n += cv::norm(bgr.at<cv::Vec3b>(y, x), color, cv::NORM_L1) <= tolerance;
   return n;
 }
 
@@ -149,9 +154,11 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 70);
-  const std::string common = "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit --window-size 1280x720";
+  const std::string common =
+      "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit --window-size 1280x720";
   const fs::path png = home / "b.png", json = home / "b.json";
-  const RunResult r = runInXvfb(home, common + " --press b --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
+  const RunResult r =
+      runInXvfb(home, common + " --press b --screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(json);
   EXPECT_EQ(stats["frames_mapped"], 70);
@@ -163,8 +170,10 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
   EXPECT_EQ(stats["layout"]["labels_cut"], 0);
   const cv::Mat image = test::readImage(png);
   const cv::Vec3b loop_color(255, 120, 20);  // render::kLoopEdgeColor
-  EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20) << "loop markers above the scrubber";
-  EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50) << "the banner and loop edges in the 3-D view";
+  EXPECT_GT(pixelsNear(image, stats["layout"]["panels"]["Sequence"], loop_color), 20)
+      << "loop markers above the scrubber";
+  EXPECT_GT(pixelsNear(image, stats["layout"]["viewport"], loop_color), 50)
+      << "the banner and loop edges in the 3-D view";
 }
 
 // --- Tracking error figures and latency stages (global map / worker stream): a tracked run with
@@ -174,8 +183,10 @@ TEST(GuiCli, TrackedRunReportsAteAndRpe) {
   TempDir home;
   writeBoxRoomSequence(home / "seq", 40);
   const fs::path json = home / "t.json";
-  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses track --play-to-end --exit "
-                                      "--window-size 1280x720 --stats-json '" + json.string() + "'");
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() +
+                                          "' --poses track --play-to-end --exit "
+                                          "--window-size 1280x720 --stats-json '" +
+                                          json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(json);
   for (const char* key : {"ate_rmse_m", "rpe_frame_m", "rpe_frame_deg", "rpe_second_m"}) {
@@ -197,8 +208,8 @@ TEST(GuiCli, ATrackedSessionReopensWithItsTrackingError) {
   const RunResult m = runVdmap("map '" + (home / "seq").string() + "' --poses track --out '" + (home / "out").string() +
                                "' --save '" + session.string() + "'");
   ASSERT_EQ(m.exit_code, 0) << m.err;
-  const RunResult r = runInXvfb(home, "gui '" + session.string() + "' --exit --window-size 1280x720 --stats-json '" +
-                                          json.string() + "'");
+  const RunResult r = runInXvfb(
+      home, "gui '" + session.string() + "' --exit --window-size 1280x720 --stats-json '" + json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(json);
   EXPECT_TRUE(stats["has_groundtruth"].get<bool>());
@@ -215,8 +226,10 @@ TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
   TempDir home;
   writeBoxRoomSequence(home / "seq", 6);
   const fs::path json = home / "l.json";
-  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses gt --play-to-end --exit "
-                                      "--measure-latency 4 --stats-json '" + json.string() + "'");
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() +
+                                          "' --poses gt --play-to-end --exit "
+                                          "--measure-latency 4 --stats-json '" +
+                                          json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(json);
   ASSERT_EQ(stats["slider_to_map_ms"].size(), 4u);
@@ -234,7 +247,8 @@ TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
     }
     // The stages come from the snapshot's stamps and the frame's own clock reads, the latency from
     // the script's: a few per cent and ms apart under a sanitizer, never a stage counted twice.
-    EXPECT_LE(sum, 1.05 * stats["slider_to_map_ms"][i].get<double>() + 2.0) << "the stages lie within the edit's latency";
+    EXPECT_LE(sum, 1.05 * stats["slider_to_map_ms"][i].get<double>() + 2.0)
+        << "the stages lie within the edit's latency";
     EXPECT_GE(stages[i]["build"].get<double>() + 1e-3, stages[i]["t_g"].get<double>()) << "the build holds t_g";
   }
   // A fusion edit keeps every merge group and the occlusion removal; a merge-distance edit none.
@@ -258,14 +272,19 @@ TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
   // Then played, in the smallest window (each mapped frame is a picture between waits).
   const RunResult p = runInXvfb(home, "--frames 0:10 --play-to-end --window-size 1280x720 --exit --measure-idle 1 "
-                                      "--stats-json '" + json.string() + "'");
+                                      "--stats-json '" +
+                                          json.string() + "'");
   ASSERT_EQ(p.exit_code, 0) << p.err;
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0) << "while playing";
 
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
-  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
-  const RunResult s = runInXvfb(home, "gui '" + session + "' --exit --measure-idle 1 --stats-json '" + json.string() + "'");
+  ASSERT_EQ(
+      runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'")
+          .exit_code,
+      0);
+  const RunResult s =
+      runInXvfb(home, "gui '" + session + "' --exit --measure-idle 1 --stats-json '" + json.string() + "'");
   ASSERT_EQ(s.exit_code, 0) << s.err;
   EXPECT_EQ(readJson(json)["labels_cut_before_wait"], 0);
 }
@@ -280,7 +299,9 @@ TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
   const RunResult r = runInXvfb(home, "--close-after-frames 5", BuiltinCache::kOwn);
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::smatch m;
-  ASSERT_TRUE(std::regex_search(r.err, m, std::regex(R"(closed while rendering the built-in scene \((\d+) of (\d+) frames done\): nothing kept)")))
+  ASSERT_TRUE(std::regex_search(
+      r.err, m,
+      std::regex(R"(closed while rendering the built-in scene \((\d+) of (\d+) frames done\): nothing kept)")))
       << r.err;
   EXPECT_LT(std::stoi(m[1]), std::stoi(m[2]));
   EXPECT_EQ(std::stoi(m[2]), 300);
@@ -296,8 +317,8 @@ TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {
   TempDir home;
   writeBoxRoomSequence(home / "seq", 6);
   const fs::path json = home / "g.json";
-  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() + "' --poses gt --play-to-end --exit --stats-json '" +
-                                          json.string() + "'");
+  const RunResult r = runInXvfb(home, "gui '" + (home / "seq").string() +
+                                          "' --poses gt --play-to-end --exit --stats-json '" + json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(json);
   EXPECT_EQ(stats["frames_mapped"], 6);
@@ -318,7 +339,10 @@ TEST(GuiCli, ASavedSessionOpensAsSeqLikeWithMap) {
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
-  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  ASSERT_EQ(
+      runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'")
+          .exit_code,
+      0);
   const RunResult r = runInXvfb(home, "gui '" + session + "' --exit --stats-json '" + (home / "s.json").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_GE(readJson(home / "s.json")["keyframes"].get<int>(), 1);
@@ -353,12 +377,16 @@ TEST(GuiCli, AFailedScriptedRunWritesNeitherFile) {
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
-  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
+  ASSERT_EQ(
+      runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'")
+          .exit_code,
+      0);
   std::string bytes = readFile(session);
   bytes[bytes.size() / 2] ^= 1;  // a checksum mismatch
   writeText(home / "bad.vdmap", bytes);
-  const RunResult r = runInXvfb(home, "gui '" + (home / "bad.vdmap").string() + "' --exit --screenshot '" +
-                                          (home / "p.png").string() + "' --stats-json '" + (home / "j.json").string() + "'");
+  const RunResult r =
+      runInXvfb(home, "gui '" + (home / "bad.vdmap").string() + "' --exit --screenshot '" + (home / "p.png").string() +
+                          "' --stats-json '" + (home / "j.json").string() + "'");
   EXPECT_EQ(r.exit_code, 1) << r.err;
   EXPECT_NE(r.err.find("checksum mismatch"), std::string::npos) << r.err;
   EXPECT_FALSE(fs::exists(home / "p.png"));
@@ -380,7 +408,8 @@ TEST(GuiCli, AScriptedRunUsesTheSettingsFileItIsGivenAndSaysSo) {
   const fs::path tuned = home / "tuned.json";
   writeText(tuned, kTunedSettings);
   const auto run = [&](const std::string& name, const std::string& extra) {
-    const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --exit --stats-json '" + (home / name).string() + "' " + extra);
+    const RunResult r =
+        runInXvfb(home, "--frames 0:30 --play-to-end --exit --stats-json '" + (home / name).string() + "' " + extra);
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return r;
   };
@@ -401,10 +430,14 @@ TEST(GuiCli, AScriptedRunUsesTheSettingsFileItIsGivenAndSaysSo) {
   // A saved session keeps its own thresholds; --settings goes over them, and says so.
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
-  ASSERT_EQ(runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'").exit_code, 0);
-  const RunResult own = runInXvfb(home, "gui '" + session + "' --exit --stats-json '" + (home / "o.json").string() + "'");
-  const RunResult over = runInXvfb(home, "gui '" + session + "' --exit --settings '" + tuned.string() + "' --stats-json '" +
-                                             (home / "v.json").string() + "'");
+  ASSERT_EQ(
+      runVdmap("map '" + (home / "seq").string() + "' --out '" + (home / "out").string() + "' --save '" + session + "'")
+          .exit_code,
+      0);
+  const RunResult own =
+      runInXvfb(home, "gui '" + session + "' --exit --stats-json '" + (home / "o.json").string() + "'");
+  const RunResult over = runInXvfb(home, "gui '" + session + "' --exit --settings '" + tuned.string() +
+                                             "' --stats-json '" + (home / "v.json").string() + "'");
   ASSERT_EQ(own.exit_code, 0) << own.err;
   ASSERT_EQ(over.exit_code, 0) << over.err;
   EXPECT_TRUE(saysSettings(own, "the session's thresholds")) << own.err;
@@ -439,7 +472,8 @@ TEST(GuiCli, AMalformedSettingsFileIsOneErrorNamingIt) {
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const fs::path bad = home / "bad.json";
-  for (const std::string& text : {std::string(R"({"thresholds": {"merge_distance": -1}})"), std::string("{\"thresholds\": ")}) {
+  for (const std::string& text :
+       {std::string(R"({"thresholds": {"merge_distance": -1}})"), std::string("{\"thresholds\": ")}) {
     writeText(bad, text);
     for (const std::string& verb : {"gui '" + (home / "seq").string() + "'", std::string("--frames 0:3")}) {
       const RunResult r = runVdmap(verb + " --exit --settings '" + bad.string() + "'", "DISPLAY= WAYLAND_DISPLAY=");
@@ -454,8 +488,8 @@ TEST(GuiCli, AMalformedSettingsFileIsOneErrorNamingIt) {
 // Without a display, a missing sequence or session is named (it named the display), in one line.
 TEST(GuiCli, AMissingInputIsNamedBeforeTheDisplay) {
   TempDir home;
-  for (const std::string& input : {std::string("'") + (home / "nope").string() + "'",
-                                   "--map '" + (home / "nope.vdmap").string() + "'"}) {
+  for (const std::string& input :
+       {std::string("'") + (home / "nope").string() + "'", "--map '" + (home / "nope.vdmap").string() + "'"}) {
     const RunResult r = runVdmap("gui " + input + " --exit", "DISPLAY= WAYLAND_DISPLAY=");
     EXPECT_EQ(r.exit_code, 1) << r.err;
     EXPECT_NE(r.err.find("nope"), std::string::npos) << r.err;
@@ -477,8 +511,10 @@ int drawnPixels(const fs::path& png) {
       const cv::Vec3b c = bgr.at<cv::Vec3b>(y, x);
       ++counts[c[0] << 16 | c[1] << 8 | c[2]];
     }
-  const int mode = std::max_element(counts.begin(), counts.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
-  const cv::Vec3b background(static_cast<uchar>(mode >> 16), static_cast<uchar>(mode >> 8 & 255), static_cast<uchar>(mode & 255));
+  const int mode =
+      std::max_element(counts.begin(), counts.end(), [](auto& a, auto& b) { return a.second < b.second; })->first;
+  const cv::Vec3b background(static_cast<uchar>(mode >> 16), static_cast<uchar>(mode >> 8 & 255),
+                             static_cast<uchar>(mode & 255));
   int drawn = 0;
   for (int y = 0; y < bgr.rows; ++y)
     for (int x = 0; x < bgr.cols; ++x) drawn += cv::norm(bgr.at<cv::Vec3b>(y, x), background, cv::NORM_L1) > 30;
@@ -510,8 +546,9 @@ TEST(GuiCli, OpensAFolderAPlyAndABt) {
     fs::path path;
     int ellipsoids, keyframes;
   };
-  for (const Case& c : {Case{m.out, m.ellipsoids, m.keyframes}, Case{m.out / "global_points.ply", m.ellipsoids, 0},
-                        Case{m.out / "global_ellipsoids.ply", m.ellipsoids, 0}, Case{m.out / "global.bt", m.occupied_leaves, 0}}) {
+  for (const Case& c :
+       {Case{m.out, m.ellipsoids, m.keyframes}, Case{m.out / "global_points.ply", m.ellipsoids, 0},
+        Case{m.out / "global_ellipsoids.ply", m.ellipsoids, 0}, Case{m.out / "global.bt", m.occupied_leaves, 0}}) {
     SCOPED_TRACE(c.path.string());
     const fs::path stats = home / "s.json", view = home / "v.png";
     fs::remove(view);
@@ -532,15 +569,17 @@ TEST(GuiCli, ADroppedPathOpens) {
   const MappedFolder m(home);
   const fs::path stats = home / "d.json", view = home / "d.png";
   // The sequence opens (mapped to 3 frames), then the OctoMap dropped on the window replaces it.
-  const RunResult r = runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (m.out / "global.bt").string() +
-                                          "' --stats-json '" + stats.string() + "' --view-screenshot '" + view.string() + "'");
+  const RunResult r =
+      runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (m.out / "global.bt").string() +
+                          "' --stats-json '" + stats.string() + "' --view-screenshot '" + view.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json s = readJson(stats);
   EXPECT_EQ(s["sigma_e_prime"], m.occupied_leaves);
   EXPECT_EQ(s["keyframes"], 0);
   EXPECT_GT(drawnPixels(view), 1000);
   // A dropped file that cannot be opened fails the scripted run with its name.
-  const RunResult bad = runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (home / "nope.bt").string() + "'");
+  const RunResult bad =
+      runInXvfb(home, "gui '" + m.seq.string() + "' --exit --drop '" + (home / "nope.bt").string() + "'");
   EXPECT_EQ(bad.exit_code, 1) << bad.err;
   EXPECT_NE(bad.err.find("nope.bt"), std::string::npos) << bad.err;
 }
@@ -579,8 +618,9 @@ namespace {
 TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
   REQUIRE_XVFB();
   TempDir home;
-  const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --exit --measure-orbit 6 --fast-budget 500 --stats-json '" +
-                                          (home / "s.json").string() + "'");
+  const RunResult r =
+      runInXvfb(home, "--frames 0:30 --play-to-end --exit --measure-orbit 6 --fast-budget 500 --stats-json '" +
+                          (home / "s.json").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json stats = readJson(home / "s.json");
   ASSERT_GT(stats["sigma_e_prime"].get<int>(), 500);
@@ -630,9 +670,9 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
   const std::string common = kSurfaceViewArgs;
   const cv::Point a = found.front(), b = found.back();
   const fs::path json = home / "m.json";
-  const RunResult r = runInXvfb(home, common + " --measure " + std::to_string(a.x) + "," + std::to_string(a.y) + "," +
-                                          std::to_string(b.x) + "," + std::to_string(b.y) + " --stats-json '" +
-                                          json.string() + "'");
+  const RunResult r =
+      runInXvfb(home, common + " --measure " + std::to_string(a.x) + "," + std::to_string(a.y) + "," +
+                          std::to_string(b.x) + "," + std::to_string(b.y) + " --stats-json '" + json.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json m = readJson(json)["measure"];
   ASSERT_TRUE(m.is_object()) << readJson(json).dump();
@@ -671,8 +711,9 @@ TEST(GuiCli, ProbeAndQuerySliceScripted) {
   EXPECT_EQ(probe["class"] == "occupied", d == 0.0) << probe.dump();
 
   const fs::path shot = home / "slice.png";
-  r = runInXvfb(home, common + " --probe " + pixel + " --query-slice z=1.0 --query-slice-color distance --stats-json '" +
-                          json.string() + "' --view-screenshot '" + shot.string() + "'");
+  r = runInXvfb(home, common + " --probe " + pixel +
+                          " --query-slice z=1.0 --query-slice-color distance --stats-json '" + json.string() +
+                          "' --view-screenshot '" + shot.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   stats = readJson(json);
   EXPECT_EQ(stats["probe"]["on_slice"], true) << stats["probe"].dump();
@@ -716,9 +757,9 @@ TEST(GuiCli, PressingFLeavesTheViewsBorderEmpty) {
   TempDir home;
   for (const std::string size : {"1280x720", "900x1000"}) {
     const fs::path view = home / (size + ".png"), json = home / (size + ".json");
-    const RunResult r = runInXvfb(home, "--frames 0:30 --play-to-end --press f --exit --window-size " + size +
-                                            " --view-screenshot '" + view.string() + "' --stats-json '" +
-                                            json.string() + "'");
+    const RunResult r =
+        runInXvfb(home, "--frames 0:30 --play-to-end --press f --exit --window-size " + size + " --view-screenshot '" +
+                            view.string() + "' --stats-json '" + json.string() + "'");
     ASSERT_EQ(r.exit_code, 0) << r.err;
     EXPECT_EQ(borderPixelsOff(view), 0) << size << ": the frame cuts what is drawn";
     const nlohmann::json layout = readJson(json)["layout"];
@@ -746,8 +787,8 @@ TEST(GuiCli, ASliceDrawsFewerEllipsoidsAndIsSavedInTheView) {
     return readJson(home / (name + ".json"));
   };
   const nlohmann::json all = run("all", "");
-  const nlohmann::json sliced =
-      run("sliced", "--set slice=true --set slice_lo=0 --set slice_hi=0.5 --save-view '" + (home / "v.json").string() + "'");
+  const nlohmann::json sliced = run("sliced", "--set slice=true --set slice_lo=0 --set slice_hi=0.5 --save-view '" +
+                                                  (home / "v.json").string() + "'");
   EXPECT_EQ(all["map_drawn"], m.ellipsoids);
   EXPECT_GT(sliced["map_drawn"].get<int>(), 0);
   EXPECT_LT(sliced["map_drawn"].get<int>(), 3 * m.ellipsoids / 4);

@@ -56,11 +56,11 @@ TEST(JUnitXml, EscapingKeepsTextAndUtf8AndDropsWhatXmlCannotCarry) {
   EXPECT_EQ(escapeXml("tab\tline\nreturn\r"), "tab&#9;line&#10;return&#13;");
   EXPECT_EQ(escapeXml(std::string("nul\0bell\a", 9)), "nul?bell?");
   EXPECT_EQ(escapeXml("caf\xC3\xA9 \xF0\x9F\x98\x80"), "caf\xC3\xA9 \xF0\x9F\x98\x80");  // é and an emoji
-  EXPECT_EQ(escapeXml("cut \xC3"), "cut ?");                 // a truncated sequence
-  EXPECT_EQ(escapeXml("stray \x80 byte"), "stray ? byte");   // a continuation byte alone
-  EXPECT_EQ(escapeXml("over\xE0\x80\x80long"), "over???long"); // an overlong NUL
-  EXPECT_EQ(escapeXml("half\xED\xA0\x80"), "half???");       // a UTF-16 surrogate
-  EXPECT_EQ(escapeXml("not \xEF\xBF\xBE a char"), "not ? a char");  // U+FFFE, no XML character
+  EXPECT_EQ(escapeXml("cut \xC3"), "cut ?");                                             // a truncated sequence
+  EXPECT_EQ(escapeXml("stray \x80 byte"), "stray ? byte");                               // a continuation byte alone
+  EXPECT_EQ(escapeXml("over\xE0\x80\x80long"), "over???long");                           // an overlong NUL
+  EXPECT_EQ(escapeXml("half\xED\xA0\x80"), "half???");                                   // a UTF-16 surrogate
+  EXPECT_EQ(escapeXml("not \xEF\xBF\xBE a char"), "not ? a char");                       // U+FFFE, no XML character
   EXPECT_EQ(escapeXml(""), "");
 }
 

@@ -1,8 +1,8 @@
 // vdmap map / vdmap bench end to end on a tiny generated sequence.
 #include <algorithm>
 #include <fstream>
-#include <sstream>
 #include <regex>
+#include <sstream>
 #include <string>
 #include <thread>
 #include <vector>
@@ -20,8 +20,8 @@ TEST(MapCli, WritesEllipsoidPlyAndCounts) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 4);
   const fs::path out = tmp / "out" / "nested";
-  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --octomap 0.05 --out '" +
-                               out.string() + "'");
+  const RunResult r =
+      runVdmap("map '" + (tmp / "seq").string() + "' --keyframe-every 2 --octomap 0.05 --out '" + out.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("2 keyframes"), std::string::npos) << r.out;
   const std::string header = readFile(out / "local_maps.ply");
@@ -52,7 +52,10 @@ TEST(MapCli, DroppedFramesAreReportedAndCounted) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
   EXPECT_EQ(r.err.rfind("vdmap map: warning: MOST FRAMES DROPPED: 3 of the 5 frames of 0:5 dropped, 2 mapped: 3 "
-                        "without a ground-truth pose within 0.1 s", 0), 0u) << r.err;
+                        "without a ground-truth pose within 0.1 s",
+                        0),
+            0u)
+      << r.err;
   std::ifstream stats_file(tmp / "out" / "stats.json");
   const auto stats = nlohmann::json::parse(stats_file);
   EXPECT_EQ(stats["frames_listed"], 5);
@@ -64,7 +67,8 @@ TEST(MapCli, DroppedFramesAreReportedAndCounted) {
 
   // Every frame with a pose: no line, and the counts say nothing was dropped.
   writeTinySequence(tmp / "full", 3);
-  const RunResult full = runVdmap("map '" + (tmp / "full").string() + "' --frames 1: --out '" + (tmp / "out2").string() + "'");
+  const RunResult full =
+      runVdmap("map '" + (tmp / "full").string() + "' --frames 1: --out '" + (tmp / "out2").string() + "'");
   ASSERT_EQ(full.exit_code, 0) << full.err;
   EXPECT_EQ(full.err, "");
   std::ifstream full_file(tmp / "out2" / "stats.json");
@@ -92,8 +96,13 @@ TEST(MapCli, StatsRecordTheProvenance) {
   EXPECT_EQ(stats["frame_range"], "0:4");
   EXPECT_EQ(stats["camera"], "file camera.yaml");
   EXPECT_EQ(stats["camera_source"], "file");
-  EXPECT_EQ(stats["camera_intrinsics"], nlohmann::json({{"width", 64}, {"height", 48}, {"fx", 50.0}, {"fy", 50.0},
-                                                        {"cx", 31.5}, {"cy", 23.5}, {"depth_scale", 5000.0}}));
+  EXPECT_EQ(stats["camera_intrinsics"], nlohmann::json({{"width", 64},
+                                                        {"height", 48},
+                                                        {"fx", 50.0},
+                                                        {"fy", 50.0},
+                                                        {"cx", 31.5},
+                                                        {"cy", 23.5},
+                                                        {"depth_scale", 5000.0}}));
   EXPECT_EQ(stats["poses"], "gt");
   EXPECT_EQ(stats["refine"], "none");
   // Every parameter of the table, the given ones with their values.
@@ -104,8 +113,8 @@ TEST(MapCli, StatsRecordTheProvenance) {
   EXPECT_EQ(stats["parameters"]["tau_group"], 0.3);
   EXPECT_EQ(stats["parameters"]["occlusion_removal"], true);
 
-  const RunResult tracked = runVdmap("map '" + (tmp / "seq").string() + "' --poses track --refine pairwise --json --out '" +
-                                     (tmp / "out").string() + "'");
+  const RunResult tracked = runVdmap("map '" + (tmp / "seq").string() +
+                                     "' --poses track --refine pairwise --json --out '" + (tmp / "out").string() + "'");
   ASSERT_EQ(tracked.exit_code, 0) << tracked.err;
   const auto t = nlohmann::json::parse(tracked.out);
   EXPECT_EQ(t["poses"], "track");
@@ -115,8 +124,8 @@ TEST(MapCli, StatsRecordTheProvenance) {
   writeTinySequence(tmp / "vga", 2, 640, 480);
   fs::remove(tmp / "vga" / "camera.yaml");
   for (const auto& [option, kind] : {std::pair{"", "guessed"}, std::pair{"--camera tum-fr1", "preset"}}) {
-    const RunResult r2 = runVdmap("map '" + (tmp / "vga").string() + "' " + option + " --json --out '" +
-                                  (tmp / "out").string() + "'");
+    const RunResult r2 =
+        runVdmap("map '" + (tmp / "vga").string() + "' " + option + " --json --out '" + (tmp / "out").string() + "'");
     ASSERT_EQ(r2.exit_code, 0) << r2.err;
     EXPECT_EQ(nlohmann::json::parse(r2.out)["camera_source"], kind) << option;
   }
@@ -161,8 +170,8 @@ TEST(MapCli, SaysWhichCameraItGuessedAndWhy) {
   for (const Case& c : cases) {
     writeTinySequence(tmp / c.folder, 2, 640, 480);
     fs::remove(tmp / c.folder / "camera.yaml");
-    const RunResult r = runVdmap("map '" + (tmp / c.folder).string() + "' --out '" + (tmp / c.folder).string() +
-                                 "_out'" + c.option);
+    const RunResult r =
+        runVdmap("map '" + (tmp / c.folder).string() + "' --out '" + (tmp / c.folder).string() + "_out'" + c.option);
     ASSERT_EQ(r.exit_code, 0) << r.err;
     if (c.note.empty()) {
       EXPECT_EQ(r.err, "") << c.folder;
@@ -178,8 +187,8 @@ TEST(MapCli, BadCellSizeFailsWithoutOutput) {
   writeTinySequence(tmp / "seq", 2);
   // 0 is wrong by itself (CLI11's ValidationError, 105); 49 only for this 64x48 camera (exit 1).
   for (const char* s : {"0", "49"}) {
-    const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --cell-size " + s +
-                                 " --out '" + (tmp / "out").string() + "'");
+    const RunResult r =
+        runVdmap("map '" + (tmp / "seq").string() + "' --cell-size " + s + " --out '" + (tmp / "out").string() + "'");
     EXPECT_EQ(r.exit_code, s[0] == '0' ? 105 : 1);
     EXPECT_NE(r.err.find(s[0] == '0' ? "cell_size must be >= 1 px" : "cell size 49 px"), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(tmp / "out"));
@@ -193,9 +202,9 @@ TEST(BenchCli, JsonHasTheContractKeys) {
       runVdmap("bench '" + (tmp / "seq").string() + "' --frames 2 --json --out '" + tmp.path().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
-  for (const char* key : {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms",
-                          "octomap_002_ms", "ratio_octomap_010", "vd_pipeline_ms", "sigma_e", "sigma_e_prime",
-                          "t_g_s", "t_g_us_per_ellipsoid"})
+  for (const char* key :
+       {"frames", "vd_update_ms", "octomap_010_ms", "octomap_005_ms", "octomap_002_ms", "ratio_octomap_010",
+        "vd_pipeline_ms", "sigma_e", "sigma_e_prime", "t_g_s", "t_g_us_per_ellipsoid"})
     EXPECT_TRUE(j.contains(key)) << key;
   EXPECT_EQ(j["frames"], 2);  // a plain N means 0:N
   EXPECT_EQ(j["frame_range"], "0:2");
@@ -209,8 +218,8 @@ TEST(BenchCli, JsonHasTheContractKeys) {
 TEST(BenchCli, TextSaysWhoseKeyframesItCounts) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 3);
-  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --keyframe-every 1 --out '" +
-                               tmp.path().string() + "'");
+  const RunResult r =
+      runVdmap("bench '" + (tmp / "seq").string() + "' --keyframe-every 1 --out '" + tmp.path().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("keyframes       the update row starts one every frame; the pipeline made "), std::string::npos)
       << r.out;
@@ -249,9 +258,10 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
     const bool global = i == 4 || i == 9 || i == 11;
     EXPECT_EQ(!f[5].empty(), global) << "row " << i << ": " << rows[i];
   }
-  EXPECT_EQ(runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
-                .exit_code,
-            105);  // a value wrong by itself: CLI11's ValidationError
+  EXPECT_EQ(
+      runVdmap("bench '" + (tmp / "seq").string() + "' --long --global-every 0 --out '" + tmp.path().string() + "'")
+          .exit_code,
+      105);  // a value wrong by itself: CLI11's ValidationError
   EXPECT_EQ(j.value("poses", ""), "gt");
   EXPECT_FALSE(j.contains("loop_closures"));
 }
@@ -262,8 +272,9 @@ TEST(BenchCli, LongRunWritesOneRowPerFrameAndTheSummary) {
 TEST(BenchCli, LongRunWithTrackedPosesReportsTheTracking) {
   TempDir tmp;
   writeBoxRoomSequence(tmp / "seq", 12);
-  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --long --poses track --global-every 6 --json --out '" +
-                               (tmp / "new" / "long").string() + "'");
+  const RunResult r =
+      runVdmap("bench '" + (tmp / "seq").string() + "' --long --poses track --global-every 6 --json --out '" +
+               (tmp / "new" / "long").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_TRUE(std::filesystem::exists(tmp / "new" / "long" / "long.json"));
   const auto j = nlohmann::json::parse(r.out);
@@ -291,8 +302,8 @@ void expectTidyNumbers(const std::string& json, int digits) {
 TEST(MapCli, OneFrameOneKeyframeAndAQuietOctomapExport) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 3);
-  const RunResult r = runVdmap("map '" + (tmp / "seq").string() + "' --frames 1 --octomap 0.05 --out '" +
-                               (tmp / "out").string() + "'");
+  const RunResult r =
+      runVdmap("map '" + (tmp / "seq").string() + "' --frames 1 --octomap 0.05 --out '" + (tmp / "out").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("1 frame, 1 keyframe, 0 edges, 0 revisits;"), std::string::npos) << r.out;
   EXPECT_EQ(r.err, "") << "stderr is not a terminal: no progress, no library lines";
@@ -308,8 +319,8 @@ TEST(BenchCli, CreatesItsOutFolderAndSkippedPeersAreNull) {
   TempDir tmp;
   writeTinySequence(tmp / "seq", 3);
   const fs::path out = tmp / "new" / "bench";
-  const RunResult r = runVdmap("bench '" + (tmp / "seq").string() + "' --no-octomap --no-open3d --json --out '" +
-                               out.string() + "'");
+  const RunResult r =
+      runVdmap("bench '" + (tmp / "seq").string() + "' --no-octomap --no-open3d --json --out '" + out.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(readFile(out / "bench.json"));
   EXPECT_TRUE(j["octomap_010_ms"].is_null());

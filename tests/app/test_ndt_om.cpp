@@ -23,7 +23,8 @@ TEST(NdtOm, CellsEqualBatchStatisticsOfAllTheirPoints) {
   std::map<std::array<long, 3>, std::vector<Eigen::Vector3d>> points, colors;
   for (int i = 0; i < 4; ++i) {
     const Transform T = test::lookAt({0.5 - 0.2 * i, -0.4, 0.1 * i}, {0, 0, 1.4});
-    const RgbdFrame f = test::renderFrame(scene, cam, T, [](double) { return 0.002; }, 10 + i);
+    const RgbdFrame f = test::renderFrame(
+        scene, cam, T, [](double) { return 0.002; }, 10 + i);
     map.integrateFrame(f, cam);
     // The baseline's documented input: toPointCloud, moved to the world frame in float.
     const ColoredPointCloud cloud = toPointCloud(f, cam, params.depth_range);

@@ -107,7 +107,8 @@ TEST(OdometryPeers, BenchWithTrackedPosesReportsEveryPeer) {
                                            "' --frames 4 --poses track --refine joint --no-octomap --json --out '" +
                                            tmp.path().string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const std::string key : {"opencv_rgbd_frame", "opencv_rgbd_keyframe", "opencv_icp_frame", "opencv_icp_keyframe"}) {
+  for (const std::string key :
+       {"opencv_rgbd_frame", "opencv_rgbd_keyframe", "opencv_icp_frame", "opencv_icp_keyframe"}) {
     const std::size_t at = r.out.find('"' + key + "\": {");
     ASSERT_NE(at, std::string::npos) << key << "\n" << r.out;
     const std::string body = r.out.substr(at, r.out.find('}', at) - at);

@@ -28,10 +28,9 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
   TempDir tmp;
   ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 12 --out " + q(tmp / "seq")).exit_code, 0);
   ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 12 --noise none --out " + q(tmp / "exact")).exit_code, 0);
-  const RunResult r = runVdmap("bench " + q(tmp / "seq") + " --query --mesh " + q(tmp / "seq" / "mesh.ply") +
-                               " --truth " + q(tmp / "exact") +
-                               " --query-points 2000 --truth-points 300 --views 1 --octomap-every 3 --json --out " +
-                               q(tmp / "out"));
+  const RunResult r = runVdmap(
+      "bench " + q(tmp / "seq") + " --query --mesh " + q(tmp / "seq" / "mesh.ply") + " --truth " + q(tmp / "exact") +
+      " --query-points 2000 --truth-points 300 --views 1 --octomap-every 3 --json --out " + q(tmp / "out"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out).at("query");
   EXPECT_EQ(j["frames"], 12);
@@ -69,7 +68,8 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
   EXPECT_EQ(j["accuracy"]["sets"]["occupied"], 300);
   EXPECT_EQ(j["accuracy"]["sets"]["free_near"], 150);
   const std::string md = readFile(tmp / "out" / "bench.md");
-  for (const char* figure : {"bal.acc", "conflict rule", "near surfaces", "castRays", "keyframe views", "surface index"})
+  for (const char* figure :
+       {"bal.acc", "conflict rule", "near surfaces", "castRays", "keyframe views", "surface index"})
     EXPECT_NE(md.find(figure), std::string::npos) << figure;
 }
 

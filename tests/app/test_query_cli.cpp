@@ -18,9 +18,9 @@
 #include "app/query_files/query_io.h"
 #include "mapping/core/error.h"
 #include "mapping/files/occupancy_grid.h"
-#include "mapping/global_map/global_map.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/files/session_file.h"
+#include "mapping/global_map/global_map.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::test {
@@ -79,8 +79,7 @@ std::vector<Eigen::Vector3d> testPoints() {
   std::mt19937 rng(36);
   std::uniform_real_distribution<double> u(0, 1);
   std::vector<Eigen::Vector3d> points;
-  for (int i = 0; i < 240; ++i)
-    points.push_back(lo + (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng))));
+  for (int i = 0; i < 240; ++i) points.push_back(lo + (hi - lo).cwiseProduct(Eigen::Vector3d(u(rng), u(rng), u(rng))));
   // Points on surfaces: the first hits of rays from the box's centre.
   std::vector<Ray> rays;
   for (int i = 0; i < 60; ++i) {
@@ -111,7 +110,8 @@ void writePointsTxt(const fs::path& file, const std::vector<Eigen::Vector3d>& po
 }
 
 // An ascii PLY of `rows` under the property names `names` (all double).
-void writePly(const fs::path& file, const std::vector<std::string>& names, const std::vector<std::vector<double>>& rows) {
+void writePly(const fs::path& file, const std::vector<std::string>& names,
+              const std::vector<std::vector<double>>& rows) {
   std::string text = "ply\nformat ascii 1.0\nelement vertex " + std::to_string(rows.size()) + "\n";
   for (const std::string& n : names) text += "property double " + n + "\n";
   text += "end_header\n";
@@ -138,24 +138,19 @@ app::QueryAnswers libraryAnswers(const QueryMap& map, QueryOp op, const app::Que
   switch (op) {
     case QueryOp::kClassify:
       a.classes.resize(input.points.size());
-      if (keyframe >= 0)
-        map.classifyInKeyframe(keyframe, input.points, a.classes);
-      else
-        map.classify(input.points, a.classes);
+      if (keyframe >= 0) map.classifyInKeyframe(keyframe, input.points, a.classes);
+      else map.classify(input.points, a.classes);
       break;
     case QueryOp::kDistance:
       a.distances.resize(input.points.size());
       map.distance(input.points, a.distances);
       break;
-    case QueryOp::kCollide:
-      a.bodies = map.collide(input.spheres, clearance);
-      break;
+    case QueryOp::kCollide: a.bodies = map.collide(input.spheres, clearance); break;
     case QueryOp::kRay:
       a.hits.resize(input.rays.size());
       map.castRays(input.rays, a.hits);
       break;
-    default:
-      break;
+    default: break;
   }
   return a;
 }
@@ -221,8 +216,8 @@ TEST(QueryCli, EveryOpRoundTripsTextAndPlyWithTheLibrarysAnswers) {
     for (const char* input_ext : {".txt", ".ply"})
       for (const char* out_ext : {".txt", ".ply"}) {
         const fs::path out = tmp / ("out-" + op + input_ext + out_ext);
-        const RunResult r = runVdmap("query " + q(f.session) + " --op " + op + " --points " + q(tmp / (op + input_ext)) +
-                                     " --out " + q(out));
+        const RunResult r = runVdmap("query " + q(f.session) + " --op " + op + " --points " +
+                                     q(tmp / (op + input_ext)) + " --out " + q(out));
         ASSERT_EQ(r.exit_code, 0) << r.err;
         EXPECT_EQ(r.err, "");
         EXPECT_NE(r.out.find(" -> " + out.string()), std::string::npos) << r.out;
@@ -236,7 +231,8 @@ TEST(QueryCli, EveryOpRoundTripsTextAndPlyWithTheLibrarysAnswers) {
         for (const char* column : {"x", "y", "z", "red", "green", "blue"}) EXPECT_GE(table.column(column), 0) << column;
         const app::QueryAnswers a = libraryAnswers(tinyMap(), in.op, from_txt);
         for (std::size_t i = 0; i < table.count; ++i) {
-          for (double v : {table.at(i, table.column("x")), table.at(i, table.column("y")), table.at(i, table.column("z"))})
+          for (double v :
+               {table.at(i, table.column("x")), table.at(i, table.column("y")), table.at(i, table.column("z"))})
             EXPECT_TRUE(std::isfinite(v));
           switch (in.op) {
             case QueryOp::kClassify:
@@ -247,8 +243,7 @@ TEST(QueryCli, EveryOpRoundTripsTextAndPlyWithTheLibrarysAnswers) {
               const double d = table.at(i, table.column("distance"));
               if (std::isfinite(a.distances[i].distance_m))
                 EXPECT_EQ(static_cast<float>(d), static_cast<float>(a.distances[i].distance_m)) << i;
-              else
-                EXPECT_EQ(static_cast<float>(d), std::numeric_limits<float>::max()) << i;
+              else EXPECT_EQ(static_cast<float>(d), std::numeric_limits<float>::max()) << i;
               break;
             }
             case QueryOp::kRay:
@@ -259,13 +254,13 @@ TEST(QueryCli, EveryOpRoundTripsTextAndPlyWithTheLibrarysAnswers) {
               break;
             case QueryOp::kCollide: {
               const int body = static_cast<int>(table.at(i, table.column("body")));
-              const auto b = std::find_if(a.bodies.begin(), a.bodies.end(), [&](const BodyCollision& c) { return c.body == body; });
+              const auto b = std::find_if(a.bodies.begin(), a.bodies.end(),
+                                          [&](const BodyCollision& c) { return c.body == body; });
               ASSERT_NE(b, a.bodies.end());
               EXPECT_EQ(table.at(i, table.column("collides")), b->collides ? 1.0 : 0.0);
               break;
             }
-            default:
-              break;
+            default: break;
           }
         }
       }
@@ -294,12 +289,14 @@ TEST(QueryCli, SummaryAsJsonCountsEveryPoint) {
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto j = nlohmann::json::parse(r.out);
   EXPECT_EQ(j["records"].get<std::size_t>(), points.size());
-  EXPECT_EQ(j["occupied"].get<std::size_t>() + j["free"].get<std::size_t>() + j["unknown"].get<std::size_t>(), points.size());
+  EXPECT_EQ(j["occupied"].get<std::size_t>() + j["free"].get<std::size_t>() + j["unknown"].get<std::size_t>(),
+            points.size());
   EXPECT_EQ(j["keyframes"], 3);
-  const auto plain = runVdmap("query " + q(f.session) + " --op distance --points " + q(tmp / "p.txt") + " --out " +
-                              q(tmp / "d.txt"));
+  const auto plain =
+      runVdmap("query " + q(f.session) + " --op distance --points " + q(tmp / "p.txt") + " --out " + q(tmp / "d.txt"));
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  EXPECT_NE(plain.out.find("distance of " + std::to_string(points.size()) + " points: min "), std::string::npos) << plain.out;
+  EXPECT_NE(plain.out.find("distance of " + std::to_string(points.size()) + " points: min "), std::string::npos)
+      << plain.out;
 }
 
 TEST(QueryCli, OneAndTwoThreadsWriteTheSameBytes) {
@@ -330,8 +327,8 @@ TEST(QueryCli, KeyframeClassifiesInThatKeyframeAlone) {
     const RunResult r = runVdmap("query " + q(f.session) + " --op classify --keyframe " + std::to_string(k) +
                                  " --points " + q(tmp / "p.txt") + " --out " + q(tmp / "k.txt"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
-    EXPECT_EQ(readFile(tmp / "k.txt"),
-              app::queryAnswersText(QueryOp::kClassify, input, libraryAnswers(tinyMap(), QueryOp::kClassify, input, k)));
+    EXPECT_EQ(readFile(tmp / "k.txt"), app::queryAnswersText(QueryOp::kClassify, input,
+                                                             libraryAnswers(tinyMap(), QueryOp::kClassify, input, k)));
   }
   const RunResult bad = runVdmap("query " + q(f.session) + " --op classify --keyframe 3 --points " + q(tmp / "p.txt") +
                                  " --out " + q(tmp / "bad.txt"));
@@ -357,12 +354,14 @@ TEST(QueryCli, NanOnLine17IsOneErrorNamingTheLine) {
   std::string ply = "ply\nformat binary_little_endian 1.0\nelement vertex 20\nproperty float x\nproperty float y\n"
                     "property float z\nproperty float radius\nend_header\n";
   for (int v = 0; v < 20; ++v)
-    for (const float c : {0.5f, 0.25f, 1.0f, v == 16 ? 0.0f : 0.1f}) ply.append(reinterpret_cast<const char*>(&c), sizeof c);
+    for (const float c : {0.5f, 0.25f, 1.0f, v == 16 ? 0.0f : 0.1f})
+      ply.append(reinterpret_cast<const char*>(&c), sizeof c);
   writeText(tmp / "pts.ply", ply);
   const RunResult p = runVdmap("query " + q(f.session) + " --op collide --points " + q(tmp / "pts.ply") + " --out " +
                                q(tmp / "out.ply"));
   EXPECT_EQ(p.exit_code, 1);
-  EXPECT_EQ(p.err, "vdmap query: error: " + (tmp / "pts.ply").string() + ": vertex 16: the radius must be > 0, got 0\n");
+  EXPECT_EQ(p.err,
+            "vdmap query: error: " + (tmp / "pts.ply").string() + ": vertex 16: the radius must be > 0, got 0\n");
   const float inf = INFINITY;
   ply.replace(ply.size() - 4, 4, reinterpret_cast<const char*>(&inf), 4);
   writeText(tmp / "pts.ply", ply);
@@ -406,8 +405,8 @@ TEST(QueryCli, GridParsesBackAndFollowsTheColumnRule) {
   const Fixture& f = fixture();
   TempDir tmp;
   const double res = 0.5;
-  const RunResult r = runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band 0.3:0.9 --out " +
-                               q(tmp / "map.yaml"));
+  const RunResult r =
+      runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band 0.3:0.9 --out " + q(tmp / "map.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const std::string yaml = readFile(tmp / "map.yaml");
   EXPECT_NE(yaml.find("\nimage: map.pgm\n"), std::string::npos) << yaml;
@@ -467,8 +466,8 @@ TEST(QueryCli, GridParsesBackAndFollowsTheColumnRule) {
           << "row " << row << " column " << col;
     }
   // Another up axis: the band along -z is the same slab seen from below (x, -y).
-  const RunResult down = runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band -0.9:-0.3 --up -z --out " +
-                                  q(tmp / "down.yaml"));
+  const RunResult down = runVdmap("query " + q(f.session) +
+                                  " --op grid --resolution 0.5 --band -0.9:-0.3 --up -z --out " + q(tmp / "down.yaml"));
   ASSERT_EQ(down.exit_code, 0) << down.err;
   EXPECT_NE(readFile(tmp / "down.yaml").find("up -z, grid x = world +x, grid y = world -y"), std::string::npos);
   const std::string flipped = readFile(tmp / "down.pgm");
@@ -479,11 +478,11 @@ TEST(QueryCli, GridParsesBackAndFollowsTheColumnRule) {
 TEST(QueryCli, MapGridIsTheQuerysGrid) {
   const Fixture& f = fixture();
   TempDir tmp;
-  const RunResult m = runVdmap("map " + q(f.dir / "bi") + " --frames 0:3 --cell-size 16 --grid 0.5 --grid-band 0.3:0.9 --out " +
-                               q(tmp / "m"));
+  const RunResult m = runVdmap("map " + q(f.dir / "bi") +
+                               " --frames 0:3 --cell-size 16 --grid 0.5 --grid-band 0.3:0.9 --out " + q(tmp / "m"));
   ASSERT_EQ(m.exit_code, 0) << m.err;
-  const RunResult r = runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band 0.3:0.9 --out " +
-                               q(tmp / "q.yaml"));
+  const RunResult r =
+      runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band 0.3:0.9 --out " + q(tmp / "q.yaml"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readFile(tmp / "m" / "grid.pgm"), readFile(tmp / "q.pgm"));
   EXPECT_NE(readFile(tmp / "m" / "grid.yaml").find("image: grid.pgm\n"), std::string::npos);
@@ -498,8 +497,8 @@ TEST(QueryCli, OctomapLoadsAndAgreesWithClassify) {
   const Fixture& f = fixture();
   TempDir tmp;
   const double res = 0.25;
-  const RunResult r = runVdmap("query " + q(f.session) + " --op octomap --resolution 0.25 --out " + q(tmp / "m.bt") +
-                               " --json");
+  const RunResult r =
+      runVdmap("query " + q(f.session) + " --op octomap --resolution 0.25 --out " + q(tmp / "m.bt") + " --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const auto summary = nlohmann::json::parse(r.out);
   octomap::OcTree tree(0.1);
@@ -557,8 +556,9 @@ TEST(QueryCli, KeyframePosesMoveTheAnswers) {
   const QueryMap moved_map = libraryMap(f.session, tmp / "poses.txt");
   for (const QueryOp op : {QueryOp::kClassify, QueryOp::kDistance}) {
     const std::string name = app::queryOpName(op);
-    const RunResult r = runVdmap("query " + q(f.session) + " --op " + name + " --keyframe-poses " + q(tmp / "poses.txt") +
-                                 " --points " + q(tmp / "p.txt") + " --out " + q(tmp / "moved.txt"));
+    const RunResult r =
+        runVdmap("query " + q(f.session) + " --op " + name + " --keyframe-poses " + q(tmp / "poses.txt") +
+                 " --points " + q(tmp / "p.txt") + " --out " + q(tmp / "moved.txt"));
     ASSERT_EQ(r.exit_code, 0) << r.err;
     const std::string answers = readFile(tmp / "moved.txt");
     EXPECT_EQ(answers, app::queryAnswersText(op, input, libraryAnswers(moved_map, op, input))) << name;
@@ -596,7 +596,8 @@ TEST(QueryCli, AnEmptyMapAnswersUnknown) {
   EXPECT_EQ(run("distance", "p.txt"), "inf 0 0 0\ninf 0 0 0\n");
   EXPECT_EQ(run("ray", "r.txt"), "miss\n");
   EXPECT_EQ(run("collide", "s.txt"), "0 0 1 inf -1\n1 0 1 inf -1\n");
-  const RunResult grid = runVdmap("query " + q(tmp / "empty.vdmap") + " --op grid --band 0:1 --out " + q(tmp / "g.yaml"));
+  const RunResult grid =
+      runVdmap("query " + q(tmp / "empty.vdmap") + " --op grid --band 0:1 --out " + q(tmp / "g.yaml"));
   EXPECT_EQ(grid.exit_code, 1);
   EXPECT_NE(grid.err.find("the map sees nothing"), std::string::npos) << grid.err;
   EXPECT_FALSE(fs::exists(tmp / "g.yaml"));

@@ -35,7 +35,8 @@ TEST(RenderBench, EllipsoidsNamesTheUploadAndTheMedianFrame) {
   const auto j = nlohmann::json::parse(r.out).at("ellipsoids");
   EXPECT_EQ(j.at("count"), 200);
   EXPECT_EQ(j.at("points_below_px"), 0.0);
-  for (const char* key : {"renderer", "upload_ms", "frame_ms_median", "frame_ms_min"}) EXPECT_TRUE(j.contains(key)) << key;
+  for (const char* key : {"renderer", "upload_ms", "frame_ms_median", "frame_ms_min"})
+    EXPECT_TRUE(j.contains(key)) << key;
 }
 
 TEST(RenderBench, EllipsoidsRefusesBadInput) {
@@ -65,8 +66,8 @@ TEST_F(RenderBenchOnASession, ViewNamesEveryPassOfTheOrbit) {
   const std::string view = "bench " + session() + " --view --steps 2 --fast-budget 100 --size 64x48";
   RunResult r = runVdmap(view + " --png " + quoted(tmp / "v"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* figure : {"map upload", "LOD order", "full:", "mesh selection", "fast:", "budget 100", "settle",
-                             "cached frame"})
+  for (const char* figure :
+       {"map upload", "LOD order", "full:", "mesh selection", "fast:", "budget 100", "settle", "cached frame"})
     EXPECT_NE(r.out.find(figure), std::string::npos) << figure << " in\n" << r.out;
   EXPECT_TRUE(std::filesystem::exists(tmp / "v_full.png"));
   EXPECT_TRUE(std::filesystem::exists(tmp / "v_fast_100.png"));
@@ -102,8 +103,8 @@ TEST_F(RenderBenchOnASession, SuiteOfASessionNamesEveryStage) {
   EXPECT_EQ(j.at("maps_loaded"), 1);
   for (const char* key : {"decoded_s", "lazy_s"}) EXPECT_TRUE(j.at("session_load").contains(key)) << key;
   for (const char* run : {"update", "compare"})
-    for (const char* key : {"validate_s", "load_s", "context_s", "build_s", "render_s_per_view", "check_s_per_view",
-                            "total_s"})
+    for (const char* key :
+         {"validate_s", "load_s", "context_s", "build_s", "render_s_per_view", "check_s_per_view", "total_s"})
       EXPECT_TRUE(j.at(run).contains(key)) << run << " " << key;
 }
 
@@ -115,8 +116,8 @@ TEST_F(RenderBenchOnASession, SuiteFileIsTimedAsItIs) {
   ASSERT_EQ(runVdmap("render --suite " + quoted(tmp / "views.yaml") + " --update").exit_code, 0);
   const RunResult r = runVdmap("bench --suite " + quoted(tmp / "views.yaml") + " --runs 2");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  for (const char* figure : {"compare  validate", "context", "per view: render", "medians of 2 runs", "2 views, 0 differ",
-                             "maps loaded 1"})
+  for (const char* figure :
+       {"compare  validate", "context", "per view: render", "medians of 2 runs", "2 views, 0 differ", "maps loaded 1"})
     EXPECT_NE(r.out.find(figure), std::string::npos) << figure << " in\n" << r.out;
   EXPECT_EQ(r.out.find("update"), std::string::npos) << "a given suite's goldens are not rewritten";
 }
@@ -126,8 +127,8 @@ TEST_F(RenderBenchOnASession, SuiteRefusesWhatIsNoSuite) {
   test::writeText(tmp / "notes.txt", "not a suite\n");
   expectOneLineError(runVdmap("bench --suite " + quoted(tmp / "notes.txt")), (tmp / "notes.txt").string() + ": ");
   // A suite whose goldens were never made is refused before anything is timed.
-  test::writeText(tmp / "views.yaml", "version: 1\nmaps: {room: " + quoted(*dir_ / "s.vdmap") +
-                                          "}\nviews:\n  - {name: a, map: room}\n");
+  test::writeText(tmp / "views.yaml",
+                  "version: 1\nmaps: {room: " + quoted(*dir_ / "s.vdmap") + "}\nviews:\n  - {name: a, map: room}\n");
   expectOneLineError(runVdmap("bench --suite " + quoted(tmp / "views.yaml")), "golden");
   expectOneLineError(runVdmap("bench --suite " + session() + " " + session()), "--suite excludes SEQ");
   expectOneLineError(runVdmap("bench " + session() + " --runs 2"), "--runs requires --suite");

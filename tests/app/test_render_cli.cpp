@@ -7,16 +7,16 @@
 #include <regex>
 
 #include "app/view/view_file.h"
-#include "mapping/global_map/global_map.h"
 #include "mapping/files/ply_reader.h"
-#include "mapping/io/tum_sequence.h"
 #include "mapping/files/session_file.h"
+#include "mapping/global_map/global_map.h"
+#include "mapping/io/tum_sequence.h"
+#include "mapping/synth/builtin_scene.h"
 #include "render/colormap.h"
 #include "render/map_scene.h"
+#include "render/sequence_synth.h"
 #include "render/view_camera.h"
 #include "render/view_framing.h"
-#include "mapping/synth/builtin_scene.h"
-#include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -117,9 +117,10 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
 TEST(RenderCli, MissingOsmesaIsAClearError) {
   TempDir tmp;
   writeEllipsoidPly(tmp / "map.ply");
-  const auto r = runVdmap("render --map '" + (tmp / "map.ply").string() + "' --out '" + (tmp / "o.png").string() +
-                          "' 2>&1; VDMAP_OSMESA_LIBRARY=/nonexistent/libOSMesa.so '" + VDMAP_BINARY +
-                          "' render --map '" + (tmp / "map.ply").string() + "' --out '" + (tmp / "p.png").string() + "'");
+  const auto r =
+      runVdmap("render --map '" + (tmp / "map.ply").string() + "' --out '" + (tmp / "o.png").string() +
+               "' 2>&1; VDMAP_OSMESA_LIBRARY=/nonexistent/libOSMesa.so '" + VDMAP_BINARY + "' render --map '" +
+               (tmp / "map.ply").string() + "' --out '" + (tmp / "p.png").string() + "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_NE(r.err.find("needs OSMesa, which is not available"), std::string::npos) << r.err;
   EXPECT_TRUE(std::filesystem::exists(tmp / "o.png")) << "the control, with OSMesa found, must render";
@@ -191,8 +192,8 @@ TEST_F(RenderSequenceCli, KeyframeViewReproducesTheKeyframesImage) {
 }
 
 TEST_F(RenderSequenceCli, ContainerViewIsTheKeyframeImageWithItsEllipses) {
-  const auto r = runVdmap("render " + seq() + " --view container:0 --size 640x480 --grid --out '" +
-                          out("container0.png") + "'");
+  const auto r =
+      runVdmap("render " + seq() + " --view container:0 --size 640x480 --grid --out '" + out("container0.png") + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const cv::Mat img = test::readImage(out("container0.png"));
   ASSERT_EQ(img.size(), cv::Size(640, 480));
@@ -219,16 +220,18 @@ TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
   for (const char* view : {"global", "keyframe:1", "container:1"}) {
     const std::string a = out(std::string("seq-") + view + ".png"), b = out(std::string("session-") + view + ".png");
     const auto from_seq = runVdmap("render " + seq() + " --view " + view + " --size 320x240 --out '" + a + "'");
-    const auto from_session = runVdmap("render '" + out("s.vdmap") + "' --view " + view + " --size 320x240 --out '" + b + "'");
+    const auto from_session =
+        runVdmap("render '" + out("s.vdmap") + "' --view " + view + " --size 320x240 --out '" + b + "'");
     ASSERT_EQ(from_seq.exit_code, 0) << from_seq.err;
     ASSERT_EQ(from_session.exit_code, 0) << from_session.err;
     EXPECT_EQ(cv::norm(test::readImage(a), test::readImage(b), cv::NORM_INF), 0.0) << view;
     EXPECT_NE(from_session.out.find("keyframes"), std::string::npos) << from_session.out;
   }
-  const auto with_map = runVdmap("render --map '" + out("s.vdmap") + "' --view keyframe:0 --out '" + out("k.png") + "'");
+  const auto with_map =
+      runVdmap("render --map '" + out("s.vdmap") + "' --view keyframe:0 --out '" + out("k.png") + "'");
   EXPECT_EQ(with_map.exit_code, 0) << with_map.err;
-  const auto folder = runVdmap("render --map '" + out("map") + "' --size 320x240 --background white --out '" +
-                               out("folder.png") + "'");
+  const auto folder =
+      runVdmap("render --map '" + out("map") + "' --size 320x240 --background white --out '" + out("folder.png") + "'");
   ASSERT_EQ(folder.exit_code, 0) << folder.err;
   // --map alone frames the map as the window does: the box of the central 96 % of the means
   // (a few strays may reach past the edges) projects inside the image and spans at least 60 % of
@@ -245,7 +248,8 @@ TEST_F(RenderSequenceCli, ASessionAndAMapFolderRenderWithoutMapping) {
   const render::ViewCamera view = render::OrbitCamera::framing(lo, hi, {0, 0, 1}, 320.f / 240.f).view(320, 240);
   glm::vec2 a(INFINITY), b(-INFINITY);
   for (int c = 0; c < 8; ++c) {
-    const glm::vec4 q = view.T_C_W * glm::vec4((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z, 1.f);
+    const glm::vec4 q =
+        view.T_C_W * glm::vec4((c & 1) ? hi.x : lo.x, (c & 2) ? hi.y : lo.y, (c & 4) ? hi.z : lo.z, 1.f);
     const glm::vec2 p(view.fx * q.x / q.z + view.cx, view.fy * q.y / q.z + view.cy);
     a = glm::min(a, p), b = glm::max(b, p);
   }
@@ -268,12 +272,15 @@ long ellipsoidsDrawn(const std::string& out) {
 // A PNG's pixels (BGR).
 cv::Mat png(const std::string& file) { return test::readImage(file); }
 
-double maxDifference(const cv::Mat& a, const cv::Mat& b) { return a.size() == b.size() ? cv::norm(a, b, cv::NORM_INF) : 1e9; }
+double maxDifference(const cv::Mat& a, const cv::Mat& b) {
+  return a.size() == b.size() ? cv::norm(a, b, cv::NORM_INF) : 1e9;
+}
 
 // Pixels of `image` (BGR) within 12 counts of `rgb`.
 int countColour(const cv::Mat& image, const glm::u8vec3& rgb) {
   cv::Mat mask;
-  cv::inRange(image, cv::Scalar(rgb.b - 12, rgb.g - 12, rgb.r - 12), cv::Scalar(rgb.b + 12, rgb.g + 12, rgb.r + 12), mask);
+  cv::inRange(image, cv::Scalar(rgb.b - 12, rgb.g - 12, rgb.r - 12), cv::Scalar(rgb.b + 12, rgb.g + 12, rgb.r + 12),
+              mask);
   return cv::countNonZero(mask);
 }
 
@@ -319,7 +326,8 @@ TEST_F(RenderSessionCli, UncertaintyAndKeyframeColoursDrawTheirLegend) {
   EXPECT_GT(countColour(u, render::colormap(1.f)), 10) << "the ramp's bright end";
   EXPECT_GT(countColour(k, render::keyframeColor(0)), 10) << "K0's swatch";
   EXPECT_GT(countColour(k, render::keyframeColor(1)), 10) << "K1's swatch";
-  EXPECT_LT(countColour(rgb, render::colormap(1.f)) + countColour(rgb, render::keyframeColor(1)), 5) << "rgb: no legend";
+  EXPECT_LT(countColour(rgb, render::colormap(1.f)) + countColour(rgb, render::keyframeColor(1)), 5)
+      << "rgb: no legend";
 }
 
 TEST_F(RenderSessionCli, EachLayerCanBeSwitchedOffAlone) {
@@ -356,8 +364,8 @@ TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) 
   // 80 and 239.
   const cv::Mat with = png(out("c.png")), without = png(out("cn.png"));
   const glm::u8vec3 yellow{255, 220, 0};
-  for (const cv::Rect& edge : {cv::Rect(100, 58, 120, 4), cv::Rect(100, 178, 120, 4), cv::Rect(78, 80, 4, 80),
-                               cv::Rect(238, 80, 4, 80)}) {
+  for (const cv::Rect& edge :
+       {cv::Rect(100, 58, 120, 4), cv::Rect(100, 178, 120, 4), cv::Rect(78, 80, 4, 80), cv::Rect(238, 80, 4, 80)}) {
     EXPECT_GT(countColour(with(edge), yellow), 100) << edge;
     EXPECT_EQ(countColour(without(edge), yellow), 0) << edge;
   }
@@ -373,7 +381,8 @@ TEST_F(RenderSessionCli, ASliceDrawsOnlyTheEllipsoidsWithinItAndDrawNoneNone) {
   ASSERT_EQ(high.exit_code, 0) << high.err;
   EXPECT_GT(ellipsoidsDrawn(low.out), 0) << low.out;
   EXPECT_GT(ellipsoidsDrawn(high.out), 0) << high.out;
-  EXPECT_EQ(ellipsoidsDrawn(low.out) + ellipsoidsDrawn(high.out), ellipsoidsDrawn(all.out)) << "whole ellipsoids, each once";
+  EXPECT_EQ(ellipsoidsDrawn(low.out) + ellipsoidsDrawn(high.out), ellipsoidsDrawn(all.out))
+      << "whole ellipsoids, each once";
   EXPECT_GT(maxDifference(png(out("slice-low.png")), png(out("slice-high.png"))), 0.0);
   const auto none = render("draw-none.png", "--layers none --draw none");
   ASSERT_EQ(none.exit_code, 0) << none.err;
@@ -400,7 +409,8 @@ TEST_F(RenderSessionCli, OrbitOfTheDefaultAnglesIsTheDefaultView) {
 
 TEST_F(RenderSessionCli, LookAtFromAViewFilesCameraIsThatView) {
   // A hand-written view file with a camera, and the same camera as flags.
-  writeText(out("v.json"), R"({"vdmap_view": 2, "slice": null, "source": "s.vdmap", "view": "global", "size": [320, 240],
+  writeText(out("v.json"),
+            R"({"vdmap_view": 2, "slice": null, "source": "s.vdmap", "view": "global", "size": [320, 240],
     "camera": {"eye": [2.5, -1.5, -2.0], "target": [0.1, 0.2, 1.5], "up": [0, -1, 0], "fov_y_deg": 50},
     "up_axis": "data", "color": "rgb", "draw": "ellipsoids", "sigma": 2, "sphere_level": 0,
     "points_below_px": 4, "background": "white",
@@ -408,7 +418,8 @@ TEST_F(RenderSessionCli, LookAtFromAViewFilesCameraIsThatView) {
                "grid": false, "bounds": true},
     "selected_keyframe": -1, "thresholds": {}})");
   // thresholds are required in full: the reader names the first missing one.
-  const auto partial = runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") + "' --out '" + out("v.png") + "'");
+  const auto partial =
+      runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") + "' --out '" + out("v.png") + "'");
   EXPECT_EQ(partial.exit_code, 1);
   EXPECT_NE(partial.err.find("v.json: missing key 'thresholds."), std::string::npos) << partial.err;
   EXPECT_EQ(std::count(partial.err.begin(), partial.err.end(), '\n'), 1) << partial.err;
@@ -427,7 +438,8 @@ TEST_F(RenderSessionCli, LookAtFromAViewFilesCameraIsThatView) {
   const auto from_file =
       runVdmap("render '" + out("s.vdmap") + "' --view-file '" + out("v.json") + "' --out '" + out("v.png") + "'");
   ASSERT_EQ(from_file.exit_code, 0) << from_file.err;
-  const auto from_flags = render("f.png", "--look-at 2.5,-1.5,-2.0,0.1,0.2,1.5 --up 0,-1,0 --fov 50 --background white");
+  const auto from_flags =
+      render("f.png", "--look-at 2.5,-1.5,-2.0,0.1,0.2,1.5 --up 0,-1,0 --fov 50 --background white");
   ASSERT_EQ(from_flags.exit_code, 0) << from_flags.err;
   const cv::Mat a = png(out("v.png")), b = png(out("f.png"));
   ASSERT_EQ(a.size(), cv::Size(320, 240)) << "the view file's size";
@@ -449,7 +461,8 @@ TEST_F(RenderSessionCli, ASettingsFileGivesTheWindowsThresholds) {
   ASSERT_EQ(with_file.exit_code, 0) << with_file.err;
   ASSERT_EQ(with_set.exit_code, 0) << with_set.err;
   EXPECT_NE(with_file.err.find("note: settings: " + out("settings.json") + " over the session's thresholds\n"),
-            std::string::npos) << with_file.err;
+            std::string::npos)
+      << with_file.err;
   EXPECT_LT(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(plain.out)) << "k = 1 keeps fewer ellipsoids";
   EXPECT_EQ(ellipsoidsDrawn(with_file.out), ellipsoidsDrawn(with_set.out));
   // --set comes over --settings.
@@ -486,7 +499,8 @@ TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
   const auto mapped = runVdmap("map '" + folder.string() + "' --frames 0:150 --out '" + (tmp / "m").string() +
                                "' --save '" + (tmp / "k.vdmap").string() + "'");
   ASSERT_EQ(mapped.exit_code, 0) << mapped.err;
-  const auto r = runVdmap("render '" + (tmp / "k.vdmap").string() + "' --size 640x360 --out '" + (tmp / "k.png").string() + "'");
+  const auto r =
+      runVdmap("render '" + (tmp / "k.vdmap").string() + "' --size 640x360 --out '" + (tmp / "k.png").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   std::smatch m;
   ASSERT_TRUE(std::regex_search(r.out, m, std::regex(R"(up \((\S+), (\S+), (\S+)\)\))"))) << r.out;
@@ -495,8 +509,7 @@ TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
   EXPECT_LT(std::abs(up.z), 0.9f) << "not the +z convention: the kitchen's up is not its z axis";
   // The view the render drew, from the session (the same framing functions).
   const Session session = loadSession(tmp / "k.vdmap");
-  const render::GraphScene graph =
-      render::graphSceneOf(session.graph, session.info.state, session.info.camera, false);
+  const render::GraphScene graph = render::graphSceneOf(session.graph, session.info.state, session.info.camera, false);
   const std::vector<Ellipsoid> map = buildGlobalMap(session.graph, session.info.global).ellipsoids;
   std::vector<glm::vec3> means;
   for (const Ellipsoid& e : map) means.emplace_back(e.mean.x(), e.mean.y(), e.mean.z());
@@ -525,7 +538,8 @@ TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
   std::sort(height_row.begin(), height_row.end());
   const std::size_t fifth = height_row.size() / 5;
   double low_rows = 0, high_rows = 0;
-  for (std::size_t i = 0; i < fifth; ++i) low_rows += height_row[i].second, high_rows += height_row[height_row.size() - 1 - i].second;
+  for (std::size_t i = 0; i < fifth; ++i)
+    low_rows += height_row[i].second, high_rows += height_row[height_row.size() - 1 - i].second;
   EXPECT_GT(low_rows / fifth, high_rows / fifth + 20.0) << "the floor is not below the rest in the image";
   // The image: dark, and the map fills a good part of it.
   const cv::Mat img = png((tmp / "k.png").string());
@@ -540,7 +554,8 @@ TEST(RenderCli, TheKitchenRendersUprightAndFramed) {
 TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {
   TempDir tmp;
   writeText(tmp / "square.ply", kSquarePly);
-  writeText(tmp / "traj.txt", "# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 0.01 0 0 0 0 0 1\n0.2 0.02 0 0 0 0 0 1\n");
+  writeText(tmp / "traj.txt",
+            "# t tx ty tz qx qy qz qw\n0.0 0 0 0 0 0 0 1\n0.1 0.01 0 0 0 0 0 1\n0.2 0.02 0 0 0 0 0 1\n");
   const std::string mesh = " --mesh '" + (tmp / "square.ply").string() + "'";
   auto r = runVdmap("synth" + mesh + " --trajectory '" + (tmp / "traj.txt").string() +
                     "' --camera tum-default --noise none --frames 1: --out '" + (tmp / "seq").string() + "'");

@@ -88,8 +88,8 @@ TEST_F(RenderGolden, AChangedColourExitsTwoWithOneLineAndADiffImage) {
   TempDir tmp;
   const auto golden = makeGolden(tmp);
   const auto diff = tmp / "d.png";
-  const auto r = runVdmap("render " + session() + " --size 160x120 --expect " + quoted(golden) + " --color keyframe --diff " +
-                          quoted(diff));
+  const auto r = runVdmap("render " + session() + " --size 160x120 --expect " + quoted(golden) +
+                          " --color keyframe --diff " + quoted(diff));
   EXPECT_EQ(r.exit_code, 2) << r.err;
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("vdmap render: differs: " + golden.string() + ": "), std::string::npos) << r.err;
@@ -134,7 +134,8 @@ void saveSessionWithABrokenImage(const std::filesystem::path& file) {
   Mapper mapper = test::mapTurningBoxRoom(2);
   KeyframeGraph graph = mapper.graph();
   Keyframe& k = graph.keyframe(0);
-  k.rgb_image = CompressedImage::fromEncoded(k.rgb_image.rows(), k.rgb_image.cols(), CV_8UC3, "\x89PNG not really", false);
+  k.rgb_image =
+      CompressedImage::fromEncoded(k.rgb_image.rows(), k.rgb_image.cols(), CV_8UC3, "\x89PNG not really", false);
   saveSession(file, graph, sessionInfo(mapper, {}));
 }
 
@@ -148,16 +149,19 @@ TEST(SessionImages, LoadWithoutDecodingThenDecodeOneKeyframeNamingIt) {
     keyframeImage(s.graph.keyframe(0), "s.vdmap");
     FAIL() << "the broken image decoded";
   } catch (const InputError& e) {
-    EXPECT_EQ(std::string(e.what()).rfind("s.vdmap: keyframe 0: rgb image: cannot decode colour image", 0), 0u) << e.what();
+    EXPECT_EQ(std::string(e.what()).rfind("s.vdmap: keyframe 0: rgb image: cannot decode colour image", 0), 0u)
+        << e.what();
   }
 }
 
 TEST(SessionImages, RenderDrawsTheGlobalViewOfASessionWithABrokenImageAndRefusesItsContainer) {
   TempDir tmp;
   saveSessionWithABrokenImage(tmp / "s.vdmap");
-  auto r = runVdmap("render '" + (tmp / "s.vdmap").string() + "' --size 80x60 --out '" + (tmp / "g.png").string() + "'");
+  auto r =
+      runVdmap("render '" + (tmp / "s.vdmap").string() + "' --size 80x60 --out '" + (tmp / "g.png").string() + "'");
   EXPECT_EQ(r.exit_code, 0) << "the global view needs no keyframe image: " << r.err;
-  r = runVdmap("render '" + (tmp / "s.vdmap").string() + "' --view container:0 --out '" + (tmp / "c.png").string() + "'");
+  r = runVdmap("render '" + (tmp / "s.vdmap").string() + "' --view container:0 --out '" + (tmp / "c.png").string() +
+               "'");
   EXPECT_EQ(r.exit_code, 1);
   EXPECT_EQ(lines(r.err), 1) << r.err;
   EXPECT_NE(r.err.find("s.vdmap: keyframe 0: rgb image: cannot decode colour image"), std::string::npos) << r.err;
@@ -170,17 +174,20 @@ class RenderSuite : public RenderGolden {
  protected:
   // A suite of four views of the session (two global, a keyframe view, a container).
   static void writeSuite(const TempDir& tmp, const std::string& extra_view = "") {
-    writeText(tmp / "views.yaml", "version: 1\n"
-                                  "goldens: goldens\n"
-                                  "out: out\n"
-                                  "maps:\n"
-                                  "  room: " + (*dir_ / "s.vdmap").string() + "\n"
-                                  "views:\n"
-                                  "  - {name: global, map: room, size: 160x120}\n"
-                                  "  - {name: orbit, map: room, size: 160x120, orbit: \"30,20\"}\n"
-                                  "  - {name: kf1, map: room, view: \"keyframe:1\", size: 160x120, color: uncertainty}\n"
-                                  "  - {name: c1, map: room, view: \"container:1\", size: 320x240, tolerance: {share: 0.01}}\n" +
-                                      extra_view);
+    writeText(tmp / "views.yaml",
+              "version: 1\n"
+              "goldens: goldens\n"
+              "out: out\n"
+              "maps:\n"
+              "  room: " +
+                  (*dir_ / "s.vdmap").string() +
+                  "\n"
+                  "views:\n"
+                  "  - {name: global, map: room, size: 160x120}\n"
+                  "  - {name: orbit, map: room, size: 160x120, orbit: \"30,20\"}\n"
+                  "  - {name: kf1, map: room, view: \"keyframe:1\", size: 160x120, color: uncertainty}\n"
+                  "  - {name: c1, map: room, view: \"container:1\", size: 320x240, tolerance: {share: 0.01}}\n" +
+                  extra_view);
   }
   static test::RunResult runSuite(const TempDir& tmp, const std::string& extra = "") {
     return runVdmap("render --suite '" + (tmp / "views.yaml").string() + "'" + extra);
@@ -204,27 +211,30 @@ TEST_F(RenderSuite, RendersEveryViewAndLoadsEachMapOnce) {
   EXPECT_NE(r.out.find("differing px"), std::string::npos) << r.out;
   // The orbit is another picture than the default view.
   EXPECT_GT(cv::norm(test::readImage((tmp / "goldens" / "global.png")),
-                     test::readImage((tmp / "goldens" / "orbit.png")), cv::NORM_L1), 0.0);
+                     test::readImage((tmp / "goldens" / "orbit.png")), cv::NORM_L1),
+            0.0);
 }
 
 TEST_F(RenderSuite, EachMapLoadsOnceAndEachSetOfThresholdsBuildsOneGlobalMap) {
   // Two maps (the session and its `vdmap map` folder); the session's views with two sets of
   // thresholds: two loads, two global maps built (the folder's is read).
   TempDir tmp;
-  writeText(tmp / "views.yaml", "version: 1\nmaps:\n  room: " + (*dir_ / "s.vdmap").string() + "\n  folder: " +
-                                    (*dir_ / "map").string() + "\nviews:\n"
-                                    "  - {name: a, map: room, size: 80x60}\n"
-                                    "  - {name: b, map: room, size: 80x60, orbit: \"0,30\"}\n"
-                                    "  - {name: c, map: room, size: 80x60, set: [filter_sigma_factor=1.5]}\n"
-                                    "  - {name: d, map: room, size: 80x60, view: \"keyframe:0\", set: [filter_sigma_factor=1.5]}\n"
-                                    "  - {name: e, map: folder, size: 80x60}\n"
-                                    "  - {name: f, map: folder, size: 80x60, color: count}\n");
+  writeText(tmp / "views.yaml",
+            "version: 1\nmaps:\n  room: " + (*dir_ / "s.vdmap").string() + "\n  folder: " + (*dir_ / "map").string() +
+                "\nviews:\n"
+                "  - {name: a, map: room, size: 80x60}\n"
+                "  - {name: b, map: room, size: 80x60, orbit: \"0,30\"}\n"
+                "  - {name: c, map: room, size: 80x60, set: [filter_sigma_factor=1.5]}\n"
+                "  - {name: d, map: room, size: 80x60, view: \"keyframe:0\", set: [filter_sigma_factor=1.5]}\n"
+                "  - {name: e, map: folder, size: 80x60}\n"
+                "  - {name: f, map: folder, size: 80x60, color: count}\n");
   const auto r = runSuite(tmp, " --update");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_NE(r.out.find("maps loaded: 2, global maps built: 2"), std::string::npos) << r.out;
   // The thresholds took effect: the stricter filter keeps fewer ellipsoids, another picture.
-  EXPECT_GT(cv::norm(test::readImage((tmp / "goldens" / "a.png")), test::readImage((tmp / "goldens" / "c.png")),
-                     cv::NORM_L1), 0.0);
+  EXPECT_GT(
+      cv::norm(test::readImage((tmp / "goldens" / "a.png")), test::readImage((tmp / "goldens" / "c.png")), cv::NORM_L1),
+      0.0);
 }
 
 TEST_F(RenderSuite, ViewFilesAndSettingsAreReadRelativeToTheSuite) {
@@ -251,12 +261,13 @@ TEST_F(RenderSuite, ViewFilesAndSettingsAreReadRelativeToTheSuite) {
     ASSERT_EQ(r.exit_code, 0) << suite << ": " << r.err;
   }
   const auto white = tmp / "suite" / "goldens" / "white.png";
-  const auto r = runVdmap("render " + session() + " --view-file " + quoted(tmp / "suite" / "white.json") + " --expect " +
-                          quoted(white) + " --tolerance 0,0");
+  const auto r = runVdmap("render " + session() + " --view-file " + quoted(tmp / "suite" / "white.json") +
+                          " --expect " + quoted(white) + " --tolerance 0,0");
   EXPECT_EQ(r.exit_code, 0) << "the suite's view is render --view-file's, pixel for pixel: " << r.err;
   EXPECT_EQ(test::readImage(white).at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
   EXPECT_GT(cv::norm(test::readImage((tmp / "suite" / "goldens" / "plain.png")),
-                     test::readImage((tmp / "suite" / "strict" / "plain.png")), cv::NORM_L1), 0.0)
+                     test::readImage((tmp / "suite" / "strict" / "plain.png")), cv::NORM_L1),
+            0.0)
       << "the suite's settings did not reach the view";
 }
 

@@ -28,8 +28,13 @@ render::ViewSpec unusualSpec() {
   spec.sigma = 1.5f;
   spec.sphere_level = 2;
   spec.points_below_px = 0.f;
-  spec.layers = {.frustums = false, .graph = true, .trajectory = false, .groundtruth = true, .legend = false,
-                 .grid = true, .bounds = false};
+  spec.layers = {.frustums = false,
+                 .graph = true,
+                 .trajectory = false,
+                 .groundtruth = true,
+                 .legend = false,
+                 .grid = true,
+                 .bounds = false};
   spec.background = {1.f, 0.f, 0.2f};
   spec.selected_keyframe = 2;
   return spec;
@@ -83,7 +88,8 @@ TEST(ViewFile, RefusesAMissingKeyNamingIt) {
   const auto nested = editedViewFile(tmp, [](nlohmann::json& j) { j["layers"].erase("legend"); });
   EXPECT_EQ(errorOf(nested), nested.string() + ": missing key 'layers.legend'");
   const auto threshold = editedViewFile(tmp, [](nlohmann::json& j) { j["thresholds"].erase("merge_distance"); });
-  EXPECT_NE(errorOf(threshold).find("missing key 'thresholds.merge_distance'"), std::string::npos) << errorOf(threshold);
+  EXPECT_NE(errorOf(threshold).find("missing key 'thresholds.merge_distance'"), std::string::npos)
+      << errorOf(threshold);
 }
 
 TEST(ViewFile, RefusesANonFiniteNumber) {
@@ -91,8 +97,9 @@ TEST(ViewFile, RefusesANonFiniteNumber) {
   writeViewFile(tmp / "v.json", unusualSpec(), {}, "s.vdmap");
   std::string text = test::readFile(tmp / "v.json");
   // 1e999 parses as infinity; the camera is null in this file, so give it one.
-  text = std::regex_replace(text, std::regex(R"("camera": null)"),
-                            R"("camera": {"eye": [1e999, 0, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov_y_deg": 60})");
+  text =
+      std::regex_replace(text, std::regex(R"("camera": null)"),
+                         R"("camera": {"eye": [1e999, 0, 0], "target": [0, 0, 0], "up": [0, 0, 1], "fov_y_deg": 60})");
   test::writeText(tmp / "inf.json", text);
   EXPECT_EQ(errorOf(tmp / "inf.json"), (tmp / "inf.json").string() + ": camera.eye[0] must be finite");
 }
@@ -116,7 +123,8 @@ TEST(ViewFile, SettingsArgTakesASettingsFileOrAViewFile) {
   thresholds.merge_distance_m = 0.4;
   writeViewFile(tmp / "v.json", unusualSpec(), thresholds, "s.vdmap");
   EXPECT_EQ(readSettingsArg(tmp / "v.json").thresholds.merge_distance_m, 0.4);
-  test::writeText(tmp / "settings.json", R"({"thresholds": {"filter_sigma_factor": 2.5}, "view": {"background": "white"}})");
+  test::writeText(tmp / "settings.json",
+                  R"({"thresholds": {"filter_sigma_factor": 2.5}, "view": {"background": "white"}})");
   gui::Settings base;
   base.thresholds.merge_distance_m = 0.15;  // the session's: kept where the file says nothing
   const gui::Settings s = readSettingsArg(tmp / "settings.json", base);
@@ -184,7 +192,12 @@ TEST(ViewFile, Version2RoundTripsTheSliceAndDrawNone) {
   EXPECT_TRUE(nlohmann::json::parse(test::readFile(tmp / "off.json"))["slice"].is_null());
   EXPECT_EQ(readViewFile(tmp / "off.json").slice, render::HeightSlice{});
   // A slice must be [lo, hi] with lo < hi.
-  EXPECT_NE(errorOf(editedViewFile(tmp, [](nlohmann::json& v) { v["slice"] = {2, 1}; })).find("slice"), std::string::npos);
+  EXPECT_NE(errorOf(editedViewFile(tmp,
+                                   [](nlohmann::json& v) {
+                                     v["slice"] = {2, 1};
+                                   }))
+                .find("slice"),
+            std::string::npos);
   // --slice and --draw none on the render command line.
   spec.slice.on = true;
   EXPECT_NE(renderCommand(spec, "s.vdmap").find(" --draw none --slice 0.25:1.75"), std::string::npos)

@@ -28,7 +28,8 @@ class ViewTwin : public ::testing::Test {
     dir_ = new TempDir;
     const RunResult synth = runVdmap("synth --builtin --builtin-frames 40 --frames 0:10 --out '" + path("room") + "'");
     ASSERT_EQ(synth.exit_code, 0) << synth.err;
-    const RunResult map = runVdmap("map '" + path("room") + "' --out '" + path("map") + "' --save '" + path("s.vdmap") + "'");
+    const RunResult map =
+        runVdmap("map '" + path("room") + "' --out '" + path("map") + "' --save '" + path("s.vdmap") + "'");
     ASSERT_EQ(map.exit_code, 0) << map.err;
   }
   static void TearDownTestSuite() { delete dir_; }
@@ -36,7 +37,8 @@ class ViewTwin : public ::testing::Test {
 
   // The window in a virtual X server with its own config and cache.
   static RunResult gui(const std::string& args) {
-    return runVdmapInXvfb(dir_->path(), "gui '" + path("s.vdmap") + "' --window-size 1280x720 " + args + " --exit", "1600x900");
+    return runVdmapInXvfb(dir_->path(), "gui '" + path("s.vdmap") + "' --window-size 1280x720 " + args + " --exit",
+                          "1600x900");
   }
 
   static cv::Mat readRgb(const std::string& png) {
@@ -52,7 +54,8 @@ class ViewTwin : public ::testing::Test {
     const std::string view = path(name + ".json"), window = path(name + "W.png"), headless = path(name + "H.png");
     const RunResult w = gui(gui_args + " --save-view '" + view + "' --view-screenshot '" + window + "'");
     EXPECT_EQ(w.exit_code, 0) << w.err;
-    const RunResult h = runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
+    const RunResult h =
+        runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
     EXPECT_EQ(h.exit_code, 0) << h.err;
     if (w.exit_code != 0 || h.exit_code != 0) return nlohmann::json::object();
     const nlohmann::json spec = nlohmann::json::parse(readFile(view));
@@ -106,7 +109,8 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameHeightColoursAndSlice) {
   REQUIRE_XVFB();
   const nlohmann::json all = expectTwins("height", "--set color=height");
   EXPECT_EQ(all.value("color", ""), "height");
-  const nlohmann::json spec = expectTwins("height-slice", "--set color=height --set slice=true --set slice_lo=0.3 --set slice_hi=1.2");
+  const nlohmann::json spec =
+      expectTwins("height-slice", "--set color=height --set slice=true --set slice_lo=0.3 --set slice_hi=1.2");
   EXPECT_EQ(spec["slice"], nlohmann::json::array({0.3f, 1.2f}));
 }
 
@@ -126,12 +130,14 @@ TEST_F(ViewTwin, AViewFileGivenToTheWindowIsTheViewRenderDraws) {
   const std::string saved = path("viewport.json");
   ASSERT_EQ(gui("--save-view '" + saved + "'").exit_code, 0);
   nlohmann::json spec = nlohmann::json::parse(readFile(saved));
-  spec["camera"] = {{"eye", {1.5, -2.5, 3.0}}, {"target", {0.5, 1.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov_y_deg", 50.0}};
+  spec["camera"] = {
+      {"eye", {1.5, -2.5, 3.0}}, {"target", {0.5, 1.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov_y_deg", 50.0}};
   spec["background"] = "white";
   spec["color"] = "uncertainty";
   const std::string view = path("hand.json"), window = path("handW.png"), headless = path("handH.png");
   writeText(view, spec.dump(2));
-  const RunResult w = gui("--view-file '" + view + "' --view-screenshot '" + window + "' --save-view '" + path("again.json") + "'");
+  const RunResult w =
+      gui("--view-file '" + view + "' --view-screenshot '" + window + "' --save-view '" + path("again.json") + "'");
   ASSERT_EQ(w.exit_code, 0) << w.err;
   const RunResult h = runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
   ASSERT_EQ(h.exit_code, 0) << h.err;
@@ -139,12 +145,14 @@ TEST_F(ViewTwin, AViewFileGivenToTheWindowIsTheViewRenderDraws) {
   // The window took the file's view: its camera, colours and background.
   const nlohmann::json again = nlohmann::json::parse(readFile(path("again.json")));
   for (const char* key : {"eye", "target"})
-    for (int i = 0; i < 3; ++i) EXPECT_NEAR(again["camera"][key][i].get<double>(), spec["camera"][key][i].get<double>(), 1e-4) << key;
+    for (int i = 0; i < 3; ++i)
+      EXPECT_NEAR(again["camera"][key][i].get<double>(), spec["camera"][key][i].get<double>(), 1e-4) << key;
   EXPECT_EQ(again["background"], "white");
   EXPECT_EQ(again["color"], "uncertainty");
   const cv::Mat image = readRgb(window);
   ASSERT_FALSE(image.empty());
-  EXPECT_EQ(image.at<cv::Vec3b>(0, image.cols - 1), cv::Vec3b(255, 255, 255)) << "the top-right corner is the white background";
+  EXPECT_EQ(image.at<cv::Vec3b>(0, image.cols - 1), cv::Vec3b(255, 255, 255))
+      << "the top-right corner is the white background";
 }
 
 // Without a view file, render at the window's viewport size draws the window's default view:
@@ -154,7 +162,8 @@ TEST_F(ViewTwin, RenderWithoutAViewFileDrawsTheWindowsDefaultView) {
   const std::string saved = path("default.json"), window = path("defaultW.png"), headless = path("defaultH.png");
   ASSERT_EQ(gui("--save-view '" + saved + "' --view-screenshot '" + window + "'").exit_code, 0);
   const nlohmann::json spec = nlohmann::json::parse(readFile(saved));
-  const std::string size = std::to_string(spec["size"][0].get<int>()) + "x" + std::to_string(spec["size"][1].get<int>());
+  const std::string size =
+      std::to_string(spec["size"][0].get<int>()) + "x" + std::to_string(spec["size"][1].get<int>());
   const RunResult h = runVdmap("render '" + path("s.vdmap") + "' --size " + size + " --out '" + headless + "'");
   ASSERT_EQ(h.exit_code, 0) << h.err;
   expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);

@@ -31,8 +31,7 @@ TEST(BuiltinScene, FirstLapIsTheDefaultWalk) {
     EXPECT_LT((T.linear().col(2) - (target - eye).normalized()).norm(), 1e-12) << i;
   }
   // Timestamps keep increasing across laps (one sequence, 30 fps).
-  for (std::size_t i = 1; i < three.trajectory.size(); ++i)
-    EXPECT_GT(three.trajectory[i].t, three.trajectory[i - 1].t);
+  for (std::size_t i = 1; i < three.trajectory.size(); ++i) EXPECT_GT(three.trajectory[i].t, three.trajectory[i - 1].t);
 }
 
 // Each further lap sees the room from elsewhere: no pose of lap 1 or 2 is within 10 cm and 20

@@ -64,9 +64,9 @@ TEST(RgbdFrame, PointCloudBackProjectsValidPixelsOnly) {
   PinholeCamera cam{4, 3, 2.0, 2.0, 1.5, 1.0, 1000.0};
   RgbdFrame frame;
   frame.depth = cv::Mat(3, 4, CV_16UC1, cv::Scalar(2000));
-  frame.depth.at<std::uint16_t>(0, 0) = 0;       // no measurement
-  frame.depth.at<std::uint16_t>(1, 1) = 50;      // 5 cm: below the valid range
-  frame.depth.at<std::uint16_t>(2, 3) = 9000;    // 9 m: beyond it
+  frame.depth.at<std::uint16_t>(0, 0) = 0;     // no measurement
+  frame.depth.at<std::uint16_t>(1, 1) = 50;    // 5 cm: below the valid range
+  frame.depth.at<std::uint16_t>(2, 3) = 9000;  // 9 m: beyond it
   frame.rgb = cv::Mat(3, 4, CV_8UC3, cv::Scalar(10, 20, 30));
   const ColoredPointCloud cloud = toPointCloud(frame, cam);
   ASSERT_EQ(cloud.size(), 9u);
@@ -141,7 +141,8 @@ TEST(ColourRegistration, GivesEachDepthPixelTheColourOfItsPoint) {
   for (int v = 0; v < rgb.rows; ++v)
     for (int u = 0; u < rgb.cols; ++u) {
       const Eigen::Vector3d origin = T_depth_colour.translation();
-      const Eigen::Vector3d dir = T_depth_colour.linear() * Eigen::Vector3d((u - colour.cx) / colour.fx, (v - colour.cy) / colour.fy, 1);
+      const Eigen::Vector3d dir =
+          T_depth_colour.linear() * Eigen::Vector3d((u - colour.cx) / colour.fx, (v - colour.cy) / colour.fy, 1);
       const Eigen::Vector3d p = origin + dir * ((wall - origin.z()) / dir.z());
       rgb.at<cv::Vec3b>(v, u) = cv::Vec3b::all(cv::saturate_cast<std::uint8_t>(paint(p.x(), p.y())));
     }

@@ -73,8 +73,7 @@ TEST(CellStats, SinglePointsOneAtATimeEqualBatch) {
   for (int i = 0; i < 1000; ++i) {
     pts.push_back(Eigen::Vector3d(1 + 0.01 * g(rng), -2 + 0.02 * g(rng), 4 + 0.003 * g(rng)));
     cols.push_back(Eigen::Vector3d(100 + g(rng), 50, 20));
-    mergeBatch(makeBatch(std::vector<Eigen::Vector3d>{pts.back()},
-                         std::vector<Eigen::Vector3d>{cols.back()}), &cell);
+    mergeBatch(makeBatch(std::vector<Eigen::Vector3d>{pts.back()}, std::vector<Eigen::Vector3d>{cols.back()}), &cell);
   }
   const Truth truth = batchTruth(pts, cols);
   EXPECT_LT(relErr(cell.mean, truth.mean), kRelTol);
@@ -86,8 +85,7 @@ TEST(CellStats, EmptyBatchIsANoOpAndTooFewPointsHaveNoCovariance) {
   CellStats cell;
   mergeBatch(PointBatch{}, &cell);
   EXPECT_EQ(cell.n, 0.0);
-  mergeBatch(makeBatch(std::vector<Eigen::Vector3d>{{1, 2, 3}}, std::vector<Eigen::Vector3d>{{9, 9, 9}}),
-             &cell);
+  mergeBatch(makeBatch(std::vector<Eigen::Vector3d>{{1, 2, 3}}, std::vector<Eigen::Vector3d>{{9, 9, 9}}), &cell);
   EXPECT_EQ(cell.n, 1.0);
   EXPECT_EQ(cell.mean, Eigen::Vector3d(1, 2, 3));
   EXPECT_TRUE(cell.covariance().isZero());

@@ -169,8 +169,8 @@ TEST(Eval, CommandLine) {
   EXPECT_NEAR(j["rmse_mm"].get<double>(), 10.0, 1e-2);  // ascii text keeps ~6 digits
   EXPECT_EQ(j["elements"].get<std::size_t>(), cloud.positions.size());
 
-  const auto bad = test::runVdmap("eval --map '" + (dir / "nope.ply").string() + "' --mesh '" +
-                                  (dir / "mesh.ply").string() + "'");
+  const auto bad =
+      test::runVdmap("eval --map '" + (dir / "nope.ply").string() + "' --mesh '" + (dir / "mesh.ply").string() + "'");
   EXPECT_EQ(bad.exit_code, 1);
   EXPECT_NE(bad.err.find("nope.ply: no such file"), std::string::npos) << bad.err;
   const auto not_mesh = test::runVdmap("eval --map '" + (dir / "points.ply").string() + "' --mesh '" +

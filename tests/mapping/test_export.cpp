@@ -17,10 +17,10 @@
 #include "mapping/core/temporary_paths.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/octomap_export.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/files/ply_writer.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/json_text.h"
-#include "mapping/files/ply_reader.h"
 #include "tests/support/box_room_keyframes.h"
 
 namespace vdmap {
@@ -58,9 +58,9 @@ TEST(Export, WritesEveryFileAndTheEllipsoidPlyReadsBack) {
   MapExportOptions options;
   options.run_stats = {{"frames", 2}};
   const nlohmann::json stats = exportMap(tmp / "out", scene.graph, scene.map, options);
-  EXPECT_EQ(filesIn(tmp / "out"), (std::vector<std::string>{"global_ellipsoids.ply", "global_gaussians.ply",
-                                                             "global_points.ply", "graph.txt", "keyframes.txt",
-                                                             "local_maps.ply", "stats.json"}));
+  EXPECT_EQ(filesIn(tmp / "out"),
+            (std::vector<std::string>{"global_ellipsoids.ply", "global_gaussians.ply", "global_points.ply", "graph.txt",
+                                      "keyframes.txt", "local_maps.ply", "stats.json"}));
   EXPECT_EQ(stats["frames"], 2);
   EXPECT_EQ(stats["sigma_e_prime"], scene.map.sigma_e_prime);
 
@@ -125,7 +125,8 @@ TEST(Export, GaussianScaleAndRotationReproduceTheCovariance) {
   // default degree 3 (it refused a file with none).
   std::vector<std::string> names = {"x", "y", "z", "nx", "ny", "nz", "f_dc_0", "f_dc_1", "f_dc_2"};
   for (int k = 0; k < 45; ++k) names.push_back("f_rest_" + std::to_string(k));
-  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"}) names.push_back(n);
+  for (const char* n : {"opacity", "scale_0", "scale_1", "scale_2", "rot_0", "rot_1", "rot_2", "rot_3"})
+    names.push_back(n);
   ASSERT_EQ(t.names, names);
   const int x = t.column("x"), f_dc = t.column("f_dc_0"), opacity = t.column("opacity"), scale = t.column("scale_0"),
             rot = t.column("rot_0"), nx = t.column("nx"), f_rest = t.column("f_rest_0");
@@ -251,7 +252,8 @@ TEST(Export, AMapWithAValueTheFilesCannotHoldIsNotExported) {
     exportMap(tmp / "out", scene.graph, scene.map, options);
     ADD_FAILURE() << "exported a non-finite trajectory";
   } catch (const std::runtime_error& e) {
-    EXPECT_NE(std::string(e.what()).find("nothing exported: trajectory pose 1 is not finite"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("nothing exported: trajectory pose 1 is not finite"), std::string::npos)
+        << e.what();
   }
   EXPECT_FALSE(fs::exists(tmp / "out")) << "a refused export creates nothing";
   // The trajectory writer refuses on its own too (bench writes trajectories directly).
@@ -281,11 +283,12 @@ TEST(Export, MapWhoseSessionSaveFailsKeepsNoExport) {
   // Noise images (incompressible, in the session) of a flat wall in large cells (few ellipsoids,
   // in the export): the session is the largest file the run writes.
   test::writeTinySequence(tmp / "seq", 6, 160, 120);
-  const std::string map = "map '" + (tmp / "seq").string() + "' --cell-size 16 --save '" + (tmp / "s.vdmap").string() +
-                          "' --out ";
+  const std::string map =
+      "map '" + (tmp / "seq").string() + "' --cell-size 16 --save '" + (tmp / "s.vdmap").string() + "' --out ";
   ASSERT_EQ(test::runVdmap(map + "'" + (tmp / "whole").string() + "'").exit_code, 0);
   std::uintmax_t largest_export = 0;
-  for (const auto& entry : fs::directory_iterator(tmp / "whole")) largest_export = std::max(largest_export, entry.file_size());
+  for (const auto& entry : fs::directory_iterator(tmp / "whole"))
+    largest_export = std::max(largest_export, entry.file_size());
   const std::uintmax_t session = fs::file_size(tmp / "s.vdmap");
   ASSERT_LT(largest_export + 1024, session) << "the limit must fall between the export files and the session";
   fs::remove(tmp / "s.vdmap");
@@ -326,11 +329,13 @@ TEST(Export, MapSaveIntoAFolderThatCannotBeWrittenFailsAtOnce) {
   fs::create_directory(tmp / "readonly");
   fs::permissions(tmp / "readonly", fs::perms::owner_read | fs::perms::owner_exec | fs::perms::group_read |
                                         fs::perms::group_exec | fs::perms::others_read | fs::perms::others_exec);
-  const test::RunResult r = test::runVdmap("map '" + (tmp / "seq").string() + "' --out '" + (tmp / "writable" / "out").string() +
-                                               "' --save '" + (tmp / "readonly" / "s.vdmap").string() + "'",
-                                           as_user);
+  const test::RunResult r =
+      test::runVdmap("map '" + (tmp / "seq").string() + "' --out '" + (tmp / "writable" / "out").string() +
+                         "' --save '" + (tmp / "readonly" / "s.vdmap").string() + "'",
+                     as_user);
   EXPECT_EQ(r.exit_code, 1) << r.err;
-  EXPECT_NE(r.err.find("readonly/s.vdmap: cannot write into " + (tmp / "readonly").string()), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("readonly/s.vdmap: cannot write into " + (tmp / "readonly").string()), std::string::npos)
+      << r.err;
   EXPECT_EQ(r.err.find("mapping"), std::string::npos) << "fails before mapping: " << r.err;
   EXPECT_FALSE(fs::exists(tmp / "writable" / "out"));
 }
@@ -383,9 +388,9 @@ TEST(Export, AnExportRemovesTheFilesOfAnOlderOneItDoesNotWrite) {
   ASSERT_TRUE(fs::exists(tmp / "out" / "global.bt"));
   test::writeText(tmp / "out" / "notes.txt", "mine\n");
   exportMap(tmp / "out", scene.graph, scene.map);
-  EXPECT_EQ(filesIn(tmp / "out"), (std::vector<std::string>{"global_ellipsoids.ply", "global_gaussians.ply",
-                                                             "global_points.ply", "graph.txt", "keyframes.txt",
-                                                             "local_maps.ply", "notes.txt", "stats.json"}));
+  EXPECT_EQ(filesIn(tmp / "out"),
+            (std::vector<std::string>{"global_ellipsoids.ply", "global_gaussians.ply", "global_points.ply", "graph.txt",
+                                      "keyframes.txt", "local_maps.ply", "notes.txt", "stats.json"}));
 }
 
 // Staging folders of processes that are gone (a SIGKILL, a power cut) are removed by the next
@@ -467,7 +472,8 @@ TEST(Export, AnOctomapResolutionTheMapDoesNotFitInIsRefused) {
   double reach = 0;
   for (const Ellipsoid& e : scene.map.ellipsoids)
     for (const Eigen::Vector3d& p : ellipsoidSamplePoints(e)) reach = std::max(reach, p.cwiseAbs().maxCoeff());
-  for (const Keyframe& k : scene.graph.keyframes()) reach = std::max(reach, k.T_W_K.translation().cwiseAbs().maxCoeff());
+  for (const Keyframe& k : scene.graph.keyframes())
+    reach = std::max(reach, k.T_W_K.translation().cwiseAbs().maxCoeff());
   EXPECT_LE(reach, extent);
 }
 
@@ -497,18 +503,25 @@ TEST(JsonText, NumbersAreTheShortestTextThatReadsBack) {
     EXPECT_EQ(jsonText(nlohmann::json(v)), text);
   }
   std::printf("nlohmann::json wrote %d of 20000 such numbers longer than needed\n", noisy);
-  const nlohmann::json mixed = {{"path", "run-0.010102999999999999/x\"1.50\""}, {"count", 7}, {"whole", 3.0},
-                                {"small", -2.5e-07}, {"large", 1e20}, {"list", {0.010103, -1, 0.5, 320.0, 0.00012, 123456.5}}};
+  const nlohmann::json mixed = {{"path", "run-0.010102999999999999/x\"1.50\""},
+                                {"count", 7},
+                                {"whole", 3.0},
+                                {"small", -2.5e-07},
+                                {"large", 1e20},
+                                {"list", {0.010103, -1, 0.5, 320.0, 0.00012, 123456.5}}};
   const std::string text = jsonText(mixed, -1);
-  EXPECT_EQ(text, "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5,320.0,0.00012,123456.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
-                  "\"small\":-2.5e-07,\"whole\":3.0}");
+  EXPECT_EQ(
+      text,
+      "{\"count\":7,\"large\":1e+20,\"list\":[0.010103,-1,0.5,320.0,0.00012,123456.5],\"path\":\"run-0.010102999999999999/x\\\"1.50\\\"\","
+      "\"small\":-2.5e-07,\"whole\":3.0}");
   EXPECT_EQ(nlohmann::json::parse(text), mixed);
   // JSON is UTF-8: a path in another encoding is written with U+FFFD, not an exception.
   EXPECT_EQ(jsonText(nlohmann::json{{"folder", "/data/caf\xe9"}}, -1), "{\"folder\":\"/data/caf\xef\xbf\xbd\"}");
   // Any double reads back as itself, at every magnitude.
   std::mt19937_64 random(7);
   for (int i = 0; i < 100000; ++i) {
-    const double v = std::ldexp(std::uniform_real_distribution<double>(-1, 1)(random), static_cast<int>(random() % 120) - 60);
+    const double v =
+        std::ldexp(std::uniform_real_distribution<double>(-1, 1)(random), static_cast<int>(random() % 120) - 60);
     ASSERT_EQ(nlohmann::json::parse(jsonText(nlohmann::json(v))).get<double>(), v) << jsonText(nlohmann::json(v));
   }
 }

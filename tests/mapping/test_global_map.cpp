@@ -68,7 +68,8 @@ TEST(GlobalMap, MeanShiftShortcutLabelsAsTheIteration) {
   std::uniform_int_distribution<int> size(1, 9), count(1, 50);
   int shortcuts = 0;
   for (int trial = 0; trial < 3000; ++trial) {
-    const double h = 0.25, spread = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.09 : 0.3);  // all within h; around it; apart
+    const double h = 0.25,
+                 spread = trial % 3 == 0 ? 0.05 : (trial % 3 == 1 ? 0.09 : 0.3);  // all within h; around it; apart
     std::vector<Eigen::Vector3d> means(static_cast<std::size_t>(size(rng)));
     std::vector<double> weights;
     const Eigen::Vector3d centre(u(rng), u(rng), 2.0 + u(rng));
@@ -96,7 +97,8 @@ TEST(GlobalMap, MomentMatchingEqualsTheStatisticsOfTheUnion) {
   std::vector<Ellipsoid> parts;
   for (int part = 0; part < 3; ++part) {
     std::vector<Eigen::Vector3d> pts;
-    for (int i = 0; i < 20 + 7 * part; ++i) pts.push_back(Eigen::Vector3d(g(rng), 2 * g(rng), 0.1 * g(rng)) + Eigen::Vector3d(part, 0, 3));
+    for (int i = 0; i < 20 + 7 * part; ++i)
+      pts.push_back(Eigen::Vector3d(g(rng), 2 * g(rng), 0.1 * g(rng)) + Eigen::Vector3d(part, 0, 3));
     Eigen::Vector3d mean = Eigen::Vector3d::Zero();
     for (const auto& p : pts) mean += p;
     mean /= pts.size();
@@ -272,7 +274,8 @@ std::vector<Ellipsoid> fuseAcrossGroupsReference(const std::vector<Ellipsoid>& e
   }
   std::vector<std::size_t> order(n);
   std::iota(order.begin(), order.end(), 0);
-  std::stable_sort(order.begin(), order.end(), [&](std::size_t a, std::size_t b) { return lambda_max[a] < lambda_max[b]; });
+  std::stable_sort(order.begin(), order.end(),
+                   [&](std::size_t a, std::size_t b) { return lambda_max[a] < lambda_max[b]; });
   std::vector<std::size_t> seed_of(n, n);
   for (std::size_t s : order) {
     if (seed_of[s] < n) continue;

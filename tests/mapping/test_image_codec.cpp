@@ -10,11 +10,11 @@
 #include <opencv2/imgcodecs.hpp>
 #include <opencv2/imgproc.hpp>
 
+#include "mapping/core/colour_registration.h"
 #include "mapping/core/error.h"
 #include "mapping/io/compressed_image.h"
 #include "mapping/io/image_codec.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/core/colour_registration.h"
 #include "mapping/pipeline/mapper.h"
 #include "tests/support/test_util.h"
 
@@ -45,12 +45,14 @@ TEST(ImageEncode, PngBytesAreImencodes) {
   for (const cv::Size size : {cv::Size(1, 1), cv::Size(53, 37), cv::Size(320, 240)})
     for (const int type : {CV_8UC1, CV_8UC3, CV_16UC1}) {
       const cv::Mat image = testImage(size.height, size.width, type, size.area() + type);
-      const std::string what = std::to_string(size.width) + "x" + std::to_string(size.height) + " type " + std::to_string(type);
+      const std::string what =
+          std::to_string(size.width) + "x" + std::to_string(size.height) + " type " + std::to_string(type);
       // imencode without parameters (the renders, the synthetic sequences) and with level 1
       // (a keyframe's pixels); imencode takes colour as BGR.
       EXPECT_EQ(encodePng(image, ChannelOrder::kBgr, PngCompression::kFast), imencodeBytes(".png", image)) << what;
       EXPECT_EQ(encodePng(image, ChannelOrder::kBgr, PngCompression::kLevel1),
-                imencodeBytes(".png", image, {cv::IMWRITE_PNG_COMPRESSION, 1})) << what;
+                imencodeBytes(".png", image, {cv::IMWRITE_PNG_COMPRESSION, 1}))
+          << what;
       if (type != CV_8UC3) continue;
       cv::Mat bgr;
       cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
@@ -62,9 +64,11 @@ TEST(ImageEncode, JpegBytesAreImencodes) {
   for (const cv::Size size : {cv::Size(1, 1), cv::Size(53, 37), cv::Size(320, 240)})
     for (const int quality : {1, 50, 90, 95, 100}) {
       const cv::Mat image = testImage(size.height, size.width, CV_8UC3, quality);
-      const std::string what = std::to_string(size.width) + "x" + std::to_string(size.height) + " q" + std::to_string(quality);
+      const std::string what =
+          std::to_string(size.width) + "x" + std::to_string(size.height) + " q" + std::to_string(quality);
       EXPECT_EQ(encodeJpeg(image, quality, ChannelOrder::kBgr),
-                imencodeBytes(".jpg", image, {cv::IMWRITE_JPEG_QUALITY, quality})) << what;
+                imencodeBytes(".jpg", image, {cv::IMWRITE_JPEG_QUALITY, quality}))
+          << what;
       cv::Mat bgr;
       cv::cvtColor(image, bgr, cv::COLOR_RGB2BGR);
       EXPECT_EQ(encodeJpeg(image, quality), imencodeBytes(".jpg", bgr, {cv::IMWRITE_JPEG_QUALITY, quality})) << what;
@@ -97,9 +101,12 @@ TEST(ImageDecode, GivesOpenCvsPixels) {
   cv::cvtColor(colour, rgba, cv::COLOR_BGR2BGRA);
   colour.convertTo(colour16, CV_16UC3, 257.0);
   const cv::Size size(53, 37);
-  for (const auto& [name, image] : std::vector<std::pair<std::string, cv::Mat>>{
-           {"colour.png", colour}, {"grey.png", grey}, {"rgba.png", rgba}, {"colour16.png", colour16},
-           {"colour.jpg", colour}, {"grey.jpg", grey}}) {
+  for (const auto& [name, image] : std::vector<std::pair<std::string, cv::Mat>>{{"colour.png", colour},
+                                                                                {"grey.png", grey},
+                                                                                {"rgba.png", rgba},
+                                                                                {"colour16.png", colour16},
+                                                                                {"colour.jpg", colour},
+                                                                                {"grey.jpg", grey}}) {
     const std::filesystem::path file = dir / name;
     ASSERT_TRUE(cv::imwrite(file.string(), image));
     cv::Mat expected;
@@ -122,8 +129,10 @@ TEST(ImageDecode, GivesOpenCvsPixelsOnSevenScenes) {
     ASSERT_TRUE(seq.colourCamera().has_value());
     expected = registerColour(expected, frame.depth, seq.camera(), *seq.colourCamera());
     EXPECT_EQ(cv::norm(frame.rgb, expected, cv::NORM_INF), 0.0) << i;
-    EXPECT_EQ(cv::norm(frame.depth, cv::imread(seq.entries()[i].depth_path.string(), cv::IMREAD_UNCHANGED), cv::NORM_INF),
-              0.0) << i;
+    EXPECT_EQ(
+        cv::norm(frame.depth, cv::imread(seq.entries()[i].depth_path.string(), cv::IMREAD_UNCHANGED), cv::NORM_INF),
+        0.0)
+        << i;
   }
 }
 

@@ -74,7 +74,8 @@ TEST_F(Covisibility, DecisionEqualsExhaustiveSearch) {
   std::vector<View> keys;
   for (int i = 0; i < 6; ++i) {
     const double a = i * M_PI / 3;
-    keys.push_back(view(test::lookAt({0.3 * std::cos(a), 0, 0.3 * std::sin(a)}, {2 * std::cos(a), 0.2, 2 * std::sin(a)})));
+    keys.push_back(
+        view(test::lookAt({0.3 * std::cos(a), 0, 0.3 * std::sin(a)}, {2 * std::cos(a), 0.2, 2 * std::sin(a)})));
   }
   std::vector<KeyframeView> views;
   for (int i = 0; i < 6; ++i) views.push_back({i, &keys[i].T_W_C, &keys[i].features});
@@ -82,7 +83,8 @@ TEST_F(Covisibility, DecisionEqualsExhaustiveSearch) {
   params.prefilter.enabled = false;
   for (int j = 0; j < 6; ++j) {
     const double a = j * M_PI / 3 + 0.15;
-    const View f = view(test::lookAt({0.25 * std::cos(a), 0.05, 0.25 * std::sin(a)}, {2 * std::cos(a), 0, 2 * std::sin(a)}));
+    const View f =
+        view(test::lookAt({0.25 * std::cos(a), 0.05, 0.25 * std::sin(a)}, {2 * std::cos(a), 0, 2 * std::sin(a)}));
     const int current = (j + 3) % 6;  // the opposite keyframe: forces the loop-closure search
     int best = -1;
     double best_delta = 0;

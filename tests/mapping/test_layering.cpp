@@ -112,7 +112,8 @@ TEST(Layering, MappingFoldersIncludeOnlyTheFoldersTheArchitectureListsBeforeThem
   const std::vector<std::string> order = documentedMappingOrder();
   auto rank = [&](const std::string& folder) { return std::find(order.begin(), order.end(), folder) - order.begin(); };
   for (const auto& [folder, includes] : graph) {
-    ASSERT_LT(rank(folder), static_cast<long>(order.size())) << "docs/dev/architecture.md does not list mapping/" << folder;
+    ASSERT_LT(rank(folder), static_cast<long>(order.size()))
+        << "docs/dev/architecture.md does not list mapping/" << folder;
     for (const std::string& to : includes)
       EXPECT_LT(rank(to), rank(folder)) << "mapping/" << folder << " includes mapping/" << to
                                         << ", which docs/dev/architecture.md lists after it";
@@ -129,7 +130,8 @@ std::vector<std::string> bannedIncludes(const std::string& dir, const std::vecto
 }
 
 TEST(Layering, TheMappingLibraryIncludesNoGlWindowOrLayerAbove) {
-  EXPECT_EQ(bannedIncludes("mapping", {"GL/", "GLFW/", "glm/", "imgui", "render/", "app/"}), std::vector<std::string>{});
+  EXPECT_EQ(bannedIncludes("mapping", {"GL/", "GLFW/", "glm/", "imgui", "render/", "app/"}),
+            std::vector<std::string>{});
 }
 
 TEST(Layering, TheRendererIncludesNoWindowToolkitOrApp) {
@@ -146,9 +148,14 @@ TEST(Layering, AppRoomsIncludeOnlyTheRoomsBelowThem) {
     return a;
   };
   const std::vector<std::string> nothing;
-  EXPECT_EQ(bannedIncludes("app/cli", plus(toolkit, {"app/view", "app/query_files", "app/workbench", "app/window", "app/bench"})), nothing);
-  EXPECT_EQ(bannedIncludes("app/query_files", plus(toolkit, {"app/cli", "app/view", "app/workbench", "app/window", "app/bench"})), nothing);
-  EXPECT_EQ(bannedIncludes("app/view", plus(toolkit, {"app/query_files", "app/workbench", "app/window", "app/bench"})), nothing);
+  EXPECT_EQ(bannedIncludes("app/cli",
+                           plus(toolkit, {"app/view", "app/query_files", "app/workbench", "app/window", "app/bench"})),
+            nothing);
+  EXPECT_EQ(bannedIncludes("app/query_files",
+                           plus(toolkit, {"app/cli", "app/view", "app/workbench", "app/window", "app/bench"})),
+            nothing);
+  EXPECT_EQ(bannedIncludes("app/view", plus(toolkit, {"app/query_files", "app/workbench", "app/window", "app/bench"})),
+            nothing);
   EXPECT_EQ(bannedIncludes("app/workbench", plus(toolkit, {"app/window", "app/bench"})), nothing);
   EXPECT_EQ(bannedIncludes("app/bench", plus(toolkit, {"app/window", "app/workbench"})), nothing);
   EXPECT_EQ(bannedIncludes("benchmarks", {"app/"}), nothing);

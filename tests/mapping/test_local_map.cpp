@@ -74,8 +74,8 @@ auto constantNoise(double sd) {
 // same statistics within float storage precision.
 TEST(LocalMap, FastIntegratorEqualsReference) {
   const auto scene = test::boxScene({-0.3, -0.2, 1.2}, {0.3, 0.2, 1.6});
-  const MapFixture m = buildMap(scene, posesAround(test::lookAt({0.5, -0.4, 0.1}, {0, 0, 1.4})),
-                                constantNoise(kNoiseSd));
+  const MapFixture m =
+      buildMap(scene, posesAround(test::lookAt({0.5, -0.4, 0.1}, {0, 0, 1.4})), constantNoise(kNoiseSd));
   ASSERT_GT(m.container.size(), 1000u);
   ASSERT_EQ(m.container.size(), m.reference.points.size());
   for (const StoredCell& c : m.container.cells()) {
@@ -113,8 +113,7 @@ TEST(LocalMap, PlaneMeansOnSurfaceAndNormalsAgree) {
     // in-plane spread sqrt(lambda_mid) give sd / (sqrt(lambda_mid) sqrt(n)) radians per axis;
     // quantisation adds at most its bound over the same lever arm.
     const double lever = std::sqrt(eig.eigenvalues()(1));
-    const double tol = (kSigmas * kRayLength * kNoiseSd / std::sqrt(e.count) +
-                        2 * kRayLength * kQuantisation) / lever;
+    const double tol = (kSigmas * kRayLength * kNoiseSd / std::sqrt(e.count) + 2 * kRayLength * kQuantisation) / lever;
     EXPECT_LE(angle, tol) << "count " << e.count << " lever " << lever;
     ++checked;
   }
@@ -197,8 +196,8 @@ double medianSqrtLambdaMax(const KeyframeContainer& c) {
 TEST(LocalMap, FarPlaneGetsLargerEllipsoidsAsTheModelPredicts) {
   const PinholeCamera cam = sceneCamera();
   auto measured = [&](double depth) {
-    return medianSqrtLambdaMax(buildMap(test::planeScene({0, 0, depth}, {0, 0, 1}),
-                                        {Transform::Identity()}, nguyenAxialSd).container);
+    return medianSqrtLambdaMax(
+        buildMap(test::planeScene({0, 0, depth}, {0, 0, 1}), {Transform::Identity()}, nguyenAxialSd).container);
   };
   // Prediction for a fronto-parallel cell at the image centre: pixel positions uniform over
   // 5 px give (s^2 - 1) / 12 px^2 per axis, times (d / f)^2; depth noise gives sd(d)^2.
@@ -210,8 +209,7 @@ TEST(LocalMap, FarPlaneGetsLargerEllipsoidsAsTheModelPredicts) {
   EXPECT_GT(far, 2.5 * near);
   // The sample lambda_max of 25 points is biased up by a few tens of percent where two
   // eigenvalues are close (the near plane); 30 % on the ratio allows that and no more.
-  EXPECT_NEAR((far / near) / (predicted(3.0) / predicted(1.0)), 1.0, 0.3)
-      << "near " << near << " far " << far;
+  EXPECT_NEAR((far / near) / (predicted(3.0) / predicted(1.0)), 1.0, 0.3) << "near " << near << " far " << far;
 }
 
 // A step from 1 m to 2 m at a column inside a cell: cells straddling it hold points of both
@@ -219,8 +217,8 @@ TEST(LocalMap, FarPlaneGetsLargerEllipsoidsAsTheModelPredicts) {
 // gives them back when the factor is raised (the container is untouched).
 TEST(LocalMap, FilterRemovesDiscontinuityEllipsoidsAndIsAView) {
   const PinholeCamera cam = sceneCamera();
-  RgbdFrame f = renderFrame(test::planeScene({0, 0, 1.0}, {0, 0, 1}), cam, Transform::Identity(),
-                            constantNoise(0.0005), 1);
+  RgbdFrame f =
+      renderFrame(test::planeScene({0, 0, 1.0}, {0, 0, 1}), cam, Transform::Identity(), constantNoise(0.0005), 1);
   const int step_u = 322;  // container column 642: inside the cell [640, 645)
   for (int v = 0; v < cam.height; ++v)
     for (int u = step_u; u < cam.width; ++u) f.depth.at<std::uint16_t>(v, u) *= 2;
@@ -244,16 +242,14 @@ TEST(LocalMap, FilterRemovesDiscontinuityEllipsoidsAndIsAView) {
   FilterParams loose;
   loose.filter_sigma_factor = 1000.0;
   EXPECT_EQ(keptEllipsoids(container, loose, Transform::Identity(), 0).size(), container.size());
-  EXPECT_EQ(keptEllipsoids(container, FilterParams{}, Transform::Identity(), 0).size(),
-            static_cast<std::size_t>(face));
+  EXPECT_EQ(keptEllipsoids(container, FilterParams{}, Transform::Identity(), 0).size(), static_cast<std::size_t>(face));
   FilterParams many;
   many.min_points = 26;  // every cell has 25 points: all rejected, none deleted
   EXPECT_TRUE(keptEllipsoids(container, many, Transform::Identity(), 0).empty());
   EXPECT_EQ(container.size(), before);
   FilterParams belter;
   belter.model = SensorModel::kBelter2018;
-  EXPECT_EQ(keptEllipsoids(container, belter, Transform::Identity(), 0).size(),
-            static_cast<std::size_t>(face));
+  EXPECT_EQ(keptEllipsoids(container, belter, Transform::Identity(), 0).size(), static_cast<std::size_t>(face));
 }
 
 // keepCell decides most cells from cheap bounds on the eigenvalues; it must decide every cell as
@@ -267,7 +263,8 @@ TEST(LocalMap, FilterBoundsDecideAsTheEigenvalues) {
   int kept = 0, rejected = 0;
   for (int trial = 0; trial < 20000; ++trial) {
     const double depth = 0.5 + 4.0 * u(rng);
-    const Eigen::Vector3d mean = cam.backProject(cam.width * (2 * u(rng) - 0.5), cam.height * (2 * u(rng) - 0.5), depth);
+    const Eigen::Vector3d mean =
+        cam.backProject(cam.width * (2 * u(rng) - 0.5), cam.height * (2 * u(rng) - 0.5), depth);
     const Eigen::Vector2d uv = cam.project(mean);
     const Eigen::Matrix3d expected = expectedCellCovariance(filter.model, cam, uv.x(), uv.y(), depth, 5);
     // A random covariance whose largest eigenvalue is 0.1 .. 30 times the expected one, so that
@@ -303,8 +300,7 @@ TEST(LocalMap, FilterBoundsDecideAsTheEigenvalues) {
 
 TEST(LocalMap, WorldAndKeyframeFramesAgree) {
   const auto poses = posesAround(test::lookAt({0.5, -0.4, 0.1}, {0, 0, 1.4}));
-  const MapFixture m = buildMap(test::boxScene({-0.3, -0.2, 1.2}, {0.3, 0.2, 1.6}), poses,
-                                constantNoise(kNoiseSd));
+  const MapFixture m = buildMap(test::boxScene({-0.3, -0.2, 1.2}, {0.3, 0.2, 1.6}), poses, constantNoise(kNoiseSd));
   const auto in_K = keptEllipsoids(m.container, FilterParams{}, Transform::Identity(), 7);
   const auto in_W = keptEllipsoids(m.container, FilterParams{}, poses[0], 7);
   ASSERT_EQ(in_K.size(), in_W.size());
@@ -319,8 +315,8 @@ TEST(LocalMap, WorldAndKeyframeFramesAgree) {
 TEST(LocalMap, CellSizeIsAnyPositiveIntegerUpToTheImage) {
   const PinholeCamera cam = sceneCamera();
   for (int s : {1, 3, 7, 480}) {
-    const MapFixture m = buildMap(test::planeScene({0, 0, 1.5}, {0, 0, 1}), {Transform::Identity()},
-                                  constantNoise(0), s);
+    const MapFixture m =
+        buildMap(test::planeScene({0, 0, 1.5}, {0, 0, 1}), {Transform::Identity()}, constantNoise(0), s);
     std::size_t points = 0;
     for (const StoredCell& c : m.container.cells()) points += c.n;
     EXPECT_EQ(points, static_cast<std::size_t>(cam.width * cam.height)) << "s = " << s;
@@ -333,14 +329,12 @@ TEST(LocalMap, CellSizeIsAnyPositiveIntegerUpToTheImage) {
 
 TEST(LocalMapBadInput, NanPoseThrows) {
   const PinholeCamera cam = sceneCamera();
-  RgbdFrame f = renderFrame(test::planeScene({0, 0, 1.5}, {0, 0, 1}), cam, Transform::Identity(),
-                            constantNoise(0), 1);
+  RgbdFrame f = renderFrame(test::planeScene({0, 0, 1.5}, {0, 0, 1}), cam, Transform::Identity(), constantNoise(0), 1);
   KeyframeContainer container(cam, 5);
   LocalMapIntegrator integrator;
   std::vector<int> touched{1, 2};
   f.T_W_C.translation().x() = std::nan("");
-  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, &touched),
-               std::invalid_argument);
+  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, &touched), std::invalid_argument);
   Transform bad_K = Transform::Identity();
   bad_K.linear()(0, 0) = std::nan("");
   f.T_W_C = Transform::Identity();
@@ -368,15 +362,12 @@ TEST(LocalMapBadInput, DepthSizeMismatchThrows) {
   f.depth = cv::Mat(240, 320, CV_16UC1, cv::Scalar(5000));
   KeyframeContainer container(cam, 5);
   LocalMapIntegrator integrator;
-  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr),
-               std::invalid_argument);
+  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr), std::invalid_argument);
   f.depth = cv::Mat(cam.height, cam.width, CV_32FC1, cv::Scalar(1.0));
-  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr),
-               std::invalid_argument);
+  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr), std::invalid_argument);
   f.depth = cv::Mat(cam.height, cam.width, CV_16UC1, cv::Scalar(5000));
   f.rgb = cv::Mat(10, 10, CV_8UC3);
-  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr),
-               std::invalid_argument);
+  EXPECT_THROW(integrator.integrateFrame(f, cam, Transform::Identity(), &container, nullptr), std::invalid_argument);
 }
 
 }  // namespace

@@ -31,8 +31,7 @@ TEST(LocalMapRealData, ThirtyFramesReprojectIntoFrame30) {
   KeyframeContainer container(cam, 5);
   LocalMapIntegrator integrator;
   const Transform T_W_K = seq.entries()[0].T_W_C;
-  for (std::size_t i = 0; i < 30; ++i)
-    integrator.integrateFrame(seq.load(i), cam, T_W_K, &container, nullptr);
+  for (std::size_t i = 0; i < 30; ++i) integrator.integrateFrame(seq.load(i), cam, T_W_K, &container, nullptr);
   const RgbdFrame f30 = seq.load(30);
   const Transform T_C_W = f30.T_W_C.inverse();
   std::vector<double> dz;
@@ -50,8 +49,8 @@ TEST(LocalMapRealData, ThirtyFramesReprojectIntoFrame30) {
   std::nth_element(dz.begin(), dz.begin() + dz.size() / 2, dz.end());
   const double median = dz[dz.size() / 2];
   RecordProperty("median_dz_mm", std::to_string(median * 1000));
-  std::printf("kept %zu of %zu ellipsoids, %zu reprojected, median |dz| %.2f mm\n", kept.size(),
-              container.size(), dz.size(), median * 1000);
+  std::printf("kept %zu of %zu ellipsoids, %zu reprojected, median |dz| %.2f mm\n", kept.size(), container.size(),
+              dz.size(), median * 1000);
   EXPECT_LT(median, 0.01);
 }
 

@@ -10,10 +10,10 @@
 
 #include "mapping/core/error.h"
 #include "mapping/files/map_export.h"
+#include "mapping/files/map_file.h"
 #include "mapping/files/octomap_export.h"
 #include "mapping/files/ply_writer.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/files/map_file.h"
 #include "tests/support/box_room_keyframes.h"
 #include "tests/support/test_util.h"
 
@@ -91,7 +91,8 @@ TEST(MapFile, AMapFolderReadsItsEllipsoidsKeyframesAndGraph) {
   const TwoViewMap scene;
   test::TempDir tmp;
   MapExportOptions options;
-  options.trajectory = {{1.0, Transform::Identity()}, {2.0, scene.graph.keyframe(1).T_W_K}, {3.0, Transform::Identity()}};
+  options.trajectory = {
+      {1.0, Transform::Identity()}, {2.0, scene.graph.keyframe(1).T_W_K}, {3.0, Transform::Identity()}};
   exportMap(tmp / "map", scene.graph, scene.map, options);
   const StaticMap map = loadStaticMap(tmp / "map");
   EXPECT_EQ(map.kind, MapFileKind::kMapFolder);

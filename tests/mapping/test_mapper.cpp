@@ -7,8 +7,8 @@
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/ellipsoid_filter.h"
+#include "mapping/pipeline/mapper.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -32,8 +32,8 @@ TEST(Mapper, PathBackToItsStartRevisitsTheFirstKeyframe) {
   std::vector<FrameReport> reports;
   for (int i = 0; i < frames; ++i) reports.push_back(mapper.addFrame(turningFrame(i, 6.0)));
   const int keyframes = static_cast<int>(mapper.graph().size());
-  EXPECT_GE(keyframes, 4);              // a 60 degree field of view cannot cover a turn with fewer
-  EXPECT_LE(keyframes, frames / 3);     // and the covisibility decision does not spam keyframes
+  EXPECT_GE(keyframes, 4);           // a 60 degree field of view cannot cover a turn with fewer
+  EXPECT_LE(keyframes, frames / 3);  // and the covisibility decision does not spam keyframes
   EXPECT_GT(mapper.revisits(), 0);
   // The last frame looks 24 degrees past the start: it must go into a keyframe made in the first
   // 60 degrees of the turn (frames 0..9), not a new one.
@@ -248,8 +248,8 @@ TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
   }
   const double n = keyframes, mb = 1 << 20;
   std::printf("resident per keyframe (mean): images %.3f MB, features %.3f MB, slot grid %.3f MB, ellipsoids "
-              "%.3f MB\n", total.images / n / mb, total.features / n / mb, total.cell_slots / n / mb,
-              total.ellipsoids / n / mb);
+              "%.3f MB\n",
+              total.images / n / mb, total.features / n / mb, total.cell_slots / n / mb, total.ellipsoids / n / mb);
   EXPECT_LE(total.images / n, 0.2 * mb);
   EXPECT_LE((total.images + total.features + total.cell_slots) / n, 0.5 * mb);
 }

@@ -4,8 +4,8 @@
 // brute-force mesh distance.
 #include <cmath>
 
-#include <gtest/gtest.h>
 #include <Eigen/Geometry>
+#include <gtest/gtest.h>
 
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/occupancy_truth.h"
@@ -38,7 +38,8 @@ ColoredTriangleMesh roomMesh() {
     mesh.colors.push_back({128, 128, 128});
   }
   // Each face as a quad of corner indices, split in two (the winding does not matter here).
-  const std::uint32_t quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4}, {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
+  const std::uint32_t quads[6][4] = {{0, 2, 6, 4}, {1, 3, 7, 5}, {0, 1, 5, 4},
+                                     {2, 3, 7, 6}, {0, 1, 3, 2}, {4, 5, 7, 6}};
   for (const auto& q : quads) {
     mesh.triangles.push_back({q[0], q[1], q[2]});
     mesh.triangles.push_back({q[0], q[2], q[3]});
@@ -86,12 +87,12 @@ TEST(OccupancyTruth, LabelsOfOneFrameAlongTheRay) {
   truth.addFrame(constantDepth(cam, 2.0), Transform::Identity());
   EXPECT_EQ(truth.sight(0, {0, 0, 1.0}), FrameSight::kFree);
   EXPECT_EQ(truth.sight(0, {0, 0, 1.975}), FrameSight::kFree);
-  EXPECT_EQ(truth.sight(0, {0, 0, 1.99}), FrameSight::kNone);     // within 2 cm of the surface, not on it
+  EXPECT_EQ(truth.sight(0, {0, 0, 1.99}), FrameSight::kNone);  // within 2 cm of the surface, not on it
   EXPECT_EQ(truth.sight(0, {0, 0, 1.996}), FrameSight::kSurface);
   EXPECT_EQ(truth.sight(0, {0, 0, 2.004}), FrameSight::kSurface);
-  EXPECT_EQ(truth.sight(0, {0, 0, 2.5}), FrameSight::kNone);      // behind the surface
-  EXPECT_EQ(truth.sight(0, {10, 0, 1.0}), FrameSight::kNone);     // outside the image
-  EXPECT_EQ(truth.sight(0, {0, 0, -1.0}), FrameSight::kNone);     // behind the camera
+  EXPECT_EQ(truth.sight(0, {0, 0, 2.5}), FrameSight::kNone);   // behind the surface
+  EXPECT_EQ(truth.sight(0, {10, 0, 1.0}), FrameSight::kNone);  // outside the image
+  EXPECT_EQ(truth.sight(0, {0, 0, -1.0}), FrameSight::kNone);  // behind the camera
   const OccupancyTruth::Seen s = truth.seen({0, 0, 1.0});
   EXPECT_TRUE(s.free);
   EXPECT_FALSE(s.surface);
@@ -100,7 +101,7 @@ TEST(OccupancyTruth, LabelsOfOneFrameAlongTheRay) {
 TEST(OccupancyTruth, NoFreeAtADepthEdgeOrBesideAMissingDepth) {
   const PinholeCamera cam = smallCamera();
   cv::Mat depth = constantDepth(cam, 2.0);
-  depth.colRange(0, 32).setTo(1000);  // the left half is a near surface at 1 m
+  depth.colRange(0, 32).setTo(1000);    // the left half is a near surface at 1 m
   depth.at<std::uint16_t>(10, 50) = 0;  // one pixel without depth
   OccupancyTruth truth(cam);
   truth.addFrame(depth, Transform::Identity());

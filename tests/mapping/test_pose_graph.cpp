@@ -114,8 +114,8 @@ NoisyLoop noisyLoop() {
     Transform T_i_j = loop.truth[i].inverse() * loop.truth[i + 1];
     const Eigen::Vector3d dt(noise(rng), noise(rng), noise(rng)), dr(noise(rng), noise(rng), noise(rng));
     T_i_j.translation() += 0.002 * dt;
-    T_i_j.linear() = T_i_j.linear() * bias *
-                     Eigen::AngleAxisd(0.05 * kDeg * dr.norm(), dr.normalized()).toRotationMatrix();
+    T_i_j.linear() =
+        T_i_j.linear() * bias * Eigen::AngleAxisd(0.05 * kDeg * dr.norm(), dr.normalized()).toRotationMatrix();
     loop.edges.push_back({i, i + 1, T_i_j, information(0.005, 0.15 * kDeg), false});
     loop.odometry.push_back(loop.odometry.back() * T_i_j);
   }

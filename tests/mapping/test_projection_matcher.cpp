@@ -24,7 +24,9 @@ struct MatcherView {
 
 class ProjectionMatcher : public ::testing::Test {
  protected:
-  MatcherView view(const Transform& T_W_C) { return {T_W_C, extractor_.extract(test::renderBoxRoom(camera_, T_W_C), camera_)}; }
+  MatcherView view(const Transform& T_W_C) {
+    return {T_W_C, extractor_.extract(test::renderBoxRoom(camera_, T_W_C), camera_)};
+  }
   PinholeCamera camera_ = cameraPreset("tum-default");
   FeatureExtractor extractor_;
 };
@@ -80,8 +82,9 @@ std::vector<FeatureMatch> slowMatchByProjection(const FrameFeatures& K, const Tr
     std::vector<std::pair<int, int>> window;  // (distance, index)
     for (std::size_t j = 0; j < F.size(); ++j)
       if ((uv - Eigen::Vector2d(F.keypoints[j].pt.x, F.keypoints[j].pt.y)).norm() <= p.context_radius_px)
-        window.emplace_back(static_cast<int>(cv::norm(K.descriptors.row(int(i)), F.descriptors.row(int(j)), cv::NORM_HAMMING)),
-                            static_cast<int>(j));
+        window.emplace_back(
+            static_cast<int>(cv::norm(K.descriptors.row(int(i)), F.descriptors.row(int(j)), cv::NORM_HAMMING)),
+            static_cast<int>(j));
     if (window.empty()) continue;
     std::sort(window.begin(), window.end());
     if (window[0].first > p.max_hamming) continue;
@@ -151,7 +154,8 @@ TEST(ProjectionMatcherRealData, KeyframeDecisionsAgreeWithTheOracleOn7Scenes) {
   for (std::size_t i = 0; i < seq.size(); ++i) {
     const RgbdFrame frame = seq.load(i);
     MatcherView f{frame.T_W_C, extractor.extract(frame, camera)};
-    const FrameDecision slow = decideKeyframe(f.features, f.T_W_C, current, views, camera, params, covisibilityBruteForce);
+    const FrameDecision slow =
+        decideKeyframe(f.features, f.T_W_C, current, views, camera, params, covisibilityBruteForce);
     const FrameDecision fast = decideKeyframe(f.features, f.T_W_C, current, views, camera, params);
     ++frames;
     if (fast.kind == slow.kind && fast.keyframe == slow.keyframe) ++agree;

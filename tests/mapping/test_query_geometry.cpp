@@ -3,8 +3,8 @@
 // every ellipsoid, and QueryMap's distance, collision and ray casts against the same loops (bit for
 // bit), on random ellipsoids and on the analytic box room.
 #include <algorithm>
-#include <cstdio>
 #include <cmath>
+#include <cstdio>
 #include <limits>
 #include <random>
 #include <vector>
@@ -16,9 +16,9 @@
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/local_map/sensor_model.h"
+#include "mapping/query/detail/surface_index.h"
 #include "mapping/query/ellipsoid_geometry.h"
 #include "mapping/query/query_map.h"
-#include "mapping/query/detail/surface_index.h"
 #include "tests/support/box_room_keyframes.h"
 
 namespace vdmap {
@@ -91,10 +91,10 @@ std::vector<Ellipsoid> randomEllipsoids(std::size_t n, unsigned seed) {
   for (std::size_t i = 0; i < n; ++i) {
     Eigen::Vector3d s(std::exp(logs(rng)), std::exp(logs(rng)), std::exp(logs(rng)));
     const double kind = u(rng);
-    if (kind < 0.2) s.z() = 1e-5;                                // disc (below the floor)
-    else if (kind < 0.3) s.y() = s.z() = 1e-4, s.x() = 0.2;      // needle
-    else if (kind < 0.32) s = Eigen::Vector3d(0.5, 0.4, 0.3);    // large
-    else if (kind < 0.325) s = Eigen::Vector3d(3.0, 2.0, 1.0);   // larger than every grid level
+    if (kind < 0.2) s.z() = 1e-5;                               // disc (below the floor)
+    else if (kind < 0.3) s.y() = s.z() = 1e-4, s.x() = 0.2;     // needle
+    else if (kind < 0.32) s = Eigen::Vector3d(0.5, 0.4, 0.3);   // large
+    else if (kind < 0.325) s = Eigen::Vector3d(3.0, 2.0, 1.0);  // larger than every grid level
     out.push_back(ellipsoidWithSigmas({pos(rng), pos(rng), pos(rng)}, s, randomRotation(rng)));
   }
   return out;
@@ -537,7 +537,8 @@ TEST(QueryMapSurface, CastViewEqualsCastRaysOnEveryPixel) {
     // Inside the room, looking anywhere (the seen wall, the unseen ones, from inside a gate).
     Eigen::Vector3d c(u(rng), 0.8 * u(rng), u(rng));
     if (view == 4) c = s.global.ellipsoids[s.global.ellipsoids.size() / 2].mean;  // in a gate: t = 0
-    const Eigen::Vector3d target = view < 3 ? Eigen::Vector3d(u(rng), u(rng), 2.0) : Eigen::Vector3d(u(rng), u(rng), u(rng) * 2);
+    const Eigen::Vector3d target =
+        view < 3 ? Eigen::Vector3d(u(rng), u(rng), 2.0) : Eigen::Vector3d(u(rng), u(rng), u(rng) * 2);
     const Transform T = test::lookAt(c, target);
     const double max_range = view == 2 ? 1.5 : 8.0;
     const std::vector<RayHit> pixels = s.map.castView(camera, T, max_range);
@@ -647,7 +648,8 @@ TEST(QueryMapSurface, ASphereChainCollidesNearTheWallAndNotFarFromIt) {
     double best = kInf;
     int sphere = -1;
     for (int i = first; i < first + count; ++i)
-      if (d[static_cast<std::size_t>(i)].distance_m - r < best) best = d[static_cast<std::size_t>(i)].distance_m - r, sphere = i;
+      if (d[static_cast<std::size_t>(i)].distance_m - r < best)
+        best = d[static_cast<std::size_t>(i)].distance_m - r, sphere = i;
     EXPECT_EQ(b.clearance_m, best);
     EXPECT_EQ(b.sphere, sphere);
     EXPECT_EQ(b.closest_W, d[static_cast<std::size_t>(sphere)].closest_W);
@@ -656,11 +658,11 @@ TEST(QueryMapSurface, ASphereChainCollidesNearTheWallAndNotFarFromIt) {
   expectBody(bodies[0], 0, 7);
   expectBody(bodies[2], 7, 7);
   expectBody(bodies[1], 14, 3);
-  EXPECT_TRUE(bodies[0].collides);       // 7 cm - 5 cm - the gate's reach < 2 cm
+  EXPECT_TRUE(bodies[0].collides);  // 7 cm - 5 cm - the gate's reach < 2 cm
   EXPECT_NEAR(bodies[0].clearance_m, 0.02, 0.02);
-  EXPECT_FALSE(bodies[2].collides);      // 15 cm - 5 cm - reach > 2 cm
+  EXPECT_FALSE(bodies[2].collides);  // 15 cm - 5 cm - reach > 2 cm
   EXPECT_FALSE(bodies[1].collides);
-  EXPECT_TRUE(bodies[1].touches_unknown);  // no keyframe sees behind the cameras
+  EXPECT_TRUE(bodies[1].touches_unknown);   // no keyframe sees behind the cameras
   EXPECT_FALSE(bodies[2].touches_unknown);  // free in front of the seen wall
 }
 

@@ -6,16 +6,16 @@
 #include <unistd.h>
 
 #include <bit>
-#include <cstring>
 #include <chrono>
+#include <cstring>
 #include <random>
 #include <thread>
 
 #include <gtest/gtest.h>
 
 #include "mapping/core/error.h"
-#include "mapping/pipeline/parameters.h"
 #include "mapping/files/session_file.h"
+#include "mapping/pipeline/parameters.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -246,8 +246,12 @@ TEST(SessionFile, Format5FilesLoadAsTheSameSession) {
   EXPECT_EQ(old.info.state.loops[0].pose_graph_ms, 0.0) << "a wall time is not part of the session";
   EXPECT_EQ(encodeSession(old.graph, old.info), bytes);
   for (std::size_t k = 0; k < old.graph.size(); ++k) {
-    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).rgb(), s.mapper.graph().keyframe(static_cast<int>(k)).rgb(), cv::NORM_INF), 0);
-    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).depth(), s.mapper.graph().keyframe(static_cast<int>(k)).depth(), cv::NORM_INF), 0);
+    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).rgb(),
+                       s.mapper.graph().keyframe(static_cast<int>(k)).rgb(), cv::NORM_INF),
+              0);
+    EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).depth(),
+                       s.mapper.graph().keyframe(static_cast<int>(k)).depth(), cv::NORM_INF),
+              0);
   }
 }
 
@@ -470,7 +474,8 @@ TEST(SessionFile, WriterKilledAtRandomMomentsLeavesALoadableFile) {
       }
       _exit(1);
     }
-    std::this_thread::sleep_for(std::chrono::microseconds(std::uniform_int_distribution<long>(0, 2 * two_saves_us)(rng)));
+    std::this_thread::sleep_for(
+        std::chrono::microseconds(std::uniform_int_distribution<long>(0, 2 * two_saves_us)(rng)));
     kill(child, SIGKILL);
     int status = 0;
     ASSERT_EQ(waitpid(child, &status, 0), child);
@@ -581,7 +586,8 @@ TEST(SessionFile, AStateThatDoesNotFitTheGraphIsRejected) {
   ASSERT_NE(msta, std::string::npos);
   putU32(&bad, msta + 16, 7 + keyframes);  // the current keyframe, first in the payload
   const std::uint64_t length = u64At(bad, msta + 4);
-  putU32(&bad, msta + 12, crc32(std::string_view(bad).substr(msta + 16, length), crc32(std::string_view(bad).substr(msta, 12))));
+  putU32(&bad, msta + 12,
+         crc32(std::string_view(bad).substr(msta + 16, length), crc32(std::string_view(bad).substr(msta, 12))));
   const std::string expected = "section 1 'MSTA': mapper state: current keyframe " + std::to_string(7 + keyframes) +
                                " is not one of the " + std::to_string(keyframes) + " keyframes";
   EXPECT_NE(decodeError(bad).find(expected), std::string::npos) << decodeError(bad);
@@ -598,7 +604,8 @@ TEST(SessionFile, MapVerbContinuesASavedSession) {
   const auto file = [&](const char* name) { return "'" + (dir / name).string() + "'"; };
   ASSERT_EQ(test::runVdmap(seq + out("whole") + " --save " + file("whole.vdmap")).exit_code, 0);
   ASSERT_EQ(test::runVdmap(seq + " --frames 0:35" + out("a") + " --save " + file("a.vdmap")).exit_code, 0);
-  const test::RunResult r = test::runVdmap(seq + " --load " + file("a.vdmap") + out("b") + " --save " + file("b.vdmap"));
+  const test::RunResult r =
+      test::runVdmap(seq + " --load " + file("a.vdmap") + out("b") + " --save " + file("b.vdmap"));
   ASSERT_EQ(r.exit_code, 0) << r.err;
   EXPECT_EQ(readFile(dir / "b.vdmap"), readFile(dir / "whole.vdmap"));
   EXPECT_EQ(readFile(dir / "b" / "global_ellipsoids.ply"), readFile(dir / "whole" / "global_ellipsoids.ply"));
@@ -624,9 +631,9 @@ TEST(SessionFile, TrackedRunsSaveTheSameBytesWhateverTheThreadCount) {
   TempDir dir;
   test::writeBoxRoomSequence(dir / "seq", 70);
   const auto run = [&](const std::string& name, int threads) {
-    const test::RunResult r = test::runVdmap("map '" + (dir / "seq").string() + "' --poses track --threads " +
-                                             std::to_string(threads) + " --out '" + (dir / name).string() +
-                                             "' --save '" + (dir / (name + ".vdmap")).string() + "'");
+    const test::RunResult r =
+        test::runVdmap("map '" + (dir / "seq").string() + "' --poses track --threads " + std::to_string(threads) +
+                       " --out '" + (dir / name).string() + "' --save '" + (dir / (name + ".vdmap")).string() + "'");
     EXPECT_EQ(r.exit_code, 0) << r.err;
     return readFile(dir / (name + ".vdmap"));
   };
@@ -665,10 +672,8 @@ TEST(SessionFile, ParmSectionIsTheDocumentedLayout) {
   std::string expected;
   const auto little = [&expected](auto v, int bytes) {
     std::uint64_t u = 0;
-    if constexpr (std::is_same_v<decltype(v), double>)
-      u = std::bit_cast<std::uint64_t>(v);
-    else
-      u = static_cast<std::uint64_t>(v);
+    if constexpr (std::is_same_v<decltype(v), double>) u = std::bit_cast<std::uint64_t>(v);
+    else u = static_cast<std::uint64_t>(v);
     for (int i = 0; i < bytes; ++i) expected.push_back(static_cast<char>(u >> (8 * i)));
   };
   const auto i32 = [&](int v) { little(static_cast<std::uint32_t>(v), 4); };

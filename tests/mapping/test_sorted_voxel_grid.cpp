@@ -16,7 +16,8 @@ namespace {
 
 TEST(VoxelKey, PacksAndUnpacksEachAxisAndSortsLikeXYZ) {
   const std::int64_t max = VoxelKey::kAxisMax;
-  for (const auto& [x, y, z] : std::vector<std::array<std::int64_t, 3>>{{0, 0, 0}, {1, 2, 3}, {max, 0, max}, {max, max, max}}) {
+  for (const auto& [x, y, z] :
+       std::vector<std::array<std::int64_t, 3>>{{0, 0, 0}, {1, 2, 3}, {max, 0, max}, {max, max, max}}) {
     const std::uint64_t key = VoxelKey::pack(x, y, z);
     EXPECT_EQ(VoxelKey::x(key), x);
     EXPECT_EQ(VoxelKey::y(key), y);
@@ -41,7 +42,8 @@ TEST(SortedVoxelGrid, MeetsEveryPairOfPointsInAdjacentVoxelsOnce) {
   const std::vector<Eigen::Vector3d> points = randomPoints(2000);
   const double side = 0.1;
   SortedVoxelGrid grid;
-  grid.build(points.size(), [&](std::size_t i) -> const Eigen::Vector3d& { return points[i]; }, side, 1);
+  grid.build(
+      points.size(), [&](std::size_t i) -> const Eigen::Vector3d& { return points[i]; }, side, 1);
 
   // The oracle: the voxel of each point counted from the points' lower corner, and every pair
   // whose voxels differ by at most one along each axis.
@@ -101,7 +103,8 @@ TEST(SortedVoxelGrid, WidensVoxelsThatAKeyCannotCount) {
   // two points still fall into different voxels that are not neighbours.
   const std::vector<Eigen::Vector3d> points = {{0, 0, 0}, {1e5, 0, 0}, {1e5, 1e-3, 0}};
   SortedVoxelGrid grid;
-  grid.build(points.size(), [&](std::size_t i) -> const Eigen::Vector3d& { return points[i]; }, 1e-3, 1);
+  grid.build(
+      points.size(), [&](std::size_t i) -> const Eigen::Vector3d& { return points[i]; }, 1e-3, 1);
   ASSERT_EQ(grid.voxelCount(), 2u);
   EXPECT_EQ(grid.voxelEnd(0) - grid.voxelBegin(0), 1u);
   EXPECT_EQ(grid.voxelEnd(1) - grid.voxelBegin(1), 2u);

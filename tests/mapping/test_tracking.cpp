@@ -10,11 +10,11 @@
 #include <tbb/global_control.h>
 
 #include "mapping/eval/trajectory_error.h"
-#include "mapping/io/frame_prefetcher.h"
 #include "mapping/files/session_file.h"
+#include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/tum_sequence.h"
-#include "mapping/pipeline/mapper.h"
 #include "mapping/local_map/sensor_model.h"
+#include "mapping/pipeline/mapper.h"
 #include "mapping/tracking/map_registration.h"
 #include "mapping/tracking/ndt_refinement.h"
 #include "mapping/tracking/relative_pose.h"
@@ -77,7 +77,8 @@ void referenceNormalEquations(const KeyframeContainer& map, const DensePoints& p
     Eigen::Vector3d lambda = es.eigenvalues();
     lambda(1) *= p.in_plane_inflation;
     lambda(2) *= p.in_plane_inflation;
-    const Eigen::Matrix3d omega = es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
+    const Eigen::Matrix3d omega =
+        es.eigenvectors() * lambda.cwiseInverse().asDiagonal() * es.eigenvectors().transpose();
     const Eigen::Vector3d r = q - cell.mean;
     if (r.norm() > p.max_distance_m) continue;
     const double u = r.dot(omega * r) / (p.robust_k * p.robust_k);
@@ -126,8 +127,10 @@ TEST(NdtRefinement, NormalEquationsMatchTheReference) {
   Transform stepped = T;
   refineAgainstLocalMap(f.keyframe().container, points, {}, &stepped, one);
   const Eigen::Matrix<double, 6, 1> xi = -H.ldlt().solve(g);
-  EXPECT_LT((stepped.translation() - (Eigen::AngleAxisd(xi.tail<3>().norm(), xi.tail<3>().normalized()) *
-                                          T.translation() + xi.head<3>())).norm(), 1e-6);
+  EXPECT_LT((stepped.translation() -
+             (Eigen::AngleAxisd(xi.tail<3>().norm(), xi.tail<3>().normalized()) * T.translation() + xi.head<3>()))
+                .norm(),
+            1e-6);
 }
 
 // The refinement's objective measured without a step (tracking's per-thread cell cache) is the
@@ -169,7 +172,8 @@ TEST(NdtRefinement, PullsAPerturbedPoseBackToTheTruth) {
   const Transform truth = f.keyframe().T_W_K.inverse() * frame.T_W_C;
   Transform T = truth;
   T.translation() += Eigen::Vector3d(0.006, 0.003, -0.004);
-  T.linear() = T.linear() * Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
+  T.linear() =
+      T.linear() * Eigen::AngleAxisd(0.4 * M_PI / 180, Eigen::Vector3d(1, 2, 0).normalized()).toRotationMatrix();
   // The keyframe's keypoints seen at their true pixels (what PnP's inliers give): the box's
   // walls alone leave a slow slide along them, which the features pin.
   std::vector<FeatureObservation> features;
@@ -235,7 +239,8 @@ double bilinearAt(const cv::Mat& image, double x, double y) {
   const int x0 = static_cast<int>(std::floor(x)), y0 = static_cast<int>(std::floor(y));
   const double ax = x - x0, ay = y - y0;
   const auto at = [&](int yy, int xx) { return static_cast<double>(image.at<float>(yy, xx)); };
-  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x0 + 1)) + ay * ((1 - ax) * at(y0 + 1, x0) + ax * at(y0 + 1, x0 + 1));
+  return (1 - ay) * ((1 - ax) * at(y0, x0) + ax * at(y0, x0 + 1)) +
+         ay * ((1 - ax) * at(y0 + 1, x0) + ax * at(y0 + 1, x0 + 1));
 }
 
 // The photometric term's normal equations, written out in double with Eigen (the fast path
@@ -287,18 +292,21 @@ TEST(NdtRefinement, PhotometricNormalEquationsMatchTheReference) {
   const WallView w;
   const NdtRefinementParams params;
   const DensePoints points = sampleDensePoints(w.frame, boxCamera(), {}, params.strideFor(boxCamera()));
-  const PhotometricPoints photometric = samplePhotometricPoints(w.frame, boxCamera(), {}, params.strideFor(boxCamera()));
+  const PhotometricPoints photometric =
+      samplePhotometricPoints(w.frame, boxCamera(), {}, params.strideFor(boxCamera()));
   const PhotometricImage image = photometricImage(w.keyframe().rgb());
   ASSERT_GT(photometric.points_C.size(), 500u);
   const PhotometricTerm term{photometric, image};
   Transform T = w.truth;
   T.translation() += Eigen::Vector3d(0.003, -0.002, 0.001);
-  T.linear() = T.linear() * Eigen::AngleAxisd(0.2 * M_PI / 180, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
+  T.linear() =
+      T.linear() * Eigen::AngleAxisd(0.2 * M_PI / 180, Eigen::Vector3d(1, 1, 0).normalized()).toRotationMatrix();
   NdtRefinementParams measure = params;
   measure.iterations = 0;
   Transform unchanged = T;
   const NdtRefinementResult without = refineAgainstLocalMap(w.keyframe().container, points, {}, &unchanged, measure);
-  const NdtRefinementResult with = refineAgainstLocalMap(w.keyframe().container, points, {}, &unchanged, measure, &term);
+  const NdtRefinementResult with =
+      refineAgainstLocalMap(w.keyframe().container, points, {}, &unchanged, measure, &term);
   Eigen::Matrix<double, 6, 6> H;
   Eigen::Matrix<double, 6, 1> g;
   referencePhotometricEquations(term, boxCamera(), T, params, &H, &g);
@@ -354,10 +362,12 @@ TEST(RelativePose, MatchesByProjectionGiveThePoseBruteForceMatchesGive) {
   const Transform truth = f.keyframe().T_W_K.inverse() * frame.T_W_C;
   Transform prior = truth;
   prior.translation() += Eigen::Vector3d(0.004, -0.002, 0.003);
-  prior.linear() = prior.linear() * Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
+  prior.linear() =
+      prior.linear() * Eigen::AngleAxisd(0.3 * M_PI / 180, Eigen::Vector3d(0, 1, 1).normalized()).toRotationMatrix();
   const RelativePose fast = estimateRelativePose(f.keyframe(), {&features, &points, {}}, boxCamera(), prior, params);
   params.pnp.search_radius_px = 0;
-  const RelativePose reference = estimateRelativePose(f.keyframe(), {&features, &points, {}}, boxCamera(), prior, params);
+  const RelativePose reference =
+      estimateRelativePose(f.keyframe(), {&features, &points, {}}, boxCamera(), prior, params);
   ASSERT_EQ(fast.status, RelativePose::Status::kGood);
   ASSERT_EQ(reference.status, RelativePose::Status::kGood);
   EXPECT_GT(fast.pnp_inliers, 100);
@@ -395,10 +405,11 @@ TEST(Tracking, BoxRoomWalkDriftsLittleAndTheDenseRefinementHelps) {
   TrackingParams pnp_only = no_loops;
   pnp_only.tracker.relative.dense_refinement = false;
   const TrajectoryError pnp = trackBoxWalk(60, 90, pnp_only).error;
-  std::printf("box walk, 60 frames: RPE per frame %.2f mm / %.3f deg, ATE %.2f mm; PnP only %.2f mm / %.3f deg, %.2f mm\n",
-              1000 * refined.rpe_per_frame.translation_m.rmse, refined.rpe_per_frame.rotation_deg.rmse,
-              1000 * refined.ate_m.rmse, 1000 * pnp.rpe_per_frame.translation_m.rmse,
-              pnp.rpe_per_frame.rotation_deg.rmse, 1000 * pnp.ate_m.rmse);
+  std::printf(
+      "box walk, 60 frames: RPE per frame %.2f mm / %.3f deg, ATE %.2f mm; PnP only %.2f mm / %.3f deg, %.2f mm\n",
+      1000 * refined.rpe_per_frame.translation_m.rmse, refined.rpe_per_frame.rotation_deg.rmse,
+      1000 * refined.ate_m.rmse, 1000 * pnp.rpe_per_frame.translation_m.rmse, pnp.rpe_per_frame.rotation_deg.rmse,
+      1000 * pnp.ate_m.rmse);
   EXPECT_LT(refined.rpe_per_frame.translation_m.rmse, 0.0015);
   EXPECT_LT(refined.ate_m.rmse, 0.005);
   EXPECT_LT(refined.rpe_per_frame.translation_m.rmse, 0.7 * pnp.rpe_per_frame.translation_m.rmse);
@@ -412,7 +423,8 @@ TEST(Tracking, FramesThatCannotBePlacedAreCountedNotIntegrated) {
   for (int i = 0; i < 5; ++i) mapper.addFrame(boxWalkFrame(i, 90));
   std::vector<std::size_t> cells;
   std::vector<int> integrated;
-  for (const Keyframe& k : mapper.graph().keyframes()) cells.push_back(k.container.size()), integrated.push_back(k.frames_integrated);
+  for (const Keyframe& k : mapper.graph().keyframes())
+    cells.push_back(k.container.size()), integrated.push_back(k.frames_integrated);
   // A blank frame (no depth, no texture: no feature, no point) and one of a place the map has
   // never seen (a different room: a plane at 0.5 m with other texture).
   RgbdFrame blank = boxWalkFrame(5, 90);
@@ -503,8 +515,9 @@ TEST(Tracking, AWeakEstimateTheLocalMapAloneDoesNotPinIsNotUsed) {
   before.min_dense_only_conditioning = 0;
   for (const double jump_z : {0.3, -0.3}) {
     const double off_before = track(before, jump_z), off = track({}, jump_z);
-    std::printf("textureless frame %.1f m off the prediction: placed %.1f mm from the truth without the rule, %s with it\n",
-                jump_z, 1000 * off_before, off < 0 ? "lost" : "placed");
+    std::printf(
+        "textureless frame %.1f m off the prediction: placed %.1f mm from the truth without the rule, %s with it\n",
+        jump_z, 1000 * off_before, off < 0 ? "lost" : "placed");
     EXPECT_GT(off_before, 0.2);
     EXPECT_LT(off, 0);
   }
@@ -547,8 +560,9 @@ TEST(Tracking, WithoutFeaturesThePhotometricTermHoldsTheTrackAlongACorner) {
   };
   const auto [with, weak] = walk(true);
   const auto [without, weak_without] = walk(false);
-  std::printf("along a corner without features: worst frame %.2f mm from the truth with the photometric term, %.2f mm without (%d / %d weak)\n",
-              1000 * with, 1000 * without, weak, weak_without);
+  std::printf(
+      "along a corner without features: worst frame %.2f mm from the truth with the photometric term, %.2f mm without (%d / %d weak)\n",
+      1000 * with, 1000 * without, weak, weak_without);
   EXPECT_EQ(weak, 27);
   EXPECT_GE(with, 0.0);
   EXPECT_LT(with, 0.002);
@@ -579,8 +593,9 @@ TEST(Tracking, AfterAJumpFramesAreRelocalisedNeverPlacedWrong) {
     placed_after_jump += k >= 50;
     EXPECT_LT((r.T_W_C.translation() - frame.T_W_C.translation()).norm(), 0.01) << "frame " << k;
   }
-  std::printf("box walk jumping back 35 frames: %d frames lost, %d of 21 placed after the jump, %d relocalised, %d weak\n",
-              mapper.framesLost(), placed_after_jump, relocalised, weak);
+  std::printf(
+      "box walk jumping back 35 frames: %d frames lost, %d of 21 placed after the jump, %d relocalised, %d weak\n",
+      mapper.framesLost(), placed_after_jump, relocalised, weak);
   EXPECT_GE(placed_after_jump, 18);
   // The counts stats.json and the workbench report.
   EXPECT_GE(relocalised, 1);
@@ -626,7 +641,8 @@ std::unique_ptr<Mapper> twoKeyframesOneMoved(int first_frame, Transform* truth, 
   Keyframe& B = mapper->graph().keyframe(1);
   *truth = mapper->graph().keyframe(0).T_W_K.inverse() * B.T_W_K;
   B.T_W_K.translation() += scale * Eigen::Vector3d(0.009, -0.006, 0.010);
-  B.T_W_K.linear() = Eigen::AngleAxisd(scale * M_PI / 180, Eigen::Vector3d(0.3, 1, 0.2).normalized()) * B.T_W_K.linear();
+  B.T_W_K.linear() =
+      Eigen::AngleAxisd(scale * M_PI / 180, Eigen::Vector3d(0.3, 1, 0.2).normalized()) * B.T_W_K.linear();
   return mapper;
 }
 
@@ -667,13 +683,15 @@ TEST(MapRegistration, RefiningATrackedWalkKeepsItsPosesAndIsDeterministic) {
   const MapRefinementResult r = walk.mapper->refineKeyframePoses(one_thread);
   const double after = keyframeError(*walk.mapper);
   std::printf("box walk, 1.15 laps: keyframe position error %.3f mm tracked, %.3f mm refined (%d of %d pairs, %d "
-              "rounds)\n", 1000 * before, 1000 * after, r.edges, r.pairs, r.rounds);
+              "rounds)\n",
+              1000 * before, 1000 * after, r.edges, r.pairs, r.rounds);
   EXPECT_GT(r.edges, 0);
   EXPECT_LT(r.edges, r.pairs);
   EXPECT_LT(after, before + 0.0005);
   EXPECT_EQ(walk.mapper->poseGraph().posesBeforeOptimisation().size(), walk.mapper->graph().size());
   const FramePose& last = walk.mapper->framePoses().back();
-  EXPECT_TRUE(walk.mapper->trajectory().back().T_W_C.isApprox(walk.mapper->graph().keyframe(last.keyframe).T_W_K * last.T_K_C));
+  EXPECT_TRUE(
+      walk.mapper->trajectory().back().T_W_C.isApprox(walk.mapper->graph().keyframe(last.keyframe).T_W_K * last.T_K_C));
 
   TrackedWalk again = trackBoxWalk(104, 90, {});
   MapRefinementParams two_threads;
@@ -704,7 +722,8 @@ TEST(MapRegistration, JointRefinementOfTwoKeyframesIsTheirRegistration) {
   for (const StoredCell& c : B.container.cells())
     if (c.n >= static_cast<std::uint32_t>(params.min_cell_points)) means.points_C.push_back(c.mean);
   std::vector<std::uint8_t> inlier;
-  lineariseAgainstLocalMap(A.container, cellDistributions(A.container, params.joint), means, start, params.joint, &inlier);
+  lineariseAgainstLocalMap(A.container, cellDistributions(A.container, params.joint), means, start, params.joint,
+                           &inlier);
   for (std::size_t i = 0; i < means.size(); ++i)
     if (inlier[i]) inlier_means.points_C.push_back(means.points_C[i]);
   NdtRefinementParams reference_params = params.joint;
@@ -718,9 +737,10 @@ TEST(MapRegistration, JointRefinementOfTwoKeyframesIsTheirRegistration) {
   const MapRefinementResult r = refineKeyframePoses(&mapper.graph(), &pose_graph, {}, params);
   const Transform joint = A.T_W_K.inverse() * B.T_W_K;
   std::printf("joint refinement of two keyframes, one moved %.1f mm / %.2f deg: %.3f mm / %.4f deg off the "
-              "registration's pose (%d steps), which is %.3f mm off the truth\n", 1000 * translationBetween(start, truth),
-              degreesBetween(start, truth), 1000 * translationBetween(joint, reference), degreesBetween(joint, reference),
-              r.rounds, 1000 * translationBetween(reference, truth));
+              "registration's pose (%d steps), which is %.3f mm off the truth\n",
+              1000 * translationBetween(start, truth), degreesBetween(start, truth),
+              1000 * translationBetween(joint, reference), degreesBetween(joint, reference), r.rounds,
+              1000 * translationBetween(reference, truth));
   EXPECT_FALSE(r.refused);
   EXPECT_TRUE(A.T_W_K.isApprox(T_W_0));  // keyframe 0 anchors the world
   EXPECT_GT(r.rounds, 0);
@@ -834,7 +854,8 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
   test::writeBoxRoomSequence(dir / "seq", 12);
   // (append, not "'" + string: GCC 12 warns falsely about the latter's memcpy, -Wrestrict)
   const std::string seq = std::string("'").append((dir / "seq").string()).append("'");
-  const test::RunResult with_gt = test::runVdmap("map " + seq + " --poses track --json --out '" + (dir / "a").string() + "'");
+  const test::RunResult with_gt =
+      test::runVdmap("map " + seq + " --poses track --json --out '" + (dir / "a").string() + "'");
   ASSERT_EQ(with_gt.exit_code, 0) << with_gt.err;
   const nlohmann::json stats = nlohmann::json::parse(test::readFile(dir / "a" / "stats.json"));
   EXPECT_EQ(stats["poses"], "track") << stats.dump();
@@ -843,14 +864,16 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
   // refinement samples a fixed 8 px grid (300 points, too few to be trusted) instead of a stride
   // that follows the resolution (NdtRefinementParams::strideFor; 7.5 cm when that was main).
   EXPECT_LT(stats["ate_rmse_m"].get<double>(), 0.01);
-  for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms", "frames_weak", "frames_relocalised"}) EXPECT_TRUE(stats.contains(key)) << key;
+  for (const char* key : {"tracking_ms", "loop_closures", "pose_graph_ms", "frames_weak", "frames_relocalised"})
+    EXPECT_TRUE(stats.contains(key)) << key;
   const nlohmann::json& refinement = stats["map_refinement"];
   // (12 turning frames: 4 covisible pairs, 2 of them well enough conditioned to give edges.)
   EXPECT_GE(refinement["pairs"].get<int>(), 1) << stats.dump();
   EXPECT_GE(refinement["edges"].get<int>(), 1) << stats.dump();
   EXPECT_GE(refinement["rounds"].get<int>(), 1) << stats.dump();
   // --no-refine keeps the keyframe poses as tracked.
-  const test::RunResult kept = test::runVdmap("map " + seq + " --poses track --no-refine --json --out '" + (dir / "k").string() + "'");
+  const test::RunResult kept =
+      test::runVdmap("map " + seq + " --poses track --no-refine --json --out '" + (dir / "k").string() + "'");
   ASSERT_EQ(kept.exit_code, 0) << kept.err;
   EXPECT_EQ(nlohmann::json::parse(test::readFile(dir / "k" / "stats.json"))["map_refinement"]["rounds"], 0);
 

@@ -16,7 +16,6 @@ namespace {
 
 constexpr double kDegree = M_PI / 180.0;
 
-
 Transform pose(const Eigen::Vector3d& p, double yaw, double pitch = 0.0) {
   Transform T = Transform::Identity();
   T.linear() = (Eigen::AngleAxisd(yaw, Eigen::Vector3d::UnitZ()) * Eigen::AngleAxisd(pitch, Eigen::Vector3d::UnitX()))
@@ -30,7 +29,8 @@ std::vector<StampedPose> circle(double radius_m = 2.0, int frames = 300) {
   std::vector<StampedPose> poses;
   for (int i = 0; i < frames; ++i) {
     const double a = 2.0 * M_PI * i / frames;
-    poses.push_back({100.0 + i / 30.0, pose({radius_m * std::cos(a), radius_m * std::sin(a), 1.0}, a + M_PI / 2, 0.1 * std::sin(3 * a))});
+    poses.push_back({100.0 + i / 30.0,
+                     pose({radius_m * std::cos(a), radius_m * std::sin(a), 1.0}, a + M_PI / 2, 0.1 * std::sin(3 * a))});
   }
   return poses;
 }
@@ -84,7 +84,8 @@ TEST(TrajectoryError, RelativePoseErrorOfKnownPerturbations) {
   for (int i = 0; i < 90; ++i) gt.push_back({i / 30.0, pose({i / 30.0, 0.0, 0.0}, 0.0)});
   std::vector<StampedPose> est = gt;
   est[20].T_W_C.translation().y() += 0.03;
-  est[60].T_W_C.linear() = est[60].T_W_C.linear() * Eigen::AngleAxisd(2 * kDegree, Eigen::Vector3d::UnitZ()).toRotationMatrix();
+  est[60].T_W_C.linear() =
+      est[60].T_W_C.linear() * Eigen::AngleAxisd(2 * kDegree, Eigen::Vector3d::UnitZ()).toRotationMatrix();
   const TrajectoryError e = evaluateTrajectory(est, gt);
   const ErrorStats& t = e.rpe_per_frame.translation_m;
   const ErrorStats& r = e.rpe_per_frame.rotation_deg;
@@ -158,7 +159,8 @@ TEST(TrajectoryError, RefusesTooFewMatchesAndBadParameters) {
     evaluateTrajectory(two, gt);
     ADD_FAILURE() << "accepted two poses";
   } catch (const std::invalid_argument& e) {
-    EXPECT_STREQ(e.what(), "2 of 2 poses match a ground-truth timestamp within 0.02 s; at least 3 are needed for the alignment");
+    EXPECT_STREQ(e.what(),
+                 "2 of 2 poses match a ground-truth timestamp within 0.02 s; at least 3 are needed for the alignment");
   }
   TrajectoryErrorParams p;
   p.max_difference_s = 0.0;

@@ -4,8 +4,8 @@
 #include <opencv2/imgproc.hpp>
 
 #include "mapping/core/colour_registration.h"
-#include "mapping/io/compressed_image.h"
 #include "mapping/core/error.h"
+#include "mapping/io/compressed_image.h"
 #include "mapping/io/frame_prefetcher.h"
 #include "mapping/io/image_codec.h"
 #include "mapping/io/tum_sequence.h"
@@ -50,7 +50,7 @@ TEST(TumSequence, AssociatesNearestRgbAndInterpolatesPose) {
 TEST(TumSequence, DropsFramesWithoutRgbOrPoseAndCountsThem) {
   TempDir dir;
   test::writeTinySequence(dir.path(), 3);
-  writeText(dir / "rgb.txt", "0.0 rgb/000000.png\n0.0333 rgb/000001.png\n");  // none near 0.0667
+  writeText(dir / "rgb.txt", "0.0 rgb/000000.png\n0.0333 rgb/000001.png\n");      // none near 0.0667
   writeText(dir / "groundtruth.txt", "0.0 0 0 0 0 0 0 1\n0.04 0 0 0 0 0 0 1\n");  // ends before 0.0667
   const TumSequence seq = TumSequence::open(dir.path());
   EXPECT_EQ(seq.size(), 2u);
@@ -105,7 +105,8 @@ TEST(TumSequence, ARangePastTheEndIsAnErrorNamingTheRange) {
     ADD_FAILURE() << "accepted";
   } catch (const InputError& e) {
     EXPECT_NE(std::string(e.what()).find("--frames 3:9 ends past the sequence: it lists 5 depth frames (0:5)"),
-              std::string::npos) << e.what();
+              std::string::npos)
+        << e.what();
   }
   options.cut_range_at_end = true;
   const TumSequence cut = TumSequence::open(dir.path(), options);

@@ -6,9 +6,9 @@
 
 #include "mapping/eval/mesh_accuracy.h"
 #include "mapping/eval/trajectory_error.h"
+#include "mapping/files/ply_reader.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/frame_prefetcher.h"
-#include "mapping/files/ply_reader.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
@@ -35,8 +35,8 @@ TEST(BuiltinScene, TheWalkBackToTheStartRevisitsTheFirstKeyframes) {
   const GlobalMap global = buildGlobalMap(graph, {});
   EXPECT_GT(global.sigma_e_prime, 0u);
   EXPECT_LT(global.sigma_e_prime, global.sigma_e);
-  std::printf("built-in scene: %zu frames, %zu keyframes, %d revisits, Sigma_e %zu -> %zu\n", seq.size(),
-              graph.size(), mapper.revisits(), global.sigma_e, global.sigma_e_prime);
+  std::printf("built-in scene: %zu frames, %zu keyframes, %d revisits, Sigma_e %zu -> %zu\n", seq.size(), graph.size(),
+              mapper.revisits(), global.sigma_e, global.sigma_e_prime);
 }
 
 // Tracked poses on one lap of the built-in walk (150 frames, the sensor model's noise): refining
@@ -68,12 +68,14 @@ TEST(BuiltinScene, JointRefinementOfTrackedPosesBringsTheMapCloserToTheMesh) {
     }
     std::vector<Eigen::Vector3f> points;
     for (const Ellipsoid& e : buildGlobalMap(mapper.graph(), {}).ellipsoids) points.push_back(e.mean.cast<float>());
-    return Outcome{evaluateAccuracy(points, mesh).rmse_mm, 1000 * evaluateTrajectory(mapper.trajectory(), truth).ate_m.rmse};
+    return Outcome{evaluateAccuracy(points, mesh).rmse_mm,
+                   1000 * evaluateTrajectory(mapper.trajectory(), truth).ate_m.rmse};
   };
   const Outcome tracked = run(std::nullopt), pairwise = run(MapRefinementMethod::kPairwise),
                 joint = run(MapRefinementMethod::kJoint);
   std::printf("built-in lap, tracked poses: map RMSE %.2f mm as tracked, %.2f pairwise, %.2f joint; ATE %.2f / %.2f / "
-              "%.2f mm\n", tracked.map_rmse_mm, pairwise.map_rmse_mm, joint.map_rmse_mm, tracked.ate_mm, pairwise.ate_mm,
+              "%.2f mm\n",
+              tracked.map_rmse_mm, pairwise.map_rmse_mm, joint.map_rmse_mm, tracked.ate_mm, pairwise.ate_mm,
               joint.ate_mm);
   EXPECT_LT(joint.map_rmse_mm, 0.6 * pairwise.map_rmse_mm);
   EXPECT_LT(joint.map_rmse_mm, 0.6 * tracked.map_rmse_mm);

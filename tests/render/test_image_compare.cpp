@@ -61,7 +61,9 @@ void expectSameComparison(const ImageComparison& fast, const ImageComparison& sl
   EXPECT_EQ(fast.matches, slow.matches);
 }
 
-cv::Mat uniform(int width, int height, cv::Vec3b rgb) { return cv::Mat(height, width, CV_8UC3, cv::Scalar(rgb[0], rgb[1], rgb[2])); }
+cv::Mat uniform(int width, int height, cv::Vec3b rgb) {
+  return cv::Mat(height, width, CV_8UC3, cv::Scalar(rgb[0], rgb[1], rgb[2]));
+}
 
 cv::Mat randomImage(int width, int height, uint64_t seed) {
   cv::Mat image(height, width, CV_8UC3);
@@ -106,13 +108,13 @@ TEST(ImageCompare, IdenticalImagesMatch) {
 TEST(ImageCompare, AChannelOffByExactlyTheCountsStillMatches) {
   const cv::Mat expected = uniform(20, 10, {100, 150, 200});
   cv::Mat actual = uniform(20, 10, {100, 150, 208});  // blue off by 8 everywhere
-  actual.at<cv::Vec3b>(2, 3) = {100, 159, 200};      // one pixel's green off by 9
+  actual.at<cv::Vec3b>(2, 3) = {100, 159, 200};       // one pixel's green off by 9
   const ImageComparison c = compareImages(expected, actual, {.channel_counts = 8, .pixel_share = 0.0});
   EXPECT_EQ(c.differing, 1);
   EXPECT_EQ(c.over1, 200);
   EXPECT_EQ(c.worst, 9);
   EXPECT_EQ(c.where, cv::Rect(3, 2, 1, 1));
-  EXPECT_FALSE(c.matches);  // no pixel may differ at share 0
+  EXPECT_FALSE(c.matches);                       // no pixel may differ at share 0
   actual.at<cv::Vec3b>(2, 3) = {100, 142, 208};  // green off by 8 the other way
   const ImageComparison at_the_edge = compareImages(expected, actual, {.channel_counts = 8, .pixel_share = 0.0});
   EXPECT_EQ(at_the_edge.differing, 0);
@@ -146,7 +148,7 @@ TEST(ImageCompare, DiffIsGreyWhereEqualAndRedWhereDifferent) {
   const cv::Mat expected = uniform(40, 30, colour);
   cv::Mat actual = expected.clone();
   actual(cv::Rect(10, 5, 3, 2)).setTo(cv::Scalar(0, 0, 0));  // 6 pixels beyond the tolerance
-  actual.at<cv::Vec3b>(20, 30) = {208, 92, 58};               // within it
+  actual.at<cv::Vec3b>(20, 30) = {208, 92, 58};              // within it
   const cv::Mat diff = diffImage(expected, actual);
   ASSERT_EQ(diff.type(), CV_8UC3);
   ASSERT_EQ(diff.size(), expected.size());
@@ -221,8 +223,7 @@ TEST(ImageCompare, TheFastComparisonEqualsAPerPixelLoop) {
     const cv::Mat actual = withNoise(expected, 2.0 * seed, 100 + seed);
     for (const ImageTolerance tolerance :
          {ImageTolerance{}, ImageTolerance{0, 0.0}, ImageTolerance{3, 0.2}, ImageTolerance{40, 0.01}}) {
-      const std::string what = "seed " + std::to_string(seed) + ", counts " +
-                               std::to_string(tolerance.channel_counts);
+      const std::string what = "seed " + std::to_string(seed) + ", counts " + std::to_string(tolerance.channel_counts);
       const ImageComparison fast = compareImages(expected, actual, tolerance);
       expectSameComparison(fast, compareByLoop(expected, actual, tolerance), what);
       (fast.matches ? matched : failed)++;
@@ -250,7 +251,8 @@ TEST(ImageCompare, AgreesWithTheGoldenTestsVerdictOnAShiftedRender) {
       const cv::Mat moved = shifted(render, dx, dy);
       const ImageComparison fast = compareImages(render, moved);
       const ImageComparison slow = compareByLoop(render, moved, ImageTolerance{});
-      expectSameComparison(fast, slow, std::string(name) + " shifted by " + std::to_string(dx) + "," + std::to_string(dy));
+      expectSameComparison(fast, slow,
+                           std::string(name) + " shifted by " + std::to_string(dx) + "," + std::to_string(dy));
       ++cases;
       (fast.matches ? matched : failed)++;
     }

@@ -30,7 +30,8 @@ TEST(Vocabulary, TrainingIsDeterministicAndNearDescriptorsShareAWord) {
   cv::Mat d(0, 32, CV_8UC1);
   for (int i = 0; i < 4000; ++i) {
     cv::Mat row = centres.row(i % 20).clone();
-    for (int flip = 0; flip < 6; ++flip) row.at<std::uint8_t>(0, rng() % 32) ^= static_cast<std::uint8_t>(1 << (rng() % 8));
+    for (int flip = 0; flip < 6; ++flip)
+      row.at<std::uint8_t>(0, rng() % 32) ^= static_cast<std::uint8_t>(1 << (rng() % 8));
     d.push_back(row);
   }
   std::vector<std::pair<int, int>> documents;

@@ -21,7 +21,8 @@ int countColour(const cv::Mat& image, const glm::u8vec3& c, int tolerance = 10) 
   for (int y = 0; y < image.rows; ++y)
     for (int x = 0; x < image.cols; ++x) {
       const cv::Vec4b p = image.at<cv::Vec4b>(y, x);
-      n += p[3] == 255 && std::abs(p[0] - c.r) <= tolerance && std::abs(p[1] - c.g) <= tolerance && std::abs(p[2] - c.b) <= tolerance;
+      n += p[3] == 255 && std::abs(p[0] - c.r) <= tolerance && std::abs(p[1] - c.g) <= tolerance &&
+           std::abs(p[2] - c.b) <= tolerance;
     }
   return n;
 }
@@ -33,8 +34,13 @@ TEST(Colormap, TheKeyframePaletteIsTheGeneratedOne) {
   ASSERT_EQ(generated.size(), static_cast<std::size_t>(kKeyframePaletteSize));
   std::string table;  // render/keyframe_palette.inc, should it need regenerating
   for (const glm::u8vec3& c : generated)
-    table.append("{").append(std::to_string(c.r)).append(", ").append(std::to_string(c.g)).append(", ")
-        .append(std::to_string(c.b)).append("},\n");  // append: GCC 12 warns (-Wrestrict) on "{" + string
+    table.append("{")
+        .append(std::to_string(c.r))
+        .append(", ")
+        .append(std::to_string(c.g))
+        .append(", ")
+        .append(std::to_string(c.b))
+        .append("},\n");  // append: GCC 12 warns (-Wrestrict) on "{" + string
   for (int k = 0; k < kKeyframePaletteSize; ++k)
     ASSERT_EQ(keyframeColor(k), generated[static_cast<std::size_t>(k)]) << "K" << k << "; the table:\n" << table;
 }
@@ -44,7 +50,8 @@ TEST(Colormap, First64KeyframeColoursAreAtLeast20DeltaEApart) {
   for (int a = 0; a < kKeyframePaletteSize; ++a) {
     const float lightness = srgbToLab(keyframeColor(a)).x;
     EXPECT_TRUE(lightness >= 44.5f && lightness <= 85.5f) << "K" << a << " L " << lightness;
-    for (int b = a + 1; b < kKeyframePaletteSize; ++b) closest = std::min(closest, deltaE(keyframeColor(a), keyframeColor(b)));
+    for (int b = a + 1; b < kKeyframePaletteSize; ++b)
+      closest = std::min(closest, deltaE(keyframeColor(a), keyframeColor(b)));
   }
   EXPECT_GE(closest, 20.f);
 }
@@ -52,7 +59,8 @@ TEST(Colormap, First64KeyframeColoursAreAtLeast20DeltaEApart) {
 TEST(Colormap, KAndKPlus13Differ) {
   // The golden-ratio hue steps made k and k + 13 (12 degrees of hue) and k + 21 near-repeats.
   for (int k = 0; k + 21 < kKeyframePaletteSize; ++k)
-    for (int step : {1, 13, 21}) EXPECT_GE(deltaE(keyframeColor(k), keyframeColor(k + step)), 20.f) << "K" << k << "+" << step;
+    for (int step : {1, 13, 21})
+      EXPECT_GE(deltaE(keyframeColor(k), keyframeColor(k + step)), 20.f) << "K" << k << "+" << step;
   for (int k = 0; k < 128; ++k) EXPECT_GE(deltaE(keyframeColor(k), keyframeColor(k + 64)), 8.f) << "K" << k << "+64";
   // A later cycle is the palette with its lightness shifted.
   EXPECT_NEAR(srgbToLab(keyframeColor(64 + 5)).x - srgbToLab(keyframeColor(5)).x, 12.f, 2.5f);

@@ -26,7 +26,8 @@ std::vector<glm::vec3> floorAndColumn() {
 }
 
 std::tuple<long, long, long> cell(const glm::vec3& p, float size) {
-  return {std::lround(std::floor(p.x / size)), std::lround(std::floor(p.y / size)), std::lround(std::floor(p.z / size))};
+  return {std::lround(std::floor(p.x / size)), std::lround(std::floor(p.y / size)),
+          std::lround(std::floor(p.z / size))};
 }
 
 TEST(LodOrder, IsAPermutationAndDeterministic) {

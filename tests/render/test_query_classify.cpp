@@ -54,7 +54,8 @@ std::vector<Eigen::Vector3d> randomPoints(const GlobalMap& global, const Eigen::
     if (i % 2 == 0 || global.ellipsoids.empty()) {
       points.push_back(lo + (hi - lo).cwiseProduct(Eigen::Vector3d(unit(rng), unit(rng), unit(rng))));
     } else {
-      const auto& e = global.ellipsoids[std::uniform_int_distribution<std::size_t>(0, global.ellipsoids.size() - 1)(rng)];
+      const auto& e =
+          global.ellipsoids[std::uniform_int_distribution<std::size_t>(0, global.ellipsoids.size() - 1)(rng)];
       points.push_back(e.mean + Eigen::Vector3d(noise(rng), noise(rng), noise(rng)));
     }
   }
@@ -67,7 +68,8 @@ std::vector<Classification> classify(const QueryMap& map, const std::vector<Eige
   return out;
 }
 
-std::vector<Classification> classifyInKeyframe(const QueryMap& map, int id, const std::vector<Eigen::Vector3d>& points) {
+std::vector<Classification> classifyInKeyframe(const QueryMap& map, int id,
+                                               const std::vector<Eigen::Vector3d>& points) {
   std::vector<Classification> out(points.size());
   map.classifyInKeyframe(id, points, out);
   return out;
@@ -79,8 +81,8 @@ bool same(const Classification& a, const Classification& b) {
 }
 
 std::string describe(const Classification& c) {
-  return std::string(occupancyName(c.state)) + " p=" + std::to_string(c.p_occupied) + " kf=" + std::to_string(c.keyframe) +
-         " ell=" + std::to_string(c.ellipsoid);
+  return std::string(occupancyName(c.state)) + " p=" + std::to_string(c.p_occupied) +
+         " kf=" + std::to_string(c.keyframe) + " ell=" + std::to_string(c.ellipsoid);
 }
 
 /// Fast and oracle agree on every point: the same class, deciding keyframe and ellipsoid, and
@@ -105,7 +107,8 @@ struct Counts {
 };
 Counts count(const std::vector<Classification>& c) {
   Counts n;
-  for (const auto& x : c) (x.state == Occupancy::kFree ? n.free : x.state == Occupancy::kOccupied ? n.occupied : n.unknown)++;
+  for (const auto& x : c)
+    (x.state == Occupancy::kFree ? n.free : x.state == Occupancy::kOccupied ? n.occupied : n.unknown)++;
   return n;
 }
 
@@ -293,7 +296,8 @@ TEST(QueryClassify, ARigidMotionOfEveryPoseMovesTheAnswers) {
   for (std::size_t i = 0; i < a.size(); ++i) {
     const bool ok = a[i].state == b[i].state && a[i].keyframe == b[i].keyframe && a[i].ellipsoid == b[i].ellipsoid &&
                     std::abs(a[i].p_occupied - b[i].p_occupied) < 1e-4f;
-    if (!ok && ++differ <= 5) ADD_FAILURE() << points[i].transpose() << ": " << describe(a[i]) << " vs " << describe(b[i]);
+    if (!ok && ++differ <= 5)
+      ADD_FAILURE() << points[i].transpose() << ": " << describe(a[i]) << " vs " << describe(b[i]);
   }
   EXPECT_EQ(differ, 0);
   const Counts n = count(a);
@@ -417,8 +421,9 @@ TEST(QueryClassify, BadInputThrows) {
   EXPECT_THROW(classifyInKeyframe(map, -1, points), std::invalid_argument);
   std::vector<Classification> short_out(1);
   EXPECT_THROW(map.classify(points, short_out), std::invalid_argument);
-  for (void (*bad)(QueryParams&) : {+[](QueryParams& p) { p.gate_sigma = 0; }, +[](QueryParams& p) { p.gate_sigma = NAN; },
-                   +[](QueryParams& p) { p.min_sigma_m = -1; }, +[](QueryParams& p) { p.threads = -1; }}) {
+  for (void (*bad)(QueryParams&) :
+       {+[](QueryParams& p) { p.gate_sigma = 0; }, +[](QueryParams& p) { p.gate_sigma = NAN; },
+        +[](QueryParams& p) { p.min_sigma_m = -1; }, +[](QueryParams& p) { p.threads = -1; }}) {
     QueryParams p;
     bad(p);
     EXPECT_THROW(p.validate(), std::invalid_argument);

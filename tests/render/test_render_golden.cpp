@@ -26,9 +26,7 @@ class RenderGolden : public ::testing::Test {
   std::unique_ptr<Context> context_;
 };
 
-ViewCamera gridView() {
-  return ViewCamera::lookAt({0.4f, -2.2f, 1.8f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 50.f, 320, 240);
-}
+ViewCamera gridView() { return ViewCamera::lookAt({0.4f, -2.2f, 1.8f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 50.f, 320, 240); }
 
 TEST_F(RenderGolden, EllipsoidsGlobalView) {
   Framebuffer fb(gl(), 320, 240);
@@ -91,8 +89,8 @@ TEST_F(RenderGolden, FrustumsEdgesTrajectory) {
 }
 
 // A mesh on a `background` grey, seen from `eye` towards `target` (320x240, z up).
-cv::Mat drawMesh(const Gl& gl, const ColoredMesh& mesh, float background, const glm::vec3& eye,
-                 const glm::vec3& target, float fov_y_deg) {
+cv::Mat drawMesh(const Gl& gl, const ColoredMesh& mesh, float background, const glm::vec3& eye, const glm::vec3& target,
+                 float fov_y_deg) {
   MeshRenderer renderer(gl);
   renderer.set(mesh);
   Framebuffer fb(gl, 320, 240);
@@ -109,8 +107,8 @@ TEST_F(RenderGolden, BuiltinRoomMesh) {
   // The built-in room (the scene `vdmap` opens with) from a corner under the ceiling; its
   // texture tiles are 5 cm, so the golden also pins the texture generator.
   const ColoredMesh room = toColoredMesh(makeBuiltinScene({.frames = 2}).mesh);
-  EXPECT_TRUE(matchesGolden(drawMesh(gl(), room, 0.f, {2.3f, -1.8f, 2.3f}, {-0.8f, 0.6f, 0.7f}, 70.f),
-                            "builtin_room_mesh"));
+  EXPECT_TRUE(
+      matchesGolden(drawMesh(gl(), room, 0.f, {2.3f, -1.8f, 2.3f}, {-0.8f, 0.6f, 0.7f}, 70.f), "builtin_room_mesh"));
 }
 
 TEST_F(RenderGolden, ContextIsCoreProfile33OrNewer) {

@@ -126,7 +126,6 @@ TEST_F(EllipsoidLod, AReusedRendererDrawsLikeAFreshOne) {
   ViewCamera closer = view_;
   closer.T_C_W[3][2] -= 1.f;  // 1 m closer: some ellipsoids leave the view, the rest grow
   EXPECT_TRUE(same(shot(reused, closer), fresh(set, by_keyframe, closer)));
-
 }
 
 }  // namespace

@@ -29,14 +29,13 @@ class RenderView : public ::testing::Test {
     mirror.setStyle(mirrorStyle(spec));
     mirror.setMap(1, map_);
     mirror.setGraph(1, spec.selected_keyframe, [&] { return graph_; });
-    if (spec.layers.legend)
-      mirror.setLegend(legendFor(spec.color, mirror.mapColorRange(), graph_), spec.background, w);
+    if (spec.layers.legend) mirror.setLegend(legendFor(spec.color, mirror.mapColorRange(), graph_), spec.background, w);
     ViewScene scene;
     scene.up = {0, 0, 1};
     // As `vdmap render` frames it (render_view.cpp).
-    scene.bounds = frameBounds(drawnBounds(map_, spec.sigma, spec.draw(), spec.slice, heightFrame(map_, scene.up),
-                                           frameAxes(map_, scene.up)),
-                               graph_);
+    scene.bounds = frameBounds(
+        drawnBounds(map_, spec.sigma, spec.draw(), spec.slice, heightFrame(map_, scene.up), frameAxes(map_, scene.up)),
+        graph_);
     return renderView(context_->gl(), mirror, spec, scene, w, h);
   }
   std::unique_ptr<Context> context_;
@@ -59,7 +58,8 @@ TEST_F(RenderView, TheDefaultGlobalViewIsDarkWithItsLegend) {
   // The tracking key's "tracked" line, in the bottom-left corner.
   int key = 0;
   for (int y = image.rows - 60; y < image.rows; ++y)
-    for (int x = 0; x < 60; ++x) key += near(image.at<cv::Vec3b>(y, x), {kTrajectoryColor.r, kTrajectoryColor.g, kTrajectoryColor.b});
+    for (int x = 0; x < 60; ++x)
+      key += near(image.at<cv::Vec3b>(y, x), {kTrajectoryColor.r, kTrajectoryColor.g, kTrajectoryColor.b});
   EXPECT_GT(key, 20) << "no tracking key at the bottom left";
   EXPECT_TRUE(test::matchesGolden(image, "view_default"));
 }
@@ -93,8 +93,8 @@ TEST_F(RenderView, WhiteBackgroundChangesOnlyTheBackground) {
 
 TEST_F(RenderView, EachLayerSwitchesOffAlone) {
   const cv::Mat all = render(ViewSpec{});
-  for (bool ViewLayers::*layer : {&ViewLayers::frustums, &ViewLayers::graph, &ViewLayers::trajectory,
-                                   &ViewLayers::legend}) {
+  for (bool ViewLayers::*layer :
+       {&ViewLayers::frustums, &ViewLayers::graph, &ViewLayers::trajectory, &ViewLayers::legend}) {
     ViewSpec spec;
     spec.layers.*layer = false;
     const cv::Mat without = render(spec);
@@ -165,7 +165,8 @@ TEST_F(RenderView, HeightColoursFollowTheUpAxisFromTheFloor) {
   scene.up = up;
   scene.height = heightFrame(map, up);
   EXPECT_NEAR(scene.height.floor_m, 0.f, 1e-4f);
-  scene.bounds = frameBounds(drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, frameAxes(map, up)), {});
+  scene.bounds =
+      frameBounds(drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, frameAxes(map, up)), {});
   spec.look_at = LookAt{.eye = glm::vec3(0.f) + 6.f * up, .target = glm::vec3(0.f) + 1.f * up, .up = b};
   MapMirror mirror(context_->gl(), spec.sphere_level);
   mirror.setStyle(mirrorStyle(spec, scene.height));

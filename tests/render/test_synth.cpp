@@ -7,8 +7,8 @@
 #include <opencv2/imgproc.hpp>
 #include <tbb/task_arena.h>
 
-#include "mapping/io/camera_config.h"
 #include "mapping/files/ply_reader.h"
+#include "mapping/io/camera_config.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/io/tum_sequence.h"
 #include "mapping/synth/builtin_scene.h"
@@ -44,7 +44,8 @@ DepthComparison compareDepth(const cv::Mat& ref, const cv::Mat& synth, double de
 
 // The `q`-quantile (0..1) of `values` (reorders them).
 double quantile(std::vector<double>& values, double q) {
-  const auto nth = values.begin() + static_cast<long>(std::min(values.size() - 1, static_cast<std::size_t>(q * values.size())));
+  const auto nth =
+      values.begin() + static_cast<long>(std::min(values.size() - 1, static_cast<std::size_t>(q * values.size())));
   std::nth_element(values.begin(), nth, values.end());
   return *nth;
 }
@@ -67,8 +68,8 @@ TEST(Synth, ReplicaMeshReproducesReferenceDepth) {
     ASSERT_GT(c.dz.size(), synth.total() / 2) << "frame " << i;
     const double median = quantile(c.dz, 0.5);
     std::printf("replica frame %zu: median |dz| %.2f mm, 90th pct %.2f mm, %zu px compared, %d only in the "
-                "reference, %d only synthetic\n", i, 1000 * median, 1000 * quantile(c.dz, 0.9), c.dz.size(),
-                c.only_ref, c.only_synth);
+                "reference, %d only synthetic\n",
+                i, 1000 * median, 1000 * quantile(c.dz, 0.9), c.dz.size(), c.only_ref, c.only_synth);
     EXPECT_LT(median, kReplicaMedianDzTolerance_m) << "frame " << i;
   }
   // Control: the same comparison from a pose 3 cm to the side must fail it clearly.

@@ -4,8 +4,8 @@
 #include <gtest/gtest.h>
 
 #include "mapping/eval/trajectory_error.h"
-#include "mapping/io/camera_config.h"
 #include "mapping/files/ply_reader.h"
+#include "mapping/io/camera_config.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"

@@ -140,14 +140,16 @@ TEST_F(Progressive, AnUnchangedViewIsBlittedNotRedrawn) {
   const cv::Mat second = draw(mirror, &cache, view_);
   EXPECT_EQ(cache.redraws(), 1);
   EXPECT_EQ(cache.blits(), 1);
-  EXPECT_GT(differingPixels(fresh, cv::Mat(fresh.size(), fresh.type(), cv::Scalar(33, 33, 38))), 1000) << "a map is drawn";
+  EXPECT_GT(differingPixels(fresh, cv::Mat(fresh.size(), fresh.type(), cv::Scalar(33, 33, 38))), 1000)
+      << "a map is drawn";
   EXPECT_EQ(differingPixels(first, fresh), 0);
   EXPECT_EQ(differingPixels(second, fresh), 0);
   // The depth comes along (the probe under the cursor reads it): the map's nearest point is
   // nearer than the far plane in the copy as in the cache.
   Framebuffer target(gl(), view_.width, view_.height);
   target.bindAndClear(0.f, 0.f, 0.f);
-  cache.draw(mirror, {view_, {0, 0, view_.width, view_.height}}, kBackground, {0, 0, view_.width, view_.height}, true, false);
+  cache.draw(mirror, {view_, {0, 0, view_.width, view_.height}}, kBackground, {0, 0, view_.width, view_.height}, true,
+             false);
   ASSERT_TRUE(cache.depthCopied());
   std::vector<float> depth(static_cast<std::size_t>(view_.width * view_.height));
   gl().ReadPixels(0, 0, view_.width, view_.height, GL_DEPTH_COMPONENT, GL_FLOAT, depth.data());

@@ -74,8 +74,8 @@ Ellipsoid ellipsoidAt(const glm::vec3& m, const glm::vec3& sd) {
 std::vector<Ellipsoid> boxMap() {
   std::vector<Ellipsoid> map;
   for (int i = 0; i < 500; ++i)
-    map.push_back(ellipsoidAt({2.f * (i % 10) / 9.f, 1.f * ((i / 10) % 10) / 9.f, 0.5f * (i / 100) / 4.f},
-                              glm::vec3(0.01f)));
+    map.push_back(
+        ellipsoidAt({2.f * (i % 10) / 9.f, 1.f * ((i / 10) % 10) / 9.f, 0.5f * (i / 100) / 4.f}, glm::vec3(0.01f)));
   return map;
 }
 
@@ -114,10 +114,12 @@ TEST(ViewFraming, FramesEveryDrawnExtentAtSigma) {
       const ViewCamera v = viewCamera(spec, scene, w, h).camera;
       for (const Ellipsoid& e : map) {
         const glm::vec3 m(e.mean.x(), e.mean.y(), e.mean.z());
-        const glm::vec3 half = sigma * glm::vec3(std::sqrt(e.cov(0, 0)), std::sqrt(e.cov(1, 1)), std::sqrt(e.cov(2, 2)));
+        const glm::vec3 half =
+            sigma * glm::vec3(std::sqrt(e.cov(0, 0)), std::sqrt(e.cov(1, 1)), std::sqrt(e.cov(2, 2)));
         const auto [a, b] = projectedBox(v, m - half, m + half);
         ASSERT_TRUE(a.x >= 0.f && a.y >= 0.f && b.x <= w && b.y <= h)
-            << w << "x" << h << " azimuth " << azimuth << ": (" << a.x << ", " << a.y << ")-(" << b.x << ", " << b.y << ")";
+            << w << "x" << h << " azimuth " << azimuth << ": (" << a.x << ", " << a.y << ")-(" << b.x << ", " << b.y
+            << ")";
       }
     }
 }
@@ -147,7 +149,8 @@ TEST(ViewFraming, ARoomTurnedAboutUpIsBoxedAlongItsWalls) {
   for (int i = 0; i < 41; ++i)
     for (int j = 0; j < 21; ++j) {
       const float x = 0.1f * i - 2.f, y = 0.1f * j - 1.f;
-      map.push_back(ellipsoidAt({std::cos(t) * x - std::sin(t) * y, std::sin(t) * x + std::cos(t) * y, 0.f}, glm::vec3(0.01f)));
+      map.push_back(
+          ellipsoidAt({std::cos(t) * x - std::sin(t) * y, std::sin(t) * x + std::cos(t) * y, 0.f}, glm::vec3(0.01f)));
     }
   const glm::mat3 axes = frameAxes(map, {0, 0, 1});
   EXPECT_NEAR(glm::length(axes[2] - glm::vec3(0, 0, 1)), 0.f, 1e-6f);
@@ -157,7 +160,8 @@ TEST(ViewFraming, ARoomTurnedAboutUpIsBoxedAlongItsWalls) {
   // Every centre lies in the turned box.
   for (const Ellipsoid& e : map) {
     const glm::vec3 q = glm::transpose(axes) * glm::vec3(e.mean.x(), e.mean.y(), e.mean.z());
-    EXPECT_TRUE(glm::all(glm::greaterThanEqual(q, drawn.lo - 1e-4f)) && glm::all(glm::lessThanEqual(q, drawn.hi + 1e-4f)));
+    EXPECT_TRUE(glm::all(glm::greaterThanEqual(q, drawn.lo - 1e-4f)) &&
+                glm::all(glm::lessThanEqual(q, drawn.hi + 1e-4f)));
   }
 }
 

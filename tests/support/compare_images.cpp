@@ -20,7 +20,8 @@ namespace {
 cv::Mat readRgb(const std::string& file) {
   std::ifstream in(file, std::ios::binary);
   if (!in) throw std::runtime_error(file + ": cannot read the image");
-  return vdmap::decodeColorImage(std::string{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()}, file);
+  return vdmap::decodeColorImage(std::string{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()},
+                                 file);
 }
 
 }  // namespace
@@ -38,7 +39,8 @@ int main(int argc, char** argv) {
       else if (nfiles < 2 && arg.rfind("--", 0) != 0) files[nfiles++] = arg;
       else throw std::runtime_error("unexpected argument '" + arg + "'");
     }
-    if (nfiles != 2) throw std::runtime_error("usage: compare_images EXPECTED ACTUAL [--counts C] [--share S] [--diff D]");
+    if (nfiles != 2)
+      throw std::runtime_error("usage: compare_images EXPECTED ACTUAL [--counts C] [--share S] [--diff D]");
     const cv::Mat expected = readRgb(files[0]), actual = readRgb(files[1]);
     const vdmap::render::ImageComparison c = vdmap::render::compareImages(expected, actual, tolerance);
     std::printf("%s\n", c.summary().c_str());

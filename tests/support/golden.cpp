@@ -19,8 +19,8 @@ namespace fs = std::filesystem;
   if (expected_bgr.empty()) {
     const fs::path candidate = out_dir / (name + ".png");
     render::writePng(candidate, rgb);
-    return ::testing::AssertionFailure() << "no golden " << golden << "; wrote the candidate "
-                                         << candidate << " (inspect it, then copy it there)";
+    return ::testing::AssertionFailure() << "no golden " << golden << "; wrote the candidate " << candidate
+                                         << " (inspect it, then copy it there)";
   }
   if (expected_bgr.size() != rgb.size())
     return ::testing::AssertionFailure() << "golden " << golden << " is " << expected_bgr.cols << "x"

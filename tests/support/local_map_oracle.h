@@ -23,8 +23,7 @@ namespace vdmap::test {
 inline PinholeCamera sceneCamera() { return PinholeCamera{}; }
 
 /// A surface for ray casting: distance t > 0 along a ray from `origin` (world), or nullopt.
-using RayCaster = std::function<std::optional<double>(const Eigen::Vector3d& origin,
-                                                      const Eigen::Vector3d& dir)>;
+using RayCaster = std::function<std::optional<double>(const Eigen::Vector3d& origin, const Eigen::Vector3d& dir)>;
 
 inline RayCaster planeScene(const Eigen::Vector3d& point, const Eigen::Vector3d& normal) {
   return [=](const Eigen::Vector3d& o, const Eigen::Vector3d& d) -> std::optional<double> {

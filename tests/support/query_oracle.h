@@ -116,7 +116,7 @@ class QueryOracle {
       const OracleVerdict v = verdict(id, q_W);
       if (v.state == Occupancy::kUnknown) continue;
       const bool wins = best < 0 || (params_.conflict == ConflictRule::kRecent ? rankOf(id) > rankOf(best)
-                                                                                 : v.sigma_t < best_v.sigma_t);
+                                                                               : v.sigma_t < best_v.sigma_t);
       if (wins) best = id, best_v = v;
     }
     return best < 0 ? Classification{} : fromVerdict(best_v, best);

@@ -61,8 +61,8 @@ cv::Mat testCard() {
   for (int v = 0; v < img.rows; ++v)
     for (int u = 0; u < img.cols; ++u) {
       const bool check = ((u / 10) + (v / 10)) % 2 == 0;
-      img.at<cv::Vec3b>(v, u) = cv::Vec3b(static_cast<uchar>(u * 255 / 159), static_cast<uchar>(v * 255 / 119),
-                                          check ? 200 : 60);
+      img.at<cv::Vec3b>(v, u) =
+          cv::Vec3b(static_cast<uchar>(u * 255 / 159), static_cast<uchar>(v * 255 / 119), check ? 200 : 60);
     }
   return img;
 }
@@ -80,11 +80,11 @@ render::ColoredMesh cubeOnFloor() {
   const float h = 0.5f;
   const glm::vec3 o(0, 0, h);
   auto v = [&](float x, float y, float z) { return o + glm::vec3(x, y, z) * h; };
-  quad(v(-1, -1, 1), v(1, -1, 1), v(1, 1, 1), v(-1, 1, 1), {230, 60, 50});     // top
-  quad(v(-1, -1, -1), v(1, -1, -1), v(1, -1, 1), v(-1, -1, 1), {60, 200, 80});  // -y
-  quad(v(1, -1, -1), v(1, 1, -1), v(1, 1, 1), v(1, -1, 1), {50, 90, 230});      // +x
-  quad(v(-1, 1, -1), v(-1, -1, -1), v(-1, -1, 1), v(-1, 1, 1), {230, 200, 40}); // -x
-  quad(v(1, 1, -1), v(-1, 1, -1), v(-1, 1, 1), v(1, 1, 1), {200, 60, 200});     // +y
+  quad(v(-1, -1, 1), v(1, -1, 1), v(1, 1, 1), v(-1, 1, 1), {230, 60, 50});       // top
+  quad(v(-1, -1, -1), v(1, -1, -1), v(1, -1, 1), v(-1, -1, 1), {60, 200, 80});   // -y
+  quad(v(1, -1, -1), v(1, 1, -1), v(1, 1, 1), v(1, -1, 1), {50, 90, 230});       // +x
+  quad(v(-1, 1, -1), v(-1, -1, -1), v(-1, -1, 1), v(-1, 1, 1), {230, 200, 40});  // -x
+  quad(v(1, 1, -1), v(-1, 1, -1), v(-1, 1, 1), v(1, 1, 1), {200, 60, 200});      // +y
   return m;
 }
 

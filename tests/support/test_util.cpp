@@ -228,8 +228,8 @@ RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const st
   // docs/dev/testing.md, "How far drivers spread"), and two test processes each spinning up a
   // thread per core spend a fifth more CPU on the same frames.
   const std::string prefix = "LP_NUM_THREADS=1 XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
-                             (home / "cache").string() + "' xvfb-run -a -n " + std::to_string(first_display) +
-                             " -f '" + (home / "Xauthority").string() + "' -s '-screen 0 " + screen + "x24 -noreset'";
+                             (home / "cache").string() + "' xvfb-run -a -n " + std::to_string(first_display) + " -f '" +
+                             (home / "Xauthority").string() + "' -s '-screen 0 " + screen + "x24 -noreset'";
   return runVdmap(args, prefix);
 }
 
@@ -240,8 +240,8 @@ fs::path sharedData(const std::string& name) {
 
 RunResult runVdmap(const std::string& args, const std::string& prefix) {
   TempDir tmp;
-  const std::string cmd = prefix + " '" + VDMAP_BINARY + "' " + args + " >'" +
-                          (tmp / "out").string() + "' 2>'" + (tmp / "err").string() + "'";
+  const std::string cmd = prefix + " '" + VDMAP_BINARY + "' " + args + " >'" + (tmp / "out").string() + "' 2>'" +
+                          (tmp / "err").string() + "'";
   const int status = std::system(cmd.c_str());
   RunResult result;
   result.exit_code = WIFEXITED(status) ? WEXITSTATUS(status) : -1;

@@ -104,7 +104,8 @@ RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const st
 }  // namespace vdmap::test
 
 /// Skips the current test with a clear message when ../shared/data/NAME is absent.
-#define VDMAP_REQUIRE_SHARED_DATA(var, name)                                                  \
-  const std::filesystem::path var = ::vdmap::test::sharedData(name);                          \
-  if (var.empty()) GTEST_SKIP() << "shared data set '" << name << "' not found under "        \
-                                << VDMAP_SHARED_DATA << " (real-data test skipped)"
+#define VDMAP_REQUIRE_SHARED_DATA(var, name)                                               \
+  const std::filesystem::path var = ::vdmap::test::sharedData(name);                       \
+  if (var.empty())                                                                         \
+  GTEST_SKIP() << "shared data set '" << name << "' not found under " << VDMAP_SHARED_DATA \
+               << " (real-data test skipped)"

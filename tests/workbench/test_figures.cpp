@@ -34,8 +34,8 @@ fs::path boxRoomWithFrameStampedTruth(const test::TempDir& dir, int frames) {
     const Eigen::Quaterniond q(p.T_W_C.linear());
     const Eigen::Vector3d x = p.T_W_C.translation();
     char line[320];
-    std::snprintf(line, sizeof line, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.t, x.x(), x.y(), x.z(), q.x(),
-                  q.y(), q.z(), q.w());
+    std::snprintf(line, sizeof line, "%.6f %.17g %.17g %.17g %.17g %.17g %.17g %.17g\n", p.t, x.x(), x.y(), x.z(),
+                  q.x(), q.y(), q.z(), q.w());
     text += line;
   }
   test::writeText(seq / "groundtruth.txt", text);
@@ -81,8 +81,8 @@ TEST(Figures, TrackingErrorEqualsVdmapEvalOnTheExportedTrajectory) {
   EXPECT_GT(figures.ate_rmse_m, 0.0);
   EXPECT_LT(figures.ate_rmse_m, 0.05);
   // The command itself, at the 5 digits its JSON gives.
-  const test::RunResult r =
-      test::runVdmap("eval --trajectory '" + exported.string() + "' --groundtruth '" + (seq / "groundtruth.txt").string() + "' --json");
+  const test::RunResult r = test::runVdmap("eval --trajectory '" + exported.string() + "' --groundtruth '" +
+                                           (seq / "groundtruth.txt").string() + "' --json");
   ASSERT_EQ(r.exit_code, 0) << r.err;
   const nlohmann::json json = nlohmann::json::parse(r.out);
   EXPECT_NEAR(json["ate_rmse_m"].get<double>(), figures.ate_rmse_m, 1e-4 * figures.ate_rmse_m);

@@ -14,9 +14,9 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "app/view/settings.h"
+#include "app/view/view_file.h"
 #include "app/window/tg_parts.h"
 #include "app/workbench/workbench.h"
-#include "app/view/view_file.h"
 #include "render/colormap.h"
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
@@ -192,8 +192,7 @@ TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
   }
   log.clear();
   log.push_back(-1);
-  for (const auto& [view, expected] : views)
-    EXPECT_EQ(std::vector<int>(view.begin(), view.end()), expected);
+  for (const auto& [view, expected] : views) EXPECT_EQ(std::vector<int>(view.begin(), view.end()), expected);
   EXPECT_EQ(log.size(), 1u);
   EXPECT_EQ(log.view().back(), -1);
   EXPECT_TRUE(AppendLog<int>().view().empty());
@@ -428,8 +427,8 @@ TEST(GuiWorkbench, ExportSaveAndReopenTheSession) {
   bench.files().saveSession();
   t.worker().waitIdle();
   EXPECT_TRUE(t.worker().status().error.empty()) << t.worker().status().error;
-  for (const char* file : {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply",
-                           "stats.json"})
+  for (const char* file :
+       {"local_maps.ply", "keyframes.txt", "graph.txt", "global_points.ply", "global_ellipsoids.ply", "stats.json"})
     EXPECT_TRUE(std::filesystem::exists(t.dir / "export" / file)) << file;
 
   Workbench reopened{Settings{}};
@@ -562,10 +561,10 @@ TEST(GuiWorkbench, AnOpenedSessionContinuesInThePlayer) {
 
 TEST(GuiWorkbench, PickingFindsTheNearestProjectedMean) {
   std::vector<Ellipsoid> es(3);
-  es[0].mean = {0, 0, 4};   // straight ahead, listed first
-  es[1].mean = {0, 0, 2};   // in front of it on the same ray: the nearer one wins
-  es[2].mean = {0.5, 0, 2}; // to the right
-  render::ViewCamera view;  // identity pose, 640x480, f = 525
+  es[0].mean = {0, 0, 4};    // straight ahead, listed first
+  es[1].mean = {0, 0, 2};    // in front of it on the same ray: the nearer one wins
+  es[2].mean = {0.5, 0, 2};  // to the right
+  render::ViewCamera view;   // identity pose, 640x480, f = 525
   EXPECT_EQ(pickEllipsoid(es, view, view.cx, view.cy), 1);
   EXPECT_EQ(pickEllipsoid(es, view, view.cx + 525.f * 0.25f, view.cy + 2.f), 2);
   EXPECT_EQ(pickEllipsoid(es, view, 10.f, 10.f), -1);
@@ -579,8 +578,10 @@ TEST(GuiWorkbench, EulerAnglesRoundTrip) {
   EXPECT_TRUE(eulerDegToRotation(back).isApprox(eulerDegToRotation(deg), 1e-6));
   // The round trip alone holds for any eulerDegToRotation (even one returning identity); pin
   // the convention: yaw about z turns x into y, roll about x turns y into z.
-  EXPECT_TRUE((eulerDegToRotation({0.f, 0.f, 90.f}) * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-6));
-  EXPECT_TRUE((eulerDegToRotation({90.f, 0.f, 0.f}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-6));
+  EXPECT_TRUE(
+      (eulerDegToRotation({0.f, 0.f, 90.f}) * Eigen::Vector3d::UnitX()).isApprox(Eigen::Vector3d::UnitY(), 1e-6));
+  EXPECT_TRUE(
+      (eulerDegToRotation({90.f, 0.f, 0.f}) * Eigen::Vector3d::UnitY()).isApprox(Eigen::Vector3d::UnitZ(), 1e-6));
 }
 
 TEST(GuiWorkbench, PitchStaysWithin90DegreesAndTheRotationIsKept) {
@@ -672,7 +673,8 @@ TEST(GuiWorkbench, ASavedSessionShowsItsOwnParametersAndLeavesTheUsersSettingsAl
   EXPECT_TRUE(other.parameters().edit(*findParameter("tau_group"), 0.5));
   other.worker()->waitIdle();
   EXPECT_DOUBLE_EQ(other.worker()->global()->params.tau_group, 0.5);
-  EXPECT_DOUBLE_EQ(other.ui().settings.thresholds.tau_group, Settings{}.thresholds.tau_group) << "the user's settings changed";
+  EXPECT_DOUBLE_EQ(other.ui().settings.thresholds.tau_group, Settings{}.thresholds.tau_group)
+      << "the user's settings changed";
   EXPECT_EQ(other.ui().settings.thresholds.filter.min_points, 9);
   EXPECT_FALSE(other.parameters().pending(*findParameter("cell_size")));
   other.parameters().rerun();  // nothing to re-map
@@ -693,7 +695,7 @@ TEST(GuiSettings, OnlyWhatTheUserChangedIsSavedAndACorruptFileIsKept) {
   Settings start = loadSettings(file, &warning);
   applySetting(start, "merge_distance=0.5");  // --set: this run only
   Settings end = start;
-  end.color = render::ColorMode::kCount;      // changed in the window
+  end.color = render::ColorMode::kCount;  // changed in the window
   end.window_width = 1000;
   saveChangedSettings(file, start, end);
   const Settings reread = loadSettings(file, &warning);
@@ -1117,7 +1119,8 @@ void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   const Floor floor = findFloor(global->map.ellipsoids, cameras);
   ASSERT_GT(floor.inliers, 0u) << "no floor found";
   const glm::vec3 up = bench.view().upVector();
-  const double angle_deg = std::acos(std::clamp(floor.normal.dot(Eigen::Vector3d(up.x, up.y, up.z)), -1.0, 1.0)) * 180 / M_PI;
+  const double angle_deg =
+      std::acos(std::clamp(floor.normal.dot(Eigen::Vector3d(up.x, up.y, up.z)), -1.0, 1.0)) * 180 / M_PI;
   std::printf("%s: up (%.3f %.3f %.3f), floor normal (%.3f %.3f %.3f), %.1f deg apart; floor %zu of %zu ellipsoids\n",
               folder.filename().c_str(), up.x, up.y, up.z, floor.normal.x(), floor.normal.y(), floor.normal.z(),
               angle_deg, floor.inliers, global->map.ellipsoids.size());
@@ -1137,7 +1140,8 @@ void expectFloorAtTheBottom(const fs::path& folder, const std::string& frames) {
   render::ColoredLines frustums;
   for (const KeyframeInfo& k : mapping->keyframes)
     render::addFrustum(frustums, mapping->camera, k.T_W_K, render::kKeyframeFrustumDepthM, {});
-  for (const Transform& T : cameras) frustums.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
+  for (const Transform& T : cameras)
+    frustums.positions.emplace_back(T.translation().x(), T.translation().y(), T.translation().z());
   int outside = 0;
   for (const glm::vec3& p : frustums.positions) {
     const glm::vec4 q = v.T_C_W * glm::vec4(p, 1.f);
@@ -1296,7 +1300,8 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
     const bool tracked = std::string(poses) == "track";
     EXPECT_EQ(mapping->hasGroundTruth(), tracked) << poses;
     EXPECT_EQ(mapping->frames_with_groundtruth, 8) << poses;  // the sequence has it, whatever mapped it
-    EXPECT_EQ(bench.view().graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u) << poses;
+    EXPECT_EQ(bench.view().graphScene(*bench.worker()->mapping()).groundtruth.size(), tracked ? shown.size() : 0u)
+        << poses;
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
   Workbench bench{Settings{}};
@@ -1312,7 +1317,8 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   // maps (the status says so): B shows the map before that.
   const std::string message = bench.worker()->status().message;
   std::printf("status after the last tracked frame: %s\n", message.c_str());
-  EXPECT_EQ(bench.poses().canShowBeforeOptimisation(), message.find("keyframe poses refined") != std::string::npos) << message;
+  EXPECT_EQ(bench.poses().canShowBeforeOptimisation(), message.find("keyframe poses refined") != std::string::npos)
+      << message;
   EXPECT_TRUE(bench.poses().canShowBeforeOptimisation());
   EXPECT_TRUE(bench.worker()->status().error.empty()) << bench.worker()->status().error;
 }
@@ -1331,7 +1337,8 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
   };
   MapRefinementParams joint;
   joint.method = MapRefinementMethod::kJoint;
-  for (const std::optional<MapRefinementParams>& refine : {std::optional(joint), std::optional<MapRefinementParams>()}) {
+  for (const std::optional<MapRefinementParams>& refine :
+       {std::optional(joint), std::optional<MapRefinementParams>()}) {
     const TumSequence sequence = openSequence({(dir / "seq").string(), "", "", ""});
     MapperParams params = Settings{}.mapper;
     params.poses = PoseSource::kTrack;
@@ -1381,9 +1388,9 @@ TEST(GuiTracking, AfterTheRefinementTheBannerNamesIt) {
       << bench.poses().beforeOptimisationBanner(m);
   // After the sequence's last frame the refinement is the last optimisation, not the loop.
   m.last_optimisation = {LastOptimisation::Kind::kRefinement, -1, "joint", 41, 0.0032};
-  EXPECT_EQ(bench.poses().beforeOptimisationBanner(m), "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
+  EXPECT_EQ(bench.poses().beforeOptimisationBanner(m),
+            "BEFORE the final refinement (joint, 41 pairs, 3.20 mm; B: after)");
 }
-
 
 // ---- The view tools: pick scroll, drag speed, zoom at the cursor, pivot, framing the paths,
 // view files, quick views, screenshots, settings autosave, loop-strip markers.
@@ -1500,7 +1507,8 @@ TEST(GuiViewTools, PickIgnoresSlicedAwayEllipsoids) {
   std::nth_element(h.begin(), h.begin() + static_cast<long>(h.size() / 2), h.end());
   const float median = h[h.size() / 2];
   // The highest ellipsoid, picked with the slice off.
-  const Ellipsoid& top = *std::max_element(map.begin(), map.end(), [&](auto& a, auto& b) { return height(a) < height(b); });
+  const Ellipsoid& top =
+      *std::max_element(map.begin(), map.end(), [&](auto& a, auto& b) { return height(a) < height(b); });
   ASSERT_GT(height(top), median);
   const glm::vec2 at = projectInView(bench, {top.mean.x(), top.mean.y(), top.mean.z()});
   bench.view().pick(at.x, at.y, 640, 480);
@@ -1543,7 +1551,6 @@ TEST(GuiViewTools, HiddenMapDrawsNoEllipsoids) {
   EXPECT_EQ(bench.view().spec().draw(), render::DrawMode::kNone);
   EXPECT_TRUE(sameSettings(s, Settings{})) << "hidden lasts for the run only";
 }
-
 
 TEST(GuiViewTools, LoadViewRestoresTheSavedCamera) {
   MappedTinyBench t;
@@ -1626,8 +1633,7 @@ TEST(GuiViewTools, ScreenshotNeverOverwritesADefaultName) {
   test::TempDir dir;
   const std::time_t when = 1764150000;
   const fs::path first = freeTimestampedName(dir.path(), when);
-  EXPECT_TRUE(std::regex_match(first.filename().string(), std::regex(R"(vdmap-\d{8}-\d{6}\.png)")))
-      << first;
+  EXPECT_TRUE(std::regex_match(first.filename().string(), std::regex(R"(vdmap-\d{8}-\d{6}\.png)"))) << first;
   std::ofstream(first) << "x";
   const fs::path second = freeTimestampedName(dir.path(), when);
   EXPECT_NE(second, first);

@@ -3,11 +3,11 @@
 // opened paths go to the recent list.
 #include <gtest/gtest.h>
 
-#include "app/view/settings.h"
-#include "app/workbench/workbench.h"
 #include "app/view/render_source.h"
 #include "app/view/render_view.h"
+#include "app/view/settings.h"
 #include "app/view/view_file.h"
+#include "app/workbench/workbench.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/octomap_export.h"
 #include "mapping/files/ply_writer.h"
@@ -30,7 +30,8 @@ struct MapFolder {
     map = buildGlobalMap(graph, GlobalMapParams{});
     MapExportOptions options;
     options.octomap_resolution_m = 0.1;
-    for (int i = 0; i < 5; ++i) options.trajectory.push_back({graph.keyframe(0).timestamp + 0.1 * i, graph.keyframe(1).T_W_K});
+    for (int i = 0; i < 5; ++i)
+      options.trajectory.push_back({graph.keyframe(0).timestamp + 0.1 * i, graph.keyframe(1).T_W_K});
     exportMap(folder, graph, map, options);
   }
 };
@@ -163,7 +164,8 @@ TEST(GuiFiles, RenderAndTheWindowAgreeOnAMapFoldersUpAxis) {
     if (trajectory) {
       const KeyframeGraph& g = m.graph;
       writeTumTrajectory(m.folder / "trajectory.txt",
-                         {{0.0, g.keyframe(0).T_W_K}, {0.5, g.keyframe(0).T_W_K}, {1.0, g.keyframe(1).T_W_K}}, "frames");
+                         {{0.0, g.keyframe(0).T_W_K}, {0.5, g.keyframe(0).T_W_K}, {1.0, g.keyframe(1).T_W_K}},
+                         "frames");
     }
     Workbench bench{Settings{}};
     ASSERT_TRUE(bench.files().openPath(m.folder.string())) << bench.ui().status.text;

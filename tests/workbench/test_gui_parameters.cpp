@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "app/cli/parameter_table.h"
 #include "app/view/settings.h"
 #include "app/workbench/workbench.h"
-#include "app/cli/parameter_table.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::app {
@@ -62,7 +62,8 @@ bool acceptedBySettingsFile(const Parameter& p, const std::string& value, const 
   const Settings s = gui::loadSettings(dir / "settings.json", &warning);
   if (!warning.empty()) {
     // The parameter, or the rule that ties it to another (validate(): "depth range must ...").
-    EXPECT_TRUE(warning.find(std::string(p.key)) != std::string::npos || warning.find("depth range") != std::string::npos)
+    EXPECT_TRUE(warning.find(std::string(p.key)) != std::string::npos ||
+                warning.find("depth range") != std::string::npos)
         << warning;
     return false;
   }

@@ -223,11 +223,11 @@ TEST_F(GuiQueries, SlicePixelsAreOccupiedAtTheWallAndFreeInFrontOfIt) {
   std::vector<cv::Mat> images;
   bench.worker()->withMapper([&](const Mapper& mapper, const GlobalSnapshot& shown) {
     for (const int threads : {1, 2})
-      images.push_back(render::computeQuerySlice(QueryMap::build(mapper.graph(), shown.map, {.threads = threads}),
-                                                 {.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2,
-                                                  .color = render::QuerySliceColor::kDistance},
-                                                 {})
-                           .rgba);
+      images.push_back(
+          render::computeQuerySlice(
+              QueryMap::build(mapper.graph(), shown.map, {.threads = threads}),
+              {.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2, .color = render::QuerySliceColor::kDistance}, {})
+              .rgba);
     return std::string();
   });
   bench.worker()->waitIdle();
@@ -308,14 +308,15 @@ TEST_F(GuiQueries, SlicePlaneAxesAndParsing) {
 TEST_F(GuiQueries, RenderDrawsTheQuerySlice) {
   test::TempDir dir;
   const fs::path session = dir / "b.vdmap";
-  ASSERT_EQ(test::runVdmap("map '" + test::builtinSequence(30).string() + "' --out '" + (dir / "m").string() + "' --save '" +
-                           session.string() + "'")
+  ASSERT_EQ(test::runVdmap("map '" + test::builtinSequence(30).string() + "' --out '" + (dir / "m").string() +
+                           "' --save '" + session.string() + "'")
                 .exit_code,
             0);
   const std::string common = "render '" + session.string() + "' --size 320x240 --orbit 30,60";
   const test::RunResult plain = test::runVdmap(common + " --out '" + (dir / "plain.png").string() + "'");
   ASSERT_EQ(plain.exit_code, 0) << plain.err;
-  const test::RunResult sliced = test::runVdmap(common + " --query-slice z=1.2 --out '" + (dir / "slice.png").string() + "'");
+  const test::RunResult sliced =
+      test::runVdmap(common + " --query-slice z=1.2 --out '" + (dir / "slice.png").string() + "'");
   ASSERT_EQ(sliced.exit_code, 0) << sliced.err;
   EXPECT_NE(sliced.out.find("query slice z=1.200 (occupancy): "), std::string::npos) << sliced.out;
   const cv::Mat a = test::readImage((dir / "plain.png")), b = test::readImage((dir / "slice.png"));

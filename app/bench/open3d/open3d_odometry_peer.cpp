@@ -9,8 +9,8 @@
 #include <omp.h>
 #include <open3d/Open3D.h>
 
-#include "app/bench/open3d/open3d_images.h"
 #include "app/bench/open3d/odometry_peer_abi.h"
+#include "app/bench/open3d/open3d_images.h"
 
 namespace {
 
@@ -31,7 +31,8 @@ void* vdmap_odometry_create(int width, int height, double fx, double fy, double 
   omp_set_num_threads(1);
   open3d::utility::SetVerbosityLevel(open3d::utility::VerbosityLevel::Error);
   try {
-    return new Odometry{open3d::camera::PinholeCameraIntrinsic(width, height, fx, fy, cx, cy), depth_scale, {}, nullptr};
+    return new Odometry{
+        open3d::camera::PinholeCameraIntrinsic(width, height, fx, fy, cx, cy), depth_scale, {}, nullptr};
   } catch (...) {
     return nullptr;
   }

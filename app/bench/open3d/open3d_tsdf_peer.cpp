@@ -7,9 +7,9 @@
 #include <omp.h>
 #include <open3d/Open3D.h>
 
-#include "mapping/core/timing.h"
 #include "app/bench/open3d/open3d_images.h"
 #include "app/bench/open3d/tsdf_peer_abi.h"
+#include "mapping/core/timing.h"
 
 namespace {
 
@@ -17,20 +17,18 @@ struct Volume {
   open3d::pipelines::integration::ScalableTSDFVolume tsdf;
   open3d::camera::PinholeCameraIntrinsic intrinsic;
   double depth_scale, depth_max_m;
-  Volume(double voxel_m, double trunc_m, int w, int h, double fx, double fy, double cx, double cy,
-         double depth_scale, double depth_max_m)
+  Volume(double voxel_m, double trunc_m, int w, int h, double fx, double fy, double cx, double cy, double depth_scale,
+         double depth_max_m)
       : tsdf(voxel_m, trunc_m, open3d::pipelines::integration::TSDFVolumeColorType::RGB8),
-        intrinsic(w, h, fx, fy, cx, cy),
-        depth_scale(depth_scale),
-        depth_max_m(depth_max_m) {}
+        intrinsic(w, h, fx, fy, cx, cy), depth_scale(depth_scale), depth_max_m(depth_max_m) {}
 };
 
 }  // namespace
 
 extern "C" {
 
-void* vdmap_tsdf_create(double voxel_m, double sdf_trunc_m, int width, int height, double fx, double fy,
-                        double cx, double cy, double depth_scale, double depth_max_m) {
+void* vdmap_tsdf_create(double voxel_m, double sdf_trunc_m, int width, int height, double fx, double fy, double cx,
+                        double cy, double depth_scale, double depth_max_m) {
   // The comparison is single-threaded (vdmap's integrator and liboctomap are); Open3D's
   // integration loop is OpenMP. Open3D 0.16 sizes its parallel loops with
   // utility::EstimateMaxThreads(), which ignores omp_set_num_threads() and returns the number of
@@ -54,8 +52,8 @@ double vdmap_tsdf_integrate(void* volume, const std::uint8_t* rgb, const std::ui
   const Eigen::Matrix4d T_C_W = Eigen::Map<const Eigen::Matrix4d>(T_W_C).inverse();
   std::shared_ptr<open3d::geometry::RGBDImage> rgbd;  // freed after the timed part
   return vdmap::cpuTimeMs([&] {
-    rgbd = open3d::geometry::RGBDImage::CreateFromColorAndDepth(color, depth_image, v->depth_scale, v->depth_max_m,
-                                                                false);
+    rgbd =
+        open3d::geometry::RGBDImage::CreateFromColorAndDepth(color, depth_image, v->depth_scale, v->depth_max_m, false);
     v->tsdf.Integrate(*rgbd, v->intrinsic, T_C_W);
   });
 }

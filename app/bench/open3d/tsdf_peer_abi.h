@@ -10,8 +10,8 @@ extern "C" {
 
 /// One TSDF volume. Camera intrinsics in pixels, depth raw units per metre, truncation and
 /// voxel edge in metres; depth beyond depth_max_m is ignored. Returns null on failure.
-typedef void* (*VdmapTsdfCreateFn)(double voxel_m, double sdf_trunc_m, int width, int height, double fx,
-                                   double fy, double cx, double cy, double depth_scale, double depth_max_m);
+typedef void* (*VdmapTsdfCreateFn)(double voxel_m, double sdf_trunc_m, int width, int height, double fx, double fy,
+                                   double cx, double cy, double depth_scale, double depth_max_m);
 /// Integrates one frame (rgb: 8-bit RGB rows, depth: 16-bit rows, both width x height packed;
 /// T_W_C: column-major 4x4 camera-to-world). Returns the process CPU time of Open3D's own work
 /// in milliseconds (the RGBD image conversion and the integration), OpenMP pinned to one thread.

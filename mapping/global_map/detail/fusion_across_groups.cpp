@@ -90,7 +90,8 @@ void partnersOf(std::size_t n, FusionBuffers* buffers) {
   auto& partner_start = f.partner_start;
   partner_start.assign(n + 1, 0);
   for (const std::vector<FusionMatch>& list : f.found)
-    for (const FusionMatch& m : list) ++partner_start[static_cast<std::size_t>(m.a) + 1], ++partner_start[static_cast<std::size_t>(m.b) + 1];
+    for (const FusionMatch& m : list)
+      ++partner_start[static_cast<std::size_t>(m.a) + 1], ++partner_start[static_cast<std::size_t>(m.b) + 1];
   std::partial_sum(partner_start.begin(), partner_start.end(), partner_start.begin());
   f.partner.resize(static_cast<std::size_t>(partner_start[n]));
   f.fill.assign(partner_start.begin(), partner_start.end() - 1);
@@ -106,16 +107,15 @@ void nearestPerGroup(int s, const std::vector<int>& group_of, FusionBuffers* buf
   FusionBuffers& f = *buffers;
   auto& taken = f.taken;
   taken.clear();
-  for (int k = f.partner_start[static_cast<std::size_t>(s)]; k < f.partner_start[static_cast<std::size_t>(s) + 1]; ++k) {
+  for (int k = f.partner_start[static_cast<std::size_t>(s)]; k < f.partner_start[static_cast<std::size_t>(s) + 1];
+       ++k) {
     const auto [other, distance] = f.partner[static_cast<std::size_t>(k)];
     if (f.seed_of[static_cast<std::size_t>(other)] >= 0) continue;
     const int g = group_of[static_cast<std::size_t>(other)];
     auto best = std::find_if(taken.begin(), taken.end(),
                              [&](const auto& t) { return group_of[static_cast<std::size_t>(t.first)] == g; });
-    if (best == taken.end())
-      taken.push_back({other, distance});
-    else if (distance < best->second || (distance == best->second && other < best->first))
-      *best = {other, distance};
+    if (best == taken.end()) taken.push_back({other, distance});
+    else if (distance < best->second || (distance == best->second && other < best->first)) *best = {other, distance};
   }
 }
 
@@ -189,7 +189,8 @@ std::vector<Ellipsoid> fuseAcrossGroups(std::span<const Ellipsoid* const> ellips
   partnersOf(ellipsoids.size(), buffers);
   if (!f.keep) releaseVector(&f.found);
   clusterGreedily(ellipsoids.size(), group_of, lambda_max, params.threads, buffers);
-  if (!f.keep) releaseVector(&f.partner_start), releaseVector(&f.partner), releaseVector(&f.taken), releaseVector(&f.order);
+  if (!f.keep)
+    releaseVector(&f.partner_start), releaseVector(&f.partner), releaseVector(&f.taken), releaseVector(&f.order);
   return fuseClusters(ellipsoids, params.threads, buffers);
 }
 

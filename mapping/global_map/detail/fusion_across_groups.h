@@ -6,8 +6,8 @@
 #include <utility>
 #include <vector>
 
-#include "mapping/global_map/global_map.h"
 #include "mapping/global_map/detail/global_map_helpers.h"
+#include "mapping/global_map/global_map.h"
 #include "mapping/global_map/sorted_voxel_grid.h"
 
 namespace vdmap::global_map_detail {
@@ -17,10 +17,12 @@ namespace vdmap::global_map_detail {
 struct SymmetricCov {
   double xx, xy, xz, yy, yz, zz;
   static SymmetricCov of(const Eigen::Matrix3d& cov) {
-    return {cov(0, 0) + kCovFloor_m2, cov(0, 1), cov(0, 2), cov(1, 1) + kCovFloor_m2, cov(1, 2), cov(2, 2) + kCovFloor_m2};
+    return {cov(0, 0) + kCovFloor_m2, cov(0, 1), cov(0, 2),
+            cov(1, 1) + kCovFloor_m2, cov(1, 2), cov(2, 2) + kCovFloor_m2};
   }
   SymmetricCov average(const SymmetricCov& o) const {
-    return {0.5 * (xx + o.xx), 0.5 * (xy + o.xy), 0.5 * (xz + o.xz), 0.5 * (yy + o.yy), 0.5 * (yz + o.yz), 0.5 * (zz + o.zz)};
+    return {0.5 * (xx + o.xx), 0.5 * (xy + o.xy), 0.5 * (xz + o.xz),
+            0.5 * (yy + o.yy), 0.5 * (yz + o.yz), 0.5 * (zz + o.zz)};
   }
   double determinant() const { return xx * (yy * zz - yz * yz) - xy * (xy * zz - yz * xz) + xz * (xy * yz - yy * xz); }
   /// d^T S^-1 d through the adjugate.

@@ -8,7 +8,8 @@ namespace vdmap::global_map_detail {
 
 std::vector<double> largestEigenvalues(const std::vector<Ellipsoid>& ellipsoids, int threads) {
   std::vector<double> lambda_max(ellipsoids.size());
-  parallelFor(threads, ellipsoids.size(), [&](std::size_t i) { lambda_max[i] = largestEigenvalue(floored(ellipsoids[i].cov)); });
+  parallelFor(threads, ellipsoids.size(),
+              [&](std::size_t i) { lambda_max[i] = largestEigenvalue(floored(ellipsoids[i].cov)); });
   return lambda_max;
 }
 
@@ -26,7 +27,8 @@ void bucketByKey(const std::vector<int>& keys, std::size_t buckets, Buckets* b, 
   b->order.resize(static_cast<std::size_t>(b->start.back()));
   fill->assign(b->start.begin(), b->start.end() - 1);
   for (std::size_t i = 0; i < keys.size(); ++i)
-    if (keys[i] >= 0) b->order[static_cast<std::size_t>((*fill)[static_cast<std::size_t>(keys[i])]++)] = static_cast<int>(i);
+    if (keys[i] >= 0)
+      b->order[static_cast<std::size_t>((*fill)[static_cast<std::size_t>(keys[i])]++)] = static_cast<int>(i);
 }
 
 }  // namespace vdmap::global_map_detail

@@ -70,10 +70,8 @@ void meanShiftClusters(const std::vector<Eigen::Vector3d>& means, const std::vec
     for (std::size_t j = i + 1; j < means.size() && one_cluster; ++j)
       one_cluster = (means[i] - means[j]).squaredNorm() <= one_kernel_m2;
   }
-  if (one_cluster)
-    label->assign(means.size(), 0);
-  else
-    *label = meanShiftClustersByIteration(means, weights, h);
+  if (one_cluster) label->assign(means.size(), 0);
+  else *label = meanShiftClustersByIteration(means, weights, h);
 }
 
 // The kept ellipsoids of centre cell c (s->in_cell, s->means, s->weights; two or more): one

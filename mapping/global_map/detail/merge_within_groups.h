@@ -4,8 +4,8 @@
 // are declared in global_map.h.
 #include <vector>
 
-#include "mapping/global_map/global_map.h"
 #include "mapping/global_map/detail/global_map_helpers.h"
+#include "mapping/global_map/global_map.h"
 
 namespace vdmap::global_map_detail {
 

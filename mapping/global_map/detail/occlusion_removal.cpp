@@ -41,11 +41,12 @@ std::vector<int> occlusionGroup(const KeyframeGraph& graph, const Keyframe& K, c
 class CellOfPixel {
  public:
   explicit CellOfPixel(const KeyframeContainer& box)
-      : offset_u_(box.offsetU()), offset_v_(box.offsetV()),
-        width_(2.0 * box.camera().width), height_(2.0 * box.camera().height),
-        col_(static_cast<std::size_t>(2 * box.camera().width)), row_start_(static_cast<std::size_t>(2 * box.camera().height)) {
+      : offset_u_(box.offsetU()), offset_v_(box.offsetV()), width_(2.0 * box.camera().width),
+        height_(2.0 * box.camera().height), col_(static_cast<std::size_t>(2 * box.camera().width)),
+        row_start_(static_cast<std::size_t>(2 * box.camera().height)) {
     for (std::size_t x = 0; x < col_.size(); ++x) col_[x] = static_cast<int>(x) / box.cellSizePx();
-    for (std::size_t y = 0; y < row_start_.size(); ++y) row_start_[y] = static_cast<int>(y) / box.cellSizePx() * box.cols();
+    for (std::size_t y = 0; y < row_start_.size(); ++y)
+      row_start_[y] = static_cast<int>(y) / box.cellSizePx() * box.cols();
   }
   int operator()(double u, double v) const {
     const double up = u + offset_u_ + 0.5, vp = v + offset_v_ + 0.5;  // rounded as gridIndexOfPixel rounds
@@ -128,8 +129,8 @@ void itemsOfJudgedCells(const Eigen::Vector3d& centre, std::size_t cells, const 
 
 // Viewpoint K's judgement: the ellipsoids it removes, into `removed` (replacing what it held).
 void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, std::span<const Ellipsoid* const> ellipsoids,
-               const GlobalMapParams& params, const OcclusionBuffers& o,
-               OcclusionScratch* scratch, std::vector<int>* removed) {
+               const GlobalMapParams& params, const OcclusionBuffers& o, OcclusionScratch* scratch,
+               std::vector<int>* removed) {
   OcclusionScratch& s = *scratch;
   const std::size_t cells = static_cast<std::size_t>(K.container.cols()) * K.container.rows();
   // The points of K's occlusion group that fall into one of K's cells, and the count per cell.
@@ -138,7 +139,8 @@ void judgeFrom(const KeyframeGraph& graph, const Keyframe& K, std::span<const El
   s.count.assign(cells, 0);
   s.seen.clear();
   for (int g : occlusionGroup(graph, K, params))
-    for (int j = o.by_keyframe.start[static_cast<std::size_t>(g)]; j < o.by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
+    for (int j = o.by_keyframe.start[static_cast<std::size_t>(g)];
+         j < o.by_keyframe.start[static_cast<std::size_t>(g) + 1]; ++j) {
       const Eigen::Vector3d p = T_K_W * o.point[static_cast<std::size_t>(j)].mean;
       if (p.z() <= 0.0) continue;
       const Eigen::Vector2d uv = K.container.camera().project(p);
@@ -166,8 +168,8 @@ void releaseOcclusionBuffers(OcclusionBuffers* buffers) {
 }
 
 void occludingEllipsoids(const KeyframeGraph& graph, std::span<const Ellipsoid* const> ellipsoids,
-                         const std::vector<double>& lambda_max, const GlobalMapParams& params, OcclusionBuffers* buffers,
-                         std::vector<char>* removed) {
+                         const std::vector<double>& lambda_max, const GlobalMapParams& params,
+                         OcclusionBuffers* buffers, std::vector<char>* removed) {
   OcclusionBuffers& o = *buffers;
   gatherByKeyframe(graph, ellipsoids, lambda_max, params.threads, &o);
   o.removed_by.resize(graph.size());

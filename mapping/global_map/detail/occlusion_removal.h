@@ -7,8 +7,8 @@
 
 #include <tbb/enumerable_thread_specific.h>
 
-#include "mapping/global_map/global_map.h"
 #include "mapping/global_map/detail/global_map_helpers.h"
+#include "mapping/global_map/global_map.h"
 
 namespace vdmap::global_map_detail {
 
@@ -57,7 +57,7 @@ void releaseOcclusionBuffers(OcclusionBuffers* buffers);
 /// ellipsoid i is removed. Every keyframe of `graph` is a viewpoint. The same answer for any
 /// params.threads; one call per `buffers` at a time.
 void occludingEllipsoids(const KeyframeGraph& graph, std::span<const Ellipsoid* const> ellipsoids,
-                         const std::vector<double>& lambda_max, const GlobalMapParams& params, OcclusionBuffers* buffers,
-                         std::vector<char>* removed);
+                         const std::vector<double>& lambda_max, const GlobalMapParams& params,
+                         OcclusionBuffers* buffers, std::vector<char>* removed);
 
 }  // namespace vdmap::global_map_detail

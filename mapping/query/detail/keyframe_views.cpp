@@ -20,7 +20,7 @@ namespace {
 /// read is a cache miss); the terms are evaluated in double. mu is the container's float mean
 /// exactly; A is rounded to float (1e-7 relative, far below the sensor's noise).
 struct Cell {
-  float a[6];   // A: xx xy xz yy yz zz
+  float a[6];  // A: xx xy xz yy yz zz
   float mu[3];
   /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one, rounded down: a
   /// point nearer than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z).
@@ -303,7 +303,8 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     const double half_z = k * std::sqrt(cov(2, 2));
     Slot& slot = v.slot[static_cast<std::size_t>(cells[i].grid_index)];
     slot.cell = static_cast<std::int32_t>(v.cells.size());
-    slot.z_far = std::nextafter(static_cast<float>(e.mean.z() + half_z + kZMargin), std::numeric_limits<float>::infinity());
+    slot.z_far =
+        std::nextafter(static_cast<float>(e.mean.z() + half_z + kZMargin), std::numeric_limits<float>::infinity());
     z_near[static_cast<std::size_t>(cells[i].grid_index)] = e.mean.z() - half_z - kZMargin;
     v.cells.push_back(c);
     // Every point with a verdict lies in a gate or on the segment from the centre to a gate:
@@ -327,7 +328,8 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, v.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
           nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
-      v.cells[slot.cell].z_near_3x3 = std::nextafter(static_cast<float>(nearest), -std::numeric_limits<float>::infinity());
+      v.cells[slot.cell].z_near_3x3 =
+          std::nextafter(static_cast<float>(nearest), -std::numeric_limits<float>::infinity());
     }
   return v;
 }
@@ -388,8 +390,8 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
   impl->views.resize(n);
   parallelFor(params.threads, n, [&](std::size_t id) {
     const int rank = keyframe_rank.empty() ? static_cast<int>(id) : keyframe_rank[id];
-    impl->views[id] = makeView(graph.keyframe(static_cast<int>(id)), global.kept[id], params.min_sigma_m,
-                               params.gate_sigma, rank);
+    impl->views[id] =
+        makeView(graph.keyframe(static_cast<int>(id)), global.kept[id], params.min_sigma_m, params.gate_sigma, rank);
   });
   for (const View& v : impl->views) {
     impl->lo = impl->lo.cwiseMin(v.lo);
@@ -419,7 +421,8 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
           for (int x = a.x(); x <= std::min(b.x(), impl->nx - 1); ++x) {
             const Eigen::Vector3d centre = impl->origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
             if (ballMaySee(v, centre, radius))
-              touched[id].push_back(static_cast<std::uint32_t>((static_cast<std::size_t>(z) * impl->ny + y) * impl->nx + x));
+              touched[id].push_back(
+                  static_cast<std::uint32_t>((static_cast<std::size_t>(z) * impl->ny + y) * impl->nx + x));
           }
     });
     // Counting sort by voxel; filling in id order keeps each voxel's list ascending.
@@ -441,7 +444,8 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
       parallelFor(params.threads, voxels, [&](std::size_t vox) {
         std::sort(impl->ids.begin() + impl->begin[vox], impl->ids.begin() + impl->begin[vox + 1],
                   [&](std::int32_t a, std::int32_t b) {
-                    const int ra = impl->views[static_cast<std::size_t>(a)].rank, rb = impl->views[static_cast<std::size_t>(b)].rank;
+                    const int ra = impl->views[static_cast<std::size_t>(a)].rank,
+                              rb = impl->views[static_cast<std::size_t>(b)].rank;
                     return ra != rb ? ra > rb : a < b;
                   });
       });
@@ -458,8 +462,7 @@ std::size_t KeyframeViews::memoryBytes() const {
   if (!impl_) return 0;
   std::size_t bytes = sizeof(Impl) + impl_->views.capacity() * sizeof(View) +
                       impl_->begin.capacity() * sizeof(std::uint32_t) + impl_->ids.capacity() * sizeof(std::int32_t);
-  for (const View& v : impl_->views)
-    bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
+  for (const View& v : impl_->views) bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
   return bytes;
 }
 
@@ -475,8 +478,8 @@ void KeyframeViews::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const {
 
 ViewVerdict KeyframeViews::verdict(int id, const Eigen::Vector3d& q_W) const {
   if (!impl_ || id < 0 || static_cast<std::size_t>(id) >= impl_->views.size())
-    throw std::invalid_argument("keyframe " + std::to_string(id) + " is not in the map (" +
-                                std::to_string(size()) + " keyframes)");
+    throw std::invalid_argument("keyframe " + std::to_string(id) + " is not in the map (" + std::to_string(size()) +
+                                " keyframes)");
   return impl_->verdict(impl_->views[static_cast<std::size_t>(id)], q_W);
 }
 

@@ -1,8 +1,8 @@
 #include "mapping/query/detail/surface_index.h"
 
 #include <algorithm>
-#include <limits>
 #include <cmath>
+#include <limits>
 #include <optional>
 
 #include "mapping/core/box_tree.h"
@@ -12,7 +12,6 @@
 namespace vdmap {
 
 namespace {
-
 
 // Levels of the gate grid: voxel side g, 2g, 4g, ...; an ellipsoid sits at the finest level where
 // its gate box spans at most 2 voxels per axis (so in at most 8 voxels), larger ones in a list
@@ -73,9 +72,7 @@ struct GridLevel {
     }
   }
 
-  std::size_t memoryBytes() const {
-    return entries.capacity() * sizeof(entries[0]) + slots.capacity() * sizeof(Slot);
-  }
+  std::size_t memoryBytes() const { return entries.capacity() * sizeof(entries[0]) + slots.capacity() * sizeof(Slot); }
 };
 
 // Integer voxel coordinate of x along an axis, or nothing outside the key's range.
@@ -103,8 +100,8 @@ struct SurfaceIndex::Impl {
   // share cache lines), and per test the ellipsoid's index. The grid's entries hold test ranks.
   std::vector<GateTest> tests;
   std::vector<std::int32_t> test_ellipsoid;
-  std::vector<Eigen::Vector4d> balls;  // per gate: mean, longest semi-axis
-  std::vector<int> levels_used;  // the non-empty levels
+  std::vector<Eigen::Vector4d> balls;                // per gate: mean, longest semi-axis
+  std::vector<int> levels_used;                      // the non-empty levels
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
@@ -228,8 +225,8 @@ std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0;
 
 std::size_t SurfaceIndex::memoryBytes() const {
   if (!impl_) return 0;
-  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) + impl_->test_ellipsoid.capacity() * 4 +
-                      impl_->balls.capacity() * sizeof(Eigen::Vector4d) +
+  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
+                      impl_->test_ellipsoid.capacity() * 4 + impl_->balls.capacity() * sizeof(Eigen::Vector4d) +
                       impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
   // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
