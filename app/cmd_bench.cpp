@@ -159,6 +159,148 @@ void runBench(const CLI::App& verb, BenchArgs args) {
 
 }  // namespace
 
+// The comparison's options (the default mode); returns --mesh, which --query takes too.
+CLI::Option* addComparisonOptions(CLI::App& verb, BenchArgs& args) {
+  verb.add_option("--keyframe-every", args.keyframe_every,
+                  "the update row starts a keyframe every N frames (the pipeline row decides its own keyframes)")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->capture_default_str();
+  verb.add_option("--cell-size", args.local_map.cell_size_px, "container cell size, px")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->capture_default_str();
+  // Whether the mesh exists is a question about a file: read (and refused) before any work.
+  auto* mesh = verb.add_option("--mesh", args.mesh,
+                               "reference mesh PLY (world frame of the poses): adds every method's accuracy");
+  verb.add_option("--accuracy-cell-sizes", args.accuracy_cell_sizes,
+                  "with --mesh, also score vdmap at these cell sizes, px (e.g. 3,5,9,15)")
+      ->delimiter(',')
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->needs(mesh);
+  verb.add_option("--samples", args.completion_samples, "mesh samples for completion")
+      ->capture_default_str()
+      ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
+  verb.add_option("--out", args.out, "folder for bench.json and bench.md")->capture_default_str();
+  verb.add_flag("--no-octomap", args.no_octomap, "skip the OctoMap peers (for profiling)");
+  verb.add_flag("--no-open3d", args.no_open3d, "skip the Open3D peers (TSDF, and odometry with --poses track)");
+  verb.add_option("--poses", args.poses,
+                  "gt: map with the sequence's ground-truth poses; track: also track the poses with vdmap (with and "
+                  "without loop closure) and the odometry peers (OpenCV RgbdOdometry and ICPOdometry frame to frame "
+                  "and against keyframes, Open3D's hybrid odometry) on the same frames: ms per frame and ATE "
+                  "against the ground truth, and trajectory_<method>.txt in --out")
+      ->capture_default_str()
+      ->check(CLI::IsMember({"gt", "track"}));
+  return mesh;
+}
+
+// --long and its options; returns --long.
+CLI::Option* addLongRunOptions(CLI::App& verb, BenchArgs& args) {
+  addRefineArg(verb, args.sequence);
+  auto* long_run = verb.add_flag(
+      "--long", args.long_run,
+      "the long run instead: every frame (or --frames) mapped as `vdmap map` does, the mapping thread's CPU time per "
+      "frame, resident memory, live heap, keyframes and the global map's size into long.csv and long.json; with "
+      "--poses track the poses are tracked (and refined as --refine says) and long.json adds frames lost, loop "
+      "closures and the ATE");
+  verb.add_option("--global-every", args.long_options.global_every, "with --long: frames between global-map builds")
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
+      ->needs(long_run)
+      ->capture_default_str();
+  return long_run;
+}
+
+void addQueryOptions(CLI::App& verb, BenchArgs& args, CLI::Option* mesh, CLI::Option* long_run) {
+  // --query: the point queries (docs/method.md 13) against OctoMap and ground truth.
+  auto* query = verb.add_flag(
+      "--query", args.query,
+      "the point queries instead: map every frame (or --frames) with vdmap (gt poses) and OctoMap 0.05/0.02 m, then "
+      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3), then "
+      "vdmap alone: classify under each conflict rule, distance near surfaces and in open space, castRays, memory by "
+      "part; with --mesh and --truth also their accuracy against ground truth");
+  query->excludes(long_run);
+  verb.add_option("--truth", args.truth,
+                  "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
+      ->needs(query)
+      ->needs(mesh);
+  verb.add_option("--truth-points", args.truth_points,
+                  "with --truth: occupied, free and unknown points scored each (free near the surface: half as many)")
+      ->needs(query)
+      ->check(CLI::Range(std::size_t{2}, std::size_t{10'000'000}))
+      ->capture_default_str();
+  verb.add_option("--query-points", args.query_points, "with --query: points classified per pass")
+      ->needs(query)
+      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}))
+      ->capture_default_str();
+  verb.add_option("--octomap-every", args.octomap_every,
+                  "with --query: frames between OctoMap insertions (default: ceil(frames / 500))")
+      ->needs(query)
+      ->check(CLI::Range(1, std::numeric_limits<int>::max()));
+  verb.add_option("--views", args.views,
+                  "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
+      ->needs(query)
+      ->check(CLI::Range(0, 1000))
+      ->capture_default_str();
+}
+
+// --view, --suite and --ellipsoids, and the drawing options they share.
+void addDrawingOptions(CLI::App& verb, BenchArgs& args) {
+  // The renderer and the 3-D view (docs/performance.md "Rendering" and "Workbench").
+  auto* view = verb.add_flag(
+      "--view", args.view,
+      "the 3-D view's frame times instead, offscreen: SEQ is a saved session or map (anything render --map opens), "
+      "its global map drawn along --steps orbit steps at full quality and with the fast pass, then the settle frame "
+      "and a cached frame; medians, wall clock (glFinish) and process CPU");
+  verb.add_option("--replicate", args.view_options.replicate,
+                  "with --view: N copies of the map side by side along x (for paper-scale maps)")
+      ->needs(view)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  verb.add_option("--steps", args.view_options.steps, "with --view: orbit steps, 0.03 rad apart")
+      ->needs(view)
+      ->check(CLI::Range(2, 100000))
+      ->capture_default_str();
+  verb.add_option("--zoom", args.view_options.zoom,
+                  "with --view: the orbit's distance over the framed one (below 1: inside the map)")
+      ->needs(view)
+      ->check(CLI::Range(0.01f, 100.f))
+      ->capture_default_str();
+  verb.add_option("--fast-budget", args.view_options.fast_budgets,
+                  "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
+      ->needs(view)
+      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
+  auto* suite =
+      verb.add_option(
+              "--suite", args.suite,
+              "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
+              "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
+              "--runs comparing runs in this process, the medians of each stage")
+          ->type_name("FILE");
+  verb.add_option("--runs", args.runs, "with --suite: comparing runs (and session loads)")
+      ->needs(suite)
+      ->check(CLI::Range(1, 1000))
+      ->capture_default_str();
+  auto* ellipsoids = verb.add_option(
+      "--ellipsoids", args.ellipsoids,
+      "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "
+      "(default 1280x720); prints the upload and the median of 5 frames (wall clock, glFinish)");
+  ellipsoids->check(CLI::Range(1, 100'000'000));
+  verb.add_option("--sphere-level", args.sphere_level,
+                  "with --ellipsoids: icosphere subdivisions of one ellipsoid (0..3; default 1)")
+      ->needs(ellipsoids)
+      ->check(CLI::Range(0, 3));
+  verb.add_option("--size", args.draw.size,
+                  "with --view or --ellipsoids: image size WIDTHxHEIGHT (default 752x870, the 3-D viewport of a "
+                  "1600x900 window, with --view)")
+      ->check(parsedBy(parseViewSize, "WxH"));
+  verb.add_option("--points-below", args.draw.points_below,
+                  "with --view or --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as "
+                  "flat splats (0: never; default 4)")
+      ->check(CLI::Range(0.f, 64.f));
+  verb.add_option("--png", args.draw.png,
+                  "with --view or --ellipsoids: write the last frames, to look at: PREFIX_full.png and "
+                  "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)")
+      ->type_name("PREFIX");
+}
+
 void addBenchCommand(CLI::App& app) {
   auto* verb = app.add_subcommand(
       "bench",
@@ -173,132 +315,10 @@ void addBenchCommand(CLI::App& app) {
       ->description(
           "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "
           "shorter); a range past the end is an error. Frames are held decoded in memory, ~1.5 MB each at 640x480");
-  verb->add_option("--keyframe-every", args->keyframe_every,
-                   "the update row starts a keyframe every N frames (the pipeline row decides its own keyframes)")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
-      ->capture_default_str();
-  verb->add_option("--cell-size", args->local_map.cell_size_px, "container cell size, px")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
-      ->capture_default_str();
-  // Whether the mesh exists is a question about a file: read (and refused) before any work.
-  auto* mesh = verb->add_option("--mesh", args->mesh,
-                                "reference mesh PLY (world frame of the poses): adds every method's accuracy");
-  verb->add_option("--accuracy-cell-sizes", args->accuracy_cell_sizes,
-                   "with --mesh, also score vdmap at these cell sizes, px (e.g. 3,5,9,15)")
-      ->delimiter(',')
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
-      ->needs(mesh);
-  verb->add_option("--samples", args->completion_samples, "mesh samples for completion")
-      ->capture_default_str()
-      ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
-  verb->add_option("--out", args->out, "folder for bench.json and bench.md")->capture_default_str();
-  verb->add_flag("--no-octomap", args->no_octomap, "skip the OctoMap peers (for profiling)");
-  verb->add_flag("--no-open3d", args->no_open3d, "skip the Open3D peers (TSDF, and odometry with --poses track)");
-  verb->add_option("--poses", args->poses,
-                   "gt: map with the sequence's ground-truth poses; track: also track the poses with vdmap (with and "
-                   "without loop closure) and the odometry peers (OpenCV RgbdOdometry and ICPOdometry frame to frame "
-                   "and against keyframes, Open3D's hybrid odometry) on the same frames: ms per frame and ATE "
-                   "against the ground truth, and trajectory_<method>.txt in --out")
-      ->capture_default_str()
-      ->check(CLI::IsMember({"gt", "track"}));
-  addRefineArg(*verb, args->sequence);
-  auto* long_run = verb->add_flag(
-      "--long", args->long_run,
-      "the long run instead: every frame (or --frames) mapped as `vdmap map` does, the mapping thread's CPU time per "
-      "frame, resident memory, live heap, keyframes and the global map's size into long.csv and long.json; with "
-      "--poses track the poses are tracked (and refined as --refine says) and long.json adds frames lost, loop "
-      "closures and the ATE");
-  verb->add_option("--global-every", args->long_options.global_every, "with --long: frames between global-map builds")
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()))
-      ->needs(long_run)
-      ->capture_default_str();
-  // --query: the point queries (docs/method.md 13) against OctoMap and ground truth.
-  auto* query = verb->add_flag(
-      "--query", args->query,
-      "the point queries instead: map every frame (or --frames) with vdmap (gt poses) and OctoMap 0.05/0.02 m, then "
-      "time classify, distance and castView against OctoMap search/castRay (one thread, CPU, medians of 3), then "
-      "vdmap alone: classify under each conflict rule, distance near surfaces and in open space, castRays, memory by "
-      "part; with --mesh and --truth also their accuracy against ground truth");
-  query->excludes(long_run);
-  verb->add_option("--truth", args->truth,
-                   "with --query and --mesh: the same poses rendered without noise (vdmap synth --noise none)")
-      ->needs(query)
-      ->needs(mesh);
-  verb->add_option("--truth-points", args->truth_points,
-                   "with --truth: occupied, free and unknown points scored each (free near the surface: half as many)")
-      ->needs(query)
-      ->check(CLI::Range(std::size_t{2}, std::size_t{10'000'000}))
-      ->capture_default_str();
-  verb->add_option("--query-points", args->query_points, "with --query: points classified per pass")
-      ->needs(query)
-      ->check(CLI::Range(std::size_t{1}, std::size_t{100'000'000}))
-      ->capture_default_str();
-  verb->add_option("--octomap-every", args->octomap_every,
-                   "with --query: frames between OctoMap insertions (default: ceil(frames / 500))")
-      ->needs(query)
-      ->check(CLI::Range(1, std::numeric_limits<int>::max()));
-  verb->add_option("--views", args->views,
-                   "with --query: castView poses (keyframes spread over the map; 0: no views timed)")
-      ->needs(query)
-      ->check(CLI::Range(0, 1000))
-      ->capture_default_str();
-  // The renderer and the 3-D view (docs/performance.md "Rendering" and "Workbench").
-  auto* view = verb->add_flag(
-      "--view", args->view,
-      "the 3-D view's frame times instead, offscreen: SEQ is a saved session or map (anything render --map opens), "
-      "its global map drawn along --steps orbit steps at full quality and with the fast pass, then the settle frame "
-      "and a cached frame; medians, wall clock (glFinish) and process CPU");
-  verb->add_option("--replicate", args->view_options.replicate,
-                   "with --view: N copies of the map side by side along x (for paper-scale maps)")
-      ->needs(view)
-      ->check(CLI::Range(1, 1000))
-      ->capture_default_str();
-  verb->add_option("--steps", args->view_options.steps, "with --view: orbit steps, 0.03 rad apart")
-      ->needs(view)
-      ->check(CLI::Range(2, 100000))
-      ->capture_default_str();
-  verb->add_option("--zoom", args->view_options.zoom,
-                   "with --view: the orbit's distance over the framed one (below 1: inside the map)")
-      ->needs(view)
-      ->check(CLI::Range(0.01f, 100.f))
-      ->capture_default_str();
-  verb->add_option(
-          "--fast-budget", args->view_options.fast_budgets,
-          "with --view: the fast pass's size, K ellipsoids (repeatable; default 50000, 100000, 200000, 400000)")
-      ->needs(view)
-      ->check(CLI::Range(std::size_t{1}, std::size_t{1'000'000'000}));
-  auto* suite =
-      verb->add_option(
-              "--suite", args->suite,
-              "the speed of render --suite instead (no SEQ): FILE is a render suite (views.yaml; its goldens must exist) or "
-              "a session (.vdmap: a suite of 20 views of it is written to a temporary folder and its goldens made first); "
-              "--runs comparing runs in this process, the medians of each stage")
-          ->type_name("FILE");
-  verb->add_option("--runs", args->runs, "with --suite: comparing runs (and session loads)")
-      ->needs(suite)
-      ->check(CLI::Range(1, 1000))
-      ->capture_default_str();
-  auto* ellipsoids = verb->add_option(
-      "--ellipsoids", args->ellipsoids,
-      "the ellipsoid renderer alone instead (no SEQ): N random instanced ellipsoids drawn offscreen at --size "
-      "(default 1280x720); prints the upload and the median of 5 frames (wall clock, glFinish)");
-  ellipsoids->check(CLI::Range(1, 100'000'000));
-  verb->add_option("--sphere-level", args->sphere_level,
-                   "with --ellipsoids: icosphere subdivisions of one ellipsoid (0..3; default 1)")
-      ->needs(ellipsoids)
-      ->check(CLI::Range(0, 3));
-  verb->add_option("--size", args->draw.size,
-                   "with --view or --ellipsoids: image size WIDTHxHEIGHT (default 752x870, the 3-D viewport of a "
-                   "1600x900 window, with --view)")
-      ->check(parsedBy(parseViewSize, "WxH"));
-  verb->add_option("--points-below", args->draw.points_below,
-                   "with --view or --ellipsoids: draw ellipsoids projecting to a radius below this many pixels as "
-                   "flat splats (0: never; default 4)")
-      ->check(CLI::Range(0.f, 64.f));
-  verb->add_option("--png", args->draw.png,
-                   "with --view or --ellipsoids: write the last frames, to look at: PREFIX_full.png and "
-                   "PREFIX_fast_K.png (--view), PREFIX.png (--ellipsoids)")
-      ->type_name("PREFIX");
+  CLI::Option* mesh = addComparisonOptions(*verb, *args);
+  CLI::Option* long_run = addLongRunOptions(*verb, *args);
+  addQueryOptions(*verb, *args, mesh, long_run);
+  addDrawingOptions(*verb, *args);
   verb->add_flag("--json", args->json, "print JSON instead of text");
   verb->callback([args, verb] { runBench(*verb, *args); });
 }

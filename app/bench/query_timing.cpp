@@ -355,31 +355,9 @@ nlohmann::json sharesJson(const Accuracy::Shares& s) {
   return {{"occupied", rounded(s.occupied)}, {"free", rounded(s.free)}, {"unknown", rounded(s.unknown)}};
 }
 
-}  // namespace
-
-void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) {
-  checkExportFolder(out_dir);
-  std::optional<ColoredTriangleMesh> mesh;
-  if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
-  const Maps m = buildMaps(args);
-  const PinholeCamera& cam = m.mapper->camera();
-  const Speed s = timeQueries(m, args, cam);
-  const std::size_t kept_bytes = keptCellBytes(m.global);
-
-  std::ostringstream text;
+// The speed table: vdmap and each OctoMap peer, and the peers' ratios to vdmap.
+nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::ostringstream& text) {
   char buf[512];
-  std::snprintf(buf, sizeof buf,
-                "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; OctoMap "
-                "from every %d. frame (%zu frames); QueryMap built in %.0f ms (one thread, median of %d)\n",
-                m.frames, args.sequence.folder.c_str(), m.mapper->graph().size(),
-                m.mapper->params().local_map.cell_size_px, m.global.ellipsoids.size(), m.octomap_every,
-                m.octomap_frames, m.query_build_ms, kPasses);
-  text << buf;
-  std::snprintf(buf, sizeof buf,
-                "speed: one thread, process CPU, median of %d passes; classify %zu points, distance %zu, views %dx%d "
-                "to %.2f m (OctoMap: the first %zu views, castRay per pixel, unknown ignored)\n",
-                kPasses, s.points, s.distance_points, cam.width, cam.height, m.max_depth_m, s.octo_views);
-  text << buf;
   std::snprintf(buf, sizeof buf, "%-16s %14s %10s %14s %10s %12s %10s\n", "method", "classify [/s]", "x vdmap",
                 "distance [/s]", "x vdmap", "view [ms]", "x vdmap");
   text << buf;
@@ -416,6 +394,86 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   }
   text << "(x vdmap: the peer's time over vdmap's; OctoMap's distance is to the nearest occupied leaf's box through "
           "a BoxTree)\n";
+  return speed;
+}
+
+// The accuracy table against the exact frames' occupancy truth.
+nlohmann::json reportAccuracy(const Maps& m, const ColoredTriangleMesh& mesh, const BenchArgs& args,
+                              std::size_t kept_bytes, std::ostringstream& text) {
+  char buf[512];
+  ProgressBar progress("truth", 1);
+  const OccupancyTruthSets sets = m.truth->sample(mesh);
+  progress.update(1);
+  const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
+  std::snprintf(buf, sizeof buf,
+                "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
+                "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
+                args.mesh.c_str(), m.truth->frames(), sets.occupied.size(), sets.free.size(), sets.free_near.size(),
+                sets.unknown.size(), sets.ambiguous_occupied, sets.seen_triangles, mesh.triangles.size());
+  text << buf;
+  std::snprintf(buf, sizeof buf, "%-16s %8s %7s %7s %8s %7s %8s %9s %9s %8s %11s\n", "method", "bal.acc", "rec O",
+                "rec F", "rec Fnear", "rec U", "O free", "|d| med", "|d| p95", "over 1cm", "memory [MB]");
+  text << buf;
+  nlohmann::json acc = {{"sets",
+                         {{"occupied", sets.occupied.size()},
+                          {"free", sets.free.size()},
+                          {"free_near", sets.free_near.size()},
+                          {"unknown", sets.unknown.size()},
+                          {"ambiguous_occupied", sets.ambiguous_occupied}}},
+                        {"seen_triangles", sets.seen_triangles},
+                        {"truth_frames", m.truth->frames()},
+                        {"vdmap_query_bytes", m.query.memoryBytes()},
+                        {"vdmap_kept_cell_bytes", kept_bytes}};
+  for (const Accuracy& a : rows) {
+    std::snprintf(buf, sizeof buf, "%-16s %8.3f %7.3f %7.3f %8.3f %7.3f %8.4f %6.1f mm %6.1f mm %8.3f %11.2f\n",
+                  a.name.c_str(), a.balanced, a.o.occupied, a.f.free, a.f_near.free, a.u.unknown, a.o.free,
+                  a.dist_median_mm, a.dist_p95_mm, a.over_1cm, a.memory_mb);
+    text << buf;
+    acc[a.key] = {{"name", a.name},
+                  {"balanced_accuracy", rounded(a.balanced)},
+                  {"O", sharesJson(a.o)},
+                  {"F", sharesJson(a.f)},
+                  {"F_near", sharesJson(a.f_near)},
+                  {"U", sharesJson(a.u)},
+                  {"false_free_O", rounded(a.o.free)},
+                  {"distance_abs_error_median_mm", rounded(a.dist_median_mm)},
+                  {"distance_abs_error_p95_mm", rounded(a.dist_p95_mm)},
+                  {"distance_over_1cm", rounded(a.over_1cm)},
+                  {"memory_mb", rounded(a.memory_mb)}};
+  }
+  text << "(rec: share of a set given its true class, O occupied, F and F_near free, U unknown; bal.acc: mean of "
+          "rec O, F, U; O free: share of O called free; |d|: distance error on F + F_near; over 1cm: share "
+          "over-estimated by more than 1 cm; memory: vdmap QueryMap::memoryBytes + kept cells, OctoMap "
+          "memoryUsage)\n";
+  return acc;
+}
+
+}  // namespace
+
+void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) {
+  checkExportFolder(out_dir);
+  std::optional<ColoredTriangleMesh> mesh;
+  if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
+  const Maps m = buildMaps(args);
+  const PinholeCamera& cam = m.mapper->camera();
+  const Speed s = timeQueries(m, args, cam);
+  const std::size_t kept_bytes = keptCellBytes(m.global);
+
+  std::ostringstream text;
+  char buf[512];
+  std::snprintf(buf, sizeof buf,
+                "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; OctoMap "
+                "from every %d. frame (%zu frames); QueryMap built in %.0f ms (one thread, median of %d)\n",
+                m.frames, args.sequence.folder.c_str(), m.mapper->graph().size(),
+                m.mapper->params().local_map.cell_size_px, m.global.ellipsoids.size(), m.octomap_every,
+                m.octomap_frames, m.query_build_ms, kPasses);
+  text << buf;
+  std::snprintf(buf, sizeof buf,
+                "speed: one thread, process CPU, median of %d passes; classify %zu points, distance %zu, views %dx%d "
+                "to %.2f m (OctoMap: the first %zu views, castRay per pixel, unknown ignored)\n",
+                kPasses, s.points, s.distance_points, cam.width, cam.height, m.max_depth_m, s.octo_views);
+  text << buf;
+  nlohmann::json speed = reportSpeed(m, s, text);
   text << s.detail_text;
   nlohmann::json query = {{"frames", m.frames},
                           {"keyframes", m.mapper->graph().size()},
@@ -427,54 +485,7 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
                           {"speed", speed},
                           {"vdmap", s.detail}};
 
-  if (m.truth && mesh) {
-    ProgressBar progress("truth", 1);
-    const OccupancyTruthSets sets = m.truth->sample(*mesh);
-    progress.update(1);
-    const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
-    std::snprintf(
-        buf, sizeof buf,
-        "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
-        "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
-        args.mesh.c_str(), m.truth->frames(), sets.occupied.size(), sets.free.size(), sets.free_near.size(),
-        sets.unknown.size(), sets.ambiguous_occupied, sets.seen_triangles, mesh->triangles.size());
-    text << buf;
-    std::snprintf(buf, sizeof buf, "%-16s %8s %7s %7s %8s %7s %8s %9s %9s %8s %11s\n", "method", "bal.acc", "rec O",
-                  "rec F", "rec Fnear", "rec U", "O free", "|d| med", "|d| p95", "over 1cm", "memory [MB]");
-    text << buf;
-    nlohmann::json acc = {{"sets",
-                           {{"occupied", sets.occupied.size()},
-                            {"free", sets.free.size()},
-                            {"free_near", sets.free_near.size()},
-                            {"unknown", sets.unknown.size()},
-                            {"ambiguous_occupied", sets.ambiguous_occupied}}},
-                          {"seen_triangles", sets.seen_triangles},
-                          {"truth_frames", m.truth->frames()},
-                          {"vdmap_query_bytes", m.query.memoryBytes()},
-                          {"vdmap_kept_cell_bytes", kept_bytes}};
-    for (const Accuracy& a : rows) {
-      std::snprintf(buf, sizeof buf, "%-16s %8.3f %7.3f %7.3f %8.3f %7.3f %8.4f %6.1f mm %6.1f mm %8.3f %11.2f\n",
-                    a.name.c_str(), a.balanced, a.o.occupied, a.f.free, a.f_near.free, a.u.unknown, a.o.free,
-                    a.dist_median_mm, a.dist_p95_mm, a.over_1cm, a.memory_mb);
-      text << buf;
-      acc[a.key] = {{"name", a.name},
-                    {"balanced_accuracy", rounded(a.balanced)},
-                    {"O", sharesJson(a.o)},
-                    {"F", sharesJson(a.f)},
-                    {"F_near", sharesJson(a.f_near)},
-                    {"U", sharesJson(a.u)},
-                    {"false_free_O", rounded(a.o.free)},
-                    {"distance_abs_error_median_mm", rounded(a.dist_median_mm)},
-                    {"distance_abs_error_p95_mm", rounded(a.dist_p95_mm)},
-                    {"distance_over_1cm", rounded(a.over_1cm)},
-                    {"memory_mb", rounded(a.memory_mb)}};
-    }
-    text << "(rec: share of a set given its true class, O occupied, F and F_near free, U unknown; bal.acc: mean of "
-            "rec O, F, U; O free: share of O called free; |d|: distance error on F + F_near; over 1cm: share "
-            "over-estimated by more than 1 cm; memory: vdmap QueryMap::memoryBytes + kept cells, OctoMap "
-            "memoryUsage)\n";
-    query["accuracy"] = acc;
-  }
+  if (m.truth && mesh) query["accuracy"] = reportAccuracy(m, *mesh, args, kept_bytes, text);
   writeQueryBenchReport(query, text.str(), args, out_dir);
 }
 
