@@ -129,8 +129,8 @@ void timeFastFrames(OrbitFrames& frames, const ViewTimingOptions& options, const
 }
 
 // Settled: the camera stopped; the cache draws the full frame once, then only copies it.
-void timeSettledFrames(OrbitFrames& frames, const ViewTimingOptions& options, const DrawTimingOptions& draw,
-                       std::ostringstream& text, nlohmann::json& out) {
+void timeSettledFrames(OrbitFrames& frames, const ViewTimingOptions& options, std::ostringstream& text,
+                       nlohmann::json& out) {
   char buf[512];
   render::ViewCache cache(frames.gl);
   std::vector<double> settle, blit;
@@ -209,7 +209,7 @@ void runViewBench(const std::string& map_path, const ViewTimingOptions& options,
                         {"lod_order_ms", rounded(lod_ms)}};
   timeFullFrames(frames, options, draw, text, out);
   timeFastFrames(frames, options, draw, text, out);
-  timeSettledFrames(frames, options, draw, text, out);
+  timeSettledFrames(frames, options, text, out);
   if (json) std::cout << jsonText({{"view", out}}) << "\n";
   else std::fputs(text.str().c_str(), stdout);
 }

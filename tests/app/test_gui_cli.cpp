@@ -18,9 +18,6 @@
 namespace vdmap::test {
 namespace {
 
-#define REQUIRE_XVFB() \
-  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (workbench end-to-end test skipped)"
-
 RunResult runInXvfb(const TempDir& home, const std::string& args, BuiltinCache cache = BuiltinCache::kShared) {
   return runVdmapInXvfb(home.path(), args, "3840x2160", cache);
 }
@@ -42,7 +39,7 @@ double mapCoverage(const fs::path& png) {
 }
 
 TEST(GuiCli, BuiltinScenePlayedToTheEndShowsAMapAndMergeDistanceChangesSigmaEPrime) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const std::string common = "--frames 0:30 --play-to-end --exit";
   const RunResult a = runInXvfb(home, common + " --screenshot '" + (home / "a.png").string() + "' --stats-json '" +
@@ -91,7 +88,7 @@ void expectLayoutFits(const nlohmann::json& stats, int width, int height) {
 }
 
 TEST(GuiCli, PanelsDockAndTheMapFitsTheViewFrom1280x720To3840x2160) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   for (const auto& [w, h] : {std::pair{1280, 720}, std::pair{1920, 1080}, std::pair{3840, 2160}}) {
     const std::string size = std::to_string(w) + "x" + std::to_string(h);
@@ -112,7 +109,7 @@ TEST(GuiCli, PanelsDockAndTheMapFitsTheViewFrom1280x720To3840x2160) {
 }
 
 TEST(GuiCli, AnIdleWindowCostsNoCpuAndKeyTapsWithinOneFrameAreAllHandled) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeTinySequence(home / "seq", 6);
   // Three Right taps arrive together (one UI frame): each maps one frame. H opens the help (in the
@@ -151,7 +148,7 @@ int pixelsNear(const cv::Mat& bgr, const nlohmann::json& r, cv::Vec3b rgb, int t
 // A tracked sequence that closes loops: the loop markers above the scrubber (left panel) and B
 // showing the map before the last optimisation, whose banner the 3-D view shows in the loop colour.
 TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisation) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 70);
   const std::string common =
@@ -179,7 +176,7 @@ TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisatio
 // --- Tracking error figures and latency stages (global map / worker stream): a tracked run with
 // ground truth reports ATE and RPE (app/workbench/figures.h) in its stats.
 TEST(GuiCli, TrackedRunReportsAteAndRpe) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 40);
   const fs::path json = home / "t.json";
@@ -201,7 +198,7 @@ TEST(GuiCli, TrackedRunReportsAteAndRpe) {
 // A session saved from a tracked run reopens with its tracking error: the ground truth comes
 // from the session's sequence folder, matched by timestamp.
 TEST(GuiCli, ATrackedSessionReopensWithItsTrackingError) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 40);
   const fs::path session = home / "s.vdmap", json = home / "t.json";
@@ -222,7 +219,7 @@ TEST(GuiCli, ATrackedSessionReopensWithItsTrackingError) {
 // --measure-latency splits each edit into stages from the snapshot's stamps and names the
 // parameter edited and what the global map's stage cache kept (the second edit goes back).
 TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 6);
   const fs::path json = home / "l.json";
@@ -263,7 +260,7 @@ TEST(GuiCli, LatencyStagesNameEachEditsParameterAndCache) {
 // no label is cut (tables still sizing their columns clip them to a letter). Likewise after
 // opening a saved session, whose figures table appears with its map.
 TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const fs::path json = home / "first.json";
   const RunResult r =
@@ -293,7 +290,7 @@ TEST(GuiCli, TheFirstStartsLastFrameBeforeWaitingCutsNoLabel) {
 // render within a frame: the run exits 0 at once, says so, and caches nothing (neither the
 // sequence nor its temporary folder), so the next start renders it whole.
 TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   // Frames are drawn at the start and then after each batch of 8 rendered: the 5th comes after 16.
   const RunResult r = runInXvfb(home, "--close-after-frames 5", BuiltinCache::kOwn);
@@ -313,7 +310,7 @@ TEST(GuiCli, ClosingDuringTheFirstRenderExitsAtOnce) {
 // A sequence mapped with its ground-truth poses has ground truth: the figures say so, and which
 // poses the map was made with.
 TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeBoxRoomSequence(home / "seq", 6);
   const fs::path json = home / "g.json";
@@ -327,7 +324,7 @@ TEST(GuiCli, GroundTruthPosesReportHasGroundtruthTrue) {
 }
 
 TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const RunResult r = runInXvfb(home, "gui '" + (home / "nowhere").string() + "' --exit");
   EXPECT_EQ(r.exit_code, 1) << r.err;
@@ -335,7 +332,7 @@ TEST(GuiCli, ASequenceThatFailsToLoadIsReportedNotACrash) {
 }
 
 TEST(GuiCli, ASavedSessionOpensAsSeqLikeWithMap) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
@@ -373,7 +370,7 @@ TEST(GuiCli, NoDisplayFailsBeforeRenderingTheBuiltinScene) {
 // A failed scripted run writes neither the screenshot nor the stats (a bad session once
 // exited 1 but wrote a screenshot of the error dialog and its stats).
 TEST(GuiCli, AFailedScriptedRunWritesNeitherFile) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   writeTinySequence(home / "seq", 3);
   const std::string session = (home / "s.vdmap").string();
@@ -403,7 +400,7 @@ bool saysSettings(const RunResult& r, const std::string& source) {
 }
 
 TEST(GuiCli, AScriptedRunUsesTheSettingsFileItIsGivenAndSaysSo) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const fs::path tuned = home / "tuned.json";
   writeText(tuned, kTunedSettings);
@@ -447,7 +444,7 @@ TEST(GuiCli, AScriptedRunUsesTheSettingsFileItIsGivenAndSaysSo) {
 }
 
 TEST(GuiCli, AScriptedRunIgnoresTheUsersSettingsAndSaysDefaults) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const std::string args = "--frames 0:30 --play-to-end --exit --stats-json ";
   const RunResult plain = runInXvfb(home, args + "'" + (home / "p.json").string() + "'");
@@ -537,7 +534,7 @@ struct MappedFolder {
 };
 
 TEST(GuiCli, OpensAFolderAPlyAndABt) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const MappedFolder m(home);
   ASSERT_GT(m.ellipsoids, 100);
@@ -564,7 +561,7 @@ TEST(GuiCli, OpensAFolderAPlyAndABt) {
 }
 
 TEST(GuiCli, ADroppedPathOpens) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const MappedFolder m(home);
   const fs::path stats = home / "d.json", view = home / "d.png";
@@ -586,7 +583,7 @@ TEST(GuiCli, ADroppedPathOpens) {
 
 // A view file dropped on the window is applied as a view: its camera is the one saved after.
 TEST(GuiCli, ADroppedViewFileIsApplied) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const MappedFolder m(home);
   const std::string map = "gui '" + m.out.string() + "' --exit --window-size 1280x720 ";
@@ -616,7 +613,7 @@ TEST(GuiCli, ADroppedViewFileIsApplied) {
 namespace vdmap::test {
 namespace {
 TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const RunResult r =
       runInXvfb(home, "--frames 0:30 --play-to-end --exit --measure-orbit 6 --fast-budget 500 --stats-json '" +
@@ -663,7 +660,7 @@ std::vector<cv::Point> surfacePixels(const cv::Mat& view) {
 // drawn at 2 sigma around the surface), and the distance is |b - a|. The pixels are taken where
 // the first run's view image shows a surface all around them (not the background, not a line).
 TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const std::vector<cv::Point> found = surfacePixels(surfaceView(home));
   ASSERT_GE(found.size(), 2u) << "the view shows no surface";
@@ -689,7 +686,7 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
 // at distance 0), and with --query-slice the point lies on the slice's plane; the stats give the
 // queries of the map shown and the slice's samples.
 TEST(GuiCli, ProbeAndQuerySliceScripted) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const cv::Mat view = surfaceView(home);
   const std::vector<cv::Point> found = surfacePixels(view);
@@ -753,7 +750,7 @@ int borderPixelsOff(const fs::path& png) {
 }
 
 TEST(GuiCli, PressingFLeavesTheViewsBorderEmpty) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   for (const std::string size : {"1280x720", "900x1000"}) {
     const fs::path view = home / (size + ".png"), json = home / (size + ".json");
@@ -776,7 +773,7 @@ TEST(GuiCli, PressingFLeavesTheViewsBorderEmpty) {
 // A slice set with --set draws fewer ellipsoids (the mirror's count) and pixels, and a saved
 // view carries it.
 TEST(GuiCli, ASliceDrawsFewerEllipsoidsAndIsSavedInTheView) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   TempDir home;
   const MappedFolder m(home);
   const std::string map = "gui '" + m.out.string() + "' --exit --window-size 1280x720 --set show_legend=false ";

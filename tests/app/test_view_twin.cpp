@@ -17,9 +17,6 @@
 namespace vdmap::test {
 namespace {
 
-#define REQUIRE_XVFB() \
-  if (!haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (twin test skipped)"
-
 // A small session of the built-in room (10 frames of a 40-pose walk: a few keyframes and edges),
 // made once by the binary as a user would, and the runs of the window on it.
 class ViewTwin : public ::testing::Test {
@@ -84,21 +81,21 @@ class ViewTwin : public ::testing::Test {
 TempDir* ViewTwin::dir_ = nullptr;
 
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameGlobalView) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   const nlohmann::json spec = expectTwins("global", "");
   EXPECT_EQ(spec.value("view", ""), "global");
   EXPECT_TRUE(spec["camera"].is_object()) << "the window saves its camera";
 }
 
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeView) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   const nlohmann::json spec = expectTwins("keyframe", "--keyframe 1 --press v");
   EXPECT_EQ(spec.value("view", ""), "keyframe:1");
 }
 
 // A colour legend in a letterboxed keyframe view sits inside the image on both paths.
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeViewWithItsLegend) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   const nlohmann::json spec = expectTwins("keyframe-uncertainty", "--keyframe 1 --press v --set color=uncertainty");
   EXPECT_EQ(spec.value("color", ""), "uncertainty");
 }
@@ -106,7 +103,7 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameKeyframeViewWithItsLegend) {
 // --- height slice ---
 // Height colours from the floor along the up axis, and a slice: the same picture on both paths.
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameHeightColoursAndSlice) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   const nlohmann::json all = expectTwins("height", "--set color=height");
   EXPECT_EQ(all.value("color", ""), "height");
   const nlohmann::json spec =
@@ -115,7 +112,7 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameHeightColoursAndSlice) {
 }
 
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   // The container window draws at 2 sigma whatever the 3-D view's sigma: its view file says so.
   const nlohmann::json spec = expectTwins("container", "--keyframe 1 --press c --set ellipsoid_sigma=3");
   EXPECT_EQ(spec.value("view", ""), "container:1");
@@ -125,7 +122,7 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
 // A view written by hand (a camera of its own, a white background) given to the window is the
 // view render draws from the same file.
 TEST_F(ViewTwin, AViewFileGivenToTheWindowIsTheViewRenderDraws) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   // The window's viewport size at 1280x720 (the window draws a view file at its viewport).
   const std::string saved = path("viewport.json");
   ASSERT_EQ(gui("--save-view '" + saved + "'").exit_code, 0);
@@ -158,7 +155,7 @@ TEST_F(ViewTwin, AViewFileGivenToTheWindowIsTheViewRenderDraws) {
 // Without a view file, render at the window's viewport size draws the window's default view:
 // the same framing, up axis, theme and layers.
 TEST_F(ViewTwin, RenderWithoutAViewFileDrawsTheWindowsDefaultView) {
-  REQUIRE_XVFB();
+  VDMAP_REQUIRE_XVFB();
   const std::string saved = path("default.json"), window = path("defaultW.png"), headless = path("defaultH.png");
   ASSERT_EQ(gui("--save-view '" + saved + "' --view-screenshot '" + window + "'").exit_code, 0);
   const nlohmann::json spec = nlohmann::json::parse(readFile(saved));

@@ -225,8 +225,8 @@ RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const st
   }
   const int first_display = 100 + static_cast<int>(getpid() % 5000) * 8;
   // One llvmpipe raster thread: the window draws the same pixels with any number (see
-  // docs/dev/testing.md, "How far drivers spread"), and two test processes each spinning up a
-  // thread per core spend a fifth more CPU on the same frames.
+  // docs/dev/testing.md, "How far drivers spread"), and test processes running side by side
+  // each spinning up a thread per core spend more CPU on the same frames.
   const std::string prefix = "LP_NUM_THREADS=1 XDG_CONFIG_HOME='" + (home / "config").string() + "' XDG_CACHE_HOME='" +
                              (home / "cache").string() + "' xvfb-run -a -n " + std::to_string(first_display) + " -f '" +
                              (home / "Xauthority").string() + "' -s '-screen 0 " + screen + "x24 -noreset'";

@@ -103,6 +103,10 @@ RunResult runVdmapInXvfb(const fs::path& home, const std::string& args, const st
 
 }  // namespace vdmap::test
 
+/// Skips the current test with a clear message when xvfb-run is missing (a window test).
+#define VDMAP_REQUIRE_XVFB() \
+  if (!::vdmap::test::haveXvfb()) GTEST_SKIP() << "xvfb-run not installed (window test skipped)"
+
 /// Skips the current test with a clear message when ../shared/data/NAME is absent.
 #define VDMAP_REQUIRE_SHARED_DATA(var, name)                                               \
   const std::filesystem::path var = ::vdmap::test::sharedData(name);                       \
