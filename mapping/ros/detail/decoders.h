@@ -1,0 +1,25 @@
+#pragma once
+// Each encoding's decoders; messages.cpp picks one by Encoding. ROS 1: ros1_messages.cpp (Debian's
+// roscpp_serialization with the message headers). CDR: cdr_messages.cpp (our own; the 4-byte
+// encapsulation header, then fields aligned to their size from the end of that header).
+// Same contract as messages.h: std::runtime_error with a short reason on bytes that do not hold
+// the type, never a read past the end.
+#include "mapping/ros/messages.h"
+
+namespace vdmap::ros::detail {
+
+Image decodeImageRos1(const std::vector<std::uint8_t>& bytes);
+CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes);
+CameraInfo decodeCameraInfoRos1(const std::vector<std::uint8_t>& bytes);
+std::vector<TransformStamped> decodeTransformsRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
+PoseStamped decodePoseRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
+float decodeFloat32Ros1(const std::vector<std::uint8_t>& bytes);
+
+Image decodeImageCdr(const std::vector<std::uint8_t>& bytes);
+CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes);
+CameraInfo decodeCameraInfoCdr(const std::vector<std::uint8_t>& bytes);
+std::vector<TransformStamped> decodeTransformsCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
+PoseStamped decodePoseCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
+float decodeFloat32Cdr(const std::vector<std::uint8_t>& bytes);
+
+}  // namespace vdmap::ros::detail
