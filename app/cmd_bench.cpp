@@ -53,14 +53,14 @@ void runLongRun(BenchArgs args) {
   mapper.poses = args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
   checkRefinementApplies(args.sequence, mapper.poses);
   args.long_options.json = args.json;
-  const TumSequence seq = openSequence(args.sequence);
+  const Sequence seq = openSequence(args.sequence);
   noteCameraGuess(seq, "bench");
   runLongBench(seq, mapper, {}, out_dir, args.long_options, refinement(args.sequence));
 }
 
 // Decoded on this thread, each frame timed (into `decode_ms`): decoding is the prefetch thread's
 // share of the pipeline's throughput.
-std::vector<RgbdFrame> decodeFrames(const TumSequence& seq, std::vector<double>* decode_ms) {
+std::vector<RgbdFrame> decodeFrames(const Sequence& seq, std::vector<double>* decode_ms) {
   std::vector<RgbdFrame> decoded;
   ProgressBar progress("decoding", seq.size());
   for (std::size_t i = 0; i < seq.size(); ++i) {
@@ -139,7 +139,7 @@ void runBench(const CLI::App& verb, BenchArgs args) {
   checkExportFolder(out_dir);
   std::optional<ColoredTriangleMesh> mesh;
   if (!args.mesh.empty()) mesh = readPlyMesh(args.mesh);  // fail before any work on a bad mesh
-  const TumSequence seq = openSequence(args.sequence, default_range);
+  const Sequence seq = openSequence(args.sequence, default_range);
   noteCameraGuess(seq, "bench");
   const PinholeCamera& cam = seq.camera();
   for (const int s : args.accuracy_cell_sizes)

@@ -321,8 +321,8 @@ void addGuiCommand(CLI::App& app) {
   verb->callback([args] {
     // `vdmap gui S.vdmap` (or a map folder, PLY, OctoMap) opens it, as the workbench's Open field does.
     const fs::path& seq = args->sequence.folder;
-    if (args->map.empty() && (fs::is_regular_file(seq) || (fs::is_directory(seq) && !fs::exists(seq / "rgb.txt") &&
-                                                           fs::exists(seq / "global_ellipsoids.ply"))))
+    if (args->map.empty() && !recogniseSequence(seq) &&
+        (fs::is_regular_file(seq) || fs::exists(seq / "global_ellipsoids.ply")))
       std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
       throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE (one of them)");

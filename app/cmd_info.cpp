@@ -37,7 +37,7 @@ nlohmann::json colourJson(const std::optional<ColourCamera>& c) {
 }
 
 // Reads up to `samples` evenly spaced depth images: enough for the range, cheap on long runs.
-DepthStats sampleDepth(const TumSequence& seq, int samples) {
+DepthStats sampleDepth(const Sequence& seq, int samples) {
   DepthStats stats;
   std::vector<std::uint16_t> valid;
   std::size_t pixels = 0, zero = 0, code = 0;
@@ -69,7 +69,7 @@ DepthStats sampleDepth(const TumSequence& seq, int samples) {
 }
 
 void runInfo(const SequenceArgs& args, bool json) {
-  const TumSequence seq = openSequence(args);
+  const Sequence seq = openSequence(args);
   const PinholeCamera& cam = seq.camera();
   const DepthStats depth = sampleDepth(seq, 10);
   const double t0 = seq.entries().front().t_depth, t1 = seq.entries().back().t_depth;
@@ -79,6 +79,10 @@ void runInfo(const SequenceArgs& args, bool json) {
   if (json) {
     nlohmann::json out = {
         {"folder", seq.folder().string()},
+        {"kind", sequenceKindName(seq.kind())},
+        {"kind_reason", seq.kindReason()},
+        {"poses_source", seq.posesSource()},
+        {"notes", seq.notes()},
         {"listed_depth_frames", seq.listedDepthFrames()},
         {"frames", seq.size()},
         {"frame_range", frameRangeText(seq.frameRange())},
@@ -110,11 +114,13 @@ void runInfo(const SequenceArgs& args, bool json) {
     return;
   }
   std::printf("sequence   %s\n", seq.folder().c_str());
+  std::printf("kind       %s (it %s)\n", sequenceKindName(seq.kind()).c_str(), seq.kindReason().c_str());
+  for (const std::string& note : seq.notes()) std::printf("           %s\n", note.c_str());
   if (seq.hasGroundTruth())
-    std::printf("frames     %zu usable (all with poses) of %d listed depth frames; frames %s\n", seq.size(),
-                seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+    std::printf("frames     %zu usable (all with poses, from %s) of %d listed depth frames; frames %s\n", seq.size(),
+                seq.posesSource().c_str(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   else
-    std::printf("frames     %zu usable of %d listed depth frames; frames %s; no groundtruth.txt (vdmap tracks the "
+    std::printf("frames     %zu usable of %d listed depth frames; frames %s; no recorded poses (vdmap tracks the "
                 "poses)\n",
                 seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);

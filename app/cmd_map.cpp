@@ -113,7 +113,7 @@ Session loadSessionToContinue(MapArgs* args) {
 }
 
 // The sequence must go on where the loaded session stopped, with its camera.
-void checkContinues(const TumSequence& seq, const Session& loaded, const std::string& load) {
+void checkContinues(const Sequence& seq, const Session& loaded, const std::string& load) {
   const MapperState& state = loaded.info.state;
   if (seq.frameRange().first <= state.last_frame_index)
     throw std::invalid_argument("--frames " + frameRangeText(seq.frameRange()) + ": " + load +
@@ -146,7 +146,7 @@ void printKeyframeTable(const KeyframeGraph& graph, const GlobalMap& global) {
 }
 
 // The run's figures for stats.json (exportMap adds the map's).
-nlohmann::json runStats(const Mapper& mapper, const TumSequence& seq, int frames_loaded, const FrameTimes& t,
+nlohmann::json runStats(const Mapper& mapper, const Sequence& seq, int frames_loaded, const FrameTimes& t,
                         const MapRefinementResult& refined, const std::vector<StampedPose>& trajectory) {
   const bool tracking = mapper.params().poses == PoseSource::kTrack;
   nlohmann::json stats = {
@@ -226,7 +226,7 @@ void runMap(MapArgs args) {
   if (loaded)
     continues = SequenceContinuation{args.load, loaded->info.sequence, loaded->info.state.last_frame_index,
                                      loaded->info.state.last_timestamp};
-  const TumSequence seq = openSequence(args.sequence, false, continues);
+  const Sequence seq = openSequence(args.sequence, false, continues);
   noteCameraGuess(seq, "map");
   if (const std::string dropped = droppedFramesWarning(seq); !dropped.empty())
     std::cerr << "vdmap map: warning: " << dropped << "\n";

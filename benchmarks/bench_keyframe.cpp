@@ -23,7 +23,7 @@
 #include <benchmark/benchmark.h>
 
 #include "mapping/core/timing.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/keyframe/keyframe_index.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
@@ -65,7 +65,7 @@ void printRunCost(const std::vector<FrameReport>& reports, std::size_t lo, std::
 
 Recording record(const std::filesystem::path& folder) {
   Recording rec;
-  const TumSequence seq = TumSequence::open(folder);
+  const Sequence seq = Sequence::open(folder);
   rec.mapper = std::make_unique<Mapper>(seq.camera());
   const Mapper& m = *rec.mapper;
   const FeatureExtractor extractor(m.params().features);

@@ -1,8 +1,8 @@
 // The TUM list parser: the input is a sequence's depth.txt (its rgb.txt and groundtruth.txt are
-// valid), then the same bytes as an associations.txt, through TumSequence::open.
+// valid), then the same bytes as an associations.txt, through Sequence::open.
 #include "fuzz/fuzz_input.h"
 #include "mapping/core/error.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
   using namespace vdmap;
@@ -15,11 +15,11 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     return true;
   }();
   (void)once;
-  VDMAP_FUZZ_EXPECTED_ERRORS(TumSequence::open(folder));
+  VDMAP_FUZZ_EXPECTED_ERRORS(Sequence::open(folder));
   // Written like the input, not by std::filesystem::copy_file: on CI that threw once (the copy
   // left an empty associations.txt), a failure of the harness that libFuzzer reported as a crash.
   fuzz::writeInput(data, size, "seq/associations.txt");
-  VDMAP_FUZZ_EXPECTED_ERRORS(TumSequence::open(folder));
+  VDMAP_FUZZ_EXPECTED_ERRORS(Sequence::open(folder));
   std::filesystem::remove(folder / "associations.txt");
   return 0;
 }

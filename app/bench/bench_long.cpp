@@ -57,7 +57,7 @@ double medianCpu(const std::vector<FrameRow>& rows, std::size_t begin, std::size
 
 // Maps every frame of `seq` with `mapper`, one row per frame; a global map every `global_every`
 // frames and after the last frame.
-std::vector<FrameRow> mapAndRecord(const TumSequence& seq, Mapper& mapper, const GlobalMapParams& global,
+std::vector<FrameRow> mapAndRecord(const Sequence& seq, Mapper& mapper, const GlobalMapParams& global,
                                    int global_every, const std::optional<MapRefinementParams>& refine) {
   std::vector<FrameRow> rows;
   rows.reserve(seq.size());
@@ -117,7 +117,7 @@ LongFigures longFigures(const std::vector<FrameRow>& rows) {
 }
 
 nlohmann::json longSummary(const std::vector<FrameRow>& rows, const LongFigures& f, const Mapper& mapper,
-                           const TumSequence& seq) {
+                           const Sequence& seq) {
   const std::size_t n = f.n;
   const bool tracking = mapper.params().poses == PoseSource::kTrack;
   nlohmann::json summary = {
@@ -167,7 +167,7 @@ void printLongSummary(const std::vector<FrameRow>& rows, const LongFigures& f, c
 
 }  // namespace
 
-void runLongBench(const TumSequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
+void runLongBench(const Sequence& seq, const MapperParams& mapper_params, const GlobalMapParams& global,
                   const std::filesystem::path& out_dir, const LongRunOptions& options,
                   const std::optional<MapRefinementParams>& refine) {
   if (options.global_every < 1) throw std::invalid_argument("--global-every must be at least 1");

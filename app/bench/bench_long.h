@@ -4,7 +4,7 @@
 #include <optional>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
@@ -23,7 +23,7 @@ struct LongRunOptions {
 /// the resident memory at half way and at the end) into `out_dir`, which must exist.
 /// With tracked poses (`mapper.poses`) the keyframe poses are refined after the last frame as
 /// `refine` says, as `vdmap map` does, and long.json adds the tracking figures (addTrackingStats).
-void runLongBench(const TumSequence& seq, const MapperParams& mapper, const GlobalMapParams& global,
+void runLongBench(const Sequence& seq, const MapperParams& mapper, const GlobalMapParams& global,
                   const std::filesystem::path& out_dir, const LongRunOptions& options,
                   const std::optional<MapRefinementParams>& refine);
 

@@ -90,9 +90,9 @@ struct Maps {
 };
 
 Maps buildMaps(const BenchArgs& args) {
-  const TumSequence seq = openSequence(args.sequence);
+  const Sequence seq = openSequence(args.sequence);
   noteCameraGuess(seq, "bench");
-  std::optional<TumSequence> exact;
+  std::optional<Sequence> exact;
   if (!args.truth.empty()) {
     SequenceArgs truth_args = args.sequence;
     truth_args.folder = args.truth;

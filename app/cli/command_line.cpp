@@ -4,7 +4,7 @@
 
 #include "app/cli/command_line.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap::app {
 namespace {

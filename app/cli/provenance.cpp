@@ -63,7 +63,7 @@ nlohmann::json provenanceStats(const Provenance& p) {
   };
 }
 
-nlohmann::json frameCounts(const TumSequence& seq) {
+nlohmann::json frameCounts(const Sequence& seq) {
   const DropCounts& d = seq.dropped();
   return {
       {"frames_listed", seq.listedDepthFrames()},
@@ -74,7 +74,7 @@ nlohmann::json frameCounts(const TumSequence& seq) {
   };
 }
 
-std::string droppedFramesWarning(const TumSequence& seq) {
+std::string droppedFramesWarning(const Sequence& seq) {
   const DropCounts& d = seq.dropped();
   const int dropped = d.no_rgb + d.no_pose;
   if (dropped == 0) return "";

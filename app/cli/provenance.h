@@ -7,7 +7,7 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/parameters.h"
 #include "mapping/tracking/map_registration.h"
 
@@ -17,7 +17,7 @@ namespace vdmap::app {
 /// "0.1.0" when the build was not configured from a git checkout (cmake/version.cmake).
 std::string versionText();
 
-/// Where a camera came from (TumSequence::cameraSource(), CameraChoice::source): "preset" (given
+/// Where a camera came from (Sequence::cameraSource(), CameraChoice::source): "preset" (given
 /// with --camera), "file" (a camera file in the folder), "session" (a saved session's) or
 /// "guessed" (a preset chosen from the folder's name or file names, or tum-default).
 std::string cameraSourceKind(const std::string& source);
@@ -25,7 +25,7 @@ std::string cameraSourceKind(const std::string& source);
 /// What made a map, besides its frames.
 struct Provenance {
   std::string sequence;       ///< the folder the frames came from ("" when unknown; written absolute)
-  std::string camera_source;  ///< TumSequence::cameraSource(), or "session FILE"
+  std::string camera_source;  ///< Sequence::cameraSource(), or "session FILE"
   PinholeCamera camera;
   PoseSource poses = PoseSource::kGroundTruth;
   /// Tracked poses: how the keyframe poses were refined after the last frame (nullopt: not).
@@ -42,10 +42,10 @@ nlohmann::json provenanceStats(const Provenance& p);
 /// frames_in_range (of them, inside --frames), frames_dropped_no_rgb and frames_dropped_no_pose
 /// (of those, dropped: no rgb frame within 0.02 s, no ground-truth pose within 0.1 s) and
 /// frames_mapped (the rest, fed to the mapper).
-nlohmann::json frameCounts(const TumSequence& seq);
+nlohmann::json frameCounts(const Sequence& seq);
 
 /// One line for stderr when frames of the range were dropped ("" when none were): how many of how
 /// many and why; when most of the range was dropped it says so first, in capitals.
-std::string droppedFramesWarning(const TumSequence& seq);
+std::string droppedFramesWarning(const Sequence& seq);
 
 }  // namespace vdmap::app

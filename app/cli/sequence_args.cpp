@@ -13,13 +13,31 @@ std::string cameraPresetList() {
 }
 
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
-  verb.add_option("SEQ", args.folder, "TUM RGB-D layout sequence folder")->required();
+  verb.add_option("SEQ", args.folder, "the sequence: a TUM RGB-D, 7-Scenes, Replica (NICE-SLAM) or ScanNet folder, a ROS 1 bag or an MCAP file (docs/cli.md, Sequences)")->required();
   verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList())
       ->check(cameraPresetCheck());
   verb.add_option("--frames", args.frames,
                   "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
                   "a range past the end is an error")
       ->check(frameRangeCheck());
+  verb.add_option("--depth-topic", args.topics.depth,
+                  "a recording's depth topic (default: found by type and name)");
+  verb.add_option("--rgb-topic", args.topics.rgb, "a recording's colour topic (default: found by type and name)");
+  verb.add_option("--info-topic", args.topics.info,
+                  "a recording's depth camera_info topic (default: the one nearest the depth topic)");
+  verb.add_option("--pose-topic", args.topics.pose,
+                  "a recording's poses from a geometry_msgs/PoseStamped or nav_msgs/Odometry topic instead of tf");
+  verb.add_option_function<std::string>(
+      "--pose-frames",
+      [&args](const std::string& text) {
+        const auto colon = text.find(':');
+        if (colon == std::string::npos || colon == 0 || colon + 1 == text.size())
+          throw CLI::ValidationError("--pose-frames", "expected WORLD:CAMERA, two tf frame names");
+        args.topics.world_frame = text.substr(0, colon);
+        args.topics.camera_frame = text.substr(colon + 1);
+      },
+      "a recording's tf frames the poses are taken between (default: the tree's root and the depth image's "
+      "frame_id)");
 }
 
 void addPoseSourceArg(CLI::App& verb, SequenceArgs& args) {
@@ -56,12 +74,12 @@ void checkRefinementApplies(const SequenceArgs& args, PoseSource poses) {
                               "groundtruth.txt, which it would leave as they are");
 }
 
-PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence) {
+PoseSource poseSource(const SequenceArgs& args, const Sequence& sequence) {
   if (args.poses.empty()) return sequence.hasGroundTruth() ? PoseSource::kGroundTruth : PoseSource::kTrack;
   return args.poses == "track" ? PoseSource::kTrack : PoseSource::kGroundTruth;
 }
 
-void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
+void noteCameraGuess(const Sequence& sequence, const std::string& verb) {
   if (!sequence.cameraGuessed()) return;
   const PinholeCamera& c = sequence.camera();
   std::fprintf(stderr,
@@ -71,19 +89,20 @@ void noteCameraGuess(const TumSequence& sequence, const std::string& verb) {
                c.cy, c.depth_scale);
 }
 
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end,
+Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end,
                          std::optional<SequenceContinuation> continues) {
   SequenceOptions options;
   options.continues = std::move(continues);
   options.camera_preset = args.camera;
   options.cut_range_at_end = cut_range_at_end;
-  // No --poses: ground truth when there is some (frames without a pose are then dropped, as with
-  // --poses gt), else tracking.
-  options.require_poses =
-      args.poses == "gt" ||
-      (args.poses.empty() && std::filesystem::exists(std::filesystem::path(args.folder) / "groundtruth.txt"));
+  // No --poses: the recorded poses when there are some (frames without a pose are then dropped,
+  // as with --poses gt), else tracking.
+  options.poses = args.poses == "gt"      ? SequenceOptions::Poses::kRecorded
+                  : args.poses == "track" ? SequenceOptions::Poses::kOptional
+                                          : SequenceOptions::Poses::kAuto;
   if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
-  return TumSequence::open(args.folder, options);
+  options.topics = args.topics;
+  return Sequence::open(args.folder, options);
 }
 
 }  // namespace vdmap::app

@@ -5,7 +5,7 @@
 
 #include <CLI/CLI.hpp>
 
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 
 namespace vdmap::app {
@@ -20,6 +20,7 @@ struct SequenceArgs {
   std::string refine =
       "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
   bool refine_given = false;  ///< --refine was on the command line
+  SequenceOptions::Topics topics;  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
 /// parsing; whether the sequence has those frames when it is opened).
@@ -34,7 +35,7 @@ std::optional<MapRefinementParams> refinement(const SequenceArgs& args);
 /// change (refinement corrects tracked poses, docs/method.md 10): throws std::invalid_argument.
 void checkRefinementApplies(const SequenceArgs& args, PoseSource poses);
 /// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
-PoseSource poseSource(const SequenceArgs& args, const TumSequence& sequence);
+PoseSource poseSource(const SequenceArgs& args, const Sequence& sequence);
 /// The camera preset names, comma-separated, for --camera help texts.
 std::string cameraPresetList();
 
@@ -42,10 +43,10 @@ std::string cameraPresetList();
 /// --poses track (or no --poses and no groundtruth.txt) frames without ground truth are kept.
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
 /// instead of refused. `continues`: the session the sequence continues (SequenceOptions::continues).
-TumSequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
+Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
                          std::optional<SequenceContinuation> continues = std::nullopt);
 /// When no --camera or camera file chose the sequence's camera, says on stderr, in one line,
 /// which preset was guessed and why ("vdmap VERB: note: ..."): a wrong guess maps without error.
-void noteCameraGuess(const TumSequence& sequence, const std::string& verb);
+void noteCameraGuess(const Sequence& sequence, const std::string& verb);
 
 }  // namespace vdmap::app

@@ -5,11 +5,11 @@
 #include "app/view/progress.h"
 #include "mapping/core/timing.h"
 #include "mapping/eval/trajectory_error.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 
 namespace vdmap::app {
 
-MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
+MapRefinementResult mapSequence(const Sequence& seq, Mapper& mapper,
                                 const std::function<void(const FrameReport&)>& on_frame,
                                 const std::optional<MapRefinementParams>& refine) {
   FramePrefetcher frames(seq, 4, mapper.featuresAhead());
@@ -24,14 +24,14 @@ MapRefinementResult mapSequence(const TumSequence& seq, Mapper& mapper,
                                                                : MapRefinementResult{};
 }
 
-std::vector<StampedPose> groundTruthTrajectory(const TumSequence& seq) {
+std::vector<StampedPose> groundTruthTrajectory(const Sequence& seq) {
   std::vector<StampedPose> out;
   for (const FrameEntry& e : seq.entries())
     if (e.has_pose) out.push_back({e.t_depth, e.T_W_C});
   return out;
 }
 
-void addTrackingStats(const Mapper& mapper, const std::vector<StampedPose>& trajectory, const TumSequence& seq,
+void addTrackingStats(const Mapper& mapper, const std::vector<StampedPose>& trajectory, const Sequence& seq,
                       nlohmann::json* stats) {
   nlohmann::json& s = *stats;
   s["frames_lost"] = mapper.framesLost();

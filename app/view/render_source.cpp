@@ -109,7 +109,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     if (name_.empty()) name_ = mesh;
   }
   if (!sequence.folder.empty()) {
-    const TumSequence seq = openSequence(sequence);
+    const Sequence seq = openSequence(sequence);
     noteCameraGuess(seq, "render");
     MapperParams params;
     params.poses = poseSource(sequence, seq);

@@ -131,7 +131,7 @@ void drawTimes(WindowState& win, float width) {
 void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
   const MappingSnapshot& mapping = *win.mapping;
   const int total = mapping.frames_total;
-  if (const TumSequence* sequence = bench.sequence()) {
+  if (const Sequence* sequence = bench.sequence()) {
     ImGui::TextWrapped("%s", sequence->folder().c_str());
     ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping.camera.width,
                        mapping.camera.height, total);

@@ -23,7 +23,7 @@ std::string grouped(std::size_t n) {
 // with: none when the session cannot continue, its folder is gone, or its camera is not the
 // session's. *off says why there are none (the Sequence panel shows it); *why too when it is
 // worth a warning (not for a session mapped to its sequence's end).
-std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, std::string* why) {
+std::optional<Sequence> framesAfter(const Session& saved, std::string* off, std::string* why) {
   const SessionInfo& info = saved.info;
   if (info.sequence.empty() || info.state.frames_mapped == 0) {
     *off = "the session names no sequence to continue with";
@@ -36,7 +36,7 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, s
   try {
     // A session mapped to the end of its sequence has nothing to continue with: no warning.
     if (std::filesystem::is_directory(info.sequence)) {
-      const std::size_t listed = TumSequence::open(info.sequence).listedDepthFrames();
+      const std::size_t listed = Sequence::open(info.sequence).listedDepthFrames();
       if (listed <= static_cast<std::size_t>(info.state.last_frame_index) + 1) {
         *off = "mapped to the end of " + info.sequence + " (" + std::to_string(info.state.last_frame_index + 1) +
                " of " + std::to_string(listed) + " frames): nothing to continue";
@@ -45,7 +45,7 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, s
     }
     SequenceOptions options;
     options.frames.first = info.state.last_frame_index + 1;
-    TumSequence rest = TumSequence::open(info.sequence, options);
+    Sequence rest = Sequence::open(info.sequence, options);
     if (!(rest.camera() == info.camera)) throw std::invalid_argument("its camera is not the session's");
     return rest;
   } catch (const std::exception& e) {
@@ -60,7 +60,7 @@ std::optional<TumSequence> framesAfter(const Session& saved, std::string* off, s
 std::vector<FrameEntry> groundTruthOf(const SessionInfo& info) {
   if (info.mapper.poses != PoseSource::kTrack || !std::filesystem::is_directory(info.sequence)) return {};
   try {
-    const TumSequence seq = TumSequence::open(info.sequence);
+    const Sequence seq = Sequence::open(info.sequence);
     if (seq.hasGroundTruth()) return seq.entries();
   } catch (const std::exception&) {  // framesAfter says what is wrong with the folder
   }
@@ -73,7 +73,7 @@ bool FileActions::open(const SequenceArgs& args) {
   SequenceArgs absolute_args = args;
   absolute_args.folder = absolutePath(args.folder);
   try {
-    TumSequence sequence = openSequence(absolute_args);
+    Sequence sequence = openSequence(absolute_args);
     // The pose source belongs to the sequence (--poses, or whether it has ground truth), not
     // to the settings; re-runs keep it.
     MapperParams mapper = ui_.settings.mapper;
@@ -105,7 +105,7 @@ bool FileActions::openSession(const std::string& file) {
       params.global = readSettingsArg(session_settings_, base).thresholds;
     }
     std::string off;
-    std::optional<TumSequence> rest = framesAfter(saved, &off, &why);
+    std::optional<Sequence> rest = framesAfter(saved, &off, &why);
     std::vector<FrameEntry> truth = groundTruthOf(saved.info);
     auto worker =
         std::make_unique<MappingWorker>(std::move(saved), params.global, std::move(rest), refine_, std::move(truth));
@@ -208,7 +208,7 @@ void FileActions::exportMap() {
   const std::string dir = absolutePath(ui_.export_text);
   // What `vdmap map` writes, for the frames mapped so far: the trajectory and how the map was
   // made (provenance.h). The sequence outlives the worker's commands.
-  const TumSequence* seq = worker_->sequence();
+  const Sequence* seq = worker_->sequence();
   const std::string session = seq ? "" : ui_.settings.last_sequence;  // the .vdmap file opened
   worker_->withMapper([dir, seq, session, refine = refine_](const Mapper& mapper, const GlobalSnapshot& global) {
     MapExportOptions options;

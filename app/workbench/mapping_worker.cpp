@@ -52,7 +52,7 @@ bool MappingSnapshot::hasGroundTruth() const {
                      [](const TrajectoryPoint& f) { return f.T_W_C_truth.has_value(); });
 }
 
-MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+MappingWorker::MappingWorker(Sequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
                              std::optional<MapRefinementParams> refine)
     : sequence_(std::move(sequence)), sequence_folder_(sequence_->folder().string()), mapper_params_(mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {
@@ -61,7 +61,7 @@ MappingWorker::MappingWorker(TumSequence sequence, const MapperParams& mapper, c
   start();
 }
 
-MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest,
+MappingWorker::MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<Sequence> rest,
                              std::optional<MapRefinementParams> refine, std::vector<FrameEntry> truth)
     : sequence_(std::move(rest)), sequence_folder_(saved.info.sequence), mapper_params_(saved.info.mapper),
       refine_(std::move(refine)), thresholds_(thresholds) {

@@ -20,7 +20,7 @@
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/query_map.h"
 
@@ -166,7 +166,7 @@ class MappingWorker {
   /// Starts the worker (paused, nothing mapped). Throws std::invalid_argument for bad params.
   /// With tracked poses, `refine` (nullopt: none) refines the keyframe poses after the last frame
   /// as `vdmap map --refine` does.
-  MappingWorker(TumSequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
+  MappingWorker(Sequence sequence, const MapperParams& mapper, const GlobalMapParams& thresholds,
                 std::optional<MapRefinementParams> refine = MapRefinementParams{});
   /// A saved session (.vdmap): its keyframes are there; thresholds and poses are live as usual.
   /// With `rest`, the frames of its sequence after the session's last one, the player continues
@@ -175,7 +175,7 @@ class MappingWorker {
   /// `truth`: for a session mapped with tracked poses, its sequence's frames (their ground-truth
   /// poses, matched to the session's frames by timestamp) when the folder has them, so the
   /// tracking error and the ground-truth line show as they did while it was mapped.
-  MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<TumSequence> rest = std::nullopt,
+  MappingWorker(Session saved, const GlobalMapParams& thresholds, std::optional<Sequence> rest = std::nullopt,
                 std::optional<MapRefinementParams> refine = MapRefinementParams{}, std::vector<FrameEntry> truth = {});
   // --- Static maps (mapping_worker_static.cpp) ---
   /// A map file read whole (loadStaticMap): publishes one mapping snapshot (its keyframe poses,
@@ -191,7 +191,7 @@ class MappingWorker {
   MappingWorker& operator=(const MappingWorker&) = delete;
 
   /// Null for a saved session without its sequence; for one with, the frames after the session's.
-  const TumSequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
+  const Sequence* sequence() const { return sequence_ ? &*sequence_ : nullptr; }
   /// The folder the map's frames come from (a saved session's as stored; "" when unknown).
   const std::string& sequenceFolder() const { return sequence_folder_; }
 
@@ -278,7 +278,7 @@ class MappingWorker {
   void start();
   int framesTotal() const { return sequence_ ? base_frames_ + static_cast<int>(sequence_->size()) : mapped_; }
 
-  std::optional<TumSequence> sequence_;
+  std::optional<Sequence> sequence_;
   std::shared_ptr<const Session> origin_;  // the saved session the mapper started from, if any
   std::vector<FrameEntry> session_truth_;  // its sequence's frames with ground truth, by time
   int base_frames_ = 0;                    // frames in the map before sequence_'s first entry

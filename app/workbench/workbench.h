@@ -68,7 +68,7 @@ class Workbench {
   /// each, so what mirrors them keys on this too.
   int sessionSerial() const { return state_.session_serial; }
   /// The open sequence (null while none is open, and for a saved session without its frames).
-  const TumSequence* sequence() const { return isOpen() ? state_.worker->sequence() : nullptr; }
+  const Sequence* sequence() const { return isOpen() ? state_.worker->sequence() : nullptr; }
   /// The open static map (null while nothing, a sequence or a session is open).
   const StaticMap* staticMap() const { return state_.staticMap(); }
   /// True while a saved session (no sequence) is open: nothing to play or re-run.

@@ -6,7 +6,7 @@ namespace vdmap {
 
 cv::Mat registerColour(const cv::Mat& rgb, const cv::Mat& depth, const PinholeCamera& depth_camera,
                        const ColourCamera& colour) {
-  CV_Assert(rgb.type() == CV_8UC3 && depth.type() == CV_16UC1 && rgb.size() == depth.size());
+  CV_Assert(rgb.type() == CV_8UC3 && !rgb.empty() && depth.type() == CV_16UC1);
   // The colour camera's view of depth pixel (u, v) at depth z: R * z * ray(u, v) + t, divided by
   // z (projection does not mind the scale): R * ray + t / z, with R * ray linear along a row.
   const Eigen::Matrix3f R = colour.T_colour_depth.linear().cast<float>();

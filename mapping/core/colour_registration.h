@@ -12,21 +12,24 @@
 
 namespace vdmap {
 
-/// A colour camera beside the depth camera: its intrinsics (fx, fy, cx, cy; same image size)
+/// A colour camera beside the depth camera: its intrinsics (fx, fy, cx, cy), its image size
 /// and where it sits, T_colour_depth (depth camera frame -> colour camera frame).
 struct ColourCamera {
   double fx = 525.0, fy = 525.0, cx = 319.5, cy = 239.5;
   Transform T_colour_depth = Transform::Identity();
+  int width = 0, height = 0;  ///< px; 0: the depth camera's size (ScanNet's colour is 1296x968 beside 640x480)
 
   bool operator==(const ColourCamera& o) const {
-    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && T_colour_depth.matrix() == o.T_colour_depth.matrix();
+    return fx == o.fx && fy == o.fy && cx == o.cx && cy == o.cy && width == o.width && height == o.height &&
+           T_colour_depth.matrix() == o.T_colour_depth.matrix();
   }
 };
 
 /// The colour of every depth pixel: its point (from `depth`, raw units of `depth_camera`)
 /// projected into the colour camera and sampled there (bilinear, edges clamped). A pixel without
 /// depth takes the colour along its ray at infinity (the rotation alone), so the image has no
-/// holes for the feature detector to find corners at. `rgb` and `depth` have the camera's size.
+/// holes for the feature detector to find corners at. `depth` has the depth camera's size, `rgb`
+/// the colour camera's; the result has the depth camera's.
 cv::Mat registerColour(const cv::Mat& rgb, const cv::Mat& depth, const PinholeCamera& depth_camera,
                        const ColourCamera& colour);
 

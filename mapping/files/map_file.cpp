@@ -15,6 +15,7 @@
 #include "mapping/core/error.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap {
 namespace fs = std::filesystem;
@@ -22,7 +23,7 @@ namespace fs = std::filesystem;
 namespace {
 
 const char kKinds[] =
-    "expected a sequence folder (rgb.txt), a `vdmap map` folder (global_ellipsoids.ply), a session (.vdmap), an "
+    "expected a sequence (a TUM, 7-Scenes, Replica or ScanNet folder, a ROS 1 bag, an MCAP), a `vdmap map` folder (global_ellipsoids.ply), a session (.vdmap), an "
     "ellipsoid or point PLY, an OctoMap (.bt, .ot) or a view file (.json)";
 
 // The property names of a PLY's vertex element, from its header only (at most 1000 lines).
@@ -374,12 +375,13 @@ MapFileKind detectMapFile(const fs::path& path) {
   std::error_code ec;
   if (!fs::exists(path, ec)) throw InputError(path.string(), "cannot open: no such file or folder");
   const std::string ext = asciiLower(path.extension().string());
+  if (recogniseSequence(path)) return MapFileKind::kSequence;
   if (fs::is_directory(path, ec)) {
-    if (fs::exists(path / "rgb.txt", ec)) return MapFileKind::kSequence;
     if (fs::exists(path / "global_ellipsoids.ply", ec)) return MapFileKind::kMapFolder;
     // A saved session may be stored as a folder in a later format; today it is a file.
     throw InputError(path.string(),
-                     std::string("is a folder with neither rgb.txt nor global_ellipsoids.ply (") + kKinds + ")");
+                     std::string("is a folder that is neither a sequence nor a map folder (global_ellipsoids.ply) (") + kKinds +
+                         ")");
   }
   if (ext == ".vdmap") return MapFileKind::kSession;
   if (ext == ".bt" || ext == ".ot") return MapFileKind::kOctomap;

@@ -16,7 +16,7 @@ namespace vdmap {
 
 /// The kinds detectMapFile tells apart.
 enum class MapFileKind {
-  kSequence,      ///< a folder with rgb.txt (TUM RGB-D layout)
+  kSequence,      ///< a sequence of any kind (mapping/sequence/sequence.h: a folder layout, a bag, an MCAP)
   kMapFolder,     ///< a folder with global_ellipsoids.ply (`vdmap map` output)
   kSession,       ///< a .vdmap file (saved session)
   kEllipsoidPly,  ///< a PLY whose vertices carry covariance fields (cxx ... czz)

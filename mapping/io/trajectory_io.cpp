@@ -1,5 +1,7 @@
 #include "mapping/io/trajectory_io.h"
 
+#include <algorithm>
+
 #include <cmath>
 #include <cstdio>
 #include <stdexcept>
@@ -52,6 +54,23 @@ void writeTumTrajectory(const std::filesystem::path& file, const std::vector<Sta
     text += line;
   }
   writeFileAtomically(file, text);
+}
+
+std::optional<Transform> interpolatePose(const std::vector<StampedPose>& poses, double t, double max_dt) {
+  auto next =
+      std::lower_bound(poses.begin(), poses.end(), t, [](const StampedPose& p, double time) { return p.t < time; });
+  constexpr double kSameTime = 1e-6;
+  if (next != poses.end() && next->t - t < kSameTime) return next->T_W_C;
+  if (next != poses.begin() && t - std::prev(next)->t < kSameTime) return std::prev(next)->T_W_C;
+  if (next == poses.end() || next == poses.begin()) return std::nullopt;
+  const StampedPose& a = *std::prev(next);
+  const StampedPose& b = *next;
+  if (t - a.t > max_dt || b.t - t > max_dt) return std::nullopt;
+  const double s = (t - a.t) / (b.t - a.t);
+  Transform T = Transform::Identity();
+  T.translation() = (1.0 - s) * a.T_W_C.translation() + s * b.T_W_C.translation();
+  T.linear() = Eigen::Quaterniond(a.T_W_C.linear()).slerp(s, Eigen::Quaterniond(b.T_W_C.linear())).toRotationMatrix();
+  return T;
 }
 
 }  // namespace vdmap

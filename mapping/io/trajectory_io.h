@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -25,6 +26,11 @@ struct StampedPose {
 /// a malformed line, a non-finite value, a translation component beyond kMaxPoseDistanceM, a
 /// quaternion whose norm is zero or overflows, or a timestamp out of order.
 std::vector<StampedPose> readTumTrajectory(const std::filesystem::path& file);
+
+/// The pose at time t of a trajectory sorted by time: interpolated between the poses around t
+/// (linear translation, slerp rotation), or nothing when either is more than max_dt away. A pose
+/// within 1 us of t is taken as it is.
+std::optional<Transform> interpolatePose(const std::vector<StampedPose>& poses, double t, double max_dt);
 
 /// Writes a TUM trajectory with `header` as a comment line (atomically: temp file + rename).
 /// Throws std::runtime_error naming the file, and writes nothing, when a pose is not finite.

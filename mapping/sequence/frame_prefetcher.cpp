@@ -1,8 +1,8 @@
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 
 namespace vdmap {
 
-FramePrefetcher::FramePrefetcher(const TumSequence& sequence, std::size_t capacity, Prepare prepare)
+FramePrefetcher::FramePrefetcher(const Sequence& sequence, std::size_t capacity, Prepare prepare)
     : sequence_(sequence), capacity_(capacity < 1 ? 1 : capacity), prepare_(std::move(prepare)),
       worker_([this] { run(); }) {}
 

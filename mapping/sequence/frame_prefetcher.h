@@ -7,7 +7,7 @@
 #include <optional>
 #include <thread>
 
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap {
 
@@ -20,7 +20,7 @@ class FramePrefetcher {
   using Prepare = std::function<void(RgbdFrame&)>;
 
   /// `sequence` must outlive the prefetcher.
-  explicit FramePrefetcher(const TumSequence& sequence, std::size_t capacity = 4, Prepare prepare = {});
+  explicit FramePrefetcher(const Sequence& sequence, std::size_t capacity = 4, Prepare prepare = {});
   ~FramePrefetcher();
   FramePrefetcher(const FramePrefetcher&) = delete;
   FramePrefetcher& operator=(const FramePrefetcher&) = delete;
@@ -32,7 +32,7 @@ class FramePrefetcher {
  private:
   void run();
 
-  const TumSequence& sequence_;
+  const Sequence& sequence_;
   const std::size_t capacity_;
   const Prepare prepare_;
   std::mutex mutex_;

@@ -1,4 +1,4 @@
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 
 #include <algorithm>
 #include <charconv>
@@ -9,57 +9,18 @@
 #include <stdexcept>
 
 #include "mapping/core/error.h"
-#include "mapping/io/camera_config.h"
 #include "mapping/io/image_codec.h"
-#include "mapping/io/text_list.h"
-#include "mapping/io/trajectory_io.h"
+#include "mapping/ros/recording.h"
+#include "mapping/sequence/detail/listing.h"
 
 namespace fs = std::filesystem;
 
 namespace vdmap {
 namespace {
 
-struct Stamped {
-  double t;
-  fs::path path;
-  fs::path list;  // the list file that named it, for errors
-  int line;
-};
-
-std::vector<Stamped> readImageList(const fs::path& folder, const char* name) {
-  const fs::path file = folder / name;
-  std::vector<Stamped> list;
-  double previous = -INFINITY;
-  for (const ListLine& line : readListFile(file, 2, "timestamp path")) {
-    const double t = parseListNumber(line.tokens[0], file, line.number, "the timestamp");
-    checkIncreasing(t, &previous, file, line.number);
-    list.push_back({t, folder / line.tokens[1], file, line.number});
-  }
-  return list;
-}
-
-// Pose at time t: interpolated between the ground-truth poses around t (linear translation,
-// slerp rotation), or nothing when either is more than max_dt away.
-std::optional<Transform> poseAt(const std::vector<StampedPose>& poses, double t, double max_dt) {
-  auto next =
-      std::lower_bound(poses.begin(), poses.end(), t, [](const StampedPose& p, double time) { return p.t < time; });
-  constexpr double kSameTime = 1e-6;
-  if (next != poses.end() && next->t - t < kSameTime) return next->T_W_C;
-  if (next != poses.begin() && t - std::prev(next)->t < kSameTime) return std::prev(next)->T_W_C;
-  if (next == poses.end() || next == poses.begin()) return std::nullopt;
-  const StampedPose& a = *std::prev(next);
-  const StampedPose& b = *next;
-  if (t - a.t > max_dt || b.t - t > max_dt) return std::nullopt;
-  const double s = (t - a.t) / (b.t - a.t);
-  Transform T = Transform::Identity();
-  T.translation() = (1.0 - s) * a.T_W_C.translation() + s * b.T_W_C.translation();
-  T.linear() = Eigen::Quaterniond(a.T_W_C.linear()).slerp(s, Eigen::Quaterniond(b.T_W_C.linear())).toRotationMatrix();
-  return T;
-}
-
 // An image a list names must be a regular file. A name the file system cannot even look up (a
 // symbolic-link loop, a name too long) is the list's error too, not a std::filesystem exception.
-void checkImage(const Stamped& image, const fs::path& folder) {
+void checkImage(const detail::ListedImage& image, const fs::path& folder) {
   std::error_code ec;
   if (fs::is_regular_file(image.path, ec)) return;
   const bool missing = !ec || ec == std::errc::no_such_file_or_directory || ec == std::errc::not_a_directory;
@@ -69,6 +30,7 @@ void checkImage(const Stamped& image, const fs::path& folder) {
   else if (!ec && type != fs::file_type::not_found) what = "is not a regular file";
   std::string name = image.path.lexically_relative(folder).string();
   if (name.size() > 80) name = name.substr(0, 77) + "...";
+  if (image.line == 0) throw InputError(image.path.string(), what);
   throw InputError(image.list.string(), image.line, "image '" + name + "' " + what);
 }
 
@@ -145,70 +107,93 @@ std::string frameRangeText(const FrameRange& range) {
   return std::to_string(range.first) + ":" + (range.last < 0 ? std::string() : std::to_string(range.last));
 }
 
-// A function try block: whatever the file system refuses to look up (a symbolic-link loop in the
-// folder's name, say) is reported as bad input like every other problem with the sequence.
-TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& options) try {
-  if (!fs::is_directory(folder))
-    throw InputError(folder.string(), fs::exists(folder) ? "is not a folder (expected a TUM RGB-D sequence folder)"
-                                                         : "no such sequence folder");
-  TumSequence seq;
-  seq.folder_ = folder;
+std::string sequenceKindName(SequenceKind kind) {
+  switch (kind) {
+    case SequenceKind::kTumFolder: return "TUM RGB-D folder";
+    case SequenceKind::kSevenScenes: return "7-Scenes sequence folder";
+    case SequenceKind::kReplica: return "Replica scene as NICE-SLAM renders it";
+    case SequenceKind::kScanNet: return "ScanNet export";
+    case SequenceKind::kRos1Bag: return "ROS 1 bag";
+    case SequenceKind::kMcap: return "ROS 2 recording (MCAP)";
+  }
+  return "sequence";
+}
+
+std::optional<std::pair<SequenceKind, std::string>> recogniseSequence(const fs::path& path) {
+  std::error_code ec;
+  if (fs::is_directory(path, ec)) return detail::recogniseFolder(path);
+  switch (ros::recordingFormat(path)) {
+    case ros::RecordingFormat::kRos1Bag: return std::pair{SequenceKind::kRos1Bag, std::string("starts with #ROSBAG V2.0")};
+    case ros::RecordingFormat::kMcap: return std::pair{SequenceKind::kMcap, std::string("starts with MCAP's magic bytes")};
+    default: return std::nullopt;
+  }
+}
+
+namespace {
+
+detail::Listing listSequence(const fs::path& path, const SequenceOptions& options) {
+  if (!fs::exists(path)) throw InputError(path.string(), "no such sequence folder or recording");
+  if (!fs::is_directory(path)) {
+    const ros::RecordingFormat format = ros::recordingFormat(path);
+    if (format == ros::RecordingFormat::kNone)
+      throw InputError(path.string(), "is neither a sequence folder nor a recording (a ROS 1 bag or an MCAP file)");
+    detail::Listing listing = detail::listRecording(path, options);
+    listing.reason = recogniseSequence(path)->second;
+    return listing;
+  }
+  const auto kind = detail::recogniseFolder(path);
+  if (!kind)
+    throw InputError(path.string(),
+                     "is not a sequence vdmap reads: expected a TUM RGB-D folder (rgb.txt and depth.txt, or "
+                     "associations.txt), a 7-Scenes sequence (frame-NNNNNN.depth.png), NICE-SLAM's Replica (results/ "
+                     "and traj.txt), a ScanNet export (color/, depth/, pose/, intrinsic/), a ROS 1 bag or an MCAP file");
+  detail::Listing listing;
   try {
-    CameraChoice choice = chooseCamera(folder, options.camera_preset);
-    seq.camera_ = choice.camera;
-    seq.camera_source_ = choice.source;
-    seq.camera_guessed_ = choice.guessed;
-    seq.colour_ = choice.colour;
-    if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
+    switch (kind->first) {
+      case SequenceKind::kSevenScenes: listing = detail::listSevenScenes(path, options); break;
+      case SequenceKind::kReplica: listing = detail::listReplica(path, options); break;
+      case SequenceKind::kScanNet: listing = detail::listScanNet(path, options); break;
+      default: listing = detail::listTumFolder(path, options); break;
+    }
   } catch (const std::invalid_argument& e) {
     throw InputError("--camera", e.what());
   }
+  listing.reason = kind->second;
+  return listing;
+}
 
-  // Depth list with its rgb partner: from associations.txt when present, else by timestamps.
-  struct Pair {
-    Stamped depth;
-    std::optional<Stamped> rgb;
-  };
-  std::vector<Pair> pairs;
-  const fs::path assoc_file = folder / "associations.txt";
-  if (fs::exists(assoc_file)) {
-    double previous = -INFINITY;
-    for (const ListLine& line : readListFile(assoc_file, 4, "t_rgb rgb_path t_depth depth_path")) {
-      const double t_rgb = parseListNumber(line.tokens[0], assoc_file, line.number, "the rgb timestamp");
-      const double t_depth = parseListNumber(line.tokens[2], assoc_file, line.number, "the depth timestamp");
-      checkTimestamp(t_rgb, assoc_file, line.number);
-      checkIncreasing(t_depth, &previous, assoc_file, line.number);
-      pairs.push_back({{t_depth, folder / line.tokens[3], assoc_file, line.number},
-                       Stamped{t_rgb, folder / line.tokens[1], assoc_file, line.number}});
-    }
-  } else {
-    const std::vector<Stamped> rgb = readImageList(folder, "rgb.txt");
-    if (rgb.empty()) throw InputError((folder / "rgb.txt").string(), "lists no frames");
-    for (const Stamped& depth : readImageList(folder, "depth.txt")) {
-      auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t, [](const Stamped& s, double t) { return s.t < t; });
-      std::optional<Stamped> best;
-      for (auto c : {it, it == rgb.begin() ? rgb.end() : std::prev(it)}) {
-        if (c == rgb.end() || std::abs(c->t - depth.t) > options.max_rgb_dt_s) continue;
-        if (!best || std::abs(c->t - depth.t) < std::abs(best->t - depth.t)) best = *c;
-      }
-      pairs.push_back({depth, best});
-    }
-  }
-  const fs::path gt_file = folder / "groundtruth.txt";
-  seq.has_ground_truth_ = fs::exists(gt_file);
-  if (!seq.has_ground_truth_ && options.require_poses)
-    throw InputError(gt_file.string(),
+}  // namespace
+
+// A function try block: whatever the file system refuses to look up (a symbolic-link loop in the
+// folder's name, say) is reported as bad input like every other problem with the sequence.
+Sequence Sequence::open(const fs::path& folder, const SequenceOptions& options) try {
+  detail::Listing listing = listSequence(folder, options);
+  Sequence seq;
+  seq.folder_ = folder;
+  seq.kind_ = listing.kind;
+  seq.kind_reason_ = listing.reason;
+  seq.camera_ = listing.camera.camera;
+  seq.camera_source_ = listing.camera.source;
+  seq.camera_guessed_ = listing.camera.guessed;
+  seq.colour_ = listing.camera.colour;
+  if (seq.colour_) seq.camera_source_ += "; colour registered to depth";
+  seq.has_ground_truth_ = listing.has_poses;
+  if (listing.has_poses) seq.poses_source_ = listing.poses_source;
+  seq.notes_ = listing.notes;
+  seq.decoder_ = listing.decoder;
+  const bool require_poses = options.poses == SequenceOptions::Poses::kRecorded ||
+                             (options.poses == SequenceOptions::Poses::kAuto && listing.has_poses);
+  if (!listing.has_poses && require_poses)
+    throw InputError(listing.poses_file.string(),
                      "no such file; --poses gt needs ground-truth poses (--poses track estimates them)");
-  const std::vector<StampedPose> poses =
-      seq.has_ground_truth_ ? readTumTrajectory(gt_file) : std::vector<StampedPose>{};
 
-  seq.listed_ = static_cast<int>(pairs.size());
-  if (pairs.empty())
-    throw InputError((fs::exists(assoc_file) ? assoc_file : folder / "depth.txt").string(), "lists no frames");
+  const std::vector<detail::ListedFrame>& frames = listing.frames;
+  seq.listed_ = static_cast<int>(frames.size());
+  if (frames.empty()) throw InputError(listing.list_file.string(), "lists no frames");
   if (options.continues) {
     const int k = options.continues->last_frame_index;
     checkContinuation(folder, seq.listed_,
-                      k >= 0 && k < seq.listed_ ? std::optional<double>(pairs[k].depth.t) : std::nullopt,
+                      k >= 0 && k < seq.listed_ ? std::optional<double>(frames[k].depth.t) : std::nullopt,
                       options.frames.first, *options.continues);
   }
   if (options.frames.first >= seq.listed_)
@@ -222,23 +207,22 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   seq.range_ = {options.frames.first,
                 options.frames.last < 0 ? seq.listed_ : std::min(options.frames.last, seq.listed_)};
   for (int i = 0; i < seq.listed_; ++i) {
-    const Pair& pair = pairs[i];
+    const detail::ListedFrame& frame = frames[i];
     if (i < options.frames.first || (options.frames.last >= 0 && i >= options.frames.last)) {
       ++seq.dropped_.outside_range;
       continue;
     }
-    if (!pair.rgb) {
+    if (!frame.rgb) {
       ++seq.dropped_.no_rgb;
       continue;
     }
-    const std::optional<Transform> pose = poseAt(poses, pair.depth.t, options.max_pose_dt_s);
-    if (!pose && options.require_poses) {
+    if (!frame.pose && require_poses) {
       ++seq.dropped_.no_pose;
       continue;
     }
-    for (const Stamped* image : {&pair.depth, &*pair.rgb}) checkImage(*image, folder);
-    seq.entries_.push_back({i, pair.depth.t, pair.rgb->t, pair.rgb->path, pair.depth.path,
-                            pose.value_or(Transform::Identity()), pose.has_value()});
+    for (const detail::ListedImage* image : {&frame.depth, &*frame.rgb}) checkImage(*image, folder);
+    seq.entries_.push_back({i, frame.depth.t, frame.rgb->t, frame.rgb->path, frame.depth.path,
+                            frame.pose.value_or(Transform::Identity()), frame.pose.has_value()});
   }
   if (seq.entries_.empty())
     throw InputError(folder.string(),
@@ -252,7 +236,7 @@ TumSequence TumSequence::open(const fs::path& folder, const SequenceOptions& opt
   throw InputError(e.path1().string(), e.code().message());
 }
 
-RgbdFrame TumSequence::load(std::size_t i) const {
+RgbdFrame Sequence::load(std::size_t i) const {
   const FrameEntry& e = entries_.at(i);
   RgbdFrame frame;
   frame.index = e.index;
@@ -260,16 +244,21 @@ RgbdFrame TumSequence::load(std::size_t i) const {
   frame.T_W_C = e.T_W_C;
 
   const cv::Size size(camera_.width, camera_.height);
+  const cv::Size rgb_size = colour_ && colour_->width > 0 ? cv::Size(colour_->width, colour_->height) : size;
   std::string rgb_bytes, depth_bytes;
-  frame.rgb = readColorImage(e.rgb_path, size, colour_ ? nullptr : &rgb_bytes);
-  frame.depth = readDepthImage(e.depth_path, size, &depth_bytes);
+  if (decoder_) {
+    decoder_->decode(e.index, &frame.depth, &frame.rgb, colour_ ? nullptr : &rgb_bytes);
+  } else {
+    frame.rgb = readColorImage(e.rgb_path, rgb_size, colour_ ? nullptr : &rgb_bytes);
+    frame.depth = readDepthImage(e.depth_path, size, &depth_bytes);
+  }
   if (colour_) {
     frame.rgb = registerColour(frame.rgb, frame.depth, camera_, *colour_);
     frame.rgb_resampled = true;
   } else {
-    frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
+    if (!rgb_bytes.empty()) frame.rgb_file = std::make_shared<const std::string>(std::move(rgb_bytes));
   }
-  frame.depth_file = std::make_shared<const std::string>(std::move(depth_bytes));
+  if (!depth_bytes.empty()) frame.depth_file = std::make_shared<const std::string>(std::move(depth_bytes));
   return frame;
 }
 

@@ -1,5 +1,6 @@
 #pragma once
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -9,6 +10,27 @@
 #include "mapping/core/rgbd_frame.h"
 
 namespace vdmap {
+
+namespace detail {
+class FrameDecoder;
+}
+
+/// What a sequence was read from. Sequence::open() recognises it by content.
+enum class SequenceKind {
+  kTumFolder,    ///< TUM RGB-D layout: rgb.txt + depth.txt (or associations.txt), groundtruth.txt
+  kSevenScenes,  ///< a 7-Scenes sequence folder: frame-NNNNNN.{color.png|color.jpg,depth.png,pose.txt}
+  kReplica,      ///< Replica as NICE-SLAM renders it: results/frameNNNNNN.jpg, results/depthNNNNNN.png, traj.txt
+  kScanNet,      ///< ScanNet's exported frames: color/N.jpg, depth/N.png, pose/N.txt, intrinsic/
+  kRos1Bag,      ///< a ROS 1 bag
+  kMcap,         ///< a ROS 2 recording in MCAP
+};
+
+/// "TUM RGB-D folder", "7-Scenes sequence folder", ...: for messages and `vdmap info`.
+std::string sequenceKindName(SequenceKind kind);
+
+/// The kind of sequence at `path` by its content (a folder's files, a file's first bytes) and
+/// why, e.g. {kTumFolder, "has associations.txt"}; nullopt when it is none (or does not exist).
+std::optional<std::pair<SequenceKind, std::string>> recogniseSequence(const std::filesystem::path& path);
 
 /// Which frames of a sequence to use: indices into the depth list (depth.txt, or
 /// associations.txt when present), half-open [first, last). last < 0 means to the end.
@@ -42,17 +64,28 @@ struct SequenceOptions {
   bool cut_range_at_end = false;
   double max_rgb_dt_s = 0.02;  ///< depth-rgb association window (docs/method.md 1)
   double max_pose_dt_s = 0.1;  ///< pose interpolation window
-  /// true (--poses gt): groundtruth.txt must exist and frames without a pose are dropped.
-  /// false (--poses track): groundtruth.txt is optional; every frame is kept, those without a
-  /// ground-truth pose with has_pose = false and the identity.
-  bool require_poses = true;
+  /// Whose poses the frames get (the recorded ones: groundtruth.txt, a data set's pose files).
+  enum class Poses {
+    kRecorded,  ///< (--poses gt) the sequence must record poses; frames without one are dropped
+    kOptional,  ///< (--poses track) every frame is kept, those without a recorded pose with has_pose = false
+    kAuto,      ///< (no --poses) kRecorded when the sequence records poses, else kOptional
+  };
+  Poses poses = Poses::kRecorded;
+  /// Recordings (ROS 1 bags, MCAP): the topics to read, each found by type and name when empty
+  /// (docs/cli.md, Sequences), and where poses come from.
+  struct Topics {
+    std::string depth, rgb, info;  ///< --depth-topic, --rgb-topic, --info-topic
+    std::string pose;              ///< --pose-topic: geometry_msgs/PoseStamped or nav_msgs/Odometry
+    std::string world_frame, camera_frame;  ///< --pose-frames WORLD:CAMERA (tf)
+  } topics;
   /// Set: the sequence continues a session, so its folder must have the session's folder name
   /// (a moved recording continues) and its depth frame last_frame_index the session's
   /// last_timestamp; else open() throws InputError saying what differs.
   std::optional<SequenceContinuation> continues;
 };
 
-/// One usable frame: an rgb/depth pair with an interpolated pose. Paths are absolute.
+/// One usable frame: an rgb/depth pair with its recorded (interpolated) pose. Paths are those of
+/// the images (folder kinds).
 struct FrameEntry {
   int index = 0;         ///< position in the depth list
   double t_depth = 0.0;  ///< s
@@ -70,17 +103,23 @@ struct DropCounts {
   int outside_range = 0;  ///< outside --frames
 };
 
-/// A TUM RGB-D layout sequence (docs/method.md 1). Opening parses the lists, associates and
-/// interpolates poses and checks that every image file exists; images are decoded lazily by
-/// load(), which is const and safe to call from several threads.
-class TumSequence {
+/// The one source of RGB-D frames (docs/cli.md "Sequences"): a folder in one of the layouts of
+/// SequenceKind, recognised by its content. Opening lists the depth frames in time order,
+/// associates colour, takes (interpolates) the recorded poses and checks that every image file
+/// exists; images are decoded lazily by load(), which is const and safe to call from several
+/// threads.
+class Sequence {
  public:
   /// Throws InputError ("<file>:<line>: <what was expected>") on any malformed input,
-  /// ("FOLDER: --frames ...") for a range outside the listed frames, and ("FOLDER: ...") for a
+  /// ("PATH: --frames ...") for a range outside the listed frames, and ("PATH: ...") for a
   /// sequence that is not the one options.continues stopped on, or that it already covers.
-  static TumSequence open(const std::filesystem::path& folder, const SequenceOptions& options = {});
+  static Sequence open(const std::filesystem::path& path, const SequenceOptions& options = {});
 
+  /// The folder (or recording file) the sequence was opened from.
   const std::filesystem::path& folder() const { return folder_; }
+  SequenceKind kind() const { return kind_; }
+  /// Why open() took it for that kind, e.g. "has rgb.txt and depth.txt".
+  const std::string& kindReason() const { return kind_reason_; }
   const PinholeCamera& camera() const { return camera_; }
   const std::string& cameraSource() const { return camera_source_; }
   /// True when no --camera or camera file chose the camera: a preset was guessed (chooseCamera).
@@ -91,8 +130,14 @@ class TumSequence {
   const std::vector<FrameEntry>& entries() const { return entries_; }
   std::size_t size() const { return entries_.size(); }
   int listedDepthFrames() const { return listed_; }
-  /// True when the folder has groundtruth.txt (its poses are in the entries that have one).
+  /// True when the sequence records poses (groundtruth.txt, a data set's pose files; they are in
+  /// the entries that have one).
   bool hasGroundTruth() const { return has_ground_truth_; }
+  /// Where the recorded poses come from ("groundtruth.txt", "frame-NNNNNN.pose.txt", ...), empty
+  /// when there are none.
+  const std::string& posesSource() const { return poses_source_; }
+  /// What was chosen and why, a line each (a recording's topics and frames), for `vdmap info`.
+  const std::vector<std::string>& notes() const { return notes_; }
   /// The depth-list range the sequence was opened with, its end resolved: [first, last) with
   /// last <= listedDepthFrames(). What verbs echo as "frames A:B".
   FrameRange frameRange() const { return range_; }
@@ -100,12 +145,17 @@ class TumSequence {
 
   /// Decodes frame i (0 <= i < size()) through image_codec.h. Throws InputError naming the file
   /// on a damaged or truncated image, a depth image that is not 16-bit single channel, or an
-  /// image whose size differs from the camera's. With a colour camera, the colour image is
+  /// image whose size differs from its camera's. With a colour camera, the colour image is
   /// registered to the depth (and rgb_file left empty: the file holds the unregistered pixels).
   RgbdFrame load(std::size_t i) const;
 
  private:
   std::filesystem::path folder_;
+  SequenceKind kind_ = SequenceKind::kTumFolder;
+  std::string kind_reason_;
+  std::string poses_source_;
+  std::vector<std::string> notes_;
+  std::shared_ptr<const detail::FrameDecoder> decoder_;  // recordings; null: image files
   PinholeCamera camera_;
   std::string camera_source_;
   bool camera_guessed_ = false;

@@ -23,7 +23,7 @@
 #include "mapping/io/camera_config.h"
 #include "mapping/io/image_codec.h"
 #include "mapping/io/trajectory_io.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -78,7 +78,7 @@ void setU32(std::string* bytes, std::size_t at, std::uint32_t v) {
 const std::vector<Input>& inputs() {
   static const std::vector<Input> all = {
       {"sequence", "seq", "tum_list", [](const fs::path& d) { test::writeTinySequence(d / "seq"); },
-       [](const fs::path& f) { TumSequence::open(f).load(0); }},
+       [](const fs::path& f) { Sequence::open(f).load(0); }},
       {"trajectory", "poses.txt", "pose",
        [](const fs::path& d) { writeText(d / "poses.txt", "# t tx ty tz qx qy qz qw\n0.5 1 2 3 0 0 0 1\n"); },
        [](const fs::path& f) { readTumTrajectory(f); }},

@@ -10,7 +10,7 @@
 #include "mapping/files/ply_reader.h"
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/colormap.h"
 #include "render/map_scene.h"
@@ -560,7 +560,7 @@ TEST(SynthCli, WritesASequenceAndRejectsBadTrajectories) {
   auto r = runVdmap("synth" + mesh + " --trajectory '" + (tmp / "traj.txt").string() +
                     "' --camera tum-default --noise none --frames 1: --out '" + (tmp / "seq").string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  const TumSequence seq = TumSequence::open(tmp / "seq");
+  const Sequence seq = Sequence::open(tmp / "seq");
   ASSERT_EQ(seq.size(), 2u);
   const RgbdFrame f = seq.load(0);
   EXPECT_EQ(f.depth.at<std::uint16_t>(240, 320), 10000);  // 2 m at depth scale 5000, noise off

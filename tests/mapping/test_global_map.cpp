@@ -9,7 +9,7 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "tests/support/box_room_keyframes.h"
 
@@ -470,7 +470,7 @@ TEST(GlobalMapRealData, KitchenRatioInRangeAndSameWithOneAndTwoThreads) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
   SequenceOptions options;
   options.frames = {0, 120};
-  const TumSequence seq = TumSequence::open(dir, options);
+  const Sequence seq = Sequence::open(dir, options);
   Mapper mapper(seq.camera());
   for (std::size_t i = 0; i < seq.size(); i += 2) mapper.addFrame(seq.load(i));
   const KeyframeGraph& graph = mapper.graph();

@@ -14,7 +14,7 @@
 #include "mapping/core/error.h"
 #include "mapping/io/compressed_image.h"
 #include "mapping/io/image_codec.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "tests/support/test_util.h"
 
@@ -120,7 +120,7 @@ TEST(ImageDecode, GivesOpenCvsPixels) {
 
 TEST(ImageDecode, GivesOpenCvsPixelsOnSevenScenes) {
   VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
-  const TumSequence seq = TumSequence::open(folder);
+  const Sequence seq = Sequence::open(folder);
   for (const std::size_t i : {std::size_t{0}, seq.size() / 2, seq.size() - 1}) {
     const RgbdFrame frame = seq.load(i);
     cv::Mat expected;
@@ -176,7 +176,7 @@ TEST(CompressedImage, HoldsTheSourceFilesAndDecodesThemToTheFramesPixels) {
   }
   // Through the sequence and the mapper: the keyframe keeps the loaded frame's files.
   test::writeTinySequence(dir / "seq", 2);
-  const TumSequence seq = TumSequence::open(dir / "seq");
+  const Sequence seq = Sequence::open(dir / "seq");
   const RgbdFrame frame = seq.load(0);
   ASSERT_TRUE(frame.rgb_file && frame.depth_file);
   Mapper mapper(seq.camera());

@@ -5,7 +5,7 @@
 
 #include <gtest/gtest.h>
 
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "tests/support/local_map_oracle.h"
@@ -14,10 +14,10 @@
 namespace vdmap {
 namespace {
 
-TumSequence openKitchen(const std::filesystem::path& dir, int first, int last) {
+Sequence openKitchen(const std::filesystem::path& dir, int first, int last) {
   SequenceOptions options;
   options.frames = {first, last};
-  return TumSequence::open(dir, options);
+  return Sequence::open(dir, options);
 }
 
 // 30 frames into one keyframe: the kept ellipsoid means reproject into frame 30's depth with a
@@ -25,7 +25,7 @@ TumSequence openKitchen(const std::filesystem::path& dir, int first, int last) {
 // the poses being KinectFusion's; averaging must not make it worse than 1 cm).
 TEST(LocalMapRealData, ThirtyFramesReprojectIntoFrame30) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
-  const TumSequence seq = openKitchen(dir, 0, 31);
+  const Sequence seq = openKitchen(dir, 0, 31);
   ASSERT_EQ(seq.size(), 31u);
   const PinholeCamera& cam = seq.camera();
   KeyframeContainer container(cam, 5);
@@ -58,7 +58,7 @@ TEST(LocalMapRealData, ThirtyFramesReprojectIntoFrame30) {
 // moving camera): same cells and counts, statistics within float storage precision.
 TEST(LocalMapRealData, FastIntegratorEqualsReference) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
-  const TumSequence seq = openKitchen(dir, 0, 6);
+  const Sequence seq = openKitchen(dir, 0, 6);
   const PinholeCamera& cam = seq.camera();
   KeyframeContainer container(cam, 5);
   test::ReferenceMap reference;

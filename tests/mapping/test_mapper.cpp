@@ -6,7 +6,7 @@
 
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/pipeline/mapper.h"
 #include "tests/support/test_util.h"
@@ -198,7 +198,7 @@ TEST(Mapper, FeaturesComputedForAnotherMapperAreExtractedAgain) {
 
 TEST(MapperRealData, SevenScenesKeyframeCountAndRepeatability) {
   VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
-  const TumSequence seq = TumSequence::open(folder);
+  const Sequence seq = Sequence::open(folder);
   // The second run computes the features on the prefetch thread, as vdmap map does.
   auto run = [&](bool ahead) {
     Mapper mapper(seq.camera());

@@ -9,7 +9,7 @@
 #include <gtest/gtest.h>
 
 #include "mapping/io/camera_config.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/keyframe/keyframe_selector.h"
 #include "mapping/keyframe/projection_matcher.h"
 #include "tests/support/test_util.h"
@@ -143,7 +143,7 @@ TEST(ProjectionMatcherRealData, KeyframeDecisionsAgreeWithTheOracleOn7Scenes) {
   VDMAP_REQUIRE_SHARED_DATA(dir, "7scenes-redkitchen");
   SequenceOptions options;
   options.frames = {0, 200};
-  const TumSequence seq = TumSequence::open(dir, options);
+  const Sequence seq = Sequence::open(dir, options);
   const PinholeCamera& camera = seq.camera();
   const FeatureExtractor extractor;
   const KeyframeParams params;

@@ -11,8 +11,8 @@
 
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/files/session_file.h"
-#include "mapping/io/frame_prefetcher.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/frame_prefetcher.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/local_map/sensor_model.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/tracking/map_registration.h"
@@ -896,7 +896,7 @@ TEST(TrackingCli, ASequenceWithoutGroundTruthMapsWithTrackedPoses) {
 // verify and missed it; ranked by the features re-observed within the drift margin it closes.
 TEST(TrackingRealData, SevenScenesClosesTheLoopAtItsEnd) {
   VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
-  const TumSequence seq = TumSequence::open(folder);
+  const Sequence seq = Sequence::open(folder);
   MapperParams params;
   params.poses = PoseSource::kTrack;
   Mapper mapper(seq.camera(), params);

@@ -8,7 +8,7 @@
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
@@ -19,7 +19,7 @@ namespace {
 TEST(BuiltinScene, TheWalkBackToTheStartRevisitsTheFirstKeyframes) {
   test::TempDir dir;
   render::writeBuiltinSequence(dir / "builtin");
-  const TumSequence seq = TumSequence::open(dir / "builtin");
+  const Sequence seq = Sequence::open(dir / "builtin");
   Mapper mapper(seq.camera());
   FramePrefetcher frames(seq);
   FrameReport last;
@@ -46,7 +46,7 @@ TEST(BuiltinScene, TheWalkBackToTheStartRevisitsTheFirstKeyframes) {
 TEST(BuiltinScene, JointRefinementOfTrackedPosesBringsTheMapCloserToTheMesh) {
   test::TempDir dir;
   render::writeBuiltinSequence(dir / "builtin", {.frames = 150});
-  const TumSequence seq = TumSequence::open(dir / "builtin");
+  const Sequence seq = Sequence::open(dir / "builtin");
   const ColoredTriangleMesh mesh = readPlyMesh(dir / "builtin" / "mesh.ply");
   std::vector<StampedPose> truth;
   for (const FrameEntry& e : seq.entries()) truth.push_back({e.t_depth, e.T_W_C});

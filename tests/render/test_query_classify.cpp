@@ -13,7 +13,7 @@
 #include <vector>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/io/frame_prefetcher.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/detail/keyframe_views.h"
@@ -170,7 +170,7 @@ TEST(QueryClassify, FastPathMatchesTheOracleOnTheBoxRoom) {
 
 TEST(QueryClassify, FastPathMatchesTheOracleOnABuiltinSceneMap) {
   // One lap in 40 frames: large steps between frames, so several keyframes around the table.
-  const TumSequence seq = TumSequence::open(test::builtinSequence(40));
+  const Sequence seq = Sequence::open(test::builtinSequence(40));
   Mapper mapper(seq.camera());
   FramePrefetcher frames(seq);
   while (auto f = frames.next()) mapper.addFrame(*f);

@@ -10,7 +10,7 @@
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/io/trajectory_io.h"
-#include "mapping/io/tum_sequence.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/synth/builtin_scene.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
@@ -53,7 +53,7 @@ double quantile(std::vector<double>& values, double q) {
 TEST(Synth, ReplicaMeshReproducesReferenceDepth) {
   VDMAP_REQUIRE_SHARED_DATA(data, "replica-office0");
   const ColoredTriangleMesh mesh = readPlyMesh(data / "reference" / "office0_mesh.ply");
-  const TumSequence seq = TumSequence::open(data);
+  const Sequence seq = Sequence::open(data);
   const PinholeCamera camera = cameraPreset("replica");
   std::unique_ptr<render::Context> context = render::createOffscreenContext();
   render::MeshViewRenderer renderer(*context, mesh, seq.camera());
@@ -117,7 +117,7 @@ TEST(Synth, BuiltinSceneIsAReadableSequenceThatRevisitsItsStart) {
   EXPECT_GT(scene.mesh.triangles.size(), 10000u);
   test::TempDir tmp;
   render::writeBuiltinSequence(tmp / "builtin", {.frames = 12});
-  const TumSequence seq = TumSequence::open(tmp / "builtin");
+  const Sequence seq = Sequence::open(tmp / "builtin");
   ASSERT_EQ(seq.size(), 12u);
   EXPECT_EQ(seq.camera().width, 640);
   const RgbdFrame frame = seq.load(5);

@@ -54,7 +54,7 @@ MapperParams tracked() {
 TEST(Figures, TrackingErrorEqualsVdmapEvalOnTheExportedTrajectory) {
   test::TempDir dir;
   const fs::path seq = boxRoomWithFrameStampedTruth(dir, 70);
-  MappingWorker worker(TumSequence::open(seq), tracked(), GlobalMapParams{});
+  MappingWorker worker(Sequence::open(seq), tracked(), GlobalMapParams{});
   worker.play();
   worker.waitIdle();
   const auto mapping = worker.mapping();
@@ -95,7 +95,7 @@ TEST(Figures, TrackingErrorEqualsVdmapEvalOnTheExportedTrajectory) {
 TEST(Figures, GroundTruthPosesHaveNoTrackingError) {
   test::TempDir dir;
   test::writeBoxRoomSequence(dir / "seq", 8);
-  MappingWorker worker(TumSequence::open(dir / "seq"), MapperParams{}, GlobalMapParams{});
+  MappingWorker worker(Sequence::open(dir / "seq"), MapperParams{}, GlobalMapParams{});
   worker.play();
   worker.waitIdle();
   EXPECT_FALSE(trackingError(*worker.mapping()).valid);
@@ -107,7 +107,7 @@ TEST(Figures, LastOptimisationIsTheRefinementOrTheNewestLoop) {
   test::TempDir dir;
   test::writeBoxRoomSequence(dir / "seq", 70);
   {
-    MappingWorker worker(TumSequence::open(dir / "seq"), tracked(), GlobalMapParams{}, std::nullopt);
+    MappingWorker worker(Sequence::open(dir / "seq"), tracked(), GlobalMapParams{}, std::nullopt);
     worker.play();
     worker.waitIdle();
     const auto mapping = worker.mapping();
@@ -117,7 +117,7 @@ TEST(Figures, LastOptimisationIsTheRefinementOrTheNewestLoop) {
   }
   MapRefinementParams joint;
   joint.method = MapRefinementMethod::kJoint;
-  MappingWorker worker(TumSequence::open(dir / "seq"), tracked(), GlobalMapParams{}, joint);
+  MappingWorker worker(Sequence::open(dir / "seq"), tracked(), GlobalMapParams{}, joint);
   worker.play();
   worker.waitIdle();
   const LastOptimisation& last = worker.mapping()->last_optimisation;

@@ -1339,7 +1339,7 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
   joint.method = MapRefinementMethod::kJoint;
   for (const std::optional<MapRefinementParams>& refine :
        {std::optional(joint), std::optional<MapRefinementParams>()}) {
-    const TumSequence sequence = openSequence({(dir / "seq").string(), "", "", ""});
+    const Sequence sequence = openSequence({(dir / "seq").string(), "", "", ""});
     MapperParams params = Settings{}.mapper;
     params.poses = PoseSource::kTrack;
     Mapper reference(sequence.camera(), params);

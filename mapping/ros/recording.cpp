@@ -1,0 +1,20 @@
+#include "mapping/ros/recording.h"
+
+#include <cstring>
+#include <fstream>
+
+namespace vdmap::ros {
+
+RecordingFormat recordingFormat(const std::filesystem::path& file) {
+  static constexpr char kBag[] = "#ROSBAG V2.0\n";
+  static constexpr char kMcap[] = "\x89MCAP0\r\n";
+  char head[16] = {};
+  std::ifstream in(file, std::ios::binary);
+  in.read(head, sizeof head);
+  const auto got = static_cast<std::size_t>(in.gcount());
+  if (got >= sizeof kBag - 1 && std::memcmp(head, kBag, sizeof kBag - 1) == 0) return RecordingFormat::kRos1Bag;
+  if (got >= sizeof kMcap - 1 && std::memcmp(head, kMcap, sizeof kMcap - 1) == 0) return RecordingFormat::kMcap;
+  return RecordingFormat::kNone;
+}
+
+}  // namespace vdmap::ros

@@ -1,0 +1,78 @@
+// A ROS 1 bag and an MCAP of 7-Scenes frames (../shared/data/bags, written by independent tools)
+// read as the TUM folder's frames: same stamps, depth to the millimetre, colour, and the tf poses
+// equal to groundtruth.txt; the RealSense recording with its Depth Units and no poses.
+#include <gtest/gtest.h>
+
+#include "mapping/core/error.h"
+#include "mapping/sequence/sequence.h"
+#include "tests/support/test_util.h"
+
+namespace vdmap {
+namespace {
+
+namespace fs = std::filesystem;
+
+// The recordings hold every 5th of the folder's frames 0-149, stamped 1.6e9 s later (the bag).
+void expectFolderFrames(const Sequence& rec, double stamp_offset, int max_colour_difference) {
+  VDMAP_REQUIRE_SHARED_DATA(tum, "7scenes-redkitchen");
+  SequenceOptions folder_options;
+  folder_options.frames = {0, 150};
+  const Sequence folder = Sequence::open(tum, folder_options);
+  ASSERT_EQ(rec.size(), 30u);
+  EXPECT_TRUE(rec.hasGroundTruth());
+  for (std::size_t i = 0; i < rec.size(); ++i) {
+    const FrameEntry& r = rec.entries()[i];
+    const FrameEntry& f = folder.entries()[5 * i];
+    EXPECT_EQ(r.index, static_cast<int>(i));
+    EXPECT_NEAR(r.t_depth - stamp_offset, f.t_depth, 1e-6) << "frame " << i;
+    ASSERT_TRUE(r.has_pose);
+    EXPECT_LT((r.T_W_C.matrix() - f.T_W_C.matrix()).cwiseAbs().maxCoeff(), 1e-6) << "pose of frame " << i;
+    if (i % 10 != 0) continue;  // pixels of a few frames
+    const RgbdFrame a = rec.load(i), b = folder.load(5 * i);
+    cv::Mat metres_a, metres_b;
+    a.depth.convertTo(metres_a, CV_64F, 1.0 / rec.camera().depth_scale);
+    b.depth.convertTo(metres_b, CV_64F, 1.0 / folder.camera().depth_scale);
+    EXPECT_LT(cv::norm(metres_a, metres_b, cv::NORM_INF), 1e-9) << "depth of frame " << i;
+    EXPECT_LE(cv::norm(a.rgb, b.rgb, cv::NORM_INF), max_colour_difference) << "colour of frame " << i;
+  }
+}
+
+TEST(RecordingSequence, Ros1BagReadsAsTheFolderWithTfPoses) {
+  VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
+  SequenceOptions options;
+  options.camera_preset = "7scenes";  // camera_info says 585 px for colour too: the preset knows better
+  const Sequence bag = Sequence::open(bags / "7scenes-redkitchen-tum-layout.bag", options);
+  EXPECT_EQ(bag.kind(), SequenceKind::kRos1Bag);
+  EXPECT_EQ(bag.posesSource(), "tf world -> openni_rgb_optical_frame");
+  EXPECT_EQ(bag.camera().depth_scale, 5000.0);  // 32FC1 metres
+  // rgb8 pixels were decoded from the folder's JPEGs by another decoder.
+  expectFolderFrames(bag, 1.6e9, 2);
+}
+
+TEST(RecordingSequence, McapReadsAsTheFolderWithTfAndTfStaticPoses) {
+  VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
+  SequenceOptions options;
+  options.camera_preset = "7scenes";
+  const Sequence mcap = Sequence::open(bags / "7scenes-redkitchen-realsense-layout.mcap", options);
+  EXPECT_EQ(mcap.kind(), SequenceKind::kMcap);
+  EXPECT_EQ(mcap.camera().depth_scale, 1000.0);  // 16UC1 millimetres
+  expectFolderFrames(mcap, mcap.entries().front().t_depth, 0);
+}
+
+TEST(RecordingSequence, RealSenseBagUsesItsDepthUnitsAndHasNoPoses) {
+  VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
+  SequenceOptions options;
+  options.poses = SequenceOptions::Poses::kAuto;
+  const Sequence rs = Sequence::open(bags / "realsense-d400-single-depth-color.bag", options);
+  EXPECT_EQ(rs.kind(), SequenceKind::kRos1Bag);
+  EXPECT_FALSE(rs.hasGroundTruth());
+  EXPECT_EQ(rs.camera().width, 640);
+  EXPECT_NEAR(rs.camera().depth_scale, 1000.0, 1.0);  // Depth Units 0.001 m
+  ASSERT_GE(rs.size(), 1u);
+  const RgbdFrame frame = rs.load(0);
+  EXPECT_EQ(frame.depth.size(), cv::Size(640, 480));
+  EXPECT_GT(cv::countNonZero(frame.depth), 1000);
+}
+
+}  // namespace
+}  // namespace vdmap
