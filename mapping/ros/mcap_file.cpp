@@ -423,23 +423,20 @@ class RecordReader {
                       " (a read failed or the file shrank)");
   }
 
-  /// The content of the record at `offset` with its opcode; records longer than kMaxChunkBytes
-  /// are damage.
-  std::pair<std::uint8_t, std::shared_ptr<std::uint8_t[]>> recordAt(std::uint64_t offset, std::uint64_t* size) const {
-    const auto [opcode, length] = prefixAt(offset);
+  /// The content of the record at `offset` whose opcode and length prefixAt() gave; a record
+  /// longer than kMaxChunkBytes is damage.
+  std::shared_ptr<std::uint8_t[]> contentAt(std::uint64_t offset, std::uint8_t opcode, std::uint64_t length) const {
     if (length > McapFile::kMaxChunkBytes)
       throw Malformed("the " + recordName(opcode) + " record at " + at(offset) + " declares " + std::to_string(length) +
                       " bytes, more than vdmap reads in one record");
-    *size = length;
-    return {opcode, bytesAt(offset + kPrefixBytes, length)};
+    return bytesAt(offset + kPrefixBytes, length);
   }
 
   /// The chunk record at `offset`, decompressed and checked.
   std::shared_ptr<const McapBuffer> chunkAt(std::uint64_t offset) const {
-    std::uint64_t size = 0;
-    auto [opcode, record] = recordAt(offset, &size);
+    const auto [opcode, length] = prefixAt(offset);
     if (opcode != kOpChunk) throw Malformed(at(offset) + " holds a " + recordName(opcode) + " record, not a chunk");
-    return decodeChunk(offset, std::move(record), size);
+    return decodeChunk(offset, contentAt(offset, opcode, length), length);
   }
 
  private:
@@ -570,8 +567,8 @@ LinearDamage readLinearly(const RecordReader& file, std::uint64_t data_start, co
     for (;;) {
       if (pos == size) throw Malformed("truncated at " + at(size) + " (the file ends without its footer)");
       const auto [opcode, length] = file.prefixAt(pos);
-      std::uint8_t prefix[kPrefixBytes];
-      file.bytesInto(pos, prefix, kPrefixBytes);
+      std::uint8_t prefix[kPrefixBytes] = {opcode};
+      for (std::size_t i = 0; i < 8; ++i) prefix[1 + i] = static_cast<std::uint8_t>(length >> (8 * i));
       if (opcode == kOpDataEnd) {
         endRun();
         std::uint8_t content[4] = {};
@@ -590,8 +587,8 @@ LinearDamage readLinearly(const RecordReader& file, std::uint64_t data_start, co
       if (opcode == 0) throw Malformed(at(pos) + " holds no record (opcode 0)");
       crc = crc32Of(crc, prefix, kPrefixBytes);
       if (opcode == kOpChunk || opcode == kOpMessage || opcode == kOpSchema || opcode == kOpChannel) {
-        std::uint64_t content_size = 0;
-        auto [op, content] = file.recordAt(pos, &content_size);
+        const std::uint64_t content_size = length;
+        std::shared_ptr<std::uint8_t[]> content = file.contentAt(pos, opcode, length);
         crc = crc32Of(crc, content.get(), content_size);
         if (opcode == kOpChunk) {
           endRun();
@@ -912,35 +909,33 @@ Message McapFile::read(const MessageRef& ref) const {
   const std::lock_guard lock(read_mutex_);
   try {
     const auto [opcode, length] = reader.prefixAt(ref.position);
-    std::shared_ptr<const McapBuffer> buffer;
-    std::uint64_t offset = 0;
+    std::shared_ptr<const void> keep;  // owns the bytes `content` points into
+    const std::uint8_t* content = nullptr;
+    std::uint64_t content_size = 0;
     if (opcode == kOpMessage) {
       if (ref.offset != 0) throw Malformed("a message outside chunks has no offset " + std::to_string(ref.offset));
-      if (length > kMaxChunkBytes)
-        throw Malformed("the message record declares " + std::to_string(length) + " bytes, more than vdmap reads");
-      auto record = std::make_shared<McapBuffer>();
-      std::shared_ptr<std::uint8_t[]> bytes = reader.bytesAt(ref.position, kPrefixBytes + length);
-      record->data = bytes.get();
-      record->size = kPrefixBytes + length;
-      record->storage = std::move(bytes);
-      buffer = std::move(record);
+      std::shared_ptr<std::uint8_t[]> bytes = reader.contentAt(ref.position, opcode, length);
+      content = bytes.get();
+      content_size = length;
+      keep = std::move(bytes);
     } else if (opcode == kOpChunk) {
       if (!cached_chunk_ || cached_position_ != ref.position) {
-        cached_chunk_.reset();
+        cached_chunk_.reset();  // one chunk in memory, not two
         cached_chunk_ = reader.chunkAt(ref.position);
         cached_position_ = ref.position;
       }
-      buffer = cached_chunk_;
-      offset = ref.offset;
-      if (offset > buffer->size || buffer->size - offset < kPrefixBytes || buffer->data[offset] != kOpMessage)
+      const McapBuffer& chunk = *cached_chunk_;
+      const std::uint64_t offset = ref.offset;
+      if (offset > chunk.size || chunk.size - offset < kPrefixBytes || chunk.data[offset] != kOpMessage)
         throw Malformed("the chunk holds no message record at offset " + std::to_string(offset));
-      if (littleU64(buffer->data + offset + 1) > buffer->size - offset - kPrefixBytes)
+      content = chunk.data + offset + kPrefixBytes;
+      content_size = littleU64(chunk.data + offset + 1);
+      if (content_size > chunk.size - offset - kPrefixBytes)
         throw Malformed("the message record at offset " + std::to_string(offset) + " runs past the chunk's end");
+      keep = cached_chunk_;
     } else {
       throw Malformed(at(ref.position) + " holds a " + recordName(opcode) + " record, not a message or chunk");
     }
-    const std::uint8_t* content = buffer->data + offset + kPrefixBytes;
-    const std::uint64_t content_size = littleU64(buffer->data + offset + 1);
     const MessageHeader header = parseMessageHeader(content, content_size);
     const auto topic = index_->channel_topic.find(header.channel_id);
     if (topic == index_->channel_topic.end())
