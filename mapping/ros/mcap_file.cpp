@@ -113,11 +113,13 @@ class Malformed : public std::runtime_error {
   using std::runtime_error::runtime_error;
 };
 
-std::uint64_t littleU64(const std::uint8_t* at) {
+std::uint64_t little(const std::uint8_t* at, int bytes) {
   std::uint64_t value = 0;
-  for (int i = 7; i >= 0; --i) value = (value << 8) | at[i];
+  for (int i = bytes - 1; i >= 0; --i) value = (value << 8) | at[i];
   return value;
 }
+std::uint64_t littleU64(const std::uint8_t* at) { return little(at, 8); }
+std::uint32_t littleU32(const std::uint8_t* at) { return static_cast<std::uint32_t>(little(at, 4)); }
 
 /// Bounds-checked little-endian reading of one record's fields.
 class Fields {
@@ -157,12 +159,7 @@ class Fields {
   }
 
  private:
-  std::uint64_t little(int bytes) {
-    const std::uint8_t* at = take(static_cast<std::uint64_t>(bytes));
-    std::uint64_t value = 0;
-    for (int i = bytes - 1; i >= 0; --i) value = (value << 8) | at[i];
-    return value;
-  }
+  std::uint64_t little(int bytes) { return vdmap::ros::little(take(static_cast<std::uint64_t>(bytes)), bytes); }
 
   const std::uint8_t* data_;
   std::uint64_t size_;
@@ -467,7 +464,7 @@ std::string readSummary(const RecordReader& file, std::uint64_t data_start, Cata
   if (tail[0] != kOpFooter || littleU64(tail + 1) != 20) return "damaged footer";
   const std::uint64_t summary_start = littleU64(tail + 9);
   const std::uint64_t summary_offset_start = littleU64(tail + 17);
-  const std::uint32_t summary_crc = static_cast<std::uint32_t>(littleU64(tail + 25) & 0xFFFFFFFFu);
+  const std::uint32_t summary_crc = littleU32(tail + 25);
   if (summary_start == 0) return "no summary";
   if (summary_start < data_start || summary_start > footer) return "damaged footer";
   if (summary_offset_start != 0 && (summary_offset_start < summary_start || summary_offset_start > footer))
@@ -574,8 +571,7 @@ LinearDamage readLinearly(const RecordReader& file, std::uint64_t data_start, co
         std::uint8_t content[4] = {};
         if (length < 4) throw Malformed("the data end record at " + at(pos) + " is too short");
         file.bytesInto(pos + kPrefixBytes, content, 4);
-        const std::uint32_t expected =
-            content[0] | (content[1] << 8) | (content[2] << 16) | (std::uint32_t{content[3]} << 24);
+        const std::uint32_t expected = littleU32(content);
         if (expected != 0 && expected != crc)
           throw Malformed("the data section fails its CRC check (a byte outside the chunks is damaged)");
         return LinearDamage();
@@ -595,14 +591,16 @@ LinearDamage readLinearly(const RecordReader& file, std::uint64_t data_start, co
           ChunkFields fields;
           const auto buffer = decodeChunk(pos, std::move(content), content_size, &fields);
           catalogue->compressions.insert(fields.compression);
-          McapBlock block;
-          block.is_chunk = true;
+          // Messages count once the whole chunk parses: a damaged chunk is lost as a whole.
+          std::vector<MessageHeader> messages;
           forEachRecord(buffer->data, buffer->size, "chunk at " + at(pos),
                         [&](std::uint8_t inner, std::uint64_t, const std::uint8_t* data, std::uint64_t inner_length) {
                           if (inner == kOpSchema) parseSchema(data, inner_length, &catalogue->schemas);
                           if (inner == kOpChannel) parseChannel(data, inner_length, &catalogue->channels);
-                          if (inner == kOpMessage) noteMessage(&block, parseMessageHeader(data, inner_length));
+                          if (inner == kOpMessage) messages.push_back(parseMessageHeader(data, inner_length));
                         });
+          McapBlock block;
+          for (const MessageHeader& message : messages) noteMessage(&block, message);
           block.offset = pos;
           block.length = kPrefixBytes + content_size;
           if (!block.channels.empty()) catalogue->blocks.push_back(std::move(block));

@@ -512,6 +512,33 @@ TEST(McapFile, AFlippedByteInAChunkFailsItsCrc) {
   }
 }
 
+TEST(McapFile, ARecordRunningPastItsChunkLosesTheWholeChunk) {
+  test::TempDir tmp;
+  const auto chunks = threeChunks();
+  for (const bool summary : {true, false}) {
+    WriterOptions options;
+    options.summary = summary;
+    options.crcs = false;  // so the structure, not a CRC, is what fails
+    Bytes bytes = writeTestMcap(chunks, options);
+    const auto visited = scanAll(*McapFile::open(writeBytes(tmp / "good.mcap", bytes)));
+    // The top byte of the length of the second chunk's last message record.
+    const MessageRef ref = visited[17].ref;
+    ASSERT_EQ(ref.position, visited[9].ref.position);
+    const std::size_t records = ref.position + 9 + 8 + 8 + 8 + 4 + 4 + 8;
+    ASSERT_EQ(bytes[records + ref.offset], 0x05);
+    bytes[records + ref.offset + 1 + 7] = 0x01;
+    const fs::path file = writeBytes(tmp / "damaged.mcap", bytes);
+    const auto mcap = McapFile::open(file);
+    ScanEnd end;
+    EXPECT_EQ(scanAll(*mcap, &end).size(), 9u);
+    EXPECT_EQ(end.damage, file.string() + ": chunk at byte " + std::to_string(ref.position) +
+                              " holds a message record that runs past its end; messages " +
+                              (summary ? "from 0.132 s on are lost" : "after 0.100 s are lost"));
+    // Reading linearly stops at the damage: only the first chunk's messages are counted.
+    EXPECT_EQ(mcap->topics()[0].count, summary ? 12u : 4u);
+  }
+}
+
 TEST(McapFile, WithoutCrcsADamagedByteIsNotNoticed) {
   test::TempDir tmp;
   WriterOptions options;
