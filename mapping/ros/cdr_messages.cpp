@@ -34,8 +34,8 @@ class CdrReader {
     pos_ = kEncapsulationBytes;
   }
 
-  std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(unsigned_(1, field)); }
-  std::uint32_t u32(const char* field) { return static_cast<std::uint32_t>(unsigned_(4, field)); }
+  std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(primitive(1, field)); }
+  std::uint32_t u32(const char* field) { return static_cast<std::uint32_t>(primitive(4, field)); }
   std::int32_t i32(const char* field) { return static_cast<std::int32_t>(u32(field)); }
   float f32(const char* field) {
     const std::uint32_t bits = u32(field);
@@ -44,7 +44,7 @@ class CdrReader {
     return value;
   }
   double f64(const char* field) {
-    const std::uint64_t bits = unsigned_(8, field);
+    const std::uint64_t bits = primitive(8, field);
     double value;
     std::memcpy(&value, &bits, sizeof(value));
     return value;
@@ -102,7 +102,7 @@ class CdrReader {
   }
 
   /// A `bytes`-wide unsigned value, aligned to its size from the end of the encapsulation header.
-  std::uint64_t unsigned_(std::size_t bytes, const char* field) {
+  std::uint64_t primitive(std::size_t bytes, const char* field) {
     const std::size_t misaligned = (pos_ - kEncapsulationBytes) % bytes;
     if (misaligned != 0) take(bytes - misaligned, field);
     const std::uint8_t* at = take(bytes, field);

@@ -455,12 +455,12 @@ struct Catalogue {
 /// and indexing every chunk (so a scan can go by the chunk indexes alone); otherwise why not.
 std::string readSummary(const RecordReader& file, std::uint64_t data_start, Catalogue* catalogue) {
   const std::uint64_t size = file.size();
-  if (size < data_start + kFooterBytes) return "no footer (the file is cut short or still being written)";
+  if (size < data_start + kFooterBytes) return "no footer, cut short or still being written";
   std::uint8_t tail[kFooterBytes];
   const std::uint64_t footer = size - kFooterBytes;
   file.bytesInto(footer, tail, kFooterBytes);
   if (std::memcmp(tail + kFooterBytes - sizeof(kMagic), kMagic, sizeof(kMagic)) != 0)
-    return "no footer (the file is cut short or still being written)";
+    return "no footer, cut short or still being written";
   if (tail[0] != kOpFooter || littleU64(tail + 1) != 20) return "damaged footer";
   const std::uint64_t summary_start = littleU64(tail + 9);
   const std::uint64_t summary_offset_start = littleU64(tail + 17);
