@@ -12,16 +12,18 @@
 
 namespace vdmap::ros::detail {
 
+// File-scope names carry "Cdr": the target is compiled in unity batches (CMakeLists.txt), where
+// they must not meet the ROS 1 decoders' in this namespace.
 namespace {
 
-constexpr std::size_t kEncapsulationBytes = 4;
+constexpr std::size_t kCdrEncapsulationBytes = 4;
 
 /// Reads CDR fields in order, never past the end: every read names its field, which the error
 /// gives ("message ends inside field 'encoding'").
 class CdrReader {
  public:
   explicit CdrReader(const std::vector<std::uint8_t>& bytes) : data_(bytes.data()), size_(bytes.size()) {
-    if (size_ < kEncapsulationBytes)
+    if (size_ < kCdrEncapsulationBytes)
       throw std::runtime_error("message of " + std::to_string(size_) +
                                " bytes ends inside the CDR encapsulation header");
     // Byte 1's low bit is the endianness for every encapsulation kind; only plain CDR (kinds 0
@@ -31,7 +33,7 @@ class CdrReader {
       throw std::runtime_error("CDR encapsulation 0x" + hex(data_[0]) + hex(data_[1]) +
                                " is not plain CDR (0x0000 big or 0x0001 little endian)");
     big_endian_ = data_[1] == 0;
-    pos_ = kEncapsulationBytes;
+    pos_ = kCdrEncapsulationBytes;
   }
 
   std::uint8_t u8(const char* field) { return static_cast<std::uint8_t>(primitive(1, field)); }
@@ -103,7 +105,7 @@ class CdrReader {
 
   /// A `bytes`-wide unsigned value, aligned to its size from the end of the encapsulation header.
   std::uint64_t primitive(std::size_t bytes, const char* field) {
-    const std::size_t misaligned = (pos_ - kEncapsulationBytes) % bytes;
+    const std::size_t misaligned = (pos_ - kCdrEncapsulationBytes) % bytes;
     if (misaligned != 0) take(bytes - misaligned, field);
     const std::uint8_t* at = take(bytes, field);
     std::uint64_t value = 0;
@@ -119,9 +121,9 @@ class CdrReader {
 
 // Smallest serialised sizes, to bound sequence counts before allocating: a TransformStamped is at
 // least a stamp (8), two empty strings (4 + 4) and seven doubles (56).
-constexpr std::size_t kMinTransformStampedBytes = 8 + 4 + 4 + 7 * 8;
+constexpr std::size_t kCdrMinTransformStampedBytes = 8 + 4 + 4 + 7 * 8;
 
-Header readHeader(CdrReader& cdr) {
+Header readCdrHeader(CdrReader& cdr) {
   Header header;
   const std::int32_t sec = cdr.i32("header.stamp.sec");
   const std::uint32_t nanosec = cdr.u32("header.stamp.nanosec");
@@ -130,27 +132,27 @@ Header readHeader(CdrReader& cdr) {
   return header;
 }
 
-Eigen::Vector3d readVector3(CdrReader& cdr, const char* field) {
+Eigen::Vector3d readCdrVector3(CdrReader& cdr, const char* field) {
   Eigen::Vector3d v;
   for (int i = 0; i < 3; ++i) v[i] = cdr.f64(field);
   return v;
 }
 
-Eigen::Quaterniond readQuaternion(CdrReader& cdr, const char* field) {
+Eigen::Quaterniond readCdrQuaternion(CdrReader& cdr, const char* field) {
   const double x = cdr.f64(field), y = cdr.f64(field), z = cdr.f64(field), w = cdr.f64(field);
   return Eigen::Quaterniond(w, x, y, z);
 }
 
-void readTransform(CdrReader& cdr, TransformStamped* transform) {
-  transform->translation = readVector3(cdr, "transform.translation");
-  transform->rotation = readQuaternion(cdr, "transform.rotation");
+void readCdrTransform(CdrReader& cdr, TransformStamped* transform) {
+  transform->translation = readCdrVector3(cdr, "transform.translation");
+  transform->rotation = readCdrQuaternion(cdr, "transform.rotation");
 }
 
-TransformStamped readTransformStamped(CdrReader& cdr) {
+TransformStamped readCdrTransformStamped(CdrReader& cdr) {
   TransformStamped transform;
-  transform.header = readHeader(cdr);
+  transform.header = readCdrHeader(cdr);
   transform.child_frame_id = cdr.string("child_frame_id");
-  readTransform(cdr, &transform);
+  readCdrTransform(cdr, &transform);
   return transform;
 }
 
@@ -159,7 +161,7 @@ TransformStamped readTransformStamped(CdrReader& cdr) {
 Image decodeImageCdr(const std::vector<std::uint8_t>& bytes) {
   CdrReader cdr(bytes);
   Image image;
-  image.header = readHeader(cdr);
+  image.header = readCdrHeader(cdr);
   image.height = cdr.u32("height");
   image.width = cdr.u32("width");
   image.encoding = cdr.string("encoding");
@@ -176,7 +178,7 @@ Image decodeImageCdr(const std::vector<std::uint8_t>& bytes) {
 CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes) {
   CdrReader cdr(bytes);
   CompressedImage image;
-  image.header = readHeader(cdr);
+  image.header = readCdrHeader(cdr);
   image.format = cdr.string("format");
   image.data = cdr.byteSequence("data");
   return image;
@@ -185,7 +187,7 @@ CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes)
 CameraInfo decodeCameraInfoCdr(const std::vector<std::uint8_t>& bytes) {
   CdrReader cdr(bytes);
   CameraInfo info;
-  info.header = readHeader(cdr);
+  info.header = readCdrHeader(cdr);
   info.height = cdr.u32("height");
   info.width = cdr.u32("width");
   info.distortion_model = cdr.string("distortion_model");
@@ -209,15 +211,15 @@ std::vector<TransformStamped> decodeTransformsCdr(const std::vector<std::uint8_t
   std::vector<TransformStamped> transforms;
   switch (type) {
     case MessageType::kTfMessage: {
-      const std::uint32_t n = cdr.count("transforms", kMinTransformStampedBytes);
+      const std::uint32_t n = cdr.count("transforms", kCdrMinTransformStampedBytes);
       transforms.reserve(n);
-      for (std::uint32_t i = 0; i < n; ++i) transforms.push_back(readTransformStamped(cdr));
+      for (std::uint32_t i = 0; i < n; ++i) transforms.push_back(readCdrTransformStamped(cdr));
       break;
     }
-    case MessageType::kTransformStamped: transforms.push_back(readTransformStamped(cdr)); break;
+    case MessageType::kTransformStamped: transforms.push_back(readCdrTransformStamped(cdr)); break;
     case MessageType::kTransform: {
       TransformStamped transform;
-      readTransform(cdr, &transform);
+      readCdrTransform(cdr, &transform);
       transforms.push_back(transform);
       break;
     }
@@ -231,10 +233,10 @@ PoseStamped decodePoseCdr(const std::vector<std::uint8_t>& bytes, MessageType ty
     throw std::runtime_error("not a pose message type");
   CdrReader cdr(bytes);
   PoseStamped pose;
-  pose.header = readHeader(cdr);
+  pose.header = readCdrHeader(cdr);
   if (type == MessageType::kOdometry) pose.child_frame_id = cdr.string("child_frame_id");
-  pose.position = readVector3(cdr, "pose.position");
-  pose.orientation = readQuaternion(cdr, "pose.orientation");
+  pose.position = readCdrVector3(cdr, "pose.position");
+  pose.orientation = readCdrQuaternion(cdr, "pose.orientation");
   if (type == MessageType::kOdometry) {
     // Covariances and the twist are not kept, but a message cut short inside them is damaged.
     for (int i = 0; i < 36; ++i) cdr.f64("pose.covariance");

@@ -63,6 +63,9 @@ struct McapIndex {
 
 }  // namespace detail
 
+// A named namespace: the target is compiled in unity batches (CMakeLists.txt), where these
+// file-scope names must not meet another reader's (the ROS 1 bag reader's, say).
+namespace mcap_reader {
 namespace {
 
 using detail::McapBlock;
@@ -159,7 +162,7 @@ class Fields {
   }
 
  private:
-  std::uint64_t little(int bytes) { return vdmap::ros::little(take(static_cast<std::uint64_t>(bytes)), bytes); }
+  std::uint64_t little(int bytes) { return mcap_reader::little(take(static_cast<std::uint64_t>(bytes)), bytes); }
 
   const std::uint8_t* data_;
   std::uint64_t size_;
@@ -715,6 +718,7 @@ std::string secondsText(std::uint64_t ns, std::uint64_t origin_ns) {
 }
 
 }  // namespace
+}  // namespace mcap_reader
 
 McapFile::McapFile(std::filesystem::path path, int fd, std::uint64_t size_bytes)
     : path_(std::move(path)), fd_(fd), size_bytes_(size_bytes) {}
@@ -726,6 +730,7 @@ McapFile::~McapFile() {
 const std::vector<Topic>& McapFile::topics() const { return index_->topics; }
 
 std::unique_ptr<McapFile> McapFile::open(const std::filesystem::path& file) {
+  using namespace mcap_reader;
   const std::string name = file.string();
   const int fd = ::open(file.c_str(), O_RDONLY | O_CLOEXEC);
   if (fd < 0) throw InputError(name, std::string("cannot open: ") + std::strerror(errno));
@@ -815,6 +820,7 @@ std::string McapFile::describe() const {
 }
 
 ScanEnd McapFile::scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const {
+  using namespace mcap_reader;
   const McapIndex& index = *index_;
   const std::string name = path_.string();
   std::vector<char> wanted(index.topics.size(), 0);
@@ -903,6 +909,7 @@ ScanEnd McapFile::scan(const std::vector<int>& topics, const std::function<bool(
 }
 
 Message McapFile::read(const MessageRef& ref) const {
+  using namespace mcap_reader;
   const RecordReader reader(fd_, size_bytes_);
   const std::lock_guard lock(read_mutex_);
   try {
