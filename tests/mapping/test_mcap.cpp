@@ -8,6 +8,7 @@
 #include <map>
 #include <stdexcept>
 #include <string>
+#include <thread>
 #include <vector>
 
 #include <gtest/gtest.h>
@@ -77,6 +78,8 @@ struct WriterOptions {
   bool chunked = true;      ///< false: messages are records of the data section
   bool summary = true;      ///< summary section (schemas, channels, statistics, chunk indexes)
   bool crcs = true;         ///< chunk, data section and summary CRCs (0 when false)
+  std::vector<TestSchema> schemas = kTestSchemas;
+  std::vector<TestChannel> channels = kTestChannels;
 };
 
 Bytes compress(const Bytes& raw, const std::string& compression) {
@@ -146,8 +149,8 @@ Bytes writeTestMcap(const std::vector<std::vector<TestMessage>>& chunks, const W
   for (const auto& messages : chunks) {
     Bytes records;
     if (!defined) {
-      for (const auto& schema : kTestSchemas) putRecord(&records, 0x03, schemaRecord(schema));
-      for (const auto& channel : kTestChannels) putRecord(&records, 0x04, channelRecord(channel));
+      for (const auto& schema : options.schemas) putRecord(&records, 0x03, schemaRecord(schema));
+      for (const auto& channel : options.channels) putRecord(&records, 0x04, channelRecord(channel));
       defined = true;
     }
     std::map<std::uint16_t, std::vector<std::pair<std::uint64_t, std::uint64_t>>> index;
@@ -200,12 +203,12 @@ Bytes writeTestMcap(const std::vector<std::vector<TestMessage>>& chunks, const W
   std::uint64_t summary_start = 0;
   if (options.summary) {
     summary_start = file.size();
-    for (const auto& schema : kTestSchemas) putRecord(&file, 0x03, schemaRecord(schema));
-    for (const auto& channel : kTestChannels) putRecord(&file, 0x04, channelRecord(channel));
+    for (const auto& schema : options.schemas) putRecord(&file, 0x03, schemaRecord(schema));
+    for (const auto& channel : options.channels) putRecord(&file, 0x04, channelRecord(channel));
     Bytes statistics;
     putU64(&statistics, message_count);
-    putU16(&statistics, static_cast<std::uint16_t>(kTestSchemas.size()));
-    putU32(&statistics, static_cast<std::uint32_t>(kTestChannels.size()));
+    putU16(&statistics, static_cast<std::uint16_t>(options.schemas.size()));
+    putU32(&statistics, static_cast<std::uint32_t>(options.channels.size()));
     putU32(&statistics, 0);
     putU32(&statistics, 0);
     putU32(&statistics, static_cast<std::uint32_t>(chunk_indexes.size()));
@@ -378,6 +381,58 @@ TEST_P(McapCompression, SummaryAndLinearReadingGiveTheSameMessagesInLogTimeOrder
 
 INSTANTIATE_TEST_SUITE_P(McapFile, McapCompression, ::testing::Values("", "lz4", "zstd"),
                          [](const auto& info) { return info.param.empty() ? std::string("none") : info.param; });
+
+TEST(McapFile, TopicsGetAKindOnlyInEncodingsVdmapDecodes) {
+  test::TempDir tmp;
+  WriterOptions options;
+  options.schemas = {{1, "sensor_msgs/msg/Image"}, {2, "sensor_msgs/Image"}, {3, "tf/tfMessage"}};
+  // Two publishers on one topic (channels 1 and 4) make one Topic.
+  options.channels = {{1, 1, "/depth", "cdr"}, {2, 2, "/depth_ros1", "ros1"}, {3, 3, "/tf", "ros1"},
+                      {4, 1, "/depth", "cdr"}, {5, 1, "/depth_json", "json"}, {6, 7, "/no_schema", "cdr"}};
+  const std::vector<std::vector<TestMessage>> chunks = {
+      {{1, 10, payload(1)}, {2, 11, payload(2)}, {3, 12, payload(3)}, {4, 13, payload(4)}, {5, 14, payload(5)}}};
+  const auto mcap = McapFile::open(writeBytes(tmp / "kinds.mcap", writeTestMcap(chunks, options)));
+  const auto& topics = mcap->topics();
+  ASSERT_EQ(topics.size(), 5u);
+  const auto topic = [&](const std::string& name) { return topics[static_cast<std::size_t>(topicIndex(*mcap, name))]; };
+  EXPECT_EQ(topic("/depth").kind, MessageType::kImage);
+  EXPECT_EQ(topic("/depth").count, 2u);
+  EXPECT_EQ(topic("/depth_ros1").kind, MessageType::kImage);
+  EXPECT_EQ(topic("/depth_ros1").type, "sensor_msgs/Image");
+  EXPECT_EQ(topic("/tf").kind, MessageType::kTfMessage);
+  EXPECT_EQ(topic("/depth_json").kind, MessageType::kOther);
+  EXPECT_EQ(topic("/no_schema").kind, MessageType::kOther);
+  EXPECT_EQ(topic("/no_schema").type, "");
+  std::map<std::string, Encoding> encodings;
+  mcap->scan(allTopics(*mcap), [&](const Message& m) {
+    encodings[topics[static_cast<std::size_t>(m.topic)].name] = m.encoding;
+    return true;
+  });
+  EXPECT_EQ(encodings.size(), 4u);
+  EXPECT_EQ(encodings["/depth"], Encoding::kCdr);
+  EXPECT_EQ(encodings["/depth_ros1"], Encoding::kRos1);
+  EXPECT_EQ(encodings["/tf"], Encoding::kRos1);
+}
+
+TEST(McapFile, ScansAndReadsFromSeveralThreadsAgree) {
+  test::TempDir tmp;
+  const auto mcap = McapFile::open(writeBytes(tmp / "a.mcap", writeTestMcap(threeChunks(), {"zstd"})));
+  const auto expected = scanAll(*mcap);
+  std::vector<std::vector<Visited>> scanned(4);
+  std::vector<int> reads_equal(4, 0);
+  std::vector<std::thread> threads;
+  for (std::size_t t = 0; t < 4; ++t)
+    threads.emplace_back([&, t] {
+      scanned[t] = scanAll(*mcap);
+      for (std::size_t i = t; i < expected.size(); i += 4)
+        reads_equal[t] += *mcap->read(expected[i].ref).bytes == expected[i].bytes;
+    });
+  for (auto& thread : threads) thread.join();
+  for (std::size_t t = 0; t < 4; ++t) {
+    EXPECT_EQ(scanned[t], expected);
+    EXPECT_EQ(static_cast<std::size_t>(reads_equal[t]), (expected.size() - t + 3) / 4);
+  }
+}
 
 TEST(McapFile, ScanVisitsOnlyTheChosenTopicsAndStopsWhenAsked) {
   test::TempDir tmp;
