@@ -83,6 +83,8 @@ class Ros1Fields {
 
  private:
   static std::uint32_t checkedSize(const std::vector<std::uint8_t>& bytes) {
+    // Every message decoded here has fields; and IStream would do arithmetic on a null pointer.
+    if (bytes.empty()) throw std::runtime_error("empty message");
     if (bytes.size() > UINT32_MAX) throw std::runtime_error("a message of more than 4 GiB");
     return static_cast<std::uint32_t>(bytes.size());
   }
