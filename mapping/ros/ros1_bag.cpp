@@ -57,8 +57,8 @@ const char* compressionName(Compression c) {
   return "?";
 }
 
-/// messageType() of messages.cpp for ROS 1 names, which is not built until the MCAP half lands.
-/// TODO(lead): use messageType() once mapping/ros/messages.cpp is in the library.
+/// messageType() of messages.cpp for ROS 1 names: messages.cpp is not built until the MCAP half
+/// lands. TODO: call messageType() then, and drop this copy.
 MessageType ros1MessageType(std::string_view type) {
   if (type == "sensor_msgs/Image") return MessageType::kImage;
   if (type == "sensor_msgs/CompressedImage") return MessageType::kCompressedImage;
@@ -500,8 +500,9 @@ std::string Reader::lostAfter(std::int64_t last_ns, bool any) const {
 
 // Reads the bag from its first record to its end or its damage, gathering connections, chunks and
 // messages as the index would list them. `index_pos`: where the bag header says the index starts
-// (0: nowhere), as damage there (or a file cut there) loses no message: the chunks come before it. `file_cut`: the bag header puts the index past the end of the
-// file, so the file lost its end even where it ends between two records.
+// (0: nowhere); damage there (or a cut there) loses no message, as the chunks come before it.
+// `file_cut`: the bag header puts the index past the end of the file, so the file lost its end
+// even where it ends between two records.
 void Reader::rebuildIndex(BagFile& file, std::uint64_t first_record, std::uint64_t index_pos,
                           const std::string& index_problem, bool index_missing, bool file_cut) {
   rebuilt = true;
@@ -587,7 +588,8 @@ bool Reader::loadChunk(BagFile& file, const Chunk& chunk, std::vector<std::uint8
 }
 
 void Reader::finish() {
-  // Topics in the order their connections were first listed; connections on one topic share it.
+  // Topics in the order of their connections' ids (the order the recorder made them); connections
+  // on one topic (several publishers) share it.
   std::map<std::string, int> by_name;
   for (const auto& [id, connection] : connections) {
     const auto [it, added] = by_name.try_emplace(connection.first, static_cast<int>(topics.size()));
