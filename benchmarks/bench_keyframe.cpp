@@ -23,9 +23,9 @@
 #include <benchmark/benchmark.h>
 
 #include "mapping/core/timing.h"
-#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/keyframe/keyframe_index.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
 

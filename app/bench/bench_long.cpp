@@ -57,8 +57,8 @@ double medianCpu(const std::vector<FrameRow>& rows, std::size_t begin, std::size
 
 // Maps every frame of `seq` with `mapper`, one row per frame; a global map every `global_every`
 // frames and after the last frame.
-std::vector<FrameRow> mapAndRecord(const Sequence& seq, Mapper& mapper, const GlobalMapParams& global,
-                                   int global_every, const std::optional<MapRefinementParams>& refine) {
+std::vector<FrameRow> mapAndRecord(const Sequence& seq, Mapper& mapper, const GlobalMapParams& global, int global_every,
+                                   const std::optional<MapRefinementParams>& refine) {
   std::vector<FrameRow> rows;
   rows.reserve(seq.size());
   auto buildGlobal = [&](FrameRow& row) {

@@ -4,8 +4,8 @@
 #include <optional>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap::app {
 

@@ -7,8 +7,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/parameters.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/tracking/map_registration.h"
 
 namespace vdmap::app {

@@ -13,15 +13,17 @@ std::string cameraPresetList() {
 }
 
 void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
-  verb.add_option("SEQ", args.folder, "the sequence: a TUM RGB-D, 7-Scenes, Replica (NICE-SLAM) or ScanNet folder, a ROS 1 bag or an MCAP file (docs/cli.md, Sequences)")->required();
+  verb.add_option(
+          "SEQ", args.folder,
+          "the sequence: a TUM RGB-D, 7-Scenes, Replica (NICE-SLAM) or ScanNet folder, a ROS 1 bag or an MCAP file (docs/cli.md, Sequences)")
+      ->required();
   verb.add_option("--camera", args.camera, "camera preset overriding the folder's: " + cameraPresetList())
       ->check(cameraPresetCheck());
   verb.add_option("--frames", args.frames,
                   "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
                   "a range past the end is an error")
       ->check(frameRangeCheck());
-  verb.add_option("--depth-topic", args.topics.depth,
-                  "a recording's depth topic (default: found by type and name)");
+  verb.add_option("--depth-topic", args.topics.depth, "a recording's depth topic (default: found by type and name)");
   verb.add_option("--rgb-topic", args.topics.rgb, "a recording's colour topic (default: found by type and name)");
   verb.add_option("--info-topic", args.topics.info,
                   "a recording's depth camera_info topic (default: the one nearest the depth topic)");
@@ -89,8 +91,7 @@ void noteCameraGuess(const Sequence& sequence, const std::string& verb) {
                c.cy, c.depth_scale);
 }
 
-Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end,
-                         std::optional<SequenceContinuation> continues) {
+Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::optional<SequenceContinuation> continues) {
   SequenceOptions options;
   options.continues = std::move(continues);
   options.camera_preset = args.camera;

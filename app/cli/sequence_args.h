@@ -5,8 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap::app {
 
@@ -20,7 +20,8 @@ struct SequenceArgs {
   std::string refine =
       "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
   bool refine_given = false;  ///< --refine was on the command line
-  SequenceOptions::Topics topics;  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
+  SequenceOptions::Topics
+      topics;  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
 /// parsing; whether the sequence has those frames when it is opened).
@@ -44,7 +45,7 @@ std::string cameraPresetList();
 /// `cut_range_at_end`: a --frames range past the end is cut there (a verb's default range)
 /// instead of refused. `continues`: the session the sequence continues (SequenceOptions::continues).
 Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end = false,
-                         std::optional<SequenceContinuation> continues = std::nullopt);
+                      std::optional<SequenceContinuation> continues = std::nullopt);
 /// When no --camera or camera file chose the sequence's camera, says on stderr, in one line,
 /// which preset was guessed and why ("vdmap VERB: note: ..."): a wrong guess maps without error.
 void noteCameraGuess(const Sequence& sequence, const std::string& verb);

@@ -5,8 +5,8 @@
 
 #include <nlohmann/json_fwd.hpp>
 
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap::app {
 

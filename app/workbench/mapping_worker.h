@@ -20,9 +20,9 @@
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/query_map.h"
+#include "mapping/sequence/sequence.h"
 
 namespace vdmap::app::gui {
 

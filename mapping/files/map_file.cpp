@@ -380,8 +380,8 @@ MapFileKind detectMapFile(const fs::path& path) {
     if (fs::exists(path / "global_ellipsoids.ply", ec)) return MapFileKind::kMapFolder;
     // A saved session may be stored as a folder in a later format; today it is a file.
     throw InputError(path.string(),
-                     std::string("is a folder that is neither a sequence nor a map folder (global_ellipsoids.ply) (") + kKinds +
-                         ")");
+                     std::string("is a folder that is neither a sequence nor a map folder (global_ellipsoids.ply) (") +
+                         kKinds + ")");
   }
   if (ext == ".vdmap") return MapFileKind::kSession;
   if (ext == ".bt" || ext == ".ot") return MapFileKind::kOctomap;

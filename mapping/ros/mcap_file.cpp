@@ -644,32 +644,12 @@ LinearDamage readLinearly(const RecordReader& file, std::uint64_t data_start, co
   }
 }
 
-/// The ROS 2 type names vdmap decodes. messages.h's messageType() says the same for both ROS
-/// versions; it lives in messages.cpp, built with the ROS 1 reader, which the MCAP reader must not
-/// need. Keep the two in step.
-MessageType ros2MessageType(const std::string& type) {
-  if (type == "sensor_msgs/msg/Image") return MessageType::kImage;
-  if (type == "sensor_msgs/msg/CompressedImage") return MessageType::kCompressedImage;
-  if (type == "sensor_msgs/msg/CameraInfo") return MessageType::kCameraInfo;
-  if (type == "tf2_msgs/msg/TFMessage") return MessageType::kTfMessage;
-  if (type == "geometry_msgs/msg/Transform") return MessageType::kTransform;
-  if (type == "geometry_msgs/msg/TransformStamped") return MessageType::kTransformStamped;
-  if (type == "geometry_msgs/msg/PoseStamped") return MessageType::kPoseStamped;
-  if (type == "nav_msgs/msg/Odometry") return MessageType::kOdometry;
-  if (type == "std_msgs/msg/Float32") return MessageType::kFloat32;
-  return MessageType::kOther;
-}
-
 /// The kind of a channel's messages: only encodings vdmap decodes get a kind other than kOther.
 MessageType kindOf(const std::string& type, const std::string& message_encoding) {
-  if (message_encoding == "cdr") return ros2MessageType(type);
-  if (message_encoding == "ros1") {
-    // ROS 1 names lack "/msg/"; tf/tfMessage is TFMessage's ROS 1 predecessor.
-    if (type == "tf/tfMessage") return MessageType::kTfMessage;
-    const auto slash = type.find('/');
-    if (slash == std::string::npos || type.find("/msg/") != std::string::npos) return MessageType::kOther;
-    return ros2MessageType(type.substr(0, slash) + "/msg" + type.substr(slash));
-  }
+  // ROS 2 names hold "/msg/", ROS 1 names do not.
+  const bool ros2_name = type.find("/msg/") != std::string::npos;
+  if (message_encoding == "cdr" && ros2_name) return messageType(type);
+  if (message_encoding == "ros1" && !ros2_name) return messageType(type);
   return MessageType::kOther;
 }
 

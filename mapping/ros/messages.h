@@ -17,15 +17,15 @@ enum class Encoding { kRos1, kCdr };
 
 /// The message types vdmap understands (and the rest).
 enum class MessageType {
-  kImage,            ///< sensor_msgs/Image
-  kCompressedImage,  ///< sensor_msgs/CompressedImage (colour JPEG/PNG, or compressedDepth)
-  kCameraInfo,       ///< sensor_msgs/CameraInfo
-  kTfMessage,        ///< tf2_msgs/TFMessage (and ROS 1's tf/tfMessage, the same layout)
-  kTransform,        ///< geometry_msgs/Transform (RealSense's recorded stream extrinsics)
-  kTransformStamped, ///< geometry_msgs/TransformStamped
-  kPoseStamped,      ///< geometry_msgs/PoseStamped
-  kOdometry,         ///< nav_msgs/Odometry
-  kFloat32,          ///< std_msgs/Float32 (RealSense's recorded options, e.g. Depth Units)
+  kImage,             ///< sensor_msgs/Image
+  kCompressedImage,   ///< sensor_msgs/CompressedImage (colour JPEG/PNG, or compressedDepth)
+  kCameraInfo,        ///< sensor_msgs/CameraInfo
+  kTfMessage,         ///< tf2_msgs/TFMessage (and ROS 1's tf/tfMessage, the same layout)
+  kTransform,         ///< geometry_msgs/Transform (RealSense's recorded stream extrinsics)
+  kTransformStamped,  ///< geometry_msgs/TransformStamped
+  kPoseStamped,       ///< geometry_msgs/PoseStamped
+  kOdometry,          ///< nav_msgs/Odometry
+  kFloat32,           ///< std_msgs/Float32 (RealSense's recorded options, e.g. Depth Units)
   kOther,
 };
 
@@ -58,7 +58,7 @@ struct CameraInfo {
   std::uint32_t height = 0, width = 0;
   std::string distortion_model;
   std::vector<double> d;
-  std::array<double, 9> k{};   ///< row-major 3x3 intrinsics
+  std::array<double, 9> k{};  ///< row-major 3x3 intrinsics
   std::array<double, 9> r{};
   std::array<double, 12> p{};  ///< row-major 3x4 projection
 };

@@ -31,7 +31,7 @@ struct MessageRef {
 
 /// One message, undecoded. Decode it with the functions of messages.h.
 struct Message {
-  int topic = -1;              ///< index into Recording::topics()
+  int topic = -1;                ///< index into Recording::topics()
   std::int64_t log_time_ns = 0;  ///< when the recorder received it (not the header stamp)
   MessageRef ref;
   Encoding encoding = Encoding::kRos1;

@@ -57,21 +57,6 @@ const char* compressionName(Compression c) {
   return "?";
 }
 
-/// messageType() of messages.cpp for ROS 1 names: messages.cpp is not built until the MCAP half
-/// lands. TODO: call messageType() then, and drop this copy.
-MessageType ros1MessageType(std::string_view type) {
-  if (type == "sensor_msgs/Image") return MessageType::kImage;
-  if (type == "sensor_msgs/CompressedImage") return MessageType::kCompressedImage;
-  if (type == "sensor_msgs/CameraInfo") return MessageType::kCameraInfo;
-  if (type == "tf2_msgs/TFMessage" || type == "tf/tfMessage") return MessageType::kTfMessage;
-  if (type == "geometry_msgs/Transform") return MessageType::kTransform;
-  if (type == "geometry_msgs/TransformStamped") return MessageType::kTransformStamped;
-  if (type == "geometry_msgs/PoseStamped") return MessageType::kPoseStamped;
-  if (type == "nav_msgs/Odometry") return MessageType::kOdometry;
-  if (type == "std_msgs/Float32") return MessageType::kFloat32;
-  return MessageType::kOther;
-}
-
 /// One "name=value" field of a record header; views into the header's bytes.
 struct Field {
   std::string_view name, value;
@@ -596,7 +581,7 @@ void Reader::finish() {
     if (added) topics.push_back({connection.first, connection.second, MessageType::kOther, 0});
     conn_topic[id] = it->second;
   }
-  for (Topic& topic : topics) topic.kind = ros1MessageType(topic.type);
+  for (Topic& topic : topics) topic.kind = messageType(topic.type);
   std::erase_if(entries, [&](Entry& e) {
     const auto it = conn_topic.find(e.conn);
     if (it == conn_topic.end()) return true;  // a message whose connection record was lost

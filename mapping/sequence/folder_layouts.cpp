@@ -115,9 +115,7 @@ CameraChoice dataSetCamera(const fs::path& folder, const SequenceOptions& option
   return {cameraPreset(preset), "preset " + preset + " (" + why + ")", cameraPresetColour(preset)};
 }
 
-ListedImage numberedImage(int number, const fs::path& path) {
-  return {number / kDataSetFrameRateHz, path, path, 0};
-}
+ListedImage numberedImage(int number, const fs::path& path) { return {number / kDataSetFrameRateHz, path, path, 0}; }
 
 }  // namespace
 
@@ -162,7 +160,8 @@ Listing listTumFolder(const fs::path& folder, const SequenceOptions& options) {
     const std::vector<ListedImage> rgb = readImageList(folder, "rgb.txt");
     if (rgb.empty()) throw InputError((folder / "rgb.txt").string(), "lists no frames");
     for (const ListedImage& depth : readImageList(folder, "depth.txt")) {
-      auto it = std::lower_bound(rgb.begin(), rgb.end(), depth.t, [](const ListedImage& s, double t) { return s.t < t; });
+      auto it =
+          std::lower_bound(rgb.begin(), rgb.end(), depth.t, [](const ListedImage& s, double t) { return s.t < t; });
       std::optional<ListedImage> best;
       for (auto c : {it, it == rgb.begin() ? rgb.end() : std::prev(it)}) {
         if (c == rgb.end() || std::abs(c->t - depth.t) > options.max_rgb_dt_s) continue;
@@ -226,7 +225,8 @@ Listing listReplica(const fs::path& folder, const SequenceOptions& options) {
     if (static_cast<std::size_t>(number) < rows.size()) {
       const ListLine& row = rows[number];
       std::vector<double> m;
-      for (const std::string& token : row.tokens) m.push_back(parseListNumber(token, traj, row.number, "a matrix entry"));
+      for (const std::string& token : row.tokens)
+        m.push_back(parseListNumber(token, traj, row.number, "a matrix entry"));
       frame.pose = poseFromMatrix(m, traj, row.number);
     }
     listing.frames.push_back(std::move(frame));

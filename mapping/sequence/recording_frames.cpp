@@ -112,13 +112,8 @@ class RecordingDecoder : public FrameDecoder {
  public:
   RecordingDecoder(std::shared_ptr<const ros::Recording> rec, std::string depth_topic, std::string rgb_topic,
                    DepthCoding coding, cv::Size depth_size, cv::Size rgb_size, ImageRefs refs)
-      : rec_(std::move(rec)),
-        depth_topic_(std::move(depth_topic)),
-        rgb_topic_(std::move(rgb_topic)),
-        coding_(coding),
-        depth_size_(depth_size),
-        rgb_size_(rgb_size),
-        refs_(std::move(refs)) {}
+      : rec_(std::move(rec)), depth_topic_(std::move(depth_topic)), rgb_topic_(std::move(rgb_topic)), coding_(coding),
+        depth_size_(depth_size), rgb_size_(rgb_size), refs_(std::move(refs)) {}
 
   void decode(int listed, cv::Mat* depth, cv::Mat* rgb, std::string* rgb_file) const override {
     *depth = decodeDepth(rec_->read(refs_.depth.at(listed)));
@@ -134,8 +129,9 @@ class RecordingDecoder : public FrameDecoder {
 
   void checkSize(const std::string& topic, const ros::Message& m, int width, int height, cv::Size expected) const {
     if (width != expected.width || height != expected.height)
-      throw error(topic, m, "image is " + std::to_string(width) + "x" + std::to_string(height) + " but its camera is " +
-                                std::to_string(expected.width) + "x" + std::to_string(expected.height));
+      throw error(topic, m,
+                  "image is " + std::to_string(width) + "x" + std::to_string(height) + " but its camera is " +
+                      std::to_string(expected.width) + "x" + std::to_string(expected.height));
   }
 
   cv::Mat decodeDepth(const ros::Message& m) const {
@@ -203,8 +199,10 @@ class RecordingDecoder : public FrameDecoder {
       else if (enc == "rgba8") channels = 4, red = 0;
       else if (enc == "bgra8") channels = 4, red = 2;
       else if (enc == "mono8") channels = 1;
-      else throw std::runtime_error("colour encoding '" + image.encoding + "' is not one vdmap reads (rgb8, bgr8, "
-                                    "rgba8, bgra8, mono8)");
+      else
+        throw std::runtime_error("colour encoding '" + image.encoding +
+                                 "' is not one vdmap reads (rgb8, bgr8, "
+                                 "rgba8, bgra8, mono8)");
       const int w = static_cast<int>(image.width), h = static_cast<int>(image.height);
       if (image.step < static_cast<std::uint32_t>(w * channels) ||
           image.data.size() < static_cast<std::size_t>(h) * image.step)
@@ -246,7 +244,8 @@ struct Scanned {
   std::optional<ros::CameraInfo> depth_info, rgb_info;
   std::string depth_encoding;  // of the first depth message ("compressedDepth" for those)
   int depth_width = 0, depth_height = 0;
-  std::optional<float> depth_units;  // RealSense's recorded metres per unit
+  std::optional<float> depth_units;                 // RealSense's recorded metres per unit
+  std::optional<Transform> T_ref_depth, T_ref_rgb;  // RealSense's recorded stream extrinsics
   TfTree tf;
   std::vector<StampedPose> poses;  // --pose-topic
   std::string pose_frame;
@@ -271,9 +270,9 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
                                                     {MessageType::kImage, MessageType::kCompressedImage});
   if (depth < 0)
     throw InputError(name, "has no depth image topic (topics: " + topicList(*rec) + "); name one with --depth-topic");
-  const int rgb = want.rgb.empty() ? bestTopic(*rec, colourScore)
-                                   : topicNamed(*rec, want.rgb, "--rgb-topic",
-                                                {MessageType::kImage, MessageType::kCompressedImage});
+  const int rgb = want.rgb.empty()
+                      ? bestTopic(*rec, colourScore)
+                      : topicNamed(*rec, want.rgb, "--rgb-topic", {MessageType::kImage, MessageType::kCompressedImage});
   if (rgb < 0)
     throw InputError(name, "has no colour image topic (topics: " + topicList(*rec) + "); name one with --rgb-topic");
   const std::string depth_name = rec->topics()[depth].name, rgb_name = rec->topics()[rgb].name;
@@ -288,8 +287,17 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
   const int units = bestTopic(*rec, [&](const ros::Topic& t) {
     return t.kind == MessageType::kFloat32 && contains(t.name, "depth units") ? 1 + sharedParts(t.name, sensor) : 0;
   });
+  // RealSense's recorder keeps each stream's extrinsics (to the reference stream) as a bare
+  // geometry_msgs/Transform beside its images: .../Depth_0/tf/0, .../Color_0/tf/0.
+  auto extrinsicsOf = [&](const std::string& image) {
+    const std::string stream = image.substr(0, image.rfind("/image/") + 1);
+    return bestTopic(*rec, [&](const ros::Topic& t) {
+      return t.kind == MessageType::kTransform && !stream.empty() && t.name.rfind(stream, 0) == 0 ? 1 : 0;
+    });
+  };
+  const int depth_extrinsics = extrinsicsOf(depth_name), rgb_extrinsics = extrinsicsOf(rgb_name);
   std::vector<int> chosen = {depth, rgb};
-  for (int t : {depth_info, rgb_info, pose, units})
+  for (int t : {depth_info, rgb_info, pose, units, depth_extrinsics, rgb_extrinsics})
     if (t >= 0) chosen.push_back(t);
   std::vector<int> tf_topics;
   for (std::size_t i = 0; i < rec->topics().size(); ++i)
@@ -331,6 +339,12 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
         s.pose_frame = p.header.frame_id;
       } else if (m.topic == units) {
         s.depth_units = ros::decodeFloat32(*m.bytes, m.encoding);
+      } else if (m.topic == depth_extrinsics || m.topic == rgb_extrinsics) {
+        const ros::TransformStamped t = ros::decodeTransforms(*m.bytes, m.encoding, topic.kind).at(0);
+        Transform T = Transform::Identity();
+        T.linear() = t.rotation.normalized().toRotationMatrix();
+        T.translation() = t.translation;
+        (m.topic == depth_extrinsics ? s.T_ref_depth : s.T_ref_rgb) = T;
       } else {
         const bool is_static = contains(topic.name, "tf_static");
         for (const ros::TransformStamped& t : ros::decodeTransforms(*m.bytes, m.encoding, topic.kind))
@@ -381,22 +395,24 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
     }
   } else if (s.depth_info) {
     const ros::CameraInfo& c = *s.depth_info;
-    listing.camera.camera = {static_cast<int>(c.width), static_cast<int>(c.height), c.k[0], c.k[4], c.k[2], c.k[5],
-                             coding.scale};
+    listing.camera.camera = {
+        static_cast<int>(c.width), static_cast<int>(c.height), c.k[0], c.k[4], c.k[2], c.k[5], coding.scale};
     listing.camera.source = "camera_info of " + rec->topics()[depth_info].name;
   } else {
-    listing.camera = {cameraPreset("tum-default"), "preset tum-default (the recording has no camera_info; --camera "
-                                                   "PRESET sets it)",
+    listing.camera = {cameraPreset("tum-default"),
+                      "preset tum-default (the recording has no camera_info; --camera "
+                      "PRESET sets it)",
                       std::nullopt, true};
   }
   listing.camera.camera.depth_scale = coding.scale;
-  if (s.depth_width > 0 && (s.depth_width != listing.camera.camera.width ||
-                            s.depth_height != listing.camera.camera.height))
+  if (s.depth_width > 0 &&
+      (s.depth_width != listing.camera.camera.width || s.depth_height != listing.camera.camera.height))
     throw InputError(name, "depth topic " + depth_name + " has " + std::to_string(s.depth_width) + "x" +
                                std::to_string(s.depth_height) + " images but the camera (" + listing.camera.source +
                                ") is " + std::to_string(listing.camera.camera.width) + "x" +
                                std::to_string(listing.camera.camera.height));
-  const std::string camera_frame = TfTree::name(want.camera_frame.empty() ? s.depth.front().frame_id : want.camera_frame);
+  const std::string camera_frame =
+      TfTree::name(want.camera_frame.empty() ? s.depth.front().frame_id : want.camera_frame);
   cv::Size rgb_size(listing.camera.camera.width, listing.camera.camera.height);
   if (options.camera_preset.empty() && s.rgb_info && rgb_info != depth_info) {
     // Colour from another camera: registered into the depth camera.
@@ -404,8 +420,10 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
     ColourCamera colour{c.k[0], c.k[4], c.k[2], c.k[5]};
     colour.width = static_cast<int>(c.width), colour.height = static_cast<int>(c.height);
     const std::string colour_frame = TfTree::name(s.rgb.empty() ? "" : s.rgb.front().frame_id);
-    if (!colour_frame.empty() && colour_frame != camera_frame && s.tf.has(colour_frame) && s.tf.has(camera_frame) &&
-        s.tf.root(colour_frame) == s.tf.root(camera_frame)) {
+    if (s.T_ref_depth && s.T_ref_rgb) {
+      colour.T_colour_depth = s.T_ref_rgb->inverse() * *s.T_ref_depth;
+    } else if (!colour_frame.empty() && colour_frame != camera_frame && s.tf.has(colour_frame) &&
+               s.tf.has(camera_frame) && s.tf.root(colour_frame) == s.tf.root(camera_frame)) {
       const std::string root = s.tf.root(camera_frame);
       const double t = s.depth.front().stamp;
       const auto a = s.tf.lookup(root, colour_frame, t, options.max_pose_dt_s);
@@ -464,10 +482,9 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
     if (pose_at) frame.pose = pose_at(d.stamp);
     listing.frames.push_back(std::move(frame));
   }
-  listing.decoder = std::make_shared<RecordingDecoder>(rec, depth_name, rgb_name, coding,
-                                                       cv::Size(listing.camera.camera.width,
-                                                                listing.camera.camera.height),
-                                                       rgb_size, std::move(refs));
+  listing.decoder = std::make_shared<RecordingDecoder>(
+      rec, depth_name, rgb_name, coding, cv::Size(listing.camera.camera.width, listing.camera.camera.height), rgb_size,
+      std::move(refs));
   return listing;
 }
 

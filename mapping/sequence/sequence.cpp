@@ -123,8 +123,10 @@ std::optional<std::pair<SequenceKind, std::string>> recogniseSequence(const fs::
   std::error_code ec;
   if (fs::is_directory(path, ec)) return detail::recogniseFolder(path);
   switch (ros::recordingFormat(path)) {
-    case ros::RecordingFormat::kRos1Bag: return std::pair{SequenceKind::kRos1Bag, std::string("starts with #ROSBAG V2.0")};
-    case ros::RecordingFormat::kMcap: return std::pair{SequenceKind::kMcap, std::string("starts with MCAP's magic bytes")};
+    case ros::RecordingFormat::kRos1Bag:
+      return std::pair{SequenceKind::kRos1Bag, std::string("starts with #ROSBAG V2.0")};
+    case ros::RecordingFormat::kMcap:
+      return std::pair{SequenceKind::kMcap, std::string("starts with MCAP's magic bytes")};
     default: return std::nullopt;
   }
 }
@@ -143,10 +145,11 @@ detail::Listing listSequence(const fs::path& path, const SequenceOptions& option
   }
   const auto kind = detail::recogniseFolder(path);
   if (!kind)
-    throw InputError(path.string(),
-                     "is not a sequence vdmap reads: expected a TUM RGB-D folder (rgb.txt and depth.txt, or "
-                     "associations.txt), a 7-Scenes sequence (frame-NNNNNN.depth.png), NICE-SLAM's Replica (results/ "
-                     "and traj.txt), a ScanNet export (color/, depth/, pose/, intrinsic/), a ROS 1 bag or an MCAP file");
+    throw InputError(
+        path.string(),
+        "is not a sequence vdmap reads: expected a TUM RGB-D folder (rgb.txt and depth.txt, or "
+        "associations.txt), a 7-Scenes sequence (frame-NNNNNN.depth.png), NICE-SLAM's Replica (results/ "
+        "and traj.txt), a ScanNet export (color/, depth/, pose/, intrinsic/), a ROS 1 bag or an MCAP file");
   detail::Listing listing;
   try {
     switch (kind->first) {

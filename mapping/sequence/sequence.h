@@ -74,8 +74,8 @@ struct SequenceOptions {
   /// Recordings (ROS 1 bags, MCAP): the topics to read, each found by type and name when empty
   /// (docs/cli.md, Sequences), and where poses come from.
   struct Topics {
-    std::string depth, rgb, info;  ///< --depth-topic, --rgb-topic, --info-topic
-    std::string pose;              ///< --pose-topic: geometry_msgs/PoseStamped or nav_msgs/Odometry
+    std::string depth, rgb, info;           ///< --depth-topic, --rgb-topic, --info-topic
+    std::string pose;                       ///< --pose-topic: geometry_msgs/PoseStamped or nav_msgs/Odometry
     std::string world_frame, camera_frame;  ///< --pose-frames WORLD:CAMERA (tf)
   } topics;
   /// Set: the sequence continues a session, so its folder must have the session's folder name

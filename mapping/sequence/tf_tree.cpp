@@ -64,7 +64,8 @@ std::optional<Transform> TfTree::edgeAt(const Edge& edge, double t, double max_d
   if (edge.is_static) return edge.T;
   if (!edge.sorted) {
     auto& series = const_cast<std::vector<StampedPose>&>(edge.series);
-    std::stable_sort(series.begin(), series.end(), [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
+    std::stable_sort(series.begin(), series.end(),
+                     [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
     edge.sorted = true;
   }
   return interpolatePose(edge.series, t, max_dt);

@@ -240,7 +240,7 @@ const std::vector<BadCase>& badCases() {
   static const std::vector<BadCase> all = {
       // Sequence folders and their lists (TUM layout).
       {"sequence", "missing_folder", E::kInputError, "seq: no such sequence folder", removeFile("seq")},
-      {"sequence", "folder_is_a_file", E::kInputError, "is not a folder",
+      {"sequence", "folder_is_a_file", E::kInputError, "is neither a sequence folder nor a recording",
        [](const fs::path& d) {
          fs::remove_all(d / "seq");
          return write("seq", "x")(d);

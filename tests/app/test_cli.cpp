@@ -33,7 +33,7 @@ TEST(Cli, InfoOnTinySequence) {
 TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
   const auto r = runVdmap("info /nonexistent/seq");
   EXPECT_EQ(r.exit_code, 1);
-  EXPECT_EQ(r.err, "vdmap info: error: /nonexistent/seq: no such sequence folder\n");
+  EXPECT_EQ(r.err, "vdmap info: error: /nonexistent/seq: no such sequence folder or recording\n");
   test::TempDir dir;
   test::writeTinySequence(dir.path());
   EXPECT_NE(runVdmap("info '" + dir.path().string() + "' --camera nope").err.find("unknown camera preset 'nope'"),
@@ -56,7 +56,7 @@ TEST(Cli, InfoOnSevenScenes) {
   VDMAP_REQUIRE_SHARED_DATA(folder, "7scenes-redkitchen");
   const auto r = runVdmap("info '" + folder.string() + "'");
   ASSERT_EQ(r.exit_code, 0) << r.err;
-  EXPECT_NE(r.out.find("500 usable (all with poses)"), std::string::npos) << r.out;
+  EXPECT_NE(r.out.find("500 usable (all with poses, from groundtruth.txt)"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("preset 7scenes"), std::string::npos) << r.out;
   EXPECT_NE(r.out.find("colour     fx 525.000 fy 525.000 cx 320.000 cy 240.000, 25.6 mm"), std::string::npos) << r.out;
 }

@@ -9,8 +9,8 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/box_room_keyframes.h"
 
 namespace vdmap {

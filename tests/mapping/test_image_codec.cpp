@@ -14,8 +14,8 @@
 #include "mapping/core/error.h"
 #include "mapping/io/compressed_image.h"
 #include "mapping/io/image_codec.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {

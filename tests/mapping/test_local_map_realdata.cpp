@@ -5,9 +5,9 @@
 
 #include <gtest/gtest.h>
 
-#include "mapping/sequence/sequence.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/local_map/local_map_integrator.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/local_map_oracle.h"
 #include "tests/support/test_util.h"
 

@@ -6,9 +6,9 @@
 
 #include "mapping/core/error.h"
 #include "mapping/io/camera_config.h"
-#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {

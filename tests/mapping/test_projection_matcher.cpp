@@ -9,9 +9,9 @@
 #include <gtest/gtest.h>
 
 #include "mapping/io/camera_config.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/keyframe/keyframe_selector.h"
 #include "mapping/keyframe/projection_matcher.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {

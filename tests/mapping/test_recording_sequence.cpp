@@ -63,7 +63,16 @@ TEST(RecordingSequence, RealSenseBagUsesItsDepthUnitsAndHasNoPoses) {
   VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
   SequenceOptions options;
   options.poses = SequenceOptions::Poses::kAuto;
-  const Sequence rs = Sequence::open(bags / "realsense-d400-single-depth-color.bag", options);
+  // Its one colour frame is 0.10 s before the first depth frame: no pair within 0.02 s.
+  const fs::path bag = bags / "realsense-d400-single-depth-color.bag";
+  try {
+    Sequence::open(bag, options);
+    ADD_FAILURE() << "expected no usable frames";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("2 without an rgb frame within 0.02"), std::string::npos) << e.what();
+  }
+  options.max_rgb_dt_s = 0.2;
+  const Sequence rs = Sequence::open(bag, options);
   EXPECT_EQ(rs.kind(), SequenceKind::kRos1Bag);
   EXPECT_FALSE(rs.hasGroundTruth());
   EXPECT_EQ(rs.camera().width, 640);
@@ -72,6 +81,11 @@ TEST(RecordingSequence, RealSenseBagUsesItsDepthUnitsAndHasNoPoses) {
   const RgbdFrame frame = rs.load(0);
   EXPECT_EQ(frame.depth.size(), cv::Size(640, 480));
   EXPECT_GT(cv::countNonZero(frame.depth), 1000);
+  // The colour camera (613 px) is not the depth camera (390 px): registered with the recorded
+  // extrinsics, 14 mm along x.
+  ASSERT_TRUE(rs.colourCamera().has_value());
+  EXPECT_NEAR(rs.colourCamera()->T_colour_depth.translation().norm(), 0.0143, 0.001);
+  EXPECT_EQ(frame.rgb.size(), cv::Size(640, 480));
 }
 
 }  // namespace

@@ -11,10 +11,10 @@
 
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/files/session_file.h"
-#include "mapping/sequence/frame_prefetcher.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/local_map/sensor_model.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/frame_prefetcher.h"
+#include "mapping/sequence/sequence.h"
 #include "mapping/tracking/map_registration.h"
 #include "mapping/tracking/ndt_refinement.h"
 #include "mapping/tracking/relative_pose.h"

@@ -6,10 +6,10 @@
 #include "mapping/core/colour_registration.h"
 #include "mapping/core/error.h"
 #include "mapping/io/compressed_image.h"
-#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/io/image_codec.h"
-#include "mapping/sequence/sequence.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/frame_prefetcher.h"
+#include "mapping/sequence/sequence.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {

@@ -8,8 +8,8 @@
 #include "mapping/eval/trajectory_error.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/global_map/global_map.h"
-#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/pipeline/mapper.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
 

@@ -13,11 +13,11 @@
 #include <vector>
 
 #include "mapping/global_map/global_map.h"
-#include "mapping/sequence/frame_prefetcher.h"
 #include "mapping/local_map/local_map_integrator.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/detail/keyframe_views.h"
 #include "mapping/query/query_map.h"
+#include "mapping/sequence/frame_prefetcher.h"
 #include "render/sequence_synth.h"
 #include "tests/support/box_room_keyframes.h"
 #include "tests/support/query_oracle.h"

@@ -22,7 +22,7 @@ void writeMatrix(const fs::path& file, const Eigen::Matrix4d& M) {
     }
 }
 
-void copy(const fs::path& from, const fs::path& to) {
+void copyFile(const fs::path& from, const fs::path& to) {
   fs::create_directories(to.parent_path());
   fs::copy_file(from, to, fs::copy_options::overwrite_existing);
 }
@@ -45,6 +45,7 @@ void writeDataSetLayout(SequenceKind kind, const fs::path& tum_folder, const fs:
                         const LayoutOptions& options) {
   SequenceOptions open;
   open.frames = {0, options.frames};
+  open.cut_range_at_end = true;
   const Sequence seq = Sequence::open(tum_folder, open);
   fs::create_directories(out);
   std::ofstream traj;
@@ -54,16 +55,16 @@ void writeDataSetLayout(SequenceKind kind, const fs::path& tum_folder, const fs:
     const Eigen::Matrix4d T = e.T_W_C.matrix();
     switch (kind) {
       case SequenceKind::kSevenScenes:
-        copy(e.depth_path, out / numbered("frame-%06d.depth.png", n));
+        copyFile(e.depth_path, out / numbered("frame-%06d.depth.png", n));
         if (options.colour_png)
-          writeImageFile(out / numbered("frame-%06d.color.png", n), readColorImage(e.rgb_path, {seq.camera().width, seq.camera().height}));
-        else
-          copy(e.rgb_path, out / numbered("frame-%06d.color.jpg", n));
+          writeImageFile(out / numbered("frame-%06d.color.png", n),
+                         readColorImage(e.rgb_path, {seq.camera().width, seq.camera().height}));
+        else copyFile(e.rgb_path, out / numbered("frame-%06d.color.jpg", n));
         writeMatrix(out / numbered("frame-%06d.pose.txt", n), T);
         break;
       case SequenceKind::kReplica: {
-        copy(e.depth_path, out / "results" / numbered("depth%06d.png", n));
-        copy(e.rgb_path, out / "results" / numbered("frame%06d.jpg", n));
+        copyFile(e.depth_path, out / "results" / numbered("depth%06d.png", n));
+        copyFile(e.rgb_path, out / "results" / numbered("frame%06d.jpg", n));
         char text[64];
         for (int k = 0; k < 16; ++k) {
           std::snprintf(text, sizeof text, "%.17g%c", T(k / 4, k % 4), k == 15 ? '\n' : ' ');
@@ -72,8 +73,8 @@ void writeDataSetLayout(SequenceKind kind, const fs::path& tum_folder, const fs:
         break;
       }
       case SequenceKind::kScanNet:
-        copy(e.depth_path, out / "depth" / numbered("%d.png", n));
-        copy(e.rgb_path, out / "color" / numbered("%d.jpg", n));
+        copyFile(e.depth_path, out / "depth" / numbered("%d.png", n));
+        copyFile(e.rgb_path, out / "color" / numbered("%d.jpg", n));
         fs::create_directories(out / "pose");
         writeMatrix(out / "pose" / numbered("%d.txt", n), T);
         break;
@@ -81,7 +82,7 @@ void writeDataSetLayout(SequenceKind kind, const fs::path& tum_folder, const fs:
     }
   }
   if (fs::exists(tum_folder / "camera.yaml") && kind != SequenceKind::kScanNet)
-    copy(tum_folder / "camera.yaml", out / "camera.yaml");
+    copyFile(tum_folder / "camera.yaml", out / "camera.yaml");
   if (kind == SequenceKind::kScanNet) {
     const PinholeCamera& c = seq.camera();
     fs::create_directories(out / "intrinsic");
@@ -103,8 +104,8 @@ void writeTumSubset(const fs::path& tum_folder, const fs::path& out, int first, 
   for (const FrameEntry& e : seq.entries()) {
     if ((e.index - first) % step != 0) continue;
     const std::string name = numbered("%06d", e.index);
-    copy(e.depth_path, out / "depth" / (name + e.depth_path.extension().string()));
-    copy(e.rgb_path, out / "rgb" / (name + e.rgb_path.extension().string()));
+    copyFile(e.depth_path, out / "depth" / (name + e.depth_path.extension().string()));
+    copyFile(e.rgb_path, out / "rgb" / (name + e.rgb_path.extension().string()));
     std::snprintf(line, sizeof line, "%.6f depth/%s%s\n", e.t_depth, name.c_str(), e.depth_path.extension().c_str());
     depth << line;
     std::snprintf(line, sizeof line, "%.6f rgb/%s%s\n", e.t_rgb, name.c_str(), e.rgb_path.extension().c_str());

@@ -8,8 +8,8 @@
 namespace vdmap::test {
 
 struct LayoutOptions {
-  int frames = 30;              ///< the first N frames of the TUM folder, numbered as there
-  bool colour_png = false;      ///< 7-Scenes: frame-N.color.png (as the original) instead of .color.jpg
+  int frames = 30;          ///< the first N frames of the TUM folder, numbered as there
+  bool colour_png = false;  ///< 7-Scenes: frame-N.color.png (as the original) instead of .color.jpg
 };
 
 /// Writes frames 0..N-1 of `tum_folder` (opened with its own camera) into `out` in the layout of

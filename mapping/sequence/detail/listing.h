@@ -23,8 +23,8 @@ struct ListedImage {
 /// One depth frame as listed, in time order.
 struct ListedFrame {
   ListedImage depth;
-  std::optional<ListedImage> rgb;   ///< none: no colour frame matched
-  std::optional<Transform> pose;    ///< the recorded T_W_C at the depth stamp, if any
+  std::optional<ListedImage> rgb;  ///< none: no colour frame matched
+  std::optional<Transform> pose;   ///< the recorded T_W_C at the depth stamp, if any
 };
 
 /// How a kind whose frames are not image files (a recording) decodes listed frame `listed`:
@@ -39,15 +39,15 @@ class FrameDecoder {
 
 struct Listing {
   SequenceKind kind = SequenceKind::kTumFolder;
-  std::string reason;         ///< why the folder is this kind
+  std::string reason;  ///< why the folder is this kind
   CameraChoice camera;
   std::vector<ListedFrame> frames;
-  bool has_poses = false;      ///< the sequence records poses at all
-  std::string poses_source;    ///< "groundtruth.txt", ...
-  std::filesystem::path poses_file;  ///< what a missing-poses error names
-  std::filesystem::path list_file;   ///< what "lists no frames" names
+  bool has_poses = false;                       ///< the sequence records poses at all
+  std::string poses_source;                     ///< "groundtruth.txt", ...
+  std::filesystem::path poses_file;             ///< what a missing-poses error names
+  std::filesystem::path list_file;              ///< what "lists no frames" names
   std::shared_ptr<const FrameDecoder> decoder;  ///< recordings; null: the images are files
-  std::vector<std::string> notes;    ///< what was chosen and why (topics, frames), for `vdmap info`
+  std::vector<std::string> notes;               ///< what was chosen and why (topics, frames), for `vdmap info`
 };
 
 /// The kind of the folder `folder` by what it holds, with the reason; nullopt when none fits.

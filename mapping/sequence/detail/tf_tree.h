@@ -28,8 +28,7 @@ class TfTree {
   /// T_ancestor_frame at time t: the product of the edges from `frame` up to `ancestor`; nothing
   /// when a dynamic edge has no transforms within max_dt on both sides of t. Throws
   /// std::invalid_argument naming the frames when `ancestor` is not above `frame`.
-  std::optional<Transform> lookup(const std::string& ancestor, const std::string& frame, double t,
-                                  double max_dt) const;
+  std::optional<Transform> lookup(const std::string& ancestor, const std::string& frame, double t, double max_dt) const;
 
   static std::string name(const std::string& frame);  ///< without ROS 1's leading '/'
 
@@ -38,7 +37,7 @@ class TfTree {
     std::string parent;
     bool is_static = false;
     Transform T = Transform::Identity();  ///< static edges
-    std::vector<StampedPose> series;          ///< dynamic edges, sorted by time when looked up
+    std::vector<StampedPose> series;      ///< dynamic edges, sorted by time when looked up
     mutable bool sorted = true;
   };
   std::optional<Transform> edgeAt(const Edge& edge, double t, double max_dt) const;
