@@ -133,10 +133,14 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
   const int total = mapping.frames_total;
   if (const Sequence* sequence = bench.sequence()) {
     ImGui::TextWrapped("%s", sequence->folder().c_str());
-    ImGui::TextWrapped("camera %s (%dx%d), %d frames", sequence->cameraSource().c_str(), mapping.camera.width,
-                       mapping.camera.height, total);
-    tip("Where the intrinsics come from (--camera, camera.yaml or a preset named by the folder), the image size "
-        "in pixels, and the frames selected.");
+    ImGui::TextWrapped("%s; camera %s (%dx%d), %d frames", sequenceKindName(sequence->kind()).c_str(),
+                       sequence->cameraSource().c_str(), mapping.camera.width, mapping.camera.height, total);
+    std::string why = "What kind of sequence it is (it " + sequence->kindReason() +
+                      "), where the intrinsics come "
+                      "from (--camera, a camera file, a preset, a recording's camera_info), the image size in pixels, "
+                      "and the frames selected.";
+    for (const std::string& note : sequence->notes()) why += "\n" + note;
+    tip(why);
   } else if (const StaticMap* file = bench.staticMap()) {  // opening files: a map file
     ImGui::TextWrapped("%s", file->path.c_str());
     ImGui::TextWrapped("%s: %zu ellipsoids, %zu keyframes", mapFileKindName(file->kind), file->ellipsoids.size(),

@@ -60,7 +60,7 @@ class Recording {
 
   /// Visits, in log-time order (ties in file order), every message on the given topics (indices
   /// into topics()); `visit` returns false to stop early. Reads the file once from the start,
-  /// holding at most one chunk in memory. Damage ends the scan without throwing (see ScanEnd).
+  /// holding one chunk in memory (a few where chunks overlap in time). Damage ends the scan without throwing (see ScanEnd).
   virtual ScanEnd scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const = 0;
 
   /// The message a scan gave with this ref. Throws InputError naming the file when it cannot be

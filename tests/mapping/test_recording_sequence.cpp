@@ -3,6 +3,8 @@
 // equal to groundtruth.txt; the RealSense recording with its Depth Units and no poses.
 #include <gtest/gtest.h>
 
+#include <algorithm>
+
 #include "mapping/core/error.h"
 #include "mapping/sequence/sequence.h"
 #include "tests/support/test_util.h"
@@ -86,6 +88,33 @@ TEST(RecordingSequence, RealSenseBagUsesItsDepthUnitsAndHasNoPoses) {
   ASSERT_TRUE(rs.colourCamera().has_value());
   EXPECT_NEAR(rs.colourCamera()->T_colour_depth.translation().norm(), 0.0143, 0.001);
   EXPECT_EQ(frame.rgb.size(), cv::Size(640, 480));
+}
+
+}  // namespace
+}  // namespace vdmap
+
+namespace vdmap {
+namespace {
+
+// A recording cut short maps the frames before the cut and says where it ended.
+TEST(RecordingSequence, ATruncatedRecordingGivesTheFramesBeforeTheCut) {
+  VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
+  const test::TempDir dir;
+  for (const char* name : {"7scenes-redkitchen-realsense-layout.mcap", "7scenes-redkitchen-tum-layout.bag"}) {
+    const std::string bytes = test::readFile(bags / name);
+    const fs::path cut = dir / (std::string("cut-") + name);
+    test::writeText(cut, bytes.substr(0, bytes.size() * 6 / 10));
+    SequenceOptions options;
+    options.camera_preset = "7scenes";
+    const Sequence seq = Sequence::open(cut, options);
+    EXPECT_GT(seq.size(), 5u) << name;
+    EXPECT_LT(seq.size(), 30u) << name;
+    const auto damaged = std::find_if(seq.notes().begin(), seq.notes().end(),
+                                      [](const std::string& n) { return n.rfind("damaged: ", 0) == 0; });
+    ASSERT_NE(damaged, seq.notes().end()) << name;
+    EXPECT_NE(damaged->find(cut.string()), std::string::npos) << *damaged;
+    EXPECT_EQ(seq.load(seq.size() - 1).depth.size(), cv::Size(640, 480));
+  }
 }
 
 }  // namespace
