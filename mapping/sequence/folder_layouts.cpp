@@ -135,7 +135,6 @@ std::optional<std::pair<SequenceKind, std::string>> recogniseFolder(const fs::pa
 
 Listing listTumFolder(const fs::path& folder, const SequenceOptions& options) {
   Listing listing;
-  listing.kind = SequenceKind::kTumFolder;
   try {
     listing.camera = chooseCamera(folder, options.camera_preset);
   } catch (const std::invalid_argument& e) {
@@ -182,7 +181,6 @@ Listing listTumFolder(const fs::path& folder, const SequenceOptions& options) {
 
 Listing listSevenScenes(const fs::path& folder, const SequenceOptions& options) {
   Listing listing;
-  listing.kind = SequenceKind::kSevenScenes;
   listing.camera = dataSetCamera(folder, options, "7scenes", "a 7-Scenes folder");
   listing.list_file = folder;
   const std::map<int, fs::path> poses = numberedFiles(folder, "frame-", ".pose.txt");
@@ -203,7 +201,6 @@ Listing listSevenScenes(const fs::path& folder, const SequenceOptions& options) 
 
 Listing listReplica(const fs::path& folder, const SequenceOptions& options) {
   Listing listing;
-  listing.kind = SequenceKind::kReplica;
   // NICE-SLAM keeps cam_params.json beside the scene folders.
   const fs::path parent = fs::absolute(folder).lexically_normal().parent_path();
   const bool parent_camera = options.camera_preset.empty() && !fs::exists(folder / "cam_params.json") &&
@@ -236,7 +233,6 @@ Listing listReplica(const fs::path& folder, const SequenceOptions& options) {
 
 Listing listScanNet(const fs::path& folder, const SequenceOptions& options) {
   Listing listing;
-  listing.kind = SequenceKind::kScanNet;
   listing.list_file = folder / "depth";
   const std::map<int, fs::path> depth = numberedFiles(folder / "depth", "", ".png");
   const std::map<int, fs::path> colour = numberedFiles(folder / "color", "", ".jpg");

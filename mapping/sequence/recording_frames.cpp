@@ -252,13 +252,6 @@ struct Scanned {
   ros::ScanEnd end;
 };
 
-Transform poseOf(const ros::PoseStamped& p) {
-  Transform T = Transform::Identity();
-  T.linear() = p.orientation.normalized().toRotationMatrix();
-  T.translation() = p.position;
-  return T;
-}
-
 }  // namespace
 
 Listing listRecording(const fs::path& file, const SequenceOptions& options) {
@@ -335,16 +328,14 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
         if (depth_info == rgb_info && !s.rgb_info) s.rgb_info = s.depth_info;
       } else if (m.topic == pose) {
         const ros::PoseStamped p = ros::decodePose(*m.bytes, m.encoding, topic.kind);
-        if (s.poses.empty() || p.header.stamp > s.poses.back().t) s.poses.push_back({p.header.stamp, poseOf(p)});
+        if (s.poses.empty() || p.header.stamp > s.poses.back().t)
+          s.poses.push_back({p.header.stamp, rigidTransform(p.orientation, p.position)});
         s.pose_frame = p.header.frame_id;
       } else if (m.topic == units) {
         s.depth_units = ros::decodeFloat32(*m.bytes, m.encoding);
       } else if (m.topic == depth_extrinsics || m.topic == rgb_extrinsics) {
         const ros::TransformStamped t = ros::decodeTransforms(*m.bytes, m.encoding, topic.kind).at(0);
-        Transform T = Transform::Identity();
-        T.linear() = t.rotation.normalized().toRotationMatrix();
-        T.translation() = t.translation;
-        (m.topic == depth_extrinsics ? s.T_ref_depth : s.T_ref_rgb) = T;
+        (m.topic == depth_extrinsics ? s.T_ref_depth : s.T_ref_rgb) = rigidTransform(t.rotation, t.translation);
       } else {
         const bool is_static = contains(topic.name, "tf_static");
         for (const ros::TransformStamped& t : ros::decodeTransforms(*m.bytes, m.encoding, topic.kind))
@@ -362,7 +353,6 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
                                (s.end.complete ? "" : " before the damage: " + s.end.damage));
 
   Listing listing;
-  listing.kind = rec->describe().find("MCAP") != std::string::npos ? SequenceKind::kMcap : SequenceKind::kRos1Bag;
   listing.list_file = file;
   listing.notes.push_back("recording: " + rec->describe());
   listing.notes.push_back("depth: " + depth_name + " (" + s.depth_encoding + ", " + std::to_string(s.depth.size()) +

@@ -135,15 +135,9 @@ namespace {
 
 detail::Listing listSequence(const fs::path& path, const SequenceOptions& options) {
   if (!fs::exists(path)) throw InputError(path.string(), "no such sequence folder or recording");
-  if (!fs::is_directory(path)) {
-    const ros::RecordingFormat format = ros::recordingFormat(path);
-    if (format == ros::RecordingFormat::kNone)
-      throw InputError(path.string(), "is neither a sequence folder nor a recording (a ROS 1 bag or an MCAP file)");
-    detail::Listing listing = detail::listRecording(path, options);
-    listing.reason = recogniseSequence(path)->second;
-    return listing;
-  }
-  const auto kind = detail::recogniseFolder(path);
+  const auto kind = recogniseSequence(path);
+  if (!kind && !fs::is_directory(path))
+    throw InputError(path.string(), "is neither a sequence folder nor a recording (a ROS 1 bag or an MCAP file)");
   if (!kind)
     throw InputError(
         path.string(),
@@ -156,11 +150,14 @@ detail::Listing listSequence(const fs::path& path, const SequenceOptions& option
       case SequenceKind::kSevenScenes: listing = detail::listSevenScenes(path, options); break;
       case SequenceKind::kReplica: listing = detail::listReplica(path, options); break;
       case SequenceKind::kScanNet: listing = detail::listScanNet(path, options); break;
-      default: listing = detail::listTumFolder(path, options); break;
+      case SequenceKind::kRos1Bag:
+      case SequenceKind::kMcap: listing = detail::listRecording(path, options); break;
+      case SequenceKind::kTumFolder: listing = detail::listTumFolder(path, options); break;
     }
   } catch (const std::invalid_argument& e) {
     throw InputError("--camera", e.what());
   }
+  listing.kind = kind->first;
   listing.reason = kind->second;
   return listing;
 }

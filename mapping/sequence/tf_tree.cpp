@@ -5,16 +5,12 @@
 #include <stdexcept>
 
 namespace vdmap::detail {
-namespace {
-
-Transform toTransform(const ros::TransformStamped& t) {
+Transform rigidTransform(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translation) {
   Transform T = Transform::Identity();
-  T.linear() = t.rotation.normalized().toRotationMatrix();
-  T.translation() = t.translation;
+  T.linear() = rotation.normalized().toRotationMatrix();
+  T.translation() = translation;
   return T;
 }
-
-}  // namespace
 
 std::string TfTree::name(const std::string& frame) {
   return !frame.empty() && frame[0] == '/' ? frame.substr(1) : frame;
@@ -31,11 +27,11 @@ void TfTree::add(const ros::TransformStamped& t, bool is_static) {
   }
   if (edge.parent != parent) return;
   if (edge.is_static) {
-    edge.T = toTransform(t);
+    edge.T = rigidTransform(t.rotation, t.translation);
     return;
   }
   if (!edge.series.empty() && t.header.stamp < edge.series.back().t) edge.sorted = false;
-  edge.series.push_back({t.header.stamp, toTransform(t)});
+  edge.series.push_back({t.header.stamp, rigidTransform(t.rotation, t.translation)});
 }
 
 std::string TfTree::root(const std::string& frame) const {

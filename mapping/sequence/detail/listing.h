@@ -38,8 +38,8 @@ class FrameDecoder {
 };
 
 struct Listing {
-  SequenceKind kind = SequenceKind::kTumFolder;
-  std::string reason;  ///< why the folder is this kind
+  SequenceKind kind = SequenceKind::kTumFolder;  ///< what recogniseSequence() found
+  std::string reason;                            ///< why the folder is this kind
   CameraChoice camera;
   std::vector<ListedFrame> frames;
   bool has_poses = false;                       ///< the sequence records poses at all

@@ -13,6 +13,10 @@
 
 namespace vdmap::detail {
 
+/// The transform of a rotation (normalised here; recordings store it as written) and a
+/// translation: a tf edge, a pose message, RealSense's stream extrinsics.
+Transform rigidTransform(const Eigen::Quaterniond& rotation, const Eigen::Vector3d& translation);
+
 class TfTree {
  public:
   /// Adds `t` (the pose of t.child_frame_id in t.header.frame_id). Leading '/' of ROS 1 frame
