@@ -2,8 +2,10 @@
 // The plainest reference for QueryMap::classify and classifyInKeyframe (docs/method.md 13.1-13.3):
 // every keyframe, every kept cell of the 3x3 around the point's cell, every global ellipsoid, the
 // formulas written as the definitions read. Slow on purpose; the fast path must agree with it.
+#include <array>
 #include <cmath>
 #include <limits>
+#include <map>
 #include <span>
 #include <vector>
 
@@ -25,7 +27,19 @@ class QueryOracle {
   QueryOracle(const KeyframeGraph& graph, const GlobalMap& global, const QueryParams& params,
               std::vector<int> rank = {})
       : graph_(graph), global_(global), params_(params), rank_(std::move(rank)) {
-    for (const Ellipsoid& e : global.ellipsoids) gate_A_.push_back(floored(e.cov).inverse());
+    // d'A d >= |d|^2 / lambda_max(cov) >= |d|^2 / trace(cov), so no point farther than
+    // gate_sigma * sqrt(trace) from an ellipsoid's mean lies in its gate: each ellipsoid is listed
+    // in every 10 cm bucket that box overlaps, and gate() scans the point's bucket alone (which
+    // only saves time: the answer is the scan's over every ellipsoid).
+    for (std::size_t i = 0; i < global.ellipsoids.size(); ++i) {
+      const Ellipsoid& e = global.ellipsoids[i];
+      gate_A_.push_back(floored(e.cov).inverse());
+      const double reach = params.gate_sigma * std::sqrt(floored(e.cov).trace());
+      const auto lo = bucketOf((e.mean.array() - reach).matrix()), hi = bucketOf((e.mean.array() + reach).matrix());
+      for (int x = lo[0]; x <= hi[0]; ++x)
+        for (int y = lo[1]; y <= hi[1]; ++y)
+          for (int z = lo[2]; z <= hi[2]; ++z) buckets_[{x, y, z}].push_back(static_cast<int>(i));
+    }
   }
 
   /// docs/method.md 13.1, keyframe `id` about world point q_W.
@@ -65,6 +79,21 @@ class QueryOracle {
 
   /// The global ellipsoid whose gate holds q_W with the smallest m^2 (ties: lower index), or -1.
   int gate(const Eigen::Vector3d& q_W, double* m2_out) const {
+    int best = -1;
+    double best_m2 = std::numeric_limits<double>::infinity();
+    const auto bucket = buckets_.find(bucketOf(q_W));
+    if (bucket != buckets_.end())
+      for (const int i : bucket->second) {  // in index order
+        const Eigen::Vector3d d = q_W - global_.ellipsoids[static_cast<std::size_t>(i)].mean;
+        const double m2 = d.dot(gate_A_[static_cast<std::size_t>(i)] * d);
+        if (m2 <= params_.gate_sigma * params_.gate_sigma && m2 < best_m2) best = i, best_m2 = m2;
+      }
+    *m2_out = best_m2;
+    return best;
+  }
+
+  /// gate() by a scan over every ellipsoid: what the buckets must give (checked in the tests).
+  int gateByScan(const Eigen::Vector3d& q_W, double* m2_out) const {
     int best = -1;
     double best_m2 = std::numeric_limits<double>::infinity();
     for (std::size_t i = 0; i < gate_A_.size(); ++i) {
@@ -133,6 +162,11 @@ class QueryOracle {
   QueryParams params_;
   std::vector<int> rank_;
   std::vector<Eigen::Matrix3d> gate_A_;
+  static std::array<int, 3> bucketOf(const Eigen::Vector3d& p) {
+    const Eigen::Vector3d b = (p / 0.1).array().floor();
+    return {static_cast<int>(b.x()), static_cast<int>(b.y()), static_cast<int>(b.z())};
+  }
+  std::map<std::array<int, 3>, std::vector<int>> buckets_;  ///< ellipsoids whose gate may reach in
 };
 
 }  // namespace vdmap::test
