@@ -180,7 +180,7 @@ CLI::Option* addComparisonOptions(CLI::App& verb, BenchArgs& args) {
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
   verb.add_option("--out", args.out, "folder for bench.json and bench.md")->capture_default_str();
-  verb.add_flag("--no-octomap", args.no_octomap, "skip the OctoMap peers (for profiling)");
+  verb.add_flag("--no-octomap", args.no_octomap, "skip the OctoMap peers (for profiling; with --query: vdmap alone)");
   verb.add_flag("--no-open3d", args.no_open3d, "skip the Open3D peers (TSDF, and odometry with --poses track)");
   verb.add_option("--poses", args.poses,
                   "gt: map with the sequence's ground-truth poses; track: also track the poses with vdmap (with and "
@@ -309,8 +309,8 @@ void addBenchCommand(CLI::App& app) {
   auto args = std::make_shared<BenchArgs>();
   addSequenceArgs(*verb, args->sequence);
   verb->get_option("SEQ")->required(false)->description(
-      "sequence folder (TUM RGB-D layout); with --view a saved session or map file; none with --suite or "
-      "--ellipsoids");
+      "the sequence (a folder of any layout vdmap reads, a ROS 1 bag or an MCAP file: docs/cli.md, Sequences); "
+      "with --view a saved session or map file; none with --suite or --ellipsoids");
   verb->get_option("--frames")
       ->description(
           "frames A:B of the depth list; a plain N means 0:N (default 0:30, or fewer when the sequence is "

@@ -325,7 +325,7 @@ void addGuiCommand(CLI::App& app) {
         (fs::is_regular_file(seq) || fs::exists(seq / "global_ellipsoids.ply")))
       std::swap(args->map, args->sequence.folder);
     if (args->sequence.folder.empty() == args->map.empty())
-      throw CLI::ValidationError("SEQ", "give a sequence folder SEQ or --map FILE (one of them)");
+      throw CLI::ValidationError("SEQ", "give a sequence SEQ or --map FILE (one of them)");
     runGui(*args, false);
   });
 }

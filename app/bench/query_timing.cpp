@@ -109,7 +109,8 @@ Maps buildMaps(const BenchArgs& args) {
   MapperParams params = pipelineParams(args);
   params.poses = PoseSource::kGroundTruth;
   m.mapper = std::make_unique<Mapper>(cam, params);
-  for (const double res : {0.05, 0.02}) m.peers.push_back(std::make_unique<OctoPeer>(res));
+  if (!args.no_octomap)
+    for (const double res : {0.05, 0.02}) m.peers.push_back(std::make_unique<OctoPeer>(res));
   OccupancyTruthParams truth_params;
   truth_params.occupied = truth_params.free = truth_params.unknown = args.truth_points;
   truth_params.free_near = args.truth_points / 2;
@@ -121,7 +122,7 @@ Maps buildMaps(const BenchArgs& args) {
     double lo = 0, hi = 0;
     cv::minMaxLoc(frame.depth, &lo, &hi);
     m.max_depth_m = std::max(m.max_depth_m, std::min(hi / cam.depth_scale, range.max_m));
-    if (i % static_cast<std::size_t>(m.octomap_every) == 0) {
+    if (!m.peers.empty() && i % static_cast<std::size_t>(m.octomap_every) == 0) {
       const octomap::Pointcloud cloud = worldCloud(frame, cam, range);
       const Eigen::Vector3d c = frame.T_W_C.translation();
       for (auto& peer : m.peers)
@@ -461,17 +462,24 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
 
   std::ostringstream text;
   char buf[512];
+  const std::string octomap = m.peers.empty() ? "no OctoMap (--no-octomap)"
+                                               : "OctoMap from every " + std::to_string(m.octomap_every) + ". frame (" +
+                                                     std::to_string(m.octomap_frames) + " frames)";
   std::snprintf(buf, sizeof buf,
-                "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; OctoMap "
-                "from every %d. frame (%zu frames); QueryMap built in %.0f ms (one thread, median of %d)\n",
+                "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; %s; "
+                "QueryMap built in %.0f ms (one thread, median of %d)\n",
                 m.frames, args.sequence.folder.c_str(), m.mapper->graph().size(),
-                m.mapper->params().local_map.cell_size_px, m.global.ellipsoids.size(), m.octomap_every,
-                m.octomap_frames, m.query_build_ms, kPasses);
+                m.mapper->params().local_map.cell_size_px, m.global.ellipsoids.size(), octomap.c_str(),
+                m.query_build_ms, kPasses);
   text << buf;
   std::snprintf(buf, sizeof buf,
                 "speed: one thread, process CPU, median of %d passes; classify %zu points, distance %zu, views %dx%d "
-                "to %.2f m (OctoMap: the first %zu views, castRay per pixel, unknown ignored)\n",
-                kPasses, s.points, s.distance_points, cam.width, cam.height, m.max_depth_m, s.octo_views);
+                "to %.2f m%s\n",
+                kPasses, s.points, s.distance_points, cam.width, cam.height, m.max_depth_m,
+                m.peers.empty() ? ""
+                                : (" (OctoMap: the first " + std::to_string(s.octo_views) +
+                                   " views, castRay per pixel, unknown ignored)")
+                                      .c_str());
   text << buf;
   nlohmann::json speed = reportSpeed(m, s, text);
   text << s.detail_text;

@@ -85,5 +85,21 @@ TEST(QueryBench, RefusesATruthOfOtherFrames) {
   EXPECT_FALSE(std::filesystem::exists(tmp / "out" / "bench.json"));
 }
 
+// --no-octomap: vdmap alone, no OctoMap built or named.
+TEST(QueryBench, WithoutOctomapReportsVdmapAlone) {
+  TempDir tmp;
+  ASSERT_EQ(runVdmap("synth --builtin --builtin-frames 3 --out " + q(tmp / "seq")).exit_code, 0);
+  const RunResult r = runVdmap("bench " + q(tmp / "seq") +
+                               " --query --no-octomap --query-points 200 --views 1 --json --out " + q(tmp / "out"));
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  const auto j = nlohmann::json::parse(r.out).at("query");
+  EXPECT_EQ(j["octomap_frames"], 0);
+  EXPECT_GT(j["speed"]["vdmap"]["classify_per_s"].get<double>(), 0.0);
+  EXPECT_FALSE(j["speed"].contains("octomap_002"));
+  const std::string md = readFile(tmp / "out" / "bench.md");
+  EXPECT_NE(md.find("no OctoMap (--no-octomap)"), std::string::npos) << md;
+  EXPECT_EQ(md.find("OctoMap 0.02 m"), std::string::npos) << md;
+}
+
 }  // namespace
 }  // namespace vdmap
