@@ -72,10 +72,9 @@ class CdrReader {
     return n;
   }
 
-  std::vector<std::uint8_t> byteSequence(const char* field) {
+  std::span<const std::uint8_t> byteSequence(const char* field) {
     const std::uint32_t n = count(field, 1);
-    const std::uint8_t* bytes = take(n, field);
-    return std::vector<std::uint8_t>(bytes, bytes + n);
+    return {take(n, field), n};
   }
 
   std::vector<double> doubleSequence(const char* field) {

@@ -5,6 +5,7 @@
 // our own reader, cdr_messages.cpp). Field names follow the messages'; stamps are in seconds.
 #include <array>
 #include <cstdint>
+#include <span>
 #include <string>
 #include <string_view>
 #include <vector>
@@ -44,13 +45,13 @@ struct Image {
   std::string encoding;  ///< "16UC1", "mono16", "32FC1", "rgb8", "bgr8", "rgba8", "bgra8", "mono8", ...
   bool is_bigendian = false;
   std::uint32_t step = 0;  ///< bytes per row
-  std::vector<std::uint8_t> data;
+  std::span<const std::uint8_t> data;  ///< in the decoded message's bytes (valid while they are)
 };
 
 struct CompressedImage {
   Header header;
   std::string format;  ///< "jpeg", "png", "rgb8; jpeg compressed bgr8", "16UC1; compressedDepth png", ...
-  std::vector<std::uint8_t> data;
+  std::span<const std::uint8_t> data;  ///< in the decoded message's bytes (valid while they are)
 };
 
 struct CameraInfo {
@@ -85,8 +86,11 @@ struct PoseStamped {
 /// Decoders. Each throws std::runtime_error with a short reason ("image data holds 100 bytes,
 /// height * step needs 614400", "message ends inside field 'encoding'") when the bytes do not hold
 /// a message of that type; callers add the file and the topic. Never read past `bytes`.
+/// An image's data is a view into `bytes`, so they must outlive it (no temporaries).
 Image decodeImage(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 CompressedImage decodeCompressedImage(const std::vector<std::uint8_t>& bytes, Encoding encoding);
+Image decodeImage(std::vector<std::uint8_t>&&, Encoding) = delete;
+CompressedImage decodeCompressedImage(std::vector<std::uint8_t>&&, Encoding) = delete;
 CameraInfo decodeCameraInfo(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 /// tf2_msgs/TFMessage: its transforms; TransformStamped and Transform: one.
 std::vector<TransformStamped> decodeTransforms(const std::vector<std::uint8_t>& bytes, Encoding encoding,

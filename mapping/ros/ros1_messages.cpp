@@ -60,12 +60,11 @@ class Ros1Fields {
   }
 
   /// The next uint8[] field into `out`, copied once (a ROS vector would be copied again into ours).
-  void nextBytes(const char* name, std::vector<std::uint8_t>& out) {
+  void nextBytes(const char* name, std::span<const std::uint8_t>& out) {
     std::uint32_t length = 0;
     next(name, length);
     if (length > stream_.getLength()) throw std::runtime_error(std::string("message ends inside field '") + name + "'");
-    const std::uint8_t* data = stream_.advance(length);
-    out.assign(data, data + length);
+    out = {stream_.advance(length), length};
   }
 
   /// The next variable-length array, whose elements take at least `min_element_bytes` each: its

@@ -1,6 +1,7 @@
 // A ROS 1 bag's or an MCAP's frames (detail/listing.h): the topics chosen, one pass over them
 // for stamps, camera_info and tf, then each frame decoded from its messages when loaded.
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <cstring>
 
@@ -15,6 +16,8 @@
 namespace fs = std::filesystem;
 
 namespace vdmap::detail {
+
+static_assert(std::endian::native == std::endian::little);  // images are converted to little-endian order
 namespace {
 
 using ros::MessageType;
@@ -151,25 +154,28 @@ class RecordingDecoder : public FrameDecoder {
       const int w = static_cast<int>(image.width), h = static_cast<int>(image.height);
       const bool f32 = coding_.kind == DepthCoding::Kind::kFloat32;
       const std::size_t pixel = f32 ? 4 : 2;
-      if (image.step < w * pixel || image.data.size() < static_cast<std::size_t>(h) * image.step)
-        throw std::runtime_error("image data holds " + std::to_string(image.data.size()) + " bytes, " +
-                                 std::to_string(h) + " rows of " + std::to_string(image.step) + " needed");
+      // (The decoder checked that the data holds height * step bytes.)
+      if (image.step < w * pixel)
+        throw std::runtime_error("rows of " + std::to_string(image.step) + " bytes hold no " + std::to_string(w) +
+                                 " pixels of " + std::to_string(pixel) + " bytes");
       cv::Mat out(h, w, CV_16UC1);
+      std::vector<std::uint8_t> swapped(image.is_bigendian ? w * pixel : 0);
+      std::vector<float> metres(f32 ? w : 0);
       for (int v = 0; v < h; ++v) {
         const std::uint8_t* row = image.data.data() + static_cast<std::size_t>(v) * image.step;
+        if (image.is_bigendian) {  // to this machine's (little-endian) order
+          for (int u = 0; u < w; ++u) std::reverse_copy(row + u * pixel, row + (u + 1) * pixel, &swapped[u * pixel]);
+          row = swapped.data();
+        }
         std::uint16_t* o = out.ptr<std::uint16_t>(v);
+        if (!f32) {
+          std::memcpy(o, row, w * pixel);
+          continue;
+        }
+        std::memcpy(metres.data(), row, w * pixel);
         for (int u = 0; u < w; ++u) {
-          std::uint8_t b[4];
-          std::memcpy(b, row + u * pixel, pixel);
-          if (image.is_bigendian) std::reverse(b, b + pixel);
-          if (!f32) {
-            std::memcpy(&o[u], b, 2);
-            continue;
-          }
-          float metres;
-          std::memcpy(&metres, b, 4);
-          const double raw = std::round(metres * coding_.scale);
-          o[u] = std::isfinite(metres) && raw > 0 && raw <= 65535 ? static_cast<std::uint16_t>(raw) : 0;
+          const double raw = std::round(metres[u] * coding_.scale);
+          o[u] = std::isfinite(metres[u]) && raw > 0 && raw <= 65535 ? static_cast<std::uint16_t>(raw) : 0;
         }
       }
       return out;
@@ -204,10 +210,9 @@ class RecordingDecoder : public FrameDecoder {
                                  "' is not one vdmap reads (rgb8, bgr8, "
                                  "rgba8, bgra8, mono8)");
       const int w = static_cast<int>(image.width), h = static_cast<int>(image.height);
-      if (image.step < static_cast<std::uint32_t>(w * channels) ||
-          image.data.size() < static_cast<std::size_t>(h) * image.step)
-        throw std::runtime_error("image data holds " + std::to_string(image.data.size()) + " bytes, " +
-                                 std::to_string(h) + " rows of " + std::to_string(image.step) + " needed");
+      if (image.step < static_cast<std::uint32_t>(w * channels))  // (the decoder checked height * step)
+        throw std::runtime_error("rows of " + std::to_string(image.step) + " bytes hold no " + std::to_string(w) +
+                                 " pixels of " + std::to_string(channels) + " bytes");
       cv::Mat out(h, w, CV_8UC3);
       for (int v = 0; v < h; ++v) {
         const std::uint8_t* row = image.data.data() + static_cast<std::size_t>(v) * image.step;

@@ -207,7 +207,8 @@ TEST(Ros1Bag, ScanVisitsOnlyTheChosenTopicsAndStopsWhenAsked) {
 TEST(Ros1Bag, TumLayoutDepthIs32FC1MetresWithNaNWhereNoMeasurement) {
   VDMAP_REQUIRE_BAG(file, kTumBag);
   const auto bag = Ros1Bag::open(file);
-  const Image depth = detail::decodeImageRos1(firstMessage(*bag, "/camera/depth/image"));
+  const auto depth_bytes = firstMessage(*bag, "/camera/depth/image");
+  const Image depth = detail::decodeImageRos1(depth_bytes);
   EXPECT_EQ(depth.width, 640u);
   EXPECT_EQ(depth.height, 480u);
   EXPECT_EQ(depth.encoding, "32FC1");
@@ -229,7 +230,8 @@ TEST(Ros1Bag, TumLayoutDepthIs32FC1MetresWithNaNWhereNoMeasurement) {
   }
   EXPECT_GT(nan, 0);
   EXPECT_GT(valid, 640 * 480 / 2);
-  const Image rgb = detail::decodeImageRos1(firstMessage(*bag, "/camera/rgb/image_color"));
+  const auto rgb_bytes = firstMessage(*bag, "/camera/rgb/image_color");
+  const Image rgb = detail::decodeImageRos1(rgb_bytes);
   EXPECT_EQ(rgb.encoding, "rgb8");
   EXPECT_EQ(rgb.step, 640u * 3);
   const CameraInfo info = detail::decodeCameraInfoRos1(firstMessage(*bag, "/camera/depth/camera_info"));
@@ -281,7 +283,8 @@ TEST(Ros1Bag, RealSenseTopicsDepthUnitsAndExtrinsics) {
   EXPECT_EQ(bag->topics()[stream_info].kind, MessageType::kOther);
   EXPECT_EQ(bag->topics()[topicIndex(*bag, "/device_0/info")].kind, MessageType::kOther);
 
-  const Image image = detail::decodeImageRos1(firstMessage(*bag, "/device_0/sensor_0/Depth_0/image/data"));
+  const auto bytes = firstMessage(*bag, "/device_0/sensor_0/Depth_0/image/data");
+  const Image image = detail::decodeImageRos1(bytes);
   EXPECT_EQ(image.encoding, "mono16");
   EXPECT_EQ(image.width, 640u);
   EXPECT_EQ(image.height, 480u);
@@ -756,7 +759,7 @@ TEST(Ros1Messages, PosesTransformsAndCompressedImages) {
   const auto jpeg = Ros1Bytes().header(2, 0, "cam").text("jpeg").text("\xff\xd8\xff").bytes;
   const CompressedImage c = detail::decodeCompressedImageRos1(jpeg);
   EXPECT_EQ(c.format, "jpeg");
-  EXPECT_EQ(c.data, (std::vector<std::uint8_t>{0xff, 0xd8, 0xff}));
+  EXPECT_EQ(std::vector<std::uint8_t>(c.data.begin(), c.data.end()), (std::vector<std::uint8_t>{0xff, 0xd8, 0xff}));
   expectEveryPrefixThrows(jpeg, [](const auto& b) { return detail::decodeCompressedImageRos1(b); });
 
   EXPECT_THROW(detail::decodePoseRos1(pose, MessageType::kImage), std::runtime_error);

@@ -10,6 +10,8 @@ namespace vdmap::ros::detail {
 
 Image decodeImageRos1(const std::vector<std::uint8_t>& bytes);
 CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes);
+Image decodeImageRos1(std::vector<std::uint8_t>&&) = delete;  // the image's data views the bytes
+CompressedImage decodeCompressedImageRos1(std::vector<std::uint8_t>&&) = delete;
 CameraInfo decodeCameraInfoRos1(const std::vector<std::uint8_t>& bytes);
 std::vector<TransformStamped> decodeTransformsRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
 PoseStamped decodePoseRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
@@ -17,6 +19,8 @@ float decodeFloat32Ros1(const std::vector<std::uint8_t>& bytes);
 
 Image decodeImageCdr(const std::vector<std::uint8_t>& bytes);
 CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes);
+Image decodeImageCdr(std::vector<std::uint8_t>&&) = delete;  // the image's data views the bytes
+CompressedImage decodeCompressedImageCdr(std::vector<std::uint8_t>&&) = delete;
 CameraInfo decodeCameraInfoCdr(const std::vector<std::uint8_t>& bytes);
 std::vector<TransformStamped> decodeTransformsCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
 PoseStamped decodePoseCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
