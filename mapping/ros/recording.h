@@ -1,6 +1,6 @@
 #pragma once
-// A robot's recording read message by message: a ROS 1 bag (ros1_bag.h, through Debian's
-// rosbag_storage) or a ROS 2 MCAP file (mcap_file.h, our own reader of the published format).
+// A robot's recording read message by message: a ROS 1 bag (ros1_bag.h, our own reader of bag
+// format 2.0) or a ROS 2 MCAP file (mcap_file.h, our own reader of the published format).
 // Both give the same topics, message references and decoded messages (messages.h), so what turns
 // messages into RGB-D frames (mapping/sequence/) does not know which file it reads.
 #include <cstdint>

@@ -5,8 +5,8 @@
 // in the file (it allocates the header lengths it reads, reads chunk buffers at index offsets
 // unchecked, and loads the encryptor plugin a bag names), so a damaged or hostile bag can crash
 // it, and it refuses a bag whose index is missing. Here every length is checked against the file
-// and the chunk before it is used; the tests read the same bags through rosbag_storage as the
-// oracle. Chunks are decompressed with liblz4's frame API (rosbag's lz4 chunks are LZ4 frames)
+// and the chunk before it is used; what rosbag_storage read of the shared bags (once, by a small
+// rosbag::View program) is the tests' oracle. Chunks are decompressed with liblz4's frame API (rosbag's lz4 chunks are LZ4 frames)
 // and libbz2. ROS headers stay out of this file: the implementation is behind a pimpl.
 #include <filesystem>
 #include <memory>

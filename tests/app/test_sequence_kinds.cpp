@@ -10,6 +10,7 @@
 
 #include "mapping/files/ply_reader.h"
 #include "tests/support/layouts.h"
+#include "tests/support/ros1_bag_writer.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -128,6 +129,92 @@ TEST(SequenceKinds, InfoSaysTheKindAndWhy) {
             std::string::npos)
       << r.out;
   EXPECT_NE(r.out.find("all with poses, from frame-NNNNNN.pose.txt"), std::string::npos) << r.out;
+}
+
+// --- A recording's bad input, at the command line ---------------------------------------------
+
+// `vdmap map` of `recording` written as rec.bag: its result, and whether the output folder holds
+// anything.
+struct MapRun {
+  test::RunResult r;
+  bool wrote = false;
+};
+MapRun mapRecording(const test::TinyRecording& recording, const std::string& options = "") {
+  const test::TempDir dir;
+  test::writeText(dir / "rec.bag", recording.write());
+  MapRun run;
+  run.r = runVdmap("map '" + (dir / "rec.bag").string() + "' " + options + " --out '" + (dir / "out").string() + "'");
+  run.wrote = fs::exists(dir / "out") && !fs::is_empty(dir / "out");
+  return run;
+}
+
+// Exit 1, one line naming the file and `what`, nothing written.
+void expectRefused(const MapRun& run, const std::string& what) {
+  EXPECT_EQ(run.r.exit_code, 1) << run.r.err;
+  EXPECT_EQ(std::count(run.r.err.begin(), run.r.err.end(), '\n'), 1) << run.r.err;
+  EXPECT_NE(run.r.err.find("rec.bag"), std::string::npos) << run.r.err;
+  EXPECT_NE(run.r.err.find(what), std::string::npos) << run.r.err;
+  EXPECT_FALSE(run.wrote);
+}
+
+TEST(RecordingBadInput, TheTinyRecordingMaps) {  // so that no case below fails by accident
+  const MapRun run = mapRecording(test::TinyRecording());
+  EXPECT_EQ(run.r.exit_code, 0) << run.r.err;
+  EXPECT_TRUE(run.wrote);
+}
+
+TEST(RecordingBadInput, AnImageOfAnotherSizeThanItsCameraInfo) {
+  test::TinyRecording recording;
+  const std::size_t last = recording.on("/camera/depth/image").back();
+  recording.messages[last].bytes =
+      test::imageMessage(100.2, "camera", 16, 12, "16UC1", 32, std::vector<std::uint8_t>(16 * 12 * 2, 0));
+  expectRefused(mapRecording(recording), "image is 16x12 but its camera is 32x24");
+}
+
+TEST(RecordingBadInput, HeaderStampsGoingBackwards) {
+  test::TinyRecording recording;
+  const std::vector<std::size_t> depth = recording.on("/camera/depth/image");
+  recording.messages[depth[2]].bytes =
+      test::imageMessage(100.05, "camera", 32, 24, "16UC1", 64, std::vector<std::uint8_t>(32 * 24 * 2, 0));
+  expectRefused(mapRecording(recording), "header stamps go backwards");
+}
+
+TEST(RecordingBadInput, AColourEncodingVdmapDoesNotRead) {
+  test::TinyRecording recording;
+  const std::vector<std::size_t> rgb = recording.on("/camera/rgb/image_color");
+  for (std::size_t k = 0; k < rgb.size(); ++k)
+    recording.messages[rgb[k]].bytes = test::imageMessage(100.0 + 0.1 * static_cast<double>(k), "camera", 32, 24,
+                                                          "yuv422", 64, std::vector<std::uint8_t>(32 * 24 * 2, 0));
+  expectRefused(mapRecording(recording), "colour encoding 'yuv422' is not one vdmap reads");
+}
+
+TEST(RecordingBadInput, TfWithoutAPathBetweenThePoseFrames) {
+  test::TinyRecording recording;
+  expectRefused(mapRecording(recording, "--pose-frames world:elsewhere"), "tf has no frame 'elsewhere'");
+  recording.messages.push_back({4, 100'000'000'000, test::tfMessage(100.0, "odom", "base", 0, 0, 0)});
+  std::stable_sort(recording.messages.begin(), recording.messages.end(),
+                   [](const auto& a, const auto& b) { return a.time_ns < b.time_ns; });
+  expectRefused(mapRecording(recording, "--pose-frames odom:camera"), "tf has frames: ");
+}
+
+// Without camera_info the camera is a preset, named with the reason (as for folders); an image
+// of another size than the preset's is refused saying so.
+TEST(RecordingBadInput, NoCameraInfoMapsWithAStatedGuess) {
+  auto without_info = [](test::TinyRecording recording) {
+    std::erase_if(recording.messages, [](const test::BagMessage& m) { return m.conn == 2 || m.conn == 3; });
+    return recording;
+  };
+  expectRefused(mapRecording(without_info(test::TinyRecording(3, 32, 24))),
+                "32x24 images but the camera (preset tum-default (the recording has no camera_info; --camera PRESET "
+                "sets it)) is 640x480");
+  const test::TempDir dir;
+  test::writeText(dir / "rec.bag", without_info(test::TinyRecording(3, 640, 480)).write());
+  const test::RunResult info = runVdmap("info '" + (dir / "rec.bag").string() + "'");
+  ASSERT_EQ(info.exit_code, 0) << info.err;
+  EXPECT_NE(info.out.find("preset tum-default (the recording has no camera_info"), std::string::npos) << info.out;
+  const test::RunResult map = runVdmap("map '" + (dir / "rec.bag").string() + "' --out '" + (dir / "out").string() + "'");
+  EXPECT_EQ(map.exit_code, 0) << map.err;
+  EXPECT_TRUE(fs::exists(dir / "out" / "global_ellipsoids.ply"));
 }
 
 }  // namespace

@@ -1,7 +1,6 @@
 // The ROS 1 bag reader (mapping/ros/ros1_bag.h) and the ROS 1 message decoders
 // (mapping/ros/detail/decoders.h) on the recordings of ../shared/data/bags: what they hold, read
 // as rosbag_storage reads them, and what damage leaves of them.
-#include <bzlib.h>
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -16,11 +15,16 @@
 #include "mapping/core/error.h"
 #include "mapping/ros/detail/decoders.h"
 #include "mapping/ros/ros1_bag.h"
+#include "tests/support/ros1_bag_writer.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap::ros::ros1_bag_test {
 
 namespace fs = std::filesystem;
+using test::BagConnection;
+using test::BagMessage;
+using test::BagWriter;
+using test::Ros1Bytes;
 
 /// A bag of ../shared/data/bags, or empty (the test skips) when absent.
 fs::path bagFile(const fs::path& bags, const std::string& name) {
@@ -481,113 +485,6 @@ TEST(Ros1Bag, NotABagIsAnInputError) {
 
 // --- Bags written here: chunks of each compression, chunks that overlap in time, no index ---------
 
-/// A message to write: its connection, log time and serialised bytes.
-struct BagMessage {
-  std::uint32_t conn = 0;
-  std::int64_t time_ns = 0;
-  std::vector<std::uint8_t> bytes;
-};
-struct BagConnection {
-  std::uint32_t id = 0;
-  std::string topic, type;
-};
-
-/// Bag format 2.0 as rosbag writes it (http://wiki.ros.org/Bags/Format/2.0), small.
-class BagWriter {
- public:
-  /// A bag of `chunks` (each with `compression`: "none" or "bz2"), indexed unless `indexed` is false
-  /// (then as a recorder leaves it when it stops without closing the bag).
-  static std::string write(const std::vector<BagConnection>& connections,
-                           const std::vector<std::vector<BagMessage>>& chunks, const std::string& compression,
-                           bool indexed = true) {
-    std::string out = "#ROSBAG V2.0\n";
-    const std::size_t header_pos = out.size();
-    out += bagHeader(0, connections.size(), chunks.size());
-    struct ChunkInfo {
-      std::uint64_t pos;
-      std::int64_t start, end;
-      std::map<std::uint32_t, std::vector<std::pair<std::int64_t, std::uint32_t>>> index;  // conn -> (time, offset)
-    };
-    std::vector<ChunkInfo> infos;
-    for (const auto& messages : chunks) {
-      ChunkInfo info{out.size(), INT64_MAX, INT64_MIN, {}};
-      std::string inner;
-      for (const BagMessage& m : messages) {
-        if (!info.index.contains(m.conn)) inner += connectionRecord(connections, m.conn);
-        info.index[m.conn].emplace_back(m.time_ns, static_cast<std::uint32_t>(inner.size()));
-        inner += record({field("op", u8(2)), field("conn", u32(m.conn)), field("time", time(m.time_ns))},
-                        std::string(m.bytes.begin(), m.bytes.end()));
-        info.start = std::min(info.start, m.time_ns);
-        info.end = std::max(info.end, m.time_ns);
-      }
-      out += record({field("op", u8(5)), field("compression", compression), field("size", u32(inner.size()))},
-                    compress(inner, compression));
-      for (const auto& [conn, entries] : info.index) {
-        std::string data;
-        for (const auto& [t, offset] : entries) data += time(t) + u32(offset);
-        out += record(
-            {field("op", u8(4)), field("ver", u32(1)), field("conn", u32(conn)), field("count", u32(entries.size()))},
-            data);
-      }
-      infos.push_back(std::move(info));
-    }
-    if (!indexed) return out;
-    const std::uint64_t index_pos = out.size();
-    for (const BagConnection& c : connections) out += connectionRecord(connections, c.id);
-    for (const ChunkInfo& info : infos) {
-      std::string data;
-      for (const auto& [conn, entries] : info.index) data += u32(conn) + u32(entries.size());
-      out += record({field("op", u8(6)), field("ver", u32(1)), field("chunk_pos", u64(info.pos)),
-                     field("start_time", time(info.start)), field("end_time", time(info.end)),
-                     field("count", u32(info.index.size()))},
-                    data);
-    }
-    out.replace(header_pos, bagHeader(0, 0, 0).size(), bagHeader(index_pos, connections.size(), chunks.size()));
-    return out;
-  }
-
- private:
-  template <typename T>
-  static std::string bytesOf(T value) {
-    return std::string(reinterpret_cast<const char*>(&value), sizeof(T));
-  }
-  static std::string u8(std::uint8_t v) { return bytesOf(v); }
-  static std::string u32(std::size_t v) { return bytesOf(static_cast<std::uint32_t>(v)); }
-  static std::string u64(std::uint64_t v) { return bytesOf(v); }
-  static std::string time(std::int64_t ns) {
-    return u32(static_cast<std::uint64_t>(ns) / 1'000'000'000) + u32(static_cast<std::uint64_t>(ns) % 1'000'000'000);
-  }
-  static std::string field(const std::string& name, const std::string& value) {
-    return u32(name.size() + 1 + value.size()) + name + "=" + value;
-  }
-  static std::string record(const std::vector<std::string>& fields, const std::string& data) {
-    std::string header;
-    for (const std::string& f : fields) header += f;
-    return u32(header.size()) + header + u32(data.size()) + data;
-  }
-  /// The bag header record, padded to 4096 bytes as rosbag pads it (so it can be rewritten in place).
-  static std::string bagHeader(std::uint64_t index_pos, std::size_t conns, std::size_t chunks) {
-    const std::string header = field("op", u8(3)) + field("index_pos", u64(index_pos)) +
-                               field("conn_count", u32(conns)) + field("chunk_count", u32(chunks));
-    return u32(header.size()) + header + u32(4096 - 8 - header.size()) + std::string(4096 - 8 - header.size(), ' ');
-  }
-  static std::string connectionRecord(const std::vector<BagConnection>& connections, std::uint32_t id) {
-    const auto c = std::find_if(connections.begin(), connections.end(), [&](const auto& x) { return x.id == id; });
-    return record({field("op", u8(7)), field("conn", u32(id)), field("topic", c->topic)},
-                  field("topic", c->topic) + field("type", c->type) + field("md5sum", "*"));
-  }
-  static std::string compress(const std::string& bytes, const std::string& compression) {
-    if (compression != "bz2") return bytes;
-    std::string out(bytes.size() + bytes.size() / 100 + 600, '\0');
-    auto size = static_cast<unsigned>(out.size());
-    EXPECT_EQ(BZ2_bzBuffToBuffCompress(out.data(), &size, const_cast<char*>(bytes.data()),
-                                       static_cast<unsigned>(bytes.size()), 9, 0, 0),
-              BZ_OK);
-    out.resize(size);
-    return out;
-  }
-};
-
 std::vector<std::uint8_t> float32Message(float value) {
   std::vector<std::uint8_t> bytes(4);
   std::memcpy(bytes.data(), &value, 4);
@@ -689,26 +586,6 @@ void expectEveryPrefixThrows(const std::vector<std::uint8_t>& bytes, Decode deco
 }
 
 /// ROS 1 serialisation of fields, to make messages the bags do not hold.
-struct Ros1Bytes {
-  std::vector<std::uint8_t> bytes;
-  template <typename T>
-  Ros1Bytes& put(T value) {
-    const auto* p = reinterpret_cast<const std::uint8_t*>(&value);
-    bytes.insert(bytes.end(), p, p + sizeof(T));
-    return *this;
-  }
-  Ros1Bytes& text(const std::string& s) {
-    put(static_cast<std::uint32_t>(s.size()));
-    bytes.insert(bytes.end(), s.begin(), s.end());
-    return *this;
-  }
-  Ros1Bytes& header(std::uint32_t sec, std::uint32_t nsec, const std::string& frame) {
-    return put(std::uint32_t{7}).put(sec).put(nsec).text(frame);
-  }
-  Ros1Bytes& pose(double x, double y, double z, double qx, double qy, double qz, double qw) {
-    return put(x).put(y).put(z).put(qx).put(qy).put(qz).put(qw);
-  }
-};
 
 TEST(Ros1Messages, EveryPrefixOfARealMessageThrows) {
   VDMAP_REQUIRE_BAG(file, kRealSenseBag);
