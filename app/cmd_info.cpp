@@ -108,7 +108,8 @@ void runInfo(const SequenceArgs& args, bool json) {
           {"invalid_fraction", rounded(1.0 - depth.valid_fraction)},
           {"no_depth_fraction", rounded(depth.no_depth_fraction)},
           {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
-        {"dropped", {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}}},
+        {"dropped",
+         {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}, {"rgb_window_s", d.max_rgb_dt_s}}},
     };
     std::cout << jsonText(out) << "\n";
     return;
@@ -135,9 +136,8 @@ void runInfo(const SequenceArgs& args, bool json) {
               "measurement, %.3g%% 65535 = invalid code) (%d frames sampled)\n",
               depth.min_m, depth.max_m, depth.median_m, 100.0 * (1.0 - depth.valid_fraction),
               100.0 * depth.no_depth_fraction, 100.0 * depth.invalid_code_fraction, depth.frames_sampled);
-  std::printf("dropped    %d without an rgb frame within 0.02 s, %d without a pose within 0.1 s, "
-              "%d outside --frames\n",
-              d.no_rgb, d.no_pose, d.outside_range);
+  std::printf("dropped    %d without an rgb frame within %g s, %d without a pose within %g s, %d outside --frames\n",
+              d.no_rgb, d.max_rgb_dt_s, d.no_pose, d.max_pose_dt_s, d.outside_range);
 }
 
 }  // namespace

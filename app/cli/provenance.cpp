@@ -1,5 +1,6 @@
 #include "app/cli/provenance.h"
 
+#include <cstdio>
 #include <filesystem>
 
 #include <nlohmann/json.hpp>
@@ -80,10 +81,17 @@ std::string droppedFramesWarning(const Sequence& seq) {
   if (dropped == 0) return "";
   const int in_range = seq.listedDepthFrames() - d.outside_range;
   std::string why;
-  if (d.no_pose > 0)
-    why = std::to_string(d.no_pose) + " without a ground-truth pose within 0.1 s (groundtruth.txt does not cover "
-                                      "them; --poses track maps every frame)";
-  if (d.no_rgb > 0) why += (why.empty() ? "" : ", ") + std::to_string(d.no_rgb) + " without an rgb frame within 0.02 s";
+  char window[32];
+  if (d.no_pose > 0) {
+    std::snprintf(window, sizeof window, "%g s", d.max_pose_dt_s);
+    why = std::to_string(d.no_pose) + " without a ground-truth pose within " + window +
+          " (the recorded poses do not cover them; --poses track maps every frame)";
+  }
+  if (d.no_rgb > 0) {
+    std::snprintf(window, sizeof window, "%g s", d.max_rgb_dt_s);
+    why += (why.empty() ? "" : ", ") + std::to_string(d.no_rgb) + " without an rgb frame within " + window +
+           " (--rgb-window S pairs colour further away)";
+  }
   // More than half of the range gone is rarely what the user meant: say so before the details.
   const std::string most = 2 * dropped > in_range ? "MOST FRAMES DROPPED: " : "";
   return most + std::to_string(dropped) + " of the " + std::to_string(in_range) + " frames of " +

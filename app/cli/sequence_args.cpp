@@ -23,6 +23,11 @@ void addSequenceArgs(CLI::App& verb, SequenceArgs& args) {
                   "frames A:B of the depth list (B exclusive; A: or :B; a plain N means 0:N, the first N frames); "
                   "a range past the end is an error")
       ->check(frameRangeCheck());
+  verb.add_option("--rgb-window", args.rgb_window_s,
+                  "seconds: a depth frame takes the colour image nearest in time within this (sensors that do not "
+                  "trigger colour and depth together need more)")
+      ->check(CLI::Range(0.0, 10.0))
+      ->capture_default_str();
   verb.add_option("--depth-topic", args.topics.depth, "a recording's depth topic (default: found by type and name)");
   verb.add_option("--rgb-topic", args.topics.rgb, "a recording's colour topic (default: found by type and name)");
   verb.add_option("--info-topic", args.topics.info,
@@ -103,6 +108,7 @@ Sequence openSequence(const SequenceArgs& args, bool cut_range_at_end, std::opti
                                           : SequenceOptions::Poses::kAuto;
   if (!args.frames.empty()) options.frames = parseFrameRange(args.frames);
   options.topics = args.topics;
+  options.max_rgb_dt_s = args.rgb_window_s;
   return Sequence::open(args.folder, options);
 }
 

@@ -22,6 +22,7 @@ struct SequenceArgs {
   bool refine_given = false;  ///< --refine was on the command line
   SequenceOptions::Topics
       topics;  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
+  double rgb_window_s = SequenceOptions{}.max_rgb_dt_s;  ///< --rgb-window
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while
 /// parsing; whether the sequence has those frames when it is opened).

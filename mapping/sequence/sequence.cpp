@@ -170,6 +170,8 @@ Sequence Sequence::open(const fs::path& folder, const SequenceOptions& options) 
   detail::Listing listing = listSequence(folder, options);
   Sequence seq;
   seq.folder_ = folder;
+  seq.dropped_.max_rgb_dt_s = options.max_rgb_dt_s;
+  seq.dropped_.max_pose_dt_s = options.max_pose_dt_s;
   seq.kind_ = listing.kind;
   seq.kind_reason_ = listing.reason;
   seq.camera_ = listing.camera.camera;
@@ -224,13 +226,15 @@ Sequence Sequence::open(const fs::path& folder, const SequenceOptions& options) 
     seq.entries_.push_back({i, frame.depth.t, frame.rgb->t, frame.rgb->path, frame.depth.path,
                             frame.pose.value_or(Transform::Identity()), frame.pose.has_value()});
   }
-  if (seq.entries_.empty())
-    throw InputError(folder.string(),
-                     "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
-                         std::to_string(seq.dropped_.no_rgb) + " without an rgb frame within " +
-                         std::to_string(options.max_rgb_dt_s) + " s, " + std::to_string(seq.dropped_.no_pose) +
-                         " without a ground-truth pose within " + std::to_string(options.max_pose_dt_s) + " s, " +
-                         std::to_string(seq.dropped_.outside_range) + " outside --frames");
+  if (seq.entries_.empty()) {
+    char windows[128];
+    std::snprintf(windows, sizeof windows, " without an rgb frame within %g s, %d without a ground-truth pose within %g s",
+                  options.max_rgb_dt_s, seq.dropped_.no_pose, options.max_pose_dt_s);
+    throw InputError(folder.string(), "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
+                                          std::to_string(seq.dropped_.no_rgb) + windows + ", " +
+                                          std::to_string(seq.dropped_.outside_range) + " outside --frames" +
+                                          (seq.dropped_.no_rgb > 0 ? "; --rgb-window S pairs colour further away" : ""));
+  }
   return seq;
 } catch (const fs::filesystem_error& e) {
   throw InputError(e.path1().string(), e.code().message());

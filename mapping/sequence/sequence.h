@@ -62,7 +62,7 @@ struct SequenceOptions {
   /// A range that ends past the last listed frame is an error (it names the sequence's range);
   /// true cuts it there instead (for a verb's default range, such as bench's 0:30).
   bool cut_range_at_end = false;
-  double max_rgb_dt_s = 0.02;  ///< depth-rgb association window (docs/method.md 1)
+  double max_rgb_dt_s = 0.02;  ///< depth-rgb association window (docs/method.md 1; --rgb-window)
   double max_pose_dt_s = 0.1;  ///< pose interpolation window
   /// Whose poses the frames get (the recorded ones: groundtruth.txt, a data set's pose files).
   enum class Poses {
@@ -101,6 +101,7 @@ struct DropCounts {
   int no_rgb = 0;         ///< no rgb frame within max_rgb_dt_s
   int no_pose = 0;        ///< no ground-truth poses within max_pose_dt_s on both sides
   int outside_range = 0;  ///< outside --frames
+  double max_rgb_dt_s = 0, max_pose_dt_s = 0;  ///< the windows they were judged by (SequenceOptions)
 };
 
 /// The one source of RGB-D frames (docs/cli.md "Sequences"): a folder in one of the layouts of

@@ -47,9 +47,9 @@ double matchedShare(const std::vector<EllipsoidRecord>& x, const std::vector<Ell
 }
 
 // `vdmap map` of `seq` (frames 0:N) into `out`; its stats.json.
-nlohmann::json mapStats(const fs::path& seq, int frames, const fs::path& out) {
-  const test::RunResult r = runVdmap("map '" + seq.string() + "' --frames 0:" + std::to_string(frames) +
-                                     " --json --out '" + out.string() + "'");
+nlohmann::json mapStats(const fs::path& seq, int frames, const fs::path& out, const std::string& options = "") {
+  const test::RunResult r = runVdmap("map '" + seq.string() + "' --frames 0:" + std::to_string(frames) + " " +
+                                     options + " --json --out '" + out.string() + "'");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
 }
@@ -117,6 +117,23 @@ TEST(SequenceKinds, Ros1BagMapsAsTheFolderOfItsFrames) {
 
 TEST(SequenceKinds, McapMapsAsTheFolderOfItsFrames) {
   expectRecordingMapsAsTheFolder("7scenes-redkitchen-realsense-layout.mcap", 1e-5);
+}
+
+// The RealSense recorder's sample: its one colour frame is 0.10 s from the first depth frame.
+// Refused in one line that names --rgb-window; with it, that frame maps (tracked: no poses).
+TEST(SequenceKinds, RealSenseBagMapsWithAWiderColourWindow) {
+  VDMAP_REQUIRE_SHARED_DATA(bags, "bags");
+  const fs::path bag = bags / "realsense-d400-single-depth-color.bag";
+  const test::TempDir dir;
+  const test::RunResult refused = runVdmap("map '" + bag.string() + "' --out '" + (dir / "a").string() + "'");
+  EXPECT_EQ(refused.exit_code, 1);
+  EXPECT_EQ(std::count(refused.err.begin(), refused.err.end(), '\n'), 1) << refused.err;
+  EXPECT_NE(refused.err.find("no usable frames"), std::string::npos) << refused.err;
+  EXPECT_NE(refused.err.find("--rgb-window"), std::string::npos) << refused.err;
+  const nlohmann::json j = mapStats(bag, 2, dir / "b", "--rgb-window 0.2");
+  ASSERT_FALSE(j.is_null());
+  EXPECT_EQ(j["frames_mapped"], 1);
+  EXPECT_EQ(j["poses"], "track");
 }
 
 TEST(SequenceKinds, InfoSaysTheKindAndWhy) {

@@ -71,7 +71,8 @@ TEST(RecordingSequence, RealSenseBagUsesItsDepthUnitsAndHasNoPoses) {
     Sequence::open(bag, options);
     ADD_FAILURE() << "expected no usable frames";
   } catch (const InputError& e) {
-    EXPECT_NE(std::string(e.what()).find("2 without an rgb frame within 0.02"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("2 without an rgb frame within 0.02 s"), std::string::npos) << e.what();
+    EXPECT_NE(std::string(e.what()).find("--rgb-window S pairs colour further away"), std::string::npos) << e.what();
   }
   options.max_rgb_dt_s = 0.2;
   const Sequence rs = Sequence::open(bag, options);
