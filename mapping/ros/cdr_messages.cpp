@@ -157,7 +157,7 @@ TransformStamped readCdrTransformStamped(CdrReader& cdr) {
 
 }  // namespace
 
-Image decodeImageCdr(const std::vector<std::uint8_t>& bytes) {
+Image decodeImageCdr(const std::vector<std::uint8_t>& bytes, bool head_only) {
   CdrReader cdr(bytes);
   Image image;
   image.header = readCdrHeader(cdr);
@@ -166,6 +166,7 @@ Image decodeImageCdr(const std::vector<std::uint8_t>& bytes) {
   image.encoding = cdr.string("encoding");
   image.is_bigendian = cdr.u8("is_bigendian") != 0;
   image.step = cdr.u32("step");
+  if (head_only) return image;
   image.data = cdr.byteSequence("data");
   const std::uint64_t needed = static_cast<std::uint64_t>(image.height) * image.step;
   if (image.data.size() < needed)
@@ -174,11 +175,12 @@ Image decodeImageCdr(const std::vector<std::uint8_t>& bytes) {
   return image;
 }
 
-CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes) {
+CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes, bool head_only) {
   CdrReader cdr(bytes);
   CompressedImage image;
   image.header = readCdrHeader(cdr);
   image.format = cdr.string("format");
+  if (head_only) return image;
   image.data = cdr.byteSequence("data");
   return image;
 }

@@ -31,6 +31,15 @@ CompressedImage decodeCompressedImage(const std::vector<std::uint8_t>& bytes, En
                                      : detail::decodeCompressedImageCdr(bytes);
 }
 
+Image decodeImageHead(const std::vector<std::uint8_t>& bytes, Encoding encoding) {
+  return encoding == Encoding::kRos1 ? detail::decodeImageRos1(bytes, true) : detail::decodeImageCdr(bytes, true);
+}
+
+CompressedImage decodeCompressedImageHead(const std::vector<std::uint8_t>& bytes, Encoding encoding) {
+  return encoding == Encoding::kRos1 ? detail::decodeCompressedImageRos1(bytes, true)
+                                     : detail::decodeCompressedImageCdr(bytes, true);
+}
+
 CameraInfo decodeCameraInfo(const std::vector<std::uint8_t>& bytes, Encoding encoding) {
   return encoding == Encoding::kRos1 ? detail::decodeCameraInfoRos1(bytes) : detail::decodeCameraInfoCdr(bytes);
 }

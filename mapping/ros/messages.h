@@ -91,6 +91,10 @@ Image decodeImage(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 CompressedImage decodeCompressedImage(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 Image decodeImage(std::vector<std::uint8_t>&&, Encoding) = delete;
 CompressedImage decodeCompressedImage(std::vector<std::uint8_t>&&, Encoding) = delete;
+/// The fields before an image's data (header, size, encoding; a CompressedImage's header and
+/// format), from the message whole or its first bytes (Recording::scanHeads); data left empty.
+Image decodeImageHead(const std::vector<std::uint8_t>& bytes, Encoding encoding);
+CompressedImage decodeCompressedImageHead(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 CameraInfo decodeCameraInfo(const std::vector<std::uint8_t>& bytes, Encoding encoding);
 /// tf2_msgs/TFMessage: its transforms; TransformStamped and Transform: one.
 std::vector<TransformStamped> decodeTransforms(const std::vector<std::uint8_t>& bytes, Encoding encoding,

@@ -36,6 +36,7 @@ struct Message {
   MessageRef ref;
   Encoding encoding = Encoding::kRos1;
   std::shared_ptr<const std::vector<std::uint8_t>> bytes;  ///< the serialised message
+  bool head_only = false;  ///< bytes hold only its first bytes (Recording::scanHeads)
 };
 
 /// How a scan ended: at the end of the file, or at damage (a truncated file, a bad CRC, a record
@@ -62,6 +63,15 @@ class Recording {
   /// into topics()); `visit` returns false to stop early. Reads the file once from the start,
   /// holding one chunk in memory (a few where chunks overlap in time). Damage ends the scan without throwing (see ScanEnd).
   virtual ScanEnd scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const = 0;
+
+  /// As scan(), but a message on a topic of `heads` (image topics) may come as its first bytes
+  /// only (Message::head_only): enough for decodeImageHead(). Listing a recording's frames needs
+  /// no more of its images. A reader that cannot cut them short gives them whole.
+  virtual ScanEnd scanHeads(const std::vector<int>& topics, const std::vector<int>& heads,
+                            const std::function<bool(const Message&)>& visit) const {
+    (void)heads;
+    return scan(topics, visit);
+  }
 
   /// The message a scan gave with this ref. Throws InputError naming the file when it cannot be
   /// read. Reading refs in file order is cheap (the last chunk read is kept).

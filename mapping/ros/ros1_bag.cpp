@@ -185,8 +185,10 @@ struct ChunkRecord {
   std::size_t end() const { return data_pos + data_len; }
 };
 
-/// Reads the record at `offset` of a chunk's bytes; false when it does not fit or parse.
-bool chunkRecord(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkRecord& record, std::string& why) {
+/// Reads the record at `offset` of a chunk's bytes; false when it does not fit or parse. With
+/// `with_data` false its data may lie beyond the bytes given.
+bool chunkRecord(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkRecord& record, std::string& why,
+                 bool with_data = true) {
   std::uint32_t header_len = 0;
   if (offset > chunk.size() || chunk.size() - offset < 4) return why = "a record's length is cut", false;
   std::memcpy(&header_len, chunk.data() + offset, 4);
@@ -200,7 +202,8 @@ bool chunkRecord(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkR
   std::memcpy(&record.data_len, chunk.data() + len_pos, 4);
   record.op = *op;
   record.data_pos = len_pos + 4;
-  if (record.data_len > chunk.size() - record.data_pos) return why = "a record's data runs past its chunk", false;
+  if (with_data && record.data_len > chunk.size() - record.data_pos)
+    return why = "a record's data runs past its chunk", false;
   return true;
 }
 
@@ -229,76 +232,145 @@ bool messageAt(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkMes
   return true;
 }
 
-/// Decompresses a chunk's data into at most `size` bytes. With `partial` (a chunk the file cuts
-/// short) the data may end early and give what they hold; otherwise they must give exactly `size`.
-bool decompress(Compression compression, std::span<const std::uint8_t> in, std::uint32_t size, bool partial,
-                std::vector<std::uint8_t>& out, std::string& why) {
-  out.clear();
-  if (compression == Compression::kNone) {
-    if (in.size() > size || (!partial && in.size() != size))
-      return why = "an uncompressed chunk of " + std::to_string(in.size()) + " bytes states " + std::to_string(size),
+// How much of an image message a scan with heads gives: its header, size and encoding (a frame
+// id or encoding longer than this makes the listing read the message whole).
+constexpr std::size_t kHeadBytes = 1024;
+
+/// A chunk's data `in` decompressed as far as they are asked for, into `out` (at most `size`
+/// bytes; both buffers are the caller's, so that a scan re-uses them chunk after chunk). With
+/// `partial` (a chunk the file cuts short) the data may end early and give what they hold;
+/// otherwise finish() checks that they give exactly `size`. The output grows as the data
+/// decompress, so a false size costs only what the data really give. Uncompressed data are
+/// given as they lie in `in`.
+class ChunkInflater {
+ public:
+  ChunkInflater(Compression compression, std::span<const std::uint8_t> in, std::vector<std::uint8_t>& out,
+                std::uint32_t size, bool partial)
+      : compression_(compression), in_(in), out_(out), size_(size), partial_(partial) {
+    out_.clear();
+    if (compression_ == Compression::kNone) {
+      ended_ = true;
+    } else if (compression_ == Compression::kLz4) {
+      if (LZ4F_isError(LZ4F_createDecompressionContext(&lz4_, LZ4F_VERSION))) lz4_ = nullptr;
+    } else {
+      bz2_ready_ = BZ2_bzDecompressInit(&bz2_, 0, 0) == BZ_OK;
+    }
+  }
+  ~ChunkInflater() {
+    if (lz4_) LZ4F_freeDecompressionContext(lz4_);
+    if (bz2_ready_) BZ2_bzDecompressEnd(&bz2_);
+  }
+  ChunkInflater(const ChunkInflater&) = delete;
+  ChunkInflater& operator=(const ChunkInflater&) = delete;
+
+  /// Decompresses until at least `n` bytes are out or the data end (then fewer are); false with
+  /// `why` when the data do not decode.
+  bool ensure(std::size_t n, std::string& why) {
+    if (!error_.empty()) return why = error_, false;
+    while (produced_ < n && !ended_ && grow()) {
+      std::size_t dst = 0, src = 0;
+      if (compression_ == Compression::kLz4) {
+        if (!lz4_) return why = error_ = "out of memory", false;
+        dst = out_.size() - produced_, src = in_.size() - consumed_;
+        const std::size_t r = LZ4F_decompress(lz4_, out_.data() + produced_, &dst, in_.data() + consumed_, &src, nullptr);
+        if (LZ4F_isError(r)) return why = error_ = std::string("lz4 data do not decode (") + LZ4F_getErrorName(r) + ")", false;
+        ended_ = r == 0;
+      } else {
+        if (!bz2_ready_) return why = error_ = "out of memory", false;
+        // Both counts fit: a chunk's data and size are 32-bit fields.
+        bz2_.next_in = const_cast<char*>(reinterpret_cast<const char*>(in_.data() + consumed_));
+        bz2_.avail_in = static_cast<unsigned>(in_.size() - consumed_);
+        bz2_.next_out = reinterpret_cast<char*>(out_.data() + produced_);
+        bz2_.avail_out = static_cast<unsigned>(out_.size() - produced_);
+        const int r = BZ2_bzDecompress(&bz2_);
+        dst = out_.size() - produced_ - bz2_.avail_out, src = in_.size() - consumed_ - bz2_.avail_in;
+        if (r != BZ_OK && r != BZ_STREAM_END)
+          return why = error_ = "bz2 data do not decode (error " + std::to_string(r) + ")", false;
+        ended_ = r == BZ_STREAM_END;
+      }
+      produced_ += dst;
+      consumed_ += src;
+      if (dst == 0 && src == 0) stalled_ = true;
+      if (stalled_) break;
+    }
+    return true;
+  }
+
+  /// Decompresses the rest and checks the total against the chunk's size.
+  bool finish(std::string& why) {
+    if (compression_ == Compression::kNone) {
+      if (in_.size() > size_ || (!partial_ && in_.size() != size_))
+        return why = "an uncompressed chunk of " + std::to_string(in_.size()) + " bytes states " + std::to_string(size_),
+               false;
+      return true;
+    }
+    if (!ensure(size_ + std::size_t{1}, why)) return false;
+    if (ended_ && produced_ != size_)
+      return why = "a chunk decompresses to " + std::to_string(produced_) + " bytes, its header says " +
+                   std::to_string(size_),
              false;
-    out.assign(in.begin(), in.end());
+    if (!ended_ && !partial_) {
+      if (produced_ == size_)
+        return why = "a chunk decompresses to more than the " + std::to_string(size_) + " bytes its header says",
+               false;
+      return why = std::string(compressionName(compression_)) + " data end early", false;
+    }
     return true;
   }
-  // The output grows as the data decompress, so a false size costs only what the data really give.
-  std::size_t produced = 0, consumed = 0;
-  bool ended = false;
-  auto grow = [&] {
-    if (produced < out.size()) return true;
-    if (out.size() == size) return false;
-    out.resize(std::min<std::size_t>(size, std::max<std::size_t>(out.size() * 2, std::size_t{1} << 16)));
+
+  /// The bytes decompressed so far.
+  std::span<const std::uint8_t> bytes() const {
+    return compression_ == Compression::kNone ? in_ : std::span<const std::uint8_t>(out_.data(), produced_);
+  }
+
+ private:
+  // Room for more output: false when the output holds `size` bytes already.
+  bool grow() {
+    if (produced_ < out_.size()) return true;
+    if (out_.size() >= size_) return false;
+    out_.resize(std::min<std::size_t>(size_, std::max<std::size_t>(out_.size() * 2, std::size_t{1} << 16)));
     return true;
-  };
-  if (compression == Compression::kLz4) {
-    LZ4F_dctx* context = nullptr;
-    if (LZ4F_isError(LZ4F_createDecompressionContext(&context, LZ4F_VERSION))) return why = "out of memory", false;
-    while (grow()) {
-      std::size_t dst = out.size() - produced, src = in.size() - consumed;
-      const std::size_t r = LZ4F_decompress(context, out.data() + produced, &dst, in.data() + consumed, &src, nullptr);
-      if (LZ4F_isError(r)) {
-        why = std::string("lz4 data do not decode (") + LZ4F_getErrorName(r) + ")";
-        LZ4F_freeDecompressionContext(context);
-        return false;
-      }
-      produced += dst;
-      consumed += src;
-      if (r == 0) ended = true;
-      if (ended || (dst == 0 && src == 0)) break;
-    }
-    LZ4F_freeDecompressionContext(context);
-  } else {
-    bz_stream stream{};
-    if (BZ2_bzDecompressInit(&stream, 0, 0) != BZ_OK) return why = "out of memory", false;
-    while (grow()) {
-      // Both counts fit: a chunk's data and size are 32-bit fields.
-      stream.next_in = const_cast<char*>(reinterpret_cast<const char*>(in.data() + consumed));
-      stream.avail_in = static_cast<unsigned>(in.size() - consumed);
-      stream.next_out = reinterpret_cast<char*>(out.data() + produced);
-      stream.avail_out = static_cast<unsigned>(out.size() - produced);
-      const int r = BZ2_bzDecompress(&stream);
-      const std::size_t dst = out.size() - produced - stream.avail_out, src = in.size() - consumed - stream.avail_in;
-      produced += dst;
-      consumed += src;
-      if (r != BZ_OK && r != BZ_STREAM_END) {
-        BZ2_bzDecompressEnd(&stream);
-        return why = "bz2 data do not decode (error " + std::to_string(r) + ")", false;
-      }
-      if (r == BZ_STREAM_END) ended = true;
-      if (ended || (dst == 0 && src == 0)) break;
-    }
-    BZ2_bzDecompressEnd(&stream);
   }
-  out.resize(produced);
-  if (ended && produced != size)
-    return why = "a chunk decompresses to " + std::to_string(produced) + " bytes, its header says " +
-                 std::to_string(size),
-           false;
-  if (!ended && !partial) {
-    if (produced == size)
-      return why = "a chunk decompresses to more than the " + std::to_string(size) + " bytes its header says", false;
-    return why = std::string(compressionName(compression)) + " data end early", false;
+
+  Compression compression_;
+  std::span<const std::uint8_t> in_;
+  std::vector<std::uint8_t>& out_;
+  std::uint32_t size_;
+  bool partial_;
+  std::size_t produced_ = 0, consumed_ = 0;
+  bool ended_ = false, stalled_ = false;
+  std::string error_;
+  LZ4F_dctx* lz4_ = nullptr;
+  bz_stream bz2_{};
+  bool bz2_ready_ = false;
+};
+
+/// messageAt() in a chunk decompressed on demand: the message's first `want` bytes of data
+/// (`cut` when that is fewer than it has).
+bool messageIn(ChunkInflater& chunk, std::size_t offset, std::size_t want, ChunkMessage& message, bool& cut,
+               std::string& why) {
+  ChunkRecord record;
+  for (;;) {  // ends as messageAt's loop does
+    std::uint32_t header_len = 0;
+    if (!chunk.ensure(offset + 4, why)) return false;
+    if (chunk.bytes().size() >= offset + 4) std::memcpy(&header_len, chunk.bytes().data() + offset, 4);
+    if (!chunk.ensure(offset + 8 + std::size_t{header_len}, why) ||
+        !chunkRecord(chunk.bytes(), offset, record, why, false))
+      return false;
+    if (record.op != kOpConnection && record.op != kOpMessageDefinition) break;
+    if (!chunk.ensure(record.end(), why)) return false;
+    offset = record.end();
   }
+  if (record.op != kOpMessageData)
+    return why = "the record is not a message (op " + std::to_string(record.op) + ")", false;
+  const auto conn = intField<std::uint32_t>(record.fields, "conn");
+  const auto time = timeField(record.fields, "time");
+  if (!conn || !time) return why = "a message record without conn and time fields", false;
+  const std::size_t take = std::min<std::size_t>(record.data_len, want);
+  if (!chunk.ensure(record.data_pos + take, why)) return false;
+  if (chunk.bytes().size() - record.data_pos < take) return why = "a record's data runs past its chunk", false;
+  message = {*conn, *time, chunk.bytes().subspan(record.data_pos, take)};
+  cut = take < record.data_len;
   return true;
 }
 
@@ -365,11 +437,15 @@ struct Reader {
   bool addConnection(const std::vector<Field>& fields, std::string_view data, std::string& why);
   void walkChunk(std::span<const std::uint8_t> bytes, std::uint32_t chunk, bool cut, std::string& why, bool& bad);
   void finish();
+  /// A chunk's data as they lie in the file (compressed).
+  bool readChunkData(BagFile& file, const Chunk& chunk, std::vector<std::uint8_t>& data, std::string& why) const;
+  /// A chunk decompressed whole and checked.
   bool loadChunk(BagFile& file, const Chunk& chunk, std::vector<std::uint8_t>& bytes, std::string& why) const;
   std::string lostAfter(std::int64_t last_ns, bool any) const;
 
   std::string describe() const;
-  ScanEnd scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const;
+  ScanEnd scan(const std::vector<int>& topics, const std::vector<int>& heads,
+               const std::function<bool(const Message&)>& visit) const;
   Message read(const MessageRef& ref) const;
 };
 
@@ -566,10 +642,19 @@ void Reader::rebuildIndex(BagFile& file, std::uint64_t first_record, std::uint64
            lostAfter(last, !entries.empty());
 }
 
+bool Reader::readChunkData(BagFile& file, const Chunk& chunk, std::vector<std::uint8_t>& data, std::string& why) const {
+  data.resize(chunk.data_len);
+  return file.read(chunk.data_pos, data.data(), data.size()) || (why = "the chunk's data cannot be read", false);
+}
+
 bool Reader::loadChunk(BagFile& file, const Chunk& chunk, std::vector<std::uint8_t>& bytes, std::string& why) const {
-  std::vector<std::uint8_t> data(chunk.data_len);
-  if (!file.read(chunk.data_pos, data.data(), data.size())) return why = "the chunk's data cannot be read", false;
-  return decompress(chunk.compression, data, chunk.size, chunk.cut, bytes, why);
+  std::vector<std::uint8_t> data;
+  if (!readChunkData(file, chunk, data, why)) return false;
+  ChunkInflater inflater(chunk.compression, data, bytes, chunk.size, chunk.cut);
+  if (!inflater.finish(why)) return false;
+  if (chunk.compression == Compression::kNone) bytes = std::move(data);
+  else bytes.resize(inflater.bytes().size());
+  return true;
 }
 
 void Reader::finish() {
@@ -646,13 +731,19 @@ std::string Reader::describe() const {
   return text + ")";
 }
 
-ScanEnd Reader::scan(const std::vector<int>& chosen, const std::function<bool(const Message&)>& visit) const {
+ScanEnd Reader::scan(const std::vector<int>& chosen, const std::vector<int>& heads,
+                     const std::function<bool(const Message&)>& visit) const {
   const Reader& bag = *this;
-  std::vector<char> wanted(bag.topics.size(), 0);
+  std::vector<char> wanted(bag.topics.size(), 0), head(bag.topics.size(), 0);
   for (const int t : chosen)
     if (t >= 0 && t < static_cast<int>(wanted.size())) wanted[t] = 1;
+  for (const int t : heads)
+    if (t >= 0 && t < static_cast<int>(head.size())) head[t] = 1;
   BagFile file(bag.path);
-  std::vector<std::uint8_t> bytes;
+  // Without heads each chunk is decompressed whole and checked when it is reached (as read()
+  // does); with heads only as far as the messages asked for.
+  std::vector<std::uint8_t> data, bytes;  // the chunk's as read and decompressed, re-used
+  std::optional<ChunkInflater> chunk_bytes;
   std::uint32_t loaded = UINT32_MAX;
   std::string why;
   std::int64_t last_ns = 0;
@@ -666,12 +757,18 @@ ScanEnd Reader::scan(const std::vector<int>& chosen, const std::function<bool(co
     const Chunk& chunk = bag.chunks[entry.chunk];
     if (entry.chunk != loaded) {
       loaded = UINT32_MAX;
-      if (!bag.loadChunk(file, chunk, bytes, why))
+      chunk_bytes.reset();
+      if (!bag.readChunkData(file, chunk, data, why))
+        return damaged("bad chunk at byte " + std::to_string(chunk.pos) + " (" + why + ")");
+      chunk_bytes.emplace(chunk.compression, data, bytes, chunk.size, chunk.cut);
+      if (heads.empty() && !chunk_bytes->finish(why))
         return damaged("bad chunk at byte " + std::to_string(chunk.pos) + " (" + why + ")");
       loaded = entry.chunk;
     }
     ChunkMessage found;
-    if (!messageAt(bytes, entry.offset, found, why) || found.conn != entry.conn)
+    bool cut = false;
+    if (!messageIn(*chunk_bytes, entry.offset, head[entry.topic] ? kHeadBytes : SIZE_MAX, found, cut, why) ||
+        found.conn != entry.conn)
       return damaged("the chunk at byte " + std::to_string(chunk.pos) +
                      " does not hold the message its index names at offset " + std::to_string(entry.offset) +
                      (why.empty() ? "" : " (" + why + ")"));
@@ -681,6 +778,7 @@ ScanEnd Reader::scan(const std::vector<int>& chosen, const std::function<bool(co
     message.ref = {chunk.pos, entry.offset};
     message.encoding = Encoding::kRos1;
     message.bytes = std::make_shared<const std::vector<std::uint8_t>>(found.data.begin(), found.data.end());
+    message.head_only = cut;
     last_ns = entry.time_ns;
     any = true;
     if (!visit(message)) return {};
@@ -743,7 +841,12 @@ const std::filesystem::path& Ros1Bag::path() const { return impl_->path; }
 const std::vector<Topic>& Ros1Bag::topics() const { return impl_->topics; }
 
 ScanEnd Ros1Bag::scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const {
-  return impl_->scan(topics, visit);
+  return impl_->scan(topics, {}, visit);
+}
+
+ScanEnd Ros1Bag::scanHeads(const std::vector<int>& topics, const std::vector<int>& heads,
+                           const std::function<bool(const Message&)>& visit) const {
+  return impl_->scan(topics, heads, visit);
 }
 
 Message Ros1Bag::read(const MessageRef& ref) const { return impl_->read(ref); }

@@ -34,6 +34,11 @@ class Ros1Bag : public Recording {
   const std::filesystem::path& path() const override;
   const std::vector<Topic>& topics() const override;
   ScanEnd scan(const std::vector<int>& topics, const std::function<bool(const Message&)>& visit) const override;
+  /// Decompresses each chunk only as far as the messages asked for: a heads message costs its
+  /// first kilobyte and what lies before it in its chunk. Damage beyond what was asked for is
+  /// not seen (read() sees it).
+  ScanEnd scanHeads(const std::vector<int>& topics, const std::vector<int>& heads,
+                    const std::function<bool(const Message&)>& visit) const override;
   Message read(const MessageRef& ref) const override;
 
  private:

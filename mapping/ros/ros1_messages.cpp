@@ -112,7 +112,7 @@ constexpr std::uint32_t kMinTransformStampedBytes = 4 + 8 + 4 + 4 + 7 * 8;
 
 }  // namespace
 
-Image decodeImageRos1(const std::vector<std::uint8_t>& bytes) {
+Image decodeImageRos1(const std::vector<std::uint8_t>& bytes, bool head_only) {
   sensor_msgs::Image_<A> m;
   Ros1Fields fields(bytes);
   fields.next("header", m.header);
@@ -122,6 +122,7 @@ Image decodeImageRos1(const std::vector<std::uint8_t>& bytes) {
   fields.next("is_bigendian", m.is_bigendian);
   fields.next("step", m.step);
   Image image{header(m.header), m.height, m.width, text(m.encoding), m.is_bigendian != 0, m.step, {}};
+  if (head_only) return image;
   fields.nextBytes("data", image.data);
   if (image.data.size() < std::uint64_t{m.height} * m.step)
     throw std::runtime_error("image data holds " + std::to_string(image.data.size()) + " bytes, height * step needs " +
@@ -129,12 +130,13 @@ Image decodeImageRos1(const std::vector<std::uint8_t>& bytes) {
   return image;
 }
 
-CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes) {
+CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes, bool head_only) {
   sensor_msgs::CompressedImage_<A> m;
   Ros1Fields fields(bytes);
   fields.next("header", m.header);
   fields.next("format", m.format);
   CompressedImage image{header(m.header), text(m.format), {}};
+  if (head_only) return image;
   fields.nextBytes("data", image.data);
   return image;
 }

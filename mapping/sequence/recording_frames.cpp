@@ -4,6 +4,7 @@
 #include <bit>
 #include <cmath>
 #include <cstring>
+#include <span>
 
 #include "mapping/core/error.h"
 #include "mapping/io/image_codec.h"
@@ -103,7 +104,9 @@ int infoTopicFor(const ros::Recording& rec, const std::string& image) {
 }
 
 struct DepthCoding {
-  enum class Kind { kUnsigned16, kFloat32, kCompressedDepth } kind = Kind::kUnsigned16;
+  /// kCompressedDepth: compressed_depth_image_transport's PNG of 16-bit depth; kInverseDepth: its
+  /// PNG of quantised inverse depth, for 32FC1 images.
+  enum class Kind { kUnsigned16, kFloat32, kCompressedDepth, kInverseDepth } kind = Kind::kUnsigned16;
   double scale = kMillimetreScale;
 };
 
@@ -139,14 +142,24 @@ class RecordingDecoder : public FrameDecoder {
 
   cv::Mat decodeDepth(const ros::Message& m) const {
     try {
-      if (coding_.kind == DepthCoding::Kind::kCompressedDepth) {
+      if (coding_.kind == DepthCoding::Kind::kCompressedDepth || coding_.kind == DepthCoding::Kind::kInverseDepth) {
         const ros::CompressedImage c = ros::decodeCompressedImage(*m.bytes, m.encoding);
-        // compressed_depth_image_transport: a 12-byte header (format, two quantisation floats)
-        // before the PNG of 16-bit depth.
+        // compressed_depth_image_transport: a 12-byte header (format, then the two floats that
+        // quantise inverse depth) before the PNG of 16-bit values.
         constexpr std::size_t kHeader = 12;
         if (c.data.size() <= kHeader) throw std::runtime_error("compressedDepth message holds no PNG");
-        const cv::Mat d = decodeDepthImage(std::string(c.data.begin() + kHeader, c.data.end()), depth_topic_);
+        cv::Mat d = decodeDepthImage(std::string(c.data.begin() + kHeader, c.data.end()), depth_topic_);
         checkSize(depth_topic_, m, d.cols, d.rows, depth_size_);
+        if (coding_.kind == DepthCoding::Kind::kCompressedDepth) return d;
+        float quant[2];
+        std::memcpy(quant, c.data.data() + 4, sizeof quant);
+        // As the transport decodes it: depth = A / (v - B) metres, 0 = no measurement.
+        for (int v = 0; v < d.rows; ++v)
+          for (std::uint16_t& value : std::span(d.ptr<std::uint16_t>(v), d.cols)) {
+            const float metres = value == 0 ? 0.0f : quant[0] / (static_cast<float>(value) - quant[1]);
+            const double raw = std::round(metres * coding_.scale);
+            value = std::isfinite(metres) && raw > 0 && raw <= 65535 ? static_cast<std::uint16_t>(raw) : 0;
+          }
         return d;
       }
       const ros::Image image = ros::decodeImage(*m.bytes, m.encoding);
@@ -247,7 +260,7 @@ struct StampedImage {
 struct Scanned {
   std::vector<StampedImage> depth, rgb;
   std::optional<ros::CameraInfo> depth_info, rgb_info;
-  std::string depth_encoding;  // of the first depth message ("compressedDepth" for those)
+  std::string depth_encoding;  // of the first depth message (a CompressedImage's format)
   int depth_width = 0, depth_height = 0;
   std::optional<float> depth_units;                 // RealSense's recorded metres per unit
   std::optional<Transform> T_ref_depth, T_ref_rgb;  // RealSense's recorded stream extrinsics
@@ -305,22 +318,32 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
     }
 
   Scanned s;
-  s.end = rec->scan(chosen, [&](const ros::Message& m) {
+  // Images are listed from their heads (stamp, frame, size, encoding): their pixels are read
+  // when the frames load. A head too short for its fields (a very long frame id) is read whole.
+  auto head = [&]<typename T>(const ros::Message& m, T (*decode)(const std::vector<std::uint8_t>&, ros::Encoding)) {
+    try {
+      return decode(*m.bytes, m.encoding);
+    } catch (const std::runtime_error&) {
+      if (!m.head_only) throw;
+    }
+    return decode(*rec->read(m.ref).bytes, m.encoding);
+  };
+  s.end = rec->scanHeads(chosen, {depth, rgb}, [&](const ros::Message& m) {
     const ros::Topic& topic = rec->topics()[m.topic];
     try {
       if (m.topic == depth || m.topic == rgb) {
         ros::Header header;
         if (topic.kind == MessageType::kImage) {
-          const ros::Image image = ros::decodeImage(*m.bytes, m.encoding);
+          const ros::Image image = head(m, &ros::decodeImageHead);
           header = image.header;
           if (m.topic == depth && s.depth.empty()) {
             s.depth_encoding = image.encoding;
             s.depth_width = static_cast<int>(image.width), s.depth_height = static_cast<int>(image.height);
           }
         } else {
-          const ros::CompressedImage image = ros::decodeCompressedImage(*m.bytes, m.encoding);
+          const ros::CompressedImage image = head(m, &ros::decodeCompressedImageHead);
           header = image.header;
-          if (m.topic == depth && s.depth.empty()) s.depth_encoding = "compressedDepth";
+          if (m.topic == depth && s.depth.empty()) s.depth_encoding = image.format;
         }
         std::vector<StampedImage>& list = m.topic == depth ? s.depth : s.rgb;
         if (!list.empty() && header.stamp < list.back().stamp)
@@ -369,13 +392,17 @@ Listing listRecording(const fs::path& file, const SequenceOptions& options) {
   // The depth coding and the camera.
   DepthCoding coding;
   const std::string enc = lower(s.depth_encoding);
+  // A compressedDepth format reads "16UC1; compressedDepth" (ROS 1), "32FC1; compressedDepth png"
+  // (ROS 2) or "...; compressedDepth rvl" (ROS 2's other codec, not read here).
+  const bool compressed = contains(enc, "compresseddepth") && !contains(enc, "rvl");
   if (enc == "32fc1") coding = {DepthCoding::Kind::kFloat32, kFloatDepthScale};
-  else if (enc == "compresseddepth") coding = {DepthCoding::Kind::kCompressedDepth, kMillimetreScale};
+  else if (compressed && enc.starts_with("32fc1")) coding = {DepthCoding::Kind::kInverseDepth, kFloatDepthScale};
+  else if (compressed) coding = {DepthCoding::Kind::kCompressedDepth, kMillimetreScale};
   else if (enc == "16uc1" || enc == "mono16") coding = {DepthCoding::Kind::kUnsigned16, kMillimetreScale};
   else
     throw InputError(name, "depth topic " + depth_name + " has encoding '" + s.depth_encoding +
                                "'; vdmap reads 16UC1, mono16 (millimetres or the recorded Depth Units), 32FC1 "
-                               "(metres) and compressedDepth PNG");
+                               "(metres) and compressedDepth PNG (of 16UC1 or 32FC1)");
   if (coding.kind == DepthCoding::Kind::kUnsigned16 && s.depth_units) {
     if (!(*s.depth_units > 0) || !std::isfinite(*s.depth_units))
       throw InputError(name, "the recorded Depth Units (" + std::to_string(*s.depth_units) + ") are not positive");

@@ -208,6 +208,44 @@ TEST(Ros1Bag, ScanVisitsOnlyTheChosenTopicsAndStopsWhenAsked) {
   EXPECT_TRUE(bag->scan({}, [](const Message&) { return true; }).complete);
 }
 
+// A heads scan gives each image as its first bytes (the rest of the topics whole), and decodes to
+// the same header, size and encoding as the whole message; it visits what scan() visits.
+TEST(Ros1Bag, HeadsScanGivesEachImagesFirstBytes) {
+  VDMAP_REQUIRE_BAG(file, kTumBag);
+  const auto bag = Ros1Bag::open(file);
+  const int depth = topicIndex(*bag, "/camera/depth/image"), rgb = topicIndex(*bag, "/camera/rgb/image_color");
+  std::vector<Message> whole, heads;
+  const std::vector<int> topics = allTopics(*bag);
+  EXPECT_TRUE(bag->scan(topics, [&](const Message& m) { return whole.push_back(m), true; }).complete);
+  EXPECT_TRUE(bag->scanHeads(topics, {depth, rgb}, [&](const Message& m) { return heads.push_back(m), true; }).complete);
+  ASSERT_EQ(heads.size(), whole.size());
+  int images = 0;
+  for (std::size_t i = 0; i < heads.size(); ++i) {
+    const Message &h = heads[i], &w = whole[i];
+    ASSERT_EQ(h.topic, w.topic);
+    EXPECT_EQ(h.log_time_ns, w.log_time_ns);
+    ASSERT_LE(h.bytes->size(), w.bytes->size());
+    EXPECT_TRUE(std::equal(h.bytes->begin(), h.bytes->end(), w.bytes->begin())) << i;
+    if (h.topic != depth && h.topic != rgb) {
+      EXPECT_FALSE(h.head_only);
+      EXPECT_EQ(h.bytes->size(), w.bytes->size());
+      continue;
+    }
+    ++images;
+    EXPECT_TRUE(h.head_only);
+    EXPECT_LT(h.bytes->size(), 2000u);
+    const Image a = decodeImageHead(*h.bytes, Encoding::kRos1), b = decodeImage(*w.bytes, Encoding::kRos1);
+    EXPECT_EQ(a.header.stamp, b.header.stamp);
+    EXPECT_EQ(a.header.frame_id, b.header.frame_id);
+    EXPECT_EQ(a.width, b.width);
+    EXPECT_EQ(a.height, b.height);
+    EXPECT_EQ(a.encoding, b.encoding);
+    EXPECT_TRUE(a.data.empty());
+    EXPECT_THROW(decodeImage(*h.bytes, Encoding::kRos1), std::runtime_error) << "a head holds no pixels";
+  }
+  EXPECT_EQ(images, 60);
+}
+
 TEST(Ros1Bag, TumLayoutDepthIs32FC1MetresWithNaNWhereNoMeasurement) {
   VDMAP_REQUIRE_BAG(file, kTumBag);
   const auto bag = Ros1Bag::open(file);
@@ -529,6 +567,15 @@ TEST(Ros1Bag, ReadsEachChunkCompressionInLogTimeOrderAcrossOverlappingChunks) {
     });
     EXPECT_TRUE(end.complete) << end.damage;
     EXPECT_EQ(values, (std::vector<float>{0, 1, 2, 3, 4, 5, 6}));
+    // Chunks decompressed only as far as asked: the same messages (each shorter than a head).
+    std::vector<float> heads;
+    EXPECT_TRUE(bag->scanHeads({0, 1}, {0, 1}, [&](const Message& m) {
+                      EXPECT_FALSE(m.head_only);
+                      heads.push_back(detail::decodeFloat32Ros1(*m.bytes));
+                      return true;
+                    })
+                    .complete);
+    EXPECT_EQ(heads, values);
   }
 }
 

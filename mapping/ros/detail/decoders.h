@@ -8,19 +8,20 @@
 
 namespace vdmap::ros::detail {
 
-Image decodeImageRos1(const std::vector<std::uint8_t>& bytes);
-CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes);
-Image decodeImageRos1(std::vector<std::uint8_t>&&) = delete;  // the image's data views the bytes
-CompressedImage decodeCompressedImageRos1(std::vector<std::uint8_t>&&) = delete;
+// head_only: the fields before the data (messages.h, decodeImageHead).
+Image decodeImageRos1(const std::vector<std::uint8_t>& bytes, bool head_only = false);
+CompressedImage decodeCompressedImageRos1(const std::vector<std::uint8_t>& bytes, bool head_only = false);
+Image decodeImageRos1(std::vector<std::uint8_t>&&, bool = false) = delete;  // the image's data views the bytes
+CompressedImage decodeCompressedImageRos1(std::vector<std::uint8_t>&&, bool = false) = delete;
 CameraInfo decodeCameraInfoRos1(const std::vector<std::uint8_t>& bytes);
 std::vector<TransformStamped> decodeTransformsRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
 PoseStamped decodePoseRos1(const std::vector<std::uint8_t>& bytes, MessageType type);
 float decodeFloat32Ros1(const std::vector<std::uint8_t>& bytes);
 
-Image decodeImageCdr(const std::vector<std::uint8_t>& bytes);
-CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes);
-Image decodeImageCdr(std::vector<std::uint8_t>&&) = delete;  // the image's data views the bytes
-CompressedImage decodeCompressedImageCdr(std::vector<std::uint8_t>&&) = delete;
+Image decodeImageCdr(const std::vector<std::uint8_t>& bytes, bool head_only = false);
+CompressedImage decodeCompressedImageCdr(const std::vector<std::uint8_t>& bytes, bool head_only = false);
+Image decodeImageCdr(std::vector<std::uint8_t>&&, bool = false) = delete;  // the image's data views the bytes
+CompressedImage decodeCompressedImageCdr(std::vector<std::uint8_t>&&, bool = false) = delete;
 CameraInfo decodeCameraInfoCdr(const std::vector<std::uint8_t>& bytes);
 std::vector<TransformStamped> decodeTransformsCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
 PoseStamped decodePoseCdr(const std::vector<std::uint8_t>& bytes, MessageType type);
