@@ -30,8 +30,11 @@ void TfTree::add(const ros::TransformStamped& t, bool is_static) {
     edge.T = rigidTransform(t.rotation, t.translation);
     return;
   }
-  if (!edge.series.empty() && t.header.stamp < edge.series.back().t) edge.sorted = false;
-  edge.series.push_back({t.header.stamp, rigidTransform(t.rotation, t.translation)});
+  // Kept in time order (after any of the same stamp): transforms mostly come in order, so this is
+  // an append.
+  const auto at = std::upper_bound(edge.series.begin(), edge.series.end(), t.header.stamp,
+                                   [](double stamp, const StampedPose& p) { return stamp < p.t; });
+  edge.series.insert(at, {t.header.stamp, rigidTransform(t.rotation, t.translation)});
 }
 
 std::string TfTree::root(const std::string& frame) const {
@@ -58,12 +61,6 @@ bool TfTree::has(const std::string& frame) const {
 
 std::optional<Transform> TfTree::edgeAt(const Edge& edge, double t, double max_dt) const {
   if (edge.is_static) return edge.T;
-  if (!edge.sorted) {
-    auto& series = const_cast<std::vector<StampedPose>&>(edge.series);
-    std::stable_sort(series.begin(), series.end(),
-                     [](const StampedPose& a, const StampedPose& b) { return a.t < b.t; });
-    edge.sorted = true;
-  }
   return interpolatePose(edge.series, t, max_dt);
 }
 

@@ -6,7 +6,9 @@
 #include <algorithm>
 
 #include "mapping/core/error.h"
+#include "mapping/io/image_codec.h"
 #include "mapping/sequence/sequence.h"
+#include "tests/support/ros1_bag_writer.h"
 #include "tests/support/test_util.h"
 
 namespace vdmap {
@@ -115,6 +117,65 @@ TEST(RecordingSequence, ATruncatedRecordingGivesTheFramesBeforeTheCut) {
     ASSERT_NE(damaged, seq.notes().end()) << name;
     EXPECT_NE(damaged->find(cut.string()), std::string::npos) << *damaged;
     EXPECT_EQ(seq.load(seq.size() - 1).depth.size(), cv::Size(640, 480));
+  }
+}
+
+
+// compressed_depth_image_transport's messages: a 12-byte header (format, quantisation A and B)
+// and a PNG. For 32FC1 the PNG holds A / depth + B (truncated to 16 bits; 0 = none), read back as
+// A / (v - B); for 16UC1 it holds the millimetres.
+std::vector<std::uint8_t> compressedDepthMessage(double stamp, const std::string& format, const cv::Mat& values,
+                                                 float a, float b) {
+  std::vector<std::uint8_t> data(12, 0);
+  std::memcpy(data.data() + 4, &a, 4);
+  std::memcpy(data.data() + 8, &b, 4);
+  const std::string png = encodePng(values);
+  data.insert(data.end(), png.begin(), png.end());
+  const auto sec = static_cast<std::uint32_t>(stamp);
+  const auto nsec = static_cast<std::uint32_t>(std::llround((stamp - sec) * 1e9));
+  return test::Ros1Bytes().header(sec, nsec, "camera").text(format).blob(data).bytes;
+}
+
+// The tiny recording with its depth as compressedDepth of `format`, each frame's values `values`.
+fs::path writeCompressedDepth(const fs::path& dir, const std::string& format, const cv::Mat& values, float a,
+                              float b) {
+  test::TinyRecording recording(3, static_cast<std::uint32_t>(values.cols), static_cast<std::uint32_t>(values.rows));
+  recording.connections[0].type = "sensor_msgs/CompressedImage";
+  const std::vector<std::size_t> depth = recording.on("/camera/depth/image");
+  for (std::size_t k = 0; k < depth.size(); ++k)
+    recording.messages[depth[k]].bytes =
+        compressedDepthMessage(100.0 + 0.1 * static_cast<double>(k), format, values, a, b);
+  const fs::path file = dir / (format.substr(0, 5) + ".bag");
+  test::writeText(file, recording.write());
+  return file;
+}
+
+TEST(RecordingSequence, CompressedDepthOf16UC1And32FC1) {
+  const test::TempDir dir;
+  // 16UC1: millimetres as they are.
+  const cv::Mat mm(24, 32, CV_16UC1, cv::Scalar(1500));
+  const Sequence a = Sequence::open(writeCompressedDepth(dir.path(), "16UC1; compressedDepth", mm, 0, 0));
+  EXPECT_EQ(a.camera().depth_scale, 1000.0);
+  EXPECT_EQ(cv::norm(a.load(0).depth, mm, cv::NORM_INF), 0.0);
+  // 32FC1 with the transport's defaults (depth_max 10 m, quantization 100): 1.5 m in the left
+  // half, 4 m in the right, none in the top row.
+  const float qa = 100.0f * 101.0f, qb = 1.0f - qa / 10.0f;
+  cv::Mat inverse(24, 32, CV_16UC1);
+  for (int v = 0; v < 24; ++v)
+    for (int u = 0; u < 32; ++u)
+      inverse.at<std::uint16_t>(v, u) = v == 0 ? 0 : static_cast<std::uint16_t>(qa / (u < 16 ? 1.5f : 4.0f) + qb);
+  const Sequence b = Sequence::open(writeCompressedDepth(dir.path(), "32FC1; compressedDepth png", inverse, qa, qb));
+  EXPECT_EQ(b.camera().depth_scale, 5000.0);
+  const cv::Mat depth = b.load(0).depth;
+  EXPECT_EQ(depth.at<std::uint16_t>(0, 3), 0);
+  EXPECT_NEAR(depth.at<std::uint16_t>(5, 3) / 5000.0, 1.5, 1e-3);
+  EXPECT_NEAR(depth.at<std::uint16_t>(5, 30) / 5000.0, 4.0, 2e-3);
+  // The transport's other codec is refused by name, not read as a PNG.
+  try {
+    Sequence::open(writeCompressedDepth(dir.path(), "16UC1; compressedDepth rvl", mm, 0, 0));
+    ADD_FAILURE() << "an RVL compressedDepth topic was accepted";
+  } catch (const InputError& e) {
+    EXPECT_NE(std::string(e.what()).find("has encoding '16UC1; compressedDepth rvl'"), std::string::npos) << e.what();
   }
 }
 

@@ -41,8 +41,7 @@ class TfTree {
     std::string parent;
     bool is_static = false;
     Transform T = Transform::Identity();  ///< static edges
-    std::vector<StampedPose> series;      ///< dynamic edges, sorted by time when looked up
-    mutable bool sorted = true;
+    std::vector<StampedPose> series;      ///< dynamic edges, in time order
   };
   std::optional<Transform> edgeAt(const Edge& edge, double t, double max_dt) const;
   std::map<std::string, Edge> edges_;  ///< by child frame
