@@ -214,6 +214,17 @@ struct ChunkMessage {
   std::span<const std::uint8_t> data;
 };
 
+/// A message data record's connection and time; false when the record is not one.
+bool messageFields(const ChunkRecord& record, ChunkMessage& message, std::string& why) {
+  if (record.op != kOpMessageData)
+    return why = "the record is not a message (op " + std::to_string(record.op) + ")", false;
+  const auto conn = intField<std::uint32_t>(record.fields, "conn");
+  const auto time = timeField(record.fields, "time");
+  if (!conn || !time) return why = "a message record without conn and time fields", false;
+  message.conn = *conn, message.time_ns = *time;
+  return true;
+}
+
 /// The message data record at `offset` of a chunk, past the connection records before it: rosbag
 /// indexes a connection's first message at the connection record written just before it.
 bool messageAt(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkMessage& message, std::string& why) {
@@ -223,12 +234,8 @@ bool messageAt(std::span<const std::uint8_t> chunk, std::size_t offset, ChunkMes
     if (record.op != kOpConnection && record.op != kOpMessageDefinition) break;
     offset = record.end();
   }
-  if (record.op != kOpMessageData)
-    return why = "the record is not a message (op " + std::to_string(record.op) + ")", false;
-  const auto conn = intField<std::uint32_t>(record.fields, "conn");
-  const auto time = timeField(record.fields, "time");
-  if (!conn || !time) return why = "a message record without conn and time fields", false;
-  message = {*conn, *time, chunk.subspan(record.data_pos, record.data_len)};
+  if (!messageFields(record, message, why)) return false;
+  message.data = chunk.subspan(record.data_pos, record.data_len);
   return true;
 }
 
@@ -361,15 +368,11 @@ bool messageIn(ChunkInflater& chunk, std::size_t offset, std::size_t want, Chunk
     if (!chunk.ensure(record.end(), why)) return false;
     offset = record.end();
   }
-  if (record.op != kOpMessageData)
-    return why = "the record is not a message (op " + std::to_string(record.op) + ")", false;
-  const auto conn = intField<std::uint32_t>(record.fields, "conn");
-  const auto time = timeField(record.fields, "time");
-  if (!conn || !time) return why = "a message record without conn and time fields", false;
+  if (!messageFields(record, message, why)) return false;
   const std::size_t take = std::min<std::size_t>(record.data_len, want);
   if (!chunk.ensure(record.data_pos + take, why)) return false;
   if (chunk.bytes().size() - record.data_pos < take) return why = "a record's data runs past its chunk", false;
-  message = {*conn, *time, chunk.bytes().subspan(record.data_pos, take)};
+  message.data = chunk.bytes().subspan(record.data_pos, take);
   cut = take < record.data_len;
   return true;
 }
