@@ -109,7 +109,10 @@ void runInfo(const SequenceArgs& args, bool json) {
           {"no_depth_fraction", rounded(depth.no_depth_fraction)},
           {"invalid_code_fraction", rounded(depth.invalid_code_fraction)}}},
         {"dropped",
-         {{"no_rgb", d.no_rgb}, {"no_pose", d.no_pose}, {"outside_frames", d.outside_range}, {"rgb_window_s", d.max_rgb_dt_s}}},
+         {{"no_rgb", d.no_rgb},
+          {"no_pose", d.no_pose},
+          {"outside_frames", d.outside_range},
+          {"rgb_window_s", d.max_rgb_dt_s}}},
     };
     std::cout << jsonText(out) << "\n";
     return;

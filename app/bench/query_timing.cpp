@@ -463,8 +463,8 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   std::ostringstream text;
   char buf[512];
   const std::string octomap = m.peers.empty() ? "no OctoMap (--no-octomap)"
-                                               : "OctoMap from every " + std::to_string(m.octomap_every) + ". frame (" +
-                                                     std::to_string(m.octomap_frames) + " frames)";
+                                              : "OctoMap from every " + std::to_string(m.octomap_every) + ". frame (" +
+                                                    std::to_string(m.octomap_frames) + " frames)";
   std::snprintf(buf, sizeof buf,
                 "query bench: %zu frames of %s, %zu keyframes (gt poses, cell %d px), %zu global ellipsoids; %s; "
                 "QueryMap built in %.0f ms (one thread, median of %d)\n",

@@ -19,11 +19,10 @@ CompressedImage::CompressedImage(const cv::Mat& image, int jpeg_quality)
   // The file holds the image's blue as its red (swapped_red_blue_), which decode() undoes: so
   // keyframes have been written since OpenCV's encoder (which takes BGR) wrote them, and a
   // JPEG's pixels stay those it has always given.
-  bytes_ = std::make_shared<const std::string>(jpeg_quality > 0
-                                                   ? encodeJpeg(image, jpeg_quality, ChannelOrder::kBgr)
-                                                   : encodePng(image, ChannelOrder::kBgr,
-                                                               type_ == CV_16UC1 ? PngCompression::kFast
-                                                                                 : PngCompression::kLevel1));
+  bytes_ = std::make_shared<const std::string>(
+      jpeg_quality > 0
+          ? encodeJpeg(image, jpeg_quality, ChannelOrder::kBgr)
+          : encodePng(image, ChannelOrder::kBgr, type_ == CV_16UC1 ? PngCompression::kFast : PngCompression::kLevel1));
   swapped_red_blue_ = type_ == CV_8UC3;
 }
 

@@ -44,7 +44,7 @@ struct Image {
   std::uint32_t height = 0, width = 0;
   std::string encoding;  ///< "16UC1", "mono16", "32FC1", "rgb8", "bgr8", "rgba8", "bgra8", "mono8", ...
   bool is_bigendian = false;
-  std::uint32_t step = 0;  ///< bytes per row
+  std::uint32_t step = 0;              ///< bytes per row
   std::span<const std::uint8_t> data;  ///< in the decoded message's bytes (valid while they are)
 };
 

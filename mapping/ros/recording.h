@@ -36,7 +36,7 @@ struct Message {
   MessageRef ref;
   Encoding encoding = Encoding::kRos1;
   std::shared_ptr<const std::vector<std::uint8_t>> bytes;  ///< the serialised message
-  bool head_only = false;  ///< bytes hold only its first bytes (Recording::scanHeads)
+  bool head_only = false;                                  ///< bytes hold only its first bytes (Recording::scanHeads)
 };
 
 /// How a scan ended: at the end of the file, or at damage (a truncated file, a bad CRC, a record

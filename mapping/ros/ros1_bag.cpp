@@ -279,8 +279,10 @@ class ChunkInflater {
       if (compression_ == Compression::kLz4) {
         if (!lz4_) return why = error_ = "out of memory", false;
         dst = out_.size() - produced_, src = in_.size() - consumed_;
-        const std::size_t r = LZ4F_decompress(lz4_, out_.data() + produced_, &dst, in_.data() + consumed_, &src, nullptr);
-        if (LZ4F_isError(r)) return why = error_ = std::string("lz4 data do not decode (") + LZ4F_getErrorName(r) + ")", false;
+        const std::size_t r =
+            LZ4F_decompress(lz4_, out_.data() + produced_, &dst, in_.data() + consumed_, &src, nullptr);
+        if (LZ4F_isError(r))
+          return why = error_ = std::string("lz4 data do not decode (") + LZ4F_getErrorName(r) + ")", false;
         ended_ = r == 0;
       } else {
         if (!bz2_ready_) return why = error_ = "out of memory", false;
@@ -307,7 +309,8 @@ class ChunkInflater {
   bool finish(std::string& why) {
     if (compression_ == Compression::kNone) {
       if (in_.size() > size_ || (!partial_ && in_.size() != size_))
-        return why = "an uncompressed chunk of " + std::to_string(in_.size()) + " bytes states " + std::to_string(size_),
+        return why =
+                   "an uncompressed chunk of " + std::to_string(in_.size()) + " bytes states " + std::to_string(size_),
                false;
       return true;
     }
@@ -318,8 +321,7 @@ class ChunkInflater {
              false;
     if (!ended_ && !partial_) {
       if (produced_ == size_)
-        return why = "a chunk decompresses to more than the " + std::to_string(size_) + " bytes its header says",
-               false;
+        return why = "a chunk decompresses to more than the " + std::to_string(size_) + " bytes its header says", false;
       return why = std::string(compressionName(compression_)) + " data end early", false;
     }
     return true;

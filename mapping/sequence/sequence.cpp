@@ -228,12 +228,14 @@ Sequence Sequence::open(const fs::path& folder, const SequenceOptions& options) 
   }
   if (seq.entries_.empty()) {
     char windows[128];
-    std::snprintf(windows, sizeof windows, " without an rgb frame within %g s, %d without a ground-truth pose within %g s",
-                  options.max_rgb_dt_s, seq.dropped_.no_pose, options.max_pose_dt_s);
-    throw InputError(folder.string(), "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
-                                          std::to_string(seq.dropped_.no_rgb) + windows + ", " +
-                                          std::to_string(seq.dropped_.outside_range) + " outside --frames" +
-                                          (seq.dropped_.no_rgb > 0 ? "; --rgb-window S pairs colour further away" : ""));
+    std::snprintf(windows, sizeof windows,
+                  " without an rgb frame within %g s, %d without a ground-truth pose within %g s", options.max_rgb_dt_s,
+                  seq.dropped_.no_pose, options.max_pose_dt_s);
+    throw InputError(folder.string(),
+                     "no usable frames: " + std::to_string(seq.listed_) + " listed, " +
+                         std::to_string(seq.dropped_.no_rgb) + windows + ", " +
+                         std::to_string(seq.dropped_.outside_range) + " outside --frames" +
+                         (seq.dropped_.no_rgb > 0 ? "; --rgb-window S pairs colour further away" : ""));
   }
   return seq;
 } catch (const fs::filesystem_error& e) {

@@ -98,9 +98,9 @@ struct FrameEntry {
 
 /// How many listed depth frames were not kept, by reason.
 struct DropCounts {
-  int no_rgb = 0;         ///< no rgb frame within max_rgb_dt_s
-  int no_pose = 0;        ///< no ground-truth poses within max_pose_dt_s on both sides
-  int outside_range = 0;  ///< outside --frames
+  int no_rgb = 0;                              ///< no rgb frame within max_rgb_dt_s
+  int no_pose = 0;                             ///< no ground-truth poses within max_pose_dt_s on both sides
+  int outside_range = 0;                       ///< outside --frames
   double max_rgb_dt_s = 0, max_pose_dt_s = 0;  ///< the windows they were judged by (SequenceOptions)
 };
 

@@ -48,8 +48,8 @@ double matchedShare(const std::vector<EllipsoidRecord>& x, const std::vector<Ell
 
 // `vdmap map` of `seq` (frames 0:N) into `out`; its stats.json.
 nlohmann::json mapStats(const fs::path& seq, int frames, const fs::path& out, const std::string& options = "") {
-  const test::RunResult r = runVdmap("map '" + seq.string() + "' --frames 0:" + std::to_string(frames) + " " +
-                                     options + " --json --out '" + out.string() + "'");
+  const test::RunResult r = runVdmap("map '" + seq.string() + "' --frames 0:" + std::to_string(frames) + " " + options +
+                                     " --json --out '" + out.string() + "'");
   EXPECT_EQ(r.exit_code, 0) << r.err;
   return r.exit_code == 0 ? nlohmann::json::parse(r.out) : nlohmann::json();
 }
@@ -229,7 +229,8 @@ TEST(RecordingBadInput, NoCameraInfoMapsWithAStatedGuess) {
   const test::RunResult info = runVdmap("info '" + (dir / "rec.bag").string() + "'");
   ASSERT_EQ(info.exit_code, 0) << info.err;
   EXPECT_NE(info.out.find("preset tum-default (the recording has no camera_info"), std::string::npos) << info.out;
-  const test::RunResult map = runVdmap("map '" + (dir / "rec.bag").string() + "' --out '" + (dir / "out").string() + "'");
+  const test::RunResult map =
+      runVdmap("map '" + (dir / "rec.bag").string() + "' --out '" + (dir / "out").string() + "'");
   EXPECT_EQ(map.exit_code, 0) << map.err;
   EXPECT_TRUE(fs::exists(dir / "out" / "global_ellipsoids.ply"));
 }

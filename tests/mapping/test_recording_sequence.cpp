@@ -120,7 +120,6 @@ TEST(RecordingSequence, ATruncatedRecordingGivesTheFramesBeforeTheCut) {
   }
 }
 
-
 // compressed_depth_image_transport's messages: a 12-byte header (format, quantisation A and B)
 // and a PNG. For 32FC1 the PNG holds A / depth + B (truncated to 16 bits; 0 = none), read back as
 // A / (v - B); for 16UC1 it holds the millimetres.
@@ -137,8 +136,7 @@ std::vector<std::uint8_t> compressedDepthMessage(double stamp, const std::string
 }
 
 // The tiny recording with its depth as compressedDepth of `format`, each frame's values `values`.
-fs::path writeCompressedDepth(const fs::path& dir, const std::string& format, const cv::Mat& values, float a,
-                              float b) {
+fs::path writeCompressedDepth(const fs::path& dir, const std::string& format, const cv::Mat& values, float a, float b) {
   test::TinyRecording recording(3, static_cast<std::uint32_t>(values.cols), static_cast<std::uint32_t>(values.rows));
   recording.connections[0].type = "sensor_msgs/CompressedImage";
   const std::vector<std::size_t> depth = recording.on("/camera/depth/image");

@@ -217,7 +217,8 @@ TEST(Ros1Bag, HeadsScanGivesEachImagesFirstBytes) {
   std::vector<Message> whole, heads;
   const std::vector<int> topics = allTopics(*bag);
   EXPECT_TRUE(bag->scan(topics, [&](const Message& m) { return whole.push_back(m), true; }).complete);
-  EXPECT_TRUE(bag->scanHeads(topics, {depth, rgb}, [&](const Message& m) { return heads.push_back(m), true; }).complete);
+  EXPECT_TRUE(
+      bag->scanHeads(topics, {depth, rgb}, [&](const Message& m) { return heads.push_back(m), true; }).complete);
   ASSERT_EQ(heads.size(), whole.size());
   int images = 0;
   for (std::size_t i = 0; i < heads.size(); ++i) {
@@ -569,11 +570,12 @@ TEST(Ros1Bag, ReadsEachChunkCompressionInLogTimeOrderAcrossOverlappingChunks) {
     EXPECT_EQ(values, (std::vector<float>{0, 1, 2, 3, 4, 5, 6}));
     // Chunks decompressed only as far as asked: the same messages (each shorter than a head).
     std::vector<float> heads;
-    EXPECT_TRUE(bag->scanHeads({0, 1}, {0, 1}, [&](const Message& m) {
-                      EXPECT_FALSE(m.head_only);
-                      heads.push_back(detail::decodeFloat32Ros1(*m.bytes));
-                      return true;
-                    })
+    EXPECT_TRUE(bag->scanHeads({0, 1}, {0, 1},
+                               [&](const Message& m) {
+                                 EXPECT_FALSE(m.head_only);
+                                 heads.push_back(detail::decodeFloat32Ros1(*m.bytes));
+                                 return true;
+                               })
                     .complete);
     EXPECT_EQ(heads, values);
   }

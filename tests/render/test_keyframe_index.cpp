@@ -77,8 +77,8 @@ Walk renderWalk(int laps, int stride) {
     const render::SyntheticView view = renderer.render(scene.trajectory[i].T_W_C);
     RgbdFrame frame;
     frame.rgb = view.rgb;
-    frame.depth = simulateDepth(view.z_cos, scene.camera.depth_scale, {.model = DepthNoiseModel::kNone},
-                                static_cast<int>(i));
+    frame.depth =
+        simulateDepth(view.z_cos, scene.camera.depth_scale, {.model = DepthNoiseModel::kNone}, static_cast<int>(i));
     walk.features.push_back(extractor.extract(frame, scene.camera));
     walk.poses.push_back(scene.trajectory[i].T_W_C);
   }

@@ -174,14 +174,18 @@ inline std::vector<std::uint8_t> cameraInfoMessage(double stamp, const std::stri
   for (const double k : {f, 0.0, cx, 0.0, f, cy, 0.0, 0.0, 1.0}) m.put(k);
   for (const double r : {1.0, 0.0, 0.0, 0.0, 1.0, 0.0, 0.0, 0.0, 1.0}) m.put(r);
   for (const double p : {f, 0.0, cx, 0.0, 0.0, f, cy, 0.0, 0.0, 0.0, 1.0, 0.0}) m.put(p);
-  m.put(std::uint32_t{0}).put(std::uint32_t{0});                                  // binning
-  m.put(std::uint32_t{0}).put(std::uint32_t{0}).put(std::uint32_t{0}).put(std::uint32_t{0}).put(std::uint8_t{0});  // roi
+  m.put(std::uint32_t{0}).put(std::uint32_t{0});  // binning
+  m.put(std::uint32_t{0})
+      .put(std::uint32_t{0})
+      .put(std::uint32_t{0})
+      .put(std::uint32_t{0})
+      .put(std::uint8_t{0});  // roi
   return m.bytes;
 }
 
 /// tf2_msgs/TFMessage with one transform: `child` in `parent` at (x, y, z), unrotated.
-inline std::vector<std::uint8_t> tfMessage(double stamp, const std::string& parent, const std::string& child,
-                                           double x, double y, double z) {
+inline std::vector<std::uint8_t> tfMessage(double stamp, const std::string& parent, const std::string& child, double x,
+                                           double y, double z) {
   const auto sec = static_cast<std::uint32_t>(stamp);
   const auto nsec = static_cast<std::uint32_t>(std::llround((stamp - sec) * 1e9));
   return Ros1Bytes().put(std::uint32_t{1}).header(sec, nsec, parent).text(child).pose(x, y, z, 0, 0, 0, 1).bytes;
