@@ -274,7 +274,7 @@ class ChunkInflater {
   /// `why` when the data do not decode.
   bool ensure(std::size_t n, std::string& why) {
     if (!error_.empty()) return why = error_, false;
-    while (produced_ < n && !ended_ && grow()) {
+    while (produced_ < n && !ended_ && !stalled_ && grow()) {
       std::size_t dst = 0, src = 0;
       if (compression_ == Compression::kLz4) {
         if (!lz4_) return why = error_ = "out of memory", false;
@@ -299,8 +299,7 @@ class ChunkInflater {
       }
       produced_ += dst;
       consumed_ += src;
-      if (dst == 0 && src == 0) stalled_ = true;
-      if (stalled_) break;
+      stalled_ = dst == 0 && src == 0;  // the data end early: no call will give more
     }
     return true;
   }
