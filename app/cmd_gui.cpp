@@ -147,6 +147,7 @@ void runGui(GuiArgs args, bool builtin) {
   // --set and --window-size hold for this run only: they are not saved (saveChangedSettings).
   gui::Settings settings = start.settings;
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
+  if (!args.map.empty()) gui::refuseRemapSettings(args.set, args.map);
   if (!args.window_size.empty()) {
     int w = 0, h = 0;
     char rest = 0;
@@ -172,7 +173,7 @@ void runGui(GuiArgs args, bool builtin) {
   gui::requireDisplay();
   std::cerr << verb << ": note: settings: " << start.source << "\n";
   gui::Workbench bench(settings, warning);
-  if (!args.settings.empty()) bench.files().setSessionSettings(args.settings);
+  bench.files().setSessionSettings(args.settings, args.set);
   bench.ui().settings_source = start.source;
   bench.ui().settings_file = settings_file.string();
   // Saved 1 s after the last change while the window runs, and on close (below); scripted and

@@ -78,13 +78,15 @@ void runRender(RenderArgs args) {
                              (!args.sequence.folder.empty() && isSessionPath(args.sequence.folder));
   const bool keyframes_given = session_given || !args.sequence.folder.empty();
   ResolvedView view = resolveViewSpec(args.view, std::nullopt);
+  const std::string& drawn = args.map.empty() ? args.sequence.folder : args.map;
+  if (session_given || isStaticMapFile(drawn)) gui::refuseRemapSettings(args.view.set, drawn);
   if (!keyframes_given && view.spec.kind != render::ViewKind::kGlobal)
     throw std::invalid_argument("--view " + viewName(view.spec) +
                                 " needs keyframes: give a sequence (SEQ) or a session (.vdmap); a --map PLY or map "
                                 "folder has none");
   sharedOffscreenGl();
   times.mark("context");
-  RenderSource source(args.sequence, args.map, args.mesh);
+  RenderSource source(args.sequence, args.map, args.mesh, view.mapper);
   times.mark("load");
   if (args.query_slice) {  // the point queries' slice plane (docs/workbench.md "Queries")
     render::QuerySliceSpec slice = *args.query_slice;

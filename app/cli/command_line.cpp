@@ -1,12 +1,22 @@
 // The CLI11 checks of option values shared by the verbs (commands.h), and their notes on stderr.
 #include <cmath>
 #include <cstdlib>
+#include <regex>
 
 #include "app/cli/command_line.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/sequence/sequence.h"
 
 namespace vdmap::app {
+
+std::string shellQuoted(const std::string& text) {
+  static const std::regex plain(R"([A-Za-z0-9_./:=,+#@%-]+)");
+  if (std::regex_match(text, plain)) return text;
+  std::string out = "'";
+  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
+  return out + "'";
+}
+
 namespace {
 
 // The number `text` holds, all of it (std::invalid_argument otherwise).

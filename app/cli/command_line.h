@@ -24,6 +24,9 @@ struct ExitWith : std::runtime_error {
   int code;
 };
 
+/// `text` as one shell word: as it is when it needs no quoting, else in single quotes.
+std::string shellQuoted(const std::string& text);
+
 /// "1 keyframe", "2 keyframes": a count with its noun (regular plurals only).
 inline std::string counted(long long n, const std::string& noun) {
   return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");

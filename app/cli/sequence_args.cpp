@@ -67,6 +67,28 @@ void addRefineArg(CLI::App& verb, SequenceArgs& args) {
       "--no-refine", [&args] { args.refine = "none"; }, "same as --refine none");
 }
 
+std::string sequenceFlags(const SequenceArgs& args) {
+  std::string flags;
+  const auto add = [&flags](const char* flag, const std::string& value) {
+    if (!value.empty()) flags += std::string(" ") + flag + " " + shellQuoted(value);
+  };
+  add("--camera", args.camera);
+  add("--frames", args.frames);
+  if (args.rgb_window_s != SequenceArgs{}.rgb_window_s) {
+    char window[32];
+    std::snprintf(window, sizeof window, "%g", args.rgb_window_s);
+    add("--rgb-window", window);
+  }
+  add("--depth-topic", args.topics.depth);
+  add("--rgb-topic", args.topics.rgb);
+  add("--info-topic", args.topics.info);
+  add("--pose-topic", args.topics.pose);
+  if (!args.topics.world_frame.empty()) add("--pose-frames", args.topics.world_frame + ":" + args.topics.camera_frame);
+  add("--poses", args.poses);
+  if (args.refine_given) add("--refine", args.refine);
+  return flags;
+}
+
 std::optional<MapRefinementParams> refinement(const SequenceArgs& args) {
   if (args.refine == "none") return std::nullopt;
   MapRefinementParams params;

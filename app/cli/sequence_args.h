@@ -38,6 +38,9 @@ std::optional<MapRefinementParams> refinement(const SequenceArgs& args);
 void checkRefinementApplies(const SequenceArgs& args, PoseSource poses);
 /// The pose source --poses names for an opened sequence (the default: gt when it has ground truth).
 PoseSource poseSource(const SequenceArgs& args, const Sequence& sequence);
+/// The flags that open the frames `args` names as given (" --camera kinect --frames 0:150", ""
+/// when none): for the commands the workbench prints. --refine only when refine_given.
+std::string sequenceFlags(const SequenceArgs& args);
 /// The camera preset names, comma-separated, for --camera help texts.
 std::string cameraPresetList();
 

@@ -36,8 +36,8 @@ std::vector<double> paramsKey(const GlobalMapParams& params) {
   return key;
 }
 
-// Whether `path` is a map file loadStaticMap reads (a sequence folder, a typo and the rest: no,
-// and they keep their own errors).
+}  // namespace
+
 bool isStaticMapFile(const std::string& path) {
   try {
     const MapFileKind kind = detectMapFile(path);
@@ -46,8 +46,6 @@ bool isStaticMapFile(const std::string& path) {
     return false;
   }
 }
-
-}  // namespace
 
 struct RenderSource::Impl {
   std::optional<Session> session;
@@ -77,7 +75,8 @@ struct RenderSource::Impl {
   int slice_serial = 0;
 };
 
-RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& map_in, const std::string& mesh)
+RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& map_in, const std::string& mesh,
+                           const MapperParams& mapper)
     : impl_(std::make_unique<Impl>()) {
   SequenceArgs sequence = sequence_in;
   std::string map = map_in;
@@ -111,7 +110,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
   if (!sequence.folder.empty()) {
     const Sequence seq = openSequence(sequence);
     noteCameraGuess(seq, "render");
-    MapperParams params;
+    MapperParams params = mapper;  // --settings and --set (their re-run keys)
     params.poses = poseSource(sequence, seq);
     checkRefinementApplies(sequence, params.poses);
     m.mapper = std::make_unique<Mapper>(seq.camera(), params);

@@ -21,13 +21,18 @@ struct Gl;
 
 namespace vdmap::app {
 
+/// Whether `path` is a map file loadStaticMap reads (a sequence folder, a typo and the rest: no,
+/// and they keep their own errors).
+bool isStaticMapFile(const std::string& path);
+
 /// One thing to draw, loaded once: a session, a map file (mapping/files/map_file.h), a mesh, or
-/// a sequence mapped with the default parameters. Caches what several views of it share.
+/// a sequence mapped with `mapper` (the defaults unless --settings or --set change them). Caches what several views of it share.
 class RenderSource {
  public:
   /// Opens what the arguments name (SEQ or --map, and/or --mesh); throws InputError. A sequence
   /// is mapped here. `name` is the path errors and the summary use.
-  RenderSource(const SequenceArgs& sequence, const std::string& map, const std::string& mesh);
+  RenderSource(const SequenceArgs& sequence, const std::string& map, const std::string& mesh,
+               const MapperParams& mapper = {});
   ~RenderSource();
   RenderSource(const RenderSource&) = delete;
   RenderSource& operator=(const RenderSource&) = delete;

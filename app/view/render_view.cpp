@@ -295,6 +295,7 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
                                 " has its keyframe's");
   out.spec = spec;
   out.thresholds = settings.thresholds;
+  out.mapper = settings.mapper;
   return out;
 }
 

@@ -48,6 +48,7 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& args);
 struct ResolvedView {
   render::ViewSpec spec;
   GlobalMapParams thresholds;
+  MapperParams mapper;  ///< what a sequence is mapped with (--settings' and --set's re-run keys)
   std::string settings_source;
 };
 ResolvedView resolveViewSpec(const RenderViewArgs& args, const std::optional<GlobalMapParams>& session_thresholds);

@@ -318,4 +318,14 @@ void applySetting(Settings& settings, const std::string& key_value) {
   }
 }
 
+void refuseRemapSettings(const std::vector<std::string>& set, const std::string& what) {
+  for (const std::string& kv : set) {
+    const Parameter* p = findParameter(kv.substr(0, kv.find('=')));
+    if (p && !p->live)
+      throw std::invalid_argument("--set '" + kv + "': " + std::string(p->key) +
+                                  " changes how frames are mapped, and " + what +
+                                  " is mapped already (give its sequence to map it again)");
+  }
+}
+
 }  // namespace vdmap::app::gui

@@ -91,6 +91,9 @@ bool rerunParamsDiffer(const Settings& a, const Settings& b);
 /// The keys applySetting takes, for help texts: "thresholds: KEY, ...; rerun: ...; view: ...",
 /// the keys of those sections of the settings file.
 std::string settingKeyList();
+/// Refuses (std::invalid_argument naming it) a --set of a re-run parameter: `what` (a saved
+/// session or a map file) was mapped already, so only live thresholds and view keys apply.
+void refuseRemapSettings(const std::vector<std::string>& set, const std::string& what);
 
 /// Applies "key=value" to the thresholds, re-run parameters or view (the --set option); the
 /// value is checked as in the settings file. Keys: settingKeyList().

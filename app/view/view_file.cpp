@@ -229,14 +229,6 @@ json parseFile(const fs::path& file) {
   return j;
 }
 
-std::string quoted(const std::string& text) {
-  static const std::regex plain(R"([A-Za-z0-9_./:=,+#@%-]+)");
-  if (std::regex_match(text, plain)) return text;
-  std::string out = "'";
-  for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
-  return out + "'";
-}
-
 std::string number(float v) {
   char text[32];
   std::snprintf(text, sizeof text, "%.9g", v);  // round-trips a float exactly
@@ -312,10 +304,13 @@ void writeViewFile(const fs::path& file, const render::ViewSpec& spec, const Glo
   writeFileAtomically(file, jsonText(j) + "\n");
 }
 
-std::string renderCommand(const render::ViewSpec& spec, const std::string& source, const std::string& view_file,
+std::string renderCommand(const render::ViewSpec& spec, const CommandSource& source, const std::string& view_file,
                           const std::string& out) {
-  std::string cmd = "vdmap render " + quoted(source);
-  if (!view_file.empty()) return cmd + " --view-file " + quoted(view_file) + " --out " + quoted(out);
+  std::string cmd = "vdmap render " + shellQuoted(source.path) + source.flags;
+  if (!view_file.empty())
+    return cmd + " --view-file " + shellQuoted(view_file) +
+           (source.thresholds.empty() ? "" : " --settings " + shellQuoted(view_file)) + " --out " + shellQuoted(out);
+  cmd += source.thresholds;
   const render::ViewSpec defaults;
   cmd += " --view " + viewName(spec);
   if (spec.width > 0 && spec.height > 0)
@@ -343,7 +338,8 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
   if (spec.sigma != defaults.sigma) cmd += " --sigma " + number(spec.sigma);
   if (spec.sphere_level != defaults.sphere_level) cmd += " --sphere-level " + std::to_string(spec.sphere_level);
   if (spec.points_below_px != defaults.points_below_px) cmd += " --points-below " + number(spec.points_below_px);
-  if (spec.background != defaults.background) cmd += " --background " + quoted(gui::backgroundName(spec.background));
+  if (spec.background != defaults.background)
+    cmd += " --background " + shellQuoted(gui::backgroundName(spec.background));
   if (spec.layers != defaults.layers) {
     std::string list;
     for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
@@ -352,7 +348,7 @@ std::string renderCommand(const render::ViewSpec& spec, const std::string& sourc
     cmd += " --layers " + (list.empty() ? std::string("none") : list);
   }
   if (spec.selected_keyframe >= 0) cmd += " --select " + std::to_string(spec.selected_keyframe);
-  return cmd + " --out " + quoted(out);
+  return cmd + " --out " + shellQuoted(out);
 }
 
 bool isViewFile(const fs::path& file) {

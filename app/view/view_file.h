@@ -20,10 +20,22 @@ render::ViewSpec readViewFile(const std::filesystem::path& file, GlobalMapParams
 void writeViewFile(const std::filesystem::path& file, const render::ViewSpec& spec, const GlobalMapParams& thresholds,
                    const std::string& source);
 
+/// What a printed `vdmap render` command draws: the session, map file or sequence, the flags that
+/// select what of it is shown (a sequence's " --frames 0:150 --camera kinect"), and " --set K=V"
+/// for each threshold that differs from what `vdmap render` starts with for it.
+struct CommandSource {
+  CommandSource(std::string p, std::string f = "", std::string s = "")
+      : path(std::move(p)), flags(std::move(f)), thresholds(std::move(s)) {}
+  CommandSource(const char* p) : path(p) {}
+  std::string path, flags, thresholds;
+};
+
 /// The `vdmap render` command that draws `spec` of `source` into `out`: with `view_file` empty
-/// every option spelled out (--view, --size, --look-at/--orbit, --color, ...; defaults left out),
-/// else `vdmap render SOURCE --view-file VIEW_FILE --out OUT`. Paths are quoted when needed.
-std::string renderCommand(const render::ViewSpec& spec, const std::string& source, const std::string& view_file = "",
+/// every option spelled out (--view, --size, --look-at/--orbit, --color, ...; defaults left out,
+/// the thresholds as --set), else `vdmap render SOURCE --view-file VIEW_FILE --out OUT` (with
+/// `--settings VIEW_FILE` when the thresholds differ: the file holds them). Paths are quoted
+/// when needed.
+std::string renderCommand(const render::ViewSpec& spec, const CommandSource& source, const std::string& view_file = "",
                           const std::string& out = "view.png");
 
 /// --settings FILE: a settings.json or a view file (told apart by its "vdmap_view" key). A view

@@ -181,7 +181,7 @@ void drawView(Workbench& bench, WindowState& win) {
   tip("Off: Load view changes the view alone (as --view-file); on: the file's thresholds are applied too (as --settings).");
   const std::string view_file = ui.confirm_view_replace;
   if (askToReplace("Replace view file?", ui.confirm_view_replace)) bench.viewFiles().saveSafely(view_file, true);
-  std::string command = renderCommand(bench.view().spec(), bench.viewFiles().source());
+  std::string command = renderCommand(bench.view().spec(), bench.viewFiles().commandSource());
   if (ImGui::Button("Copy")) ImGui::SetClipboardText(command.c_str());
   tip("Copies the `vdmap render` command that draws this view (every option spelled out) to the clipboard.");
   checkFits(win.check);

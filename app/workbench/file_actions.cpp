@@ -84,6 +84,12 @@ bool FileActions::open(const SequenceArgs& args) {
     worker_ = std::move(worker);  // the old session (if any) stops here
     ui_.params = {mapper, ui_.settings.thresholds};
     why_player_off_.clear();
+    state_.opened_args = absolute_args;  // what a printed render command repeats, with this run's refinement
+    state_.opened_args.refine = !refine_                                            ? "none"
+                                : refine_->method == MapRefinementMethod::kPairwise ? "pairwise"
+                                                                                    : "joint";
+    state_.opened_args.refine_given = state_.opened_args.refine != SequenceArgs{}.refine;
+    state_.render_thresholds = GlobalMapParams{};
   } catch (const std::exception& e) {
     state_.report(StatusLine::Kind::kError, e.what());
     return false;
@@ -99,11 +105,12 @@ bool FileActions::openSession(const std::string& file) {
     Session saved = loadSession(path);
     // The session's own parameters, shown and used; the user's settings stay as they are.
     ParameterValues params{saved.info.mapper, saved.info.global};
-    if (!session_settings_.empty()) {  // keys the file lacks keep the session's values
-      Settings base;
-      base.thresholds = params.global;
-      params.global = readSettingsArg(session_settings_, base).thresholds;
-    }
+    const GlobalMapParams saved_thresholds = saved.info.global;
+    Settings over;  // keys the file and --set lack keep the session's values
+    over.thresholds = params.global;
+    if (!session_settings_.empty()) over = readSettingsArg(session_settings_, over);
+    for (const std::string& kv : session_set_) applySetting(over, kv);
+    params.global = over.thresholds;
     std::string off;
     std::optional<Sequence> rest = framesAfter(saved, &off, &why);
     std::vector<FrameEntry> truth = groundTruthOf(saved.info);
@@ -113,6 +120,8 @@ bool FileActions::openSession(const std::string& file) {
     worker_ = std::move(worker);
     ui_.params = params;
     why_player_off_ = off;
+    state_.opened_args = {};
+    state_.render_thresholds = saved_thresholds;
   } catch (const std::exception& e) {
     state_.report(StatusLine::Kind::kError, e.what());
     return false;
@@ -172,6 +181,8 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
   // The sliders (disabled) show what the worker holds, so nothing reads as pending.
   ui_.params = {worker_->mapping()->mapper, worker_->global()->params};
   why_player_off_ = kStaticMapWhy;
+  state_.opened_args = {};
+  state_.render_thresholds.reset();
   opened(m.path.string());
   char sigma[32];
   std::snprintf(sigma, sizeof sigma, "%.1f mm", m.sigma_m * 1e3);

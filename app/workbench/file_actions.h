@@ -50,9 +50,13 @@ class FileActions {
   /// The refinement of tracked keyframe poses after the last frame (nullopt: none) for the
   /// sequences and sessions opened from now on (default: joint, as `vdmap map`).
   void setRefinement(std::optional<MapRefinementParams> refine) { refine_ = std::move(refine); }
-  /// The thresholds `file` sets (--settings FILE: a settings.json or a view file, readSettingsArg)
-  /// go over the saved thresholds of every session opened from now on; "": none.
-  void setSessionSettings(std::string file) { session_settings_ = std::move(file); }
+  /// The thresholds `file` sets (--settings FILE: a settings.json or a view file, readSettingsArg;
+  /// "": none), then the KEY=VALUE of `set` (--set), go over the saved thresholds of every
+  /// session opened from now on.
+  void setSessionSettings(std::string file, std::vector<std::string> set = {}) {
+    session_settings_ = std::move(file);
+    session_set_ = std::move(set);
+  }
   /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
   /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
   const std::string& whyPlayerOff() const { return why_player_off_; }
@@ -75,6 +79,7 @@ class FileActions {
   std::function<void()> opened_;
   std::optional<MapRefinementParams> refine_ = MapRefinementParams{};  // setRefinement's
   std::string session_settings_;                                       // setSessionSettings'
+  std::vector<std::string> session_set_;                               // setSessionSettings'
   std::string why_player_off_;                                         // whyPlayerOff()
   std::vector<std::string> dropped_;                                   // drop()'s, not opened yet
 };

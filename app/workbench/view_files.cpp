@@ -3,6 +3,8 @@
 #include <cstdlib>
 #include <iostream>
 
+#include "app/cli/command_line.h"
+#include "app/cli/parameter_table.h"
 #include "app/view/view_file.h"
 
 namespace vdmap::app::gui {
@@ -81,10 +83,49 @@ bool ViewFiles::save(const std::string& file) {
     state_.report(StatusLine::Kind::kError, e.what());
     return false;
   }
-  const std::string command = renderCommand(view_.spec(), source(), path);
+  const std::string command = renderCommand(view_.spec(), commandSource(), path);
   std::cout << "vdmap: view saved to " << path << "; draw it with: " << command << std::endl;
   state_.report(StatusLine::Kind::kSuccess, "view saved to " + path + "; " + command);
   return true;
+}
+
+namespace {
+
+// " --set KEY=VALUE" for each parameter (live ones when `live`) whose value in `now` is not its
+// value in `start`.
+std::string changedParameters(const ParameterValues& now, const ParameterValues& start, bool live) {
+  std::string sets;
+  for (const Parameter& p : parameters()) {
+    if (p.live != live || p.get(now) == p.get(start)) continue;
+    const double v = p.get(now);
+    const std::string text = p.kind == ParameterSpec::Kind::kChoice ? formatValue(p, v) : valueJson(p, v).dump();
+    sets += " --set " + shellQuoted(std::string(p.key) + "=" + text);
+  }
+  return sets;
+}
+
+}  // namespace
+
+CommandSource ViewFiles::commandSource() const {
+  CommandSource out(source());
+  const MappingWorker* worker = state_.worker.get();
+  const auto mapping = worker ? worker->mapping() : nullptr;
+  if (!mapping) return out;
+  if (const Sequence* seq = worker->sequence(); seq && !state_.opened_args.folder.empty()) {
+    SequenceArgs args = state_.opened_args;
+    const int mapped = mapping->frames_mapped;
+    const bool whole = mapped >= static_cast<int>(seq->size());
+    if (mapped > 0 && !whole)  // the frames the player has reached
+      args.frames = frameRangeText({seq->frameRange().first, seq->entries()[mapped - 1].index + 1});
+    const bool tracked = mapping->mapper.poses == PoseSource::kTrack;
+    args.poses = tracked ? "track" : "gt";
+    if (!tracked) args.refine_given = false;                          // refinement corrects tracked poses only
+    else if (!whole) args.refine = "none", args.refine_given = true;  // refined after the last frame
+    out.flags = sequenceFlags(args) + changedParameters({mapping->mapper, {}}, {MapperParams{}, {}}, false);
+  }
+  if (state_.render_thresholds)
+    out.thresholds = changedParameters({{}, state_.ui.params.global}, {{}, *state_.render_thresholds}, true);
+  return out;
 }
 
 bool ViewFiles::saveSafely(const std::string& file, bool replace) {

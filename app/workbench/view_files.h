@@ -7,6 +7,7 @@
 #include <optional>
 #include <string>
 
+#include "app/view/view_file.h"
 #include "app/workbench/parameter_editor.h"
 #include "app/workbench/view_controller.h"
 #include "app/workbench/workbench_state.h"
@@ -52,6 +53,10 @@ class ViewFiles {
   bool recallQuickView(int slot);
   /// The file a render command names for the open session: the .vdmap or sequence folder.
   const std::string& source() const { return state_.ui.settings.last_sequence; }
+  /// What a printed render command draws to show what the window shows: source(), a sequence's
+  /// frames mapped so far and how it was opened (--frames, --camera, --poses, ...), and --set for
+  /// each parameter that differs from what `vdmap render` starts with.
+  CommandSource commandSource() const;
 
  private:
   WorkbenchState& state_;

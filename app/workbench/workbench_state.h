@@ -7,6 +7,7 @@
 #include <string>
 
 #include "app/cli/parameter_table.h"
+#include "app/cli/sequence_args.h"
 #include "app/view/settings.h"
 #include "app/workbench/mapping_worker.h"
 #include "render/query_slice.h"
@@ -108,6 +109,12 @@ struct WorkbenchState {
   /// Called on the worker's thread on news (Workbench::setOnChange); every new worker gets it.
   std::function<void()> on_change;
   std::string first_error;  ///< the first error reported ("" if none)
+  /// How the open sequence was opened (folder, --frames, --camera, ...), which a printed render
+  /// command repeats; an empty folder for a session or a map file.
+  SequenceArgs opened_args;
+  /// The thresholds `vdmap render` starts from for what is open: the defaults for a sequence, the
+  /// saved ones for a session; none for a map file (it has no thresholds).
+  std::optional<GlobalMapParams> render_thresholds;
 
   /// Shows `text` in the status line (errors stay until the next report).
   void report(StatusLine::Kind kind, std::string text);

@@ -166,5 +166,58 @@ TEST_F(ViewTwin, RenderWithoutAViewFileDrawsTheWindowsDefaultView) {
   expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
 }
 
+// The command the window prints when it saves a view redraws what the window shows, whatever
+// opened it: the frames given (--frames), parameters --set for the run (also over a session's
+// thresholds).
+class PrintedCommand : public ViewTwin {
+ protected:
+  // Runs the window with `open` (what to open and how), saves the view, and runs the render
+  // command it printed, into `name`W.png and `name`H.png; returns the command.
+  static std::string expectCommandRedraws(const std::string& name, const std::string& open) {
+    const std::string view = path(name + ".json"), window = path(name + "W.png"), headless = path(name + "H.png");
+    const RunResult w = runVdmapInXvfb(
+        dir_->path(),
+        "gui " + open + " --window-size 1280x720 --save-view '" + view + "' --view-screenshot '" + window + "' --exit",
+        "1600x900");
+    EXPECT_EQ(w.exit_code, 0) << w.err;
+    const std::string marker = "draw it with: vdmap ";
+    const auto at = w.out.find(marker);
+    EXPECT_NE(at, std::string::npos) << w.out;
+    if (at == std::string::npos) return "";
+    std::string command = w.out.substr(at + marker.size());
+    command = command.substr(0, command.find('\n'));
+    command = command.substr(0, command.rfind(" --out ")) + " --out '" + headless + "'";
+    const RunResult h = runVdmap(command);
+    EXPECT_EQ(h.exit_code, 0) << command << "\n" << h.err;
+    const nlohmann::json spec = nlohmann::json::parse(readFile(view));
+    expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
+    return command;
+  }
+};
+
+TEST_F(PrintedCommand, RedrawsTheFramesTheWindowWasOpenedOn) {
+  VDMAP_REQUIRE_XVFB();
+  const std::string command = expectCommandRedraws(
+      "frames", "'" + path("room") + "' --frames 0:4 --play-to-end --set cell_size=8 --set merge_distance=0.1");
+  EXPECT_NE(command.find(" --frames 0:4"), std::string::npos) << command;
+  EXPECT_NE(command.find(" --set cell_size=8"), std::string::npos) << command;
+}
+
+TEST_F(PrintedCommand, RedrawsASessionWithThresholdsSetForTheRun) {
+  VDMAP_REQUIRE_XVFB();
+  const std::string command =
+      expectCommandRedraws("set", "'" + path("s.vdmap") + "' --set merge_distance=0.1 --set min_points=40");
+  EXPECT_EQ(nlohmann::json::parse(readFile(path("set.json")))["thresholds"]["merge_distance"], 0.1)
+      << "--set applies over the session's thresholds";
+  EXPECT_NE(command.find(" --settings "), std::string::npos) << command;
+}
+
+TEST_F(PrintedCommand, ASetOfAParameterASessionCannotChangeIsRefused) {
+  const RunResult r = runVdmap("gui '" + path("s.vdmap") + "' --set cell_size=20 --exit");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("cell_size"), std::string::npos) << r.err;
+  EXPECT_NE(r.err.find("mapped already"), std::string::npos) << r.err;
+}
+
 }  // namespace
 }  // namespace vdmap::test

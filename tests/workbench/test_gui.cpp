@@ -1710,5 +1710,24 @@ TEST(LoopStrip, NearbyMarkersMergeWithACount) {
   EXPECT_TRUE(clusterMarkers({}, 8.f).empty());
 }
 
+// The render command the window prints draws what it shows: the frames played so far, how the
+// sequence was opened, and the parameters that are not what `vdmap render` starts with.
+TEST(GuiViewFiles, TheRenderCommandNamesTheFramesPlayedAndTheChangedParameters) {
+  TinyBench t;
+  for (int i = 0; i < 4; ++i) t.worker().step();
+  t.worker().waitIdle();
+  findParameter("merge_distance")->set(t.bench.ui().params, 0.125);
+  const CommandSource source = t.bench.viewFiles().commandSource();
+  EXPECT_EQ(source.path, (t.dir / "seq").string());
+  EXPECT_EQ(source.flags, " --frames 0:4 --poses gt --set keyframe_every=3");
+  EXPECT_EQ(source.thresholds, " --set merge_distance=0.125");
+  const std::string command = renderCommand(render::ViewSpec{}, source, "v.json", "o.png");
+  EXPECT_NE(command.find(" --view-file v.json --settings v.json --out o.png"), std::string::npos) << command;
+  // At the end of the sequence, no --frames: the whole sequence as opened.
+  t.worker().play();
+  t.worker().waitIdle();
+  EXPECT_EQ(t.bench.viewFiles().commandSource().flags, " --poses gt --set keyframe_every=3");
+}
+
 }  // namespace
 }  // namespace vdmap::app::gui
