@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "mapping/io/camera_config.h"
 #include "render/colormap.h"
 
 namespace vdmap::render {
@@ -130,6 +131,22 @@ GraphScene graphSceneOf(const KeyframeGraph& graph, const MapperState& state, co
   if (state.frame_poses.empty()) scene.trajectory = scene.keyframes;
   scene.current_keyframe = state.current_keyframe;
   scene.tracked = tracked;
+  return scene;
+}
+
+GraphScene graphSceneOf(const StaticMap& map) {
+  GraphScene scene;
+  scene.camera = cameraPreset(kStaticMapCamera);
+  for (const StampedPose& k : map.keyframes) scene.keyframes.push_back(k.T_W_C);
+  for (const CovisibilityEdge& e : map.edges) scene.edges.push_back({e.a, e.b, static_cast<float>(e.weight)});
+  if (map.keyframes.empty()) return scene;
+  // Each frame relative to the newest keyframe at or before it, as the workbench holds it.
+  std::size_t k = 0;
+  for (const StampedPose& p : map.trajectory) {
+    while (k + 1 < map.keyframes.size() && map.keyframes[k + 1].t <= p.t) ++k;
+    scene.trajectory.push_back(scene.keyframes[k] * (scene.keyframes[k].inverse() * p.T_W_C));
+  }
+  if (map.trajectory.empty()) scene.trajectory = scene.keyframes;
   return scene;
 }
 

@@ -5,6 +5,7 @@
 #include <span>
 #include <vector>
 
+#include "mapping/files/map_file.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
@@ -33,5 +34,9 @@ glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid
 /// mapped frame's pose (the keyframes' for sessions that lack them) and the current keyframe.
 GraphScene graphSceneOf(const KeyframeGraph& graph, const MapperState& state, const PinholeCamera& camera,
                         bool tracked);
+/// A map file's keyframes, covisibility edges and trajectory as the workbench draws them: the
+/// trajectory only beside keyframes (else the keyframes stand for it), the frustums in the
+/// shape of kStaticMapCamera (a map folder stores no intrinsics).
+GraphScene graphSceneOf(const StaticMap& map);
 
 }  // namespace vdmap::render

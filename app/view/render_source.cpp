@@ -59,6 +59,7 @@ struct RenderSource::Impl {
   bool tracked = false;
   std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
   std::vector<Transform> map_cameras;              // a map folder's trajectory (else keyframes): the data up axis
+  render::GraphScene file_graph;                   // a map folder's keyframes, edges and trajectory
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, GlobalMap>> maps;  // by paramsKey
   // The query slice (--query-slice): the point queries of the last map asked for, and the slice.
@@ -100,6 +101,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     // The cameras the window's data up axis uses too (the trajectory, else the keyframes).
     for (const StampedPose& p : file.trajectory.empty() ? file.keyframes : file.trajectory)
       m.map_cameras.push_back(p.T_W_C);
+    m.file_graph = render::graphSceneOf(file);
     m.map_file = std::move(file.ellipsoids);
     name_ = map;
   }
@@ -265,7 +267,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   }
   mirror.setMap(generation, *shown);
   mirror.setQuerySlice(querySliceOf(map, scene.height));  // --query-slice (null: none)
-  render::GraphScene graph;
+  render::GraphScene graph = m.file_graph;
   if (m.graph) graph = render::graphSceneOf(*m.graph, *m.state, m.camera, m.tracked);
   graph.selected_keyframe = spec.selected_keyframe;
   mirror.setGraph(1, spec.selected_keyframe, [&] { return graph; });

@@ -18,9 +18,7 @@ MappingWorker::MappingWorker(std::shared_ptr<const StaticMap> map) : static_map_
 
   auto snap = std::make_shared<MappingSnapshot>();
   snap->generation = ++mapping_generation_;
-  // The keyframe frustums need intrinsics: a map folder does not store them; the TUM default's
-  // 640x480 shape draws them as `vdmap map` of a TUM sequence would.
-  snap->camera = cameraPreset("tum-default");
+  snap->camera = cameraPreset(kStaticMapCamera);  // a map folder stores no intrinsics
   snap->frames_total = snap->frames_mapped = mapped_;
   std::vector<std::size_t> per_keyframe(m.keyframes.size(), 0);
   for (const Ellipsoid& e : m.ellipsoids)

@@ -50,6 +50,10 @@ struct StaticMap {
   std::string stats_json;           ///< a map folder's stats.json text ("" when none)
 };
 
+/// The camera preset whose shape a map file's keyframe frustums are drawn in: a map folder
+/// stores no intrinsics, and `vdmap map` of a TUM sequence would have this one.
+inline constexpr const char* kStaticMapCamera = "tum-default";
+
 /// Reads a map folder, ellipsoid PLY, point PLY or OctoMap into a StaticMap:
 /// - map folder: global_ellipsoids.ply, keyframes.txt, trajectory.txt and graph.txt when present,
 ///   stats.json's text;

@@ -219,5 +219,17 @@ TEST_F(PrintedCommand, ASetOfAParameterASessionCannotChangeIsRefused) {
   EXPECT_NE(r.err.find("mapped already"), std::string::npos) << r.err;
 }
 
+// A map folder (`vdmap map --out`) shows its keyframe frustums, graph and trajectory in the
+// window and in render alike, and render's --layers turns them on and off.
+TEST_F(PrintedCommand, AMapFolderDrawsItsKeyframesGraphAndTrajectoryAsTheWindowDoes) {
+  VDMAP_REQUIRE_XVFB();
+  expectCommandRedraws("folder", "'" + path("map") + "'");
+  const std::string lines = path("lines.png"), none = path("none.png");
+  ASSERT_EQ(runVdmap("render '" + path("map") + "' --size 320x240 --out '" + lines + "'").exit_code, 0);
+  ASSERT_EQ(runVdmap("render '" + path("map") + "' --size 320x240 --layers none --out '" + none + "'").exit_code, 0);
+  const render::ImageComparison c = render::compareImages(readRgb(lines), readRgb(none), render::ImageTolerance{});
+  EXPECT_GT(c.differing, 100) << "the frustums, graph and trajectory are drawn: " << c.summary();
+}
+
 }  // namespace
 }  // namespace vdmap::test
