@@ -196,9 +196,9 @@ cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int m
   return rgba;
 }
 
-LegendPlace legendPlace(int view_width, int up_label_width, float em) {
+LegendPlace legendPlace(int view_width, float em) {
   if (view_width < 40.f * em) return {view_width, true};
-  return {std::max(1, view_width - up_label_width - static_cast<int>(std::lround(3.f * em))), false};
+  return {std::max(1, view_width - static_cast<int>(std::lround((kUpLabelEm + 3.f) * em))), false};
 }
 
 cv::Point legendOrigin(const cv::Mat& legend, int height, float scale) {

@@ -56,14 +56,23 @@ std::string metresText(double m);
 /// `scale` 1 is a 12 px font. Empty for an empty legend.
 cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int max_width, float scale = 1.f);
 
+/// The window's font size at scale 1, pixels: the em the legend is placed by, in the window and in
+/// `vdmap render` alike.
+inline constexpr float kWindowEmPx = 13.f;
+/// The room the window's up label takes at the bottom right, in em: its longest text, "up: data
+/// (-0.00, -0.00, -0.00)", in the window's font (7 px a character at 13 px). A fixed room, not
+/// the label measured, so that the window and `vdmap render` (which draws no label) wrap the
+/// legend at the same width.
+inline constexpr float kUpLabelEm = 16.5f;
+
 /// How wide the legend may be in a view of `view_width` pixels whose bottom-right corner holds
-/// the up label (`up_label_width` pixels; `em` the font size): up to 3 em left of the label, or,
-/// in a view narrower than 40 em, the whole width with the label moved to the top instead.
+/// the up label (`em` the font size): up to 3 em left of the label's room, or, in a view narrower
+/// than 40 em, the whole width with the label moved to the top instead.
 struct LegendPlace {
   int max_width = 0;
   bool up_label_on_top = false;
 };
-LegendPlace legendPlace(int view_width, int up_label_width, float em);
+LegendPlace legendPlace(int view_width, float em = kWindowEmPx);
 
 /// Where the legend image goes in a viewport of `height` pixels: its top-left corner in image
 /// coordinates (row 0 on top), bottom-left with a margin.

@@ -293,7 +293,7 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
                        ? render::legendFor(spec.color, mirror.mapColorRange(), graph, spec.layers.trajectory,
                                            spec.layers.groundtruth, spec.layers.graph)
                        : render::Legend{},
-                   spec.background, w);
+                   spec.background, render::legendPlace(w).max_width);  // as the window places it
   if (!m.mesh.triangles.empty() && !m.mesh_renderer) {
     m.mesh_renderer = std::make_unique<render::MeshRenderer>(gl);
     m.mesh_renderer->set(render::toColoredMesh(m.mesh));

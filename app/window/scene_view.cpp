@@ -73,8 +73,7 @@ void drawUpAxis(ImDrawList* draw, const UiState& ui, const Rect& view) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const std::string text = upAxisText(ui);
   const ImVec2 size = ImGui::CalcTextSize(text.c_str());
-  const render::LegendPlace place =
-      render::legendPlace(static_cast<int>(view.w), static_cast<int>(std::ceil(size.x)), font);
+  const render::LegendPlace place = render::legendPlace(static_cast<int>(view.w), font);
   const float y = place.up_label_on_top ? view.y + pad : view.y + view.h - pad - size.y;
   draw->AddText({view.x + view.w - pad - size.x, y}, kOverlayDim, text.c_str());
 }
@@ -99,17 +98,12 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     keys.loops.resize(mapping.loops.size());
     keys.keyframes.resize(mapping.keyframes.size());
   }
-  mirror.setLegend(s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory,
-                                                     s.show_groundtruth, s.show_graph)
-                                 : render::Legend{},
-                   s.background, [&] {
-                     // Left of the up label at the bottom-right (framebuffer pixels).
-                     const float fb_scale = ImGui::GetIO().DisplayFramebufferScale.x;
-                     const float em = ImGui::GetFontSize() * fb_scale;
-                     const int up_w =
-                         static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
-                     return render::legendPlace(ui.view_width, up_w, em).max_width;
-                   }());
+  mirror.setLegend(
+      s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth,
+                                        s.show_graph)
+                    : render::Legend{},
+      s.background,  // left of the up label at the bottom-right (framebuffer pixels)
+      render::legendPlace(ui.view_width, ImGui::GetFontSize() * ImGui::GetIO().DisplayFramebufferScale.x).max_width);
   if (!bench.isOpen()) return;
   if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session
     mirrored.session = bench.sessionSerial();

@@ -231,5 +231,11 @@ TEST_F(PrintedCommand, AMapFolderDrawsItsKeyframesGraphAndTrajectoryAsTheWindowD
   EXPECT_GT(c.differing, 100) << "the frustums, graph and trajectory are drawn: " << c.summary();
 }
 
+// Ten keyframes in a 602 px view: the window and render wrap the keyframe colour key alike.
+TEST_F(PrintedCommand, TheKeyframeColourKeyWrapsAsInTheWindow) {
+  VDMAP_REQUIRE_XVFB();
+  expectCommandRedraws("key", "'" + path("room") + "' --play-to-end --set keyframe_every=1 --set color=keyframe");
+}
+
 }  // namespace
 }  // namespace vdmap::test

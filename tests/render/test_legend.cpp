@@ -114,13 +114,13 @@ TEST(Legend, ManyKeyframesShowAStripWithEveryKeyframe) {
 
 TEST(Legend, StaysLeftOfTheUpLabel) {
   const float em = 13.f;
-  const LegendPlace wide = legendPlace(1000, 200, em);
+  const LegendPlace wide = legendPlace(1000, em);
   EXPECT_FALSE(wide.up_label_on_top);
-  EXPECT_EQ(wide.max_width, 1000 - 200 - 39);
+  EXPECT_EQ(wide.max_width, 1000 - 254) << "16.5 em for the label, 3 em between";
   const Legend legend = legendFor(ColorMode::kKeyframe, std::nullopt, keyframes(300));
   EXPECT_LE(rasterizeLegend(legend, kDarkBackground, wide.max_width).cols, wide.max_width);
   // Narrower than 40 em: the legend takes the width, the label goes to the top.
-  const LegendPlace narrow = legendPlace(500, 200, em);
+  const LegendPlace narrow = legendPlace(500, em);
   EXPECT_TRUE(narrow.up_label_on_top);
   EXPECT_EQ(narrow.max_width, 500);
   EXPECT_LE(rasterizeLegend(legend, kDarkBackground, narrow.max_width).cols, 500);
