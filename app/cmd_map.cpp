@@ -74,6 +74,7 @@ void checkMapArgs(const MapArgs& args) {
   // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
   checkExportFolder(args.out);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
+  checkNotAnInput(args.save, "--save", {{"SEQ", args.sequence.folder}, {"--load", args.load}});
   if (!args.load.empty() && !isSessionPath(args.load))
     throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
                                                                    : "no such session file (--load)");

@@ -355,6 +355,7 @@ void runQuery(QueryArgs args, const CLI::App& verb) {
   args.params.conflict = conflictRule(args.conflict);
   // Outputs that cannot be written and inputs that are wrong fail before the map is loaded.
   checkOutputFile(args.out, "--out");
+  checkNotAnInput(args.out, "--out", {{"--points", args.points}, {"MAP", args.map}});
   QueryInput input;
   if (queryOpReadsPoints(op)) input = readQueryInput(args.points, op, args.max_range_m);
   const LoadedMap loaded = loadQueryMap(args);

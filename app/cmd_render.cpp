@@ -69,6 +69,15 @@ void runRender(RenderArgs args) {
                              "--mesh PLY, or --map and --mesh",
                              CLI::ExitCodes::RequiredError);
   if (!args.out.empty()) checkOutputFile(args.out, "--out");
+  for (const auto& [option, file] :
+       {std::pair<const char*, std::string>{"--out", args.out}, {"--diff", args.check.diff}})
+    checkNotAnInput(file, option,
+                    {{"SEQ", args.sequence.folder},
+                     {"--map", args.map},
+                     {"--mesh", args.mesh},
+                     {"--view-file", args.view.view_file},
+                     {"--settings", args.view.settings},
+                     {"--expect", args.check.update ? "" : args.check.expect}});
   StageTimes times(args.check.timings);
   // The golden decodes before any work; its size is checked once the view's is known.
   const cv::Mat golden = args.check.expect.empty() || args.check.update ? cv::Mat() : readGolden(args.check.expect);

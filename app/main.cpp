@@ -1,5 +1,8 @@
 // The vdmap command: verbs for mapping, rendering, benchmarking and evaluation, and (with no
 // argument) the workbench on the built-in scene.
+#include <cerrno>
+#include <cstdio>
+#include <cstring>
 #include <iostream>
 
 #include "app/cli/command_line.h"
@@ -34,20 +37,31 @@ int main(int argc, char** argv) {
     std::cerr << "vdmap" << verb << ": " << kind << ": " << what << "\n";
   };
   const auto error = [&print](const std::string& what) { print("error", what); };
+  // What was written to stdout must have arrived: a full disk or a closed file there (`info
+  // --json > /dev/full`) is a failure, not a silent success.
+  const auto written = [&error](int code) {
+    std::cout.flush();
+    errno = 0;
+    if (std::fflush(stdout) == 0 && std::cout && !std::ferror(stdout)) return code;
+    // The failed write may be an earlier one (its errno gone): then no reason is given.
+    error(std::string("cannot write to standard output") +
+          (errno != 0 ? std::string(": ") + std::strerror(errno) : "") + " (a full disk or a closed file?)");
+    return code == 0 ? 1 : code;
+  };
   try {
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {
-    if (e.get_exit_code() == 0) return app.exit(e);  // --help, --version
+    if (e.get_exit_code() == 0) return written(app.exit(e));  // --help, --version
     // One line like every other error (CLI11's own adds "Run with --help ...").
     error(std::string(e.what()) + " (see --help)");
     return e.get_exit_code();
   } catch (const ExitWith& e) {  // the work was done; its verdict is not success (render --expect: 2)
     print("differs", e.what());
-    return e.code;
+    return written(e.code);
   } catch (const std::exception& e) {
     error(e.what());
     return 1;
   }
-  return 0;
+  return written(0);
 }

@@ -8,6 +8,7 @@
 #include <cstring>
 #include <filesystem>
 #include <functional>
+#include <initializer_list>
 #include <optional>
 #include <stdexcept>
 #include <string>
@@ -80,6 +81,23 @@ inline void checkOutputFile(const std::string& file, const std::string& option) 
   if (fs::exists(existing) && !fs::is_directory(existing))
     throw std::invalid_argument(file + ": " + existing.string() + " is a file, not a folder (" + option + ")");
   throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
+}
+
+/// Fails before any work when the output `file` (given as `option`) is one of `inputs` ({option,
+/// path} pairs; empty paths skipped) by any path to it: writing it would destroy what is read.
+inline void checkNotAnInput(const std::string& file, const std::string& option,
+                            std::initializer_list<std::pair<const char*, std::string>> inputs) {
+  namespace fs = std::filesystem;
+  std::error_code ec;
+  for (const auto& [input_option, input] : inputs) {
+    if (input.empty() || file.empty()) continue;
+    const bool same = fs::exists(file, ec) && fs::exists(input, ec)
+                          ? fs::equivalent(file, input, ec)
+                          : fs::weakly_canonical(file, ec) == fs::weakly_canonical(input, ec);
+    if (same)
+      throw std::invalid_argument(file + ": " + option + " is the file " + input_option +
+                                  " reads; write the output elsewhere");
+  }
 }
 
 }  // namespace vdmap::app

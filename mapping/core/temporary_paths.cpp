@@ -79,6 +79,10 @@ void installTemporaryPathCleanup() {
     sigemptyset(&action.sa_mask);
     ::sigaction(signal, &action, nullptr);
   }
+  // A file grown past `ulimit -f` would end the process by SIGXFSZ, with no message and its
+  // temporary files left; ignored, the write fails with EFBIG ("File too large") and is reported
+  // and cleaned up as a full disk is.
+  ::signal(SIGXFSZ, SIG_IGN);
 }
 
 }  // namespace vdmap

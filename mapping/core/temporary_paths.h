@@ -34,6 +34,7 @@ void removeTemporaryPaths();
 
 /// Installs SIGINT, SIGTERM and SIGHUP handlers that call removeTemporaryPaths() and then end the
 /// process with the same signal (default action), so the exit status still says "interrupted".
+/// Also ignores SIGXFSZ, so a write past `ulimit -f` fails with EFBIG like any write error.
 /// For executables (vdmap's main); a library never installs it on its own.
 void installTemporaryPathCleanup();
 

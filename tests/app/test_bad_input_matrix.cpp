@@ -688,6 +688,15 @@ const std::vector<BadCase>& badCases() {
        then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                              "property float z\nend_header\n0 0 1\n"),
             "query {dir}/s.vdmap --op collide --points {dir}/pts.ply --out {dir}/out.ply")},
+      // An output that is an input is refused before any work (the input stays as it was).
+      {"session", "query_out_is_the_points", E::kCliError, "pts.txt: --out is the file --points reads",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/./pts.txt")},
+      {"session", "render_out_is_the_golden", E::kCliError, "g.png: --out is the file --expect reads",
+       args("render {dir}/s.vdmap --expect {dir}/g.png --out {dir}/g.png")},
+      {"session", "render_diff_is_the_golden", E::kCliError, "g.png: --diff is the file --expect reads",
+       args("render {dir}/s.vdmap --expect {dir}/g.png --diff {dir}/g.png")},
+      {"command_line", "map_save_is_the_session_loaded", E::kCliError, "s.vdmap: --save is the file --load reads",
+       args("map {dir}/seq --load {dir}/s.vdmap --out {dir}/out --save {dir}/s.vdmap")},
       {"session", "query_map_folder", E::kCliError, "not a session: vdmap query reads a session file",
        then(write("pts.txt", "0 0 1\n"), "query {dir} --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
       {"session", "query_keyframe_outside_the_graph", E::kCliError, "--keyframe 40: the session has",

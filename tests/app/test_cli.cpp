@@ -30,6 +30,29 @@ TEST(Cli, InfoOnTinySequence) {
   EXPECT_NE(r.out.find("file camera.yaml"), std::string::npos) << r.out;
 }
 
+// Output that cannot be written is a failure with one line, not a silent success: stdout on a
+// full disk, and a file past `ulimit -f` (SIGXFSZ would end the process with no message).
+TEST(Cli, AFailedWriteIsAnErrorNamingIt) {
+  test::TempDir dir;
+  test::writeTinySequence(dir / "seq", 4);
+  const std::string seq = "'" + (dir / "seq").string() + "'", err = (dir / "err").string();
+  for (const std::string& verb : {"info " + seq + " --json", std::string("--help"), std::string("params --markdown")}) {
+    // The runner's own redirections come after these; the run's stderr goes to `err`.
+    const auto r = runVdmap(verb + " >/dev/full 2>'" + err + "' || exit $?; :");
+    EXPECT_EQ(r.exit_code, 1) << verb;
+    EXPECT_NE(test::readFile(err).find("cannot write to standard output"), std::string::npos)
+        << verb << ": " << test::readFile(err);
+  }
+  const auto r =
+      runVdmap("map " + seq + " --out '" + (dir / "out").string() + "' --save '" + (dir / "s.vdmap").string() + "'",
+               "ulimit -f 8;");
+  EXPECT_EQ(r.exit_code, 1) << r.err;
+  EXPECT_NE(r.err.find("File too large"), std::string::npos) << r.err;
+  EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << r.err;
+  for (const auto& entry : std::filesystem::directory_iterator(dir.path()))
+    EXPECT_TRUE(entry.path().filename() == "seq" || entry.path().filename() == "err") << entry.path() << " left behind";
+}
+
 TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
   const auto r = runVdmap("info /nonexistent/seq");
   EXPECT_EQ(r.exit_code, 1);
