@@ -144,7 +144,7 @@ void runGui(GuiArgs args, bool builtin) {
   const fs::path& settings_file = start.user_file;
   const std::string& warning = start.warning;
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
-  // --set and --window-size hold for this run only: they are not saved (saveChangedSettings).
+  // --set and --window-size hold for this run only: they are not saved (Workbench::saveSettings).
   gui::Settings settings = start.settings;
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
   if (!args.window_size.empty()) {
@@ -197,7 +197,7 @@ void runGui(GuiArgs args, bool builtin) {
   const int code = gui::runWorkbenchWindow(bench, args.script, settings_file.string(), std::move(prepare));
   if (!settings_file.empty()) {
     try {
-      gui::saveChangedSettings(settings_file, settings, bench.ui().settings);
+      bench.saveSettings();
     } catch (const std::exception& e) {
       std::cerr << "vdmap: warning: settings not saved: " << e.what() << "\n";
     }

@@ -99,17 +99,19 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     keys.loops.resize(mapping.loops.size());
     keys.keyframes.resize(mapping.keyframes.size());
   }
-  mirror.setLegend(s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory,
-                                                     s.show_groundtruth, s.show_graph)
-                                 : render::Legend{},
-                   s.background, [&] {
-                     // Left of the up label at the bottom-right (framebuffer pixels).
-                     const float fb_scale = ImGui::GetIO().DisplayFramebufferScale.x;
-                     const float em = ImGui::GetFontSize() * fb_scale;
-                     const int up_w =
-                         static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
-                     return render::legendPlace(ui.view_width, up_w, em).max_width;
-                   }());
+  render::Legend legend;
+  if (s.show_legend) {
+    legend =
+        render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth, s.show_graph);
+    if (ui.query_slice) render::addQuerySliceKey(legend, ui.query_slice_spec);
+  }
+  mirror.setLegend(legend, s.background, [&] {
+    // Left of the up label at the bottom-right (framebuffer pixels).
+    const float fb_scale = ImGui::GetIO().DisplayFramebufferScale.x;
+    const float em = ImGui::GetFontSize() * fb_scale;
+    const int up_w = static_cast<int>(std::ceil(ImGui::CalcTextSize(upAxisText(ui).c_str()).x * fb_scale));
+    return render::legendPlace(ui.view_width, up_w, em).max_width;
+  }());
   if (!bench.isOpen()) return;
   if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session
     mirrored.session = bench.sessionSerial();

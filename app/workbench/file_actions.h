@@ -34,7 +34,7 @@ class FileActions {
   /// Opens whatever `path` holds (detectMapFile): a sequence folder (open), a session
   /// (openSession), a map folder, ellipsoid or point PLY or OctoMap (openMapFile), or a view file
   /// (applied as Load view does: the camera and view options, not its thresholds). On success
-  /// the path goes to the front of settings().recent.
+  /// the path goes to the front of settings().recent (as every open's does).
   bool openPath(const std::string& path);
   /// Opens a map file as a static map: one mapping snapshot (keyframe poses, edges and
   /// trajectory when the file has them) and one global map, nothing to play, rebuild or edit.
@@ -77,6 +77,7 @@ class FileActions {
   std::string session_settings_;                                       // setSessionSettings'
   std::string why_player_off_;                                         // whyPlayerOff()
   std::vector<std::string> dropped_;                                   // drop()'s, not opened yet
+  bool height_for_rgb_ = false;  // a map file without colours turned rgb into height (opening another turns it back)
 };
 
 }  // namespace vdmap::app::gui
