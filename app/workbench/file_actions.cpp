@@ -191,6 +191,12 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
   return true;
 }
 
+Settings FileActions::savedSettings() const {
+  Settings s = ui_.settings;
+  if (height_for_rgb_ && s.color == render::ColorMode::kHeight) s.color = render::ColorMode::kRgb;
+  return s;
+}
+
 int FileActions::openDropped() {
   std::vector<std::string> paths;
   paths.swap(dropped_);

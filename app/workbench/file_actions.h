@@ -56,6 +56,9 @@ class FileActions {
   /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
   /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
   const std::string& whyPlayerOff() const { return why_player_off_; }
+  /// The settings as they are saved: the colour mode the user chose, not the height that a map
+  /// file without colours put in place of rgb while it is open.
+  Settings savedSettings() const;
 
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
   /// the status line with the absolute path).

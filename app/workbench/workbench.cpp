@@ -112,7 +112,7 @@ void Workbench::enableSettingsAutosave(std::string file, Settings at_start) {
 
 double Workbench::autosaveSettings(SettingsAutosave::Clock::time_point now) {
   if (!autosave_ || autosave_file_.empty()) return INFINITY;
-  autosave_->note(now, state_.ui.settings);
+  autosave_->note(now, files_.savedSettings());
   if (autosave_->due(now)) {
     try {
       saveSettings();
@@ -127,7 +127,7 @@ double Workbench::autosaveSettings(SettingsAutosave::Clock::time_point now) {
 
 void Workbench::saveSettings() {
   if (!autosave_ || autosave_file_.empty()) return;
-  autosave_->note(SettingsAutosave::Clock::now(), state_.ui.settings);
+  autosave_->note(SettingsAutosave::Clock::now(), files_.savedSettings());
   // Against what this run wrote last, so that a value put back (by hand or by Reset to
   // defaults) to what it was at the start replaces what was written meanwhile.
   saveChangedSettings(autosave_file_, autosave_->written(), autosave_->noted());

@@ -133,9 +133,12 @@ TEST(GuiFiles, AnOctomapWithoutColoursIsShownByHeight) {
   const MapFolder m;
   test::writeTinySequence(m.dir / "seq", 3);
   Workbench bench{Settings{}};
+  bench.enableSettingsAutosave((m.dir / "settings.json").string(), Settings{});
   ASSERT_TRUE(bench.files().openPath((m.folder / "global.bt").string())) << bench.ui().status.text;
   EXPECT_TRUE(bench.staticMap()->height_colors);
   EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kHeight) << "colour mode rgb over height colours";
+  bench.saveSettings();  // the user's choice is saved, not the file's stand-in
+  EXPECT_EQ(loadSettings(m.dir / "settings.json", nullptr).color, render::ColorMode::kRgb);
   ASSERT_TRUE(bench.files().openPath((m.dir / "seq").string())) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kRgb);
   // A map file with its own colours keeps the mode, as does a mode chosen by the user.
