@@ -266,9 +266,11 @@ class WorkbenchWindow {
     ImGui::NewFrame();
     glfwGetFramebufferSize(context_.window(), &win_.layout.fb_width, &win_.layout.fb_height);
     layOut(win_.layout, bench_.ui());
-    // A click in the 3-D view starts a new action: the status line's older message goes.
+    // A click anywhere but on the status line (its x, its tooltip) starts a new action: the
+    // status line's older message goes (what the action reports replaces it).
     const ImGuiIO& io = ImGui::GetIO();
-    if (!io.WantCaptureMouse && (io.MouseClicked[0] || io.MouseClicked[1] || io.MouseClicked[2])) bench_.noteAction();
+    if ((io.MouseClicked[0] || io.MouseClicked[1] || io.MouseClicked[2]) && !win_.layout.status.contains(io.MousePos))
+      bench_.noteAction();
     handleKeys(bench_, keys_);
     // Opening files: what was dropped (or --drop) opens before this frame reads the model.
     for (std::string& path : keys_.dropped) bench_.files().drop(std::move(path));

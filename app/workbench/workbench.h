@@ -93,7 +93,7 @@ class Workbench {
   void sync();
   /// One keyboard action (a new action: noteAction first).
   void key(KeyAction action);
-  /// The user starts a new action (a key, a click in the 3-D view): the status line's message,
+  /// The user starts a new action (a key, a click): the status line's message,
   /// the outcome of an earlier one, goes; what this action reports shows until the next one.
   void noteAction();
 

@@ -1670,7 +1670,7 @@ TEST(GuiViewTools, AStatusMessageGoesWithTheNextAction) {
   bench.key(KeyAction::kFrameMap);
   EXPECT_EQ(bench.ui().status.text, "") << "the message stayed after a later action";
   bench.report(StatusLine::Kind::kError, "an error");
-  bench.noteAction();  // a click in the 3-D view
+  bench.noteAction();  // a click
   EXPECT_EQ(bench.ui().status.text, "");
   bench.ui().view_file_text = (t.dir / "v.json").string();
   bench.key(KeyAction::kSaveView);  // an action that reports: its own message shows
