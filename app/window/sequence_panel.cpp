@@ -249,9 +249,10 @@ void drawFrameImages(const render::MapMirror& mirror, WindowState& win, bool sho
 
 void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, WindowState& win) {
   beginPanel("Sequence", win.layout.left, win.layout.left_w, win.layout.last_size.x);
-  drawOpenArea(bench, win);                // opening files: map_file_panel.cpp
-  if (!bench.isOpen() && win.preparing) {  // the first start: the built-in scene opens when rendered
-    std::string what = win.prepare_what;   // "rendering the built-in scene"
+  drawOpenArea(bench, win);  // opening files: map_file_panel.cpp
+  // The first start: the built-in scene opens once it is rendered ("rendering the built-in scene").
+  if (!bench.isOpen() && win.preparing) {
+    std::string what = win.prepare_what;
     if (!what.empty()) what[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(what[0])));
     textWrapped(what + ": " + std::to_string(win.prepare_done) + " of " + std::to_string(win.prepare_total) +
                 " frames, then it opens (the first start only: later starts reuse it).");
