@@ -217,7 +217,7 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option_function<std::string>(
       "--press", [&args](const std::string& keys) { args.script.press = gui::parseKeyNames(keys); },
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
-      "f1, esc, pgup, pgdn; e.g. h for the help)");
+      "f1, esc, pgup, pgdn, each with ctrl+ before it for Ctrl; e.g. h for the help, ctrl+s to save the view)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
   app.add_option("--drop", args.script.drop,
                  "scripted: PATH dropped on the window once mapping is done, before the screenshot (any kind the "
