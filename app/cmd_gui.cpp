@@ -144,7 +144,7 @@ void runGui(GuiArgs args, bool builtin) {
   const fs::path& settings_file = start.user_file;
   const std::string& warning = start.warning;
   if (!warning.empty()) std::cerr << "vdmap: warning: " << warning << "\n";
-  // --set and --window-size hold for this run only: they are not saved (saveChangedSettings).
+  // --set and --window-size hold for this run only: they are not saved (Workbench::saveSettings).
   gui::Settings settings = start.settings;
   for (const std::string& kv : args.set) gui::applySetting(settings, kv);
   if (!args.map.empty()) gui::refuseRemapSettings(args.set, args.map);
@@ -198,7 +198,7 @@ void runGui(GuiArgs args, bool builtin) {
   const int code = gui::runWorkbenchWindow(bench, args.script, settings_file.string(), std::move(prepare));
   if (!settings_file.empty()) {
     try {
-      gui::saveChangedSettings(settings_file, settings, bench.ui().settings);
+      bench.saveSettings();
     } catch (const std::exception& e) {
       std::cerr << "vdmap: warning: settings not saved: " << e.what() << "\n";
     }
@@ -218,7 +218,7 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
   app.add_option_function<std::string>(
       "--press", [&args](const std::string& keys) { args.script.press = gui::parseKeyNames(keys); },
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
-      "f1, esc, pgup, pgdn; e.g. h for the help)");
+      "f1, esc, pgup, pgdn, each with ctrl+ before it for Ctrl; e.g. h for the help, ctrl+s to save the view)");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
   app.add_option("--drop", args.script.drop,
                  "scripted: PATH dropped on the window once mapping is done, before the screenshot (any kind the "

@@ -86,6 +86,26 @@ Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const G
   return legend;
 }
 
+void addQuerySliceKey(Legend& legend, const QuerySliceSpec& spec) {
+  if (spec.color == QuerySliceColor::kOccupancy) {
+    const auto rgb = [](const std::array<std::uint8_t, 4>& c) { return glm::u8vec3(c[0], c[1], c[2]); };
+    legend.lines.push_back({rgb(kSliceFree), "slice: free"});
+    legend.lines.push_back({rgb(kSliceOccupied), "occupied"});
+    legend.lines.push_back({rgb(kSliceUnknown), "unknown"});
+    return;
+  }
+  char hi[32];
+  std::snprintf(hi, sizeof hi, "%.2f", spec.max_distance_m);
+  if (legend.ramp_title.empty()) {
+    legend.ramp_title = "slice: distance to the surface (m)";
+    legend.ramp_lo = "0";
+    legend.ramp_hi = hi;
+    return;
+  }
+  legend.lines.push_back({colormap(0.f), "slice: at the surface"});
+  legend.lines.push_back({colormap(1.f), std::string(hi) + " m or more"});
+}
+
 cv::Mat rasterizeLegend(const Legend& legend, const glm::vec3& background, int max_width, float scale) {
   if (legend.empty()) return {};
   const Metrics m{std::max(scale, 0.25f)};

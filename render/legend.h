@@ -11,6 +11,7 @@
 #include <glm/gtc/type_precision.hpp>
 #include <opencv2/core.hpp>
 
+#include "render/query_slice.h"
 #include "render/scene_lines.h"
 
 namespace vdmap::render {
@@ -45,6 +46,12 @@ struct Legend {
 /// is one; loop closures when `loops_shown` and there are some).
 Legend legendFor(ColorMode mode, const std::optional<ColorRange>& range, const GraphScene& graph,
                  bool trajectory_shown = true, bool groundtruth_shown = true, bool loops_shown = true);
+
+/// Adds the key of the query slice drawn with `spec` (render/query_slice.h): for occupancy colours
+/// a line per class (free, occupied, unknown); for distance colours the ramp "distance to the
+/// surface (m)" from 0 to the max distance, or, when the map's colours hold the ramp, its two ends
+/// as lines.
+void addQuerySliceKey(Legend& legend, const QuerySliceSpec& spec);
 
 /// A length for people: "0.42 mm", "3.1 mm", "1.20 m".
 std::string metresText(double m);

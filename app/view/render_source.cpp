@@ -289,11 +289,13 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;
   last_up_ = spec.look_at ? glm::normalize(spec.look_at->up) : scene.up;
-  mirror.setLegend(spec.layers.legend
-                       ? render::legendFor(spec.color, mirror.mapColorRange(), graph, spec.layers.trajectory,
-                                           spec.layers.groundtruth, spec.layers.graph)
-                       : render::Legend{},
-                   spec.background, render::legendPlace(w).max_width);  // as the window places it
+  render::Legend legend;
+  if (spec.layers.legend) {
+    legend = render::legendFor(spec.color, mirror.mapColorRange(), graph, spec.layers.trajectory,
+                               spec.layers.groundtruth, spec.layers.graph);
+    if (m.query_slice) render::addQuerySliceKey(legend, *m.query_slice);  // as the window's legend
+  }
+  mirror.setLegend(legend, spec.background, render::legendPlace(w).max_width);  // as the window places it
   if (!m.mesh.triangles.empty() && !m.mesh_renderer) {
     m.mesh_renderer = std::make_unique<render::MeshRenderer>(gl);
     m.mesh_renderer->set(render::toColoredMesh(m.mesh));

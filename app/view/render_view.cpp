@@ -176,7 +176,7 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
   verb.add_option("--fov", a.fov, "vertical field of view of the global view, degrees (default 60)")
       ->check(CLI::Range(1.f, 179.f));
   verb.add_option("--view-file", a.view_file,
-                  "a view file (JSON, saved by the workbench's S key): its view, size, camera and options; flags "
+                  "a view file (JSON, saved by the workbench's Ctrl+S): its view, size, camera and options; flags "
                   "given beside it override it");
   verb.add_option("--settings", a.settings,
                   "a settings.json (its thresholds and view keys) or a view file (its thresholds) instead of the "

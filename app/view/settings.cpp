@@ -246,8 +246,8 @@ void saveSettings(const fs::path& file, const Settings& settings) {
   writeFileAtomically(file, jsonText(toJson(settings)) + "\n");
 }
 
-void saveChangedSettings(const fs::path& file, const Settings& at_start, const Settings& at_end) {
-  const json start = toJson(at_start), end = toJson(at_end);
+void saveChangedSettings(const fs::path& file, const Settings& before, const Settings& after) {
+  const json start = toJson(before), end = toJson(after);
   if (start == end) return;
   json saved = json::object();
   if (fs::exists(file)) {

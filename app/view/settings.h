@@ -74,12 +74,14 @@ render::ViewSpec viewSpecOf(const Settings& settings);
 /// Writes settings atomically (creating the folder). Throws std::runtime_error naming the file.
 void saveSettings(const std::filesystem::path& file, const Settings& settings);
 
-/// Writes into `file` the keys whose value differs between `at_start` and `at_end` (what the user
-/// changed during this run), keeping every other key of the file as it is: values given with
-/// --set and not changed since are not saved, nor do they undo what another run saved. Creates
-/// the file (and folder) when missing; writes nothing when nothing changed. A file that exists
-/// but is not valid settings is never replaced: throws std::runtime_error saying so, naming it.
-void saveChangedSettings(const std::filesystem::path& file, const Settings& at_start, const Settings& at_end);
+/// Writes into `file` the keys whose value differs between `before` (the settings as this run
+/// last wrote them, or as it started) and `after`, keeping every other key of the file as it is:
+/// values given with --set and not changed since are not saved, nor do they undo what another run
+/// saved; a value put back to what it was at the start is written once it differs from what this
+/// run wrote. Creates the file (and folder) when missing; writes nothing when nothing changed. A
+/// file that exists but is not valid settings is never replaced: throws std::runtime_error saying
+/// so, naming it.
+void saveChangedSettings(const std::filesystem::path& file, const Settings& before, const Settings& after);
 
 /// Whether a and b hold the same values (every key of the settings file).
 bool sameSettings(const Settings& a, const Settings& b);

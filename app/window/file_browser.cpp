@@ -61,7 +61,7 @@ void openFileBrowser(FileBrowser& b, const std::string& start) {
   b.open = true;
 }
 
-std::string drawFileBrowser(FileBrowser& b) {
+std::string drawFileBrowser(FileBrowser& b, bool double_click) {
   if (!b.open) return "";
   const ImGuiViewport* vp = ImGui::GetMainViewport();
   ImGui::SetNextWindowPos({vp->WorkPos.x + vp->WorkSize.x * 0.5f, vp->WorkPos.y + vp->WorkSize.y * 0.5f},
@@ -105,9 +105,10 @@ std::string drawFileBrowser(FileBrowser& b) {
       const bool clicked = ImGui::Selectable(
           name.c_str(), b.selected == i, ImGuiSelectableFlags_SpanAllColumns | ImGuiSelectableFlags_AllowDoubleClick);
       if (!e.folder && !e.kind) ImGui::PopStyleColor();
-      if (clicked) {
+      const bool twice = double_click && ImGui::IsItemHovered();
+      if (clicked || twice) {
         b.selected = i;
-        if (ImGui::IsMouseDoubleClicked(0)) {
+        if (twice) {
           // A plain folder is entered; a sequence or map folder, and any file vdmap opens, is opened.
           if (e.folder && !e.kind) b.path = withSlash(e.path);
           else if (e.kind) chosen = e.path.string();

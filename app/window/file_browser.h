@@ -23,6 +23,7 @@ struct FileBrowser {
 void openFileBrowser(FileBrowser& b, const std::string& start);
 /// Draws the browser's window while it is open; returns the path the user chose to open (a double
 /// click on an entry that opens, or Open), "" otherwise. The browser closes when one is chosen.
-std::string drawFileBrowser(FileBrowser& b);
+/// `double_click`: the left button was double-clicked since the last frame (WindowState).
+std::string drawFileBrowser(FileBrowser& b, bool double_click);
 
 }  // namespace vdmap::app::gui

@@ -51,7 +51,7 @@ void drawOpenArea(Workbench& bench, WindowState& win) {
   }
   tip(ui.settings.recent.empty() ? "Nothing opened yet: the paths opened go here." : "Recently opened, newest first.");
   ImGui::EndDisabled();
-  if (const std::string chosen = drawFileBrowser(win.browser); !chosen.empty()) {
+  if (const std::string chosen = drawFileBrowser(win.browser, win.double_click); !chosen.empty()) {
     ui.sequence_text = chosen;
     bench.files().openPath(chosen);
   }

@@ -74,8 +74,7 @@ void handleViewTools(Workbench& bench, WindowState& win) {
   // The probe (Q) follows the cursor: asked every frame over the view (a frame is drawn only
   // after input or news, such as the queries of a new map).
   if (ui.probe) win.probes.push_back({ViewProbe::Purpose::kQuery, at.x, at.y});
-  if (pivot || ImGui::IsMouseDoubleClicked(ImGuiMouseButton_Left))
-    win.probes.push_back({ViewProbe::Purpose::kPivot, at.x, at.y});
+  if (pivot || win.double_click) win.probes.push_back({ViewProbe::Purpose::kPivot, at.x, at.y});
   if (io.MouseWheel != 0.f && ui.probe && io.KeyAlt)  // the probe's offset, 25 % a step
     ui.probe_offset_m = std::clamp(ui.probe_offset_m * std::pow(1.25f, io.MouseWheel), 0.005f, 1.f);
   else if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});

@@ -17,8 +17,7 @@ namespace {
 void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const std::string& why_disabled) {
   const bool disabled = !why_disabled.empty();
   const bool pending = bench.parameters().pending(p);
-  std::string help = std::string(p.help) + "\n\nvalid: " + validityText(p) + "; `vdmap map " + std::string(p.flag) +
-                     "`, --set / settings.json " + (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
+  std::string help = parameterHelp(p);
   if (pending)
     help += "\n\nPending: the map shown was made with " + formatValue(p, bench.parameters().inUse(p)) +
             (p.live ? " (rebuilding)." : "; Re-run applies the edited value.");
@@ -27,6 +26,11 @@ void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const 
       std::string(p.label) + (p.unit.empty() ? "" : " (" + std::string(p.unit) + ")") + (pending ? " *" : "");
   label(win.check, text.c_str(), help, pending);
   ImGui::BeginDisabled(disabled);
+  // The widget, then the "def" button that puts this parameter alone back to its default.
+  const ImGuiStyle& style = ImGui::GetStyle();
+  const float def_w = ImGui::CalcTextSize("def").x + 2.f * style.FramePadding.x;
+  ImGui::SetNextItemWidth(
+      std::max(4.f * ImGui::GetFontSize(), ImGui::GetContentRegionAvail().x - def_w - style.ItemInnerSpacing.x));
   double v = p.get(bench.ui().params);
   bool changed = false;
   const std::string id = "##" + std::string(p.key);
@@ -53,8 +57,15 @@ void parameterRow(Workbench& bench, WindowState& win, const Parameter& p, const 
     }
   }
   tip(help);
+  const double def = defaultValue(p);
+  ImGui::SameLine(0.f, style.ItemInnerSpacing.x);
+  ImGui::BeginDisabled(p.get(bench.ui().params) == def);
+  const bool reset = ImGui::Button(("def" + id).c_str());
+  tip("Back to the default, " + formatValue(p, def) + " (this parameter only).");
   ImGui::EndDisabled();
-  if (changed) bench.parameters().edit(p, v);
+  ImGui::EndDisabled();
+  if (reset) bench.parameters().resetParameter(p);
+  else if (changed) bench.parameters().edit(p, v);
 }
 
 // The global map's figures (docs/method.md 6.4) under the thresholds, and a warning when the filter keeps

@@ -98,11 +98,14 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     keys.loops.resize(mapping.loops.size());
     keys.keyframes.resize(mapping.keyframes.size());
   }
-  mirror.setLegend(
-      s.show_legend ? render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth,
-                                        s.show_graph)
-                    : render::Legend{},
-      s.background,  // left of the up label at the bottom-right (framebuffer pixels)
+  render::Legend legend;
+  if (s.show_legend) {
+    legend =
+        render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth, s.show_graph);
+    if (ui.query_slice) render::addQuerySliceKey(legend, ui.query_slice_spec);
+  }
+  mirror.setLegend(  // left of the up label at the bottom-right (framebuffer pixels)
+      legend, s.background,
       render::legendPlace(ui.view_width, ImGui::GetFontSize() * ImGui::GetIO().DisplayFramebufferScale.x).max_width);
   if (!bench.isOpen()) return;
   if (bench.sessionSerial() != mirrored.session) {  // generations restart with every session

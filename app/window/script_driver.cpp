@@ -4,7 +4,11 @@
 #include <cmath>
 #include <filesystem>
 
+#define GLFW_INCLUDE_NONE
+#include <GLFW/glfw3.h>
+
 #include "app/window/measure_overlay.h"
+#include "app/window/workbench_window.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -15,6 +19,10 @@ nlohmann::json toJson(const Rect& r) { return {r.x, r.y, r.w, r.h}; }
 
 std::optional<glm::vec3> ScriptedWindow::pointUnder(float x_px, float y_px) {
   return probeView(bench_, gl_, win_, x_px, y_px);
+}
+
+void ScriptedWindow::press(int key) {
+  keys_.presses.emplace_back(key & ~kCtrlKey, key & kCtrlKey ? GLFW_MOD_CONTROL : 0);
 }
 
 void ScriptedWindow::saveScreenshot(const std::string& file) { gui::saveScreenshot(bench_, gl_, win_, file); }

@@ -23,7 +23,7 @@ class ScriptedWindow : public ScriptWindow {
   std::optional<glm::vec3> pointUnder(float x_px, float y_px) override;
   void saveScreenshot(const std::string& file) override;
   nlohmann::json layout() override;
-  void press(int key) override { keys_.presses.emplace_back(key, 0); }
+  void press(int key) override;  // parseKeyNames' code
 
  private:
   Workbench& bench_;

@@ -1,6 +1,7 @@
 #include "app/window/sequence_panel.h"
 
 #include <algorithm>
+#include <cctype>
 #include <cfloat>
 #include <cmath>
 #include <cstdio>
@@ -132,7 +133,7 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
   const MappingSnapshot& mapping = *win.mapping;
   const int total = mapping.frames_total;
   if (const Sequence* sequence = bench.sequence()) {
-    ImGui::TextWrapped("%s", sequence->folder().c_str());
+    textWrapped(sequence->folder().string());
     ImGui::TextWrapped("%s; camera %s (%dx%d), %d frames", sequenceKindName(sequence->kind()).c_str(),
                        sequence->cameraSource().c_str(), mapping.camera.width, mapping.camera.height, total);
     std::string why = "What kind of sequence it is (it " + sequence->kindReason() +
@@ -142,16 +143,16 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
     for (const std::string& note : sequence->notes()) why += "\n" + note;
     tip(why);
   } else if (const StaticMap* file = bench.staticMap()) {  // opening files: a map file
-    ImGui::TextWrapped("%s", file->path.c_str());
+    textWrapped(file->path.string());
     ImGui::TextWrapped("%s: %zu ellipsoids, %zu keyframes", mapFileKindName(file->kind), file->ellipsoids.size(),
                        mapping.keyframes.size());
     tip("A map read whole from a file: nothing to play, re-map or rebuild (the Map panel shows its figures).");
   } else {
-    ImGui::TextWrapped("%s", bench.ui().settings.last_sequence.c_str());
+    textWrapped(bench.ui().settings.last_sequence);
     ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
     tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
         "they were mapped with (the Re-run parameters show them).");
-    if (!bench.files().whyPlayerOff().empty()) ImGui::TextWrapped("%s", bench.files().whyPlayerOff().c_str());
+    if (!bench.files().whyPlayerOff().empty()) textWrapped(bench.files().whyPlayerOff());
   }
 }
 
@@ -249,6 +250,15 @@ void drawFrameImages(const render::MapMirror& mirror, WindowState& win, bool sho
 void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, WindowState& win) {
   beginPanel("Sequence", win.layout.left, win.layout.left_w, win.layout.last_size.x);
   drawOpenArea(bench, win);  // opening files: map_file_panel.cpp
+  // The first start: the built-in scene opens once it is rendered ("rendering the built-in scene").
+  if (!bench.isOpen() && win.preparing) {
+    std::string what = win.prepare_what;
+    if (!what.empty()) what[0] = static_cast<char>(std::toupper(static_cast<unsigned char>(what[0])));
+    textWrapped(what + ": " + std::to_string(win.prepare_done) + " of " + std::to_string(win.prepare_total) +
+                " frames, then it opens (the first start only: later starts reuse it).");
+    ImGui::End();
+    return;
+  }
   if (!bench.isOpen()) {
     ImGui::TextWrapped("Nothing open: type a TUM RGB-D folder, a .vdmap session or a map file (map folder, PLY, "
                        "OctoMap) above, or drop one on the window.");

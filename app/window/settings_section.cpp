@@ -9,13 +9,12 @@ void drawSettings(Workbench& bench) {
   if (ImGui::Button("Reset to defaults")) bench.parameters().resetToDefaults();
   tip("Thresholds, re-run parameters and view options back to the defaults; panels back to their widths.");
   const UiState& ui = bench.ui();
-  ImGui::TextWrapped("This run started with: %s.", ui.settings_source.c_str());
+  textWrapped("This run started with: " + ui.settings_source + ".");
   if (ui.settings_file.empty())
     ImGui::TextWrapped("Not saved on exit (a scripted run, or --settings): your settings are left as they are.");
   else
-    ImGui::TextWrapped("Saved a second after each change and on exit (what you changed only) to %s; the window "
-                       "layout to imgui.ini beside it.",
-                       ui.settings_file.c_str());
+    textWrapped("Saved a second after each change and on exit (what you changed only) to " + ui.settings_file +
+                "; the window layout to imgui.ini and quick views to quick_views/ beside it.");
 }
 
 }  // namespace vdmap::app::gui

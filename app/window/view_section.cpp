@@ -159,7 +159,7 @@ void drawView(Workbench& bench, WindowState& win) {
   // The view as a view file, and the command that draws it headless (docs/workbench.md "Save view").
   UiState& ui = bench.ui();
   ImGui::BeginDisabled(ui.view_file_text.empty());
-  if (ImGui::Button("Save view (S)")) bench.viewFiles().saveSafely(ui.view_file_text);
+  if (ImGui::Button("Save view (Ctrl+S)")) bench.viewFiles().saveSafely(ui.view_file_text);
   tip(ui.view_file_text.empty()
           ? "Type a file name on the right first."
           : "Writes the view shown (camera, size, colours, layers, thresholds) as a view file to the "

@@ -8,6 +8,7 @@
 
 #include <imgui_internal.h>
 
+#include "app/workbench/workbench_state.h"
 #include "render/colormap.h"
 #include "render/legend.h"
 
@@ -35,6 +36,13 @@ void drawRamp(ImDrawList* draw, ImVec2 at, float w, float h) {
     draw->AddRectFilled({x0, at.y}, {x1 + 0.5f, at.y + h}, rgbColor(render::colormap((i + 0.5f) / kSteps)));
   }
   draw->AddRect(at, {at.x + w, at.y + h}, IM_COL32(200, 200, 200, 160));
+}
+
+void textWrapped(const std::string& text) {
+  const float width = std::max(1.f, ImGui::GetContentRegionAvail().x);
+  ImGui::TextUnformatted(breakLines(text, width, [](std::string_view s) {
+                           return ImGui::CalcTextSize(s.data(), s.data() + s.size()).x;
+                         }).c_str());
 }
 
 std::string metres(double m) { return render::metresText(m); }

@@ -36,6 +36,9 @@ ImU32 rgbColor(const glm::u8vec3& c);
 void tip(const std::string& text);
 /// A horizontal colour ramp (viridis) from `at` of size w x h into `draw`.
 void drawRamp(ImDrawList* draw, ImVec2 at, float w, float h);
+/// Text wrapped to the space left on the line, breaking after spaces and '/' (a path breaks
+/// between folders, not inside a name; breakLines).
+void textWrapped(const std::string& text);
 /// A length as the panels print it: mm below a metre, else m.
 std::string metres(double m);
 

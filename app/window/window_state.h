@@ -36,6 +36,8 @@ struct KeyQueue {
   std::deque<std::pair<int, int>> presses;  ///< (GLFW key, modifiers)
   int events = 0;                           ///< any input at all since the last frame
   std::vector<std::string> dropped;         ///< paths dropped on the window (FileActions::drop takes them)
+  DoubleClick double_click;                 ///< told from the presses' times (a slow frame loses it otherwise)
+  int double_clicks = 0;                    ///< double clicks since the last frame
 };
 
 /// What the GPU mirror was last given, to key its generations.
@@ -68,6 +70,7 @@ struct WindowState {
   bool preparing = false;
   std::string prepare_what;
   std::size_t prepare_done = 0, prepare_total = 0;  ///< frames
+  bool double_click = false;  ///< the left button was double-clicked since the last frame (KeyQueue)
   // The sequence panel.
   float below_images_px = 0;  ///< its depth scale and stage times, as last drawn
   int scrub = 0;              ///< the scrubber's frame

@@ -12,6 +12,7 @@
 #include <memory>
 #include <optional>
 #include <sstream>
+#include <utility>
 
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
@@ -46,7 +47,14 @@ void installInputCallbacks(GLFWwindow* window) {
       keyQueue(w).presses.emplace_back(key, mods);
   });
   glfwSetCursorPosCallback(window, [](GLFWwindow* w, double, double) { ++keyQueue(w).events; });
-  glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int, int, int) { ++keyQueue(w).events; });
+  glfwSetMouseButtonCallback(window, [](GLFWwindow* w, int button, int action, int) {
+    KeyQueue& q = keyQueue(w);
+    ++q.events;
+    double x = 0, y = 0;
+    glfwGetCursorPos(w, &x, &y);
+    if (button == GLFW_MOUSE_BUTTON_LEFT && action == GLFW_PRESS && q.double_click.press(glfwGetTime(), x, y))
+      ++q.double_clicks;
+  });
   glfwSetScrollCallback(window, [](GLFWwindow* w, double, double) { ++keyQueue(w).events; });
   glfwSetCharCallback(window, [](GLFWwindow* w, unsigned) { ++keyQueue(w).events; });
   glfwSetWindowFocusCallback(window, [](GLFWwindow* w, int) { ++keyQueue(w).events; });
@@ -71,7 +79,9 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_V: return KeyAction::kViewFromKeyframe;
     case GLFW_KEY_C: return KeyAction::kContainer;
     case GLFW_KEY_B: return KeyAction::kBeforeOptimisation;
-    case GLFW_KEY_S: return KeyAction::kSaveView;
+    case GLFW_KEY_S:  // writes a file: never a letter typed by mistake (a text field that lost the keyboard)
+      if (mods & GLFW_MOD_CONTROL) return KeyAction::kSaveView;
+      return std::nullopt;
     case GLFW_KEY_T: return KeyAction::kFrameTrajectories;
     case GLFW_KEY_P: return KeyAction::kPivotHere;
     case GLFW_KEY_Q: return KeyAction::kProbe;
@@ -95,6 +105,7 @@ void handleKeys(Workbench& bench, KeyQueue& keys) {
     keys.presses.pop_front();
     if (typing && key != GLFW_KEY_F1) continue;    // the key belongs to a text field
     if (key >= GLFW_KEY_1 && key <= GLFW_KEY_9) {  // quick views: Ctrl+N keeps the view, N shows it
+      bench.noteAction();
       ViewFiles& views = bench.viewFiles();
       (mods & GLFW_MOD_CONTROL) ? views.storeQuickView(key - GLFW_KEY_0)
                                 : void(views.recallQuickView(key - GLFW_KEY_0));
@@ -246,6 +257,7 @@ class WorkbenchWindow {
     // ImGui shows hover and active states a frame late: after input, draw two more frames.
     settle_frames_ = keys_.events > 0 ? 2 : std::max(0, settle_frames_ - 1);
     keys_.events = 0;
+    win_.double_click = std::exchange(keys_.double_clicks, 0) > 0;
     if (preparing_.folder.valid() && preparing_.folder.wait_for(std::chrono::seconds(0)) == std::future_status::ready)
       finishPreparation();
     showPreparation();
@@ -254,6 +266,11 @@ class WorkbenchWindow {
     ImGui::NewFrame();
     glfwGetFramebufferSize(context_.window(), &win_.layout.fb_width, &win_.layout.fb_height);
     layOut(win_.layout, bench_.ui());
+    // A click anywhere but on the status line (its x, its tooltip) starts a new action: the
+    // status line's older message goes (what the action reports replaces it).
+    const ImGuiIO& io = ImGui::GetIO();
+    if ((io.MouseClicked[0] || io.MouseClicked[1] || io.MouseClicked[2]) && !win_.layout.status.contains(io.MousePos))
+      bench_.noteAction();
     handleKeys(bench_, keys_);
     // Opening files: what was dropped (or --drop) opens before this frame reads the model.
     for (std::string& path : keys_.dropped) bench_.files().drop(std::move(path));
@@ -399,6 +416,11 @@ std::vector<int> parseKeyNames(const std::string& comma_separated) {
   std::vector<int> keys;
   std::stringstream in(comma_separated);
   for (std::string name; std::getline(in, name, ',');) {
+    int ctrl = 0;
+    if (name.rfind("ctrl+", 0) == 0) {
+      ctrl = kCtrlKey;
+      name = name.substr(5);
+    }
     if (name.size() == 1 && name[0] >= 'a' && name[0] <= 'z') keys.push_back(GLFW_KEY_A + (name[0] - 'a'));
     else if (name == "space") keys.push_back(GLFW_KEY_SPACE);
     else if (name == "right") keys.push_back(GLFW_KEY_RIGHT);
@@ -408,7 +430,9 @@ std::vector<int> parseKeyNames(const std::string& comma_separated) {
     else if (name == "pgup") keys.push_back(GLFW_KEY_PAGE_UP);
     else if (name == "pgdn") keys.push_back(GLFW_KEY_PAGE_DOWN);
     else
-      throw std::invalid_argument("--press: unknown key '" + name + "' (a-z, space, right, left, f1, esc, pgup, pgdn)");
+      throw std::invalid_argument("--press: unknown key '" + name +
+                                  "' (a-z, space, right, left, f1, esc, pgup, pgdn; ctrl+ before any)");
+    keys.back() |= ctrl;
   }
   return keys;
 }
@@ -429,6 +453,12 @@ int runWorkbenchWindow(Workbench& bench, const ScriptOptions& script, const std:
   std::error_code ignored;  // ImGui writes imgui.ini at DestroyContext, before the settings make the folder
   if (!ini.empty()) std::filesystem::create_directories(std::filesystem::path(ini).parent_path(), ignored);
   ImGui::StyleColorsDark();
+  // Dear ImGui draws a slider's value over its handle: a thin, see-through handle leaves the
+  // digits under it readable.
+  ImGuiStyle& style = ImGui::GetStyle();
+  style.GrabMinSize = 6.f;
+  style.Colors[ImGuiCol_SliderGrab].w = 0.45f;
+  style.Colors[ImGuiCol_SliderGrabActive].w = 0.6f;
   // HiDPI screens: scale fonts and sizes by the window's content scale (1 on a plain X server).
   float scale_x = 1.f, scale_y = 1.f;
   glfwGetWindowContentScale(context.window(), &scale_x, &scale_y);

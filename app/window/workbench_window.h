@@ -22,8 +22,10 @@ struct Preparation {
       run;
 };
 
-/// The keys --press takes, by name ("space", "right", "h", ...), as GLFW key codes. Throws
-/// std::invalid_argument naming the key for an unknown name.
+/// Added to a GLFW key code by parseKeyNames for "ctrl+KEY": the key pressed with Ctrl.
+inline constexpr int kCtrlKey = 1 << 20;
+/// The keys --press takes, by name ("space", "right", "h", "ctrl+s", ...), as GLFW key codes
+/// (kCtrlKey added for ctrl+). Throws std::invalid_argument naming the key for an unknown name.
 std::vector<int> parseKeyNames(const std::string& comma_separated);
 
 /// Opens the window (and runs `prepare` first when given), runs until it is closed (or the script

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <filesystem>
+#include <utility>
 
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
@@ -153,13 +154,13 @@ bool FileActions::openPath(const std::string& path_in) {
         state_.report(whole ? StatusLine::Kind::kSuccess : StatusLine::Kind::kWarning,
                       "view " + path + " applied" + (whole ? "" : " (its keyframe is not mapped: the global view)"));
         ok = true;
+        addRecent(ui_.settings, path);  // opened() remembers the other kinds
       } catch (const std::exception& e) {
         state_.report(StatusLine::Kind::kError, e.what());
       }
       break;
     default: ok = openMapFile(path); break;
   }
-  if (ok) addRecent(ui_.settings, path);
   return ok;
 }
 
@@ -184,6 +185,12 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
   state_.opened_args = {};
   state_.render_thresholds.reset();
   opened(m.path.string());
+  // A file without colours is drawn by height: the colour mode says so and the legend shows the
+  // ramp, rather than "rgb" over colours the file does not have.
+  if (m.height_colors && ui_.settings.color == render::ColorMode::kRgb) {
+    ui_.settings.color = render::ColorMode::kHeight;
+    height_for_rgb_ = true;
+  }
   char sigma[32];
   std::snprintf(sigma, sizeof sigma, "%.1f mm", m.sigma_m * 1e3);
   std::string what = std::string(mapFileKindName(m.kind)) + ", " + grouped(m.ellipsoids.size()) +
@@ -195,6 +202,12 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
   return true;
 }
 
+Settings FileActions::savedSettings() const {
+  Settings s = ui_.settings;
+  if (height_for_rgb_ && s.color == render::ColorMode::kHeight) s.color = render::ColorMode::kRgb;
+  return s;
+}
+
 int FileActions::openDropped() {
   std::vector<std::string> paths;
   paths.swap(dropped_);
@@ -204,11 +217,16 @@ int FileActions::openDropped() {
 
 void FileActions::opened(const std::string& path) {
   ++state_.session_serial;
+  if (std::exchange(height_for_rgb_, false) && ui_.settings.color == render::ColorMode::kHeight)
+    ui_.settings.color = render::ColorMode::kRgb;  // as it was before a file without colours
   ui_.settings.last_sequence = path;
+  addRecent(ui_.settings, path);  // however it was opened: the command line, Open, a drop, Recent
   ui_.sequence_text = path;
   state_.report(StatusLine::Kind::kSuccess, "opened " + path);
   ui_.selected_keyframe = ui_.view_from_keyframe = -1;  // as the new session's selection
   ui_.picked.reset();
+  ui_.measure_a.reset();  // a measurement belongs to the map it was made on
+  ui_.measure_b.reset();
   ui_.follow_map = true;
   ui_.show_before_optimisation = false;  // as the new session's
   opened_();

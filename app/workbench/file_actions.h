@@ -34,7 +34,7 @@ class FileActions {
   /// Opens whatever `path` holds (detectMapFile): a sequence folder (open), a session
   /// (openSession), a map folder, ellipsoid or point PLY or OctoMap (openMapFile), or a view file
   /// (applied as Load view does: the camera and view options, not its thresholds). On success
-  /// the path goes to the front of settings().recent.
+  /// the path goes to the front of settings().recent (as every open's does).
   bool openPath(const std::string& path);
   /// Opens a map file as a static map: one mapping snapshot (keyframe poses, edges and
   /// trajectory when the file has them) and one global map, nothing to play, rebuild or edit.
@@ -60,6 +60,9 @@ class FileActions {
   /// Why the open saved session cannot continue mapping (its player is off), e.g. "mapped to the
   /// end of SEQ (503 of 503 frames): nothing to continue"; "" when it continues or no session is open.
   const std::string& whyPlayerOff() const { return why_player_off_; }
+  /// The settings as they are saved: the colour mode the user chose, not the height that a map
+  /// file without colours put in place of rgb while it is open.
+  Settings savedSettings() const;
 
   /// Writes what `vdmap map` writes into ui().export_text (on the worker; the outcome shows in
   /// the status line with the absolute path).
@@ -82,6 +85,7 @@ class FileActions {
   std::vector<std::string> session_set_;                               // setSessionSettings'
   std::string why_player_off_;                                         // whyPlayerOff()
   std::vector<std::string> dropped_;                                   // drop()'s, not opened yet
+  bool height_for_rgb_ = false;  // a map file without colours turned rgb into height (opening another turns it back)
 };
 
 }  // namespace vdmap::app::gui

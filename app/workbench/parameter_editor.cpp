@@ -2,6 +2,14 @@
 
 namespace vdmap::app::gui {
 
+std::string parameterHelp(const Parameter& p) {
+  return std::string(p.help) + "\n\nvalid: " + validityText(p) + "; default " + formatValue(p, defaultValue(p)) +
+         " (def puts it back); `vdmap map " + std::string(p.flag) + "`, --set / settings.json " +
+         (p.live ? "thresholds." : "rerun.") + std::string(p.key) + ".";
+}
+
+double defaultValue(const Parameter& p) { return p.get(ParameterValues{}); }
+
 bool ParameterEditor::edit(const Parameter& p, double value) {
   UiState& ui = state_.ui;
   ParameterValues edited = ui.params;
@@ -14,7 +22,12 @@ bool ParameterEditor::edit(const Parameter& p, double value) {
     return false;
   }
   ui.params = edited;
-  if (p.live) applyThresholds();
+  if (!state_.worker) {  // nothing open: what the next sequence opened starts with
+    ui.settings.thresholds = edited.global;
+    ui.settings.mapper = edited.mapper;
+  } else if (p.live) {
+    applyThresholds();
+  }
   return true;
 }
 

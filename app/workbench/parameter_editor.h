@@ -1,10 +1,18 @@
 #pragma once
 // The mapping parameters as the sliders edit them: live thresholds sent at once, re-run
 // parameters kept until Re-run, what the shown map was made with, and the defaults.
+#include <string>
+
 #include "app/workbench/player.h"
 #include "app/workbench/workbench_state.h"
 
 namespace vdmap::app::gui {
+
+/// A parameter's tooltip: what it does, its valid values, its default (the row's "def" button
+/// puts it back), its `vdmap map` flag and its settings key.
+std::string parameterHelp(const Parameter& p);
+/// The value of `p` a run without settings starts with (the library's default).
+double defaultValue(const Parameter& p);
 
 /// Edits ui().params and sends them to the open session; while a sequence is open they become
 /// the user's settings too (a saved session's never do).
@@ -16,6 +24,8 @@ class ParameterEditor {
   /// to the status line and false is returned, the edit is dropped). Live ones are applied at
   /// once; re-run ones stay pending until rerun().
   bool edit(const Parameter& p, double value);
+  /// `p` alone back to its default, as edit() sets it (the others stay).
+  bool resetParameter(const Parameter& p) { return edit(p, defaultValue(p)); }
   /// Sends the edited thresholds (ui().params.global) to the session (a bad value goes to the
   /// status line).
   void applyThresholds();

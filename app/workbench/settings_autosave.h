@@ -27,6 +27,8 @@ class SettingsAutosave {
     changed_at_.reset();
   }
   const Settings& noted() const { return noted_; }
+  /// The settings as last written (or as given at the start): what the file holds of this run.
+  const Settings& written() const { return saved_; }
 
  private:
   Settings saved_, noted_;

@@ -156,16 +156,41 @@ bool ViewFiles::warnAboutSize(const render::ViewSpec& asked) {
   return true;
 }
 
+fs::path ViewFiles::quickViewFile(int slot) const {
+  return quick_view_folder_.empty() ? fs::path()
+                                    : quick_view_folder_ / "quick_views" / (std::to_string(slot) + ".json");
+}
+
 void ViewFiles::storeQuickView(int slot) {
   if (slot < 1 || slot > 9 || !state_.worker) return;
-  quick_views_[static_cast<std::size_t>(slot - 1)] = view_.spec();
-  state_.report(StatusLine::Kind::kInfo,
-                "view kept as quick view " + std::to_string(slot) + " (" + std::to_string(slot) + " shows it again)");
+  const render::ViewSpec spec = view_.spec();
+  quick_views_[static_cast<std::size_t>(slot - 1)] = spec;
+  std::string kept =
+      "view kept as quick view " + std::to_string(slot) + " (" + std::to_string(slot) + " shows it again)";
+  if (const fs::path file = quickViewFile(slot); !file.empty()) {
+    try {
+      fs::create_directories(file.parent_path());
+      writeViewFile(file, spec, state_.ui.params.global, source());
+    } catch (const std::exception& e) {
+      return state_.report(StatusLine::Kind::kWarning, kept + ", for this run only: " + e.what());
+    }
+  }
+  state_.report(StatusLine::Kind::kInfo, kept);
 }
 
 bool ViewFiles::recallQuickView(int slot) {
   if (slot < 1 || slot > 9 || !state_.worker) return false;
-  const auto& spec = quick_views_[static_cast<std::size_t>(slot - 1)];
+  auto& spec = quick_views_[static_cast<std::size_t>(slot - 1)];
+  const fs::path file = quickViewFile(slot);
+  std::error_code ignored;
+  if (!spec && !file.empty() && fs::exists(file, ignored)) {  // kept by an earlier run
+    try {
+      spec = readViewFile(file);
+    } catch (const std::exception& e) {
+      state_.report(StatusLine::Kind::kWarning, std::string("quick view ") + std::to_string(slot) + ": " + e.what());
+      return false;
+    }
+  }
   if (!spec) {
     state_.report(StatusLine::Kind::kInfo, "no quick view " + std::to_string(slot) + " yet (Ctrl+" +
                                                std::to_string(slot) + " keeps the view shown)");

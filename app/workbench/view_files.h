@@ -48,9 +48,12 @@ class ViewFiles {
   bool saveSafely(const std::string& file, bool replace = false);
   /// Warns (true) when `asked`'s size is not the viewport's (load, --view-file).
   bool warnAboutSize(const render::ViewSpec& asked);
-  /// Ctrl+1..9 keep the view shown in memory; 1..9 show it again (false: none kept there).
+  /// Ctrl+1..9 keep the view shown; 1..9 show it again (false: none kept there). With
+  /// keepQuickViewsIn they are view files there too, so they last beyond the run.
   void storeQuickView(int slot);
   bool recallQuickView(int slot);
+  /// Quick views are written to and read from FOLDER/quick_views/N.json ("": in memory only).
+  void keepQuickViewsIn(std::filesystem::path folder) { quick_view_folder_ = std::move(folder); }
   /// The file a render command names for the open session: the .vdmap or sequence folder.
   const std::string& source() const { return state_.ui.settings.last_sequence; }
   /// What a printed render command draws to show what the window shows: source(), a sequence's
@@ -63,6 +66,8 @@ class ViewFiles {
   ViewController& view_;
   ParameterEditor& parameters_;  // load with thresholds applies them
   std::array<std::optional<render::ViewSpec>, 9> quick_views_;
+  std::filesystem::path quick_view_folder_;  // keepQuickViewsIn's
+  std::filesystem::path quickViewFile(int slot) const;
 };
 
 }  // namespace vdmap::app::gui

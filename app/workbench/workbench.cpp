@@ -1,8 +1,10 @@
 #include "app/workbench/workbench.h"
 
 #include <cmath>
+#include <filesystem>
 
 namespace vdmap::app::gui {
+namespace fs = std::filesystem;
 
 const std::vector<std::pair<const char*, const char*>>& keyHelp() {
   static const std::vector<std::pair<const char*, const char*>> keys = {
@@ -14,12 +16,14 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"V", "view from the selected keyframe (its own intrinsics, letterboxed)"},
       {"C", "the selected keyframe's container view, large (zoom, cell grid, image bounds)"},
       {"B", "tracked poses: the map before / after the last pose-graph optimisation (loop closure)"},
-      {"S", "save the view as a view file (View section) and print the `vdmap render` command that draws it"},
+      {"Ctrl+S",
+       "save the view as a view file (View section) and print the `vdmap render` command that draws it (with Ctrl: "
+       "a letter meant for a text field writes nothing)"},
       {"T", "frame the trajectories (tracked and ground truth) only"},
       {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
       {"Q", "probe under the cursor: free / occupied / unknown, distance (Alt+wheel: offset)"},
-      {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (this run only)"},
+      {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (kept across runs)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
@@ -63,8 +67,14 @@ void Workbench::sync() {
   view_.sync();
 }
 
+void Workbench::noteAction() {
+  StatusLine& status = state_.ui.status;
+  if (!status.text.empty()) status = {StatusLine::Kind::kInfo, "", status.serial + 1};
+}
+
 void Workbench::key(KeyAction action) {
   UiState& ui = state_.ui;
+  noteAction();
   switch (action) {
     case KeyAction::kPlayPause: player_.playPause(); break;
     case KeyAction::kStepForward: player_.step(); break;
@@ -95,24 +105,33 @@ void Workbench::key(KeyAction action) {
 }
 
 void Workbench::enableSettingsAutosave(std::string file, Settings at_start) {
+  view_files_.keepQuickViewsIn(fs::path(file).parent_path());
   autosave_file_ = std::move(file);
-  autosave_start_ = at_start;
   autosave_.emplace(std::move(at_start));
 }
 
 double Workbench::autosaveSettings(SettingsAutosave::Clock::time_point now) {
   if (!autosave_ || autosave_file_.empty()) return INFINITY;
-  autosave_->note(now, state_.ui.settings);
+  autosave_->note(now, files_.savedSettings());
   if (autosave_->due(now)) {
     try {
-      saveChangedSettings(autosave_file_, autosave_start_, autosave_->noted());
+      saveSettings();
     } catch (const std::exception& e) {
       state_.report(StatusLine::Kind::kWarning, std::string("settings not saved: ") + e.what());
+      autosave_->saved();  // a failure is not retried every frame: the next change tries again
     }
-    autosave_->saved();  // a failure is not retried every frame: the next change tries again
   }
   const auto left = autosave_->dueIn(now);
   return left ? std::chrono::duration<double>(*left).count() : INFINITY;
+}
+
+void Workbench::saveSettings() {
+  if (!autosave_ || autosave_file_.empty()) return;
+  autosave_->note(SettingsAutosave::Clock::now(), files_.savedSettings());
+  // Against what this run wrote last, so that a value put back (by hand or by Reset to
+  // defaults) to what it was at the start replaces what was written meanwhile.
+  saveChangedSettings(autosave_file_, autosave_->written(), autosave_->noted());
+  autosave_->saved();
 }
 
 }  // namespace vdmap::app::gui

@@ -83,7 +83,7 @@ class Workbench {
   /// nullptr removes it.
   void setOnChange(std::function<void()> on_change);
 
-  /// Shows `text` in the status area (errors stay until the next report).
+  /// Shows `text` in the status area (it stays until the next report or action).
   void report(StatusLine::Kind kind, std::string text) { state_.report(kind, std::move(text)); }
   /// The first error reported since construction ("" if none): a scripted run fails on it.
   const std::string& firstError() const { return state_.first_error; }
@@ -91,15 +91,21 @@ class Workbench {
   /// Once per UI frame: the point queries, the pose fields, the session's news into the status
   /// line, the pick cleared when the map changed, and the view re-framed while it follows the map.
   void sync();
-  /// One keyboard action.
+  /// One keyboard action (a new action: noteAction first).
   void key(KeyAction action);
+  /// The user starts a new action (a key, a click): the status line's message,
+  /// the outcome of an earlier one, goes; what this action reports shows until the next one.
+  void noteAction();
 
   /// The window saves the settings while it runs, 1 s after the last change (SettingsAutosave):
-  /// into `file`, what changed since `at_start` (saveChangedSettings).
+  /// into `file`, what differs from what the file got from this run, at first `at_start`
+  /// (saveChangedSettings). Quick views are kept beside it (ViewFiles::keepQuickViewsIn).
   void enableSettingsAutosave(std::string file, Settings at_start);
   /// Once per turn of the event loop: saves when due. Returns the seconds until the next save
   /// is due (the loop's longest wait; infinity: nothing to save).
   double autosaveSettings(SettingsAutosave::Clock::time_point now);
+  /// Saves what changed now, due or not (on exit). Throws std::runtime_error naming the file.
+  void saveSettings();
 
   Player& player() { return player_; }
   const Player& player() const { return player_; }
@@ -126,7 +132,6 @@ class Workbench {
                      }};
   std::optional<SettingsAutosave> autosave_;  // enableSettingsAutosave's
   std::string autosave_file_;
-  Settings autosave_start_;
 };
 
 }  // namespace vdmap::app::gui

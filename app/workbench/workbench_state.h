@@ -5,6 +5,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <string_view>
 
 #include "app/cli/parameter_table.h"
 #include "app/cli/sequence_args.h"
@@ -58,7 +59,7 @@ struct UiState {
   std::string trajectory_text;                     ///< the "load corrected trajectory" field
   std::string export_text = "vdmap_export";        ///< export folder
   std::string session_text = "map.vdmap";          ///< "save session" file
-  std::string view_file_text = "vdmap_view.json";  ///< "save view" file (S)
+  std::string view_file_text = "vdmap_view.json";  ///< "save view" file (Ctrl+S)
   StatusLine status;
   /// Which settings this run started with (the note cmd_gui prints) and the file they are saved
   /// to on exit ("": not saved, a scripted run or --settings).
@@ -99,6 +100,24 @@ inline constexpr const char* kStaticMapWhy = "a map file has no local maps to re
 /// `path` absolute and normal, as the status line names files ("" stays "").
 std::string absolutePath(const std::string& path);
 
+/// Tells a double click by the presses' own times (GLFW's callbacks) rather than by the frames
+/// that see them: a frame slower than the clicks sees the button held once (Dear ImGui 1.86 only
+/// looks at which buttons are down when a frame starts) and a double click was lost.
+class DoubleClick {
+ public:
+  /// A press of the left button at `t_s` seconds at (x, y) pixels: true when it is the second of
+  /// a double click (within 0.4 s and 6 pixels of the first); a third starts again.
+  bool press(double t_s, double x, double y);
+
+ private:
+  double last_t_ = -1e9, last_x_ = 0, last_y_ = 0;
+};
+
+/// `text` broken into lines (joined by '\n') no wider than `width` as `measure` gives a piece's
+/// width: after a space or a '/' (so a path breaks between its folders, never inside a name),
+/// inside a piece only when it alone is wider than a line.
+std::string breakLines(const std::string& text, float width, const std::function<float(std::string_view)>& measure);
+
 /// What the Workbench's controllers share (the Workbench owns it; the UI thread alone uses it).
 struct WorkbenchState {
   UiState ui;
@@ -116,7 +135,7 @@ struct WorkbenchState {
   /// saved ones for a session; none for a map file (it has no thresholds).
   std::optional<GlobalMapParams> render_thresholds;
 
-  /// Shows `text` in the status line (errors stay until the next report).
+  /// Shows `text` in the status line (it stays until the next report or action).
   void report(StatusLine::Kind kind, std::string text);
   /// The open static map (null while nothing, a sequence or a session is open).
   const StaticMap* staticMap() const { return worker ? worker->staticMap() : nullptr; }

@@ -238,12 +238,14 @@ StaticMap loadOctomap(const fs::path& file) {
     tree.readBinaryData(data);
     map.ellipsoids = occupiedLeaves(tree, none);
     colorByHeight(map.ellipsoids);
+    map.height_colors = true;
   } else if (f.id == "OcTree") {
     OctomapStreamCheck(file, f.data).full(sizeof(float));
     octomap::OcTree tree(f.resolution_m);
     tree.readData(data);
     map.ellipsoids = occupiedLeaves(tree, none);
     colorByHeight(map.ellipsoids);
+    map.height_colors = true;
   } else if (f.id == "ColorOcTree") {
     OctomapStreamCheck(file, f.data).full(sizeof(float) + 3);
     octomap::ColorOcTree tree(f.resolution_m);
@@ -471,6 +473,7 @@ StaticMap loadStaticMap(const fs::path& path) {
       map.ellipsoids = std::move(octo.ellipsoids);
       map.sigma_m = octo.sigma_m;
       map.source_elements = octo.source_elements;
+      map.height_colors = octo.height_colors;
       break;
     }
     case MapFileKind::kSequence:

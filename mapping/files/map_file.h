@@ -48,6 +48,8 @@ struct StaticMap {
   double sigma_m = 0;
   std::size_t source_elements = 0;  ///< vertices of a PLY, occupied leaves of an OctoMap
   std::string stats_json;           ///< a map folder's stats.json text ("" when none)
+  /// The colours are a height ramp the reader gave them (an OctoMap without colours), not the file's.
+  bool height_colors = false;
 };
 
 /// The camera preset whose shape a map file's keyframe frustums are drawn in: a map folder

@@ -612,6 +612,22 @@ TEST(GuiCli, ADroppedViewFileIsApplied) {
 // test_view_cache compares with a fresh draw).
 namespace vdmap::test {
 namespace {
+// Writing a file wants a modifier: S alone (typed into a text field that lost the keyboard)
+// writes nothing; Ctrl+S saves the view.
+TEST(GuiCli, SavingTheViewWantsCtrl) {
+  VDMAP_REQUIRE_XVFB();
+  TempDir home;
+  const RunResult plain = runInXvfb(home, "--frames 0:10 --play-to-end --exit --press s");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_EQ(plain.out.find("view saved to"), std::string::npos) << plain.out;
+  const RunResult ctrl = runInXvfb(home, "--frames 0:10 --play-to-end --exit --press ctrl+s");
+  ASSERT_EQ(ctrl.exit_code, 0) << ctrl.err;
+  std::smatch saved;
+  ASSERT_TRUE(std::regex_search(ctrl.out, saved, std::regex("view saved to (\\S+);"))) << ctrl.out;
+  EXPECT_TRUE(fs::exists(saved[1].str()));
+  fs::remove(saved[1].str());
+}
+
 TEST(GuiCli, AfterMovingStopsTheFullQualityFrameIsShown) {
   VDMAP_REQUIRE_XVFB();
   TempDir home;

@@ -1613,6 +1613,27 @@ TEST(GuiViewTools, QuickViewRecallsTheStoredCamera) {
   EXPECT_LT(glm::length(bench.ui().camera.target - target), 1e-4f);
 }
 
+TEST(GuiViewTools, QuickViewsLastBeyondTheRun) {
+  MappedTinyBench t;
+  const fs::path settings = t.dir / "config" / "settings.json";
+  t.bench.enableSettingsAutosave(settings.string(), t.bench.ui().settings);
+  t.bench.view().orbit(0.7f, -0.2f);
+  const glm::vec3 eye = t.bench.ui().camera.eye();
+  t.bench.viewFiles().storeQuickView(4);
+  // The next start, with the same settings folder.
+  Workbench next{TinyBench::settings()};
+  next.enableSettingsAutosave(settings.string(), next.ui().settings);
+  ASSERT_TRUE(next.files().open({(t.dir / "seq").string(), "", "", ""})) << next.ui().status.text;
+  next.ui().view_width = 640;
+  next.ui().view_height = 480;
+  next.worker()->play();
+  next.worker()->waitIdle();
+  next.sync();
+  ASSERT_TRUE(next.viewFiles().recallQuickView(4)) << next.ui().status.text;
+  EXPECT_LT(glm::length(next.ui().camera.eye() - eye), 1e-4f);
+  EXPECT_FALSE(next.viewFiles().recallQuickView(5));
+}
+
 TEST(GuiViewTools, MeasurePointsAlternateAndSnapToCentres) {
   MappedTinyBench t;
   Workbench& bench = t.bench;
@@ -1627,6 +1648,33 @@ TEST(GuiViewTools, MeasurePointsAlternateAndSnapToCentres) {
   bench.view().addMeasurePoint(glm::vec3(m.x(), m.y(), m.z()) + glm::vec3(1e-4f));  // a third click: A again
   EXPECT_FALSE(bench.ui().measure_b);
   EXPECT_LT(glm::length(*bench.ui().measure_a - glm::vec3(m.x(), m.y(), m.z())), 1e-6f);
+}
+
+TEST(GuiViewTools, AMeasurementBelongsToTheMapItWasMadeOn) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.view().addMeasurePoint({0.f, 0.f, 1.f});
+  bench.view().addMeasurePoint({0.3f, 0.4f, 1.f});
+  ASSERT_TRUE(bench.ui().measure_b);
+  ASSERT_TRUE(bench.files().openPath((t.dir / "seq").string())) << bench.ui().status.text;
+  EXPECT_FALSE(bench.ui().measure_a) << "the A-B line stayed on the newly opened map";
+  EXPECT_FALSE(bench.ui().measure_b);
+}
+
+// The status line says what the last action did: a message from an earlier one goes with the
+// next action, and what that action reports shows.
+TEST(GuiViewTools, AStatusMessageGoesWithTheNextAction) {
+  MappedTinyBench t;
+  Workbench& bench = t.bench;
+  bench.report(StatusLine::Kind::kInfo, "no surface under the cursor to measure at");
+  bench.key(KeyAction::kFrameMap);
+  EXPECT_EQ(bench.ui().status.text, "") << "the message stayed after a later action";
+  bench.report(StatusLine::Kind::kError, "an error");
+  bench.noteAction();  // a click
+  EXPECT_EQ(bench.ui().status.text, "");
+  bench.ui().view_file_text = (t.dir / "v.json").string();
+  bench.key(KeyAction::kSaveView);  // an action that reports: its own message shows
+  EXPECT_NE(bench.ui().status.text.find("v.json"), std::string::npos) << bench.ui().status.text;
 }
 
 TEST(GuiViewTools, ScreenshotNeverOverwritesADefaultName) {
@@ -1693,6 +1741,95 @@ TEST(GuiSettings, TheWorkbenchAutosavesWhatChangedIntoTheFile) {
   EXPECT_TRUE(std::isinf(bench.autosaveSettings(t0 + 1100ms)));
   ASSERT_TRUE(fs::exists(file));
   EXPECT_EQ(loadSettings(file, nullptr).ellipsoid_sigma, 3.f);
+}
+
+// A value put back to what it was when the window opened, by hand or by Reset to defaults, is
+// what the next start shows (it was left as written in between).
+TEST(GuiSettings, AValuePutBackOrResetIsSaved) {
+  using namespace std::chrono_literals;
+  TinyBench t;
+  const fs::path file = t.dir / "settings.json";
+  Workbench& bench = t.bench;
+  bench.enableSettingsAutosave(file.string(), bench.ui().settings);
+  const SettingsAutosave::Clock::time_point t0{};
+  bench.ui().settings.ellipsoid_sigma = 3.f;
+  bench.autosaveSettings(t0);
+  bench.autosaveSettings(t0 + 2s);
+  ASSERT_EQ(loadSettings(file, nullptr).ellipsoid_sigma, 3.f);
+  bench.ui().settings.ellipsoid_sigma = 2.f;  // back to the start's value
+  bench.autosaveSettings(t0 + 3s);
+  bench.autosaveSettings(t0 + 5s);
+  EXPECT_EQ(loadSettings(file, nullptr).ellipsoid_sigma, 2.f);
+
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("filter_sigma_factor"), 0.5));
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 55));
+  bench.ui().settings.ellipsoid_sigma = 8.f;
+  bench.autosaveSettings(t0 + 6s);
+  bench.autosaveSettings(t0 + 8s);
+  Settings reread = loadSettings(file, nullptr);
+  ASSERT_EQ(reread.thresholds.filter.min_points, 55);
+  ASSERT_EQ(reread.ellipsoid_sigma, 8.f);
+  bench.parameters().resetToDefaults();
+  t.worker().waitIdle();
+  bench.saveSettings();  // on exit, within the second
+  reread = loadSettings(file, nullptr);
+  const Settings defaults;
+  EXPECT_EQ(reread.thresholds.filter.min_points, defaults.thresholds.filter.min_points);
+  EXPECT_EQ(reread.thresholds.filter.filter_sigma_factor, defaults.thresholds.filter.filter_sigma_factor);
+  EXPECT_EQ(reread.ellipsoid_sigma, defaults.ellipsoid_sigma);
+  EXPECT_EQ(reread.mapper.keyframe_every, defaults.mapper.keyframe_every);
+}
+
+// Each parameter goes back to its default alone; its tooltip names the default.
+TEST(GuiSettings, EachParameterResetsAloneAndItsTooltipGivesItsDefault) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  const Parameter& k = *findParameter("filter_sigma_factor");
+  const Parameter& n = *findParameter("min_points");
+  ASSERT_TRUE(bench.parameters().edit(k, 0.5));
+  ASSERT_TRUE(bench.parameters().edit(n, 55));
+  ASSERT_TRUE(bench.parameters().resetParameter(n));
+  EXPECT_EQ(bench.ui().params.global.filter.min_points, Settings{}.thresholds.filter.min_points);
+  EXPECT_EQ(bench.ui().settings.thresholds.filter.min_points, Settings{}.thresholds.filter.min_points);
+  EXPECT_EQ(bench.ui().params.global.filter.filter_sigma_factor, 0.5) << "the other parameter was reset too";
+  EXPECT_NE(parameterHelp(n).find("default 6"), std::string::npos) << parameterHelp(n);
+  EXPECT_NE(parameterHelp(k).find("default 3"), std::string::npos) << parameterHelp(k);
+}
+
+// A slider moved while nothing is open is what the next sequence opens with, and is saved.
+TEST(GuiSettings, AParameterEditedWithNothingOpenIsKept) {
+  test::TempDir dir;
+  Workbench bench{Settings{}};
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 12));
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("keyframe_every"), 4));
+  EXPECT_EQ(bench.ui().settings.thresholds.filter.min_points, 12);
+  test::writeTinySequence(dir / "seq", 4);
+  ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().params.global.filter.min_points, 12);
+  EXPECT_EQ(bench.ui().params.mapper.keyframe_every, 4);
+}
+
+// Long paths break between their folders, never inside a name that fits on a line.
+TEST(GuiWorkbench, LongPathsBreakBetweenFolders) {
+  const auto chars = [](std::string_view s) { return static_cast<float>(s.size()); };
+  EXPECT_EQ(breakLines("/home/user/data/rgbd_dataset_freiburg1_desk", 30, chars),
+            "/home/user/data/\nrgbd_dataset_freiburg1_desk");
+  EXPECT_EQ(breakLines("Saved to /x/y; the window", 12, chars), "Saved to /x/\ny; the\nwindow");
+  EXPECT_EQ(breakLines("abcdefghij", 4, chars), "abcd\nefgh\nij") << "a name wider than a line";
+  EXPECT_EQ(breakLines("short", 30, chars), "short");
+  EXPECT_EQ(breakLines("", 30, chars), "");
+}
+
+// A double click is told by the presses' times, however slowly frames are drawn (a frame slower
+// than the clicks saw the button held once and the file browser's double click did nothing).
+TEST(GuiWorkbench, ADoubleClickIsToldByThePressTimes) {
+  DoubleClick d;
+  EXPECT_FALSE(d.press(10.0, 100, 100));
+  EXPECT_TRUE(d.press(10.25, 102, 101)) << "two presses a quarter second apart";
+  EXPECT_FALSE(d.press(10.4, 102, 101)) << "a third press starts again";
+  EXPECT_FALSE(d.press(11.0, 102, 101)) << "0.6 s after the last";
+  EXPECT_FALSE(d.press(11.2, 140, 101)) << "somewhere else";
+  EXPECT_TRUE(d.press(11.3, 141, 100));
 }
 
 TEST(LoopStrip, NearbyMarkersMergeWithACount) {

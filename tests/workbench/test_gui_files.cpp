@@ -114,6 +114,42 @@ TEST(GuiFiles, OpenPathOpensEveryKindAndRemembersItNewestFirst) {
   EXPECT_EQ(bench.ui().settings.recent.size(), paths.size());
 }
 
+// What the command line opens (vdmap gui PATH goes through open, openSession or openMapFile,
+// not openPath) is in Recent too.
+TEST(GuiFiles, WhatTheCommandLineOpensIsRecent) {
+  const MapFolder m;
+  test::writeTinySequence(m.dir / "seq", 3);
+  Workbench bench{Settings{}};
+  ASSERT_TRUE(bench.files().open({(m.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().settings.recent, (std::vector<std::string>{(m.dir / "seq").string()}));
+  ASSERT_TRUE(bench.files().openMapFile((m.folder / "global.bt").string())) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().settings.recent.front(), (m.folder / "global.bt").string());
+  EXPECT_EQ(bench.ui().settings.recent.size(), 2u);
+}
+
+// An OctoMap without colours is drawn by height: the colour mode says so (and the legend shows
+// the height ramp); opening something else gives rgb back.
+TEST(GuiFiles, AnOctomapWithoutColoursIsShownByHeight) {
+  const MapFolder m;
+  test::writeTinySequence(m.dir / "seq", 3);
+  Workbench bench{Settings{}};
+  bench.enableSettingsAutosave((m.dir / "settings.json").string(), Settings{});
+  ASSERT_TRUE(bench.files().openPath((m.folder / "global.bt").string())) << bench.ui().status.text;
+  EXPECT_TRUE(bench.staticMap()->height_colors);
+  EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kHeight) << "colour mode rgb over height colours";
+  bench.saveSettings();  // the user's choice is saved, not the file's stand-in
+  EXPECT_EQ(loadSettings(m.dir / "settings.json", nullptr).color, render::ColorMode::kRgb);
+  ASSERT_TRUE(bench.files().openPath((m.dir / "seq").string())) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kRgb);
+  // A map file with its own colours keeps the mode, as does a mode chosen by the user.
+  ASSERT_TRUE(bench.files().openPath(m.folder.string())) << bench.ui().status.text;
+  EXPECT_FALSE(bench.staticMap()->height_colors);
+  EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kRgb);
+  bench.ui().settings.color = render::ColorMode::kCount;
+  ASSERT_TRUE(bench.files().openPath((m.folder / "global.bt").string())) << bench.ui().status.text;
+  EXPECT_EQ(bench.ui().settings.color, render::ColorMode::kCount);
+}
+
 TEST(GuiFiles, RecentKeepsTenPathsAndRoundTripsThroughTheSettingsFile) {
   Settings s;
   for (int i = 0; i < 14; ++i) addRecent(s, "/p/" + std::to_string(i));

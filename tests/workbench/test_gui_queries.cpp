@@ -12,6 +12,7 @@
 #include "mapping/files/map_export.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/synth/builtin_scene.h"
+#include "render/legend.h"
 #include "render/query_slice.h"
 #include "render/sequence_synth.h"
 #include "tests/support/box_room_keyframes.h"
@@ -327,6 +328,31 @@ TEST_F(GuiQueries, RenderDrawsTheQuerySlice) {
   const test::RunResult bad = test::runVdmap(common + " --query-slice w=1 --out '" + (dir / "bad.png").string() + "'");
   EXPECT_NE(bad.exit_code, 0);
   EXPECT_FALSE(fs::exists(dir / "bad.png"));
+}
+
+// The query slice's colours have a key in the view's legend.
+TEST(GuiQueryKey, TheQuerySliceHasAColourKey) {
+  render::QuerySliceSpec spec;
+  render::Legend occupancy;
+  render::addQuerySliceKey(occupancy, spec);
+  ASSERT_EQ(occupancy.lines.size(), 3u);
+  EXPECT_EQ(occupancy.lines[0].text, "slice: free");
+  EXPECT_EQ(occupancy.lines[0].color, glm::u8vec3(render::kSliceFree[0], render::kSliceFree[1], render::kSliceFree[2]));
+  EXPECT_EQ(occupancy.lines[1].text, "occupied");
+  EXPECT_EQ(occupancy.lines[2].text, "unknown");
+  spec.color = render::QuerySliceColor::kDistance;
+  spec.max_distance_m = 0.25;
+  render::Legend distance;
+  render::addQuerySliceKey(distance, spec);
+  EXPECT_EQ(distance.ramp_title, "slice: distance to the surface (m)");
+  EXPECT_EQ(distance.ramp_lo, "0");
+  EXPECT_EQ(distance.ramp_hi, "0.25");
+  // The map's own ramp (height colours) stays; the slice's ends come as lines.
+  render::Legend height = render::legendFor(render::ColorMode::kHeight, render::ColorRange{0.f, 2.f}, {});
+  render::addQuerySliceKey(height, spec);
+  EXPECT_EQ(height.ramp_title, "height above floor (m)");
+  ASSERT_EQ(height.lines.size(), 2u);
+  EXPECT_EQ(height.lines[1].text, "0.25 m or more");
 }
 
 }  // namespace
