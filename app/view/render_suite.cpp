@@ -380,7 +380,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     p.update = options.update && (options.update_views.empty() ||
                                   std::count(options.update_views.begin(), options.update_views.end(), view.name));
     std::error_code exists_ec;
-    if (fs::exists(p.golden, exists_ec)) {
+    if (fs::exists(p.golden, exists_ec) || (options.require_goldens && !p.update)) {
       try {
         p.golden_rgb = readGolden(p.golden.string(), cv::Size(p.width, p.height));
       } catch (const std::exception& e) {

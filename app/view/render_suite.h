@@ -24,6 +24,7 @@ struct SuiteOptions {
   std::string out{};                                ///< --out DIR: replaces the suite's out folder
   std::string settings{};                           ///< --settings FILE: replaces the suite's settings
   std::vector<std::string> set{};                   ///< --set KEY=VALUE for every view (its own win)
+  bool require_goldens = false;                     ///< a missing golden is bad input (bench: nothing to compare)
 };
 
 /// One view's outcome. Times in seconds: the global map it needed built (0 when cached), the
