@@ -24,9 +24,9 @@ namespace vdmap::app {
 inline constexpr render::ImageTolerance kGoldenTolerance{.channel_counts = 8, .pixel_share = 0.025};
 
 /// The default of --suite and of --compare nearby: the nearby compare (render/image_compare.h),
-/// 8 counts, 0.01 % of the pixels. softpipe renders of views whose goldens llvmpipe drew kept
-/// under 0.006 % of their pixels there, while a merge distance of 0.1 instead of 0.25 seen from
-/// a keyframe and a global view turned by half a degree moved 0.012 % and 0.16 %
+/// 8 counts, 0.01 % of the pixels. softpipe renders at 640x480 of views whose goldens llvmpipe
+/// drew kept under 0.004 % of their pixels there, while a merge distance of 0.1 instead of 0.25
+/// seen from a keyframe and a global view turned by 0.2 degrees moved 0.015-0.056 % and 0.036 %
 /// (docs/dev/testing.md has the figures).
 inline constexpr render::ImageTolerance kSuiteTolerance{
     .channel_counts = 8, .pixel_share = 0.0001, .method = render::CompareMethod::kNearby};
