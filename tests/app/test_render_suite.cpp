@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
@@ -382,6 +383,46 @@ TEST_F(RenderSuite, OutSetSettingsAndAShareInPercentWorkWithSuites) {
   EXPECT_EQ(r.exit_code, 2) << "--settings reached the view: " << r.err << r.out;
   r = runSuite(tmp, " --tolerance 8,0");
   EXPECT_EQ(r.exit_code, 0) << r.err << r.out;
+}
+
+TEST_F(RenderSuite, EveryOptionTheWorkbenchSpellsOutIsAViewKey) {
+  // The workbench's Copy render command spells out every field of the view it saves; each
+  // option becomes a key of a suite view, which draws what the saved view file draws.
+  TempDir tmp;
+  render::ViewSpec spec;
+  spec.width = 96;
+  spec.height = 72;
+  spec.look_at = render::LookAt{.eye = {2.f, -2.f, 2.f}, .target = {0.f, 0.f, 0.5f}, .up = {0.f, 0.f, 1.f}};
+  spec.look_at->fov_y_deg = 50.f;
+  spec.color = render::ColorMode::kKeyframe;
+  spec.setDraw(render::DrawMode::kCentres);
+  spec.slice = {.on = true, .lo_m = 0.2f, .hi_m = 1.5f};
+  spec.sigma = 2.f;
+  spec.sphere_level = 2;
+  spec.points_below_px = 2.f;
+  spec.background = render::kWhiteBackground;
+  spec.layers.graph = false;
+  spec.layers.bounds = false;
+  spec.selected_keyframe = 1;
+  app::writeViewFile(tmp / "v.json", spec, GlobalMapParams{}, "s.vdmap");
+  std::istringstream command(app::renderCommand(spec, "s.vdmap"));
+  std::string word, view = "  - {name: all, map: room";
+  int keys = 0;
+  for (command >> word >> word >> word; command >> word && word != "--out"; ++keys) {
+    std::string value;
+    command >> value;
+    view += ", " + word.substr(2) + ": \"" + value + "\"";
+  }
+  EXPECT_GE(keys, 12) << view;
+  writeText(tmp / "views.yaml", "version: 1\ncompare: plain\ntolerance: {counts: 0, share: 0}\nmaps: {room: " +
+                                    (*dir_ / "s.vdmap").string() + "}\nviews:\n" + view +
+                                    "}\n  - {name: file, map: room, view-file: v.json}\n");
+  auto r = runSuite(tmp, " --update");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  const cv::Mat all = test::readImage(tmp / "goldens" / "all.png"),
+                file = test::readImage(tmp / "goldens" / "file.png");
+  ASSERT_EQ(all.size(), cv::Size(96, 72));
+  EXPECT_EQ(cv::norm(all, file, cv::NORM_INF), 0.0) << "the keys draw what the view file draws";
 }
 
 // --- the nearby compare: another driver passes, a real change fails --------------------------
