@@ -295,8 +295,11 @@ void removeIfThere(const fs::path& file) {
   fs::remove(file, ec);
 }
 
-// A path as the report shows it: relative to the suite's folder.
-std::string shown(const fs::path& file, const fs::path& folder) { return file.lexically_relative(folder).string(); }
+// A path as the report shows it: relative to the suite's folder (absolute on another root).
+std::string shown(const fs::path& file, const fs::path& folder) {
+  const fs::path relative = file.lexically_relative(folder);
+  return relative.empty() ? file.string() : relative.string();
+}
 
 // The PNGs of the goldens folder no view names.
 std::vector<std::string> orphanGoldens(const fs::path& goldens, const std::vector<ViewEntry>& views) {
