@@ -63,6 +63,13 @@ void writeImage(const std::filesystem::path& file, const cv::Mat& rgb) {
 void runRender(RenderArgs args) {
   // A missing option is a command-line error like map's: CLI11's message and exit code.
   checkRenderCheckArgs(args.check);
+  if (!args.out.empty()) {  // checked here: with --suite --out is a folder
+    try {
+      imageFormat(args.out);
+    } catch (const std::invalid_argument& e) {
+      throw CLI::ValidationError("--out", e.what());
+    }
+  }
   if (args.out.empty() && args.check.expect.empty()) throw CLI::RequiredError("--out");  // as every verb says it
   if (args.sequence.folder.empty() && args.map.empty() && args.mesh.empty())
     throw CLI::RequiredError("give SEQ, --map (an ellipsoid PLY, a `vdmap map` folder or a .vdmap session), "
@@ -153,8 +160,9 @@ void addRenderCommand(CLI::App& app) {
                    "an OctoMap .bt/.ot")
       ->excludes(seq);
   verb->add_option("--mesh", args->mesh, "triangle mesh PLY with vertex colours, drawn shaded");
-  verb->add_option("--out", args->out, "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says")
-      ->check(parsedBy(imageFormat, "FILE.png|.jpg"));
+  verb->add_option("--out", args->out,
+                   "image to write: PNG (.png) or JPEG (.jpg, .jpeg), as its extension says; with --suite: the "
+                   "folder of the report and the failing views' images");
   addRenderViewOptions(*verb, args->view);
   addRenderCheckArgs(*verb, args->check);
   // The point queries' slice plane (docs/workbench.md "Queries"); not the height slice (--slice LO:HI).
@@ -170,7 +178,8 @@ void addRenderCommand(CLI::App& app) {
           "the nearest surface, viridis to 0.5 m; unknown grey)")
       ->check(parsedBy(render::parseQuerySliceColor, "occupancy|distance"));
   verb->callback([args, verb] {
-    if (!runSuiteIfGiven(*verb, args->check)) runRender(*args);  // --suite: many views (app/view/render_suite.h)
+    if (!runSuiteIfGiven(*verb, args->check, args->view, args->out))
+      runRender(*args);  // --suite: many views (app/view/render_suite.h)
   });
 }
 

@@ -47,6 +47,47 @@ std::array<long, 256> histogram(const cv::Mat& difference) {
   return counts;
 }
 
+// Every pixel's largest channel range over its 3x3 (the local contrast; CV_8UC1).
+cv::Mat localContrast(const cv::Mat& image) {
+  cv::Mat high, low, range;
+  cv::dilate(image, high, cv::Mat());
+  cv::erode(image, low, cv::Mat());
+  cv::Mat channels[3];
+  cv::split(high - low, channels);
+  cv::max(channels[0], channels[1], range);
+  cv::max(range, channels[2], range);
+  return range;
+}
+
+// Where no pixel of `reference` within 1 px is within counts + a quarter of the reference's local
+// contrast of `image`'s.
+cv::Mat nothingNearMatches(const cv::Mat& reference, const cv::Mat& image, int counts) {
+  cv::Mat padded, best(image.size(), CV_8UC1, cv::Scalar(255));
+  cv::copyMakeBorder(reference, padded, 1, 1, 1, 1, cv::BORDER_REPLICATE);
+  for (int dy = 0; dy <= 2; ++dy)
+    for (int dx = 0; dx <= 2; ++dx)
+      cv::min(best, largestChannelDifference(padded(cv::Rect(dx, dy, image.cols, image.rows)), image), best);
+  cv::Mat allowed;
+  localContrast(reference).convertTo(allowed, CV_8U, 0.25, counts);
+  return best > allowed;
+}
+
+// The nearby compare's differing pixels (ImageTolerance says why): nothing near matches, either
+// way, and at least 3 of the 3x3 differ so.
+cv::Mat nearbyDiffering(const cv::Mat& expected, const cv::Mat& actual, int counts) {
+  const cv::Mat differs = nothingNearMatches(expected, actual, counts) | nothingNearMatches(actual, expected, counts);
+  cv::Mat neighbours;
+  cv::boxFilter(differs / 255, neighbours, CV_8U, cv::Size(3, 3), cv::Point(-1, -1), false, cv::BORDER_CONSTANT);
+  return differs & (neighbours >= 3);
+}
+
+// The pixels the tolerance's method counts as differing (CV_8UC1, 255 where they do).
+cv::Mat differingPixels(const cv::Mat& expected, const cv::Mat& actual, const cv::Mat& difference,
+                        const ImageTolerance& tolerance) {
+  if (tolerance.method == CompareMethod::kNearby) return nearbyDiffering(expected, actual, tolerance.channel_counts);
+  return difference > tolerance.channel_counts;
+}
+
 long countAbove(const std::array<long, 256>& counts, int threshold) {
   long n = 0;
   for (int d = threshold + 1; d < 256; ++d) n += counts[d];
@@ -55,12 +96,22 @@ long countAbove(const std::array<long, 256>& counts, int threshold) {
 
 }  // namespace
 
+const char* compareMethodName(CompareMethod method) { return method == CompareMethod::kNearby ? "nearby" : "plain"; }
+
+CompareMethod parseCompareMethod(const std::string& text) {
+  if (text == "plain") return CompareMethod::kPlain;
+  if (text == "nearby") return CompareMethod::kNearby;
+  throw std::invalid_argument("'" + text + "': expected plain or nearby");
+}
+
 std::string ImageComparison::summary() const {
   std::ostringstream out;
   out.imbue(std::locale::classic());
   out << std::setprecision(3) << differing << " of " << pixels << " pixels (" << 100.0 * share << "%, allowed "
-      << 100.0 * tolerance.pixel_share << "%) differ by more than " << tolerance.channel_counts << " counts; " << over1
-      << " by more than 1, " << over32 << " by more than 32, worst " << worst;
+      << 100.0 * tolerance.pixel_share << "%) differ "
+      << (tolerance.method == CompareMethod::kNearby ? "from everything within 1 px " : "") << "by more than "
+      << tolerance.channel_counts << " counts" << (tolerance.method == CompareMethod::kNearby ? " (nearby)" : "")
+      << "; " << over1 << " by more than 1, " << over32 << " by more than 32, worst " << worst;
   if (!where.empty())
     out << ", inside x " << where.x << ".." << where.x + where.width - 1 << " y " << where.y << ".."
         << where.y + where.height - 1;
@@ -74,20 +125,22 @@ ImageComparison compareImages(const cv::Mat& expected_rgb, const cv::Mat& actual
   ImageComparison c;
   c.tolerance = tolerance;
   c.pixels = static_cast<long>(difference.total());
-  c.differing = countAbove(counts, tolerance.channel_counts);
+  const cv::Mat differs = differingPixels(expected_rgb, actual_rgb, difference, tolerance);
+  c.differing = cv::countNonZero(differs);
   c.over1 = countAbove(counts, 1);
   c.over32 = countAbove(counts, 32);
   for (int d = 255; d > 0 && c.worst == 0; --d)
     if (counts[d] > 0) c.worst = d;
   c.share = static_cast<double>(c.differing) / static_cast<double>(c.pixels);
-  if (c.differing > 0) c.where = cv::boundingRect(difference > tolerance.channel_counts);
+  if (c.differing > 0) c.where = cv::boundingRect(differs);
   c.matches = c.share <= tolerance.pixel_share;
   return c;
 }
 
 cv::Mat diffImage(const cv::Mat& expected_rgb, const cv::Mat& actual_rgb, const ImageTolerance& tolerance) {
   requireComparable(expected_rgb, actual_rgb, tolerance);
-  const cv::Mat differs = largestChannelDifference(expected_rgb, actual_rgb) > tolerance.channel_counts;
+  const cv::Mat differs =
+      differingPixels(expected_rgb, actual_rgb, largestChannelDifference(expected_rgb, actual_rgb), tolerance);
   cv::Mat grey;
   cv::cvtColor(expected_rgb, grey, cv::COLOR_RGB2GRAY);
   grey.convertTo(grey, CV_8U, 0.5, 64.0);

@@ -126,7 +126,8 @@ void runSuiteBench(const std::string& file, int runs, bool json) {
     out["update"] = stages("update", {runSuite(suite, {.update = true, .tolerance = {}, .table = false})}, &text);
   }
   std::vector<SuiteResult> compares;
-  for (int i = 0; i < runs; ++i) compares.push_back(runSuite(suite, {.tolerance = {}, .table = false}));
+  for (int i = 0; i < runs; ++i)
+    compares.push_back(runSuite(suite, {.tolerance = {}, .table = false, .require_goldens = true}));
   out["compare"] = stages("compare", compares, &text);
   const SuiteResult& last = compares.back();
   out["views"] = last.views.size();

@@ -15,18 +15,33 @@
 
 namespace vdmap::app {
 
+render::ImageTolerance defaultTolerance(render::CompareMethod method) {
+  return method == render::CompareMethod::kNearby ? kSuiteTolerance : kGoldenTolerance;
+}
+
+double parseShare(const std::string& text) {
+  std::smatch m;
+  static const std::regex pattern(R"(\s*([0-9]*\.?[0-9]+)\s*(%?)\s*)");
+  if (!std::regex_match(text, m, pattern))
+    throw std::invalid_argument("'" + text + "': expected a share, e.g. 0.025 or 2.5%");
+  const double share = std::stod(m[1]) / (m[2].length() > 0 ? 100.0 : 1.0);
+  if (!(share >= 0.0 && share <= 1.0))
+    throw std::invalid_argument("'" + text + "': a share must be in 0..1 (or 0%..100%)");
+  return share;
+}
+
 render::ImageTolerance parseTolerance(const std::string& text) {
   std::smatch m;
-  static const std::regex pattern(R"((\d{1,3}),([0-9]*\.?[0-9]+)(%?))");
+  static const std::regex pattern(R"((\d{1,3}),([0-9]*\.?[0-9]+%?))");
   if (!std::regex_match(text, m, pattern))
     throw std::invalid_argument("'" + text + "': expected COUNTS,SHARE, e.g. 8,0.025 or 8,2.5%");
   const int counts = std::stoi(m[1]);
-  double share = std::stod(m[2]);
-  if (m[3].matched && m[3].length() > 0) share /= 100.0;
   if (counts > 255) throw std::invalid_argument("'" + text + "': COUNTS must be in 0..255");
-  if (!(share >= 0.0 && share <= 1.0))
+  try {
+    return {.channel_counts = counts, .pixel_share = parseShare(m[2])};
+  } catch (const std::invalid_argument&) {
     throw std::invalid_argument("'" + text + "': SHARE must be in 0..1 (or 0%..100%)");
-  return {.channel_counts = counts, .pixel_share = share};
+  }
 }
 
 void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args) {
@@ -37,8 +52,22 @@ void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args) {
                   "COUNTS,SHARE: a pixel differs when a channel is off by more than COUNTS; at most SHARE of "
                   "the pixels may (a fraction or a percentage; default 8,2.5%)")
       ->check(parsedBy(parseTolerance, "COUNTS,SHARE"));
+  verb.add_option("--compare", args.compare,
+                  "plain: every pixel against the same pixel (--expect's default); nearby: a pixel differs only when "
+                  "nothing within 1 px matches it and its neighbours differ too, so another driver passes and a real "
+                  "change fails (--suite's default, tolerance 8,0.01%)")
+      ->check(parsedBy(render::parseCompareMethod, "plain|nearby"));
   verb.add_option("--diff", args.diff, "with --expect: where a differing render's diff image goes (PNG)");
-  verb.add_flag("--update", args.update, "with --expect: write the render as the golden (atomically) and exit 0");
+  verb.add_option_function<std::vector<std::string>>(
+          "--update",
+          [&args](const std::vector<std::string>& views) {
+            args.update = true;
+            for (const std::string& view : views)
+              if (!view.empty()) args.update_views.push_back(view);  // a bare --update gives one empty value
+          },
+          "with --expect: write the render as the golden (atomically) and exit 0; with --suite: write every "
+          "view's golden, or only those of the views named (--update VIEW...)")
+      ->expected(0, CLI::detail::expected_max_vector_size);
   verb.add_option("--suite", args.suite,
                   "render every view of this YAML file (maps loaded once), compare each with its golden; a table, "
                   "JUnit XML and the failing views' images in its out folder; exit 2 when any differs");
@@ -46,19 +75,27 @@ void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args) {
 }
 
 render::ImageTolerance tolerance(const RenderCheckArgs& args) {
-  return args.tolerance.empty() ? kGoldenTolerance : parseTolerance(args.tolerance);
+  const render::CompareMethod method =
+      args.compare.empty() ? render::CompareMethod::kPlain : render::parseCompareMethod(args.compare);
+  render::ImageTolerance t = args.tolerance.empty() ? defaultTolerance(method) : parseTolerance(args.tolerance);
+  t.method = method;
+  return t;
 }
 
 void checkRenderCheckArgs(const RenderCheckArgs& args, bool suite) {
   if (args.expect.empty() && !suite) {
     const char* alone = args.update               ? "--update"
                         : !args.tolerance.empty() ? "--tolerance"
+                        : !args.compare.empty()   ? "--compare"
                         : !args.diff.empty()      ? "--diff"
                                                   : nullptr;
     if (alone)
       throw CLI::RequiredError(std::string(alone) + " needs --expect GOLDEN.png (or --suite)",
                                CLI::ExitCodes::RequiredError);
   }
+  if (!suite && !args.update_views.empty())
+    throw CLI::ValidationError(
+        "--update", "view names ('" + args.update_views.front() + "') need --suite; give SEQ before --update");
   if (!args.diff.empty()) checkOutputFile(args.diff, "--diff");
   if (args.update && !args.expect.empty()) checkOutputFile(args.expect, "--expect");
 }

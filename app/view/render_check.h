@@ -23,28 +23,46 @@ namespace vdmap::app {
 /// (docs/cli.md says why).
 inline constexpr render::ImageTolerance kGoldenTolerance{.channel_counts = 8, .pixel_share = 0.025};
 
+/// The default of --suite and of --compare nearby: the nearby compare (render/image_compare.h),
+/// 8 counts, 0.01 % of the pixels. softpipe renders at 640x480 of views whose goldens llvmpipe
+/// drew kept under 0.004 % of their pixels there, while a merge distance of 0.1 instead of 0.25
+/// seen from a keyframe and a global view turned by 0.2 degrees moved 0.015-0.056 % and 0.036 %
+/// (docs/dev/testing.md has the figures).
+inline constexpr render::ImageTolerance kSuiteTolerance{
+    .channel_counts = 8, .pixel_share = 0.0001, .method = render::CompareMethod::kNearby};
+
+/// The default tolerance of `method`: kSuiteTolerance for nearby, kGoldenTolerance for plain.
+render::ImageTolerance defaultTolerance(render::CompareMethod method);
+
+/// A share of the pixels as a fraction in 0..1 or a percentage ("0.025", "2.5%"). Throws
+/// std::invalid_argument.
+double parseShare(const std::string& text);
+
 /// --tolerance COUNTS,SHARE: counts in 0..255 and a share of the pixels as a fraction in 0..1 or
 /// a percentage ("8,0.005", "8,0.5%"). Throws std::invalid_argument naming what is wrong.
 render::ImageTolerance parseTolerance(const std::string& text);
 
 /// The options of the comparison.
 struct RenderCheckArgs {
-  std::string expect;     ///< the golden PNG ("" : no comparison)
-  std::string diff;       ///< where the diff image goes when the render differs ("" : nowhere)
-  std::string tolerance;  ///< COUNTS,SHARE ("" : kGoldenTolerance)
-  bool update = false;    ///< write the render as the golden instead of comparing
-  bool timings = false;   ///< print the stage times on stderr
-  std::string suite;      ///< --suite views.yaml (app/view/render_suite.h)
+  std::string expect;                     ///< the golden PNG ("" : no comparison)
+  std::string diff;                       ///< where the diff image goes when the render differs ("" : nowhere)
+  std::string tolerance;                  ///< COUNTS,SHARE ("" : the compare's default)
+  std::string compare;                    ///< --compare plain|nearby ("" : plain, with --suite nearby)
+  bool update = false;                    ///< write the render as the golden instead of comparing
+  std::vector<std::string> update_views;  ///< --update VIEW...: with --suite, only these views
+  bool timings = false;                   ///< print the stage times on stderr
+  std::string suite;                      ///< --suite views.yaml (app/view/render_suite.h)
 };
 
-/// Registers --expect, --tolerance, --diff, --update, --suite (and --timings) on `verb`.
+/// Registers --expect, --tolerance, --compare, --diff, --update, --suite (and --timings) on `verb`.
 void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args);
 
-/// The tolerance the arguments give (kGoldenTolerance without --tolerance).
+/// The tolerance the arguments give (defaultTolerance of --compare without --tolerance).
 render::ImageTolerance tolerance(const RenderCheckArgs& args);
 
 /// Refuses --update, --tolerance or --diff without --expect (or, when `suite`, --suite) as a
-/// command-line error (CLI::RequiredError, CLI11's code); checks that --diff and, with
+/// command-line error (CLI::RequiredError, CLI11's code), and view names after --update
+/// without --suite; checks that --diff and, with
 /// --update, --expect can be written (std::invalid_argument).
 void checkRenderCheckArgs(const RenderCheckArgs& args, bool suite = false);
 

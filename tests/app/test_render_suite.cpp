@@ -2,14 +2,18 @@
 // maps against theirs), end to end on a session of the built-in room; and the session's lazy
 // images that let render skip decoding them.
 #include <algorithm>
+#include <cstdio>
 #include <fstream>
+#include <sstream>
 
 #include <gtest/gtest.h>
 
+#include "app/view/render_check.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
 #include "mapping/files/session_file.h"
 #include "mapping/synth/builtin_scene.h"
+#include "render/image_compare.h"
 #include "render/sequence_synth.h"
 #include "tests/support/test_util.h"
 
@@ -37,20 +41,25 @@ int occurrences(const std::string& text, const std::string& what) {
   return n;
 }
 
-// The first 10 poses of a 40-pose walk around the built-in room (a few keyframes), saved as a
-// session once for all tests.
+// The first `frames` poses of a 40-pose walk around the built-in room (big steps: a keyframe
+// every few poses), mapped by the binary into DIR/map and DIR/s.vdmap.
+void saveWalkSession(const std::filesystem::path& dir, int frames) {
+  const BuiltinScene scene = makeBuiltinScene({.frames = 40});
+  render::SynthOptions options;
+  options.camera = scene.camera;
+  options.last_frame = frames;
+  render::synthesizeSequence(scene.mesh, scene.trajectory, options, dir / "room");
+  const auto saved = runVdmap("map '" + (dir / "room").string() + "' --out '" + (dir / "map").string() + "' --save '" +
+                              (dir / "s.vdmap").string() + "'");
+  ASSERT_EQ(saved.exit_code, 0) << saved.err;
+}
+
+// The first 10 poses of the walk (a few keyframes), saved as a session once for all tests.
 class RenderGolden : public ::testing::Test {
  protected:
   static void SetUpTestSuite() {
     dir_ = new TempDir;
-    const BuiltinScene scene = makeBuiltinScene({.frames = 40});
-    render::SynthOptions options;
-    options.camera = scene.camera;
-    options.last_frame = 10;
-    render::synthesizeSequence(scene.mesh, scene.trajectory, options, *dir_ / "room");
-    const auto saved = runVdmap("map '" + (*dir_ / "room").string() + "' --out '" + (*dir_ / "map").string() +
-                                "' --save '" + (*dir_ / "s.vdmap").string() + "'");
-    ASSERT_EQ(saved.exit_code, 0) << saved.err;
+    saveWalkSession(dir_->path(), 10);
   }
   static void TearDownTestSuite() { delete dir_; }
   static std::string quoted(const std::filesystem::path& p) { return std::string("'").append(p.string()).append("'"); }
@@ -322,6 +331,165 @@ TEST_F(RenderSuite, SuiteOptionsExcludeASingleViewsOptions) {
   EXPECT_GE(r.exit_code, 100) << r.err;
   EXPECT_LE(r.exit_code, 114) << r.err;
   EXPECT_NE(r.err.find("--suite excludes --expect"), std::string::npos) << r.err;
+}
+
+// --- a suite's details: missing goldens, --update VIEW..., orphans, the command line's options
+
+TEST_F(RenderSuite, AViewWithoutAGoldenFailsAloneAndUpdateNamesViews) {
+  TempDir tmp;
+  writeSuite(tmp, "  - {name: slice, map: room, size: 80x60, query-slice: up=1.0, query-slice-color: distance}\n");
+  auto r = runSuite(tmp, " --update global orbit");
+  ASSERT_EQ(r.exit_code, 2) << r.err;
+  EXPECT_NE(r.out.find("goldens changed: global (new), orbit (new)"), std::string::npos) << r.out;
+  EXPECT_EQ(occurrences(r.out, "| NO GOLDEN "), 3) << r.out;
+  EXPECT_NE(r.err.find("3 of 5 views differ from their goldens: kf1 (no golden), c1 (no golden), slice (no golden)"),
+            std::string::npos)
+      << r.err;
+  std::string xml = test::readFile(tmp / "out" / "junit.xml");
+  EXPECT_NE(xml.find("<failure message=\"no golden: goldens/kf1.png (write it with --update kf1)\""), std::string::npos)
+      << "a path relative to the suite file: " << xml;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "out" / "kf1.actual.png"));
+  // A plain --update writes the rest and says which goldens changed; an orphan is listed.
+  test::writeImage(tmp / "goldens" / "gone.png", cv::Mat(4, 4, CV_8UC3, cv::Scalar::all(0)));
+  r = runSuite(tmp, " --update");
+  ASSERT_EQ(r.exit_code, 0) << r.err;
+  EXPECT_NE(r.out.find("goldens changed: kf1 (new), c1 (new), slice (new)"), std::string::npos) << r.out;
+  EXPECT_EQ(occurrences(r.out, "| same "), 2) << r.out;
+  EXPECT_NE(r.out.find("orphan goldens (no view of the suite names them) in goldens: gone.png"), std::string::npos)
+      << r.out;
+  EXPECT_GT(cv::norm(test::readImage(tmp / "goldens" / "slice.png"),
+                     test::readImage(tmp / "goldens" / "global.png")(cv::Rect(0, 0, 80, 60)), cv::NORM_L1),
+            0.0);
+  r = runSuite(tmp, " --update nothere");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("--update nothere: no view of that name"), std::string::npos) << r.err;
+}
+
+TEST_F(RenderSuite, OutSetSettingsAndAShareInPercentWorkWithSuites) {
+  TempDir tmp;
+  writeText(tmp / "views.yaml",
+            "version: 1\ntolerance: {share: 2.5%}\ncompare: plain\nmaps: {room: " + (*dir_ / "s.vdmap").string() +
+                "}\nviews:\n  - {name: a, map: room, size: 80x60}\n");
+  ASSERT_EQ(runSuite(tmp, " --update").exit_code, 0);
+  // A stricter filter for every view from the command line: another picture, reported in --out.
+  auto r = runSuite(tmp, " --set filter_sigma_factor=1.0 --out '" + (tmp / "o").string() + "' --tolerance 8,0");
+  EXPECT_EQ(r.exit_code, 2) << r.err << r.out;
+  EXPECT_TRUE(std::filesystem::exists(tmp / "o" / "junit.xml"));
+  EXPECT_TRUE(std::filesystem::exists(tmp / "o" / "a.diff.png"));
+  GlobalMapParams strict;
+  strict.filter.filter_sigma_factor = 1.0;
+  app::writeViewFile(tmp / "strict.json", render::ViewSpec{}, strict, "s.vdmap");
+  r = runSuite(tmp, " --settings '" + (tmp / "strict.json").string() + "' --tolerance 8,0");
+  EXPECT_EQ(r.exit_code, 2) << "--settings reached the view: " << r.err << r.out;
+  r = runSuite(tmp, " --tolerance 8,0");
+  EXPECT_EQ(r.exit_code, 0) << r.err << r.out;
+}
+
+TEST_F(RenderSuite, EveryOptionTheWorkbenchSpellsOutIsAViewKey) {
+  // The workbench's Copy render command spells out every field of the view it saves; each
+  // option becomes a key of a suite view, which draws what the saved view file draws.
+  TempDir tmp;
+  render::ViewSpec spec;
+  spec.width = 96;
+  spec.height = 72;
+  spec.look_at = render::LookAt{.eye = {2.f, -2.f, 2.f}, .target = {0.f, 0.f, 0.5f}, .up = {0.f, 0.f, 1.f}};
+  spec.look_at->fov_y_deg = 50.f;
+  spec.color = render::ColorMode::kKeyframe;
+  spec.setDraw(render::DrawMode::kCentres);
+  spec.slice = {.on = true, .lo_m = 0.2f, .hi_m = 1.5f};
+  spec.sigma = 2.f;
+  spec.sphere_level = 2;
+  spec.points_below_px = 2.f;
+  spec.background = render::kWhiteBackground;
+  spec.layers.graph = false;
+  spec.layers.bounds = false;
+  spec.selected_keyframe = 1;
+  app::writeViewFile(tmp / "v.json", spec, GlobalMapParams{}, "s.vdmap");
+  std::istringstream command(app::renderCommand(spec, "s.vdmap"));
+  std::string word, view = "  - {name: all, map: room";
+  int keys = 0;
+  for (command >> word >> word >> word; command >> word && word != "--out"; ++keys) {
+    std::string value;
+    command >> value;
+    view += ", " + word.substr(2) + ": \"" + value + "\"";
+  }
+  EXPECT_GE(keys, 12) << view;
+  writeText(tmp / "views.yaml", "version: 1\ncompare: plain\ntolerance: {counts: 0, share: 0}\nmaps: {room: " +
+                                    (*dir_ / "s.vdmap").string() + "}\nviews:\n" + view +
+                                    "}\n  - {name: file, map: room, view-file: v.json}\n");
+  auto r = runSuite(tmp, " --update");
+  ASSERT_EQ(r.exit_code, 0) << r.err << r.out;
+  const cv::Mat all = test::readImage(tmp / "goldens" / "all.png"),
+                file = test::readImage(tmp / "goldens" / "file.png");
+  ASSERT_EQ(all.size(), cv::Size(96, 72));
+  EXPECT_EQ(cv::norm(all, file, cv::NORM_INF), 0.0) << "the keys draw what the view file draws";
+}
+
+// --- the nearby compare: another driver passes, a real change fails --------------------------
+
+// A session of 20 frames of the built-in walk (7 keyframes) and a suite of three views at
+// 640x480 whose goldens llvmpipe draws (at 320x240 a merge seen from keyframe 3 moves no pixel
+// by more than 1 px).
+class DriverOrChange : public ::testing::Test {
+ protected:
+  static void SetUpTestSuite() {
+    dir_ = new TempDir;
+    saveWalkSession(dir_->path(), 20);
+    if (HasFatalFailure()) return;
+    writeViews("views.yaml", "-60,35");
+    writeViews("orbited.yaml", "-59.8,35");
+    const auto r = suite("views.yaml", " --update");
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+  }
+  static void TearDownTestSuite() { delete dir_; }
+  static void writeViews(const std::string& name, const std::string& orbit) {
+    writeText(*dir_ / name, "version: 1\nmaps: {room: s.vdmap}\nviews:\n"
+                            "  - {name: global, map: room, size: 640x480, orbit: \"" +
+                                orbit +
+                                "\"}\n"
+                                "  - {name: kf3, map: room, size: 640x480, view: \"keyframe:3\"}\n"
+                                "  - {name: kf4, map: room, size: 640x480, view: \"keyframe:4\"}\n");
+  }
+  static test::RunResult suite(const std::string& name, const std::string& extra, const std::string& prefix = "") {
+    return runVdmap("render --suite '" + (*dir_ / name).string() + "'" + extra, prefix);
+  }
+  // The share of pixels the compare `method` finds differing between a view's golden and its actual.
+  static double share(const std::string& view, render::CompareMethod method) {
+    const cv::Mat golden = test::readImage(*dir_ / "goldens" / (view + ".png"));
+    const cv::Mat actual = test::readImage(*dir_ / "render-out" / (view + ".actual.png"));
+    const render::ImageComparison c =
+        render::compareImages(golden, actual, {.channel_counts = 8, .pixel_share = 1, .method = method});
+    std::printf("%s: %.4f %% differ (%s)\n", view.c_str(), 100 * c.share, render::compareMethodName(method));
+    return c.share;
+  }
+  static TempDir* dir_;
+};
+TempDir* DriverOrChange::dir_ = nullptr;
+
+TEST_F(DriverOrChange, SoftpipeRendersPassTheLlvmpipeGoldens) {
+  // The plain compare at 8 counts and no share fails each, so that every actual is written.
+  const auto r = suite("views.yaml", " --compare plain --tolerance 8,0", "GALLIUM_DRIVER=softpipe");
+  ASSERT_EQ(r.exit_code, 2) << "softpipe drew the same pixels as llvmpipe? " << r.err << r.out;
+  for (const char* view : {"global", "kf3", "kf4"}) {
+    share(view, render::CompareMethod::kPlain);
+    EXPECT_LE(share(view, render::CompareMethod::kNearby), app::kSuiteTolerance.pixel_share) << view;
+  }
+}
+
+TEST_F(DriverOrChange, AMergeDistanceAndATurnedCameraFail) {
+  auto r = suite("views.yaml", " --set merge_distance=0.1");
+  EXPECT_EQ(r.exit_code, 2) << r.err << r.out;
+  EXPECT_NE(r.err.find("kf3, kf4"), std::string::npos) << r.err;
+  for (const char* view : {"kf3", "kf4"}) {
+    EXPECT_LT(share(view, render::CompareMethod::kPlain), app::kGoldenTolerance.pixel_share)
+        << view << ": the old compare passed it";
+    EXPECT_GT(share(view, render::CompareMethod::kNearby), app::kSuiteTolerance.pixel_share) << view;
+  }
+  r = suite("orbited.yaml", "");
+  EXPECT_EQ(r.exit_code, 2) << r.err << r.out;
+  EXPECT_NE(r.err.find(": global"), std::string::npos) << r.err;
+  share("global", render::CompareMethod::kPlain);
+  EXPECT_GT(share("global", render::CompareMethod::kNearby), app::kSuiteTolerance.pixel_share);
 }
 
 }  // namespace

@@ -263,5 +263,58 @@ TEST(ImageCompare, AgreesWithTheGoldenTestsVerdictOnAShiftedRender) {
   std::cout << matched << " of " << cases << " shifted goldens within the default tolerance\n";
 }
 
+// --- the nearby compare ----------------------------------------------------------------------
+
+constexpr ImageTolerance kNearby{.channel_counts = 8, .pixel_share = 0, .method = CompareMethod::kNearby};
+
+TEST(ImageCompareNearby, AOnePixelShiftAndScatteredSpecksDoNotDiffer) {
+  // What another rasteriser does: silhouettes a pixel off, single pixels of the other colour.
+  cv::Mat golden = uniform(40, 30, {20, 20, 30});
+  cv::rectangle(golden, cv::Rect(10, 8, 15, 12), cv::Scalar(200, 120, 40), cv::FILLED);
+  cv::Mat actual = shifted(golden, 1, 0);
+  for (int k = 0; k < 6; ++k) actual.at<cv::Vec3b>(3 + 4 * k, 2 + 6 * k) = cv::Vec3b(255, 255, 255);
+  EXPECT_GT(compareImages(golden, actual).differing, 12 + 6) << "the plain compare counts the edge and the specks";
+  const ImageComparison c = compareImages(golden, actual, kNearby);
+  EXPECT_EQ(c.differing, 0) << c.summary();
+  EXPECT_TRUE(c.matches);
+}
+
+TEST(ImageCompareNearby, APatchOfAnotherColourDiffersWhole) {
+  const cv::Mat golden = uniform(40, 30, {20, 20, 30});
+  cv::Mat actual = golden.clone();
+  actual(cv::Rect(5, 6, 4, 4)) = cv::Scalar(60, 20, 30);  // 40 counts off, 16 pixels
+  const ImageComparison c = compareImages(golden, actual, kNearby);
+  EXPECT_EQ(c.differing, 16) << c.summary();
+  EXPECT_EQ(c.where, cv::Rect(5, 6, 4, 4));
+  EXPECT_FALSE(c.matches);
+  EXPECT_NE(c.summary().find("differ from everything within 1 px by more than 8 counts (nearby)"), std::string::npos)
+      << c.summary();
+  cv::Mat red;
+  cv::inRange(diffImage(golden, actual, kNearby), cv::Scalar(255, 0, 0), cv::Scalar(255, 0, 0), red);
+  EXPECT_EQ(cv::countNonZero(red), 16);
+}
+
+TEST(ImageCompareNearby, BusyTextureAllowsMoreThanAFlatSurface) {
+  // The same 20-count change of a 3x3 patch: counted on a flat surface, not on a checkerboard of
+  // 100 counts' contrast (a quarter of it, 25, plus 8 counts are allowed there).
+  cv::Mat flat = uniform(20, 20, {100, 100, 100}), busy = flat.clone();
+  for (int y = 0; y < 20; ++y)
+    for (int x = 0; x < 20; ++x)
+      if ((x + y) % 2) busy.at<cv::Vec3b>(y, x) = cv::Vec3b(200, 200, 200);
+  const auto changed = [](const cv::Mat& golden) {
+    cv::Mat actual = golden.clone();
+    actual(cv::Rect(8, 8, 3, 3)) += cv::Scalar::all(20);
+    return compareImages(golden, actual, kNearby).differing;
+  };
+  EXPECT_EQ(changed(flat), 9);
+  EXPECT_EQ(changed(busy), 0);
+}
+
+TEST(ImageCompareNearby, MethodNamesRoundTrip) {
+  for (const CompareMethod m : {CompareMethod::kPlain, CompareMethod::kNearby})
+    EXPECT_EQ(parseCompareMethod(compareMethodName(m)), m);
+  EXPECT_THROW(parseCompareMethod("fuzzy"), std::invalid_argument);
+}
+
 }  // namespace
 }  // namespace vdmap::render

@@ -1,4 +1,4 @@
-// compare_images EXPECTED.png ACTUAL.png [--counts C] [--share S] [--diff DIFF.png]: the
+// compare_images EXPECTED.png ACTUAL.png [--counts C] [--share S] [--compare plain|nearby] [--diff DIFF.png]: the
 // comparison of render/image_compare.h from the shell, for scripts/render-driver-spread (the
 // same metric as the golden tests). Prints ImageComparison::summary(); exits 0 when the images
 // match, 2 when they differ, 1 on bad input.
@@ -36,11 +36,13 @@ int main(int argc, char** argv) {
       if (i + 1 < argc && arg == "--counts") tolerance.channel_counts = std::stoi(argv[++i]);
       else if (i + 1 < argc && arg == "--share") tolerance.pixel_share = std::stod(argv[++i]);
       else if (i + 1 < argc && arg == "--diff") diff = argv[++i];
+      else if (i + 1 < argc && arg == "--compare") tolerance.method = vdmap::render::parseCompareMethod(argv[++i]);
       else if (nfiles < 2 && arg.rfind("--", 0) != 0) files[nfiles++] = arg;
       else throw std::runtime_error("unexpected argument '" + arg + "'");
     }
     if (nfiles != 2)
-      throw std::runtime_error("usage: compare_images EXPECTED ACTUAL [--counts C] [--share S] [--diff D]");
+      throw std::runtime_error(
+          "usage: compare_images EXPECTED ACTUAL [--counts C] [--share S] [--compare M] [--diff D]");
     const cv::Mat expected = readRgb(files[0]), actual = readRgb(files[1]);
     const vdmap::render::ImageComparison c = vdmap::render::compareImages(expected, actual, tolerance);
     std::printf("%s\n", c.summary().c_str());
