@@ -10,9 +10,9 @@
 namespace vdmap {
 namespace {
 
-constexpr double kRadiusM = 0.12;          // a patch: the means within this of its centre (at least)
-constexpr std::size_t kMaxPoints = 60000;  // means looked at (evenly strided)
-constexpr std::size_t kMaxPatches = 3000;  // patch centres (evenly strided)
+constexpr double kRadiusM = 0.12;                     // a patch: the means within this of its centre (at least)
+constexpr std::size_t kMaxPoints = 60000;             // means looked at (evenly strided)
+constexpr std::size_t kMaxPatches = 3000;             // patch centres (evenly strided)
 const double kAlign = std::cos(10.0 * M_PI / 180.0);  // a normal along a direction: within 10 degrees
 
 struct Patch {

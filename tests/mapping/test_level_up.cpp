@@ -35,16 +35,16 @@ std::vector<Eigen::Vector3d> scannedKitchen() {
   std::mt19937 rng(3);
   std::vector<Eigen::Vector3d> p;
   const Eigen::Vector3d x = Eigen::Vector3d::UnitX(), y = Eigen::Vector3d::UnitY(), z = Eigen::Vector3d::UnitZ();
-  addRect(p, {0.6, 0.6, 0}, 3.4 * x, 2.4 * y, rng);            // floor
-  addRect(p, {0, 0, 0.9}, 4.0 * x, 1.5 * z, rng);              // back wall above the counter
-  addRect(p, {0, 0, 0.9}, 3.0 * y, 1.5 * z, rng);              // side wall above the counter
-  addRect(p, {0, 0, 0.9}, 4.0 * x, 0.6 * y, rng);              // back counter top
-  addRect(p, {0, 0.6, 0.1}, 4.0 * x, 0.8 * z, rng);            // its front
-  addRect(p, {0, 0.6, 0.9}, 0.6 * x, 2.4 * y, rng);            // side counter top
-  addRect(p, {0.6, 0.6, 0.1}, 2.4 * y, 0.8 * z, rng);          // its front
-  addRect(p, {1.0, 0, 1.6}, 2.0 * x, 0.35 * y, rng);           // wall cabinet underside
-  addRect(p, {1.0, 0.35, 1.6}, 2.0 * x, 0.7 * z, rng);         // its front
-  addRect(p, {2.0, 1.8, 0.75}, 1.2 * x, 0.8 * y, rng);         // table top
+  addRect(p, {0.6, 0.6, 0}, 3.4 * x, 2.4 * y, rng);     // floor
+  addRect(p, {0, 0, 0.9}, 4.0 * x, 1.5 * z, rng);       // back wall above the counter
+  addRect(p, {0, 0, 0.9}, 3.0 * y, 1.5 * z, rng);       // side wall above the counter
+  addRect(p, {0, 0, 0.9}, 4.0 * x, 0.6 * y, rng);       // back counter top
+  addRect(p, {0, 0.6, 0.1}, 4.0 * x, 0.8 * z, rng);     // its front
+  addRect(p, {0, 0.6, 0.9}, 0.6 * x, 2.4 * y, rng);     // side counter top
+  addRect(p, {0.6, 0.6, 0.1}, 2.4 * y, 0.8 * z, rng);   // its front
+  addRect(p, {1.0, 0, 1.6}, 2.0 * x, 0.35 * y, rng);    // wall cabinet underside
+  addRect(p, {1.0, 0.35, 1.6}, 2.0 * x, 0.7 * z, rng);  // its front
+  addRect(p, {2.0, 1.8, 0.75}, 1.2 * x, 0.8 * y, rng);  // table top
   return p;
 }
 
@@ -68,9 +68,9 @@ TEST(LevelUp, FindsARoomsUpTurnedEveryWay) {
   std::normal_distribution<double> g(0.0, 1.0);
   double worst = 0.0;
   for (int trial = 0; trial < 20; ++trial) {
-    const Eigen::Matrix3d R =
-        trial == 0 ? Eigen::Matrix3d::Identity()
-                   : Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
+    const Eigen::Matrix3d R = trial == 0
+                                  ? Eigen::Matrix3d::Identity()
+                                  : Eigen::Quaterniond(g(rng), g(rng), g(rng), g(rng)).normalized().toRotationMatrix();
     const std::optional<LevelUp> found = levelUp(asEllipsoids(room, R));
     ASSERT_TRUE(found) << trial;
     const double error = angleDeg(found->up, R * Eigen::Vector3d::UnitZ());
