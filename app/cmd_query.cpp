@@ -27,6 +27,7 @@
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
+#include "render/map_scene.h"
 
 namespace vdmap::app {
 namespace {
@@ -115,7 +116,8 @@ struct LoadedMap {
   QueryMap map;
   std::size_t keyframes = 0;
   std::size_t ellipsoids = 0;
-  int poses_matched = -1;  ///< keyframes --keyframe-poses moved (-1: not given)
+  int poses_matched = -1;                              ///< keyframes --keyframe-poses moved (-1: not given)
+  Eigen::Vector3d data_up = Eigen::Vector3d::UnitZ();  ///< the session's estimated up (render::estimateUp)
   double load_ms = 0, build_ms = 0;
 };
 
@@ -148,6 +150,10 @@ LoadedMap loadQueryMap(const QueryArgs& args) {
     const GlobalMap map = withStageBar("global map", [&] { return buildGlobalMap(session.graph, global); });
     const std::vector<int> rank = lastObservedRank(session);
     loaded.map = withStageBar("query map", [&] { return QueryMap::build(session.graph, map, args.params, rank); });
+    // The up the window and `vdmap render` estimate for this session: its cameras and floor.
+    const glm::vec3 up = render::estimateUp(
+        render::graphSceneOf(session.graph, session.info.state, session.info.camera, false).trajectory, map.ellipsoids);
+    loaded.data_up = Eigen::Vector3d(up.x, up.y, up.z);
   }
   loaded.ellipsoids = loaded.map.ellipsoids();
   loaded.build_ms = msSince(build_start);
@@ -264,11 +270,39 @@ nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& 
   return summary;
 }
 
-nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map) {
+// The degrees between unit vectors a and b.
+double degreesBetween(const Eigen::Vector3d& a, const Eigen::Vector3d& b) {
+  return std::acos(std::clamp(a.dot(b), -1.0, 1.0)) * 180.0 / M_PI;
+}
+
+nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map, const Eigen::Vector3d& data_up) {
   OccupancyGridSpec spec;
   spec.resolution_m = args.resolution_m;
   std::tie(spec.band_lo_m, spec.band_hi_m) = parseGridBand(args.band);
-  spec.up = parseUpAxis(args.up);
+  // "data": the axis nearest the session's estimated up. A band along an axis far from that up
+  // slices the room askew: say so, and which axis would not.
+  UpAxis nearest = UpAxis::kPlusZ;
+  double nearest_deg = 180.0;
+  for (const UpAxis axis :
+       {UpAxis::kPlusZ, UpAxis::kMinusZ, UpAxis::kPlusY, UpAxis::kMinusY, UpAxis::kPlusX, UpAxis::kMinusX}) {
+    Eigen::Vector3d u, v, w;
+    gridAxes(axis, &u, &v, &w);
+    if (const double deg = degreesBetween(w, data_up); deg < nearest_deg) nearest = axis, nearest_deg = deg;
+  }
+  spec.up = args.up == "data" ? nearest : parseUpAxis(args.up);
+  Eigen::Vector3d u, v, w;
+  gridAxes(spec.up, &u, &v, &w);
+  const double off_deg = degreesBetween(w, data_up);
+  if (args.up == "data")
+    std::fprintf(stderr,
+                 "vdmap query: note: grid up %s, the axis nearest the session's estimated up (%.2f, %.2f, %.2f), "
+                 "%.1f degrees from it\n",
+                 upAxisName(spec.up), data_up.x(), data_up.y(), data_up.z(), off_deg);
+  else if (off_deg > 20.0 && spec.up != nearest)
+    std::fprintf(stderr,
+                 "vdmap query: note: grid up %s is %.0f degrees from the session's estimated up (%.2f, %.2f, %.2f); "
+                 "--up %s (or data) is %.1f degrees from it\n",
+                 upAxisName(spec.up), off_deg, data_up.x(), data_up.y(), data_up.z(), upAxisName(nearest), nearest_deg);
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<ProgressBar> bar;
   const OccupancyGrid grid = computeOccupancyGrid(map, spec, [&bar](std::size_t done, std::size_t total) {
@@ -364,7 +398,7 @@ void runQuery(QueryArgs args, const CLI::App& verb) {
     summary.update(runPointQuery(args, op, loaded.map, input));
     summary["points"] = args.points;
   } else if (op == QueryOp::kGrid) {
-    summary.update(runGrid(args, loaded.map));
+    summary.update(runGrid(args, loaded.map, loaded.data_up));
   } else {
     summary.update(runOctomap(args, loaded.map));
   }
@@ -441,8 +475,10 @@ void addQueryCommand(CLI::App& app) {
       ->capture_default_str();
   verb->add_option("--band", args->band, "grid: the height band LO:HI (m along --up) a column is read over")
       ->check(parsedBy(parseGridBand, "LO:HI"));
-  verb->add_option("--up", args->up, "grid: the axis the band runs along")
-      ->check(CLI::IsMember({"+z", "-z", "+y", "-y", "+x", "-x"}))
+  verb->add_option("--up", args->up,
+                   "grid: the axis the band runs along; data: the one nearest the session's estimated up (its "
+                   "cameras and floor, as the workbench's)")
+      ->check(CLI::IsMember({"+z", "-z", "+y", "-y", "+x", "-x", "data"}))
       ->capture_default_str();
   verb->add_option("--threads", args->params.threads,
                    "threads, 0.." + std::to_string(kMaxThreads) + " (0: all); the answers do not depend on it")

@@ -123,6 +123,14 @@ void runRender(RenderArgs args) {
   // After the work, so that bad input stays one error line.
   std::fprintf(stderr, "vdmap render: note: settings: %s\n", view.settings_source.c_str());
   const glm::vec3 up = source.lastUp();
+  // A map file without cameras stands on its level planes: say so, since a wrong guess draws the
+  // map on its side.
+  if (view.spec.kind != render::ViewKind::kContainer && !view.spec.look_at && source.lastUpFrom())
+    if (const render::UpFrom from = *source.lastUpFrom(); from != render::UpFrom::kCameras)
+      std::fprintf(stderr, "vdmap render: note: up (%.2f, %.2f, %.2f) %s; --up sets it\n", up.x, up.y, up.z,
+                   from == render::UpFrom::kLevelPlanes
+                       ? "estimated from the map's level planes and walls (it has no cameras)"
+                       : "is +z: the map has no cameras and too few flat patches to estimate it");
   std::printf("%s (%dx%d, view %s, %s, %s", args.out.empty() ? "rendered" : ("wrote " + args.out).c_str(), image.cols,
               image.rows, viewName(view.spec).c_str(),
               counted(static_cast<long long>(source.lastDrawn()), "ellipsoid").c_str(),

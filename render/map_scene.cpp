@@ -6,6 +6,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "mapping/global_map/level_up.h"
 #include "mapping/io/camera_config.h"
 #include "render/colormap.h"
 
@@ -55,11 +56,18 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh) {
   return out;
 }
 
-glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map) {
+glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map, UpFrom* from) {
   Eigen::Vector3d up = Eigen::Vector3d::Zero();
   for (const Transform& T : T_W_C) up -= T.linear().col(1);
-  // Cameras turned every way (or none) give no direction: keep the +z convention.
-  if (T_W_C.empty() || up.norm() < 0.3 * static_cast<double>(T_W_C.size())) return {0.f, 0.f, 1.f};
+  if (from) *from = UpFrom::kCameras;
+  // Cameras turned every way (or none) give no direction: the map's level planes do, else the
+  // +z convention.
+  if (T_W_C.empty() || up.norm() < 0.3 * static_cast<double>(T_W_C.size())) {
+    const std::optional<LevelUp> level = levelUp(map);
+    if (from) *from = level ? UpFrom::kLevelPlanes : UpFrom::kDefault;
+    if (!level) return {0.f, 0.f, 1.f};
+    return {static_cast<float>(level->up.x()), static_cast<float>(level->up.y()), static_cast<float>(level->up.z())};
+  }
   up.normalize();
   // The largest plane of the map whose normal lies within 40 degrees of the cameras' up: the
   // floor, a table, a ceiling; each is level, so its normal is the true up. RANSAC over at most

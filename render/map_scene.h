@@ -25,9 +25,11 @@ ColoredMesh toColoredMesh(const ColoredTriangleMesh& mesh);
 /// directions (-y of each camera, which a hand-held or robot camera keeps roughly level),
 /// replaced by the normal of the map's largest plane within 40 degrees of it (floor, tables,
 /// ceiling: level surfaces, found by RANSAC over the ellipsoid means), which removes the bias of
-/// cameras that look down. Unit length, deterministic; +z when there are no cameras or they
-/// point every way.
-glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map);
+/// cameras that look down. Without cameras (a map PLY, an OctoMap), or with cameras that point
+/// every way, the map's level planes alone (levelUp); +z when it has none either. Unit length,
+/// deterministic. `from`, when given, receives which of the three gave it.
+enum class UpFrom { kCameras, kLevelPlanes, kDefault };
+glm::vec3 estimateUp(std::span<const Transform> T_W_C, std::span<const Ellipsoid> map, UpFrom* from = nullptr);
 
 /// A keyframe graph and mapper state (a session's, or a Mapper's) as the 3-D view draws it, as
 /// the workbench's snapshot has it: the keyframe poses, covisibility edges, loop closures, every

@@ -47,6 +47,31 @@ ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, con
   return v;
 }
 
+ViewCamera ViewCamera::lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov_y_deg,
+                              int width, int height, bool orthographic) {
+  if (!orthographic) return lookAt(eye, target, up, fov_y_deg, width, height);
+  const float tan_half = std::tan(glm::radians(fov_y_deg) * 0.5f) / kOrthographicFar;
+  const ViewCamera near_eye = lookAt(eye, target, up, fov_y_deg, width, height);
+  // The far eye snapped to a grid (its direction to 2^-16, its distance to 1/16 m): 1000 times
+  // out, the last bit of the view direction is a millimetre of depth, where overlapping
+  // ellipsoids would resolve differently for two cameras equal to float rounding (a view file's
+  // eye, and the window's orbit camera made from it). The snap turns the view by at most
+  // 1e-5 rad.
+  const auto snap = [](float x, float step) { return std::round(x / step) * step; };
+  const float distance = glm::length(eye - target);
+  const glm::vec3 dir = (eye - target) / distance;
+  const glm::vec3 snapped(snap(dir.x, 1.f / 65536.f), snap(dir.y, 1.f / 65536.f), snap(dir.z, 1.f / 65536.f));
+  ViewCamera v = lookAt(target + snapped * snap(distance * kOrthographicFar, 1.f / 16.f), target, up,
+                        glm::degrees(2.f * std::atan(tan_half)), width, height);
+  // The clip planes of the perspective view, moved back with the eye: the depth buffer then
+  // resolves the scene as finely as there (planes at 1% and 10x of the far eye's distance would
+  // leave centimetres per depth step, and overlapping ellipsoids would fight).
+  const float back = distance * (kOrthographicFar - 1.f);
+  v.near_m = back + near_eye.near_m;
+  v.far_m = back + near_eye.far_m;
+  return v;
+}
+
 ViewCamera ViewCamera::fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width, int height) {
   ViewCamera v;
   v.width = width;
@@ -123,7 +148,20 @@ glm::vec3 OrbitCamera::eye() const {
 }
 
 ViewCamera OrbitCamera::view(int width, int height) const {
-  return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height);
+  return ViewCamera::lookAt(eye(), target, up, fov_y_deg, width, height, orthographic);
+}
+
+glm::vec3 OrbitCamera::imageUp() const {
+  const ViewCamera v = ViewCamera::lookAt(eye(), target, up, fov_y_deg, 2, 2);
+  return -glm::vec3(glm::inverse(v.T_C_W)[1]);
+}
+
+void OrbitCamera::tumble(float d_yaw, float d_pitch) {
+  // About the image's up the view has pitch 0, so the orbit's pitch limit never holds it back.
+  const bool ortho = orthographic;
+  *this = fromLookAt(eye(), target, imageUp(), fov_y_deg);
+  orthographic = ortho;
+  orbit(d_yaw, d_pitch);
 }
 
 void OrbitCamera::fit(const FrameBox& box, float aspect, float margin) {
@@ -152,8 +190,15 @@ void OrbitCamera::fit(const FrameBox& box, float aspect, float margin) {
   // corner form an interval per axis, non-empty from the d of the widest pair of corners on:
   // d >= (a_i - a_j) / (2 tan) - (f_i + f_j) / 2. The smallest such d over both axes is taken,
   // and each shift is its interval's middle (the projected box centred).
+  // Orthographic: the image holds the box's extent along r and u at the target's plane.
   float d = 1e-3f;
-  for (int axis = 0; axis < 2; ++axis) {
+  for (int axis = 0; axis < 2 && orthographic; ++axis) {
+    const glm::vec3& dir = axis == 0 ? r : u;
+    const float t = (axis == 0 ? tan_x : tan_y) * keep;
+    for (const glm::vec3& ci : corners)
+      for (const glm::vec3& cj : corners) d = std::max(d, glm::dot(ci - cj, dir) / (2.f * t));
+  }
+  for (int axis = 0; axis < 2 && !orthographic; ++axis) {
     const glm::vec3& dir = axis == 0 ? r : u;
     const float t = (axis == 0 ? tan_x : tan_y) * keep;
     for (const glm::vec3& ci : corners)
@@ -166,7 +211,7 @@ void OrbitCamera::fit(const FrameBox& box, float aspect, float margin) {
     const float t = (axis == 0 ? tan_x : tan_y) * keep;
     float lo = -INFINITY, hi = INFINITY;
     for (const glm::vec3& c : corners) {
-      const float a = glm::dot(c - mid, dir), z = glm::dot(c - mid, f) + d;
+      const float a = glm::dot(c - mid, dir), z = orthographic ? d : glm::dot(c - mid, f) + d;
       lo = std::max(lo, a - t * z);
       hi = std::min(hi, a + t * z);
     }

@@ -13,6 +13,11 @@
 
 namespace vdmap::render {
 
+/// The orthographic view's distance factor: its eye this many times further from the target than
+/// the perspective view's, so a room's depth changes the scale by about a thousandth (under a
+/// pixel across a 1280-pixel image) and the depth buffer keeps the perspective view's precision.
+inline constexpr float kOrthographicFar = 1000.f;
+
 /// A fully specified view: intrinsics, image size, clip planes and the world-to-camera pose.
 struct ViewCamera {
   int width = 640, height = 480;
@@ -31,6 +36,11 @@ struct ViewCamera {
   /// in degrees, square pixels, principal point at the image centre.
   static ViewCamera lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov_y_deg,
                            int width, int height);
+  /// lookAt, or with `orthographic` its parallel projection: the eye kOrthographicFar times
+  /// further from the target and the lens as much narrower (the target's plane keeps its scale),
+  /// the clip planes those of lookAt moved back with the eye.
+  static ViewCamera lookAt(const glm::vec3& eye, const glm::vec3& target, const glm::vec3& up, float fov_y_deg,
+                           int width, int height, bool orthographic);
   /// The view of a real camera at pose T_W_C ("view from keyframe K"), rescaled to
   /// width x height (aspect kept by scaling the intrinsics per axis).
   static ViewCamera fromPinhole(const PinholeCamera& camera, const Transform& T_W_C, int width, int height);
@@ -60,8 +70,14 @@ struct OrbitCamera {
   float yaw = 0.f;     ///< around `up`
   float pitch = 0.4f;  ///< above the horizon, clamped to +-89 degrees
   float fov_y_deg = 60.f;
+  bool orthographic = false;  ///< view() draws the parallel projection (ViewCamera::lookAt)
 
   void orbit(float d_yaw, float d_pitch);
+  /// Trackball: turns the view about its own image axes (d_yaw about the image's up, d_pitch
+  /// about its right), so it may roll; `up` becomes the image's up direction.
+  void tumble(float d_yaw, float d_pitch);
+  /// The image's up direction (a unit world vector): `up` made perpendicular to the view.
+  glm::vec3 imageUp() const;
   /// Moves target and eye together, in the view's right/up plane, by metres.
   void pan(float right_m, float up_m);
   /// Scales the distance (factor < 1 moves closer).
@@ -80,6 +96,7 @@ struct OrbitCamera {
   /// project inside a width/height `aspect` view with `margin` (a fraction of each half-size)
   /// to spare: the distance is the smallest that holds every corner, then the target is shifted
   /// so the projected box is centred (the view's frustum, not the box's bounding sphere).
+  /// Orthographic: the distance whose view at the target holds the box's projected extent.
   void fit(const FrameBox& box, float aspect = 1.f, float margin = 0.03f);
   void fit(const glm::vec3& box_min, const glm::vec3& box_max, float aspect = 1.f, float margin = 0.03f) {
     fit(FrameBox(box_min, box_max), aspect, margin);

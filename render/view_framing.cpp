@@ -139,20 +139,38 @@ glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span
   return estimateUp(cameras, map);
 }
 
-OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect, float fov_y_deg) {
+OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect, float fov_y_deg,
+                         Projection projection) {
   OrbitCamera cam = OrbitCamera::framing(bounds, up, aspect);
-  if (fov_y_deg != cam.fov_y_deg) {
+  if (fov_y_deg != cam.fov_y_deg || projection == Projection::kOrthographic) {
     cam.fov_y_deg = fov_y_deg;
+    cam.orthographic = projection == Projection::kOrthographic;
     cam.frame(bounds, aspect);
   }
   return cam;
 }
 
+void presetView(OrbitCamera& cam, ViewPreset preset, const glm::mat3& axes) {
+  const glm::vec3 h1 = axes[0], h2 = axes[1], up = axes[2];
+  const float top = glm::radians(89.f);
+  const glm::vec3 back = preset == ViewPreset::kTop     ? std::cos(top) * -h2 + std::sin(top) * up
+                         : preset == ViewPreset::kFront ? -h2
+                                                        : h1;
+  const bool ortho = cam.orthographic;
+  cam = OrbitCamera::fromLookAt(cam.target + cam.distance_m * back, cam.target, up, cam.fov_y_deg);
+  cam.orthographic = ortho;
+}
+
 OrbitCamera orbitCamera(const ViewSpec& spec, const ViewScene& scene, int width, int height) {
-  if (spec.look_at)
-    return OrbitCamera::fromLookAt(spec.look_at->eye, spec.look_at->target, spec.look_at->up, spec.look_at->fov_y_deg);
+  const bool ortho = spec.projection == Projection::kOrthographic;
+  if (spec.look_at) {
+    OrbitCamera cam =
+        OrbitCamera::fromLookAt(spec.look_at->eye, spec.look_at->target, spec.look_at->up, spec.look_at->fov_y_deg);
+    cam.orthographic = ortho;
+    return cam;
+  }
   const float aspect = static_cast<float>(width) / static_cast<float>(std::max(1, height));
-  OrbitCamera cam = defaultOrbit(scene.bounds, scene.up, aspect, spec.fov_y_deg);
+  OrbitCamera cam = defaultOrbit(scene.bounds, scene.up, aspect, spec.fov_y_deg, spec.projection);
   if (spec.orbit) {
     cam.yaw = glm::radians(spec.orbit->azimuth_deg);
     const float limit = glm::radians(89.f);
@@ -172,7 +190,7 @@ FramedView viewCamera(const ViewSpec& spec, const ViewScene& scene, int width, i
   // eye, so a saved view reproduces the window's camera exactly).
   if (spec.look_at)
     return {ViewCamera::lookAt(spec.look_at->eye, spec.look_at->target, spec.look_at->up, spec.look_at->fov_y_deg,
-                               width, height),
+                               width, height, spec.projection == Projection::kOrthographic),
             {0, 0, width, height}};
   return {orbitCamera(spec, scene, width, height).view(width, height), {0, 0, width, height}};
 }

@@ -62,8 +62,19 @@ std::vector<Ellipsoid> slicedMap(std::span<const Ellipsoid> map, const HeightFra
 glm::vec3 upDirection(UpAxis axis, std::span<const Transform> cameras, std::span<const Ellipsoid> map);
 
 /// The default view of `bounds`: OrbitCamera::framing (yaw -60, pitch 35 degrees about `up`,
-/// the box fitted to a width/height `aspect`).
-OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect, float fov_y_deg = 60.f);
+/// the box fitted to a width/height `aspect` in the projection given).
+OrbitCamera defaultOrbit(const FrameBox& bounds, const glm::vec3& up, float aspect, float fov_y_deg = 60.f,
+                         Projection projection = Projection::kPerspective);
+
+/// The preset views: from above, from the front and from the side, turned to the map's
+/// horizontal axes (frameAxes: a room's walls).
+enum class ViewPreset { kTop, kFront, kSide };
+inline constexpr const char* kViewPresetNames[] = {"top", "front", "side"};
+/// `cam` turned to `preset` about its target, for a map boxed along `axes` (frameAxes: columns
+/// h1, h2 and up): top looks down from 89 degrees (the orbit's limit) with h2 up in the image,
+/// front looks level along h2 (h1 to the right), side level along -h1. `up` becomes axes' up;
+/// distance, field of view and projection are kept.
+void presetView(OrbitCamera& cam, ViewPreset preset, const glm::mat3& axes);
 
 /// What a view's camera is framed from.
 struct ViewScene {

@@ -21,6 +21,16 @@ enum class UpAxis { kData, kPlusZ, kPlusY, kMinusY };
 /// Names in the settings file, view files and --up, indexed by UpAxis.
 inline constexpr const char* kUpAxisNames[] = {"data", "+z", "+y", "-y"};
 
+/// How the view projects: a pinhole (perspective), or parallel rays (orthographic: drawn as a
+/// camera kOrthographicFar times further away with a lens as much narrower: ViewCamera::lookAt).
+enum class Projection { kPerspective, kOrthographic };
+inline constexpr const char* kProjectionNames[] = {"perspective", "orthographic"};
+
+/// How dragging turns the view: orbit about the up axis (the horizon stays level), or trackball
+/// (free rotation about the image's own axes; the view may roll).
+enum class Rotation { kOrbit, kTrackball };
+inline constexpr const char* kRotationNames[] = {"orbit", "trackball"};
+
 /// The window's background (dark grey) and the white of printed figures, linear RGB 0..1.
 inline constexpr glm::vec3 kDarkBackground{0.13f, 0.13f, 0.15f};
 inline constexpr glm::vec3 kWhiteBackground{1.f, 1.f, 1.f};
@@ -62,7 +72,10 @@ struct ViewSpec {
   std::optional<LookAt> look_at;  ///< an explicit camera (global view); excludes orbit
   std::optional<Orbit> orbit;     ///< the default view turned (global view)
   UpAxis up = UpAxis::kData;
-  float fov_y_deg = 60.f;  ///< the framed and orbit views' vertical field of view
+  std::optional<glm::vec3> up_vector;  ///< a user-set world up direction (overrides `up`)
+  Projection projection = Projection::kPerspective;
+  Rotation rotation = Rotation::kOrbit;  ///< the window's drag; the camera is drawn alike either way
+  float fov_y_deg = 60.f;                ///< the framed and orbit views' vertical field of view
   ColorMode color = ColorMode::kRgb;
   bool ellipsoids = true;       ///< false: the ellipsoid centres as points
   bool map_hidden = false;      ///< draw "none": no map at all (overrides `ellipsoids`)

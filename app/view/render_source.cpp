@@ -195,11 +195,15 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
 const render::QuerySliceImage* RenderSource::lastQuerySlice() const { return impl_->slice_image.get(); }
 
 glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
+  up_from_.reset();
   if (axis != render::UpAxis::kData) return render::upDirection(axis, {}, {});
   std::vector<Transform> cameras;
   if (impl_->graph) cameras = render::graphSceneOf(*impl_->graph, *impl_->state, impl_->camera, false).trajectory;
   else cameras = impl_->map_cameras;
-  return render::upDirection(axis, cameras, globalMap(params));
+  render::UpFrom from = render::UpFrom::kCameras;
+  const glm::vec3 up = render::estimateUp(cameras, globalMap(params), &from);
+  up_from_ = from;
+  return up;
 }
 
 void RenderSource::checkView(const render::ViewSpec& spec) const {
@@ -255,7 +259,8 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   for (std::size_t i = 0; i < m.maps.size(); ++i)
     if (&m.maps[i].second.ellipsoids == &map) generation = static_cast<int>(i) + 2;
   // Heights (colours, the slice) are measured from the whole map's floor along the view's up.
-  scene.up = up(spec.up, params);
+  if (spec.up_vector) up_from_.reset();
+  scene.up = spec.up_vector ? glm::normalize(*spec.up_vector) : up(spec.up, params);
   scene.height = render::heightFrame(map, scene.up);
   mirror.setStyle(render::mirrorStyle(spec, scene.height));
   // A height slice keeps the ellipsoids whose centre lies lo..hi above the floor, whole.

@@ -11,6 +11,7 @@
 
 #include "app/cli/sequence_args.h"
 #include "mapping/global_map/global_map.h"
+#include "render/map_scene.h"
 #include "render/query_slice.h"
 #include "render/view_spec.h"
 
@@ -70,6 +71,8 @@ class RenderSource {
   /// The ellipsoids the last global view left out of its frame (render::drawnBounds' strays).
   std::size_t lastStrays() const { return last_strays_; }
   glm::vec3 lastUp() const { return last_up_; }
+  /// How the last `data` up axis was found (render::estimateUp); nullopt when the axis was named.
+  std::optional<render::UpFrom> lastUpFrom() const { return up_from_; }
 
  private:
   struct Impl;
@@ -81,6 +84,7 @@ class RenderSource {
   std::size_t last_drawn_ = 0;
   std::size_t last_strays_ = 0;
   glm::vec3 last_up_{0.f, 0.f, 1.f};
+  std::optional<render::UpFrom> up_from_;
 };
 
 /// The offscreen (OSMesa) GL context of this process, created on first use; throws when OSMesa

@@ -76,7 +76,7 @@ std::optional<render::UpAxis> parseUpAxis(const std::string& text) {
 // --up: an axis name, or (with --look-at) the image's up vector X,Y,Z.
 void checkUp(const std::string& text) {
   if (parseUpAxis(text)) return;
-  const std::vector<float> v = parseNumbers(text, 3, 3, "data, +z, +y, -y, or X,Y,Z with --look-at");
+  const std::vector<float> v = parseNumbers(text, 3, 3, "data, +z, +y, -y, or X,Y,Z");
   if (glm::length(glm::vec3(v[0], v[1], v[2])) < 1e-6f) throw std::invalid_argument("'" + text + "': a zero vector");
 }
 
@@ -100,6 +100,9 @@ render::HeightSlice parseSlice(const std::string& text) {
 // The view keys of Settings that `spec` sets (the reverse of viewSpecOf), so --set can change them.
 void copyView(const render::ViewSpec& spec, gui::Settings* s) {
   s->up_axis = spec.up;
+  s->up_vector = spec.up_vector;
+  s->projection = spec.projection;
+  s->rotation = spec.rotation;
   s->color = spec.color;
   s->show_ellipsoids = spec.ellipsoids;
   s->ellipsoid_sigma = spec.sigma;
@@ -152,9 +155,13 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
                   "groundtruth, legend, grid, bounds (default: all but grid, as the window)")
       ->check(parsedBy(parseLayers, "LIST"));
   verb.add_option("--up", a.up,
-                  "the world's up axis: data (estimated from the cameras and the map's floor, the default) | +z | "
-                  "+y | -y; with --look-at also the image's up vector X,Y,Z")
+                  "the world's up axis: data (estimated from the cameras and the map's floor, or a map file's level "
+                  "planes; the default) | +z | +y | -y | a direction X,Y,Z; with --look-at, X,Y,Z is the image's up")
       ->check(parsedBy(checkUp, "UP"));
+  verb.add_option("--projection", a.projection,
+                  "perspective (the default) | orthographic (parallel rays; the scale at the target as the "
+                  "perspective view's)")
+      ->check(CLI::IsMember({render::kProjectionNames[0], render::kProjectionNames[1]}));
   verb.add_option("--draw", a.draw,
                   "ellipsoids (the default) | centres (the ellipsoid centres as points) | none (the map hidden; "
                   "trajectories and frustums still drawn)")
@@ -232,6 +239,9 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
     for (const std::string& kv : a.set) gui::applySetting(settings, kv);
     const render::ViewSpec from_set = gui::viewSpecOf(settings);
     spec.up = from_set.up;
+    spec.up_vector = from_set.up_vector;
+    spec.projection = from_set.projection;
+    spec.rotation = from_set.rotation;
     spec.color = from_set.color;
     spec.ellipsoids = from_set.ellipsoids;
     spec.sigma = from_set.sigma;
@@ -249,14 +259,19 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
   if (a.sphere_level) spec.sphere_level = *a.sphere_level;
   if (a.points_below) spec.points_below_px = *a.points_below;
   if (a.select) spec.selected_keyframe = *a.select;
+  if (!a.projection.empty())
+    spec.projection = a.projection == render::kProjectionNames[1] ? render::Projection::kOrthographic
+                                                                  : render::Projection::kPerspective;
   if (a.fov) {
     spec.fov_y_deg = *a.fov;
     if (spec.look_at) spec.look_at->fov_y_deg = *a.fov;
   }
   std::optional<glm::vec3> up_vector;
   if (!a.up.empty()) {
-    if (const auto axis = parseUpAxis(a.up)) spec.up = *axis;
-    else {
+    if (const auto axis = parseUpAxis(a.up)) {
+      spec.up = *axis;
+      spec.up_vector.reset();
+    } else {
       const std::vector<float> v = parseNumbers(a.up, 3, 3, "X,Y,Z");
       up_vector = glm::vec3(v[0], v[1], v[2]);
     }
@@ -273,10 +288,10 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
     spec.look_at = look;
     spec.orbit.reset();
   }
-  if (up_vector) {
-    if (!spec.look_at)
-      throw std::invalid_argument("--up " + a.up + ": a vector needs --look-at (or a view file's camera)");
+  if (up_vector && spec.look_at) {
     spec.look_at->up = *up_vector;
+  } else if (up_vector) {
+    spec.up_vector = *up_vector;  // the world's up, set by the user
   } else if (!a.up.empty() && spec.look_at && a.look_at.empty()) {
     spec.look_at->up = glm::vec3(0.f);  // an axis name: the view file's camera keeps up that axis
   }

@@ -22,7 +22,8 @@ struct RenderViewArgs {
   std::string color;                              ///< --color MODE
   std::string background;                         ///< --background dark|white|#rrggbb
   std::string layers;                             ///< --layers LIST|none
-  std::string up;                                 ///< --up data|+z|+y|-y, or X,Y,Z with --look-at
+  std::string up;                                 ///< --up data|+z|+y|-y|X,Y,Z (with --look-at: the image's up)
+  std::string projection;                         ///< --projection perspective|orthographic
   std::string draw;                               ///< --draw ellipsoids|centres|none
   std::string slice;                              ///< --slice LO:HI
   std::string look_at;                            ///< --look-at EX,EY,EZ,TX,TY,TZ

@@ -1,6 +1,7 @@
 #include "app/view/settings.h"
 
 #include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
@@ -54,6 +55,9 @@ json toJson(const Settings& s) {
         {"ellipsoid_sigma", s.ellipsoid_sigma},
         {"play_fps", s.play_fps},
         {"up_axis", kUpAxisNames[static_cast<int>(s.up_axis)]},
+        {"up_vector", s.up_vector ? json::array({s.up_vector->x, s.up_vector->y, s.up_vector->z}) : json(nullptr)},
+        {"projection", render::kProjectionNames[static_cast<int>(s.projection)]},
+        {"rotation", render::kRotationNames[static_cast<int>(s.rotation)]},
         {"container_grid", s.container_grid},
         {"container_bounds", s.container_bounds},
         {"background", backgroundName(s.background)},
@@ -82,6 +86,39 @@ void read(const json& section, const char* section_name, const char* key, T& out
     throw std::invalid_argument(std::string(section_name) + "." + key + ": expected " + expected + ", got " +
                                 section.at(key).dump());
   }
+}
+
+// The index of `name` in `names`; throws naming the key and the accepted names.
+template <std::size_t N>
+int nameIndex(const char* const (&names)[N], const std::string& name, const char* key) {
+  for (std::size_t i = 0; i < N; ++i)
+    if (name == names[i]) return static_cast<int>(i);
+  std::string list;
+  for (const char* n : names) list += (list.empty() ? "" : " or ") + std::string(n);
+  throw std::invalid_argument(std::string(key) + " must be " + list + ", got '" + name + "'");
+}
+
+// The view keys up_vector (null or [x, y, z], not zero), projection and rotation.
+void readViewCamera(const json& v, Settings& s) {
+  if (v.contains("up_vector")) {
+    const json& u = v.at("up_vector");
+    s.up_vector.reset();
+    if (!u.is_null()) {
+      if (!u.is_array() || u.size() != 3 ||
+          !std::all_of(u.begin(), u.end(), [](const json& x) { return x.is_number(); }))
+        throw std::invalid_argument("view.up_vector: expected null or [x, y, z], got " + u.dump());
+      const glm::vec3 up(u[0].get<float>(), u[1].get<float>(), u[2].get<float>());
+      if (!(glm::length(up) > 1e-6f) || !std::isfinite(glm::length(up)))
+        throw std::invalid_argument("view.up_vector must be a finite, non-zero vector, got " + u.dump());
+      s.up_vector = up;
+    }
+  }
+  std::string projection = render::kProjectionNames[static_cast<int>(s.projection)];
+  read(v, "view", "projection", projection);
+  s.projection = static_cast<render::Projection>(nameIndex(render::kProjectionNames, projection, "view.projection"));
+  std::string rotation = render::kRotationNames[static_cast<int>(s.rotation)];
+  read(v, "view", "rotation", rotation);
+  s.rotation = static_cast<render::Rotation>(nameIndex(render::kRotationNames, rotation, "view.rotation"));
 }
 
 Settings fromJson(const json& j, const Settings& base = {}) {
@@ -119,6 +156,7 @@ Settings fromJson(const json& j, const Settings& base = {}) {
     if (it == std::end(kUpAxisNames))
       throw std::invalid_argument("view.up_axis must be data, +z, +y or -y, got '" + up + "'");
     s.up_axis = static_cast<UpAxis>(it - std::begin(kUpAxisNames));
+    readViewCamera(v, s);
     read(v, "view", "container_grid", s.container_grid);
     read(v, "view", "container_bounds", s.container_bounds);
     std::string background = backgroundName(s.background);
@@ -193,6 +231,9 @@ std::string backgroundName(const glm::vec3& rgb) {
 render::ViewSpec viewSpecOf(const Settings& s) {
   render::ViewSpec spec;
   spec.up = s.up_axis;
+  spec.up_vector = s.up_vector;
+  spec.projection = s.projection;
+  spec.rotation = s.rotation;
   spec.color = s.color;
   spec.ellipsoids = s.show_ellipsoids;
   spec.map_hidden = s.hide_map;

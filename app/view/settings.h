@@ -30,12 +30,15 @@ struct Settings {
   bool show_frustums = true, show_graph = true, show_trajectory = true;
   bool show_groundtruth = true;  ///< tracked poses: the ground-truth trajectory beside them
   float ellipsoid_sigma = 2.f;
-  float play_fps = 0.f;                            ///< playback limit, frames per second; 0: as fast as mapping goes
-  UpAxis up_axis = UpAxis::kData;                  ///< kData: estimated from the cameras and the map's floor
-  bool container_grid = false;                     ///< the container view's cell grid
-  bool container_bounds = true;                    ///< the container view's image outline
-  glm::vec3 background = render::kDarkBackground;  ///< "dark", "white" or "#rrggbb"
-  bool show_legend = true;                         ///< the colour legend and tracking key over the 3-D view
+  float play_fps = 0.f;                ///< playback limit, frames per second; 0: as fast as mapping goes
+  UpAxis up_axis = UpAxis::kData;      ///< kData: estimated from the cameras and the map's floor
+  std::optional<glm::vec3> up_vector;  ///< a user-set up direction (key up_vector), over up_axis
+  render::Projection projection = render::Projection::kPerspective;
+  render::Rotation rotation = render::Rotation::kOrbit;  ///< how a drag turns the 3-D view
+  bool container_grid = false;                           ///< the container view's cell grid
+  bool container_bounds = true;                          ///< the container view's image outline
+  glm::vec3 background = render::kDarkBackground;        ///< "dark", "white" or "#rrggbb"
+  bool show_legend = true;                               ///< the colour legend and tracking key over the 3-D view
   /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
   /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
   render::HeightSlice slice;

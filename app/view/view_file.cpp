@@ -23,7 +23,8 @@ using nlohmann::json;
 
 namespace {
 
-constexpr int kVersion = 2;  // 2 added "slice"; version 1 files (without it) still read
+// 2 added "slice", 3 the optional "projection", "rotation" and "up_vector"; older files still read.
+constexpr int kVersion = 3;
 // What a number too large for a double (1e999) is replaced by before parsing, so that the reader
 // can name its key ("must be finite") rather than the parser refuse the whole file.
 const std::string kNonFinite = std::string("\x01non-finite");
@@ -103,6 +104,14 @@ struct Reader {
     if (!v.is_string()) fail(name + " must be a string, got " + v.dump());
     return v.get<std::string>();
   }
+  // The index of the string `v` in `names`.
+  template <std::size_t N>
+  static int name(const json& v, const std::string& key, const char* const (&names)[N], const std::string& forms) {
+    const std::string text = string(v, key);
+    for (std::size_t i = 0; i < N; ++i)
+      if (text == names[i]) return static_cast<int>(i);
+    fail(key + " must be " + forms + ", got '" + text + "'");
+  }
   static glm::vec3 vec3(const json& v, const std::string& name) {
     if (!v.is_array() || v.size() != 3) fail(name + " must be [x, y, z], got " + v.dump());
     glm::vec3 out;
@@ -117,15 +126,21 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   using R = Reader;
   if (!j.is_object()) R::fail("expected a JSON object (a view file)");
   const int version = R::integer(R::key(j, "", "vdmap_view"), "vdmap_view", 1, 1000);
-  if (version > kVersion) R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads versions 1 and 2");
+  if (version > kVersion)
+    R::fail("vdmap_view " + j.at("vdmap_view").dump() + ": this vdmap reads versions 1 to " + std::to_string(kVersion));
   if (version == 1)
     R::onlyKeys(j, "",
                 {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
                  "points_below_px", "background", "layers", "selected_keyframe", "thresholds"});
-  else
+  else if (version == 2)
     R::onlyKeys(j, "",
                 {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
                  "points_below_px", "background", "layers", "selected_keyframe", "thresholds", "slice"});
+  else
+    R::onlyKeys(j, "",
+                {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
+                 "points_below_px", "background", "layers", "selected_keyframe", "thresholds", "slice", "projection",
+                 "rotation", "up_vector"});
   R::string(R::key(j, "", "source"), "source");
   render::ViewSpec spec;
   try {
@@ -158,6 +173,17 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   const auto it = std::find(std::begin(render::kUpAxisNames), std::end(render::kUpAxisNames), up);
   if (it == std::end(render::kUpAxisNames)) R::fail("up_axis must be data, +z, +y or -y, got '" + up + "'");
   spec.up = static_cast<render::UpAxis>(it - std::begin(render::kUpAxisNames));
+  // Version 3's optional keys: absent, the defaults (perspective, orbit, the up axis).
+  if (j.contains("up_vector") && !j.at("up_vector").is_null()) {
+    spec.up_vector = R::vec3(j.at("up_vector"), "up_vector");
+    if (glm::length(*spec.up_vector) < 1e-6f) R::fail("up_vector must not be zero");
+  }
+  if (j.contains("projection"))
+    spec.projection = static_cast<render::Projection>(
+        R::name(j.at("projection"), "projection", render::kProjectionNames, "perspective or orthographic"));
+  if (j.contains("rotation"))
+    spec.rotation = static_cast<render::Rotation>(
+        R::name(j.at("rotation"), "rotation", render::kRotationNames, "orbit or trackball"));
   try {
     spec.color = render::parseColorMode(R::string(R::key(j, "", "color"), "color"));
   } catch (const std::invalid_argument& e) {
@@ -283,6 +309,9 @@ void writeViewFile(const fs::path& file, const render::ViewSpec& spec, const Glo
                    {"fov_y_deg", spec.look_at->fov_y_deg}};
   else j["camera"] = nullptr;
   j["up_axis"] = render::kUpAxisNames[static_cast<int>(spec.up)];
+  j["up_vector"] = spec.up_vector ? vec3Json(*spec.up_vector) : json(nullptr);
+  j["projection"] = render::kProjectionNames[static_cast<int>(spec.projection)];
+  j["rotation"] = render::kRotationNames[static_cast<int>(spec.rotation)];
   j["color"] = render::colorModeName(spec.color);
   j["draw"] = render::kDrawModeNames[static_cast<int>(spec.draw())];
   j["slice"] = spec.slice.on ? json::array({spec.slice.lo_m, spec.slice.hi_m}) : json(nullptr);
@@ -328,9 +357,14 @@ std::string renderCommand(const render::ViewSpec& spec, const CommandSource& sou
   if (spec.look_at) {
     const glm::vec3& u = spec.look_at->up;
     cmd += " --up " + number(u.x) + "," + number(u.y) + "," + number(u.z);
+  } else if (spec.up_vector) {
+    const glm::vec3& u = *spec.up_vector;
+    cmd += " --up " + number(u.x) + "," + number(u.y) + "," + number(u.z);
   } else if (spec.up != defaults.up) {
     cmd += std::string(" --up ") + render::kUpAxisNames[static_cast<int>(spec.up)];
   }
+  if (spec.projection != defaults.projection)
+    cmd += std::string(" --projection ") + render::kProjectionNames[static_cast<int>(spec.projection)];
   if (spec.color != defaults.color) cmd += std::string(" --color ") + render::colorModeName(spec.color);
   if (spec.draw() != defaults.draw())
     cmd += std::string(" --draw ") + render::kDrawModeNames[static_cast<int>(spec.draw())];

@@ -62,8 +62,9 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banne
 std::string upAxisText(const UiState& ui) {
   const glm::vec3 up = ui.camera.up;
   char text[96];
-  std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)", kUpAxisNames[static_cast<int>(ui.settings.up_axis)],
-                up.x, up.y, up.z);
+  std::snprintf(text, sizeof text, "up: %s (%.2f, %.2f, %.2f)",
+                ui.settings.up_vector ? "custom" : kUpAxisNames[static_cast<int>(ui.settings.up_axis)], up.x, up.y,
+                up.z);
   return text;
 }
 

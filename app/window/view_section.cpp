@@ -126,11 +126,44 @@ void drawView(Workbench& bench, WindowState& win) {
     ImGui::EndDisabled();
     label(win.check, "up axis",
           "The world direction kept up on screen, the one the view orbits about. data: estimated from the "
-          "cameras (their mean image-up direction) refined by the floor's normals.");
-    int up = static_cast<int>(s.up_axis);
-    if (ImGui::Combo("##up", &up, kUpAxisNames, 4)) {
-      s.up_axis = static_cast<UpAxis>(up);
+          "cameras (their mean image-up direction) refined by the floor's normals; for a map file without cameras, "
+          "from its level planes (floors, tables) and walls.");
+    // The four axes, and "custom": a direction the user sets (first the one shown).
+    const char* ups[] = {kUpAxisNames[0], kUpAxisNames[1], kUpAxisNames[2], kUpAxisNames[3], "custom"};
+    int up = s.up_vector ? 4 : static_cast<int>(s.up_axis);
+    if (ImGui::Combo("##up", &up, ups, 5)) {
+      if (up == 4) s.up_vector = bench.view().upVector();
+      else s.up_axis = static_cast<UpAxis>(up), s.up_vector.reset();
       bench.view().resetView();
+    }
+    if (s.up_vector) {
+      label(win.check, "up x,y,z", "The custom up direction (world frame); the view orbits about it.");
+      glm::vec3 v = *s.up_vector;
+      if (ImGui::DragFloat3("##upvec", &v.x, 0.01f, -1.f, 1.f, "%.2f") && glm::length(v) > 1e-3f) {
+        s.up_vector = v;
+        bench.view().resetView();
+      }
+      if (ImGui::Button("up from view")) {
+        s.up_vector = bench.ui().camera.imageUp();
+        bench.view().resetView();
+      }
+      tip("Makes the direction up on the screen now the up direction: turn the view with the trackball until the "
+          "room stands upright, then press this.");
+    }
+    label(win.check, "projection", "perspective, or orthographic: parallel rays, no vanishing lines.");
+    int projection = static_cast<int>(s.projection);
+    if (ImGui::Combo("##projection", &projection, render::kProjectionNames, 2))
+      bench.view().setProjection(static_cast<render::Projection>(projection));
+    label(win.check, "rotation",
+          "How a drag turns the view: orbit about the up axis (the horizon stays level), or trackball (free "
+          "rotation about the screen's axes; the view may roll).");
+    int rotation = static_cast<int>(s.rotation);
+    if (ImGui::Combo("##rotation", &rotation, render::kRotationNames, 2))
+      bench.view().setRotation(static_cast<render::Rotation>(rotation));
+    label(win.check, "preset", "Views along the map's walls: from above, from the front, from the side.");
+    for (int i = 0; i < 3; ++i) {
+      if (i > 0) ImGui::SameLine();
+      if (ImGui::Button(render::kViewPresetNames[i])) bench.view().preset(static_cast<render::ViewPreset>(i));
     }
     label(win.check, "show",
           "Keyframe frustums (yellow: current, white: selected, red: the camera now), covisibility edges "

@@ -73,8 +73,10 @@ render::FrameBox ViewController::frameBounds(std::size_t* strays) const {
 void ViewController::frameMap() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
+  framed_frames_ = global ? global->frames_mapped : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
-  ui_.camera.up = framingUp();
+  if (ui_.settings.rotation == render::Rotation::kOrbit) ui_.camera.up = framingUp();  // a trackball's roll stays
+  ui_.camera.orthographic = ui_.settings.projection == render::Projection::kOrthographic;
   ui_.camera.frame(box, static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
@@ -83,9 +85,10 @@ void ViewController::frameMap() {
 void ViewController::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
+  framed_frames_ = global ? global->frames_mapped : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
-  ui_.camera =
-      render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
+  ui_.camera = render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height),
+                                    render::ViewSpec{}.fov_y_deg, ui_.settings.projection);
   ui_.follow_map = true;
   ui_.view_from_keyframe = -1;
 }
@@ -93,7 +96,33 @@ void ViewController::resetView() {
 void ViewController::orbit(float d_yaw, float d_pitch) {
   ui_.follow_map = false;
   ui_.view_from_keyframe = -1;
-  ui_.camera.orbit(d_yaw, d_pitch);
+  if (ui_.settings.rotation == render::Rotation::kTrackball) ui_.camera.tumble(d_yaw, d_pitch);
+  else ui_.camera.orbit(d_yaw, d_pitch);
+}
+
+void ViewController::setRotation(render::Rotation rotation) {
+  ui_.settings.rotation = rotation;
+  // Back to orbiting: level again about the up axis (the trackball's roll undone).
+  if (rotation == render::Rotation::kOrbit) {
+    const bool ortho = ui_.camera.orthographic;
+    ui_.camera = render::OrbitCamera::fromLookAt(ui_.camera.eye(), ui_.camera.target, upVector(), ui_.camera.fov_y_deg);
+    ui_.camera.orthographic = ortho;
+  }
+}
+
+void ViewController::setProjection(render::Projection projection) {
+  ui_.settings.projection = projection;
+  ui_.camera.orthographic = projection == render::Projection::kOrthographic;
+}
+
+void ViewController::preset(render::ViewPreset preset) {
+  ui_.follow_map = false;
+  ui_.view_from_keyframe = -1;
+  const auto global = worker_ ? worker_->global() : nullptr;
+  const glm::vec3 up = framingUp();
+  const glm::mat3 axes = global ? render::frameAxes(global->map.ellipsoids, up) : render::frameAxes({}, up);
+  render::presetView(ui_.camera, preset, axes);
+  ui_.camera.frame(frameBounds(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height));
 }
 
 void ViewController::pan(float dx_px, float dy_px) {
@@ -160,6 +189,7 @@ void ViewController::frameTrajectories() {
 }
 
 glm::vec3 ViewController::upVector() const {
+  if (ui_.settings.up_vector) return glm::normalize(*ui_.settings.up_vector);
   if (!worker_ || ui_.settings.up_axis != UpAxis::kData) return render::upDirection(ui_.settings.up_axis, {}, {});
   const auto mapping = worker_->mapping();
   const auto global = worker_->global();
@@ -263,6 +293,9 @@ render::ViewSpec ViewController::spec() const {
 bool ViewController::applySpec(const render::ViewSpec& spec) {
   Settings& s = ui_.settings;
   s.up_axis = spec.up;
+  s.up_vector = spec.up_vector;
+  s.projection = spec.projection;
+  s.rotation = spec.rotation;
   s.color = spec.color;
   s.show_ellipsoids = spec.ellipsoids;
   s.hide_map = spec.map_hidden;
@@ -284,6 +317,7 @@ bool ViewController::applySpec(const render::ViewSpec& spec) {
   scene.up = upVector();
   ui_.camera = render::orbitCamera(spec, scene, ui_.view_width, ui_.view_height);
   framed_generation_ = worker_ && worker_->global() ? worker_->global()->generation : 0;
+  framed_frames_ = worker_ && worker_->global() ? worker_->global()->frames_mapped : 0;
   framed_size_ = {ui_.view_width, ui_.view_height};
   ui_.follow_map = !spec.look_at && !spec.orbit;  // "camera": null is the framed view, which follows the map
   const int id = spec.kind == render::ViewKind::kGlobal ? spec.selected_keyframe : spec.keyframe;
@@ -303,8 +337,14 @@ render::HeightFrame ViewController::heightFrame() const {
   if (!global) return {};
   const auto mapping = worker_->mapping();
   SliceCache& c = slice_cache_;
-  if (c.global != global || c.axis != ui_.settings.up_axis || (c.axis == UpAxis::kData && c.mapping != mapping)) {
-    const glm::vec3 up = upVector();
+  if (c.global != global || c.axis != ui_.settings.up_axis || c.user_up != ui_.settings.up_vector ||
+      (c.axis == UpAxis::kData && c.mapping != mapping)) {
+    // The data up axis is estimated again when frames were mapped (or another session or axis
+    // is shown), not for a threshold change alone: the view's up, heights and slice stay, so
+    // before and after compare.
+    const bool same_frames = c.global && c.global->frames_mapped == global->frames_mapped && c.mapping == mapping &&
+                             c.axis == ui_.settings.up_axis && c.user_up == ui_.settings.up_vector;
+    const glm::vec3 up = same_frames ? c.frame.up : upVector();
     if (c.global != global || up != c.frame.up) {
       c.frame = render::heightFrame(global->map.ellipsoids, up);
       c.shown = {};
@@ -312,6 +352,7 @@ render::HeightFrame ViewController::heightFrame() const {
     c.global = global;
     c.mapping = mapping;
     c.axis = ui_.settings.up_axis;
+    c.user_up = ui_.settings.up_vector;
   }
   return c.frame;
 }
@@ -348,7 +389,10 @@ void ViewController::sync() {
   // Framed again for a new map, and for a new viewport size (its aspect): the window's panels
   // settle a frame or two after the first map, and a resized window keeps the map framed.
   const std::pair<int, int> size{ui_.view_width, ui_.view_height};
-  if (ui_.follow_map && ui_.view_from_keyframe < 0 && (generation != framed_generation_ || size != framed_size_) &&
+  // Not for a new map of the same frames (a threshold change): the camera stays, so before and
+  // after compare.
+  const bool grown = generation != framed_generation_ && (!global || global->frames_mapped != framed_frames_);
+  if (ui_.follow_map && ui_.view_from_keyframe < 0 && (framed_generation_ < 0 || grown || size != framed_size_) &&
       global && !global->map.ellipsoids.empty()) {
     if (framed_generation_ < 0) resetView();
     else frameMap();

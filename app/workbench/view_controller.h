@@ -3,6 +3,7 @@
 // through a keyframe, picking, measuring, the height slice, and the view as a view spec.
 #include <cstddef>
 #include <memory>
+#include <optional>
 #include <vector>
 
 #include "app/workbench/pose_editor.h"
@@ -38,7 +39,15 @@ class ViewController {
   void resetView();
   /// The user orbits, pans or zooms: the view stops following the map and leaves "view from
   /// keyframe".
+  /// A drag turns the view: about the up axis (orbit), or about the image's axes (trackball,
+  /// settings.rotation).
   void orbit(float d_yaw, float d_pitch);
+  /// Sets settings.rotation; back to orbit, the view is levelled about the up axis again.
+  void setRotation(render::Rotation rotation);
+  /// Sets settings.projection and the camera's.
+  void setProjection(render::Projection projection);
+  /// Turns the view to a preset (top, front, side) along the map's horizontal axes, framed.
+  void preset(render::ViewPreset preset);
   void pan(float dx_px, float dy_px);
   void zoom(float wheel_steps);
   /// Zooms by `wheel_steps` toward `p` (world): the point under the cursor stays under it.
@@ -119,6 +128,7 @@ class ViewController {
   const std::unique_ptr<MappingWorker>& worker_ = state_.worker;
   PoseEditor& poses_;                      // a pick or a keyframe view selects its keyframe
   int framed_generation_ = -1;             // the global map the view was last framed on
+  int framed_frames_ = 0;                  // the frames it held (a threshold change keeps them)
   std::pair<int, int> framed_size_{0, 0};  // and the viewport it was framed in
   std::size_t framed_strays_ = 0;          // left out of that frame
   // heightFrame's and shownMap's cache, keyed by the global snapshot and the up axis.
@@ -126,6 +136,7 @@ class ViewController {
     std::shared_ptr<const GlobalSnapshot> global;
     std::shared_ptr<const MappingSnapshot> mapping;  // its cameras give the data up axis
     UpAxis axis = UpAxis::kData;
+    std::optional<glm::vec3> user_up;
     int serial = 0;
     render::HeightFrame frame;
     render::HeightSlice slice;

@@ -28,7 +28,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"H, F1", "show or hide these keys"},
       {"Esc", "close the help and the container view, leave \"view from keyframe\""},
       {"Ctrl+Z", "undo the last pose edit"},
-      {"left drag", "orbit about the up axis"},
+      {"left drag", "orbit about the up axis (trackball: turn about the screen's axes)"},
       {"right / middle drag, Shift + left drag", "pan"},
       {"wheel", "zoom toward the point under the cursor"},
       {"click", "pick an ellipsoid (marked magenta; its keyframe is selected)"},

@@ -157,7 +157,10 @@ TEST(ViewFile, TheRenderCommandParsesBackToTheSameView) {
   keyframe.background = glm::vec3(255, 0, 51) / 255.f;
   render::ViewSpec orbit;
   orbit.orbit = render::Orbit{30.f, 20.f, 4.5f};
-  for (const render::ViewSpec& spec : {global, keyframe, orbit}) {
+  render::ViewSpec upright;  // a user-set up, drawn orthographic
+  upright.up_vector = glm::vec3(0.f, -1.f, 0.25f);
+  upright.projection = render::Projection::kOrthographic;
+  for (const render::ViewSpec& spec : {global, keyframe, orbit, upright}) {
     const std::string command = renderCommand(spec, "/data/s.vdmap");
     ASSERT_EQ(command.rfind("vdmap render /data/s.vdmap ", 0), 0u) << command;
     CLI::App app;
@@ -181,7 +184,7 @@ TEST(ViewFile, Version2RoundTripsTheSliceAndDrawNone) {
   spec.setDraw(render::DrawMode::kNone);
   writeViewFile(tmp / "v.json", spec, {}, "s.vdmap");
   const nlohmann::json j = nlohmann::json::parse(test::readFile(tmp / "v.json"));
-  EXPECT_EQ(j["vdmap_view"], 2);
+  EXPECT_EQ(j["vdmap_view"], 3);
   EXPECT_EQ(j["slice"], nlohmann::json::array({0.25, 1.75}));
   EXPECT_EQ(j["draw"], "none");
   const render::ViewSpec back = readViewFile(tmp / "v.json");
@@ -204,18 +207,68 @@ TEST(ViewFile, Version2RoundTripsTheSliceAndDrawNone) {
       << renderCommand(spec, "s.vdmap");
 }
 
+// Version 3's keys, the camera's new options, erased: what a version 1 or 2 file holds.
+void eraseVersion3Keys(nlohmann::json& j) {
+  for (const char* key : {"projection", "rotation", "up_vector"}) j.erase(key);
+}
+
 TEST(ViewFile, Version1StillReads) {
   TempDir tmp;
   // A version 1 file: no "slice" key (and one is refused there).
   const auto v1 = editedViewFile(tmp, [](nlohmann::json& j) {
     j["vdmap_view"] = 1;
     j.erase("slice");
+    eraseVersion3Keys(j);
   });
   EXPECT_EQ(readViewFile(v1), unusualSpec());
-  const auto v1_slice = editedViewFile(tmp, [](nlohmann::json& j) { j["vdmap_view"] = 1; });
+  const auto v1_slice = editedViewFile(tmp, [](nlohmann::json& j) {
+    j["vdmap_view"] = 1;
+    eraseVersion3Keys(j);
+  });
   EXPECT_NE(errorOf(v1_slice).find("slice"), std::string::npos) << errorOf(v1_slice);
-  const auto v3 = editedViewFile(tmp, [](nlohmann::json& j) { j["vdmap_view"] = 3; });
-  EXPECT_NE(errorOf(v3).find("versions 1 and 2"), std::string::npos) << errorOf(v3);
+  const auto v4 = editedViewFile(tmp, [](nlohmann::json& j) { j["vdmap_view"] = 4; });
+  EXPECT_NE(errorOf(v4).find("versions 1 to 3"), std::string::npos) << errorOf(v4);
+}
+
+// --- view file version 3: projection, rotation, a user-set up ---
+TEST(ViewFile, Version3RoundTripsTheProjectionRotationAndUpVector) {
+  TempDir tmp;
+  render::ViewSpec spec;
+  spec.projection = render::Projection::kOrthographic;
+  spec.rotation = render::Rotation::kTrackball;
+  spec.up_vector = glm::vec3(0.1f, -0.98f, 0.05f);
+  spec.look_at = render::LookAt{{1.f, 2.f, 3.f}, {0.f, 0.5f, 0.25f}, {0.3f, -0.9f, 0.1f}, 40.f};
+  spec.fov_y_deg = 40.f;
+  writeViewFile(tmp / "v.json", spec, {}, "s.vdmap");
+  const nlohmann::json j = nlohmann::json::parse(test::readFile(tmp / "v.json"));
+  EXPECT_EQ(j["vdmap_view"], 3);
+  EXPECT_EQ(j["projection"], "orthographic");
+  EXPECT_EQ(j["rotation"], "trackball");
+  EXPECT_EQ(j["up_vector"].size(), 3u);
+  EXPECT_EQ(readViewFile(tmp / "v.json"), spec);
+  // The new keys are optional: a version 2 file (without them) or a version 3 file that leaves
+  // them out reads with the defaults.
+  const auto v2 = editedViewFile(tmp, [](nlohmann::json& v) {
+    v["vdmap_view"] = 2;
+    eraseVersion3Keys(v);
+  });
+  EXPECT_EQ(readViewFile(v2), unusualSpec());
+  const auto v3_bare = editedViewFile(tmp, eraseVersion3Keys);
+  EXPECT_EQ(readViewFile(v3_bare), unusualSpec());
+  // A version 2 file may not hold them; bad values are named.
+  const auto v2_ortho = editedViewFile(tmp, [](nlohmann::json& v) { v["vdmap_view"] = 2; });
+  EXPECT_NE(errorOf(v2_ortho).find("unknown key"), std::string::npos) << errorOf(v2_ortho);
+  const auto bad_projection = editedViewFile(tmp, [](nlohmann::json& v) { v["projection"] = "fisheye"; });
+  EXPECT_NE(errorOf(bad_projection).find("projection must be perspective or orthographic, got 'fisheye'"),
+            std::string::npos)
+      << errorOf(bad_projection);
+  const auto zero_up = editedViewFile(tmp, [](nlohmann::json& v) { v["up_vector"] = {0, 0, 0}; });
+  EXPECT_NE(errorOf(zero_up).find("up_vector must not be zero"), std::string::npos) << errorOf(zero_up);
+  // The render command says it too: --projection, and --up X,Y,Z for a user-set up without a camera.
+  spec.look_at.reset();
+  const std::string command = renderCommand(spec, "s.vdmap");
+  EXPECT_NE(command.find(" --up 0.100000001,-0.980000019,0.0500000007"), std::string::npos) << command;
+  EXPECT_NE(command.find(" --projection orthographic"), std::string::npos) << command;
 }
 
 }  // namespace

@@ -7,6 +7,7 @@
 #include <cstdlib>
 #include <iostream>
 
+#include <glm/glm.hpp>
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 #include <opencv2/imgproc.hpp>
@@ -58,6 +59,23 @@ class ViewTwin : public ::testing::Test {
     const nlohmann::json spec = nlohmann::json::parse(readFile(view));
     expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
     return spec;
+  }
+
+  // The window given `spec` as the view file NAME.json (it saves it again as NAME-again.json)
+  // and render of that file: the same picture. Returns the view the window saved.
+  static nlohmann::json expectFileTwins(const std::string& name, const nlohmann::json& spec) {
+    const std::string view = path(name + ".json"), window = path(name + "W.png"), headless = path(name + "H.png");
+    const std::string again = path(name + "-again.json");
+    writeText(view, spec.dump(2));
+    const RunResult w =
+        gui("--view-file '" + view + "' --view-screenshot '" + window + "' --save-view '" + again + "'");
+    EXPECT_EQ(w.exit_code, 0) << w.err;
+    const RunResult h =
+        runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
+    EXPECT_EQ(h.exit_code, 0) << h.err;
+    if (w.exit_code != 0 || h.exit_code != 0) return nlohmann::json::object();
+    expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
+    return nlohmann::json::parse(readFile(again));
   }
 
   static void expectSamePicture(const std::string& window, const std::string& headless, int width, int height) {
@@ -131,25 +149,64 @@ TEST_F(ViewTwin, AViewFileGivenToTheWindowIsTheViewRenderDraws) {
       {"eye", {1.5, -2.5, 3.0}}, {"target", {0.5, 1.0, 0.8}}, {"up", {0.0, 0.0, 1.0}}, {"fov_y_deg", 50.0}};
   spec["background"] = "white";
   spec["color"] = "uncertainty";
-  const std::string view = path("hand.json"), window = path("handW.png"), headless = path("handH.png");
-  writeText(view, spec.dump(2));
-  const RunResult w =
-      gui("--view-file '" + view + "' --view-screenshot '" + window + "' --save-view '" + path("again.json") + "'");
-  ASSERT_EQ(w.exit_code, 0) << w.err;
-  const RunResult h = runVdmap("render '" + path("s.vdmap") + "' --view-file '" + view + "' --out '" + headless + "'");
-  ASSERT_EQ(h.exit_code, 0) << h.err;
-  expectSamePicture(window, headless, spec["size"][0], spec["size"][1]);
+  const nlohmann::json again = expectFileTwins("hand", spec);
+  ASSERT_TRUE(again.contains("camera"));
   // The window took the file's view: its camera, colours and background.
-  const nlohmann::json again = nlohmann::json::parse(readFile(path("again.json")));
   for (const char* key : {"eye", "target"})
     for (int i = 0; i < 3; ++i)
       EXPECT_NEAR(again["camera"][key][i].get<double>(), spec["camera"][key][i].get<double>(), 1e-4) << key;
   EXPECT_EQ(again["background"], "white");
   EXPECT_EQ(again["color"], "uncertainty");
-  const cv::Mat image = readRgb(window);
+  const cv::Mat image = readRgb(path("handW.png"));
   ASSERT_FALSE(image.empty());
   EXPECT_EQ(image.at<cv::Vec3b>(0, image.cols - 1), cv::Vec3b(255, 255, 255))
       << "the top-right corner is the white background";
+}
+
+// --- projection, rotation and a user-set up ---
+// The window's orthographic default view (--set) and a user-set up: render draws the file alike.
+TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameOrthographicViewAboutAUserSetUp) {
+  VDMAP_REQUIRE_XVFB();
+  const nlohmann::json spec =
+      expectTwins("ortho", "--set projection=orthographic --set 'up_vector=[0.2, 0.1, 1.0]' --set color=height");
+  EXPECT_EQ(spec.value("projection", ""), "orthographic");
+  ASSERT_TRUE(spec["up_vector"].is_array());
+  EXPECT_NEAR(spec["up_vector"][0].get<double>(), 0.2, 1e-6);
+}
+
+// A trackball view rolled off the up axis, orthographic, written by hand: the window shows it
+// (and keeps its roll) and render draws the same picture.
+TEST_F(ViewTwin, ARolledTrackballViewFileIsTheSamePictureOnBothPaths) {
+  VDMAP_REQUIRE_XVFB();
+  const std::string saved = path("viewport3.json");
+  ASSERT_EQ(gui("--save-view '" + saved + "'").exit_code, 0);
+  nlohmann::json spec = nlohmann::json::parse(readFile(saved));
+  EXPECT_EQ(spec["vdmap_view"], 3);
+  spec["camera"] = {
+      {"eye", {1.5, -2.5, 3.0}}, {"target", {0.5, 1.0, 0.8}}, {"up", {0.5, 0.3, 0.8}}, {"fov_y_deg", 50.0}};
+  spec["projection"] = "orthographic";
+  spec["rotation"] = "trackball";
+  const nlohmann::json again = expectFileTwins("rolled", spec);
+  ASSERT_TRUE(again.contains("camera"));
+  EXPECT_EQ(again["projection"], "orthographic");
+  EXPECT_EQ(again["rotation"], "trackball");
+  // The roll stays: the saved camera's image-up (its up made perpendicular to the view) is the file's.
+  const glm::vec3 eye(1.5f, -2.5f, 3.f), target(0.5f, 1.f, 0.8f), up(0.5f, 0.3f, 0.8f);
+  const glm::vec3 f = glm::normalize(target - eye);
+  const auto imageUp = [&f](const glm::vec3& u) { return glm::normalize(u - glm::dot(u, f) * f); };
+  glm::vec3 saved_up;
+  for (int i = 0; i < 3; ++i) saved_up[i] = again["camera"]["up"][i].get<float>();
+  EXPECT_GT(glm::dot(imageUp(saved_up), imageUp(up)), 0.9999f);
+  // And the picture differs from the perspective one: the projection is really drawn.
+  spec["projection"] = "perspective";
+  writeText(path("rolledP.json"), spec.dump(2));
+  ASSERT_EQ(runVdmap("render '" + path("s.vdmap") + "' --view-file '" + path("rolledP.json") + "' --out '" +
+                     path("rolledP.png") + "'")
+                .exit_code,
+            0);
+  EXPECT_FALSE(
+      render::compareImages(readRgb(path("rolledH.png")), readRgb(path("rolledP.png")), render::ImageTolerance{})
+          .matches);
 }
 
 // Without a view file, render at the window's viewport size draws the window's default view:

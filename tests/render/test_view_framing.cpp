@@ -1,10 +1,14 @@
 // Where a view's camera is (render/view_framing.h), the same for the window and `vdmap render`.
+#include <algorithm>
 #include <cmath>
+#include <cstdio>
 
 #include <gtest/gtest.h>
 
+#include "mapping/files/map_file.h"
 #include "render/map_scene.h"
 #include "render/view_framing.h"
+#include "tests/support/test_util.h"
 
 namespace vdmap::render {
 namespace {
@@ -216,6 +220,109 @@ TEST(ViewFraming, UpFromDataMatchesTheWindowsBeforeTheMove) {
   EXPECT_EQ(upDirection(UpAxis::kPlusY, {}, {}), glm::vec3(0, 1, 0));
   EXPECT_EQ(upDirection(UpAxis::kMinusY, {}, {}), glm::vec3(0, -1, 0));
   EXPECT_EQ(upDirection(UpAxis::kData, {}, {}), glm::vec3(0, 0, 1)) << "no cameras: +z";
+}
+
+// The 7-Scenes kitchen mapped by `vdmap map --octomap`: its ellipsoid PLY and OctoMap have no
+// cameras, and stand on their level planes as the map folder does on its cameras and floor.
+TEST(ViewFraming, TheSevenScenesKitchensMapFilesStandUprightWithoutCameras) {
+  VDMAP_REQUIRE_SHARED_DATA(data, "7scenes-redkitchen");
+  test::TempDir dir;
+  const test::RunResult map = test::runVdmap("map '" + data.string() + "' --frames 0:250 --octomap 0.05 --out '" +
+                                             (dir / "map").string() + "'");
+  ASSERT_EQ(map.exit_code, 0) << map.err;
+  const StaticMap folder = loadStaticMap((dir / "map").string());
+  std::vector<Transform> cameras;
+  for (const StampedPose& p : folder.trajectory) cameras.push_back(p.T_W_C);
+  UpFrom from = UpFrom::kDefault;
+  const glm::vec3 reference = estimateUp(cameras, folder.ellipsoids, &from);
+  ASSERT_EQ(from, UpFrom::kCameras);
+  EXPECT_LT(glm::degrees(std::acos(std::min(1.f, -reference.y))), 35.f) << "7-Scenes' up is about -y";
+  for (const char* file : {"global_ellipsoids.ply", "global.bt"}) {
+    const StaticMap m = loadStaticMap((dir / "map" / file).string());
+    ASSERT_TRUE(m.trajectory.empty() && m.keyframes.empty()) << file;
+    const glm::vec3 up = estimateUp({}, m.ellipsoids, &from);
+    EXPECT_EQ(from, UpFrom::kLevelPlanes) << file;
+    const float error = glm::degrees(std::acos(std::clamp(glm::dot(up, reference), -1.f, 1.f)));
+    std::printf("%s: up (%.3f, %.3f, %.3f), %.2f degrees from the map folder's (%.3f, %.3f, %.3f)\n", file, up.x, up.y,
+                up.z, error, reference.x, reference.y, reference.z);
+    EXPECT_LT(error, 5.f) << file;
+  }
+}
+
+// Orthographic: parallel rays. Points along the viewing direction land on one pixel (to a
+// tenth of a pixel over 2 m of depth), and the target's plane has the perspective view's scale.
+TEST(OrbitCamera, TheOrthographicViewHasParallelRaysAndThePerspectiveScaleAtTheTarget) {
+  const glm::vec3 eye(4.f, -3.f, 2.f), target(0.5f, 0.2f, 0.3f), up(0, 0, 1);
+  const ViewCamera persp = ViewCamera::lookAt(eye, target, up, 50.f, 800, 600);
+  const ViewCamera ortho = ViewCamera::lookAt(eye, target, up, 50.f, 800, 600, true);
+  const glm::vec3 f = glm::normalize(target - eye), side(0.3f, 0.4f, 0.5f);
+  for (const float depth : {-1.f, 0.f, 1.f}) {
+    const glm::vec2 a = project(ortho, target + depth * f), b = project(ortho, target + side + depth * f);
+    // Float rounding of an eye 1000 times further away: a few hundredths of a pixel.
+    EXPECT_NEAR(glm::length(a - glm::vec2(399.5f, 299.5f)), 0.f, 0.05f);
+    const glm::vec2 b0 = project(ortho, target + side);
+    EXPECT_NEAR(glm::length(b - b0), 0.f, 0.1f) << "depth " << depth;
+  }
+  // At the target's depth both views agree (to a hundredth of a pixel off the view axis).
+  const glm::vec3 q = target + glm::vec3(0.2f, -0.1f, 0.25f) - glm::dot(glm::vec3(0.2f, -0.1f, 0.25f), f) * f;
+  EXPECT_NEAR(glm::length(project(ortho, q) - project(persp, q)), 0.f, 0.02f);
+  // fit() holds a box's corners inside the orthographic image too.
+  OrbitCamera cam = OrbitCamera::fromLookAt(eye, target, up, 50.f);
+  cam.orthographic = true;
+  const FrameBox box(glm::vec3(-1.f, -2.f, 0.f), glm::vec3(3.f, 1.f, 2.5f));
+  cam.fit(box, 800.f / 600.f);
+  const ViewCamera v = cam.view(800, 600);
+  float lo = 1e9f, hi = -1e9f;
+  for (int c = 0; c < 8; ++c) {
+    const glm::vec2 p = project(v, box.corner(c));
+    EXPECT_GE(p.x, -0.5f);
+    EXPECT_LE(p.x, 799.5f);
+    EXPECT_GE(p.y, -0.5f);
+    EXPECT_LE(p.y, 599.5f);
+    lo = std::min({lo, p.x / 800.f, p.y / 600.f});
+    hi = std::max({hi, p.x / 800.f, p.y / 600.f});
+  }
+  EXPECT_LT(lo, 0.05f) << "the box fills the view (margin 3 %)";
+  EXPECT_GT(hi, 0.95f);
+}
+
+// Trackball: the view turns about its own axes, past the orbit's 89-degree limit, and may roll;
+// distance and target stay.
+TEST(OrbitCamera, TheTrackballTurnsPastThePoleAndRolls) {
+  OrbitCamera cam = OrbitCamera::fromLookAt({3.f, 0.f, 1.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 60.f);
+  const float distance = cam.distance_m;
+  for (int i = 0; i < 10; ++i) cam.tumble(0.f, 0.3f);  // 3 radians over the top
+  EXPECT_NEAR(cam.distance_m, distance, 1e-4f);
+  EXPECT_NEAR(glm::length(cam.target), 0.f, 1e-6f);
+  // Turned by 3 rad about the image's right axis (the y axis here): the eye is behind the target
+  // and upside down, where an orbit would stop at 89 degrees.
+  const glm::vec3 dir = glm::normalize(cam.eye() - cam.target);
+  EXPECT_NEAR(dir.x, std::cos(std::atan2(1.f, 3.f) + 3.f), 1e-3f);
+  EXPECT_LT(cam.imageUp().z, 0.f) << "past the pole the image's up points down";
+  OrbitCamera orbit = OrbitCamera::fromLookAt({3.f, 0.f, 1.f}, {0.f, 0.f, 0.f}, {0, 0, 1}, 60.f);
+  for (int i = 0; i < 10; ++i) orbit.orbit(0.f, 0.3f);
+  EXPECT_NEAR(orbit.pitch, glm::radians(89.f), 1e-5f);
+}
+
+// The presets look along the map's axes: from above (89 degrees, h2 up in the image), level along
+// h2 (front) and along -h1 (side), about the same target at the same distance.
+TEST(OrbitCamera, PresetsLookAlongTheMapsAxes) {
+  const glm::vec3 h1 = glm::normalize(glm::vec3(1.f, 1.f, 0.f)), h2 = glm::normalize(glm::vec3(-1.f, 1.f, 0.f));
+  const glm::mat3 axes(h1, h2, glm::vec3(0, 0, 1));
+  OrbitCamera cam = OrbitCamera::fromLookAt({3.f, -1.f, 2.f}, {0.5f, 0.5f, 0.5f}, {0, 0, 1}, 60.f);
+  cam.orthographic = true;
+  const float distance = cam.distance_m;
+  const auto forward = [&cam] { return glm::normalize(cam.target - cam.eye()); };
+  presetView(cam, ViewPreset::kTop, axes);
+  EXPECT_NEAR(glm::dot(forward(), glm::vec3(0, 0, -1)), std::sin(glm::radians(89.f)), 1e-4f);
+  EXPECT_GT(glm::dot(cam.imageUp(), h2), 0.99f);
+  EXPECT_TRUE(cam.orthographic);
+  EXPECT_NEAR(cam.distance_m, distance, 1e-4f);
+  presetView(cam, ViewPreset::kFront, axes);
+  EXPECT_GT(glm::dot(forward(), h2), 0.9999f);
+  presetView(cam, ViewPreset::kSide, axes);
+  EXPECT_GT(glm::dot(forward(), -h1), 0.9999f);
+  EXPECT_NEAR(glm::length(cam.target - glm::vec3(0.5f)), 0.f, 1e-5f);
 }
 
 TEST(OrbitCamera, FromLookAtReproducesEyeAndTarget) {

@@ -43,6 +43,13 @@ struct TinyBench {
     return s;
   }
   MappingWorker& worker() { return *bench.worker(); }
+  // Maps every frame and frames the view in a 900 x 500 viewport, following the map.
+  void mapAndFrame() {
+    worker().play();
+    worker().waitIdle();
+    bench.ui().view_width = 900, bench.ui().view_height = 500;
+    bench.sync();
+  }
 };
 
 // Selects keyframe `id` as the keyframe list does and returns the session's selection once the
@@ -923,17 +930,39 @@ TEST(GuiView, ViewFromKeyframeKeepsTheImagesAspectAndIntrinsics) {
   EXPECT_NEAR(v.camera.fy, c.fy * 500.0 / c.height, 1e-3);
 }
 
+// A threshold change is a new map of the same frames: a view that follows the map keeps its
+// camera (eye, target, up) and its estimated up axis, so before and after compare.
+TEST(GuiView, AThresholdChangeLeavesTheCameraWhereItIs) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  t.mapAndFrame();
+  UiState& ui = bench.ui();
+  ASSERT_TRUE(ui.follow_map);
+  const render::OrbitCamera before = ui.camera;
+  const glm::vec3 up_before = bench.view().heightFrame().up;
+  const auto map_before = t.worker().global();
+  // Cells of a 5 px grid over 3 frames of a plane hold ~75 points: 60 drops most of the map.
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 60));
+  t.worker().waitIdle();
+  bench.sync();
+  const auto map_after = t.worker().global();
+  ASSERT_GT(map_after->generation, map_before->generation);
+  ASSERT_LT(map_after->map.ellipsoids.size(), map_before->map.ellipsoids.size()) << "the map must change";
+  EXPECT_EQ(ui.camera.eye(), before.eye());
+  EXPECT_EQ(ui.camera.target, before.target);
+  EXPECT_EQ(ui.camera.up, before.up);
+  EXPECT_EQ(bench.view().heightFrame().up, up_before);
+  EXPECT_TRUE(ui.follow_map);
+}
+
 // ViewController::spec describes what is shown (global with its camera, keyframe:K at the letterbox's size,
 // container:K at 2W x 2H) and applySpec shows it again: the camera, the view options and the
 // selection come back as they were.
 TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   TinyBench t;
   Workbench& bench = t.bench;
-  t.worker().play();
-  t.worker().waitIdle();
+  t.mapAndFrame();
   UiState& ui = bench.ui();
-  ui.view_width = 900, ui.view_height = 500;
-  bench.sync();
   bench.view().orbit(0.4f, -0.1f);
   bench.view().zoom(2.f);
   bench.view().pan(30.f, -12.f);
