@@ -1052,7 +1052,9 @@ TEST(GuiView, SKeySavesTheViewFile) {
   ASSERT_TRUE(fs::exists(file)) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().status.kind, StatusLine::Kind::kSuccess);
   EXPECT_NE(bench.ui().status.text.find(file.string()), std::string::npos) << bench.ui().status.text;
-  EXPECT_NE(bench.ui().status.text.find("vdmap render " + (t.dir / "seq").string() + " --view-file"), std::string::npos)
+  EXPECT_NE(bench.ui().status.text.find("vdmap render " + (t.dir / "seq").string() +
+                                        " --poses gt --set keyframe_every=3 --view-file"),
+            std::string::npos)
       << bench.ui().status.text;
   GlobalMapParams thresholds;
   thresholds.merge_distance_m = -1;
