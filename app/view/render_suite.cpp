@@ -217,6 +217,19 @@ ViewEntry readView(const YAML::Node& node, const SuiteFile& suite, const std::st
   return view;
 }
 
+// Refuses a map that gives a key twice (YAML allows reading either), anywhere in `node`.
+void refuseDuplicateKeys(const YAML::Node& node, const std::string& file) {
+  if (node.IsSequence())
+    for (const YAML::Node& item : node) refuseDuplicateKeys(item, file);
+  if (!node.IsMap()) return;
+  std::set<std::string> seen;
+  for (const auto& entry : node) {
+    if (entry.first.IsScalar() && !seen.insert(entry.first.Scalar()).second)
+      throw InputError(file, lineOf(entry.first), "key '" + entry.first.Scalar() + "' is given twice in one map");
+    refuseDuplicateKeys(entry.second, file);
+  }
+}
+
 SuiteFile readSuite(const fs::path& file_path, const SuiteOptions& options) {
   const std::string file = file_path.string();
   YAML::Node root;
@@ -228,6 +241,7 @@ SuiteFile readSuite(const fs::path& file_path, const SuiteOptions& options) {
     throw InputError(file, e.mark.line + 1, "not valid YAML: " + e.msg);
   }
   if (!root.IsMap()) throw InputError(file, "expected a map with version, maps and views");
+  refuseDuplicateKeys(root, file);
   SuiteFile suite;
   suite.name = file;
   suite.folder = fs::absolute(file_path).parent_path();

@@ -9,6 +9,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/parameter_table.h"
+#include "app/view/json_file.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
@@ -38,6 +39,13 @@ std::string valueText(const Parameter& p, const json& v) {
   }
   if (v.is_boolean() || v.is_number()) return v.dump();
   throw std::invalid_argument(std::string(p.key) + ": expected " + validityText(p) + ", got " + v.dump());
+}
+
+// The whole of `file` (throws InputError when it cannot be read).
+std::string readText(const fs::path& file) {
+  std::ifstream in(file);
+  if (!in) throw InputError(file.string(), "cannot be read");
+  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 json toJson(const Settings& s) {
@@ -124,8 +132,9 @@ void readViewCamera(const json& v, Settings& s) {
 Settings fromJson(const json& j, const Settings& base = {}) {
   Settings s = base;
   if (!j.is_object()) throw std::invalid_argument("expected a JSON object");
+  refuseUnknownKeys(j, toJson(Settings{}));  // a misspelt key or section is named, never ignored
   // The mapping parameters, each read and checked by the parameter table (as --set and the
-  // command line do); keys the table does not know are left alone.
+  // command line do).
   ParameterValues params = paramsOf(s);
   for (const Parameter& p : parameters()) {
     const char* section = sectionOf(p);
@@ -252,10 +261,7 @@ render::ViewSpec viewSpecOf(const Settings& s) {
 
 Settings readSettingsFile(const fs::path& file, const Settings& base) {
   if (!fs::exists(file)) throw InputError(file.string(), "no such file");
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot be read");
-  json j = json::parse(in, nullptr, false);
-  if (j.is_discarded()) throw InputError(file.string(), "not valid JSON (expected a settings file)");
+  const json j = parseJsonStrictly(readText(file), file.string());
   try {
     return fromJson(j, base);
   } catch (const std::exception& e) {
@@ -273,9 +279,10 @@ fs::path settingsPath() {
 Settings loadSettings(const fs::path& file, std::string* warning) {
   if (!fs::exists(file)) return {};
   try {
-    std::ifstream in(file);
-    if (!in) throw std::runtime_error("cannot be read");
-    return fromJson(json::parse(in));
+    return fromJson(parseJsonStrictly(readText(file), file.string()));
+  } catch (const InputError& e) {  // names the file (and line) already
+    if (warning) *warning = std::string(e.what()) + "; using the default settings";
+    return {};
   } catch (const std::exception& e) {
     if (warning) *warning = file.string() + ": " + e.what() + "; using the default settings";
     return {};
@@ -293,9 +300,7 @@ void saveChangedSettings(const fs::path& file, const Settings& before, const Set
   json saved = json::object();
   if (fs::exists(file)) {
     try {
-      std::ifstream in(file);
-      if (!in) throw std::runtime_error("cannot be read");
-      saved = json::parse(in);
+      saved = parseJsonStrictly(readText(file), file.string());
       fromJson(saved);  // the same checks as loading
     } catch (const std::exception& e) {
       throw std::runtime_error(file.string() + " is not valid settings (" + e.what() +

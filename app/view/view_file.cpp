@@ -12,6 +12,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/parameter_table.h"
+#include "app/view/json_file.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
@@ -71,8 +72,12 @@ struct Reader {
   static void onlyKeys(const json& object, const std::string& prefix, std::initializer_list<const char*> names) {
     for (const auto& [k, v] : object.items()) {
       bool known = false;
-      for (const char* n : names) known = known || k == n;
-      if (!known) fail("unknown key '" + prefix + k + "'");
+      std::string valid;
+      for (const char* n : names) {
+        known = known || k == n;
+        valid += (valid.empty() ? "" : ", ") + std::string(n);
+      }
+      if (!known) fail("unknown key '" + prefix + k + "' (valid: " + valid + ")");
     }
   }
   static double number(const json& v, const std::string& name) {
@@ -239,7 +244,11 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
     }
   }
   for (const auto& [k, v] : t.items())
-    if (!live.count(k)) R::fail("unknown key 'thresholds." + k + "'");
+    if (!live.count(k)) {
+      std::string valid;
+      for (const std::string& key : live) valid += (valid.empty() ? "" : ", ") + key;
+      R::fail("unknown key 'thresholds." + k + "' (valid: " + valid + ")");
+    }
   validate(params);
   if (thresholds) *thresholds = params.global;
   return spec;
@@ -250,9 +259,7 @@ json parseFile(const fs::path& file) {
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "cannot be read");
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
-  json j = json::parse(markNonFinite(text), nullptr, false);
-  if (j.is_discarded()) throw InputError(file.string(), "not valid JSON");
-  return j;
+  return parseJsonStrictly(markNonFinite(text), file.string());
 }
 
 std::string number(float v) {

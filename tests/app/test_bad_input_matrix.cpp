@@ -645,6 +645,32 @@ const std::vector<BadCase>& badCases() {
       {"session", "render_suite_unknown_view_key", E::kCliError, "views.yaml:5: unknown view key 'colour'",
        then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - {name: a, map: s, colour: rgb}\n"),
             "render --suite {dir}/views.yaml --update")},
+      {"session", "render_suite_duplicate_key", E::kCliError, "views.yaml:7: key 'color' is given twice in one map",
+       then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - name: a\n    color: rgb\n    "
+                                "color: height\n    map: s\n"),
+            "render --suite {dir}/views.yaml --update")},
+      // Settings and view files are read strictly: a misspelt key or section is named with the valid
+      // ones, a key given twice names its line.
+      {"session", "settings_unknown_key", E::kCliError,
+       "set.json: unknown key 'thresholds.merge_dist' (valid: filter_sigma_factor,",
+       then(write("set.json", "{\"thresholds\": {\"merge_dist\": 0.1}}"),
+            "render {dir}/s.vdmap --settings {dir}/set.json --out {dir}/o.png")},
+      {"session", "settings_unknown_section", E::kCliError, "set.json: unknown key 'thresholdz' (valid: last_sequence,",
+       then(write("set.json", "{\"thresholdz\": {\"merge_distance\": 0.1}}"),
+            "render {dir}/s.vdmap --settings {dir}/set.json --out {dir}/o.png")},
+      {"session", "settings_duplicate_key", E::kCliError, "set.json:3: key 'merge_distance' is given twice in one object",
+       then(write("set.json", "{\"thresholds\": {\n  \"merge_distance\": 0.1,\n  \"merge_distance\": 0.2\n}}"),
+            "render {dir}/s.vdmap --settings {dir}/set.json --out {dir}/o.png")},
+      {"session", "render_view_file_duplicate_key", E::kCliError, "v.json:1: key 'color' is given twice in one object",
+       then(
+           [](const fs::path& d) {
+             viewFile([](nlohmann::json&) {})(d);
+             std::string text = readFile(d / "v.json");
+             text.insert(1, "\"color\": \"rgb\", ");  // the file is one line
+             writeText(d / "v.json", text);
+             return std::string();
+           },
+           "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
       {"session", "render_tolerance_bad", E::kCliUsage, "--tolerance: '8': expected COUNTS,SHARE",
        args("render {dir}/s.vdmap --expect {dir}/g.png --tolerance 8")},
       {"session", "render_update_without_expect", E::kCliUsage, "--update needs --expect GOLDEN.png (or --suite)",
