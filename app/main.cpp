@@ -3,12 +3,30 @@
 #include <cerrno>
 #include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <iostream>
+#include <regex>
 
 #include "app/cli/command_line.h"
 #include "app/verbs.h"
 #include "mapping/core/temporary_paths.h"
 #include "vdmap_version.h"
+
+namespace {
+
+// CLI11 reads 0x10 as 16 and 0b11 as 3: an option's value in another base is almost surely a typo
+// (--resolution 0x10 for 0.10), so it is refused (a file or folder of that name is left alone).
+void refuseRadixNumbers(int argc, char** argv) {
+  static const std::regex radix("[-+]?0[xXbBoO][0-9a-fA-F]+");
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i - 1]).rfind("--", 0) == 0 && std::regex_match(argv[i], radix) &&
+        !std::filesystem::exists(argv[i]))
+      throw CLI::ValidationError(argv[i - 1], std::string("'") + argv[i] +
+                                                  "': a number in another base (hexadecimal, binary, octal); write "
+                                                  "it in decimal");
+}
+
+}  // namespace
 
 int main(int argc, char** argv) {
   using namespace vdmap::app;
@@ -20,8 +38,8 @@ int main(int argc, char** argv) {
   // The project version, and the commit when the build was configured from a git checkout
   // (cmake/version.cmake); nothing is looked up at run time.
   const std::string commit = vdmap::kGitDescribe[0] ? std::string(" (git ") + vdmap::kGitDescribe + ")" : "";
-  app.set_version_flag("--version", std::string("vdmap ") + vdmap::kVersion + commit,
-                       "print vdmap's version (and the git commit it was built from) and exit");
+  const std::string version = std::string("vdmap ") + vdmap::kVersion + commit;
+  app.set_version_flag("--version", version, "print vdmap's version (and the git commit it was built from) and exit");
   addInfoCommand(app);
   addMapCommand(app);
   addRenderCommand(app);
@@ -48,7 +66,14 @@ int main(int argc, char** argv) {
           (errno != 0 ? std::string(": ") + std::strerror(errno) : "") + " (a full disk or a closed file?)");
     return code == 0 ? 1 : code;
   };
+  // `vdmap VERB --version` too: CLI11 knows it only before a verb (the verb asked for its SEQ).
+  for (int i = 2; i < argc; ++i)
+    if (std::string(argv[i]) == "--version") {
+      std::cout << version << "\n";
+      return written(0);
+    }
   try {
+    refuseRadixNumbers(argc, argv);
     app.parse(argc, argv);
     if (app.get_subcommands().empty()) workbench();
   } catch (const CLI::ParseError& e) {

@@ -57,7 +57,14 @@ void addRenderCheckArgs(CLI::App& verb, RenderCheckArgs& args) {
                   "nothing within 1 px matches it and its neighbours differ too, so another driver passes and a real "
                   "change fails (--suite's default, tolerance 8,0.01%)")
       ->check(parsedBy(render::parseCompareMethod, "plain|nearby"));
-  verb.add_option("--diff", args.diff, "with --expect: where a differing render's diff image goes (PNG)");
+  verb.add_option("--diff", args.diff, "with --expect: where a differing render's diff image goes (a .png file)")
+      ->check(CLI::Validator(
+          [](std::string& file) {
+            std::string ext = std::filesystem::path(file).extension().string();
+            for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+            return ext == ".png" ? std::string() : "'" + file + "': the diff image is a PNG: name it .png";
+          },
+          "FILE.png"));
   verb.add_option_function<std::vector<std::string>>(
           "--update",
           [&args](const std::vector<std::string>& views) {

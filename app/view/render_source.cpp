@@ -207,6 +207,11 @@ glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
 }
 
 void RenderSource::checkView(const render::ViewSpec& spec) const {
+  const std::size_t keyframes = impl_->graph ? impl_->graph->size() : impl_->file_graph.keyframes.size();
+  if (spec.selected_keyframe >= static_cast<int>(keyframes))
+    throw std::invalid_argument(
+        "--select " + std::to_string(spec.selected_keyframe) + ": " + name_ +
+        (keyframes == 0 ? std::string(" has no keyframe") : " has keyframes 0.." + std::to_string(keyframes - 1)));
   if (spec.kind == render::ViewKind::kGlobal) return;
   const std::string view = viewName(spec);
   if (!impl_->graph)

@@ -645,6 +645,13 @@ const std::vector<BadCase>& badCases() {
       {"session", "render_suite_unknown_view_key", E::kCliError, "views.yaml:5: unknown view key 'colour'",
        then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - {name: a, map: s, colour: rgb}\n"),
             "render --suite {dir}/views.yaml --update")},
+      {"session", "render_select_outside_the_graph", E::kCliError, "--select 99: ",
+       args("render {dir}/s.vdmap --select 99 --out {dir}/o.png")},
+      {"session", "render_diff_not_png", E::kCliUsage, "--diff: '",
+       args("render {dir}/s.vdmap --expect {dir}/g.png --diff {dir}/d.jpg")},
+      {"session", "query_resolution_in_hexadecimal", E::kCliUsage,
+       "--resolution: '0x10': a number in another base (hexadecimal, binary, octal); write it in decimal",
+       args("query {dir}/s.vdmap --op octomap --resolution 0x10 --out {dir}/o.bt")},
       {"session", "render_suite_duplicate_key", E::kCliError, "views.yaml:7: key 'color' is given twice in one map",
        then(write("views.yaml", "version: 1\nout: out\nmaps: {s: s.vdmap}\nviews:\n  - name: a\n    color: rgb\n    "
                                 "color: height\n    map: s\n"),

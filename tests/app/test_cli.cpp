@@ -53,6 +53,14 @@ TEST(Cli, AFailedWriteIsAnErrorNamingIt) {
     EXPECT_TRUE(entry.path().filename() == "seq" || entry.path().filename() == "err") << entry.path() << " left behind";
 }
 
+TEST(Cli, EveryVerbTellsTheVersion) {
+  for (const char* verb : {"map", "render", "query", "gui"}) {
+    const auto r = runVdmap(std::string(verb) + " --version");
+    EXPECT_EQ(r.exit_code, 0) << verb << ": " << r.err;
+    EXPECT_EQ(r.out.rfind("vdmap ", 0), 0u) << verb << ": " << r.out;
+  }
+}
+
 TEST(Cli, BadInputIsOneLineErrorAndNonZeroExit) {
   const auto r = runVdmap("info /nonexistent/seq");
   EXPECT_EQ(r.exit_code, 1);
