@@ -34,6 +34,7 @@ bool ParameterEditor::edit(const Parameter& p, double value) {
 void ParameterEditor::applyThresholds() {
   if (!state_.worker || state_.staticMap()) return;  // a map file has nothing to rebuild
   try {
+    state_.edit_diff.edited(state_.worker->global(), state_.ui.params.global);
     state_.worker->setThresholds(state_.ui.params.global);
   } catch (const std::exception& e) {
     state_.report(StatusLine::Kind::kError, e.what());
