@@ -52,8 +52,8 @@ MapDiff diffMaps(std::shared_ptr<const GlobalSnapshot> before, std::shared_ptr<c
   const ParameterValues old_values{{}, before->params}, new_values{{}, after->params};
   for (const Parameter& p : parameters())
     if (p.live && p.get(old_values) != p.get(new_values))
-      d.edit += (d.edit.empty() ? "" : ", ") + std::string(p.label) + " " + formatValue(p, p.get(old_values)) +
-                " -> " + formatValue(p, p.get(new_values));
+      d.edit += (d.edit.empty() ? "" : ", ") + std::string(p.label) + " " + formatValue(p, p.get(old_values)) + " -> " +
+                formatValue(p, p.get(new_values));
   const std::vector<Ellipsoid>&old_map = before->map.ellipsoids, &new_map = after->map.ellipsoids;
   const KeySet old_keys = keysOf(old_map), new_keys = keysOf(new_map);
   for (const Ellipsoid& e : old_map)
