@@ -334,6 +334,16 @@ TEST(GuiSession, EditDiffShowsWhatAThresholdEditChanged) {
   EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), diff->after->map.ellipsoids.size() + diff->removed.size());
   bench.key(KeyAction::kEditDiff);
   EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), diff->after->map.ellipsoids.size());
+
+  // A refused edit changes nothing; the next one is compared with the map shown.
+  const auto shown_map = t.worker().global();
+  EXPECT_FALSE(bench.parameters().edit(*findParameter("merge_distance"), -1));
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 60));
+  t.worker().waitIdle();
+  bench.sync();
+  ASSERT_NE(bench.view().diff(), nullptr);
+  EXPECT_EQ(bench.view().diff()->before, shown_map);
+  EXPECT_EQ(bench.view().diff()->edit, "min points 3 -> 60");
 }
 
 TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
