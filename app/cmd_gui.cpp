@@ -219,6 +219,9 @@ void addGuiOptions(CLI::App& app, GuiArgs& args) {
       "--press", [&args](const std::string& keys) { args.script.press = gui::parseKeyNames(keys); },
       "scripted: keys pressed once mapping is done, before the screenshot (comma-separated: a-z, space, right, left, "
       "f1, esc, pgup, pgdn, each with ctrl+ before it for Ctrl; e.g. h for the help, ctrl+s to save the view)");
+  app.add_option("--edit", args.script.edit,
+                 "scripted: KEY=VALUE, a threshold edited once mapping is done, before the keys (as its slider "
+                 "does; D then shows what it changed); repeatable");
   app.add_option("--window-size", args.window_size, "WxH: the window's size for this run (not saved)");
   app.add_option("--drop", args.script.drop,
                  "scripted: PATH dropped on the window once mapping is done, before the screenshot (any kind the "

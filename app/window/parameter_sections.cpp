@@ -119,6 +119,19 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
   }
 }
 
+// "Show what the last edit changed" (D) and the last edit's counts.
+void drawEditDiff(Workbench& bench) {
+  UiState& ui = bench.ui();
+  const MapDiff* diff = bench.view().diff();
+  ImGui::BeginDisabled(!diff);
+  ImGui::Checkbox("Show what the last edit changed (D)", &ui.show_edit_diff);
+  ImGui::EndDisabled();
+  tip("The 3-D view shows the map of the last threshold edit with the ellipsoids it kept grey, those it added "
+      "(merged results, ellipsoids brought back) green and those it removed or merged away red (drawn from the map "
+      "before the edit). Ellipsoids match by keyframe and exact mean.");
+  if (diff) ImGui::TextWrapped("%s", diff->text().c_str());
+}
+
 }  // namespace
 
 void drawThresholds(Workbench& bench, WindowState& win) {
@@ -130,6 +143,7 @@ void drawThresholds(Workbench& bench, WindowState& win) {
   }
   if (file) return drawStaticMapFigures(bench, win);
   if (!win.global) return ImGui::TextWrapped("No global map yet: play or step the sequence.");
+  drawEditDiff(bench);
   drawMapFigures(bench, win);
 }
 

@@ -32,8 +32,8 @@ void drawPreparation(ImDrawList* draw, const WindowState& win) {
 
 // Top left: what the view does (follows the map, looks through a keyframe) and a banner while the
 // map before the last optimisation shows. The tracking lines' key is in the legend (render/legend.h).
-void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banner, const Rect& view,
-                   std::size_t strays) {
+void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banner, const Rect& view, std::size_t strays,
+                   const MapDiff* diff) {
   const float font = ImGui::GetFontSize(), pad = 0.6f * font;
   const char* mode = ui.view_from_keyframe >= 0 ? "view from keyframe (Esc leaves)"
                      : ui.follow_map            ? "following the map (a drag stops it, F resumes)"
@@ -51,6 +51,12 @@ void drawViewHints(ImDrawList* draw, const UiState& ui, const std::string& banne
     char text[96];
     std::snprintf(text, sizeof text, "%zu ellipsoid%s outside the frame", strays, strays == 1 ? "" : "s");
     draw->AddText({view.x + pad, line_y}, kOverlayDim, text);
+    line_y += 1.3f * font;
+  }
+  if (diff) {  // the last edit's diff (D)
+    const std::string text = diff->text() + " (removed red, new green, kept grey; D hides)";
+    draw->AddText(ImGui::GetFont(), ImGui::GetFontSize(), {view.x + pad, line_y}, kOverlayText, text.c_str(), nullptr,
+                  view.w - 2 * pad);
     line_y += 1.3f * font;
   }
   if (!banner.empty())  // names the optimisation B undoes (PoseEditor::beforeOptimisationBanner)
@@ -89,7 +95,12 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   // hides the map), colours, sigma, layers.
   // The height frame only where it shows (its data up axis costs a pass over the map per mapped frame).
   const bool heights = s.color == render::ColorMode::kHeight || s.slice.on;
-  mirror.setStyle(render::mirrorStyle(viewSpecOf(s), heights ? bench.view().heightFrame() : render::HeightFrame{}));
+  render::MirrorStyle style =
+      render::mirrorStyle(viewSpecOf(s), heights ? bench.view().heightFrame() : render::HeightFrame{});
+  // The last edit's diff (D) is drawn in its own colours (diffColoured), whatever the colour mode.
+  const bool diff = bench.view().shownDiff() != nullptr;
+  if (diff) style.color = render::ColorMode::kRgb;
+  mirror.setStyle(style);
   // The legend: the same function and pixels as `vdmap render` (render/legend.h).
   render::GraphScene keys;
   if (bench.isOpen()) {
@@ -101,8 +112,8 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   }
   render::Legend legend;
   if (s.show_legend) {
-    legend =
-        render::legendFor(s.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth, s.show_graph);
+    legend = render::legendFor(style.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth,
+                               s.show_graph);
     if (ui.query_slice) render::addQuerySliceKey(legend, ui.query_slice_spec);
   }
   mirror.setLegend(  // left of the up label at the bottom-right (framebuffer pixels)
@@ -113,9 +124,10 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     mirrored.session = bench.sessionSerial();
     mirrored.session_base += 1 << 20;
   }
-  if (win.global && s.slice.on) {
-    // The slice's selection (ViewController::shownMap): negative generations, distinct from every
-    // session's, so a new selection re-uploads (and re-orders the fast pass, re-keys the cache).
+  if (win.global && (s.slice.on || diff)) {
+    // The slice's selection or the diff (ViewController::shownMap): negative generations, distinct
+    // from every session's, so a new selection re-uploads (and re-orders the fast pass, re-keys
+    // the cache).
     const ViewController::ShownMap shown = bench.view().shownMap();
     mirror.setMap(-2 - shown.serial, *shown.ellipsoids);
   } else if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
@@ -253,7 +265,8 @@ void drawViewOverlay(Workbench& bench, const WindowState& win) {
     return;
   }
   const UiState& ui = bench.ui();
-  drawViewHints(draw, ui, bench.poses().beforeOptimisationBanner(*win.mapping), view, bench.view().framedStrays());
+  drawViewHints(draw, ui, bench.poses().beforeOptimisationBanner(*win.mapping), view, bench.view().framedStrays(),
+                bench.view().shownDiff());
   drawUpAxis(draw, ui, view);
 }
 

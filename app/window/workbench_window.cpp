@@ -85,6 +85,7 @@ std::optional<KeyAction> actionOf(int key, int mods) {
     case GLFW_KEY_T: return KeyAction::kFrameTrajectories;
     case GLFW_KEY_P: return KeyAction::kPivotHere;
     case GLFW_KEY_Q: return KeyAction::kProbe;
+    case GLFW_KEY_D: return KeyAction::kEditDiff;
     case GLFW_KEY_PAGE_UP: return KeyAction::kSliceUp;
     case GLFW_KEY_PAGE_DOWN: return KeyAction::kSliceDown;
     case GLFW_KEY_H:

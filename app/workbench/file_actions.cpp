@@ -217,6 +217,7 @@ int FileActions::openDropped() {
 
 void FileActions::opened(const std::string& path) {
   ++state_.session_serial;
+  state_.edit_diff.reset();
   if (std::exchange(height_for_rgb_, false) && ui_.settings.color == render::ColorMode::kHeight)
     ui_.settings.color = render::ColorMode::kRgb;  // as it was before a file without colours
   ui_.settings.last_sequence = path;

@@ -33,12 +33,14 @@ bool ParameterEditor::edit(const Parameter& p, double value) {
 
 void ParameterEditor::applyThresholds() {
   if (!state_.worker || state_.staticMap()) return;  // a map file has nothing to rebuild
+  auto shown = state_.worker->global();              // taken first: the worker may publish the edit's map at once
   try {
     state_.worker->setThresholds(state_.ui.params.global);
   } catch (const std::exception& e) {
     state_.report(StatusLine::Kind::kError, e.what());
     return;
   }
+  state_.edit_diff.edited(std::move(shown), state_.ui.params.global);
   if (!state_.savedSession()) state_.ui.settings.thresholds = state_.ui.params.global;
 }
 

@@ -79,6 +79,19 @@ bool measureLatency(ScriptRun& run, Workbench& bench, const std::shared_ptr<cons
 }
 // --- end latency
 
+// --edit KEY=VALUE: a live threshold edited as its slider does (a bad one goes to the status line,
+// which fails the run).
+void editScripted(Workbench& bench, const std::string& edit) {
+  const std::size_t eq = edit.find('=');
+  const Parameter* p = eq == std::string::npos ? nullptr : findParameter(edit.substr(0, eq));
+  if (!p || !p->live) return bench.report(StatusLine::Kind::kError, "--edit: no threshold KEY=VALUE: " + edit);
+  try {
+    bench.parameters().edit(*p, parseValue(*p, edit.substr(eq + 1)));
+  } catch (const std::exception& e) {
+    bench.report(StatusLine::Kind::kError, std::string("--edit: ") + e.what());
+  }
+}
+
 // --measure: the points under two pixels of the view as Ctrl+click finds them, from the depth
 // of the frame just drawn (ImGui draws without the depth test, so the scene's depth is intact).
 void measureScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
@@ -155,6 +168,11 @@ void writeStats(const ScriptRun& run, Workbench& bench, const ScriptFrame& frame
     stats["t_g_s"] = global->map.t_g_s;
     stats["merge_distance_m"] = global->params.merge_distance_m;
   }
+  if (const MapDiff* diff = bench.view().diff())
+    stats["edit_diff"] = {{"edit", diff->edit},
+                          {"removed", diff->removed.size()},
+                          {"added", diff->added_count},
+                          {"shown", bench.view().shownDiff() != nullptr}};
   stats["ui_frames_while_busy"] = run.busy_frame_ms.size();
   stats["ui_frame_ms_median_while_busy"] = median(run.busy_frame_ms);
   stats["layout"] = run.layout;
@@ -279,6 +297,7 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
       if (run.options.view) bench.view().applySpec(*run.options.view);
       else bench.view().resetView();
       if (run.options.keyframe >= 0) bench.poses().selectKeyframe(run.options.keyframe);
+      for (const std::string& edit : run.options.edit) editScripted(bench, edit);
       for (const int key : run.options.press) window.press(key);  // as if typed now
       for (const std::string& path : run.options.drop)
         bench.files().drop(path);  // as if dropped now (opened next frame)

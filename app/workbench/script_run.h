@@ -21,9 +21,11 @@ namespace vdmap::app::gui {
 
 /// The scripted path for tests and documentation screenshots.
 struct ScriptOptions {
-  bool play_to_end = false;      ///< press Play at start
-  int keyframe = -1;             ///< select this keyframe in the inspector before the screenshot
-  std::vector<int> press;        ///< keys pressed then, before the screenshot (the window's codes, parseKeyNames)
+  bool play_to_end = false;  ///< press Play at start
+  int keyframe = -1;         ///< select this keyframe in the inspector before the screenshot
+  std::vector<int> press;    ///< keys pressed then, before the screenshot (the window's codes, parseKeyNames)
+  /// Threshold edits KEY=VALUE made then, before the keys, as a slider makes them (stats: edit_diff).
+  std::vector<std::string> edit;
   bool expand_sections = false;  ///< every collapsible section of the panels open (layout checks)
   std::string screenshot;        ///< PNG of the window, taken once mapping and map building are done
   std::string stats_json;        ///< figures (Sigma_e, Sigma_e', t_g, UI frame time) written then too

@@ -363,15 +363,22 @@ ViewController::ShownMap ViewController::shownMap() const {
   const render::HeightFrame frame = heightFrame();  // clears the selection on a new map or up
   SliceCache& c = slice_cache_;
   const render::HeightSlice& slice = ui_.settings.slice;
-  if (!c.shown.ellipsoids || !(slice == c.slice)) {
+  const MapDiff* diff = shownDiff();
+  const int diff_serial = diff ? diff->serial : 0;
+  if (!c.shown.ellipsoids || !(slice == c.slice) || diff_serial != c.diff_serial) {
     c.slice = slice;
+    c.diff_serial = diff_serial;
     c.shown.serial = ++c.serial;
+    const auto map = diff ? std::make_shared<const std::vector<Ellipsoid>>(diffColoured(*diff))
+                          : std::shared_ptr<const std::vector<Ellipsoid>>(global, &global->map.ellipsoids);
     c.shown.ellipsoids =
-        slice.on
-            ? std::make_shared<const std::vector<Ellipsoid>>(render::slicedMap(global->map.ellipsoids, frame, slice))
-            : std::shared_ptr<const std::vector<Ellipsoid>>(global, &global->map.ellipsoids);
+        slice.on ? std::make_shared<const std::vector<Ellipsoid>>(render::slicedMap(*map, frame, slice)) : map;
   }
   return c.shown;
+}
+
+const MapDiff* ViewController::shownDiff() const {
+  return state_.edit_diff.shown(ui_.show_edit_diff, worker_ ? worker_->global() : nullptr);
 }
 
 void ViewController::moveSlice(int direction) {

@@ -99,13 +99,19 @@ class ViewController {
   /// (colour "height") and bound the slice. Computed once per map and up direction.
   render::HeightFrame heightFrame() const;
   /// What the 3-D view draws and picks of the global map: all of it, or with the settings' slice
-  /// on the ellipsoids it keeps (render::slicedMap, as `vdmap render --slice`). `serial` is
-  /// new whenever the selection is (a new map, up direction or slice). Null while none is open.
+  /// on the ellipsoids it keeps (render::slicedMap, as `vdmap render --slice`); while
+  /// ui().show_edit_diff shows the last edit's diff, its coloured map (diffColoured) instead of
+  /// the map. `serial` is new whenever the selection is (a new map, up direction, slice or
+  /// diff). Null while none is open.
   struct ShownMap {
     std::shared_ptr<const std::vector<Ellipsoid>> ellipsoids;
     int serial = 0;
   };
   ShownMap shownMap() const;
+  /// The last threshold edit's diff (EditDiffTracker::diff), null when there is none.
+  const MapDiff* diff() const { return state_.edit_diff.diff(); }
+  /// The diff the view draws (ui().show_edit_diff and a diff of the map shown), else null.
+  const MapDiff* shownDiff() const;
   /// PgUp / PgDn: the slice moves up (+1) or down (-1) by its thickness (one floor at a time).
   void moveSlice(int direction);
 
@@ -140,6 +146,7 @@ class ViewController {
     int serial = 0;
     render::HeightFrame frame;
     render::HeightSlice slice;
+    int diff_serial = 0;  // the diff shown (0: none)
     ShownMap shown;
   };
   mutable SliceCache slice_cache_;

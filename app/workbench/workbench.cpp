@@ -22,6 +22,7 @@ const std::vector<std::pair<const char*, const char*>>& keyHelp() {
       {"T", "frame the trajectories (tracked and ground truth) only"},
       {"PgUp / PgDn", "move the height slice up / down by its thickness (one floor)"},
       {"P, double-click", "turn about the point under the cursor (the eye stays)"},
+      {"D", "show what the last threshold edit changed: kept grey, new green, removed or merged red"},
       {"Q", "probe under the cursor: free / occupied / unknown, distance (Alt+wheel: offset)"},
       {"Ctrl+1..9 / 1..9", "keep the view in quick view 1..9 / show it again (kept across runs)"},
       {"Ctrl+click", "measure: point A, then B (the distance shows in the view and the Measure section)"},
@@ -64,6 +65,7 @@ void Workbench::sync() {
   queries_.sync();  // wanted by the probe or the slice; the slice's computation
   poses_.sync();
   player_.sync();
+  state_.edit_diff.sync(state_.worker->global());
   view_.sync();
 }
 
@@ -101,6 +103,7 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kSliceUp: view_.moveSlice(1); break;
     case KeyAction::kSliceDown: view_.moveSlice(-1); break;
     case KeyAction::kProbe: ui.probe = !ui.probe; break;
+    case KeyAction::kEditDiff: ui.show_edit_diff = !ui.show_edit_diff; break;
   }
 }
 

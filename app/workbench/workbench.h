@@ -41,7 +41,8 @@ enum class KeyAction {
   kPivotHere,
   kSliceUp,
   kSliceDown,  // height slice: PgUp / PgDn
-  kProbe       // point queries: Q
+  kProbe,      // point queries: Q
+  kEditDiff    // what the last threshold edit changed: D
 };
 
 /// The keys and mouse actions, for the help overlay and docs/workbench.md: {keys, what they do}.

@@ -10,6 +10,7 @@
 #include "app/cli/parameter_table.h"
 #include "app/cli/sequence_args.h"
 #include "app/view/settings.h"
+#include "app/workbench/edit_diff.h"
 #include "app/workbench/mapping_worker.h"
 #include "render/query_slice.h"
 #include "render/view_camera.h"
@@ -69,6 +70,8 @@ struct UiState {
   /// The map, keyframes and trajectory as they were before the last pose-graph optimisation
   /// (PoseEditor::showBeforeOptimisation); off again when there is none (after seeking back).
   bool show_before_optimisation = false;
+  /// The 3-D view shows what the last threshold edit changed (D; EditDiffTracker).
+  bool show_edit_diff = false;
   bool reset_layout = false;  ///< panels go back to their default widths next frame
   // The view tools: pick marker, keyframe list, measuring, quick views.
   /// The keyframe list scrolls to the selected keyframe once (set by a pick or a loop marker;
@@ -134,6 +137,8 @@ struct WorkbenchState {
   /// The thresholds `vdmap render` starts from for what is open: the defaults for a sequence, the
   /// saved ones for a session; none for a map file (it has no thresholds).
   std::optional<GlobalMapParams> render_thresholds;
+  /// What the last threshold edit changed (ParameterEditor sends edits, Workbench::sync follows).
+  EditDiffTracker edit_diff;
 
   /// Shows `text` in the status line (it stays until the next report or action).
   void report(StatusLine::Kind kind, std::string text);

@@ -145,6 +145,37 @@ int pixelsNear(const cv::Mat& bgr, const nlohmann::json& r, cv::Vec3b rgb, int t
   return n;
 }
 
+// --edit then D: the stats count what the edit removed and the 3-D view draws it red
+// (kDiffRemoved), which it does not without D.
+TEST(GuiCli, DShowsWhatAScriptedThresholdEditRemoved) {
+  VDMAP_REQUIRE_XVFB();
+  TempDir home;
+  writeTinySequence(home / "seq", 10);
+  const auto run = [&](const std::string& name, const std::string& keys) {
+    const fs::path png = home / (name + ".png"), json = home / (name + ".json");
+    const RunResult r =
+        runInXvfb(home, "gui '" + (home / "seq").string() +
+                            "' --set keyframe_every=3 min_points=3 --play-to-end --exit "
+                            "--window-size 1280x720 --edit min_points=60 " +
+                            keys + " --view-screenshot '" + png.string() + "' --stats-json '" + json.string() + "'");
+    EXPECT_EQ(r.exit_code, 0) << r.err;
+    const cv::Mat image = test::readImage(png);
+    int red = 0;  // shaded kDiffRemoved: red well above green and blue
+    for (auto p = image.begin<cv::Vec3b>(); p != image.end<cv::Vec3b>(); ++p)
+      red += (*p)[2] > 60 && (*p)[2] > 3 * std::max((*p)[0], (*p)[1]);
+    return std::pair(readJson(json), red);
+  };
+  const auto [stats, red] = run("d", "--press d");
+  const nlohmann::json& diff = stats["edit_diff"];
+  EXPECT_EQ(diff["edit"], "min points 3 -> 60") << stats.dump();
+  EXPECT_GT(diff["removed"].get<int>(), 0);
+  EXPECT_EQ(diff["shown"], true);
+  const auto [plain_stats, plain_red] = run("plain", "");
+  EXPECT_EQ(plain_stats["edit_diff"]["shown"], false);
+  EXPECT_EQ(plain_stats["edit_diff"]["removed"], diff["removed"]);
+  EXPECT_GT(red, plain_red + 1000) << "removed: red";  // ~15700 against ~200 (frustum lines)
+}
+
 // A tracked sequence that closes loops: the loop markers above the scrubber (left panel) and B
 // showing the map before the last optimisation, whose banner the 3-D view shows in the loop colour.
 TEST(GuiCli, TrackedLoopClosuresAreMarkedAndBShowsTheMapBeforeTheLastOptimisation) {

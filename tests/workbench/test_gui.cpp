@@ -266,6 +266,86 @@ TEST(GuiSession, KeyframesAreAtTheirScrubberPositionWithAFrameRange) {
   EXPECT_EQ(mapping->keyframes[1].frame, 3);  // depth frame 7
 }
 
+// The ellipsoids of `a` that no ellipsoid of `b` matches (same keyframe, same mean), compared
+// pair by pair: the reference for MapDiff.
+std::size_t countNotIn(const std::vector<Ellipsoid>& a, const std::vector<Ellipsoid>& b) {
+  std::size_t n = 0;
+  for (const Ellipsoid& e : a)
+    n += std::none_of(b.begin(), b.end(),
+                      [&](const Ellipsoid& f) { return f.keyframe == e.keyframe && f.mean == e.mean; });
+  return n;
+}
+
+// How many ellipsoids of `map` have colour `c`.
+std::size_t countColoured(const std::vector<Ellipsoid>& map, const Eigen::Vector3f& c) {
+  return std::count_if(map.begin(), map.end(), [&](const Ellipsoid& e) { return e.color == c; });
+}
+
+// A threshold edit's diff counts what the edit removed or merged away and what it added, as a
+// set difference of the two maps says; D draws it: kept grey, added green, removed red.
+TEST(GuiSession, EditDiffShowsWhatAThresholdEditChanged) {
+  TinyBench t;
+  Workbench& bench = t.bench;
+  bench.ui().params.global.filter.min_points = 3;  // keeps what the edits below remove
+  bench.parameters().applyThresholds();
+  t.mapAndFrame();
+  EXPECT_EQ(bench.view().diff(), nullptr);  // no edit yet (the one above had no map before it)
+  const auto before = t.worker().global();
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 60));
+  t.worker().waitIdle();
+  bench.sync();
+  const MapDiff* diff = bench.view().diff();
+  ASSERT_NE(diff, nullptr);
+  const auto after = t.worker().global();
+  EXPECT_EQ(diff->before, before);
+  EXPECT_EQ(diff->after, after);
+  const std::vector<Ellipsoid>&old_map = before->map.ellipsoids, &new_map = after->map.ellipsoids;
+  const std::size_t removed = countNotIn(old_map, new_map), added = countNotIn(new_map, old_map);
+  EXPECT_GT(removed, 0u);  // the cells of keyframes that integrated fewer frames
+  EXPECT_EQ(diff->removed.size(), removed);
+  EXPECT_EQ(diff->added_count, added);
+  EXPECT_EQ(diff->text(),
+            "min points 3 -> 60: " + std::to_string(removed) + " removed or merged, " + std::to_string(added) + " new");
+
+  // The view draws the map until D shows the diff, and again after a second D.
+  EXPECT_EQ(bench.view().shownDiff(), nullptr);
+  EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), new_map.size());
+  bench.key(KeyAction::kEditDiff);
+  ASSERT_EQ(bench.view().shownDiff(), diff);
+  const auto shown = bench.view().shownMap().ellipsoids;
+  ASSERT_EQ(shown->size(), new_map.size() + removed);
+  EXPECT_EQ(countColoured(*shown, kDiffAdded), added);
+  EXPECT_EQ(countColoured(*shown, kDiffRemoved), removed);
+  EXPECT_EQ(countColoured(*shown, kDiffKept), new_map.size() - added);
+
+  // The next edit is compared with the map of the one before, and the view shows its diff.
+  const int serial = bench.view().shownMap().serial;
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 3));
+  t.worker().waitIdle();
+  bench.sync();
+  diff = bench.view().diff();
+  ASSERT_NE(diff, nullptr);
+  EXPECT_EQ(diff->before, after);
+  EXPECT_EQ(diff->removed.size(), countNotIn(new_map, t.worker().global()->map.ellipsoids));
+  EXPECT_EQ(diff->added_count, countNotIn(t.worker().global()->map.ellipsoids, new_map));
+  EXPECT_EQ(diff->edit, "min points 60 -> 3");
+  EXPECT_EQ(diff->added_count, removed);  // brought back
+  EXPECT_NE(bench.view().shownMap().serial, serial);
+  EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), diff->after->map.ellipsoids.size() + diff->removed.size());
+  bench.key(KeyAction::kEditDiff);
+  EXPECT_EQ(bench.view().shownMap().ellipsoids->size(), diff->after->map.ellipsoids.size());
+
+  // A refused edit changes nothing; the next one is compared with the map shown.
+  const auto shown_map = t.worker().global();
+  EXPECT_FALSE(bench.parameters().edit(*findParameter("merge_distance"), -1));
+  ASSERT_TRUE(bench.parameters().edit(*findParameter("min_points"), 60));
+  t.worker().waitIdle();
+  bench.sync();
+  ASSERT_NE(bench.view().diff(), nullptr);
+  EXPECT_EQ(bench.view().diff()->before, shown_map);
+  EXPECT_EQ(bench.view().diff()->edit, "min points 3 -> 60");
+}
+
 TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   TinyBench t;
   Workbench& bench = t.bench;
