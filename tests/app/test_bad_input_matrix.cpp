@@ -684,6 +684,19 @@ const std::vector<BadCase>& badCases() {
                                          "property float y\nproperty float z\nend_header\n") +
                                  std::string("\0\0\0\0\0\0\0\0\0\0\x80\x3f\0\0\0\0\0\0\0\0\0\0\x80\x7f", 24)),
             "query {dir}/s.vdmap --op classify --points {dir}/pts.ply --out {dir}/out.ply")},
+      // Records lie within 10 km of the origin (as poses), so that every answer stays finite.
+      {"session", "query_distance_far_point", E::kCliError, "pts.txt:2: x is 3.4e+38: query records lie within 10000 m of the origin",
+       then(write("pts.txt", "0 0 1\n3.4e38 0 0\n"), "query {dir}/s.vdmap --op distance --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_classify_far_point", E::kCliError, "pts.txt:1: z is -100000: query records lie within",
+       then(write("pts.txt", "0 0 -1e5\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_collide_huge_radius", E::kCliError, "pts.txt:1: r is 1e+39: query records lie within",
+       then(write("pts.txt", "0 0 1 1e39 2\n"), "query {dir}/s.vdmap --op collide --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_ray_far_range", E::kCliError, "pts.txt:1: max_range is 1e+30: query records lie within",
+       then(write("pts.txt", "0 0 1 0 0 1 1e30\n"), "query {dir}/s.vdmap --op ray --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_ply_vertex_far", E::kCliError, "pts.ply: vertex 0: y is 3e+38: query records lie within",
+       then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n0 3e38 1\n"),
+            "query {dir}/s.vdmap --op distance --points {dir}/pts.ply --out {dir}/out.ply")},
       {"session", "query_ply_without_radius", E::kCliError, "pts.ply: the vertex element has no property 'radius'",
        then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                              "property float z\nend_header\n0 0 1\n"),
