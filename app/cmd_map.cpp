@@ -255,7 +255,10 @@ void runMap(MapArgs args) {
     QueryParams query;
     query.threads = args.params.global.threads;
     grid = withStageBar("occupancy grid", [&] {
-      return computeOccupancyGrid(graph.size() ? QueryMap::build(graph, global, query) : QueryMap(), spec);
+      const QueryMap map = graph.size() ? QueryMap::build(graph, global, query) : QueryMap();
+      if (const std::string note = gridBandClipNote(spec, layOutOccupancyGrid(map, spec), "--grid-band"); !note.empty())
+        std::fprintf(stderr, "vdmap map: note: %s\n", note.c_str());
+      return computeOccupancyGrid(map, spec);
     });
   }
   if (!args.json) printKeyframeTable(graph, global);

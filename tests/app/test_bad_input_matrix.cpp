@@ -731,6 +731,14 @@ const std::vector<BadCase>& badCases() {
        args("query {dir}/s.vdmap --op grid --out {dir}/out.yaml")},
       {"session", "query_grid_band_reversed", E::kCliUsage, "--band: '2:1': expected LO:HI with LO < HI",
        args("query {dir}/s.vdmap --op grid --band 2:1 --out {dir}/out.yaml")},
+      // A grid is clipped to the map's extent along up, and refused before any query when it would
+      // ask too many points or lies outside the map.
+      {"session", "query_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
+       args("query {dir}/s.vdmap --op grid --up -y --band -1e30:1e30 --resolution 0.001 --out {dir}/out.yaml")},
+      {"session", "query_grid_band_outside_the_map", E::kCliError, "the band 5000:6000 m lies outside the map's",
+       args("query {dir}/s.vdmap --op grid --up -y --band 5000:6000 --out {dir}/out.yaml")},
+      {"command_line", "map_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
+       args("map {dir}/seq --out {dir}/out --grid 0.0005 --grid-band -1e30:1e30")},
       {"session", "query_points_with_grid", E::kCliUsage, "--points: applies to --op classify, distance, collide and ray only",
        then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op grid --band 0:1 --points {dir}/pts.txt --out {dir}/out.yaml")},
       {"session", "query_octomap_resolution_zero", E::kCliUsage, "--resolution: must be a number > 0, got 0",
