@@ -737,6 +737,8 @@ const std::vector<BadCase>& badCases() {
        args("query {dir}/s.vdmap --op grid --up -y --band -1e30:1e30 --resolution 0.001 --out {dir}/out.yaml")},
       {"session", "query_grid_band_outside_the_map", E::kCliError, "the band 5000:6000 m lies outside the map's",
        args("query {dir}/s.vdmap --op grid --up -y --band 5000:6000 --out {dir}/out.yaml")},
+      {"command_line", "map_grid_band_beyond_any_map", E::kCliError, "--grid-band 1e30:2e30 lies beyond any map: poses lie within 10000 m",
+       args("map {dir}/seq --out {dir}/out --grid 0.05 --grid-band 1e30:2e30")},
       {"command_line", "map_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
        args("map {dir}/seq --out {dir}/out --grid 0.0005 --grid-band -1e30:1e30")},
       {"session", "query_points_with_grid", E::kCliUsage, "--points: applies to --op classify, distance, collide and ray only",
