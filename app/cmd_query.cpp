@@ -290,6 +290,9 @@ nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map, const Eigen::
     if (const double deg = degreesBetween(w, data_up); deg < nearest_deg) nearest = axis, nearest_deg = deg;
   }
   spec.up = args.up == "data" ? nearest : parseUpAxis(args.up);
+  // Clipped, or refused (outside the map, too many points to ask) in one line before any query.
+  const std::string clip_note = gridBandClipNote(spec, layOutOccupancyGrid(map, spec), "--band");
+  if (!clip_note.empty()) std::fprintf(stderr, "vdmap query: note: %s\n", clip_note.c_str());
   Eigen::Vector3d u, v, w;
   gridAxes(spec.up, &u, &v, &w);
   const double off_deg = degreesBetween(w, data_up);
@@ -303,9 +306,6 @@ nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map, const Eigen::
                  "vdmap query: note: grid up %s is %.0f degrees from the session's estimated up (%.2f, %.2f, %.2f); "
                  "--up %s (or data) is %.1f degrees from it\n",
                  upAxisName(spec.up), off_deg, data_up.x(), data_up.y(), data_up.z(), upAxisName(nearest), nearest_deg);
-  // Clipped or refused (too many points to ask) before any query.
-  if (const std::string note = gridBandClipNote(spec, layOutOccupancyGrid(map, spec), "--band"); !note.empty())
-    std::fprintf(stderr, "vdmap query: note: %s\n", note.c_str());
   const auto start = std::chrono::steady_clock::now();
   std::unique_ptr<ProgressBar> bar;
   const OccupancyGrid grid = computeOccupancyGrid(map, spec, [&bar](std::size_t done, std::size_t total) {

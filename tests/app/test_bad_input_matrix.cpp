@@ -734,9 +734,9 @@ const std::vector<BadCase>& badCases() {
       // A grid is clipped to the map's extent along up, and refused before any query when it would
       // ask too many points or lies outside the map.
       {"session", "query_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
-       args("query {dir}/s.vdmap --op grid --up -y --band -1e30:1e30 --resolution 0.001 --out {dir}/out.yaml")},
+       args("query {dir}/s.vdmap --op grid --band -1e30:1e30 --resolution 0.001 --out {dir}/out.yaml")},
       {"session", "query_grid_band_outside_the_map", E::kCliError, "the band 5000:6000 m lies outside the map's",
-       args("query {dir}/s.vdmap --op grid --up -y --band 5000:6000 --out {dir}/out.yaml")},
+       args("query {dir}/s.vdmap --op grid --band 5000:6000 --out {dir}/out.yaml")},
       {"command_line", "map_grid_band_beyond_any_map", E::kCliError, "--grid-band 1e30:2e30 lies beyond any map: poses lie within 10000 m",
        args("map {dir}/seq --out {dir}/out --grid 0.05 --grid-band 1e30:2e30")},
       {"command_line", "map_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
