@@ -28,6 +28,7 @@
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
+#include "mapping/io/trajectory_io.h"
 
 namespace vdmap::app {
 namespace {
@@ -74,6 +75,17 @@ void checkMapArgs(const MapArgs& args) {
   // DIR is created only when there is a map to write, so a failed run leaves nothing behind.
   checkExportFolder(args.out);
   if (!args.save.empty()) checkOutputFile(args.save, "--save");
+  if (args.grid_resolution_m > 0) {
+    // Poses lie within kMaxPoseDistanceM and depth within --max-depth: a band beyond both holds
+    // nothing of any map. Within, the band is clipped to the map's extent once it is mapped.
+    const auto [lo, hi] = parseGridBand(args.grid_band);
+    const double depth = args.params.mapper.local_map.depth_range.max_m, reach = kMaxPoseDistanceM + depth;
+    char text[256];
+    std::snprintf(text, sizeof text,
+                  " lies beyond any map: poses lie within %g m of the origin and depth within --max-depth (%g m)",
+                  kMaxPoseDistanceM, depth);
+    if (lo > reach || hi < -reach) throw std::invalid_argument("--grid-band " + args.grid_band + text);
+  }
   checkNotAnInput(args.save, "--save", {{"SEQ", args.sequence.folder}, {"--load", args.load}});
   if (!args.load.empty() && !isSessionPath(args.load))
     throw InputError(args.load, std::filesystem::exists(args.load) ? "not a vdmap session file (--load)"
@@ -255,7 +267,10 @@ void runMap(MapArgs args) {
     QueryParams query;
     query.threads = args.params.global.threads;
     grid = withStageBar("occupancy grid", [&] {
-      return computeOccupancyGrid(graph.size() ? QueryMap::build(graph, global, query) : QueryMap(), spec);
+      const QueryMap map = graph.size() ? QueryMap::build(graph, global, query) : QueryMap();
+      if (const std::string note = gridBandClipNote(spec, layOutOccupancyGrid(map, spec), "--grid-band"); !note.empty())
+        std::fprintf(stderr, "vdmap map: note: %s\n", note.c_str());
+      return computeOccupancyGrid(map, spec);
     });
   }
   if (!args.json) printKeyframeTable(graph, global);

@@ -290,6 +290,9 @@ nlohmann::json runGrid(const QueryArgs& args, const QueryMap& map, const Eigen::
     if (const double deg = degreesBetween(w, data_up); deg < nearest_deg) nearest = axis, nearest_deg = deg;
   }
   spec.up = args.up == "data" ? nearest : parseUpAxis(args.up);
+  // Clipped, or refused (outside the map, too many points to ask) in one line before any query.
+  const std::string clip_note = gridBandClipNote(spec, layOutOccupancyGrid(map, spec), "--band");
+  if (!clip_note.empty()) std::fprintf(stderr, "vdmap query: note: %s\n", clip_note.c_str());
   Eigen::Vector3d u, v, w;
   gridAxes(spec.up, &u, &v, &w);
   const double off_deg = degreesBetween(w, data_up);

@@ -14,6 +14,7 @@
 #include "mapping/core/error.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
+#include "mapping/io/trajectory_io.h"
 
 namespace vdmap::app {
 namespace {
@@ -37,10 +38,22 @@ std::string number(double v) {
   return text;
 }
 
-// Checks and stores one record's values (already finite numbers); `where` throws the error for
-// this record with a message.
+// "No surface" (+inf) in the answers: the largest float, so that no output holds a non-finite
+// value. Records lie within kMaxPoseDistanceM, so every real distance is far below it.
+double finiteAnswer(double v) { return std::isfinite(v) ? v : std::numeric_limits<float>::max(); }
+
+// Checks and stores one record's values (already finite numbers, named `names`); `fail` throws
+// the error for this record with a message.
 template <typename Fail>
-void addRecord(QueryOp op, const std::vector<double>& v, double max_range_m, QueryInput* input, const Fail& fail) {
+void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::string>& names, double max_range_m,
+               QueryInput* input, const Fail& fail) {
+  // Coordinates (and radii, directions, ranges) as poses: within 10 km, where the float outputs
+  // keep a millimetre and every distance stays finite.
+  const std::size_t lengths = op == QueryOp::kCollide ? 4 : v.size();  // not the body number
+  for (std::size_t i = 0; i < std::min(lengths, v.size()); ++i)
+    if (std::abs(v[i]) > kMaxPoseDistanceM)
+      fail(names[i] + " is " + number(v[i]) + ": query records lie within " +
+           std::to_string(static_cast<int>(kMaxPoseDistanceM)) + " m of the origin");
   const Eigen::Vector3d p(v[0], v[1], v[2]);
   switch (op) {
     case QueryOp::kCollide: {
@@ -82,6 +95,10 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
   std::string text;
   std::vector<std::string> tokens;
   std::vector<double> values;
+  // parseListNumber's messages name the column ("x is not finite ('nan')").
+  static const std::vector<std::string> kNames[3] = {
+      {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
+  const std::vector<std::string>& names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
   for (int line = 1; std::getline(in, text); ++line) {
     if (!text.empty() && text.back() == '\r') text.pop_back();
     const auto first = text.find_first_not_of(" \t");
@@ -99,13 +116,9 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
                            std::to_string(tokens.size()) + " fields");
     values.clear();
     for (std::size_t i = 0; i < tokens.size(); ++i) {
-      // parseListNumber's messages name the column ("x is not finite ('nan')").
-      static const char* const kNames[3][7] = {
-          {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
-      const int kind = op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0;
-      values.push_back(parseListNumber(tokens[i], file, line, kNames[kind][i]));
+      values.push_back(parseListNumber(tokens[i], file, line, names[i].c_str()));
     }
-    addRecord(op, values, max_range_m, &input,
+    addRecord(op, values, names, max_range_m, &input,
               [&](const std::string& what) { throw InputError(file.string(), line, what); });
   }
   if (in.bad()) throw InputError(file.string(), "cannot be read");
@@ -130,6 +143,8 @@ QueryInput readPly(const fs::path& file, QueryOp op, double max_range_m) {
   }
   for (const char* name : optional)
     if (const int c = table.column(name); c >= 0) columns.push_back(c);
+  std::vector<std::string> names;
+  for (const int c : columns) names.push_back(table.names[static_cast<std::size_t>(c)]);
   QueryInput input;
   std::vector<double> values;
   for (std::size_t i = 0; i < table.count; ++i) {
@@ -139,11 +154,10 @@ QueryInput readPly(const fs::path& file, QueryOp op, double max_range_m) {
     values.clear();
     for (std::size_t k = 0; k < columns.size(); ++k) {
       const double v = table.at(i, columns[k]);
-      if (!std::isfinite(v))
-        fail(table.names[static_cast<std::size_t>(columns[k])] + " is not finite (" + number(v) + ")");
+      if (!std::isfinite(v)) fail(names[k] + " is not finite (" + number(v) + ")");
       values.push_back(v);
     }
-    addRecord(op, values, max_range_m, &input, fail);
+    addRecord(op, values, names, max_range_m, &input, fail);
   }
   return input;
 }
@@ -160,8 +174,7 @@ struct PlyBody {
   void put3(const Eigen::Vector3d& v) {
     for (int k = 0; k < 3; ++k) put(static_cast<float>(v[k]));
   }
-  // PLY files vdmap writes hold no non-finite value: "no surface" (+inf) is the largest float.
-  void putDistance(double v) { put(std::isfinite(v) ? static_cast<float>(v) : std::numeric_limits<float>::max()); }
+  void putDistance(double v) { put(static_cast<float>(finiteAnswer(v))); }
   void rgb(std::uint8_t r, std::uint8_t g, std::uint8_t b) { put(r), put(g), put(b); }
 };
 
@@ -212,15 +225,15 @@ std::string queryAnswersText(QueryOp op, const QueryInput& input, const QueryAns
     case QueryOp::kDistance:
       out.reserve(a.distances.size() * 48);
       for (const DistanceResult& d : a.distances) {
-        std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g\n", d.distance_m, d.gradient.x(), d.gradient.y(),
-                      d.gradient.z());
+        std::snprintf(line, sizeof line, "%.9g %.9g %.9g %.9g\n", finiteAnswer(d.distance_m), d.gradient.x(),
+                      d.gradient.y(), d.gradient.z());
         out += line;
       }
       break;
     case QueryOp::kCollide:
       for (const BodyCollision& b : a.bodies) {
         std::snprintf(line, sizeof line, "%d %d %d %.9g %d\n", b.body, b.collides ? 1 : 0, b.touches_unknown ? 1 : 0,
-                      b.clearance_m, b.sphere);
+                      finiteAnswer(b.clearance_m), b.sphere);
         out += line;
       }
       break;

@@ -32,7 +32,8 @@ struct QueryInput {
 /// [max_range]`; `.ply` (any PLY's vertex element): x y z, + radius [body] (collide), + nx ny nz
 /// [max_range] (ray: the direction). A ray without its own max_range gets `max_range_m`. Throws
 /// InputError "FILE:LINE: ..." (text) or "FILE: vertex N: ..." (PLY; N from 0) for a wrong column
-/// count, a value that is not a finite number, a radius <= 0, a body that is not a whole number,
+/// count, a value that is not a finite number, a value other than the body beyond
+/// kMaxPoseDistanceM (so every answer is a finite float), a radius <= 0, a body that is not a whole number,
 /// a zero direction or a max_range <= 0; "FILE: ..." for no records, a missing property or another
 /// extension.
 QueryInput readQueryInput(const std::filesystem::path& file, QueryOp op, double max_range_m);
@@ -45,9 +46,9 @@ struct QueryAnswers {
   std::vector<RayHit> hits;               ///< ray
 };
 
-/// The text output (%.9g): classify `CLASS p keyframe ellipsoid`; distance `d gx gy gz` (`inf 0 0
-/// 0` when no surface is near enough); collide one line per body `body collides touches_unknown
-/// clearance sphere` (0/1 flags); ray `hit t x y z nx ny nz ellipsoid` or `miss`.
+/// The text output (%.9g): classify `CLASS p keyframe ellipsoid`; distance `d gx gy gz` (`3.40282347e+38
+/// 0 0 0`, the largest float, when no surface is near enough); collide one line per body `body
+/// collides touches_unknown clearance sphere` (0/1 flags; the same largest float for no surface); ray `hit t x y z nx ny nz ellipsoid` or `miss`.
 std::string queryAnswersText(QueryOp op, const QueryInput& input, const QueryAnswers& answers);
 
 /// The PLY output (binary little endian): the input's vertices (x y z float; + radius, body for

@@ -63,7 +63,7 @@ void OccupancyGridSpec::validate() const {
     throw std::invalid_argument("the grid band LO:HI must have finite ends and LO < HI");
 }
 
-OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec& spec, const ExportProgress& progress) {
+OccupancyGridLayout layOutOccupancyGrid(const QueryMap& map, const OccupancyGridSpec& spec) {
   spec.validate();
   Eigen::Vector3d lo, hi;
   map.seenBounds(&lo, &hi);
@@ -72,37 +72,78 @@ OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec&
         "the map sees nothing (no keyframe with a kept cell): there is no extent to lay a grid over");
   Eigen::Vector3d au, av, aw;
   gridAxes(spec.up, &au, &av, &aw);
-  // The seen box's extent along u and v (the axes are signed unit axes, so its corners' extremes).
-  double u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY;
+  // The seen box's extent along u, v and w (the axes are signed unit axes, so its corners' extremes).
+  double u_lo = INFINITY, u_hi = -INFINITY, v_lo = INFINITY, v_hi = -INFINITY, w_lo = INFINITY, w_hi = -INFINITY;
   for (int corner = 0; corner < 8; ++corner) {
     const Eigen::Vector3d c((corner & 1) ? hi.x() : lo.x(), (corner & 2) ? hi.y() : lo.y(),
                             (corner & 4) ? hi.z() : lo.z());
     u_lo = std::min(u_lo, au.dot(c)), u_hi = std::max(u_hi, au.dot(c));
     v_lo = std::min(v_lo, av.dot(c)), v_hi = std::max(v_hi, av.dot(c));
+    w_lo = std::min(w_lo, aw.dot(c)), w_hi = std::max(w_hi, aw.dot(c));
   }
   const double res = spec.resolution_m;
-  OccupancyGrid grid;
-  grid.resolution_m = res;
-  grid.up = spec.up;
-  grid.origin_m = {std::floor(u_lo / res) * res, std::floor(v_lo / res) * res};
-  const double width = std::max(1.0, std::ceil((u_hi - grid.origin_m.x()) / res));
-  const double height = std::max(1.0, std::ceil((v_hi - grid.origin_m.y()) / res));
+  OccupancyGridLayout g;
+  g.seen_lo_m = std::floor(w_lo / res) * res;
+  g.seen_hi_m = std::ceil(w_hi / res) * res;
+  g.band_lo_m = std::max(spec.band_lo_m, g.seen_lo_m);
+  g.band_hi_m = std::min(spec.band_hi_m, g.seen_hi_m);
+  g.clipped = g.band_lo_m != spec.band_lo_m || g.band_hi_m != spec.band_hi_m;
+  char text[320];
+  if (!(g.band_lo_m < g.band_hi_m)) {
+    std::snprintf(text, sizeof text,
+                  "the band %g:%g m lies outside the map's %.2f:%.2f m along %s: give a band within it", spec.band_lo_m,
+                  spec.band_hi_m, g.seen_lo_m, g.seen_hi_m, upAxisName(spec.up));
+    throw std::invalid_argument(text);
+  }
+  g.origin_m = {std::floor(u_lo / res) * res, std::floor(v_lo / res) * res};
+  const double width = std::max(1.0, std::ceil((u_hi - g.origin_m.x()) / res));
+  const double height = std::max(1.0, std::ceil((v_hi - g.origin_m.y()) / res));
   if (width * height > static_cast<double>(kMaxGridCells)) {
-    char text[256];
     std::snprintf(text, sizeof text,
                   "a grid of resolution %g m over the seen %.3g x %.3g m would have %.3g cells (at most %zu): give a "
                   "coarser resolution",
                   res, u_hi - u_lo, v_hi - v_lo, width * height, kMaxGridCells);
     throw std::invalid_argument(text);
   }
-  grid.width = static_cast<int>(width);
-  grid.height = static_cast<int>(height);
+  // Sub-boxes: 2 x 2 per cell, `layers` along the band, each at most min(2 cm, res / 2) tall.
+  const double layers = std::max(1.0, std::ceil((g.band_hi_m - g.band_lo_m) / std::min(0.02, res / 2) - 1e-9));
+  g.samples = width * height * 4 * layers;
+  if (g.samples > kMaxGridSamples) {
+    std::snprintf(text, sizeof text,
+                  "a grid of resolution %g m over the seen %.3g x %.3g m and the band %g:%g m would ask %.3g points "
+                  "(at most %.3g): give a coarser resolution or a narrower band",
+                  res, u_hi - u_lo, v_hi - v_lo, g.band_lo_m, g.band_hi_m, g.samples, kMaxGridSamples);
+    throw std::invalid_argument(text);
+  }
+  g.width = static_cast<int>(width);
+  g.height = static_cast<int>(height);
+  g.layers = static_cast<int>(layers);
+  return g;
+}
+
+std::string gridBandClipNote(const OccupancyGridSpec& spec, const OccupancyGridLayout& layout, const char* option) {
+  if (!layout.clipped) return "";
+  char text[256];
+  std::snprintf(text, sizeof text, "%s %g:%g clipped to the map's %g:%g m along %s", option, spec.band_lo_m,
+                spec.band_hi_m, layout.band_lo_m, layout.band_hi_m, upAxisName(spec.up));
+  return text;
+}
+
+OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec& spec, const ExportProgress& progress) {
+  const OccupancyGridLayout layout = layOutOccupancyGrid(map, spec);
+  Eigen::Vector3d au, av, aw;
+  gridAxes(spec.up, &au, &av, &aw);
+  const double res = spec.resolution_m;
+  OccupancyGrid grid;
+  grid.resolution_m = res;
+  grid.up = spec.up;
+  grid.origin_m = layout.origin_m;
+  grid.width = layout.width;
+  grid.height = layout.height;
   grid.cells.assign(static_cast<std::size_t>(grid.width) * grid.height, kGridUnknown);
 
-  // Sub-boxes: 2 x 2 per cell, `layers` along the band, each at most min(2 cm, res / 2) tall.
-  const double band = spec.band_hi_m - spec.band_lo_m;
-  const int layers = static_cast<int>(std::max(1.0, std::ceil(band / std::min(0.02, res / 2) - 1e-9)));
-  const double hz = band / layers, hxy = res / 2;
+  const int layers = layout.layers;
+  const double hz = (layout.band_hi_m - layout.band_lo_m) / layers, hxy = res / 2;
   const double half_diagonal = 0.5 * std::sqrt(2 * hxy * hxy + hz * hz);
   const std::size_t per_cell = 4 * static_cast<std::size_t>(layers);
   std::vector<Eigen::Vector3d> samples(static_cast<std::size_t>(grid.width) * per_cell);
@@ -117,7 +158,7 @@ OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec&
         for (int l = 0; l < layers; ++l) {
           const double u = grid.origin_m.x() + (i + 0.25 + 0.5 * (s & 1)) * res;
           const double v = grid.origin_m.y() + (j + 0.25 + 0.5 * (s >> 1)) * res;
-          const double w = spec.band_lo_m + (l + 0.5) * hz;
+          const double w = layout.band_lo_m + (l + 0.5) * hz;
           samples[static_cast<std::size_t>(i) * per_cell + s * layers + l] = u * au + v * av + w * aw;
         }
     // Distances stop early past twice the half-diagonal: beyond it only "farther" matters.

@@ -49,6 +49,29 @@ inline constexpr std::uint8_t kGridUnknown = 205;
 
 /// Most cells a grid may have (a resolution far too fine for the map's extent is refused).
 inline constexpr std::size_t kMaxGridCells = std::size_t{1} << 28;
+/// Most points a grid may ask the map about (cells x sub-boxes per cell; a few minutes of queries).
+inline constexpr double kMaxGridSamples = 268435456.0;  // 2^28
+
+/// Where a grid lies: computed from the map's seen box alone, before any query.
+struct OccupancyGridLayout {
+  int width = 0, height = 0;
+  Eigen::Vector2d origin_m{0, 0};
+  double band_lo_m = 0, band_hi_m = 0;  ///< the band clipped to the map's extent along up
+  double seen_lo_m = 0, seen_hi_m = 0;  ///< that extent, widened to multiples of the resolution
+  bool clipped = false;                 ///< the band reached beyond the extent
+  int layers = 0;                       ///< sub-boxes along the band
+  double samples = 0;                   ///< distance samples: width x height x 4 x layers
+};
+
+/// The layout of `spec`'s grid over `map`: the band is clipped to the seen box's extent along up
+/// (widened outward to multiples of the resolution), so a huge band costs what the map holds.
+/// Throws std::invalid_argument for a bad spec, an empty map, a band outside that extent, more
+/// than kMaxGridCells cells or kMaxGridSamples samples (each one line with the estimate and
+/// what to change).
+OccupancyGridLayout layOutOccupancyGrid(const QueryMap& map, const OccupancyGridSpec& spec);
+
+/// "--band 0:1e30 clipped to the map's -0.05:1.95 m" when `layout` clipped the band, else "".
+std::string gridBandClipNote(const OccupancyGridSpec& spec, const OccupancyGridLayout& layout, const char* option);
 
 struct OccupancyGrid {
   int width = 0, height = 0;  ///< cells along u and v
@@ -65,8 +88,8 @@ struct OccupancyGrid {
 /// centre is within its half-diagonal of a surface (QueryMap::distance) makes the cell occupied
 /// (the sphere around it covers the box, so no surface in the band is missed); else the cell is
 /// free when some sub-box centre is classified free; else unknown. The grid covers
-/// QueryMap::seenBounds, its origin a multiple of the resolution. Throws std::invalid_argument
-/// for a bad spec, an empty map (nothing seen: no extent) or more than kMaxGridCells cells.
+/// QueryMap::seenBounds, its origin a multiple of the resolution, over the band clipped to it
+/// (layOutOccupancyGrid, whose errors it throws).
 /// `progress` is called after each row with (rows done, rows).
 OccupancyGrid computeOccupancyGrid(const QueryMap& map, const OccupancyGridSpec& spec,
                                    const ExportProgress& progress = {});

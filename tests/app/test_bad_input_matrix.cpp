@@ -717,6 +717,19 @@ const std::vector<BadCase>& badCases() {
                                          "property float y\nproperty float z\nend_header\n") +
                                  std::string("\0\0\0\0\0\0\0\0\0\0\x80\x3f\0\0\0\0\0\0\0\0\0\0\x80\x7f", 24)),
             "query {dir}/s.vdmap --op classify --points {dir}/pts.ply --out {dir}/out.ply")},
+      // Records lie within 10 km of the origin (as poses), so that every answer stays finite.
+      {"session", "query_distance_far_point", E::kCliError, "pts.txt:2: x is 3.4e+38: query records lie within 10000 m of the origin",
+       then(write("pts.txt", "0 0 1\n3.4e38 0 0\n"), "query {dir}/s.vdmap --op distance --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_classify_far_point", E::kCliError, "pts.txt:1: z is -100000: query records lie within",
+       then(write("pts.txt", "0 0 -1e5\n"), "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_collide_huge_radius", E::kCliError, "pts.txt:1: r is 1e+39: query records lie within",
+       then(write("pts.txt", "0 0 1 1e39 2\n"), "query {dir}/s.vdmap --op collide --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_ray_far_range", E::kCliError, "pts.txt:1: max_range is 1e+30: query records lie within",
+       then(write("pts.txt", "0 0 1 0 0 1 1e30\n"), "query {dir}/s.vdmap --op ray --points {dir}/pts.txt --out {dir}/out.ply")},
+      {"session", "query_ply_vertex_far", E::kCliError, "pts.ply: vertex 0: y is 3e+38: query records lie within",
+       then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
+                             "property float z\nend_header\n0 3e38 1\n"),
+            "query {dir}/s.vdmap --op distance --points {dir}/pts.ply --out {dir}/out.ply")},
       {"session", "query_ply_without_radius", E::kCliError, "pts.ply: the vertex element has no property 'radius'",
        then(write("pts.ply", "ply\nformat ascii 1.0\nelement vertex 1\nproperty float x\nproperty float y\n"
                              "property float z\nend_header\n0 0 1\n"),
@@ -751,6 +764,16 @@ const std::vector<BadCase>& badCases() {
        args("query {dir}/s.vdmap --op grid --out {dir}/out.yaml")},
       {"session", "query_grid_band_reversed", E::kCliUsage, "--band: '2:1': expected LO:HI with LO < HI",
        args("query {dir}/s.vdmap --op grid --band 2:1 --out {dir}/out.yaml")},
+      // A grid is clipped to the map's extent along up, and refused before any query when it would
+      // ask too many points or lies outside the map.
+      {"session", "query_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
+       args("query {dir}/s.vdmap --op grid --band -1e30:1e30 --resolution 0.001 --out {dir}/out.yaml")},
+      {"session", "query_grid_band_outside_the_map", E::kCliError, "the band 5000:6000 m lies outside the map's",
+       args("query {dir}/s.vdmap --op grid --band 5000:6000 --out {dir}/out.yaml")},
+      {"command_line", "map_grid_band_beyond_any_map", E::kCliError, "--grid-band 1e30:2e30 lies beyond any map: poses lie within 10000 m",
+       args("map {dir}/seq --out {dir}/out --grid 0.05 --grid-band 1e30:2e30")},
+      {"command_line", "map_grid_too_fine", E::kCliError, "points (at most 2.68e+08): give a coarser resolution or a narrower band",
+       args("map {dir}/seq --out {dir}/out --grid 0.0005 --grid-band -1e30:1e30")},
       {"session", "query_points_with_grid", E::kCliUsage, "--points: applies to --op classify, distance, collide and ray only",
        then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op grid --band 0:1 --points {dir}/pts.txt --out {dir}/out.yaml")},
       {"session", "query_octomap_resolution_zero", E::kCliUsage, "--resolution: must be a number > 0, got 0",

@@ -474,6 +474,31 @@ TEST(QueryCli, GridParsesBackAndFollowsTheColumnRule) {
   EXPECT_EQ(flipped.size(), pgm.size());
 }
 
+// A band beyond the map is clipped to its extent along up (a note on stderr): the grid is the one
+// of that extent, at its cost; vdmap map --grid-band clips alike.
+TEST(QueryCli, AHugeBandIsClippedToTheMap) {
+  const Fixture& f = fixture();
+  TempDir tmp;
+  const RunResult huge =
+      runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band -1e30:1e30 --out " + q(tmp / "h.yaml"));
+  ASSERT_EQ(huge.exit_code, 0) << huge.err;
+  const std::string lead = "vdmap query: note: --band -1e+30:1e+30 clipped to the map's ";
+  ASSERT_NE(huge.err.find(lead), std::string::npos) << huge.err;
+  const std::string extent = huge.err.substr(huge.err.find(lead) + lead.size());
+  const std::string band = extent.substr(0, extent.find(' '));
+  const RunResult own =
+      runVdmap("query " + q(f.session) + " --op grid --resolution 0.5 --band " + band + " --out " + q(tmp / "o.yaml"));
+  ASSERT_EQ(own.exit_code, 0) << own.err;
+  EXPECT_EQ(own.err.find("clipped"), std::string::npos) << own.err;
+  EXPECT_EQ(readFile(tmp / "h.pgm"), readFile(tmp / "o.pgm"));
+  const RunResult m = runVdmap("map " + q(f.dir / "bi") +
+                               " --frames 0:3 --cell-size 16 --grid 0.5 --grid-band -1e30:1e30 --out " + q(tmp / "m"));
+  ASSERT_EQ(m.exit_code, 0) << m.err;
+  EXPECT_NE(m.err.find("vdmap map: note: --grid-band -1e+30:1e+30 clipped to the map's " + band), std::string::npos)
+      << m.err;
+  EXPECT_EQ(readFile(tmp / "m" / "grid.pgm"), readFile(tmp / "o.pgm"));
+}
+
 // vdmap map --grid writes the grid vdmap query --op grid gives of its session, into DIR.
 TEST(QueryCli, MapGridIsTheQuerysGrid) {
   const Fixture& f = fixture();
@@ -593,9 +618,10 @@ TEST(QueryCli, AnEmptyMapAnswersUnknown) {
     return readFile(tmp / "o.txt");
   };
   EXPECT_EQ(run("classify", "p.txt"), "unknown 0.5 -1 -1\nunknown 0.5 -1 -1\n");
-  EXPECT_EQ(run("distance", "p.txt"), "inf 0 0 0\ninf 0 0 0\n");
+  // No output holds a non-finite value: "no surface" is the largest float.
+  EXPECT_EQ(run("distance", "p.txt"), "3.40282347e+38 0 0 0\n3.40282347e+38 0 0 0\n");
   EXPECT_EQ(run("ray", "r.txt"), "miss\n");
-  EXPECT_EQ(run("collide", "s.txt"), "0 0 1 inf -1\n1 0 1 inf -1\n");
+  EXPECT_EQ(run("collide", "s.txt"), "0 0 1 3.40282347e+38 -1\n1 0 1 3.40282347e+38 -1\n");
   const RunResult grid =
       runVdmap("query " + q(tmp / "empty.vdmap") + " --op grid --band 0:1 --out " + q(tmp / "g.yaml"));
   EXPECT_EQ(grid.exit_code, 1);
