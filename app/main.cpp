@@ -15,12 +15,13 @@
 namespace {
 
 // CLI11 reads 0x10 as 16 and 0b11 as 3: an option's value in another base is almost surely a typo
-// (--resolution 0x10 for 0.10), so it is refused (a file or folder of that name is left alone).
+// (--resolution 0x10 for 0.10), so it is refused (a file or folder of that name is left alone, and
+// --size and --window-size, whose WxH reads 0x10 as 0 by 10).
 void refuseRadixNumbers(int argc, char** argv) {
   static const std::regex radix("[-+]?0[xXbBoO][0-9a-fA-F]+");
   for (int i = 2; i < argc; ++i)
-    if (std::string(argv[i - 1]).rfind("--", 0) == 0 && std::regex_match(argv[i], radix) &&
-        !std::filesystem::exists(argv[i]))
+    if (std::string(argv[i - 1]).rfind("--", 0) == 0 && !std::string(argv[i - 1]).ends_with("size") &&
+        std::regex_match(argv[i], radix) && !std::filesystem::exists(argv[i]))
       throw CLI::ValidationError(argv[i - 1], std::string("'") + argv[i] +
                                                   "': a number in another base (hexadecimal, binary, octal); write "
                                                   "it in decimal");
