@@ -310,6 +310,80 @@ TEST(ImageCompareNearby, BusyTextureAllowsMoreThanAFlatSurface) {
   EXPECT_EQ(changed(busy), 0);
 }
 
+// The nearby compare's oracle, one pixel at a time: a pixel of `image` finds no match when every
+// pixel of `reference` within 1 px (the border repeated) is further than counts plus a quarter
+// of the reference's local contrast (its 3x3's largest channel range, inside the image).
+bool noMatchNear(const cv::Mat& reference, const cv::Mat& image, int x, int y, int counts) {
+  int best = 255, contrast = 0;
+  for (int c = 0; c < 3; ++c) {
+    int lo = 255, hi = 0;
+    for (int dy = -1; dy <= 1; ++dy)
+      for (int dx = -1; dx <= 1; ++dx) {
+        const int qx = x + dx, qy = y + dy;
+        if (qx < 0 || qy < 0 || qx >= image.cols || qy >= image.rows) continue;
+        lo = std::min(lo, int(reference.at<cv::Vec3b>(qy, qx)[c]));
+        hi = std::max(hi, int(reference.at<cv::Vec3b>(qy, qx)[c]));
+      }
+    contrast = std::max(contrast, hi - lo);
+  }
+  for (int dy = -1; dy <= 1; ++dy)
+    for (int dx = -1; dx <= 1; ++dx) {
+      const int qx = std::clamp(x + dx, 0, image.cols - 1), qy = std::clamp(y + dy, 0, image.rows - 1);
+      int d = 0;
+      for (int c = 0; c < 3; ++c)
+        d = std::max(d, std::abs(int(reference.at<cv::Vec3b>(qy, qx)[c]) - int(image.at<cv::Vec3b>(y, x)[c])));
+      best = std::min(best, d);
+    }
+  const int allowed = std::min(255, static_cast<int>(std::nearbyint(0.25 * contrast + counts)));
+  return best > allowed;
+}
+
+long nearbyDifferingByLoop(const cv::Mat& expected, const cv::Mat& actual, int counts) {
+  cv::Mat differs(expected.size(), CV_8UC1, cv::Scalar(0));
+  for (int y = 0; y < expected.rows; ++y)
+    for (int x = 0; x < expected.cols; ++x)
+      differs.at<uchar>(y, x) =
+          noMatchNear(expected, actual, x, y, counts) || noMatchNear(actual, expected, x, y, counts);
+  long n = 0;
+  for (int y = 0; y < expected.rows; ++y)
+    for (int x = 0; x < expected.cols; ++x) {
+      int around = 0;
+      for (int dy = -1; dy <= 1; ++dy)
+        for (int dx = -1; dx <= 1; ++dx) {
+          const int qx = x + dx, qy = y + dy;
+          around += qx >= 0 && qy >= 0 && qx < expected.cols && qy < expected.rows && differs.at<uchar>(qy, qx);
+        }
+      n += differs.at<uchar>(y, x) && around >= 3;
+    }
+  return n;
+}
+
+TEST(ImageCompareNearby, MatchesThePerPixelLoopOnRandomImages) {
+  cv::RNG rng(7);
+  long total = 0;
+  for (int round = 0; round < 20; ++round) {
+    // Blocks of colour (structure) with noise, and a copy shifted, recoloured and speckled in parts.
+    cv::Mat expected(24 + round, 31, CV_8UC3);
+    rng.fill(expected, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(256));
+    cv::resize(expected(cv::Rect(0, 0, 8, 6)), expected, expected.size(), 0, 0, cv::INTER_NEAREST);
+    cv::Mat noise(expected.size(), CV_8UC3);
+    rng.fill(noise, cv::RNG::UNIFORM, cv::Scalar::all(0), cv::Scalar::all(12));
+    expected += noise;
+    cv::Mat actual = expected.clone();
+    cv::Mat shift = (cv::Mat_<double>(2, 3) << 1, 0, round % 3 - 1, 0, 1, round % 2);
+    cv::warpAffine(expected, actual, shift, expected.size(), cv::INTER_NEAREST, cv::BORDER_REPLICATE);
+    actual(cv::Rect(round % 20, round % 15, 6, 5)) += cv::Scalar(round * 7 % 60, 30, 0);
+    for (int k = 0; k < 15; ++k)
+      actual.at<cv::Vec3b>(rng.uniform(0, actual.rows), rng.uniform(0, actual.cols)) = cv::Vec3b(255, 0, 255);
+    const int counts = round % 4 * 4;
+    const ImageTolerance nearby{counts, 0.01, CompareMethod::kNearby};
+    const long by_loop = nearbyDifferingByLoop(expected, actual, counts);
+    EXPECT_EQ(compareImages(expected, actual, nearby).differing, by_loop) << "round " << round;
+    total += by_loop;
+  }
+  EXPECT_GT(total, 100) << "the images differ somewhere, so the two counts are compared on something";
+}
+
 TEST(ImageCompareNearby, MethodNamesRoundTrip) {
   for (const CompareMethod m : {CompareMethod::kPlain, CompareMethod::kNearby})
     EXPECT_EQ(parseCompareMethod(compareMethodName(m)), m);
