@@ -7,6 +7,7 @@
 
 #include <Eigen/Eigenvalues>
 
+#include "mapping/core/parallel.h"
 #include "render/colormap.h"
 #include "render/icosphere.h"
 #include "render/lod_order.h"
@@ -39,12 +40,14 @@ std::array<float, 12> ellipsoidAxes(const EllipsoidInstance& e, float sigma) {
   return out;
 }
 
+// One eigen-decomposition per ellipsoid, on all cores (each writes its own slot): most of a new
+// map's upload on the UI thread.
 std::vector<float> geometryOf(std::span<const EllipsoidInstance> ellipsoids, float sigma) {
   std::vector<float> out(ellipsoids.size() * 12);
-  for (std::size_t i = 0; i < ellipsoids.size(); ++i) {
+  parallelFor(0, ellipsoids.size(), [&](std::size_t i) {
     const auto axes = ellipsoidAxes(ellipsoids[i], sigma);
-    std::copy(axes.begin(), axes.end(), out.begin() + 12 * i);
-  }
+    std::copy(axes.begin(), axes.end(), out.begin() + 12 * static_cast<std::ptrdiff_t>(i));
+  });
   return out;
 }
 
@@ -90,16 +93,20 @@ EllipsoidRenderer::EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style)
 
 EllipsoidRenderer::~EllipsoidRenderer() = default;
 
-void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids) {
+void EllipsoidRenderer::set(std::span<const EllipsoidInstance> ellipsoids, std::span<const std::uint32_t> lod_order) {
   near_key_.reset();
   instances_.assign(ellipsoids.begin(), ellipsoids.end());
   geometry_cpu_ = geometryOf(instances_, style_.sigma);
   geometry_.upload(geometry_cpu_.data(), geometry_cpu_.size() * sizeof(float));
   colors_cpu_ = ellipsoidColors(instances_, style_.color, style_.height, style_.slice);
   colors_.upload(colors_cpu_.data(), colors_cpu_.size() * sizeof(glm::u8vec4));
-  std::vector<glm::vec3> centres(instances_.size());
-  for (std::size_t i = 0; i < instances_.size(); ++i) centres[i] = instances_[i].mean;
-  lod_order_cpu_ = render::lodOrder(centres);
+  if (lod_order.size() == instances_.size()) {
+    lod_order_cpu_.assign(lod_order.begin(), lod_order.end());
+  } else {
+    std::vector<glm::vec3> centres(instances_.size());
+    for (std::size_t i = 0; i < instances_.size(); ++i) centres[i] = instances_[i].mean;
+    lod_order_cpu_ = render::lodOrder(centres);
+  }
   gl_->BindVertexArray(0);  // the element buffer binding belongs to the bound VAO: fast_vao_'s
   fast_vao_.bind();
   lod_order_.upload(lod_order_cpu_.data(), lod_order_cpu_.size() * sizeof(std::uint32_t));

@@ -40,8 +40,9 @@ class EllipsoidRenderer {
  public:
   EllipsoidRenderer(const Gl& gl, const EllipsoidStyle& style = {});
   ~EllipsoidRenderer();
-  /// Replaces the whole set.
-  void set(std::span<const EllipsoidInstance> ellipsoids);
+  /// Replaces the whole set. `lod_order`: lodOrder of the set's means when the caller has it
+  /// (computed off the UI thread); empty: computed here.
+  void set(std::span<const EllipsoidInstance> ellipsoids, std::span<const std::uint32_t> lod_order = {});
   /// Changes sigma (re-sends geometry) or colour mode (re-sends colours) when they differ.
   void setStyle(const EllipsoidStyle& style);
   void draw(const ViewCamera& view) const;

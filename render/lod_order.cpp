@@ -74,4 +74,11 @@ std::vector<std::uint32_t> lodOrder(std::span<const glm::vec3> centres) {
   return order;
 }
 
+std::vector<std::uint32_t> lodOrder(std::span<const Ellipsoid> ellipsoids) {
+  std::vector<glm::vec3> centres(ellipsoids.size());
+  for (std::size_t i = 0; i < ellipsoids.size(); ++i)
+    centres[i] = {ellipsoids[i].mean.x(), ellipsoids[i].mean.y(), ellipsoids[i].mean.z()};
+  return lodOrder(centres);
+}
+
 }  // namespace vdmap::render

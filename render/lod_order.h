@@ -8,6 +8,8 @@
 
 #include <glm/glm.hpp>
 
+#include "mapping/local_map/ellipsoid_filter.h"
+
 namespace vdmap::render {
 
 /// Cell sizes of the order's levels, coarsest first, metres.
@@ -18,5 +20,8 @@ inline constexpr float kLodCellSizesM[] = {0.32f, 0.16f, 0.08f, 0.04f};
 /// order (the first centre of each cell). Deterministic; O(n) per level (a hash of cell keys).
 /// Non-finite centres come last.
 std::vector<std::uint32_t> lodOrder(std::span<const glm::vec3> centres);
+/// The order of a map's ellipsoids as the 3-D view draws them (their means in float, as
+/// toInstances gives them; the same order): computed where the map is built, off the UI thread.
+std::vector<std::uint32_t> lodOrder(std::span<const Ellipsoid> ellipsoids);
 
 }  // namespace vdmap::render

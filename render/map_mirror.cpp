@@ -132,11 +132,12 @@ void MapMirror::setStyle(const MirrorStyle& style) {
   }
 }
 
-void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids) {
+void MapMirror::setMap(int generation, std::span<const Ellipsoid> ellipsoids,
+                       std::span<const std::uint32_t> lod_order) {
   if (generation == map_generation_) return;
   map_generation_ = generation;
   instances_ = toInstances(ellipsoids);
-  ellipsoids_.set(instances_);
+  ellipsoids_.set(instances_, lod_order);
   points_.set(instances_, style_.color, style_.height, style_.slice);
   points_style_ = style_;
   ++uploads_.map;

@@ -78,8 +78,9 @@ class MapMirror {
   /// Restyles (re-sends colours or geometry only when the style asks for it).
   void setStyle(const MirrorStyle& style);
   /// The global map of `generation` (world frame). Uploaded only when the generation differs
-  /// from the one shown; generation 0 with an empty span clears the view.
-  void setMap(int generation, std::span<const Ellipsoid> ellipsoids);
+  /// from the one shown; generation 0 with an empty span clears the view. `lod_order`: its
+  /// lodOrder when the caller computed it (the mapping worker does), else computed here.
+  void setMap(int generation, std::span<const Ellipsoid> ellipsoids, std::span<const std::uint32_t> lod_order = {});
   /// The keyframe graph of mapping snapshot `generation`: build() is called, and the lines
   /// re-sent, only when the generation, the selected keyframe or `variant` (anything else the
   /// build depends on, such as which keyframe poses it shows) changed, or the style's

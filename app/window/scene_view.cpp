@@ -130,7 +130,8 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
     // the cache).
     const ViewController::ShownMap shown = bench.view().shownMap();
     mirror.setMap(-2 - shown.serial, *shown.ellipsoids);
-  } else if (win.global) mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids);
+  } else if (win.global)
+    mirror.setMap(mirrored.session_base + win.global->generation, win.global->map.ellipsoids, win.global->lod_order);
   else mirror.setMap(mirrored.session_base, {});
   const auto mapping = win.mapping;
   mirror.setFrame(mirrored.session_base + mapping->generation, mapping->rgb, mapping->depth,

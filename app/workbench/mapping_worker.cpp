@@ -5,6 +5,7 @@
 #include "app/cli/release_memory.h"
 #include "mapping/core/timing.h"
 #include "mapping/local_map/ellipsoid_filter.h"
+#include "render/lod_order.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -323,6 +324,7 @@ void MappingWorker::rebuildGlobal() {
   const auto publish = [&](const KeyframeGraph& graph, const std::shared_ptr<GlobalSnapshot>& snap) {
     snap->t_edit = t_edit;
     snap->t_build_start = t0;
+    snap->lod_order = render::lodOrder(snap->map.ellipsoids);
     snap->t_build_end = Clock::now();
     releaseFreedMemory();  // the build's other temporaries, before the next frames
     {

@@ -118,6 +118,9 @@ struct GlobalSnapshot {
   GlobalMapParams params;
   int frames_mapped = 0;  ///< the mapping state it was built from
   int generation = 0;     ///< 1, 2, ... per build
+  /// render::lodOrder of map.ellipsoids: the 3-D view's fast-pass order, computed by the worker
+  /// so that a new map costs the UI thread no sort (0.13 s at 1M ellipsoids).
+  std::vector<std::uint32_t> lod_order;
   /// Built with the keyframe poses before the last pose-graph optimisation
   /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;

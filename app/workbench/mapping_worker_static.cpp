@@ -7,6 +7,7 @@
 #include "app/workbench/mapping_worker.h"
 #include "app/workbench/workbench_state.h"
 #include "mapping/io/camera_config.h"
+#include "render/lod_order.h"
 
 namespace vdmap::app::gui {
 
@@ -57,6 +58,7 @@ MappingWorker::MappingWorker(std::shared_ptr<const StaticMap> map) : static_map_
   auto global = std::make_shared<GlobalSnapshot>();
   global->map.ellipsoids = m.ellipsoids;
   global->map.sigma_e = global->map.merged = global->map.sigma_e_prime = m.ellipsoids.size();
+  global->lod_order = render::lodOrder(global->map.ellipsoids);
   global->params = thresholds_;
   global->frames_mapped = mapped_;
   global->generation = ++generation_;

@@ -40,7 +40,7 @@ TEST(LodOrder, IsAPermutationAndDeterministic) {
   for (std::size_t i = 0; i < sorted.size(); ++i) ASSERT_EQ(sorted[i], i);
   EXPECT_EQ(order.back(), centres.size() - 1);
   EXPECT_EQ(lodOrder(centres), order);
-  EXPECT_TRUE(lodOrder({}).empty());
+  EXPECT_TRUE(lodOrder(std::span<const glm::vec3>{}).empty());
 }
 
 TEST(LodOrder, APrefixCoversEveryOccupied32cmCell) {

@@ -76,6 +76,13 @@ TEST_F(Progressive, FastPassDrawsTheBudgetPrefix) {
     const int v = static_cast<int>(std::lround(view.fy * first.y / first.z + view.cy));
     EXPECT_GT(image.at<cv::Vec3b>(v, u)[0], 0) << budget;
   }
+  // An order made elsewhere (the mapping worker's) is taken as given; one of another size is not.
+  const std::vector<std::uint32_t> own = renderer.lodOrder();
+  const std::vector<std::uint32_t> reversed(own.rbegin(), own.rend());
+  renderer.set(set, reversed);
+  EXPECT_EQ(renderer.lodOrder(), reversed);
+  renderer.set(set, std::span(reversed).first(5));
+  EXPECT_EQ(renderer.lodOrder(), own);
   renderer.draw(view);
   EXPECT_FALSE(renderer.lastDraw().fast);
   EXPECT_EQ(renderer.lastDraw().point_instances, set.size());  // the full pass's splats: all of them

@@ -18,6 +18,7 @@
 #include "app/window/tg_parts.h"
 #include "app/workbench/workbench.h"
 #include "render/colormap.h"
+#include "render/lod_order.h"
 #include "render/map_mirror.h"
 #include "render/map_scene.h"
 #include "render/scene_lines.h"
@@ -364,6 +365,8 @@ TEST(GuiSession, LiveThresholdChangeSwapsInANewGlobalMap) {
   EXPECT_EQ(after->params.filter.min_points, 60);
   EXPECT_LT(after->map.sigma_e, before->map.sigma_e);
   EXPECT_LT(after->map.sigma_e_prime, before->map.sigma_e_prime);
+  // Each map comes with its fast-pass order, made by the worker rather than the UI thread.
+  for (const auto& snap : {before, after}) EXPECT_EQ(snap->lod_order, render::lodOrder(snap->map.ellipsoids));
   std::size_t local = 0;  // the selection, keyframe by keyframe, covers Sigma_e
   for (int id = 0; id < static_cast<int>(after->map.kept.size()); ++id) local += selectAndWait(bench, id)->local.size();
   EXPECT_EQ(local, after->map.sigma_e);
