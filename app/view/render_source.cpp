@@ -62,9 +62,10 @@ struct RenderSource::Impl {
   render::GraphScene file_graph;                   // a map folder's keyframes, edges and trajectory
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, GlobalMap>> maps;  // by paramsKey
-  // The query slice (--query-slice): the point queries of the last map asked for, and the slice.
+  // The query slice (--query-slice): the point queries of the last map asked for (by its
+  // paramsKey; empty for a map file's own ellipsoids), and the slice.
   std::optional<render::QuerySliceSpec> query_slice;
-  const std::vector<Ellipsoid>* query_for = nullptr;
+  std::optional<std::vector<double>> query_for;
   std::shared_ptr<const QueryMap> query;
   std::shared_ptr<const render::QuerySliceImage> slice_image;
   render::HeightFrame slice_height;  // what slice_image was computed at
@@ -162,18 +163,20 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
                                                                           const render::HeightFrame& height) {
   Impl& m = *impl_;
   if (!m.query_slice) return nullptr;
-  if (m.query_for != &map) {
+  // Which of the built maps `map` is (its address is valid now; kept across calls it would not be).
+  const GlobalMap* global = nullptr;
+  std::vector<double> key;
+  for (const auto& entry : m.maps)
+    if (&entry.second.ellipsoids == &map) global = &entry.second, key = entry.first;
+  if (m.query_for != key) {
     // The global map's point queries (docs/method.md 13): a map file has no keyframes, so its
     // queries hold the ellipsoids alone (nothing seen free).
-    const GlobalMap* global = nullptr;
-    for (const auto& entry : m.maps)
-      if (&entry.second.ellipsoids == &map) global = &entry.second;
     GlobalMap file_map;
     if (!global) file_map.ellipsoids = map, global = &file_map;
     const KeyframeGraph none;
     m.query = std::make_shared<const QueryMap>(
         QueryMap::build(global == &file_map ? none : *m.graph, *global, QueryParams{}));
-    m.query_for = &map;
+    m.query_for = key;
     m.slice_image.reset();
   }
   if (!m.slice_image || m.slice_image->spec != *m.query_slice || m.slice_height != height) {

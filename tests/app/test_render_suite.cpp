@@ -246,6 +246,32 @@ TEST_F(RenderSuite, EachMapLoadsOnceAndEachSetOfThresholdsBuildsOneGlobalMap) {
       0.0);
 }
 
+TEST_F(RenderSuite, EachQuerySliceIsOfItsOwnViewsThresholds) {
+  // Views alternating between thresholds, each with the query slice: every slice is the one a
+  // single render with those thresholds draws (the suite's cache of point queries follows the
+  // thresholds, however many global maps it holds).
+  TempDir tmp;
+  const std::string slice = "size: 80x60, query-slice: up=0.5, query-slice-color: distance";
+  const char* sets[] = {"", "filter_sigma_factor=1.5", "min_points=40", "", "filter_sigma_factor=1.5"};
+  std::string views;
+  for (int i = 0; i < 5; ++i)
+    views += "  - {name: v" + std::to_string(i) + ", map: room, " + slice +
+             (*sets[i] ? std::string(", set: [") + sets[i] + "]" : "") + "}\n";
+  writeText(tmp / "views.yaml", "version: 1\nmaps:\n  room: " + (*dir_ / "s.vdmap").string() + "\nviews:\n" + views);
+  ASSERT_EQ(runSuite(tmp, " --update").exit_code, 0);
+  for (int i = 0; i < 5; ++i) {
+    const auto one = tmp / ("one" + std::to_string(i) + ".png");
+    const auto r = runVdmap("render '" + (*dir_ / "s.vdmap").string() + "' --out '" + one.string() +
+                            "' --size 80x60 --query-slice up=0.5 --query-slice-color distance" +
+                            (*sets[i] ? std::string(" --set ") + sets[i] : ""));
+    ASSERT_EQ(r.exit_code, 0) << r.err;
+    EXPECT_EQ(cv::norm(test::readImage(one), test::readImage(tmp / "goldens" / ("v" + std::to_string(i) + ".png")),
+                       cv::NORM_INF),
+              0.0)
+        << i;
+  }
+}
+
 TEST_F(RenderSuite, ViewFilesAndSettingsAreReadRelativeToTheSuite) {
   // A view file beside the suite (white, an explicit camera) draws what render --view-file draws;
   // the suite's settings (a view file's thresholds: a stricter filter) reach every view.
