@@ -5,6 +5,8 @@
 #include <cstdio>
 #include <cstdlib>
 #include <fstream>
+#include <iomanip>
+#include <sstream>
 
 #include <nlohmann/json.hpp>
 
@@ -48,6 +50,13 @@ std::string readText(const fs::path& file) {
   return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
+// The query slice's plane as --query-slice writes it ("up=1", "x=-0.5").
+std::string querySliceAt(const render::QuerySliceSpec& spec) {
+  std::ostringstream out;
+  out << render::querySliceAxisName(spec.axis) << "=" << std::setprecision(10) << spec.offset_m;
+  return out.str();
+}
+
 json toJson(const Settings& s) {
   const ParameterValues params = paramsOf(s);
   json j = {
@@ -72,7 +81,13 @@ json toJson(const Settings& s) {
         {"show_legend", s.show_legend},
         {"slice", s.slice.on},
         {"slice_lo", s.slice.lo_m},
-        {"slice_hi", s.slice.hi_m}}},
+        {"slice_hi", s.slice.hi_m},
+        {"probe", s.probe},
+        {"probe_offset", s.probe_offset_m},
+        {"query_slice", s.query_slice},
+        {"query_slice_at", querySliceAt(s.query_slice_spec)},
+        {"query_slice_color", render::querySliceColorName(s.query_slice_spec.color)},
+        {"query_slice_max_distance", s.query_slice_spec.max_distance_m}}},
       {"window", {{"width", s.window_width}, {"height", s.window_height}}},
       {"last_sequence", s.last_sequence},
       {"recent", s.recent},  // opened paths, newest first (Settings::recent)
@@ -104,6 +119,30 @@ int nameIndex(const char* const (&names)[N], const std::string& name, const char
   std::string list;
   for (const char* n : names) list += (list.empty() ? "" : " or ") + std::string(n);
   throw std::invalid_argument(std::string(key) + " must be " + list + ", got '" + name + "'");
+}
+
+// The view keys of the point queries: probe, probe_offset and the query slice's.
+void readQueries(const json& v, Settings& s) {
+  read(v, "view", "probe", s.probe);
+  read(v, "view", "probe_offset", s.probe_offset_m);
+  if (!(s.probe_offset_m >= 0.f && s.probe_offset_m <= 10.f))
+    throw std::invalid_argument("view.probe_offset must be in [0, 10] m");
+  read(v, "view", "query_slice", s.query_slice);
+  render::QuerySliceSpec spec = s.query_slice_spec;
+  std::string at = querySliceAt(spec), color = render::querySliceColorName(spec.color);
+  read(v, "view", "query_slice_at", at);
+  read(v, "view", "query_slice_color", color);
+  read(v, "view", "query_slice_max_distance", spec.max_distance_m);
+  try {
+    const render::QuerySliceSpec plane = render::parseQuerySlice(at);
+    spec.axis = plane.axis, spec.offset_m = plane.offset_m;
+    spec.color = render::parseQuerySliceColor(color);
+  } catch (const std::invalid_argument& e) {
+    throw std::invalid_argument(std::string("view.query_slice_at / query_slice_color: ") + e.what());
+  }
+  if (!(spec.max_distance_m > 0.0 && spec.max_distance_m <= 100.0))
+    throw std::invalid_argument("view.query_slice_max_distance must be in (0, 100] m");
+  s.query_slice_spec = spec;
 }
 
 // The view keys up_vector (null or [x, y, z], not zero), projection and rotation.
@@ -181,6 +220,7 @@ Settings fromJson(const json& j, const Settings& base = {}) {
     read(v, "view", "slice_hi", s.slice.hi_m);
     if (!(s.slice.lo_m < s.slice.hi_m && s.slice.lo_m >= -1e4f && s.slice.hi_m <= 1e4f))
       throw std::invalid_argument("view.slice_lo must be below view.slice_hi (metres above the floor, within 1e4)");
+    readQueries(v, s);
     if (!(s.ellipsoid_sigma > 0 && s.ellipsoid_sigma <= 10))
       throw std::invalid_argument("view.ellipsoid_sigma must be in (0, 10]");
     if (!(s.play_fps >= 0 && s.play_fps <= 1000)) throw std::invalid_argument("view.play_fps must be in [0, 1000]");

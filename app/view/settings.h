@@ -10,6 +10,7 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/pipeline/mapper.h"
+#include "render/query_slice.h"
 #include "render/scene_types.h"
 #include "render/view_spec.h"
 
@@ -42,6 +43,12 @@ struct Settings {
   /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
   /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
   render::HeightSlice slice;
+  // Point queries (docs/workbench.md "Queries"; keys probe, probe_offset, query_slice,
+  // query_slice_at, query_slice_color, query_slice_max_distance).
+  bool probe = false;            ///< Q: what the map says under the cursor
+  float probe_offset_m = 0.05f;  ///< the probe stands this far in front of the surface under the cursor
+  bool query_slice = false;      ///< the query slice is drawn
+  render::QuerySliceSpec query_slice_spec;
   int window_width = 1600, window_height = 900;
   std::string last_sequence;
   /// Recently opened paths (any kind the workbench opens), newest first, at most kRecentFiles;

@@ -16,7 +16,8 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     if (section(win.check, "Keyframes", true)) drawKeyframes(bench, mirror, win);
     if (section(win.check, "Picked ellipsoid", true)) drawPicked(bench, win);
     if (section(win.check, "Measure", bench.ui().measure_a.has_value())) drawMeasure(bench, win);
-    if (section(win.check, "Queries", bench.ui().probe || bench.ui().query_slice)) drawQueries(bench, win);
+    if (section(win.check, "Queries", bench.ui().settings.probe || bench.ui().settings.query_slice))
+      drawQueries(bench, win);
     if (section(win.check, "Pose correction")) drawPoseCorrection(bench);
     if (section(win.check, "Export and save")) drawExport(bench, win);
   }

@@ -73,10 +73,10 @@ void handleViewTools(Workbench& bench, WindowState& win) {
   if (!bench.isOpen() || !over_view) return;
   // The probe (Q) follows the cursor: asked every frame over the view (a frame is drawn only
   // after input or news, such as the queries of a new map).
-  if (ui.probe) win.probes.push_back({ViewProbe::Purpose::kQuery, at.x, at.y});
+  if (ui.settings.probe) win.probes.push_back({ViewProbe::Purpose::kQuery, at.x, at.y});
   if (pivot || win.double_click) win.probes.push_back({ViewProbe::Purpose::kPivot, at.x, at.y});
-  if (io.MouseWheel != 0.f && ui.probe && io.KeyAlt)  // the probe's offset, 25 % a step
-    ui.probe_offset_m = std::clamp(ui.probe_offset_m * std::pow(1.25f, io.MouseWheel), 0.005f, 1.f);
+  if (io.MouseWheel != 0.f && ui.settings.probe && io.KeyAlt)  // the probe's offset, 25 % a step
+    ui.settings.probe_offset_m = std::clamp(ui.settings.probe_offset_m * std::pow(1.25f, io.MouseWheel), 0.005f, 1.f);
   else if (io.MouseWheel != 0.f) win.probes.push_back({ViewProbe::Purpose::kZoom, at.x, at.y, io.MouseWheel});
   if (io.KeyCtrl && ImGui::IsMouseReleased(ImGuiMouseButton_Left) && win.drag_in_view[0]) {
     const ImVec2 drag = ImGui::GetMouseDragDelta(ImGuiMouseButton_Left, 0.f);
@@ -161,7 +161,7 @@ void drawViewMarks(Workbench& bench, const WindowState& win) {
     label(draw, {at->x + 7.f, at->y - 7.f - ImGui::GetFontSize()}, kMeasureColor, name);
     return at;
   };
-  if (ui.probe && ui.probe_result) {
+  if (ui.settings.probe && ui.probe_result) {
     // The probe: a dot at its point (under the cursor: the point lies on the cursor's ray), the
     // answer beside it, or left of it where the view ends.
     const ProbeResult& r = *ui.probe_result;

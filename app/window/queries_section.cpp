@@ -11,7 +11,7 @@ namespace vdmap::app::gui {
 void drawQueries(Workbench& bench, WindowState& win) {
   UiState& ui = bench.ui();
   const auto query = bench.queries().snapshot();
-  ImGui::Checkbox("Probe (Q)", &ui.probe);
+  ImGui::Checkbox("Probe (Q)", &ui.settings.probe);
   tip("Under the cursor: occupied, free or unknown (docs/method.md 13) with p_occupied, and the distance to the "
       "nearest surface, beside the cursor and in the status line. The point stands the offset in front of the "
       "surface under the cursor (Alt+wheel changes it), or on the query slice while it is shown.");
@@ -19,17 +19,18 @@ void drawQueries(Workbench& bench, WindowState& win) {
   if (beginRows("queries")) {
     label(win.check, "probe offset",
           "How far in front of the surface under the cursor (toward the eye) the probe stands.");
-    ImGui::DragFloat("##probe_offset", &ui.probe_offset_m, 0.002f, 0.f, 1.f, "%.3f m", ImGuiSliderFlags_AlwaysClamp);
+    ImGui::DragFloat("##probe_offset", &ui.settings.probe_offset_m, 0.002f, 0.f, 1.f, "%.3f m",
+                     ImGuiSliderFlags_AlwaysClamp);
     ImGui::EndTable();
   }
-  if (ui.probe && ui.probe_result) ImGui::TextWrapped("%s", ui.probe_result->text().c_str());
-  ImGui::Checkbox("Query slice", &ui.query_slice);
+  if (ui.settings.probe && ui.probe_result) ImGui::TextWrapped("%s", ui.probe_result->text().c_str());
+  ImGui::Checkbox("Query slice", &ui.settings.query_slice);
   tip("A plane through the map coloured by the queries at its samples: free green, occupied red, unknown grey "
       "(or the distance to the nearest surface), over the box the keyframes see. Unlike the height slice (View), "
       "which keeps the ellipsoids between two heights, it draws what the map answers, in the free space too.");
   checkFits(win.check);
-  render::QuerySliceSpec& spec = ui.query_slice_spec;
-  ImGui::BeginDisabled(!ui.query_slice);
+  render::QuerySliceSpec& spec = ui.settings.query_slice_spec;
+  ImGui::BeginDisabled(!ui.settings.query_slice);
   if (beginRows("query_slice")) {
     label(win.check, "axis",
           "The plane's normal: the map's up axis (offset = height above the floor, as the height "
@@ -65,7 +66,7 @@ void drawQueries(Workbench& bench, WindowState& win) {
   if (query) {
     ImGui::TextDisabled("queries of map %d, built in %.0f ms%s%s", query->generation, query->build_ms,
                         query->note.empty() ? "" : "; ", query->note.c_str());
-  } else if (ui.probe || ui.query_slice) {
+  } else if (ui.settings.probe || ui.settings.query_slice) {
     ImGui::TextDisabled("building the queries...");
   }
 }

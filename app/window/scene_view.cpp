@@ -114,7 +114,7 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
   if (s.show_legend) {
     legend = render::legendFor(style.color, mirror.mapColorRange(), keys, s.show_trajectory, s.show_groundtruth,
                                s.show_graph);
-    if (ui.query_slice) render::addQuerySliceKey(legend, ui.query_slice_spec);
+    if (ui.settings.query_slice) render::addQuerySliceKey(legend, ui.settings.query_slice_spec);
   }
   mirror.setLegend(  // left of the up label at the bottom-right (framebuffer pixels)
       legend, s.background,
@@ -230,7 +230,7 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
   std::snprintf(right, sizeof right, "%zu ellipsoids | frame %.0f ms | H: help", shown,
                 median({win.frame_times.begin(), win.frame_times.end()}));
   // The probe (Q) leads the right side: what the map says under the cursor.
-  const std::string right_text = ui.probe && ui.probe_result ? ui.probe_result->text() + " | " + right : right;
+  const std::string right_text = ui.settings.probe && ui.probe_result ? ui.probe_result->text() + " | " + right : right;
   const float right_w = ImGui::CalcTextSize(right_text.c_str()).x;
   const StatusLine& st = ui.status;
   ImGui::AlignTextToFramePadding();

@@ -28,7 +28,7 @@ std::optional<glm::vec3> QueryController::probePoint(float x_px, float y_px, int
   const float length = glm::length(to_eye);
   if (!(length > 0.f)) return surface;
   // Back toward the camera, but never behind it.
-  return *surface + to_eye * (std::min(ui_.probe_offset_m, 0.99f * length) / length);
+  return *surface + to_eye * (std::min(ui_.settings.probe_offset_m, 0.99f * length) / length);
 }
 
 ProbeResult QueryController::probe(const glm::vec3& p, bool on_slice) const {
@@ -62,8 +62,8 @@ bool QueryController::probeAt(float x_px, float y_px, int width, int height, con
 
 void QueryController::sync() {
   if (!worker_) return;
-  worker_->wantQueries(ui_.probe || ui_.query_slice);
-  if (!ui_.probe) ui_.probe_result.reset();
+  worker_->wantQueries(ui_.settings.probe || ui_.settings.query_slice);
+  if (!ui_.settings.probe) ui_.probe_result.reset();
   // A finished slice replaces the one shown.
   if (slice_job_.valid() && slice_job_.wait_for(std::chrono::seconds(0)) == std::future_status::ready) {
     slice_image_ = slice_job_.get();
@@ -71,10 +71,10 @@ void QueryController::sync() {
   }
   const auto q = worker_->query();
   if (!q) slice_image_.reset(), slice_key_ = {};  // another session's, or queries turned off
-  if (!ui_.query_slice || slice_job_.valid() || !q) return;
+  if (!ui_.settings.query_slice || slice_job_.valid() || !q) return;
   const SliceKey key{
-      q->map, ui_.query_slice_spec,
-      ui_.query_slice_spec.axis == render::QuerySliceAxis::kUp ? view_.heightFrame() : render::HeightFrame{}};
+      q->map, ui_.settings.query_slice_spec,
+      ui_.settings.query_slice_spec.axis == render::QuerySliceAxis::kUp ? view_.heightFrame() : render::HeightFrame{}};
   if (key == slice_key_ && slice_image_) return;
   slice_job_key_ = key;
   // A map file's keyframes see nothing: the slice spans the map's robust box instead.

@@ -11,7 +11,7 @@
 
 namespace vdmap::app::gui {
 
-/// The probe (ui().probe, probe_result) and the query slice (ui().query_slice, query_slice_spec).
+/// The probe (ui().settings.probe, probe_result) and the query slice (ui().settings.query_slice, query_slice_spec).
 class QueryController {
  public:
   QueryController(WorkbenchState& state, const ViewController& view) : state_(state), view_(view) {}
@@ -21,7 +21,7 @@ class QueryController {
   std::shared_ptr<const QuerySnapshot> snapshot() const;
   /// The probe's point for pixel (x, y) of a width x height viewport: on the query slice's plane
   /// while it is shown, else `surface` (the drawn surface under the pixel) moved toward the eye
-  /// by ui().probe_offset_m; nullopt when neither exists.
+  /// by ui().settings.probe_offset_m; nullopt when neither exists.
   std::optional<glm::vec3> probePoint(float x_px, float y_px, int width, int height,
                                       const std::optional<glm::vec3>& surface) const;
   /// Classifies `p` and its distance to the nearest surface with snapshot() (a note says why
@@ -32,7 +32,9 @@ class QueryController {
   bool probeAt(float x_px, float y_px, int width, int height, const std::optional<glm::vec3>& surface);
   /// The query slice drawn now (null: none yet, or off). sync() starts its computation off the UI
   /// thread when the map, the spec or the up axis changed; the window is woken when it is done.
-  std::shared_ptr<const render::QuerySliceImage> slice() const { return ui_.query_slice ? slice_image_ : nullptr; }
+  std::shared_ptr<const render::QuerySliceImage> slice() const {
+    return ui_.settings.query_slice ? slice_image_ : nullptr;
+  }
   /// Blocks until the slice being computed (if any) is taken (tests and scripted runs).
   void waitSlice();
   /// Once per UI frame: the queries wanted or not, a finished slice taken, a new one started.

@@ -243,8 +243,8 @@ void startScript(const ScriptRun& run, Workbench& bench) {
   if (run.options.play_to_end) bench.player().play();
   if (run.options.keyframe >= 0) bench.poses().preselectKeyframe(run.options.keyframe);
   if (run.options.query_slice) {  // shown from the start (Queries section)
-    bench.ui().query_slice = true;
-    bench.ui().query_slice_spec = *run.options.query_slice;
+    bench.ui().settings.query_slice = true;
+    bench.ui().settings.query_slice_spec = *run.options.query_slice;
   }
 }
 
@@ -280,9 +280,9 @@ void advanceScript(ScriptRun& run, Workbench& bench, ScriptWindow& window, const
       const bool queries = !run.options.probe.empty() || run.options.query_slice;
       if (queries && bench.isOpen()) {
         UiState& ui = bench.ui();
-        ui.probe = ui.probe || !run.options.probe.empty();
-        if (run.options.query_slice && !ui.query_slice)
-          ui.query_slice = true, ui.query_slice_spec = *run.options.query_slice;
+        ui.settings.probe = ui.settings.probe || !run.options.probe.empty();
+        if (run.options.query_slice && !ui.settings.query_slice)
+          ui.settings.query_slice = true, ui.settings.query_slice_spec = *run.options.query_slice;
         const auto query = bench.queries().snapshot();
         const auto global = bench.global();
         if ((!query || !global || query->generation != global->generation) && bench.player().status().error.empty())

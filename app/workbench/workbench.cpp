@@ -102,7 +102,7 @@ void Workbench::key(KeyAction action) {
     case KeyAction::kPivotHere: ui.pivot_requested = true; break;  // the window probes the point under the cursor
     case KeyAction::kSliceUp: view_.moveSlice(1); break;
     case KeyAction::kSliceDown: view_.moveSlice(-1); break;
-    case KeyAction::kProbe: ui.probe = !ui.probe; break;
+    case KeyAction::kProbe: ui.settings.probe = !ui.settings.probe; break;
     case KeyAction::kEditDiff: ui.show_edit_diff = !ui.show_edit_diff; break;
   }
 }

@@ -85,12 +85,8 @@ struct UiState {
   std::string confirm_view_replace;
   bool load_view_thresholds = false;         ///< Load view: also its thresholds (as --settings does)
   int view_width = 1280, view_height = 720;  ///< the 3-D viewport in framebuffer pixels (the window sets it)
-  // Point queries (docs/workbench.md "Queries").
-  bool probe = false;                       ///< Q: what the map says under the cursor
-  float probe_offset_m = 0.05f;             ///< the probe stands this far in front of the surface under the cursor
+  // Point queries (docs/workbench.md "Queries"): the probe and the query slice are settings.
   std::optional<ProbeResult> probe_result;  ///< the last probe (cleared when the probe is turned off)
-  bool query_slice = false;                 ///< the query slice is drawn
-  render::QuerySliceSpec query_slice_spec;
 };
 
 /// The sigma the container window draws its ellipsoids at (scene_view.cpp's ContainerStyle), so

@@ -114,6 +114,37 @@ TEST(GuiSettings, RoundTripAndDefaultsForMissingKeys) {
   EXPECT_TRUE(warning.empty());
 }
 
+TEST(GuiSettings, TheProbeAndTheQuerySliceAreKept) {
+  test::TempDir dir;
+  Settings s;
+  s.probe = true;
+  s.probe_offset_m = 0.12f;
+  s.query_slice = true;
+  s.query_slice_spec = {.axis = render::QuerySliceAxis::kY,
+                        .offset_m = -0.375,
+                        .color = render::QuerySliceColor::kDistance,
+                        .max_distance_m = 0.8};
+  saveSettings(dir / "settings.json", s);
+  std::string warning;
+  const Settings r = loadSettings(dir / "settings.json", &warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  EXPECT_TRUE(r.probe);
+  EXPECT_FLOAT_EQ(r.probe_offset_m, 0.12f);
+  EXPECT_TRUE(r.query_slice);
+  EXPECT_EQ(r.query_slice_spec, s.query_slice_spec);
+  // --set takes them as the file does; a bad plane is named.
+  Settings t;
+  applySetting(t, "query_slice_at=up=1.5");
+  EXPECT_EQ(t.query_slice_spec.axis, render::QuerySliceAxis::kUp);
+  EXPECT_DOUBLE_EQ(t.query_slice_spec.offset_m, 1.5);
+  try {
+    applySetting(t, "query_slice_at=w=1");
+    ADD_FAILURE() << "taken";
+  } catch (const std::invalid_argument& e) {
+    EXPECT_NE(std::string(e.what()).find("query_slice_at"), std::string::npos) << e.what();
+  }
+}
+
 TEST(GuiSettings, CorruptFileGivesDefaultsWithAWarning) {
   test::TempDir dir;
   for (const char* text : {"{not json", R"({"thresholds": {"merge_distance": "far"}})",

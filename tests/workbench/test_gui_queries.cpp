@@ -29,7 +29,7 @@ struct BuiltinBench {
   Workbench bench{Settings{}};
   BuiltinBench() {
     EXPECT_TRUE(bench.files().open({test::builtinSequence(40).string(), "", "", ""})) << bench.ui().status.text;
-    bench.ui().probe = true;
+    bench.ui().settings.probe = true;
     bench.sync();  // asks the worker for the queries
     bench.player().play();
     bench.worker()->waitIdle();
@@ -153,7 +153,7 @@ TEST_F(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
   const int w = 640, h = 480;
   const glm::vec3 eye = bench.view().viewport(w, h).camera.eye();
   const glm::vec3 surface = eye + 2.f * glm::normalize(glm::vec3(0.1f, 0.2f, 0.3f) - eye);
-  ui.probe_offset_m = 0.05f;
+  ui.settings.probe_offset_m = 0.05f;
   const auto p = bench.queries().probePoint(320, 240, w, h, surface);
   ASSERT_TRUE(p);
   EXPECT_NEAR(glm::length(*p - surface), 0.05f, 1e-5f);
@@ -163,8 +163,8 @@ TEST_F(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
   ASSERT_TRUE(ui.probe_result);
   EXPECT_FALSE(ui.probe_result->on_slice);
 
-  ui.query_slice = true;
-  ui.query_slice_spec = {.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2};
+  ui.settings.query_slice = true;
+  ui.settings.query_slice_spec = {.axis = render::QuerySliceAxis::kZ, .offset_m = 1.2};
   bench.queries().waitSlice();
   ASSERT_TRUE(bench.queries().slice());
   const auto q = bench.queries().probePoint(320, 240, w, h, std::nullopt);
@@ -174,7 +174,7 @@ TEST_F(GuiQueries, ProbePointStandsTheOffsetInFrontOfTheSurfaceOrOnTheSlice) {
   ASSERT_TRUE(ui.probe_result);
   EXPECT_TRUE(ui.probe_result->on_slice);
   EXPECT_NE(ui.probe_result->text().find("(slice)"), std::string::npos);
-  ui.query_slice = false;
+  ui.settings.query_slice = false;
   bench.sync();
   EXPECT_FALSE(bench.queries().slice());
 }
@@ -246,8 +246,8 @@ TEST_F(GuiQueries, AMapFileAnswersFromItsEllipsoidsAlone) {
   exportMap(dir / "map", graph, map, MapExportOptions{});
   Workbench bench{Settings{}};
   ASSERT_TRUE(bench.files().openPath((dir / "map").string())) << bench.ui().status.text;
-  bench.ui().probe = true;
-  bench.ui().query_slice = true;
+  bench.ui().settings.probe = true;
+  bench.ui().settings.query_slice = true;
   bench.sync();
   bench.worker()->waitIdle();
   const auto query = bench.queries().snapshot();
