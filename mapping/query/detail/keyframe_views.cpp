@@ -47,25 +47,24 @@ struct CellTerms {
   double qad;  // q^T A (q - mu) = a - b
 };
 
-inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
+// A v for the cell's symmetric A, stored as its upper triangle (a0 a1 a2 / a3 a4 / a5).
+inline Eigen::Vector3d timesA(const Cell& c, double x, double y, double z) {
   const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
+  return {a0 * x + a1 * y + a2 * z, a1 * x + a3 * y + a4 * z, a2 * x + a4 * y + a5 * z};
+}
+
+// The gate's squared Mahalanobis distance (q - mu)^T A (q - mu).
+inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = a0 * dx + a1 * dy + a2 * dz;
-  const double ay = a1 * dx + a3 * dy + a4 * dz;
-  const double az = a2 * dx + a4 * dy + a5 * dz;
-  return dx * ax + dy * ay + dz * az;
+  const Eigen::Vector3d ad = timesA(c, dx, dy, dz);
+  return dx * ad.x() + dy * ad.y() + dz * ad.z();
 }
 
 inline CellTerms terms(const Cell& c, const Eigen::Vector3d& q) {
-  const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
   const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
-  const double ax = a0 * dx + a1 * dy + a2 * dz;
-  const double ay = a1 * dx + a3 * dy + a4 * dz;
-  const double az = a2 * dx + a4 * dy + a5 * dz;
-  const double qx = a0 * q.x() + a1 * q.y() + a2 * q.z();
-  const double qy = a1 * q.x() + a3 * q.y() + a4 * q.z();
-  const double qz = a2 * q.x() + a4 * q.y() + a5 * q.z();
-  return {dx * ax + dy * ay + dz * az, q.x() * qx + q.y() * qy + q.z() * qz, q.x() * ax + q.y() * ay + q.z() * az};
+  const Eigen::Vector3d ad = timesA(c, dx, dy, dz), aq = timesA(c, q.x(), q.y(), q.z());
+  return {dx * ad.x() + dy * ad.y() + dz * ad.z(), q.x() * aq.x() + q.y() * aq.y() + q.z() * aq.z(),
+          q.x() * ad.x() + q.y() * ad.y() + q.z() * ad.z()};
 }
 
 /// One keyframe: its current pose, camera and container grid, and its kept cells.
