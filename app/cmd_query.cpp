@@ -132,6 +132,8 @@ LoadedMap loadQueryMap(const QueryArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   SessionDecodeOptions decode;
   decode.decode_images = false;  // the queries need the local maps and poses, not the images
+  decode.keep_images = false;
+  decode.keep_features = false;
   Session session = loadSession(args.map, decode);
   if (!args.keyframe_poses.empty())
     loaded.poses_matched = applyTrajectoryFile(session.graph, args.keyframe_poses).matched;
