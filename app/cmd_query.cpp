@@ -52,9 +52,8 @@ struct QueryArgs {
   QueryParams params;
 };
 
-// Batches larger than this show a progress bar, asked in chunks of kChunk.
+// More records than this show a progress bar.
 constexpr std::size_t kProgressAbove = 100000;
-constexpr std::size_t kChunk = 65536;
 
 ConflictRule conflictRule(const std::string& name) {
   if (name == "recent") return ConflictRule::kRecent;
@@ -133,6 +132,8 @@ LoadedMap loadQueryMap(const QueryArgs& args) {
   const auto start = std::chrono::steady_clock::now();
   SessionDecodeOptions decode;
   decode.decode_images = false;  // the queries need the local maps and poses, not the images
+  decode.keep_images = false;
+  decode.keep_features = false;
   Session session = loadSession(args.map, decode);
   if (!args.keyframe_poses.empty())
     loaded.poses_matched = applyTrajectoryFile(session.graph, args.keyframe_poses).matched;
@@ -160,114 +161,19 @@ LoadedMap loadQueryMap(const QueryArgs& args) {
   return loaded;
 }
 
-// Runs `ask(begin, end)` over [0, n), in chunks under a progress bar when n is large.
-template <typename Ask>
-void inChunks(const char* label, std::size_t n, const Ask& ask) {
-  if (n <= kProgressAbove) return ask(std::size_t{0}, n);
-  ProgressBar bar(label, n);
-  for (std::size_t begin = 0; begin < n; begin += kChunk) {
-    const std::size_t end = std::min(n, begin + kChunk);
-    ask(begin, end);
-    bar.update(end);
-  }
-}
-
-double rounded6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
-
-// JSON has no infinity: null stands for "no surface".
-nlohmann::json finiteOrNull(double v) {
-  return std::isfinite(v) ? nlohmann::json(rounded6(v)) : nlohmann::json(nullptr);
-}
-
-// Asks the map, writes the answers, and returns the summary's figures.
-nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& map, const QueryInput& input) {
-  QueryAnswers answers;
-  nlohmann::json summary;
-  const std::size_t n = input.size();
-  const auto start = std::chrono::steady_clock::now();
-  switch (op) {
-    case QueryOp::kClassify:
-      answers.classes.resize(n);
-      inChunks("classify", n, [&](std::size_t b, std::size_t e) {
-        const std::span<const Eigen::Vector3d> q(input.points.data() + b, e - b);
-        const std::span<Classification> out(answers.classes.data() + b, e - b);
-        if (args.keyframe >= 0) map.classifyInKeyframe(args.keyframe, q, out);
-        else map.classify(q, out);
-      });
-      break;
-    case QueryOp::kDistance:
-      answers.distances.resize(n);
-      inChunks("distance", n, [&](std::size_t b, std::size_t e) {
-        map.distance(std::span<const Eigen::Vector3d>(input.points.data() + b, e - b),
-                     std::span<DistanceResult>(answers.distances.data() + b, e - b), args.max_distance_m);
-      });
-      break;
-    case QueryOp::kCollide: answers.bodies = map.collide(input.spheres, args.clearance_m); break;
-    case QueryOp::kRay:
-      answers.hits.resize(n);
-      inChunks("ray", n, [&](std::size_t b, std::size_t e) {
-        map.castRays(std::span<const Ray>(input.rays.data() + b, e - b),
-                     std::span<RayHit>(answers.hits.data() + b, e - b));
-      });
-      break;
-    default: break;
-  }
-  const double ms = msSince(start);
-  writeQueryAnswers(args.out, op, input, answers);
-  summary["records"] = n;
-  summary["query_ms"] = rounded6(ms);
-  summary["records_per_s"] = ms > 0 ? std::round(1e3 * static_cast<double>(n) / ms) : 0.0;
-  switch (op) {
-    case QueryOp::kClassify: {
-      std::size_t counts[3] = {0, 0, 0};
-      for (const Classification& c : answers.classes) ++counts[static_cast<int>(c.state)];
-      summary["occupied"] = counts[static_cast<int>(Occupancy::kOccupied)];
-      summary["free"] = counts[static_cast<int>(Occupancy::kFree)];
-      summary["unknown"] = counts[static_cast<int>(Occupancy::kUnknown)];
-      if (args.keyframe >= 0) summary["keyframe"] = args.keyframe;
-      break;
-    }
-    case QueryOp::kDistance: {
-      std::vector<double> d;
-      d.reserve(n);
-      std::size_t inside = 0, far = 0;
-      for (const DistanceResult& r : answers.distances) {
-        d.push_back(r.distance_m);
-        inside += r.distance_m == 0;
-        far += !std::isfinite(r.distance_m) || r.distance_m >= args.max_distance_m;
-      }
-      summary["min_m"] = finiteOrNull(*std::min_element(d.begin(), d.end()));
-      summary["median_m"] = finiteOrNull(median(d));
-      summary["inside"] = inside;
-      summary["beyond"] = far;
-      break;
-    }
-    case QueryOp::kCollide: {
-      std::size_t collide = 0, unknown = 0;
-      double clearance = INFINITY;
-      for (const BodyCollision& b : answers.bodies) {
-        collide += b.collides;
-        unknown += b.touches_unknown;
-        clearance = std::min(clearance, b.clearance_m);
-      }
-      summary["bodies"] = answers.bodies.size();
-      summary["colliding"] = collide;
-      summary["touching_unknown"] = unknown;
-      summary["min_clearance_m"] = finiteOrNull(clearance);
-      break;
-    }
-    case QueryOp::kRay: {
-      std::vector<double> t;
-      for (const RayHit& h : answers.hits)
-        if (h.hit) t.push_back(h.t_m);
-      summary["hits"] = t.size();
-      summary["misses"] = n - t.size();
-      summary["median_t_m"] = t.empty() ? nlohmann::json(nullptr) : nlohmann::json(rounded6(median(t)));
-      break;
-    }
-    default: break;
-  }
-  return summary;
+// Asks the map about every record of --points a batch at a time, writes the answers, and
+// returns the summary's figures.
+nlohmann::json runPointQuery(const QueryArgs& args, QueryOp op, const QueryMap& map, std::size_t records) {
+  PointQueryOptions options;
+  options.keyframe = args.keyframe;
+  options.clearance_m = args.clearance_m;
+  options.max_range_m = args.max_range_m;
+  options.max_distance_m = args.max_distance_m;
+  std::unique_ptr<ProgressBar> bar;
+  if (records > kProgressAbove) bar = std::make_unique<ProgressBar>(queryOpName(op), records);
+  return answerQueryRecords(map, op, args.points, records, args.out, options, [&bar](std::size_t done, std::size_t) {
+    if (bar) bar->update(done);
+  });
 }
 
 // The degrees between unit vectors a and b.
@@ -393,12 +299,12 @@ void runQuery(QueryArgs args, const CLI::App& verb) {
   // Outputs that cannot be written and inputs that are wrong fail before the map is loaded.
   checkOutputFile(args.out, "--out");
   checkNotAnInput(args.out, "--out", {{"--points", args.points}, {"MAP", args.map}});
-  QueryInput input;
-  if (queryOpReadsPoints(op)) input = readQueryInput(args.points, op, args.max_range_m);
+  // Every record is checked (and counted) before the map is loaded; the answers read them again.
+  const std::size_t records = queryOpReadsPoints(op) ? countQueryRecords(args.points, op, args.max_range_m) : 0;
   const LoadedMap loaded = loadQueryMap(args);
   nlohmann::json summary = {{"map", args.map}, {"op", args.op}, {"out", args.out}};
   if (queryOpReadsPoints(op)) {
-    summary.update(runPointQuery(args, op, loaded.map, input));
+    summary.update(runPointQuery(args, op, loaded.map, records));
     summary["points"] = args.points;
   } else if (op == QueryOp::kGrid) {
     summary.update(runGrid(args, loaded.map, loaded.data_up));

@@ -1,17 +1,21 @@
 #include "app/query_files/query_io.h"
 
 #include <algorithm>
+#include <chrono>
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
 #include <cstring>
 #include <fstream>
 #include <limits>
+#include <map>
 #include <sstream>
 #include <stdexcept>
 
+#include "app/query_files/spilled_median.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
+#include "mapping/core/timing.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
@@ -79,6 +83,10 @@ void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::
   }
 }
 
+InputError noRecords(const fs::path& file, QueryOp op) {
+  return InputError(file.string(), std::string("has no records (expected lines of ") + recordColumns(op) + ")");
+}
+
 std::pair<std::size_t, std::size_t> columnCounts(QueryOp op) {
   switch (op) {
     case QueryOp::kCollide: return {4, 5};
@@ -87,27 +95,44 @@ std::pair<std::size_t, std::size_t> columnCounts(QueryOp op) {
   }
 }
 
-QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
-  std::ifstream in(file, std::ios::binary);
-  if (!in) throw InputError(file.string(), "cannot open (missing or unreadable)");
-  const auto [least, most] = columnCounts(op);
-  QueryInput input;
-  std::string text;
-  std::vector<std::string> tokens;
+}  // namespace
+
+struct QueryRecordReader::State {
+  fs::path file;
+  QueryOp op;
+  double max_range_m;
   std::vector<double> values;
+  // A text file: the stream, the line last read and its fields.
+  std::ifstream text;
+  int line = 0;
+  std::string buffer;
+  std::vector<std::string> tokens;
+  // A PLY: its vertices, the columns read, the vertex next read.
+  std::unique_ptr<PlyVertexReader> ply;
+  std::vector<int> columns;
+  std::vector<std::string> names;
+  std::size_t vertex = 0;
+
+  bool nextText(QueryInput* input);
+  bool nextPly(QueryInput* input);
+};
+
+bool QueryRecordReader::State::nextText(QueryInput* input) {
+  const auto [least, most] = columnCounts(op);
   // parseListNumber's messages name the column ("x is not finite ('nan')").
   static const std::vector<std::string> kNames[3] = {
       {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
-  const std::vector<std::string>& names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
-  for (int line = 1; std::getline(in, text); ++line) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const auto first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;
+  const std::vector<std::string>& column_names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
+  while (std::getline(text, buffer)) {
+    ++line;
+    if (!buffer.empty() && buffer.back() == '\r') buffer.pop_back();
+    const auto first = buffer.find_first_not_of(" \t");
+    if (first == std::string::npos || buffer[first] == '#') continue;
     tokens.clear();
-    for (std::size_t at = first; at < text.size();) {
-      const std::size_t end = std::min(text.find_first_of(" \t", at), text.size());
-      tokens.emplace_back(text, at, end - at);
-      at = text.find_first_not_of(" \t", end);
+    for (std::size_t at = first; at < buffer.size();) {
+      const std::size_t end = std::min(buffer.find_first_of(" \t", at), buffer.size());
+      tokens.emplace_back(buffer, at, end - at);
+      at = buffer.find_first_not_of(" \t", end);
       if (at == std::string::npos) break;
     }
     if (tokens.size() < least || tokens.size() > most)
@@ -115,52 +140,85 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
                        std::string("expected ") + recordColumns(op) + " (--op " + queryOpName(op) + "), got " +
                            std::to_string(tokens.size()) + " fields");
     values.clear();
-    for (std::size_t i = 0; i < tokens.size(); ++i) {
-      values.push_back(parseListNumber(tokens[i], file, line, names[i].c_str()));
-    }
-    addRecord(op, values, names, max_range_m, &input,
+    for (std::size_t i = 0; i < tokens.size(); ++i)
+      values.push_back(parseListNumber(tokens[i], file, line, column_names[i].c_str()));
+    addRecord(op, values, column_names, max_range_m, input,
               [&](const std::string& what) { throw InputError(file.string(), line, what); });
+    return true;
   }
-  if (in.bad()) throw InputError(file.string(), "cannot be read");
-  return input;
+  if (text.bad()) throw InputError(file.string(), "cannot be read");
+  return false;
 }
 
-QueryInput readPly(const fs::path& file, QueryOp op, double max_range_m) {
-  const PlyVertexTable table = readPlyVertices(file);
+bool QueryRecordReader::State::nextPly(QueryInput* input) {
+  if (!ply->next()) return false;
+  const std::size_t i = vertex++;
+  const auto fail = [&](const std::string& what) {
+    throw InputError(file.string(), "vertex " + std::to_string(i) + ": " + what);
+  };
+  values.clear();
+  for (std::size_t k = 0; k < columns.size(); ++k) {
+    const double v = ply->row()[static_cast<std::size_t>(columns[k])];
+    if (!std::isfinite(v)) fail(names[k] + " is not finite (" + number(v) + ")");
+    values.push_back(v);
+  }
+  addRecord(op, values, names, max_range_m, input, fail);
+  return true;
+}
+
+QueryRecordReader::QueryRecordReader(const fs::path& file, QueryOp op, double max_range_m)
+    : state_(std::make_unique<State>()) {
+  if (!queryOpReadsPoints(op)) throw std::logic_error("QueryRecordReader: --op reads no points");
+  if (!fs::exists(file)) throw InputError(file.string(), "no such file (--points)");
+  State& s = *state_;
+  s.file = file, s.op = op, s.max_range_m = max_range_m;
+  const std::string ext = file.extension().string();
+  if (ext == ".txt") {
+    s.text.open(file, std::ios::binary);
+    if (!s.text) throw InputError(file.string(), "cannot open (missing or unreadable)");
+    return;
+  }
+  if (ext != ".ply")
+    throw InputError(file.string(), "--points reads .txt (columns) or .ply (vertices), not '" + ext + "'");
+  s.ply = std::make_unique<PlyVertexReader>(file);
   std::vector<const char*> wanted = {"x", "y", "z"};
   std::vector<const char*> optional;
   if (op == QueryOp::kCollide) wanted.push_back("radius"), optional.push_back("body");
   if (op == QueryOp::kRay) wanted.insert(wanted.end(), {"nx", "ny", "nz"}), optional.push_back("max_range");
-  std::vector<int> columns;
   for (const char* name : wanted) {
-    const int c = table.column(name);
+    const int c = s.ply->column(name);
     if (c < 0)
       throw InputError(file.string(), std::string("the vertex element has no property '") + name + "' (--op " +
                                           queryOpName(op) + " reads " + recordColumns(op) +
                                           (op == QueryOp::kCollide ? ": x y z radius [body]" : "") +
                                           (op == QueryOp::kRay ? ": x y z nx ny nz [max_range]" : "") + ")");
-    columns.push_back(c);
+    s.columns.push_back(c);
   }
   for (const char* name : optional)
-    if (const int c = table.column(name); c >= 0) columns.push_back(c);
-  std::vector<std::string> names;
-  for (const int c : columns) names.push_back(table.names[static_cast<std::size_t>(c)]);
-  QueryInput input;
-  std::vector<double> values;
-  for (std::size_t i = 0; i < table.count; ++i) {
-    const auto fail = [&](const std::string& what) {
-      throw InputError(file.string(), "vertex " + std::to_string(i) + ": " + what);
-    };
-    values.clear();
-    for (std::size_t k = 0; k < columns.size(); ++k) {
-      const double v = table.at(i, columns[k]);
-      if (!std::isfinite(v)) fail(names[k] + " is not finite (" + number(v) + ")");
-      values.push_back(v);
-    }
-    addRecord(op, values, names, max_range_m, &input, fail);
-  }
-  return input;
+    if (const int c = s.ply->column(name); c >= 0) s.columns.push_back(c);
+  for (const int c : s.columns) s.names.push_back(s.ply->names()[static_cast<std::size_t>(c)]);
 }
+
+QueryRecordReader::~QueryRecordReader() = default;
+
+bool QueryRecordReader::next(std::size_t max, QueryInput* batch) {
+  *batch = QueryInput{};
+  State& s = *state_;
+  while (batch->size() < max && (s.ply ? s.nextPly(batch) : s.nextText(batch))) {
+  }
+  return batch->size() > 0;
+}
+
+std::size_t countQueryRecords(const fs::path& file, QueryOp op, double max_range_m) {
+  QueryRecordReader reader(file, op, max_range_m);
+  QueryInput batch;
+  std::size_t records = 0;
+  while (reader.next(kQueryBatch, &batch)) records += batch.size();
+  if (records == 0) throw noRecords(file, op);
+  return records;
+}
+
+namespace {
 
 // Binary little-endian values appended to a PLY body.
 struct PlyBody {
@@ -198,15 +256,9 @@ QueryOp parseQueryOp(const std::string& name) {
 }
 
 QueryInput readQueryInput(const fs::path& file, QueryOp op, double max_range_m) {
-  if (!queryOpReadsPoints(op)) throw std::logic_error("readQueryInput: --op reads no points");
-  if (!fs::exists(file)) throw InputError(file.string(), "no such file (--points)");
-  const std::string ext = file.extension().string();
+  QueryRecordReader reader(file, op, max_range_m);
   QueryInput input;
-  if (ext == ".txt") input = readText(file, op, max_range_m);
-  else if (ext == ".ply") input = readPly(file, op, max_range_m);
-  else throw InputError(file.string(), "--points reads .txt (columns) or .ply (vertices), not '" + ext + "'");
-  if (input.size() == 0)
-    throw InputError(file.string(), std::string("has no records (expected lines of ") + recordColumns(op) + ")");
+  if (!reader.next(std::numeric_limits<std::size_t>::max(), &input)) throw noRecords(file, op);
   return input;
 }
 
@@ -255,14 +307,38 @@ std::string queryAnswersText(QueryOp op, const QueryInput& input, const QueryAns
   return out;
 }
 
-std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnswers& a) {
+namespace {
+
+// The PLY's header for `records` vertices of `op`'s answers.
+std::string answersPlyHeader(QueryOp op, std::size_t records) {
   std::string header = "ply\nformat binary_little_endian 1.0\ncomment vdmap query --op " +
-                       std::string(queryOpName(op)) + "\nelement vertex " + std::to_string(input.size()) +
+                       std::string(queryOpName(op)) + "\nelement vertex " + std::to_string(records) +
                        "\nproperty float x\nproperty float y\nproperty float z\n";
-  PlyBody body;
   switch (op) {
     case QueryOp::kClassify:
       header += "property uchar class\nproperty float p\nproperty int keyframe\nproperty int ellipsoid\n";
+      break;
+    case QueryOp::kDistance:
+      header += "property float distance\nproperty float gx\nproperty float gy\nproperty float gz\n";
+      break;
+    case QueryOp::kCollide:
+      header += "property float radius\nproperty int body\nproperty uchar collides\nproperty uchar touches_unknown\n"
+                "property float clearance\n";
+      break;
+    case QueryOp::kRay:
+      header += "property float nx\nproperty float ny\nproperty float nz\nproperty uchar hit\nproperty float t\n"
+                "property float hx\nproperty float hy\nproperty float hz\n";
+      break;
+    default: throw std::logic_error("answersPlyHeader: no records for this op");
+  }
+  return header + "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
+}
+
+// The PLY's vertices of the records `input` (collide: `a.bodies` holds every body's answer).
+std::string answersPlyBody(QueryOp op, const QueryInput& input, const QueryAnswers& a) {
+  PlyBody body;
+  switch (op) {
+    case QueryOp::kClassify:
       for (std::size_t i = 0; i < input.points.size(); ++i) {
         const Classification& c = a.classes[i];
         body.put3(input.points[i]);
@@ -274,7 +350,6 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
       }
       break;
     case QueryOp::kDistance:
-      header += "property float distance\nproperty float gx\nproperty float gy\nproperty float gz\n";
       for (std::size_t i = 0; i < input.points.size(); ++i) {
         const DistanceResult& d = a.distances[i];
         body.put3(input.points[i]);
@@ -285,15 +360,13 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
         body.rgb(static_cast<std::uint8_t>(230 * (1 - s) + 20), 40, static_cast<std::uint8_t>(230 * s + 20));
       }
       break;
-    case QueryOp::kCollide: {
-      header += "property float radius\nproperty int body\nproperty uchar collides\nproperty uchar touches_unknown\n"
-                "property float clearance\n";
+    case QueryOp::kCollide:
       for (const Sphere& s : input.spheres) {
         // One answer per body, in ascending body number.
         const auto it = std::lower_bound(a.bodies.begin(), a.bodies.end(), s.body,
                                          [](const BodyCollision& c, int body) { return c.body < body; });
         const BodyCollision* b = it != a.bodies.end() && it->body == s.body ? &*it : nullptr;
-        if (!b) throw std::logic_error("queryAnswersPly: a sphere's body has no answer");
+        if (!b) throw std::logic_error("answersPlyBody: a sphere's body has no answer");
         body.put3(s.centre_W);
         body.put(static_cast<float>(s.radius_m));
         body.put(static_cast<std::int32_t>(s.body));
@@ -305,10 +378,7 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
         else body.rgb(40, 190, 70);
       }
       break;
-    }
     case QueryOp::kRay:
-      header += "property float nx\nproperty float ny\nproperty float nz\nproperty uchar hit\nproperty float t\n"
-                "property float hx\nproperty float hy\nproperty float hz\n";
       for (std::size_t i = 0; i < input.rays.size(); ++i) {
         const RayHit& h = a.hits[i];
         body.put3(input.rays[i].origin_W);
@@ -320,16 +390,145 @@ std::string queryAnswersPly(QueryOp op, const QueryInput& input, const QueryAnsw
         else body.rgb(150, 150, 150);
       }
       break;
-    default: throw std::logic_error("queryAnswersPly: no records for this op");
+    default: throw std::logic_error("answersPlyBody: no records for this op");
   }
-  header += "property uchar red\nproperty uchar green\nproperty uchar blue\nend_header\n";
-  return header + body.bytes;
+  return std::move(body.bytes);
 }
 
-void writeQueryAnswers(const fs::path& file, QueryOp op, const QueryInput& input, const QueryAnswers& answers) {
-  const std::string ext = file.extension().string();
-  if (ext == ".ply") writeFileAtomically(file, queryAnswersPly(op, input, answers));
-  else writeFileAtomically(file, queryAnswersText(op, input, answers));
+// Folds one batch's bodies (spheres counted from `first`) into `bodies`, as collide() over all
+// the spheres at once folds them: the least clearance, the first sphere that gave it.
+void foldBodies(const std::vector<BodyCollision>& batch, std::size_t first, std::map<int, BodyCollision>* bodies) {
+  for (const BodyCollision& b : batch) {
+    const auto [it, added] = bodies->try_emplace(b.body, b);
+    BodyCollision& all = it->second;
+    if (added) {
+      if (all.sphere >= 0) all.sphere += static_cast<int>(first);
+      continue;
+    }
+    all.collides = all.collides || b.collides;
+    all.touches_unknown = all.touches_unknown || b.touches_unknown;
+    if (b.clearance_m < all.clearance_m)
+      all.clearance_m = b.clearance_m, all.sphere = b.sphere + static_cast<int>(first), all.closest_W = b.closest_W;
+  }
+}
+
+// JSON has no infinity: null stands for "no surface".
+nlohmann::json finiteOrNull(double v) {
+  return std::isfinite(v) ? nlohmann::json(rounded6(v)) : nlohmann::json(nullptr);
+}
+
+}  // namespace
+
+double rounded6(double v) { return std::isfinite(v) ? std::round(v * 1e6) / 1e6 : v; }
+
+nlohmann::json answerQueryRecords(const QueryMap& map, QueryOp op, const fs::path& points, std::size_t records,
+                                  const fs::path& out, const PointQueryOptions& options,
+                                  const std::function<void(std::size_t, std::size_t)>& progress) {
+  const bool ply = out.extension() == ".ply";
+  double ms = 0;  // asking the map only, not reading or writing
+  std::size_t counts[3] = {0, 0, 0}, inside = 0, beyond = 0, hits = 0;
+  double min_distance = INFINITY;
+  SpilledMedian medians;  // distances, or the hits' ranges
+  std::map<int, BodyCollision> bodies;
+  QueryAnswers answers;
+  QueryInput batch;
+  // Every record read again, in batches; `f(batch, first)` for each.
+  const auto eachBatch = [&](const auto& f) {
+    QueryRecordReader reader(points, op, options.max_range_m);
+    std::size_t done = 0;
+    while (reader.next(options.batch, &batch)) {
+      f(done);
+      done += batch.size();
+    }
+    if (done != records) throw InputError(points.string(), "changed while it was read");
+  };
+  const auto ask = [&](std::size_t first) {
+    const auto start = std::chrono::steady_clock::now();
+    const std::size_t n = batch.size();
+    switch (op) {
+      case QueryOp::kClassify:
+        answers.classes.resize(n);
+        if (options.keyframe >= 0) map.classifyInKeyframe(options.keyframe, batch.points, answers.classes);
+        else map.classify(batch.points, answers.classes);
+        break;
+      case QueryOp::kDistance:
+        answers.distances.resize(n);
+        map.distance(batch.points, answers.distances, options.max_distance_m);
+        break;
+      case QueryOp::kCollide: foldBodies(map.collide(batch.spheres, options.clearance_m), first, &bodies); break;
+      case QueryOp::kRay:
+        answers.hits.resize(n);
+        map.castRays(batch.rays, answers.hits);
+        break;
+      default: throw std::logic_error("answerQueryRecords: no records for this op");
+    }
+    ms += msSince(start);
+    for (const Classification& c : answers.classes) ++counts[static_cast<int>(c.state)];
+    for (const DistanceResult& r : answers.distances) {
+      medians.add(r.distance_m);
+      min_distance = std::min(min_distance, r.distance_m);
+      inside += r.distance_m == 0;
+      beyond += !std::isfinite(r.distance_m) || r.distance_m >= options.max_distance_m;
+    }
+    for (const RayHit& h : answers.hits)
+      if (h.hit) medians.add(h.t_m), ++hits;
+    if (progress) progress(first + n, records);
+  };
+  writeFileAtomically(out, [&](const ByteSink& sink) {
+    if (ply) sink(answersPlyHeader(op, records));
+    if (op != QueryOp::kCollide) {
+      eachBatch([&](std::size_t first) {
+        ask(first);
+        sink(ply ? answersPlyBody(op, batch, answers) : queryAnswersText(op, batch, answers));
+      });
+      return;
+    }
+    // A body's answer needs all its spheres: ask them all, then write.
+    eachBatch(ask);
+    for (auto& [number, body] : bodies) answers.bodies.push_back(body);
+    if (!ply) return sink(queryAnswersText(op, batch, answers));
+    eachBatch([&](std::size_t) { sink(answersPlyBody(op, batch, answers)); });
+  });
+
+  nlohmann::json summary;
+  summary["records"] = records;
+  summary["query_ms"] = rounded6(ms);
+  summary["records_per_s"] = ms > 0 ? std::round(1e3 * static_cast<double>(records) / ms) : 0.0;
+  switch (op) {
+    case QueryOp::kClassify:
+      summary["occupied"] = counts[static_cast<int>(Occupancy::kOccupied)];
+      summary["free"] = counts[static_cast<int>(Occupancy::kFree)];
+      summary["unknown"] = counts[static_cast<int>(Occupancy::kUnknown)];
+      if (options.keyframe >= 0) summary["keyframe"] = options.keyframe;
+      break;
+    case QueryOp::kDistance:
+      summary["min_m"] = finiteOrNull(min_distance);
+      summary["median_m"] = finiteOrNull(medians.median());
+      summary["inside"] = inside;
+      summary["beyond"] = beyond;
+      break;
+    case QueryOp::kCollide: {
+      std::size_t collide = 0, unknown = 0;
+      double clearance = INFINITY;
+      for (const BodyCollision& b : answers.bodies) {
+        collide += b.collides;
+        unknown += b.touches_unknown;
+        clearance = std::min(clearance, b.clearance_m);
+      }
+      summary["bodies"] = answers.bodies.size();
+      summary["colliding"] = collide;
+      summary["touching_unknown"] = unknown;
+      summary["min_clearance_m"] = finiteOrNull(clearance);
+      break;
+    }
+    case QueryOp::kRay:
+      summary["hits"] = hits;
+      summary["misses"] = records - hits;
+      summary["median_t_m"] = hits == 0 ? nlohmann::json(nullptr) : nlohmann::json(rounded6(medians.median()));
+      break;
+    default: break;
+  }
+  return summary;
 }
 
 }  // namespace vdmap::app

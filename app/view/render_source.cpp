@@ -87,7 +87,8 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
     std::swap(map, sequence.folder);
   Impl& m = *impl_;
   if (!map.empty() && isSessionPath(map)) {
-    m.session.emplace(loadSession(map, {.decode_images = false}));  // a container view decodes its keyframe's image
+    // A container view decodes its keyframe's image; nothing draws the features.
+    m.session.emplace(loadSession(map, {.decode_images = false, .keep_features = false}));
     m.graph = &m.session->graph;
     m.state = &m.session->info.state;
     m.camera = m.session->info.camera;

@@ -62,10 +62,49 @@ class Reader {
   }
 
   std::vector<Element> read() {
+    open();
+    for (Element& e : elements_) readElement(e, true);
+    return std::move(elements_);
+  }
+
+  /// Reads and checks the header; the elements' data follow.
+  void open() {
     readHeader();
     checkElementSizes();
-    for (Element& e : elements_) readElement(e);
-    return std::move(elements_);
+  }
+  std::vector<Element>& elements() { return elements_; }
+
+  /// Reads all of `e`'s records, keeping them in `e` or (keep false) checking and dropping them.
+  void readElement(Element& e, bool keep) {
+    if (keep) e.scalars.reserve(e.count * e.scalarCount());
+    std::vector<double> row;
+    for (std::size_t i = 0; i < e.count; ++i) {
+      row.clear();
+      readRecord(e, &row, keep ? &e.lists : nullptr);
+      if (keep) e.scalars.insert(e.scalars.end(), row.begin(), row.end());
+    }
+  }
+
+  /// Appends one record's scalars to `scalars` and its first list to `lists` (when given).
+  void readRecord(const Element& e, std::vector<double>* scalars, std::vector<std::vector<std::int64_t>>* lists) {
+    bool list_taken = false;
+    for (const Property& p : e.properties) {
+      if (p.count_type.empty()) {
+        scalars->push_back(readScalar(p.type));
+        continue;
+      }
+      const double n = readScalar(p.count_type);
+      if (n < 0 || n > 1e6) fail("element " + printable(e.name) + " has a list of " + std::to_string(n) + " items");
+      std::vector<std::int64_t> items(static_cast<std::size_t>(n));
+      for (auto& item : items) {
+        const double v = readScalar(p.type);
+        if (!(std::abs(v) < 9e18))
+          fail("element " + printable(e.name) + " has a list item out of range (" + std::to_string(v) + ")");
+        item = static_cast<std::int64_t>(v);
+      }
+      if (lists && !list_taken) lists->push_back(std::move(items));
+      list_taken = true;
+    }
   }
 
  private:
@@ -172,31 +211,6 @@ class Reader {
     return v;
   }
 
-  void readElement(Element& e) {
-    const int scalars = e.scalarCount();
-    e.scalars.reserve(e.count * scalars);
-    for (std::size_t i = 0; i < e.count; ++i) {
-      bool list_taken = false;
-      for (const Property& p : e.properties) {
-        if (p.count_type.empty()) {
-          e.scalars.push_back(readScalar(p.type));
-          continue;
-        }
-        const double n = readScalar(p.count_type);
-        if (n < 0 || n > 1e6) fail("element " + printable(e.name) + " has a list of " + std::to_string(n) + " items");
-        std::vector<std::int64_t> items(static_cast<std::size_t>(n));
-        for (auto& item : items) {
-          const double v = readScalar(p.type);
-          if (!(std::abs(v) < 9e18))
-            fail("element " + printable(e.name) + " has a list item out of range (" + std::to_string(v) + ")");
-          item = static_cast<std::int64_t>(v);
-        }
-        if (!list_taken) e.lists.push_back(std::move(items));
-        list_taken = true;
-      }
-    }
-  }
-
   std::filesystem::path file_;
   std::ifstream in_;
   Format format_ = Format::kAscii;
@@ -248,6 +262,11 @@ const Element& vertexElement(const std::filesystem::path& file, const std::vecto
   const Element* v = findElement(elements, "vertex");
   if (!v) throw InputError(file.string(), "no 'vertex' element");
   return *v;
+}
+
+int indexOf(const std::vector<std::string>& names, const std::string& name) {
+  const auto it = std::find(names.begin(), names.end(), name);
+  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
 }
 
 }  // namespace
@@ -306,19 +325,55 @@ std::vector<EllipsoidRecord> readPlyEllipsoids(const std::filesystem::path& file
   return out;
 }
 
-int PlyVertexTable::column(const std::string& name) const {
-  const auto it = std::find(names.begin(), names.end(), name);
-  return it == names.end() ? -1 : static_cast<int>(it - names.begin());
+int PlyVertexTable::column(const std::string& name) const { return indexOf(names, name); }
+
+struct PlyVertexReader::State {
+  explicit State(const std::filesystem::path& file) : reader(file) {}
+  Reader reader;
+  std::size_t vertex = 0;  // index of the vertex element
+  std::vector<double> row;
+};
+
+PlyVertexReader::PlyVertexReader(const std::filesystem::path& file) : state_(std::make_unique<State>(file)) {
+  Reader& r = state_->reader;
+  r.open();
+  std::vector<Element>& elements = r.elements();
+  const Element& v = vertexElement(file, elements);
+  state_->vertex = static_cast<std::size_t>(&v - elements.data());
+  for (const Property& p : v.properties)
+    if (p.count_type.empty()) names_.push_back(p.name);
+  count_ = v.count;
+  for (std::size_t e = 0; e < state_->vertex; ++e) r.readElement(elements[e], false);
+}
+
+PlyVertexReader::~PlyVertexReader() = default;
+
+int PlyVertexReader::column(const std::string& name) const { return indexOf(names_, name); }
+
+const std::vector<double>& PlyVertexReader::row() const { return state_->row; }
+
+bool PlyVertexReader::next() {
+  std::vector<Element>& elements = state_->reader.elements();
+  if (read_ < count_) {
+    state_->row.clear();
+    state_->reader.readRecord(elements[state_->vertex], &state_->row, nullptr);
+    ++read_;
+    return true;
+  }
+  if (!rest_checked_) {  // what follows the vertices is checked as readPlyVertices checks it
+    for (std::size_t e = state_->vertex + 1; e < elements.size(); ++e) state_->reader.readElement(elements[e], false);
+    rest_checked_ = true;
+  }
+  return false;
 }
 
 PlyVertexTable readPlyVertices(const std::filesystem::path& file) {
-  const std::vector<Element> elements = Reader(file).read();
-  const Element& v = vertexElement(file, elements);
+  PlyVertexReader reader(file);
   PlyVertexTable table;
-  for (const Property& p : v.properties)
-    if (p.count_type.empty()) table.names.push_back(p.name);
-  table.count = v.count;
-  table.values = v.scalars;
+  table.names = reader.names();
+  table.count = reader.count();
+  table.values.reserve(table.count * table.names.size());
+  while (reader.next()) table.values.insert(table.values.end(), reader.row().begin(), reader.row().end());
   return table;
 }
 

@@ -4,6 +4,7 @@
 #include <array>
 #include <cstdint>
 #include <filesystem>
+#include <memory>
 #include <string>
 #include <vector>
 
@@ -54,5 +55,30 @@ struct PlyVertexTable {
 /// Reads the `vertex` element of any PLY (e.g. points or 3-D Gaussians). Throws InputError as
 /// readPlyMesh.
 PlyVertexTable readPlyVertices(const std::filesystem::path& file);
+
+/// readPlyVertices one vertex at a time, so that a file of any size is read in the memory of one
+/// vertex (elements before and after the vertices are read, checked and dropped). Throws
+/// InputError as readPlyMesh: a malformed header on construction, bad data when reached.
+class PlyVertexReader {
+ public:
+  explicit PlyVertexReader(const std::filesystem::path& file);
+  ~PlyVertexReader();
+  const std::vector<std::string>& names() const { return names_; }  ///< scalar properties, in file order
+  std::size_t count() const { return count_; }                      ///< vertices
+  /// Column of `name`, or -1.
+  int column(const std::string& name) const;
+  /// Reads the next vertex into row(); false after the last one (the rest of the file read and
+  /// checked by then).
+  bool next();
+  /// The vertex next() read: names().size() values.
+  const std::vector<double>& row() const;
+
+ private:
+  struct State;
+  std::unique_ptr<State> state_;
+  std::vector<std::string> names_;
+  std::size_t count_ = 0, read_ = 0;
+  bool rest_checked_ = false;
+};
 
 }  // namespace vdmap

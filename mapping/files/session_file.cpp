@@ -568,7 +568,9 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   w->bytes(packed);
 }
 
-Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::uint32_t version, bool decode_images) {
+Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::uint32_t version,
+                      const SessionDecodeOptions& options) {
+  const bool decode_images = options.decode_images;
   const PinholeCamera& camera = info.camera;
   Keyframe k{
       id, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
@@ -618,6 +620,11 @@ Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::ui
   }
   r->check(f.keypoints.empty() || !f.descriptors.empty(), "keypoints without descriptors");
   r->expectEnd();
+  if (!options.keep_features) f = FrameFeatures{};
+  if (!options.keep_images) {
+    k.rgb_image = CompressedImage::fromEncoded(0, 0, CV_8UC3, {}, false);
+    k.depth_image = CompressedImage::fromEncoded(0, 0, CV_16UC1, {}, false);
+  }
   return k;
 }
 
@@ -777,8 +784,7 @@ Session decodeSession(std::string_view bytes, const std::string& name, const Ses
     } else if (s < first_keyframe) {
       readState(&r, version, &session.info, keyframes);
     } else {
-      session.graph.add(
-          readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version, options.decode_images));
+      session.graph.add(readKeyframe(&r, static_cast<int>(s - first_keyframe), session.info, version, options));
     }
   }
   body.setWhere("file");
@@ -800,10 +806,13 @@ bool isSessionPath(const std::filesystem::path& file) {
 }
 
 Session loadSession(const std::filesystem::path& file, const SessionDecodeOptions& options) {
-  std::ifstream in(file, std::ios::binary);
+  std::ifstream in(file, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(file.string(), "cannot open the session file");
-  const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-  if (in.bad()) throw InputError(file.string(), "cannot read the session file");
+  // Read at its size in one piece: growing a string char by char held up to three times the file.
+  const std::streamoff size = in.tellg();
+  std::string bytes(static_cast<std::size_t>(std::max<std::streamoff>(0, size)), '\0');
+  in.seekg(0);
+  if (size < 0 || !in.read(bytes.data(), size)) throw InputError(file.string(), "cannot read the session file");
   if (file.extension() == ".vdmap" && bytes.compare(0, sizeof(kMagic), std::string_view(kMagic, sizeof(kMagic))) != 0)
     throw InputError(file.string(), bytes.empty()
                                         ? "a damaged session file: it is empty (wrong magic)"

@@ -74,6 +74,12 @@ struct SessionDecodeOptions {
   /// views: it decodes a container view's image when it draws it (keyframeImage()), so a damaged
   /// image is still one error naming the session and the keyframe. The workbench stays eager.
   bool decode_images = true;
+  /// Keep each keyframe's image files (checked as decode_images says either way). Off for
+  /// `vdmap query`, which reads the local maps and poses alone: its keyframes then have empty images.
+  bool keep_images = true;
+  /// Keep each keyframe's keypoints and descriptors (checked either way). Off for the verbs that
+  /// neither track nor close loops (render, query): their keyframes then have no features.
+  bool keep_features = true;
 };
 
 /// Parses a session from memory; `name` is what errors call it. Throws InputError with one line

@@ -120,6 +120,31 @@ TEST(SessionFile, ReloadedSessionIsEqualReSavesByteIdenticalAndMergesIdentically
   }
 }
 
+// The verbs that only draw or query drop what they never read; the local maps, poses and the
+// global map stay exactly those of a full load.
+TEST(SessionFile, ImagesAndFeaturesCanBeLeftOut) {
+  const Saved& s = smallSession();
+  const Session full = decodeSession(s.bytes, "s.vdmap");
+  const Session lean =
+      decodeSession(s.bytes, "s.vdmap", {.decode_images = false, .keep_images = false, .keep_features = false});
+  ASSERT_EQ(lean.graph.size(), full.graph.size());
+  for (std::size_t i = 0; i < full.graph.size(); ++i) {
+    const Keyframe &a = full.graph.keyframes()[i], &b = lean.graph.keyframes()[i];
+    EXPECT_GT(a.memory().images, 0u);
+    EXPECT_GT(a.features.size(), 0u);
+    EXPECT_EQ(b.memory().images, 0u);
+    EXPECT_EQ(b.memory().features, 0u);
+    EXPECT_EQ(a.T_W_K.matrix(), b.T_W_K.matrix());
+    EXPECT_EQ(a.memory().ellipsoids, b.memory().ellipsoids);
+  }
+  const GlobalMap a = buildGlobalMap(full.graph, full.info.global), b = buildGlobalMap(lean.graph, lean.info.global);
+  ASSERT_EQ(a.ellipsoids.size(), b.ellipsoids.size());
+  for (std::size_t i = 0; i < a.ellipsoids.size(); ++i) {
+    ASSERT_EQ(a.ellipsoids[i].mean, b.ellipsoids[i].mean);
+    ASSERT_EQ(a.ellipsoids[i].cov, b.ellipsoids[i].cov);
+  }
+}
+
 TEST(SessionFile, EmptySessionRoundTrips) {
   const SessionInfo info;
   const std::string bytes = encodeSession(KeyframeGraph{}, info);
