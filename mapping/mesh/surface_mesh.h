@@ -16,7 +16,7 @@ struct MeshParams {
   /// Neighbouring cells are joined when their depths differ by at most tan(max_slope_deg) times their
   /// lateral distance plus edge_sigma times the sensor's depth noise: a surface turned further from
   /// the camera than this, or a depth step, is left open.
-  double max_slope_deg = 70.0;
+  double max_slope_deg = 60.0;
   double edge_sigma = 3.0;
   /// Vertices sit on a grid of stride x stride cells: each is the count-weighted mean of the kept cells
   /// there (those joined with the one of median depth). 1: one vertex per cell.
