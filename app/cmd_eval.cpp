@@ -3,6 +3,7 @@
 // exports, OctoMap voxel centres, the NDT-OM baseline's cell means, a TSDF's point cloud.
 // vdmap eval --trajectory EST --groundtruth GT: trajectory error as the TUM benchmark's tools
 // (mapping/eval/trajectory_error.h).
+#include <cstdio>
 #include <filesystem>
 #include <iostream>
 #include <memory>
@@ -22,6 +23,7 @@ struct EvalArgs {
   std::string trajectory;
   std::string groundtruth;
   bool json = false;
+  bool surface = false;
   AccuracyParams accuracy;
   TrajectoryErrorParams trajectory_error;
 };
@@ -38,6 +40,31 @@ void runTrajectoryEval(const EvalArgs& args) {
   std::cout << args.trajectory << " against " << args.groundtruth << ": " << toText(e, args.trajectory_error);
 }
 
+// --surface: the map is a triangle mesh, scored by samples over its area.
+void runSurfaceEval(const EvalArgs& args, const std::filesystem::path& map) {
+  const ColoredTriangleMesh surface = readPlyMesh(map);
+  const ColoredTriangleMesh mesh = readPlyMesh(args.mesh);
+  const SurfaceAccuracyReport r = evaluateSurfaceAccuracy(surface, mesh, args.accuracy);
+  if (args.json) {
+    const nlohmann::json out = {{"map", map.string()},
+                                {"mesh", args.mesh},
+                                {"triangles", r.triangles},
+                                {"median_mm", rounded(r.median_mm)},
+                                {"p95_mm", rounded(r.p95_mm)},
+                                {"mean_mm", rounded(r.mean_mm)},
+                                {"rmse_mm", rounded(r.rmse_mm)},
+                                {"completion_ratio", rounded(r.completion_ratio)},
+                                {"completion_within_m", args.accuracy.completion_within_m},
+                                {"samples", args.accuracy.completion_samples}};
+    std::cout << jsonText(out) << "\n";
+    return;
+  }
+  std::printf("%s against %s: %zu triangles  median %.2f mm  p95 %.2f mm  mean %.2f mm  RMSE %.2f mm  "
+              "completion %.1f%% within %g cm\n",
+              map.c_str(), args.mesh.c_str(), r.triangles, r.median_mm, r.p95_mm, r.mean_mm, r.rmse_mm,
+              100.0 * r.completion_ratio, 100.0 * args.accuracy.completion_within_m);
+}
+
 void runEval(const EvalArgs& args) {
   if (!args.trajectory.empty()) return runTrajectoryEval(args);
   if (args.map.empty())
@@ -48,6 +75,7 @@ void runEval(const EvalArgs& args) {
   // A `vdmap map` output folder is scored by its global map's ellipsoid means.
   if (fs::is_directory(map)) map /= "global_points.ply";
   if (!fs::exists(map)) throw InputError(map.string(), "no such file (expected a PLY or a `vdmap map` folder)");
+  if (args.surface) return runSurfaceEval(args, map);
   const std::vector<Eigen::Vector3f> points = readPlyPoints(map);
   const ColoredTriangleMesh mesh = readPlyMesh(args.mesh);
   const AccuracyReport report = evaluateAccuracy(points, mesh, args.accuracy);
@@ -78,6 +106,14 @@ void addEvalCommand(CLI::App& app) {
   verb->add_option("--samples", args->accuracy.completion_samples, "mesh samples for completion")
       ->capture_default_str()
       ->check(CLI::Range(std::size_t{1}, AccuracyParams::kMaxCompletionSamples));
+  auto* surface = verb->add_flag("--surface", args->surface,
+                                 "the map is a triangle mesh PLY (vdmap mesh, a TSDF's mesh): score samples over its "
+                                 "area, and completion as the reference's samples' distance to it");
+  verb->add_option("--within", args->accuracy.completion_within_m,
+                   "m: a reference sample is complete when the map is this close")
+      ->check(positiveFiniteCheck())
+      ->capture_default_str();
+  surface->needs(map);
   map->needs(mesh);
   mesh->needs(map);
   auto* trajectory = verb->add_option("--trajectory", args->trajectory,

@@ -25,6 +25,7 @@
 #include "mapping/core/timing.h"
 #include "mapping/files/map_export.h"
 #include "mapping/files/occupancy_grid.h"
+#include "mapping/files/ply_writer.h"
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
 #include "mapping/io/json_text.h"
@@ -45,6 +46,9 @@ struct MapArgs {
   double grid_resolution_m = 0.0;  // 0: no grid
   std::string grid_band;
   std::string grid_up = "+z";
+  bool mesh = false;  // --mesh: also global_mesh.ply (docs/method.md 14)
+  bool mesh_no_fuse = false;
+  MeshParams mesh_params;
 };
 
 // OctoMap carves free space along each ray from the camera to a surface it measured. vdmap maps
@@ -273,6 +277,16 @@ void runMap(MapArgs args) {
       return computeOccupancyGrid(map, spec);
     });
   }
+  // --mesh: computed before anything is written, like the grid.
+  std::optional<ColoredTriangleMesh> mesh;
+  if (args.mesh) {
+    args.mesh_params.fuse = !args.mesh_no_fuse;
+    args.mesh_params.model = args.params.global.filter.model;
+    args.mesh_params.threads = args.params.global.threads;
+    mesh = withStageBar("mesh", [&] { return buildSurfaceMesh(graph, global.kept, args.mesh_params); });
+    if (mesh->triangles.empty())
+      std::fprintf(stderr, "vdmap map: note: the map has no surface to mesh: the mesh is empty\n");
+  }
   if (!args.json) printKeyframeTable(graph, global);
   MapExportOptions options;
   options.octomap_resolution_m = args.octomap_resolution_m;
@@ -289,6 +303,7 @@ void runMap(MapArgs args) {
     };
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);
   if (grid) writeOccupancyGrid(std::filesystem::path(args.out) / "grid.yaml", *grid);
+  if (mesh) writeMeshPly(std::filesystem::path(args.out) / "global_mesh.ply", *mesh);
   if (args.json) {
     std::cout << jsonText(stats) << "\n";
     return;
@@ -331,6 +346,12 @@ void addMapCommand(CLI::App& app) {
       ->needs(grid);
   grid->needs(band);
   band->needs(grid);
+  auto* mesh = verb->add_flag("--mesh", args->mesh,
+                              "also write global_mesh.ply, a triangle mesh of the local maps (vdmap mesh)");
+  addMeshOptions(*verb, args->mesh_params, &args->mesh_no_fuse);
+  for (const char* name :
+       {"--mesh-max-slope", "--mesh-edge-sigma", "--mesh-stride", "--mesh-no-fuse", "--max-triangles"})
+    verb->get_option(name)->needs(mesh);
   verb->add_flag("--json", args->json, "print stats.json to stdout instead of the table");
   addParameterOptions(*verb, args->params);
   verb->add_option("--threads", args->params.global.threads,

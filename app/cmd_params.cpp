@@ -90,6 +90,19 @@ void printMarkdown(std::ostream& out) {
   out << "\nThe pose source (`--poses gt|track`) is no parameter of this table: it belongs to the input\n"
          "(ground truth when the sequence has it), so settings do not hold it and a re-run keeps it. A\n"
          "session file stores it with these parameters (docs/vdmap-format.md).\n";
+  // The mesh's options are the verbs' (`vdmap mesh`, `vdmap map --mesh`), not the map's: read from them.
+  out << "\n## Mesh\n\n"
+         "The surface mesh (docs/method.md 14) is made from the local maps after mapping, so its\n"
+         "parameters are options of `vdmap mesh` and `vdmap map --mesh`, not of the map.\n\n"
+         "| flag | default | what it does |\n|---|---|---|\n";
+  CLI::App mesh_options;
+  MeshParams mesh;
+  bool no_fuse = false;
+  addMeshOptions(mesh_options, mesh, &no_fuse);
+  for (const CLI::Option* o : mesh_options.get_options())
+    if (o->get_name() != "--help")
+      out << "| `" << o->get_name() << "` | " << (o->get_default_str().empty() ? "off" : o->get_default_str()) << " | "
+          << cell(o->get_description()) << " |\n";
 }
 
 }  // namespace

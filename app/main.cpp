@@ -50,6 +50,7 @@ int main(int argc, char** argv) {
   addGuiCommand(app);
   addParamsCommand(app);
   addQueryCommand(app);  // point queries (docs/method.md 13)
+  addMeshCommand(app);
   const auto workbench = addBuiltinWorkbenchOptions(app);
   const auto print = [&app](const char* kind, const std::string& what) {
     const std::string verb = app.get_subcommands().empty() ? "" : " " + app.get_subcommands()[0]->get_name();

@@ -5,6 +5,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "mapping/mesh/surface_mesh.h"
+
 namespace vdmap::app {
 
 void addInfoCommand(CLI::App& app);
@@ -18,6 +20,11 @@ void addGuiCommand(CLI::App& app);
 void addQueryCommand(CLI::App& app);
 /// `vdmap params [--markdown]`: the parameter table for users, or docs/parameters.md.
 void addParamsCommand(CLI::App& app);
+/// `vdmap mesh MAP --out FILE`: the surface mesh (docs/method.md 14).
+void addMeshCommand(CLI::App& app);
+/// The mesh's options (--mesh-max-slope, --mesh-edge-sigma, --mesh-no-fuse, --max-triangles), for
+/// `vdmap mesh` and `vdmap map --mesh`.
+void addMeshOptions(CLI::App& verb, MeshParams& params, bool* no_fuse);
 /// The workbench options of `vdmap` without a verb; the returned function opens the workbench
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);

@@ -43,6 +43,7 @@ struct BenchArgs {
   bool long_run = false;
   LongRunOptions long_options;
   std::size_t completion_samples = AccuracyParams{}.completion_samples;
+  bool surfaces = false;  ///< --surfaces: the surface meshes (app/bench/surface_timing.h)
   // --query: the point queries against OctoMap and ground truth (app/bench/query_timing.h)
   bool query = false;
   std::string truth;                     ///< the same poses rendered without noise (--truth)

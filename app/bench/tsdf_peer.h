@@ -8,6 +8,7 @@
 
 #include "mapping/core/camera.h"
 #include "mapping/core/rgbd_frame.h"
+#include "mapping/files/ply_reader.h"
 
 namespace vdmap::app {
 
@@ -27,6 +28,8 @@ class TsdfVolume {
   double integrate(const RgbdFrame& frame);
   /// Surface points of the volume (world frame, metres).
   std::vector<Eigen::Vector3f> extractPoints() const;
+  /// The volume's triangle mesh (marching cubes; world frame, metres, vertex colours).
+  ColoredTriangleMesh extractMesh() const;
 
  private:
   TsdfVolume(std::shared_ptr<const TsdfPeerApi> api, void* volume) : api_(std::move(api)), volume_(volume) {}

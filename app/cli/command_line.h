@@ -4,6 +4,7 @@
 
 #include <unistd.h>
 
+#include <cctype>
 #include <cerrno>
 #include <cstring>
 #include <filesystem>
@@ -81,6 +82,13 @@ inline void checkOutputFile(const std::string& file, const std::string& option) 
   if (fs::exists(existing) && !fs::is_directory(existing))
     throw std::invalid_argument(file + ": " + existing.string() + " is a file, not a folder (" + option + ")");
   throw std::invalid_argument(file + ": its folder does not exist (" + option + ")");
+}
+
+/// Fails before any work when `file` does not name a mesh file vdmap writes (.ply or .obj, any case).
+inline void checkMeshFileName(const std::string& file) {
+  std::string ext = std::filesystem::path(file).extension().string();
+  for (char& c : ext) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+  if (ext != ".ply" && ext != ".obj") throw std::invalid_argument(file + ": a mesh is written as .ply or .obj");
 }
 
 /// Fails before any work when the output `file` (given as `option`) is one of `inputs` ({option,

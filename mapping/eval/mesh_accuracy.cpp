@@ -5,6 +5,7 @@
 #include <limits>
 #include <numeric>
 #include <random>
+#include <stdexcept>
 
 #include <Eigen/Geometry>
 #include <tbb/parallel_for.h>
@@ -150,6 +151,35 @@ AccuracyReport evaluateAccuracy(const std::vector<Eigen::Vector3f>& points, cons
   for (const double x : c) sum += x, within += x <= params.completion_within_m;
   r.completion_mean_mm = 1e3 * sum / c.size();
   r.completion_ratio = static_cast<double>(within) / c.size();
+  return r;
+}
+
+SurfaceAccuracyReport evaluateSurfaceAccuracy(const ColoredTriangleMesh& surface, const ColoredTriangleMesh& reference,
+                                              const AccuracyParams& params, const std::vector<bool>& seen) {
+  SurfaceAccuracyReport r;
+  r.triangles = surface.triangles.size();
+  if (surface.triangles.empty()) return r;
+  std::vector<double> d =
+      distancesToMesh(sampleMeshSurface(surface, params.completion_samples, params.seed), reference);
+  double sum = 0.0, sum2 = 0.0;
+  for (const double x : d) sum += x, sum2 += x * x;
+  r.mean_mm = 1e3 * sum / d.size();
+  r.rmse_mm = 1e3 * std::sqrt(sum2 / d.size());
+  std::sort(d.begin(), d.end());
+  r.median_mm = 1e3 * d[d.size() / 2];
+  r.p95_mm = 1e3 * d[std::min(d.size() - 1, d.size() * 95 / 100)];
+  const std::vector<double> c =
+      distancesToMesh(sampleMeshSurface(reference, params.completion_samples, params.seed), surface);
+  if (!seen.empty() && seen.size() != c.size()) throw std::invalid_argument("seen does not fit the reference samples");
+  std::size_t within = 0, seen_count = 0, seen_within = 0;
+  for (std::size_t i = 0; i < c.size(); ++i) {
+    const bool near = c[i] <= params.completion_within_m, counted = seen.empty() || seen[i];
+    within += near;
+    seen_count += counted;
+    seen_within += counted && near;
+  }
+  r.completion_ratio = c.empty() ? 0.0 : static_cast<double>(within) / c.size();
+  r.seen_completion_ratio = seen_count ? static_cast<double>(seen_within) / seen_count : 0.0;
   return r;
 }
 

@@ -52,4 +52,24 @@ struct AccuracyReport {
 AccuracyReport evaluateAccuracy(const std::vector<Eigen::Vector3f>& points, const ColoredTriangleMesh& mesh,
                                 const AccuracyParams& params = {});
 
+/// docs/method.md 12, a surface against a reference mesh. Distances in millimetres.
+struct SurfaceAccuracyReport {
+  std::size_t triangles = 0;  ///< of the surface scored
+  double median_mm = 0.0;     ///< of the surface samples' distances to the reference
+  double p95_mm = 0.0;
+  double mean_mm = 0.0;
+  double rmse_mm = 0.0;
+  double completion_ratio = 0.0;       ///< reference samples within completion_within_m of the surface
+  double seen_completion_ratio = 0.0;  ///< the same among the samples `seen` marks (all when it is empty)
+};
+
+/// Scores a triangle mesh `surface` against `reference`: params.completion_samples points uniformly
+/// over each by area (sampleMeshSurface, the seed for both), the surface's samples' exact distances to
+/// the reference (accuracy) and the reference's samples' exact distances to the surface (completion).
+/// `seen` (empty, or one flag per sample of sampleMeshSurface(reference, completion_samples, seed)) marks
+/// the reference samples the frames saw, for seen_completion_ratio. An empty surface has no accuracy
+/// figures and completion 0.
+SurfaceAccuracyReport evaluateSurfaceAccuracy(const ColoredTriangleMesh& surface, const ColoredTriangleMesh& reference,
+                                              const AccuracyParams& params = {}, const std::vector<bool>& seen = {});
+
 }  // namespace vdmap

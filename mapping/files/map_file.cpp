@@ -14,7 +14,9 @@
 
 #include "mapping/core/error.h"
 #include "mapping/files/ply_reader.h"
+#include "mapping/io/json_text.h"
 #include "mapping/io/text_list.h"
+#include "mapping/io/trajectory_io.h"
 #include "mapping/sequence/sequence.h"
 
 namespace vdmap {
@@ -329,6 +331,68 @@ double medianNearestNeighbourSpacing(const std::vector<Eigen::Vector3d>& points)
     return nearest[mid];
   }
   return 0;
+}
+
+KeyframeGraph readMapFolderLocalMaps(const fs::path& dir, SensorModel* model) {
+  const fs::path stats_file = dir / "stats.json", local_file = dir / "local_maps.ply",
+                 poses_file = dir / "keyframes.txt";
+  for (const fs::path& f : {stats_file, local_file, poses_file})
+    if (!fs::exists(f)) throw InputError(f.string(), "missing (expected a `vdmap map` output folder)");
+  std::ifstream in(stats_file, std::ios::binary);
+  nlohmann::json stats;
+  try {
+    stats = nlohmann::json::parse(in);
+  } catch (const nlohmann::json::exception& e) {
+    throw InputError(stats_file.string(), std::string("does not parse as JSON: ") + e.what());
+  }
+  PinholeCamera camera;
+  int cell_size = 0;
+  try {
+    const nlohmann::json& c = stats.at("camera_intrinsics");
+    camera.width = c.at("width").get<int>();
+    camera.height = c.at("height").get<int>();
+    camera.fx = c.at("fx").get<double>();
+    camera.fy = c.at("fy").get<double>();
+    camera.cx = c.at("cx").get<double>();
+    camera.cy = c.at("cy").get<double>();
+    camera.depth_scale = c.at("depth_scale").get<double>();
+    cell_size = stats.at("parameters").at("cell_size").get<int>();
+    if (model) *model = parseSensorModel(stats.at("parameters").at("sensor_model").get<std::string>());
+  } catch (const std::exception& e) {
+    throw InputError(stats_file.string(), std::string("expected camera_intrinsics and parameters (cell_size, "
+                                                      "sensor_model) as `vdmap map` writes them: ") +
+                                              e.what());
+  }
+  KeyframeGraph graph;
+  try {
+    for (const StampedPose& pose : readTumTrajectory(poses_file)) {
+      Keyframe k{static_cast<int>(graph.size()),       0, pose.t, pose.T_W_C, {}, {}, {},
+                 KeyframeContainer(camera, cell_size), 0};
+      graph.add(std::move(k));
+    }
+  } catch (const std::invalid_argument& e) {
+    throw InputError(stats_file.string(),
+                     std::string("its camera or cell size does not make a container: ") + e.what());
+  }
+  for (const EllipsoidRecord& r : readPlyEllipsoids(local_file)) {
+    if (r.keyframe < 0 || static_cast<std::size_t>(r.keyframe) >= graph.size())
+      throw InputError(local_file.string(), "an ellipsoid of keyframe " + std::to_string(r.keyframe) +
+                                                ", which keyframes.txt does not have");
+    Keyframe& k = graph.keyframe(r.keyframe);
+    const Transform T_K_W = k.T_W_K.inverse();
+    const Eigen::Vector3d mean = T_K_W * r.mean.cast<double>();
+    if (!(mean.z() > 0.0)) continue;
+    const Eigen::Vector2d uv = camera.project(mean);
+    const int grid = k.container.gridIndexOfPixel(uv.x(), uv.y());
+    if (grid < 0 || k.container.find(grid)) continue;  // outside, or a second one rounded into a taken cell
+    CellStats cell;
+    cell.n = std::max<double>(r.count, 2.0);
+    cell.mean = mean;
+    cell.scatter = T_K_W.linear() * r.cov.cast<double>() * T_K_W.linear().transpose() * (cell.n - 1.0);
+    cell.color = Eigen::Vector3d(r.rgb[0], r.rgb[1], r.rgb[2]);
+    k.container.findOrCreate(grid).fromStats(cell);
+  }
+  return graph;
 }
 
 std::vector<FolderEntry> listFolder(const fs::path& dir) {

@@ -10,6 +10,7 @@
 #include "mapping/core/types.h"
 #include "mapping/io/trajectory_io.h"
 #include "mapping/keyframe/covisibility_graph.h"
+#include "mapping/keyframe/keyframe_graph.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 
 namespace vdmap {
@@ -67,6 +68,13 @@ inline constexpr const char* kStaticMapCamera = "tum-default";
 /// Throws InputError naming the file for anything else, a file that does not parse, or one with
 /// no ellipsoids, points or occupied leaves.
 StaticMap loadStaticMap(const std::filesystem::path& path);
+
+/// The local maps of a `vdmap map` folder: local_maps.ply's ellipsoids (the cells the filter kept) put
+/// back into the containers of their keyframes (keyframes.txt's poses; stats.json's camera and cell
+/// size), each into the cell its mean projects to. Every cell of the result is one the map kept; the
+/// sensor model of stats.json goes to *model when given. Throws InputError naming the file that is
+/// missing or does not fit (a folder of a version without stats.json's camera cannot be read this way).
+KeyframeGraph readMapFolderLocalMaps(const std::filesystem::path& dir, SensorModel* model = nullptr);
 
 /// One entry of a folder as a file browser lists it.
 struct FolderEntry {

@@ -17,6 +17,7 @@ struct ColoredTriangleMesh {
   std::vector<Eigen::Vector3f> positions;
   std::vector<std::array<std::uint8_t, 3>> colors;
   std::vector<std::array<std::uint32_t, 3>> triangles;
+  std::vector<Eigen::Vector3f> normals;  ///< one unit normal per vertex, or empty (readPlyMesh leaves it empty)
 };
 
 /// One ellipsoid as exported (docs/method.md 11): mean, colour, covariance, point count, keyframe.

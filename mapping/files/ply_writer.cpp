@@ -1,9 +1,12 @@
 #include "mapping/files/ply_writer.h"
 
 #include <algorithm>
+#include <array>
 #include <bit>
+#include <cctype>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <cstring>
 #include <stdexcept>
 #include <string>
@@ -106,19 +109,60 @@ void writePointPly(const std::filesystem::path& file, const std::vector<Ellipsoi
 }
 
 void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh) {
-  std::string bytes = vertexHeader("vdmap mesh", mesh.positions.size(), "");
+  const bool normals = !mesh.normals.empty();
+  if (normals && mesh.normals.size() != mesh.positions.size())
+    throw std::logic_error("a mesh's normals do not fit its vertices");
+  std::string bytes = vertexHeader("vdmap mesh", mesh.positions.size(),
+                                   normals ? "property float nx\nproperty float ny\nproperty float nz\n" : "");
   bytes.insert(bytes.size() - std::string("end_header\n").size(),
                "element face " + std::to_string(mesh.triangles.size()) + "\nproperty list uchar uint vertex_indices\n");
   for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
     for (int k = 0; k < 3; ++k) put(bytes, mesh.positions[i](k));
     for (int k = 0; k < 3; ++k)
       put(bytes, i < mesh.colors.size() ? mesh.colors[i][static_cast<std::size_t>(k)] : std::uint8_t{200});
+    if (normals)
+      for (int k = 0; k < 3; ++k) put(bytes, mesh.normals[i](k));
   }
   for (const auto& t : mesh.triangles) {
     put(bytes, std::uint8_t{3});
     for (std::uint32_t v : t) put(bytes, v);
   }
   writeFileAtomically(file, bytes);
+}
+
+void writeMeshObj(const std::filesystem::path& file, const ColoredTriangleMesh& mesh) {
+  const bool normals = !mesh.normals.empty();
+  if (normals && mesh.normals.size() != mesh.positions.size())
+    throw std::logic_error("a mesh's normals do not fit its vertices");
+  std::string text = "# vdmap mesh\n";
+  char line[160];
+  for (std::size_t i = 0; i < mesh.positions.size(); ++i) {
+    const Eigen::Vector3f& p = mesh.positions[i];
+    const std::array<std::uint8_t, 3> c =
+        i < mesh.colors.size() ? mesh.colors[i] : std::array<std::uint8_t, 3>{200, 200, 200};
+    text.append(line,
+                static_cast<std::size_t>(std::snprintf(line, sizeof line, "v %.9g %.9g %.9g %.6g %.6g %.6g\n", p.x(),
+                                                       p.y(), p.z(), c[0] / 255.0, c[1] / 255.0, c[2] / 255.0)));
+  }
+  if (normals)
+    for (const Eigen::Vector3f& n : mesh.normals)
+      text.append(
+          line, static_cast<std::size_t>(std::snprintf(line, sizeof line, "vn %.7g %.7g %.7g\n", n.x(), n.y(), n.z())));
+  for (const auto& t : mesh.triangles) {
+    const unsigned a = t[0] + 1, b = t[1] + 1, c = t[2] + 1;
+    const int len = normals ? std::snprintf(line, sizeof line, "f %u//%u %u//%u %u//%u\n", a, a, b, b, c, c)
+                            : std::snprintf(line, sizeof line, "f %u %u %u\n", a, b, c);
+    text.append(line, static_cast<std::size_t>(len));
+  }
+  writeFileAtomically(file, text);
+}
+
+void writeMeshFile(const std::filesystem::path& file, const ColoredTriangleMesh& mesh) {
+  std::string ext = file.extension().string();
+  std::transform(ext.begin(), ext.end(), ext.begin(),
+                 [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+  if (ext == ".obj") writeMeshObj(file, mesh);
+  else writeMeshPly(file, mesh);
 }
 
 void writeEllipsoidPly(const std::filesystem::path& file, const std::vector<Ellipsoid>& ellipsoids) {

@@ -35,8 +35,16 @@ using EllipsoidSource = std::function<void(const EllipsoidVisitor&)>;
 void writeEllipsoidPly(const std::filesystem::path& file, std::size_t count, const EllipsoidSource& source);
 
 /// Writes a coloured triangle mesh as readPlyMesh reads it: binary little-endian PLY, vertices x y
-/// z float, red green blue uchar, faces as uint vertex_indices lists. Atomic like writeEllipsoidPly.
+/// z float, red green blue uchar (then nx ny nz float when mesh.normals is not empty), faces as uint
+/// vertex_indices lists. Atomic like writeEllipsoidPly.
 void writeMeshPly(const std::filesystem::path& file, const ColoredTriangleMesh& mesh);
+
+/// Writes the mesh as Wavefront OBJ text: `v x y z r g b` (colour 0..1), `vn` when mesh.normals is not
+/// empty, faces `f a//a b//b c//c` (1-based). Atomic like writeEllipsoidPly.
+void writeMeshObj(const std::filesystem::path& file, const ColoredTriangleMesh& mesh);
+
+/// writeMeshObj for a name ending in .obj (any case), else writeMeshPly.
+void writeMeshFile(const std::filesystem::path& file, const ColoredTriangleMesh& mesh);
 
 /// Writes the ellipsoid means as a coloured point cloud: binary little-endian PLY, x y z float,
 /// red green blue uchar (docs/method.md 11). Atomic like writeEllipsoidPly.

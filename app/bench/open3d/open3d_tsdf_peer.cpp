@@ -65,6 +65,19 @@ std::size_t vdmap_tsdf_extract(void* volume, void (*sink)(void*, const double*, 
   return n;
 }
 
+std::size_t vdmap_tsdf_extract_mesh(
+    void* volume, void (*sink)(void*, const double*, const double*, std::size_t, const int*, std::size_t), void* ctx) {
+  const auto mesh = static_cast<Volume*>(volume)->tsdf.ExtractTriangleMesh();
+  const std::size_t n = mesh->vertices_.size(), t = mesh->triangles_.size();
+  const bool colours = mesh->vertex_colors_.size() == n;
+  std::vector<Eigen::Vector3d> grey;
+  if (!colours) grey.assign(n, Eigen::Vector3d::Constant(0.8));
+  // std::vector<Eigen::Vector3d> and <Eigen::Vector3i>: packed triples.
+  sink(ctx, n ? mesh->vertices_[0].data() : nullptr, n ? (colours ? mesh->vertex_colors_ : grey)[0].data() : nullptr, n,
+       t ? mesh->triangles_[0].data() : nullptr, t);
+  return t;
+}
+
 void vdmap_tsdf_destroy(void* volume) { delete static_cast<Volume*>(volume); }
 }
 
@@ -72,4 +85,5 @@ void vdmap_tsdf_destroy(void* volume) { delete static_cast<Volume*>(volume); }
 static_assert(std::is_same_v<decltype(&vdmap_tsdf_create), VdmapTsdfCreateFn>);
 static_assert(std::is_same_v<decltype(&vdmap_tsdf_integrate), VdmapTsdfIntegrateFn>);
 static_assert(std::is_same_v<decltype(&vdmap_tsdf_extract), VdmapTsdfExtractFn>);
+static_assert(std::is_same_v<decltype(&vdmap_tsdf_extract_mesh), VdmapTsdfExtractMeshFn>);
 static_assert(std::is_same_v<decltype(&vdmap_tsdf_destroy), VdmapTsdfDestroyFn>);

@@ -21,5 +21,13 @@ typedef double (*VdmapTsdfIntegrateFn)(void* volume, const std::uint8_t* rgb, co
 /// as x y z doubles. Returns the number of points.
 typedef std::size_t (*VdmapTsdfExtractFn)(void* volume, void (*sink)(void* ctx, const double* xyz, std::size_t n),
                                           void* ctx);
+/// Extracts the volume's triangle mesh (marching cubes; world frame, metres): calls sink once with the
+/// vertices as x y z doubles, their colours as r g b doubles in 0..1 and the triangles as vertex
+/// index triples. Returns the number of triangles.
+typedef std::size_t (*VdmapTsdfExtractMeshFn)(void* volume,
+                                              void (*sink)(void* ctx, const double* xyz, const double* rgb,
+                                                           std::size_t vertices, const int* triangles,
+                                                           std::size_t triangle_count),
+                                              void* ctx);
 typedef void (*VdmapTsdfDestroyFn)(void* volume);
 }
