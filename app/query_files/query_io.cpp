@@ -12,6 +12,7 @@
 
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
@@ -32,12 +33,6 @@ const char* recordColumns(QueryOp op) {
   }
 }
 
-std::string number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", v);
-  return text;
-}
-
 // "No surface" (+inf) in the answers: the largest float, so that no output holds a non-finite
 // value. Records lie within kMaxPoseDistanceM, so every real distance is far below it.
 double finiteAnswer(double v) { return std::isfinite(v) ? v : std::numeric_limits<float>::max(); }
@@ -52,16 +47,16 @@ void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::
   const std::size_t lengths = op == QueryOp::kCollide ? 4 : v.size();  // not the body number
   for (std::size_t i = 0; i < std::min(lengths, v.size()); ++i)
     if (std::abs(v[i]) > kMaxPoseDistanceM)
-      fail(names[i] + " is " + number(v[i]) + ": query records lie within " +
+      fail(names[i] + " is " + shortNumber(v[i]) + ": query records lie within " +
            std::to_string(static_cast<int>(kMaxPoseDistanceM)) + " m of the origin");
   const Eigen::Vector3d p(v[0], v[1], v[2]);
   switch (op) {
     case QueryOp::kCollide: {
-      if (!(v[3] > 0)) fail("the radius must be > 0, got " + number(v[3]));
+      if (!(v[3] > 0)) fail("the radius must be > 0, got " + shortNumber(v[3]));
       int body = 0;
       if (v.size() > 4) {
         if (v[4] != std::floor(v[4]) || std::abs(v[4]) > 2147483647.0)
-          fail("the body must be a whole number, got " + number(v[4]));
+          fail("the body must be a whole number, got " + shortNumber(v[4]));
         body = static_cast<int>(v[4]);
       }
       input->spheres.push_back({p, v[3], body});
@@ -71,7 +66,7 @@ void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::
       const Eigen::Vector3d d(v[3], v[4], v[5]);
       if (!(d.norm() > 0) || !std::isfinite(d.norm())) fail("the direction dx dy dz is zero (expected a length > 0)");
       const double range = v.size() > 6 ? v[6] : max_range_m;
-      if (!(range > 0)) fail("max_range must be > 0, got " + number(range));
+      if (!(range > 0)) fail("max_range must be > 0, got " + shortNumber(range));
       input->rays.push_back({p, d, range});
       return;
     }
@@ -93,27 +88,18 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
   const auto [least, most] = columnCounts(op);
   QueryInput input;
   std::string text;
-  std::vector<std::string> tokens;
   std::vector<double> values;
   // parseListNumber's messages name the column ("x is not finite ('nan')").
   static const std::vector<std::string> kNames[3] = {
       {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
   const std::vector<std::string>& names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
   for (int line = 1; std::getline(in, text); ++line) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const auto first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;
-    tokens.clear();
-    for (std::size_t at = first; at < text.size();) {
-      const std::size_t end = std::min(text.find_first_of(" \t", at), text.size());
-      tokens.emplace_back(text, at, end - at);
-      at = text.find_first_not_of(" \t", end);
-      if (at == std::string::npos) break;
-    }
+    const std::vector<std::string> tokens = listWords(text);
+    if (tokens.empty()) continue;
     if (tokens.size() < least || tokens.size() > most)
       throw InputError(file.string(), line,
                        std::string("expected ") + recordColumns(op) + " (--op " + queryOpName(op) + "), got " +
-                           std::to_string(tokens.size()) + " fields");
+                           counted(static_cast<long long>(tokens.size()), "field") + ": " + printable(text));
     values.clear();
     for (std::size_t i = 0; i < tokens.size(); ++i) {
       values.push_back(parseListNumber(tokens[i], file, line, names[i].c_str()));
@@ -154,7 +140,7 @@ QueryInput readPly(const fs::path& file, QueryOp op, double max_range_m) {
     values.clear();
     for (std::size_t k = 0; k < columns.size(); ++k) {
       const double v = table.at(i, columns[k]);
-      if (!std::isfinite(v)) fail(names[k] + " is not finite (" + number(v) + ")");
+      if (!std::isfinite(v)) fail(names[k] + " is not finite (" + shortNumber(v) + ")");
       values.push_back(v);
     }
     addRecord(op, values, names, max_range_m, &input, fail);
@@ -200,6 +186,7 @@ QueryOp parseQueryOp(const std::string& name) {
 QueryInput readQueryInput(const fs::path& file, QueryOp op, double max_range_m) {
   if (!queryOpReadsPoints(op)) throw std::logic_error("readQueryInput: --op reads no points");
   if (!fs::exists(file)) throw InputError(file.string(), "no such file (--points)");
+  if (fs::is_directory(file)) throw InputError(file.string(), "is a folder, not a file (--points)");
   const std::string ext = file.extension().string();
   QueryInput input;
   if (ext == ".txt") input = readText(file, op, max_range_m);

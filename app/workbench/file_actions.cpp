@@ -5,6 +5,7 @@
 #include <filesystem>
 #include <utility>
 
+#include "app/cli/error_text.h"
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
@@ -51,7 +52,7 @@ std::optional<Sequence> framesAfter(const Session& saved, std::string* off, std:
     return rest;
   } catch (const std::exception& e) {
     *off = *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
-                  e.what() + ")";
+                  errorMessage(e) + ")";
     return std::nullopt;
   }
 }
@@ -92,7 +93,7 @@ bool FileActions::open(const SequenceArgs& args) {
     state_.opened_args.refine_given = state_.opened_args.refine != SequenceArgs{}.refine;
     state_.render_thresholds = GlobalMapParams{};
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   opened(absolute_args.folder);
@@ -124,7 +125,7 @@ bool FileActions::openSession(const std::string& file) {
     state_.opened_args = {};
     state_.render_thresholds = saved_thresholds;
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   opened(path);
@@ -139,7 +140,7 @@ bool FileActions::openPath(const std::string& path_in) {
   try {
     kind = detectMapFile(path);
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   bool ok = false;
@@ -156,7 +157,7 @@ bool FileActions::openPath(const std::string& path_in) {
         ok = true;
         addRecent(ui_.settings, path);  // opened() remembers the other kinds
       } catch (const std::exception& e) {
-        state_.report(StatusLine::Kind::kError, e.what());
+        state_.report(StatusLine::Kind::kError, errorMessage(e));
       }
       break;
     default: ok = openMapFile(path); break;
@@ -169,7 +170,7 @@ bool FileActions::openMapFile(const std::string& path_in) {
   try {
     return openMapFile(std::make_shared<const StaticMap>(loadStaticMap(path)));
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
 }

@@ -5,6 +5,7 @@
 #include <ctime>
 #include <filesystem>
 
+#include "app/cli/error_text.h"
 #include "app/workbench/figures.h"
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/timing.h"
@@ -88,7 +89,7 @@ void editScripted(Workbench& bench, const std::string& edit) {
   try {
     bench.parameters().edit(*p, parseValue(*p, edit.substr(eq + 1)));
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, std::string("--edit: ") + e.what());
+    bench.report(StatusLine::Kind::kError, std::string("--edit: ") + errorMessage(e));
   }
 }
 
@@ -225,7 +226,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const ScriptFrame& frame
   try {
     writeFileAtomically(file, jsonText(stats) + "\n");
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, e.what());
+    bench.report(StatusLine::Kind::kError, errorMessage(e));
   }
 }
 

@@ -1,4 +1,5 @@
 #include "mapping/files/session_file.h"
+#include "mapping/io/text_list.h"
 
 #include <algorithm>
 #include <array>
@@ -800,6 +801,7 @@ bool isSessionPath(const std::filesystem::path& file) {
 }
 
 Session loadSession(const std::filesystem::path& file, const SessionDecodeOptions& options) {
+  checkNotAFolder(file);
   std::ifstream in(file, std::ios::binary);
   if (!in) throw InputError(file.string(), "cannot open the session file");
   const std::string bytes{std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
