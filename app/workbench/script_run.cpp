@@ -8,6 +8,7 @@
 #include "app/cli/error_text.h"
 #include "app/workbench/figures.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"
 
@@ -100,8 +101,8 @@ void measureScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
   const auto a = window.pointUnder(m[0], m[1]), b = window.pointUnder(m[2], m[3]);
   if (!a || !b) {
     bench.report(StatusLine::Kind::kError, std::string("--measure: nothing drawn under pixel ") +
-                                               (a ? std::to_string(m[2]) + "," + std::to_string(m[3])
-                                                  : std::to_string(m[0]) + "," + std::to_string(m[1])));
+                                               (a ? shortNumber(m[2]) + "," + shortNumber(m[3])
+                                                  : shortNumber(m[0]) + "," + shortNumber(m[1])));
     return;
   }
   bench.view().addMeasurePoint(*a);
@@ -116,8 +117,8 @@ void probeScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
   const UiState& ui = bench.ui();
   bench.queries().probeAt(at[0], at[1], ui.view_width, ui.view_height, window.pointUnder(at[0], at[1]));
   if (!ui.probe_result) {
-    bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + std::to_string(at[0]) + "," +
-                                               std::to_string(at[1]) + " (and no query slice there)");
+    bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + shortNumber(at[0]) + "," +
+                                               shortNumber(at[1]) + " (and no query slice there)");
     return;
   }
   const ProbeResult& r = *ui.probe_result;

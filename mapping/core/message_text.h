@@ -27,5 +27,11 @@ inline std::string shortNumber(double v) {
   std::snprintf(text, sizeof text, "%.9g", v);
   return text;
 }
+/// A float as short: 7 significant digits, so that 1e38f reads "1e+38", not "9.99999968e+37".
+inline std::string shortNumber(float v) {
+  char text[32];
+  std::snprintf(text, sizeof text, "%.7g", static_cast<double>(v));
+  return text;
+}
 
 }  // namespace vdmap

@@ -62,7 +62,9 @@ TEST(Cli, CountsAgreeWithTheirNounsAndNumbersAreShort) {
   EXPECT_EQ(shortNumber(1e308), "1e+308");
   EXPECT_EQ(shortNumber(std::numeric_limits<double>::max()), "1.79769313e+308");
   EXPECT_EQ(shortNumber(0.1), "0.1");
-  EXPECT_EQ(shortNumber(123456000), "123456000");
+  EXPECT_EQ(shortNumber(1e38f), "1e+38");
+  EXPECT_EQ(shortNumber(0.1f), "0.1");
+  EXPECT_EQ(shortNumber(123456000.0), "123456000");
 }
 
 TEST(Cli, InfoOnTinySequence) {
