@@ -8,6 +8,7 @@
 #include "app/cli/error_text.h"
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/error.h"
 #include "mapping/files/map_export.h"
 
@@ -41,7 +42,7 @@ std::optional<Sequence> framesAfter(const Session& saved, std::string* off, std:
       const std::size_t listed = Sequence::open(info.sequence).listedDepthFrames();
       if (listed <= static_cast<std::size_t>(info.state.last_frame_index) + 1) {
         *off = "mapped to the end of " + info.sequence + " (" + std::to_string(info.state.last_frame_index + 1) +
-               " of " + std::to_string(listed) + " frames): nothing to continue";
+               " of " + counted(static_cast<long long>(listed), "frame") + "): nothing to continue";
         return std::nullopt;
       }
     }
@@ -198,7 +199,7 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
                      (m.kind == MapFileKind::kOctomap ? " occupied leaves" : " ellipsoids");
   if (m.kind == MapFileKind::kPointPly) what += std::string(", points drawn at sigma ") + sigma;
   if (m.kind == MapFileKind::kOctomap) what += std::string(", resolution ") + sigma;
-  if (!m.keyframes.empty()) what += ", " + std::to_string(m.keyframes.size()) + " keyframes";
+  if (!m.keyframes.empty()) what += ", " + counted(static_cast<long long>(m.keyframes.size()), "keyframe");
   state_.report(StatusLine::Kind::kSuccess, "opened " + m.path.string() + " (" + what + ")");
   return true;
 }
