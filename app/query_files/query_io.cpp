@@ -94,6 +94,7 @@ QueryInput readText(const fs::path& file, QueryOp op, double max_range_m) {
       {"x", "y", "z"}, {"x", "y", "z", "r", "body"}, {"ox", "oy", "oz", "dx", "dy", "dz", "max_range"}};
   const std::vector<std::string>& names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
   for (int line = 1; std::getline(in, text); ++line) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();  // a CRLF file: not part of the line shown
     const std::vector<std::string> tokens = listWords(text);
     if (tokens.empty()) continue;
     if (tokens.size() < least || tokens.size() > most)

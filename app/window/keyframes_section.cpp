@@ -7,8 +7,8 @@
 
 #include "app/window/map_sections.h"
 #include "app/window/widgets.h"
-#include "render/colormap.h"
 #include "mapping/core/message_text.h"
+#include "render/colormap.h"
 
 namespace vdmap::app::gui {
 namespace {

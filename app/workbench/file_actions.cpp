@@ -8,8 +8,8 @@
 #include "app/cli/error_text.h"
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
-#include "mapping/core/message_text.h"
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 #include "mapping/files/map_export.h"
 
 namespace vdmap::app::gui {

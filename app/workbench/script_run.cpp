@@ -100,9 +100,9 @@ void measureScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
   const std::vector<float>& m = run.options.measure;
   const auto a = window.pointUnder(m[0], m[1]), b = window.pointUnder(m[2], m[3]);
   if (!a || !b) {
-    bench.report(StatusLine::Kind::kError, std::string("--measure: nothing drawn under pixel ") +
-                                               (a ? shortNumber(m[2]) + "," + shortNumber(m[3])
-                                                  : shortNumber(m[0]) + "," + shortNumber(m[1])));
+    bench.report(StatusLine::Kind::kError,
+                 std::string("--measure: nothing drawn under pixel ") +
+                     (a ? shortNumber(m[2]) + "," + shortNumber(m[3]) : shortNumber(m[0]) + "," + shortNumber(m[1])));
     return;
   }
   bench.view().addMeasurePoint(*a);

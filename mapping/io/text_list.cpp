@@ -21,6 +21,7 @@ std::vector<ListLine> readListFile(const std::filesystem::path& file, int column
   std::vector<ListLine> lines;
   std::string text;
   for (int number = 1; std::getline(in, text); ++number) {
+    if (!text.empty() && text.back() == '\r') text.pop_back();  // a CRLF file: not part of the line shown
     ListLine line{number, listWords(text)};
     if (line.tokens.empty()) continue;
     if (static_cast<int>(line.tokens.size()) != columns)

@@ -420,6 +420,7 @@ TEST(QueryCli, RecordsAreCheckedPerOp) {
   // A comment after the columns is a comment, not a field.
   EXPECT_EQ(error("1 2 3 # a note\n1 2 # x y\n", QueryOp::kClassify),
             ":2: expected x y z (--op classify), got 2 fields: '1 2 # x y'");
+  EXPECT_EQ(error("1 2 3\r\n1 2\r\n", QueryOp::kClassify), ":2: expected x y z (--op classify), got 2 fields: '1 2'");
   EXPECT_EQ(error("1 2 3 0.1 0\n1 2 3 0 1\n", QueryOp::kCollide), ":2: the radius must be > 0, got 0");
   EXPECT_EQ(error("1 2 3 0.1 0.5\n", QueryOp::kCollide), ":1: the body must be a whole number, got 0.5");
   EXPECT_EQ(error("0 0 0 0 0 0\n", QueryOp::kRay), ":1: the direction dx dy dz is zero (expected a length > 0)");
