@@ -8,6 +8,7 @@
 #include <thread>
 
 #include "app/cli/command_line.h"
+#include "app/cli/error_text.h"
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
 #include "app/view/progress.h"
@@ -200,7 +201,7 @@ void runGui(GuiArgs args, bool builtin) {
     try {
       bench.saveSettings();
     } catch (const std::exception& e) {
-      std::cerr << "vdmap: warning: settings not saved: " << e.what() << "\n";
+      std::cerr << "vdmap: warning: settings not saved: " << errorMessage(e) << "\n";
     }
   }
   if (code != 0) throw std::runtime_error(bench.firstError());

@@ -7,6 +7,7 @@
 #include "app/cli/sequence_args.h"
 #include "app/verbs.h"
 #include "app/view/progress.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"
 
@@ -121,12 +122,13 @@ void runInfo(const SequenceArgs& args, bool json) {
   std::printf("kind       %s (it %s)\n", sequenceKindName(seq.kind()).c_str(), seq.kindReason().c_str());
   for (const std::string& note : seq.notes()) std::printf("           %s\n", note.c_str());
   if (seq.hasGroundTruth())
-    std::printf("frames     %zu usable (all with poses, from %s) of %d listed depth frames; frames %s\n", seq.size(),
-                seq.posesSource().c_str(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+    std::printf("frames     %zu usable (all with poses, from %s) of %s; frames %s\n", seq.size(),
+                seq.posesSource().c_str(), counted(seq.listedDepthFrames(), "listed depth frame").c_str(),
+                frameRangeText(seq.frameRange()).c_str());
   else
-    std::printf("frames     %zu usable of %d listed depth frames; frames %s; no recorded poses (vdmap tracks the "
-                "poses)\n",
-                seq.size(), seq.listedDepthFrames(), frameRangeText(seq.frameRange()).c_str());
+    std::printf("frames     %zu usable of %s; frames %s; no recorded poses (vdmap tracks the poses)\n", seq.size(),
+                counted(seq.listedDepthFrames(), "listed depth frame").c_str(),
+                frameRangeText(seq.frameRange()).c_str());
   std::printf("time span  %.3f .. %.3f s (%.1f s)\n", t0, t1, t1 - t0);
   std::printf("camera     %dx%d fx %.3f fy %.3f cx %.3f cy %.3f depth scale %g  [%s]\n", cam.width, cam.height, cam.fx,
               cam.fy, cam.cx, cam.cy, cam.depth_scale, seq.cameraSource().c_str());
@@ -136,9 +138,10 @@ void runInfo(const SequenceArgs& args, bool json) {
                 c->fx, c->fy, c->cx, c->cy, 1000.0 * c->T_colour_depth.translation().norm(),
                 Eigen::AngleAxisd(c->T_colour_depth.linear()).angle() * 180.0 / M_PI);
   std::printf("depth      %.3f .. %.3f m, median %.3f m over valid pixels; %.3g%% invalid (%.3g%% 0 = no "
-              "measurement, %.3g%% 65535 = invalid code) (%d frames sampled)\n",
+              "measurement, %.3g%% 65535 = invalid code) (%s sampled)\n",
               depth.min_m, depth.max_m, depth.median_m, 100.0 * (1.0 - depth.valid_fraction),
-              100.0 * depth.no_depth_fraction, 100.0 * depth.invalid_code_fraction, depth.frames_sampled);
+              100.0 * depth.no_depth_fraction, 100.0 * depth.invalid_code_fraction,
+              counted(depth.frames_sampled, "frame").c_str());
   std::printf("dropped    %d without an rgb frame within %g s, %d without a pose within %g s, %d outside --frames\n",
               d.no_rgb, d.max_rgb_dt_s, d.no_pose, d.max_pose_dt_s, d.outside_range);
 }

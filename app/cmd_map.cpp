@@ -298,7 +298,7 @@ void runMap(MapArgs args) {
   // Once the export is staged and before it is put in place: a run that fails keeps neither.
   if (!args.save.empty())
     options.before_commit = [&] {
-      withStageBar("session save",
+      withStageBar("session file",
                    [&] { saveSession(args.save, graph, sessionInfo(mapper, args.params.global, seq.folder())); });
     };
   const nlohmann::json stats = exportWithProgress(args.out, graph, global, options);

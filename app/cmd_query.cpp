@@ -253,39 +253,43 @@ nlohmann::json runOctomap(const QueryArgs& args, const QueryMap& map) {
 }
 
 void printSummary(QueryOp op, const nlohmann::json& s, const std::string& out) {
-  const auto count = [&s](const char* key) { return s[key].get<std::size_t>(); };
+  const auto count = [&s](const char* key) { return s[key].get<long long>(); };
+  const auto of = [&count](const char* key, const char* noun, const char* plural = "") {
+    return counted(count(key), noun, plural);
+  };
+  // To the millimetre, every digit: 123456000 m is not cut to "12345600".
   const auto metres = [&s](const char* key) {
-    return s[key].is_null() ? std::string("none") : std::to_string(s[key].get<double>()).substr(0, 8) + " m";
+    return s[key].is_null() ? std::string("none") : shortNumber(std::round(s[key].get<double>() * 1e3) / 1e3) + " m";
   };
   switch (op) {
     case QueryOp::kClassify:
-      std::printf("classify %zu points%s: %zu occupied, %zu free, %zu unknown", count("records"),
+      std::printf("classify %s%s: %lld occupied, %lld free, %lld unknown", of("records", "point").c_str(),
                   s.contains("keyframe") ? (" in keyframe " + std::to_string(s["keyframe"].get<int>())).c_str() : "",
                   count("occupied"), count("free"), count("unknown"));
       break;
     case QueryOp::kDistance:
-      std::printf("distance of %zu points: min %s, median %s, %zu inside a surface's gate", count("records"),
+      std::printf("distance of %s: min %s, median %s, %lld inside a surface's gate", of("records", "point").c_str(),
                   metres("min_m").c_str(), metres("median_m").c_str(), count("inside"));
       break;
     case QueryOp::kCollide:
-      std::printf("collide %zu spheres in %s: %zu colliding, %zu touching unknown space, min clearance %s",
-                  count("records"), counted(static_cast<long long>(count("bodies")), "body").c_str(),
-                  count("colliding"), count("touching_unknown"), metres("min_clearance_m").c_str());
+      std::printf("collide %s in %s: %lld colliding, %lld touching unknown space, min clearance %s",
+                  of("records", "sphere").c_str(), of("bodies", "body").c_str(), count("colliding"),
+                  count("touching_unknown"), metres("min_clearance_m").c_str());
       break;
     case QueryOp::kRay:
-      std::printf("ray %zu rays: %zu hits, %zu misses, median range %s", count("records"), count("hits"),
-                  count("misses"), metres("median_t_m").c_str());
+      std::printf("ray %s: %s, %s, median range %s", of("records", "ray").c_str(), of("hits", "hit").c_str(),
+                  of("misses", "miss").c_str(), metres("median_t_m").c_str());
       break;
     case QueryOp::kGrid:
-      std::printf("grid %d x %d cells of %g m (up %s): %zu occupied, %zu free, %zu unknown; %zu samples",
+      std::printf("grid %d x %d cells of %g m (up %s): %lld occupied, %lld free, %lld unknown; %s",
                   s["width"].get<int>(), s["height"].get<int>(), s["resolution_m"].get<double>(),
                   s["up"].get<std::string>().c_str(), count("occupied"), count("free"), count("unknown"),
-                  count("samples"));
+                  of("samples", "sample").c_str());
       break;
     case QueryOp::kOctomap:
-      std::printf("octomap of %g m: %zu voxels asked, %zu occupied, %zu free, %zu leaves after pruning",
-                  s["resolution_m"].get<double>(), count("voxels"), count("occupied_voxels"), count("free_voxels"),
-                  count("leaves"));
+      std::printf("octomap of %g m: %s asked, %lld occupied, %lld free, %s after pruning",
+                  s["resolution_m"].get<double>(), of("voxels", "voxel").c_str(), count("occupied_voxels"),
+                  count("free_voxels"), of("leaves", "leaf", "leaves").c_str());
       break;
   }
   std::printf("; %.1f ms (%.3g per s) -> %s\n", s["query_ms"].get<double>(), s["records_per_s"].get<double>(),
@@ -366,10 +370,11 @@ void addQueryCommand(CLI::App& app) {
       ->check(positiveFiniteCheck());
   verb->add_option("--gate-sigma", args->params.gate_sigma,
                    "k: occupied within k sigma of an ellipsoid, free more than k sigma in front of a surface")
-      ->check(positiveFiniteCheck())
+      ->check(positiveFiniteCheck(QueryParams::kMaxGateSigma))
       ->capture_default_str();
-  verb->add_option("--min-sigma", args->params.min_sigma_m, "m, added as min_sigma^2 I to every covariance")
-      ->check(CLI::NonNegativeNumber & finiteCheck())
+  verb->add_option("--min-sigma", args->params.min_sigma_m,
+                   "m, added as min_sigma^2 I to every covariance (a floor for flat ellipsoids)")
+      ->check(positiveFiniteCheck(QueryParams::kMaxMinSigmaM))
       ->capture_default_str();
   verb->add_option("--conflict", args->conflict,
                    "a point one keyframe sees free and another occupied: occupied (any global gate wins), recent (the "

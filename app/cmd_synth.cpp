@@ -68,9 +68,10 @@ void runSynth(const SynthArgs& args) {
   ProgressBar progress("rendering", static_cast<std::size_t>(range.last - range.first));
   options.progress = [&progress](std::size_t done, std::size_t) { progress.update(done); };
   render::synthesizeSequence(mesh, trajectory, options, args.out);
-  std::printf("wrote %s: %d frames (poses %s of %d) %dx%d, noise %s, %zu triangles\n", args.out.c_str(),
-              range.last - range.first, frameRangeText(range).c_str(), poses, options.camera.width,
-              options.camera.height, args.noise.c_str(), mesh.triangles.size());
+  std::printf("wrote %s: %s (poses %s of %d) %dx%d, noise %s, %s\n", args.out.c_str(),
+              counted(range.last - range.first, "frame").c_str(), frameRangeText(range).c_str(), poses,
+              options.camera.width, options.camera.height, args.noise.c_str(),
+              counted(static_cast<long long>(mesh.triangles.size()), "triangle").c_str());
 }
 
 }  // namespace

@@ -5,9 +5,11 @@
 #include <cstring>
 #include <filesystem>
 #include <iostream>
+#include <memory>
 #include <regex>
 
 #include "app/cli/command_line.h"
+#include "app/cli/error_text.h"
 #include "app/verbs.h"
 #include "mapping/core/temporary_paths.h"
 #include "vdmap_version.h"
@@ -27,6 +29,9 @@ void refuseRadixNumbers(int argc, char** argv) {
                                                   "it in decimal");
 }
 
+// Help lines are wrapped at this many columns (a terminal's 80 to 100 show them whole).
+constexpr std::size_t kHelpWidth = 100;
+
 }  // namespace
 
 int main(int argc, char** argv) {
@@ -36,6 +41,8 @@ int main(int argc, char** argv) {
   CLI::App app{"vdmap: keyframe-based dense mapping with view-dependent local maps (RGB-D)\n"
                "With no verb, opens the workbench on the built-in scene."};
   app.require_subcommand(0, 1);
+  // Before the verbs are added: they take their formatter from here.
+  app.formatter(std::make_shared<WrappingFormatter>(kHelpWidth));
   // The project version, and the commit when the build was configured from a git checkout
   // (cmake/version.cmake); nothing is looked up at run time.
   const std::string commit = vdmap::kGitDescribe[0] ? std::string(" (git ") + vdmap::kGitDescribe + ")" : "";
@@ -86,8 +93,8 @@ int main(int argc, char** argv) {
   } catch (const ExitWith& e) {  // the work was done; its verdict is not success (render --expect: 2)
     print("differs", e.what());
     return written(e.code);
-  } catch (const std::exception& e) {
-    error(e.what());
+  } catch (const std::exception& e) {  // one line naming the path and what is wrong (errorMessage)
+    error(errorMessage(e));
     return 1;
   }
   return written(0);

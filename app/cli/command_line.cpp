@@ -2,8 +2,10 @@
 #include <cmath>
 #include <cstdlib>
 #include <regex>
+#include <sstream>
 
 #include "app/cli/command_line.h"
+#include "mapping/core/message_text.h"
 #include "mapping/io/camera_config.h"
 #include "mapping/sequence/sequence.h"
 
@@ -15,6 +17,26 @@ std::string shellQuoted(const std::string& text) {
   std::string out = "'";
   for (char c : text) out += c == '\'' ? std::string("'\\''") : std::string(1, c);
   return out + "'";
+}
+
+std::string WrappingFormatter::make_help(const CLI::App* app, std::string name, CLI::AppFormatMode mode) const {
+  std::istringstream lines(CLI::Formatter::make_help(app, std::move(name), mode));
+  std::string out;
+  for (std::string line; std::getline(lines, line);) {
+    if (line.size() > width_) {
+      // An option's line goes on under its description's column; any other under its own start.
+      const std::size_t column = get_column_width();
+      const bool option = line[column - 1] == ' ' && line[column] != ' ';
+      const std::string indent(option ? column : std::min(line.find_first_not_of(' '), width_ / 2), ' ');
+      for (std::size_t cut; line.size() > width_ && (cut = line.rfind(' ', width_)) != std::string::npos &&
+                            cut > indent.size();) {  // a word longer than a line stays whole
+        out += line.substr(0, line.find_last_not_of(' ', cut) + 1) + "\n";
+        line = indent + line.substr(cut + 1);
+      }
+    }
+    out += line + "\n";
+  }
+  return out;
 }
 
 namespace {
@@ -48,13 +70,15 @@ CLI::Validator frameRangeCheck() {
       "A:B");
 }
 
-CLI::Validator positiveFiniteCheck() {
+CLI::Validator positiveFiniteCheck(std::optional<double> most) {
+  const std::string rule = most ? "> 0 and at most " + shortNumber(*most) : "> 0";
   return parsedBy(
-      [](const std::string& text) {
+      [most, rule](const std::string& text) {
         const double v = number(text);
-        if (!(v > 0.0 && std::isfinite(v))) throw std::invalid_argument("must be a number > 0, got " + text);
+        if (!(v > 0.0 && std::isfinite(v) && v <= most.value_or(v)))
+          throw std::invalid_argument("must be a number " + rule + ", got " + text);
       },
-      "> 0");
+      rule);
 }
 
 CLI::Validator finiteCheck() {

@@ -16,6 +16,8 @@
 
 #include <CLI/CLI.hpp>
 
+#include "mapping/core/message_text.h"
+
 namespace vdmap::app {
 
 /// Ends a verb with an exit code other than 0 and 1 after it did its work: `vdmap render
@@ -29,10 +31,16 @@ struct ExitWith : std::runtime_error {
 /// `text` as one shell word: as it is when it needs no quoting, else in single quotes.
 std::string shellQuoted(const std::string& text);
 
-/// "1 keyframe", "2 keyframes": a count with its noun (regular plurals only).
-inline std::string counted(long long n, const std::string& noun) {
-  return std::to_string(n) + " " + noun + (n == 1 ? "" : "s");
-}
+/// CLI11's help with every line wrapped at `width` columns: long descriptions go on under their
+/// own column, as a terminal shows them best (CLI11 prints each on one line).
+class WrappingFormatter : public CLI::Formatter {
+ public:
+  explicit WrappingFormatter(std::size_t width) : width_(width) {}
+  std::string make_help(const CLI::App* app, std::string name, CLI::AppFormatMode mode) const override;
+
+ private:
+  std::size_t width_;
+};
 
 // CLI11 checks of an option's value by itself, while the command line is parsed: a value that is
 // wrong whatever the files hold gets CLI11's error and code (docs/cli.md "Exit codes and
@@ -42,8 +50,8 @@ inline std::string counted(long long n, const std::string& noun) {
 CLI::Validator cameraPresetCheck();
 /// A --frames range's syntax (A:B, A:, :B or N; numbers within an int; B after A).
 CLI::Validator frameRangeCheck();
-/// A finite number > 0.
-CLI::Validator positiveFiniteCheck();
+/// A finite number > 0 (and at most `most`).
+CLI::Validator positiveFiniteCheck(std::optional<double> most = std::nullopt);
 /// A finite number.
 CLI::Validator finiteCheck();
 /// Accepts a value when `parse(value)` does not throw std::invalid_argument, whose message is

@@ -16,6 +16,7 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/core/timing.h"
+#include "mapping/core/message_text.h"
 #include "mapping/files/ply_reader.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
@@ -36,12 +37,6 @@ const char* recordColumns(QueryOp op) {
   }
 }
 
-std::string number(double v) {
-  char text[32];
-  std::snprintf(text, sizeof text, "%.9g", v);
-  return text;
-}
-
 // "No surface" (+inf) in the answers: the largest float, so that no output holds a non-finite
 // value. Records lie within kMaxPoseDistanceM, so every real distance is far below it.
 double finiteAnswer(double v) { return std::isfinite(v) ? v : std::numeric_limits<float>::max(); }
@@ -56,16 +51,16 @@ void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::
   const std::size_t lengths = op == QueryOp::kCollide ? 4 : v.size();  // not the body number
   for (std::size_t i = 0; i < std::min(lengths, v.size()); ++i)
     if (std::abs(v[i]) > kMaxPoseDistanceM)
-      fail(names[i] + " is " + number(v[i]) + ": query records lie within " +
+      fail(names[i] + " is " + shortNumber(v[i]) + ": query records lie within " +
            std::to_string(static_cast<int>(kMaxPoseDistanceM)) + " m of the origin");
   const Eigen::Vector3d p(v[0], v[1], v[2]);
   switch (op) {
     case QueryOp::kCollide: {
-      if (!(v[3] > 0)) fail("the radius must be > 0, got " + number(v[3]));
+      if (!(v[3] > 0)) fail("the radius must be > 0, got " + shortNumber(v[3]));
       int body = 0;
       if (v.size() > 4) {
         if (v[4] != std::floor(v[4]) || std::abs(v[4]) > 2147483647.0)
-          fail("the body must be a whole number, got " + number(v[4]));
+          fail("the body must be a whole number, got " + shortNumber(v[4]));
         body = static_cast<int>(v[4]);
       }
       input->spheres.push_back({p, v[3], body});
@@ -75,7 +70,7 @@ void addRecord(QueryOp op, const std::vector<double>& v, const std::vector<std::
       const Eigen::Vector3d d(v[3], v[4], v[5]);
       if (!(d.norm() > 0) || !std::isfinite(d.norm())) fail("the direction dx dy dz is zero (expected a length > 0)");
       const double range = v.size() > 6 ? v[6] : max_range_m;
-      if (!(range > 0)) fail("max_range must be > 0, got " + number(range));
+      if (!(range > 0)) fail("max_range must be > 0, got " + shortNumber(range));
       input->rays.push_back({p, d, range});
       return;
     }
@@ -125,20 +120,13 @@ bool QueryRecordReader::State::nextText(QueryInput* input) {
   const std::vector<std::string>& column_names = kNames[op == QueryOp::kCollide ? 1 : op == QueryOp::kRay ? 2 : 0];
   while (std::getline(text, buffer)) {
     ++line;
-    if (!buffer.empty() && buffer.back() == '\r') buffer.pop_back();
-    const auto first = buffer.find_first_not_of(" \t");
-    if (first == std::string::npos || buffer[first] == '#') continue;
-    tokens.clear();
-    for (std::size_t at = first; at < buffer.size();) {
-      const std::size_t end = std::min(buffer.find_first_of(" \t", at), buffer.size());
-      tokens.emplace_back(buffer, at, end - at);
-      at = buffer.find_first_not_of(" \t", end);
-      if (at == std::string::npos) break;
-    }
+    if (!buffer.empty() && buffer.back() == '\r') buffer.pop_back();  // a CRLF file: not part of the line shown
+    tokens = listWords(buffer);
+    if (tokens.empty()) continue;
     if (tokens.size() < least || tokens.size() > most)
       throw InputError(file.string(), line,
                        std::string("expected ") + recordColumns(op) + " (--op " + queryOpName(op) + "), got " +
-                           std::to_string(tokens.size()) + " fields");
+                           counted(static_cast<long long>(tokens.size()), "field") + ": " + printable(buffer));
     values.clear();
     for (std::size_t i = 0; i < tokens.size(); ++i)
       values.push_back(parseListNumber(tokens[i], file, line, column_names[i].c_str()));
@@ -159,7 +147,7 @@ bool QueryRecordReader::State::nextPly(QueryInput* input) {
   values.clear();
   for (std::size_t k = 0; k < columns.size(); ++k) {
     const double v = ply->row()[static_cast<std::size_t>(columns[k])];
-    if (!std::isfinite(v)) fail(names[k] + " is not finite (" + number(v) + ")");
+    if (!std::isfinite(v)) fail(names[k] + " is not finite (" + shortNumber(v) + ")");
     values.push_back(v);
   }
   addRecord(op, values, names, max_range_m, input, fail);
@@ -170,6 +158,7 @@ QueryRecordReader::QueryRecordReader(const fs::path& file, QueryOp op, double ma
     : state_(std::make_unique<State>()) {
   if (!queryOpReadsPoints(op)) throw std::logic_error("QueryRecordReader: --op reads no points");
   if (!fs::exists(file)) throw InputError(file.string(), "no such file (--points)");
+  if (fs::is_directory(file)) throw InputError(file.string(), "is a folder, not a file (--points)");
   State& s = *state_;
   s.file = file, s.op = op, s.max_range_m = max_range_m;
   const std::string ext = file.extension().string();

@@ -1,6 +1,8 @@
 #pragma once
 #include <chrono>
 #include <cstddef>
+#include <new>
+#include <stdexcept>
 #include <string>
 #include <utility>
 
@@ -26,12 +28,18 @@ class ProgressBar {
 
 /// Runs `work` under a one-step bar named `label`, drawn when it starts and completed when it
 /// ends: for a long stage that does not report its own progress (the global-map build, a session
-/// save). Returns what `work` returns.
+/// save). Returns what `work` returns; memory running out in it is the error "out of memory
+/// building the LABEL: ..." (std::bad_alloc says nothing of what was being built).
 template <typename Work>
-auto withStageBar(std::string label, Work&& work) {
-  ProgressBar bar(std::move(label), 1);
+auto withStageBar(const std::string& label, Work&& work) {
+  ProgressBar bar(label, 1);
   bar.update(0);
-  return work();
+  try {
+    return work();
+  } catch (const std::bad_alloc&) {
+    throw std::runtime_error("out of memory building the " + label +
+                             ": give fewer frames or coarser settings, or run where more memory is free");
+  }
 }
 
 }  // namespace vdmap::app

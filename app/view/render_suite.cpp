@@ -1,6 +1,7 @@
 // `vdmap render --suite`: reading and validating the suite file (YAML), drawing its views through
 // RenderSource (app/view/render_view.h), the table, the JUnit report and the failing views' images.
 #include "app/view/render_suite.h"
+#include "app/cli/error_text.h"
 
 #include <algorithm>
 #include <chrono>
@@ -17,8 +18,10 @@
 #include "app/view/render_source.h"
 #include "app/view/render_view.h"
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "mapping/files/session_file.h"
+#include "mapping/io/text_list.h"
 #include "render/framebuffer.h"
 
 namespace vdmap::app {
@@ -233,6 +236,7 @@ void refuseDuplicateKeys(const YAML::Node& node, const std::string& file) {
 SuiteFile readSuite(const fs::path& file_path, const SuiteOptions& options) {
   const std::string file = file_path.string();
   YAML::Node root;
+  checkNotAFolder(file_path);
   try {
     root = YAML::LoadFile(file);
   } catch (const YAML::BadFile&) {
@@ -372,7 +376,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     try {
       loaded[m.name].source = std::make_unique<RenderSource>(SequenceArgs{}, m.path.string(), "");
     } catch (const std::exception& e) {
-      throw InputError(file, m.line, "map '" + m.name + "': " + e.what());
+      throw InputError(file, m.line, "map '" + m.name + "': " + errorMessage(e));
     }
     result.load_s += secondsSince(t0);
     ++result.maps_loaded;
@@ -390,7 +394,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
       if (p.resolved.spec.kind == render::ViewKind::kContainer && source.graph())
         keyframeImage(source.graph()->keyframe(p.resolved.spec.keyframe), source.name());  // lazy images: decode now
     } catch (const std::exception& e) {
-      throw InputError(file, view.line, "view '" + view.name + "': " + e.what());
+      throw InputError(file, view.line, "view '" + view.name + "': " + errorMessage(e));
     }
     p.tolerance = resolveTolerance(view.tolerance, options, suite.tolerance);
     p.golden = suite.goldens / (view.name + ".png");
@@ -401,7 +405,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
       try {
         p.golden_rgb = readGolden(p.golden.string(), cv::Size(p.width, p.height));
       } catch (const std::exception& e) {
-        if (!p.update) throw InputError(file, view.line, "view '" + view.name + "': " + e.what());
+        if (!p.update) throw InputError(file, view.line, "view '" + view.name + "': " + errorMessage(e));
       }
     }
     prepared.push_back(std::move(p));
@@ -510,10 +514,10 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
     const int written = static_cast<int>(
         std::count_if(result.views.begin(), result.views.end(), [](const SuiteViewResult& r) { return r.updated; }));
     const int views = static_cast<int>(result.views.size());
-    std::printf("%d views: %d pass, %d differ, %d goldens updated; maps loaded: %d, global maps built: %d; %.2f s; "
-                "report %s\n",
-                views, views - result.failed() - written, result.failed(), written, result.maps_loaded,
-                result.global_maps_built, result.total_s, shown(suite.out / "junit.xml", suite.folder).c_str());
+    std::printf("%s: %d pass, %d differ, %s updated; maps loaded: %d, global maps built: %d; %.2f s; report %s\n",
+                counted(views, "view").c_str(), views - result.failed() - written, result.failed(),
+                counted(written, "golden").c_str(), result.maps_loaded, result.global_maps_built, result.total_s,
+                shown(suite.out / "junit.xml", suite.folder).c_str());
   }
   if (options.timings) {
     std::vector<double> render_s, check_s;

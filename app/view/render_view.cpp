@@ -305,9 +305,12 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
     spec.orbit = orbit;
     spec.look_at.reset();
   }
+  // Here a camera comes from a flag: a view file's camera with a keyframe's view is refused when read.
   if ((spec.look_at || spec.orbit) && spec.kind != render::ViewKind::kGlobal)
-    throw std::invalid_argument("--look-at and --orbit place the global view's camera; --view " + viewName(spec) +
-                                " has its keyframe's");
+    throw std::invalid_argument(
+        std::string(a.look_at.empty() ? "--orbit" : "--look-at") + " places the global view's camera; " +
+        (a.view.empty() ? a.view_file + "'s view '" + viewName(spec) + "'" : "--view " + viewName(spec)) +
+        " has its keyframe's");
   out.spec = spec;
   out.thresholds = settings.thresholds;
   out.mapper = settings.mapper;

@@ -15,6 +15,7 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
+#include "mapping/io/text_list.h"
 #include "render/colormap.h"
 
 namespace vdmap::app::gui {
@@ -41,13 +42,6 @@ std::string valueText(const Parameter& p, const json& v) {
   }
   if (v.is_boolean() || v.is_number()) return v.dump();
   throw std::invalid_argument(std::string(p.key) + ": expected " + validityText(p) + ", got " + v.dump());
-}
-
-// The whole of `file` (throws InputError when it cannot be read).
-std::string readText(const fs::path& file) {
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot be read");
-  return std::string((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
 }
 
 // The query slice's plane as --query-slice writes it ("up=1", "x=-0.5").
@@ -301,7 +295,7 @@ render::ViewSpec viewSpecOf(const Settings& s) {
 
 Settings readSettingsFile(const fs::path& file, const Settings& base) {
   if (!fs::exists(file)) throw InputError(file.string(), "no such file");
-  const json j = parseJsonStrictly(readText(file), file.string());
+  const json j = parseJsonStrictly(readWholeFile(file), file.string());
   try {
     return fromJson(j, base);
   } catch (const std::exception& e) {
@@ -319,7 +313,7 @@ fs::path settingsPath() {
 Settings loadSettings(const fs::path& file, std::string* warning) {
   if (!fs::exists(file)) return {};
   try {
-    return fromJson(parseJsonStrictly(readText(file), file.string()));
+    return fromJson(parseJsonStrictly(readWholeFile(file), file.string()));
   } catch (const InputError& e) {  // names the file (and line) already
     if (warning) *warning = std::string(e.what()) + "; using the default settings";
     return {};
@@ -340,7 +334,7 @@ void saveChangedSettings(const fs::path& file, const Settings& before, const Set
   json saved = json::object();
   if (fs::exists(file)) {
     try {
-      saved = parseJsonStrictly(readText(file), file.string());
+      saved = parseJsonStrictly(readWholeFile(file), file.string());
       fromJson(saved);  // the same checks as loading
     } catch (const std::exception& e) {
       throw std::runtime_error(file.string() + " is not valid settings (" + e.what() +

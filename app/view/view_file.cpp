@@ -16,6 +16,7 @@
 #include "mapping/core/atomic_file.h"
 #include "mapping/core/error.h"
 #include "mapping/io/json_text.h"
+#include "mapping/io/text_list.h"
 #include "render/colormap.h"
 
 namespace vdmap::app {
@@ -173,6 +174,9 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
     if (glm::length(look.up) < 1e-6f) R::fail("camera.up must not be zero");
     spec.look_at = look;
     spec.fov_y_deg = look.fov_y_deg;
+    if (spec.kind != render::ViewKind::kGlobal)
+      R::fail("'camera' places the global view, but 'view' is '" + viewName(spec) +
+              "' (a keyframe's view has its keyframe's camera): set 'camera' to null or 'view' to 'global'");
   }
   const std::string up = R::string(R::key(j, "", "up_axis"), "up_axis");
   const auto it = std::find(std::begin(render::kUpAxisNames), std::end(render::kUpAxisNames), up);
@@ -256,9 +260,7 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
 
 json parseFile(const fs::path& file) {
   if (!fs::exists(file)) throw InputError(file.string(), "no such file");
-  std::ifstream in(file);
-  if (!in) throw InputError(file.string(), "cannot be read");
-  const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());
+  const std::string text = readWholeFile(file);
   return parseJsonStrictly(markNonFinite(text), file.string());
 }
 
@@ -393,6 +395,8 @@ std::string renderCommand(const render::ViewSpec& spec, const CommandSource& sou
 }
 
 bool isViewFile(const fs::path& file) {
+  std::error_code ec;
+  if (!fs::is_regular_file(file, ec)) return false;  // the settings reader says why
   std::ifstream in(file);
   if (!in) return false;
   const std::string text((std::istreambuf_iterator<char>(in)), std::istreambuf_iterator<char>());

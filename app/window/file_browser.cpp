@@ -6,6 +6,7 @@
 #include <imgui.h>
 #include <imgui_stdlib.h>
 
+#include "app/cli/error_text.h"
 #include "app/window/widgets.h"
 
 namespace vdmap::app::gui {
@@ -30,7 +31,7 @@ void relist(FileBrowser& b, const fs::path& folder) {
     b.entries = listFolder(folder);
   } catch (const std::exception& e) {
     b.entries.clear();
-    b.error = e.what();
+    b.error = errorMessage(e);
   }
 }
 

@@ -7,6 +7,7 @@
 
 #include "app/window/map_sections.h"
 #include "app/window/widgets.h"
+#include "mapping/core/message_text.h"
 #include "render/colormap.h"
 
 namespace vdmap::app::gui {
@@ -24,7 +25,8 @@ void drawKeyframeList(Workbench& bench, const WindowState& win) {
   if (ImGui::BeginListBox("##keyframes", {-FLT_MIN, ImGui::GetTextLineHeightWithSpacing() * 6.5f})) {
     for (const KeyframeInfo& k : win.mapping->keyframes) {
       char text[96];
-      std::snprintf(text, sizeof text, "   K%d  frame %d  %zu cells%s", k.id, k.frame, k.ellipsoids,
+      std::snprintf(text, sizeof text, "   K%d  frame %d  %s%s", k.id, k.frame,
+                    counted(static_cast<long long>(k.ellipsoids), "cell").c_str(),
                     k.id == win.mapping->current_keyframe ? "  (current)" : "");
       const ImVec2 at = ImGui::GetCursorScreenPos();
       if (ImGui::Selectable(text, k.id == bench.ui().selected_keyframe)) bench.poses().selectKeyframe(k.id);
@@ -48,8 +50,9 @@ void drawInspector(Workbench& bench, const render::MapMirror& mirror, WindowStat
     const std::vector<bool>& cells = win.global->map.kept[static_cast<std::size_t>(id)];
     kept = static_cast<std::size_t>(std::count(cells.begin(), cells.end(), true));
   }
-  ImGui::TextWrapped("K%d: %zu ellipsoids, %zu kept by the filter, %d frames integrated", id, k.ellipsoids, kept,
-                     k.frames_integrated);
+  ImGui::TextWrapped("K%d: %s, %zu kept by the filter, %s integrated", id,
+                     counted(static_cast<long long>(k.ellipsoids), "ellipsoid").c_str(), kept,
+                     counted(k.frames_integrated, "frame").c_str());
   tip("Its local map: one ellipsoid per touched container cell (docs/method.md 2); of those, the ones the filter keeps with "
       "the live thresholds (min points, k; docs/method.md 4); and the frames whose depth went into it.");
   const render::Texture2D& container = mirror.containerTexture();

@@ -7,6 +7,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/window/widgets.h"
+#include "mapping/core/message_text.h"
 
 namespace vdmap::app::gui {
 
@@ -82,7 +83,7 @@ void drawStaticMapFigures(const Workbench& bench, WindowState& win) {
           std::to_string(m->keyframes.size()));
       row("edges", "graph.txt: covisibility edges.", std::to_string(m->edges.size()));
       row("trajectory", "trajectory.txt: the mapped frames' poses (when the map was exported with them).",
-          std::to_string(m->trajectory.size()) + " poses");
+          counted(static_cast<long long>(m->trajectory.size()), "pose"));
       const nlohmann::json stats = nlohmann::json::parse(m->stats_json, nullptr, false);
       if (stats.is_object())
         for (const char* key : {"frames", "sigma_e", "sigma_e_prime", "t_g_s"})

@@ -8,6 +8,7 @@
 #include "app/window/map_sections.h"
 #include "app/window/tg_parts.h"
 #include "app/window/widgets.h"
+#include "mapping/core/message_text.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -106,8 +107,8 @@ void drawMapFigures(Workbench& bench, WindowState& win) {
         "other (the rest of the build), ms: they add up to t_g.",
         "%.0f / %.0f / %.0f / %.0f / %.0f ms", parts.groups_ms, parts.merge_ms, parts.occlusion_ms, parts.fusion_ms,
         parts.other_ms);
-    row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).",
-        "%d frames%s", win.global->frames_mapped, bench.player().status().busy ? ", rebuilding" : "");
+    row("built from", "The frames mapped when this map was built (it is rebuilt now and then while playing).", "%s%s",
+        counted(win.global->frames_mapped, "frame").c_str(), bench.player().status().busy ? ", rebuilding" : "");
     ImGui::EndTable();
   }
   if (stored > 0 && m.sigma_e * 20 < stored) {

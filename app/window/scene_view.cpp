@@ -6,6 +6,7 @@
 #include <string>
 
 #include "app/window/widgets.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "render/colormap.h"
 #include "render/legend.h"
@@ -227,7 +228,8 @@ void drawStatusBar(Workbench& bench, const WindowState& win) {
                    ImGuiWindowFlags_NoBringToFrontOnFocus);
   char right[160];
   const std::size_t shown = win.global ? win.global->map.ellipsoids.size() : 0;
-  std::snprintf(right, sizeof right, "%zu ellipsoids | frame %.0f ms | H: help", shown,
+  std::snprintf(right, sizeof right, "%s | frame %.0f ms | H: help",
+                counted(static_cast<long long>(shown), "ellipsoid").c_str(),
                 median({win.frame_times.begin(), win.frame_times.end()}));
   // The probe (Q) leads the right side: what the map says under the cursor.
   const std::string right_text = ui.settings.probe && ui.probe_result ? ui.probe_result->text() + " | " + right : right;

@@ -7,6 +7,7 @@
 #define GLFW_INCLUDE_NONE
 #include <GLFW/glfw3.h>
 
+#include "app/cli/error_text.h"
 #include "app/window/measure_overlay.h"
 #include "app/window/workbench_window.h"
 
@@ -69,7 +70,7 @@ void saveScreenshot(Workbench& bench, const render::Gl& gl, const WindowState& w
     render::writePng(path, image);
     bench.report(StatusLine::Kind::kSuccess, "screenshot written to " + path);
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, e.what());
+    bench.report(StatusLine::Kind::kError, errorMessage(e));
   }
 }
 
@@ -112,7 +113,7 @@ void saveViewScreenshot(Workbench& bench, const render::Gl& gl, render::MapMirro
     render::writePng(path, image);
     bench.report(StatusLine::Kind::kSuccess, "view screenshot written to " + path);
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, e.what());
+    bench.report(StatusLine::Kind::kError, errorMessage(e));
   }
 }
 

@@ -12,6 +12,7 @@
 
 #include "app/window/map_file_panel.h"
 #include "app/window/widgets.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "render/colormap.h"
 
@@ -134,8 +135,9 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
   const int total = mapping.frames_total;
   if (const Sequence* sequence = bench.sequence()) {
     textWrapped(sequence->folder().string());
-    ImGui::TextWrapped("%s; camera %s (%dx%d), %d frames", sequenceKindName(sequence->kind()).c_str(),
-                       sequence->cameraSource().c_str(), mapping.camera.width, mapping.camera.height, total);
+    ImGui::TextWrapped("%s; camera %s (%dx%d), %s", sequenceKindName(sequence->kind()).c_str(),
+                       sequence->cameraSource().c_str(), mapping.camera.width, mapping.camera.height,
+                       counted(total, "frame").c_str());
     std::string why = "What kind of sequence it is (it " + sequence->kindReason() +
                       "), where the intrinsics come "
                       "from (--camera, a camera file, a preset, a recording's camera_info), the image size in pixels, "
@@ -144,12 +146,14 @@ void drawWhatIsOpen(Workbench& bench, const WindowState& win) {
     tip(why);
   } else if (const StaticMap* file = bench.staticMap()) {  // opening files: a map file
     textWrapped(file->path.string());
-    ImGui::TextWrapped("%s: %zu ellipsoids, %zu keyframes", mapFileKindName(file->kind), file->ellipsoids.size(),
-                       mapping.keyframes.size());
+    ImGui::TextWrapped("%s: %s, %s", mapFileKindName(file->kind),
+                       counted(static_cast<long long>(file->ellipsoids.size()), "ellipsoid").c_str(),
+                       counted(static_cast<long long>(mapping.keyframes.size()), "keyframe").c_str());
     tip("A map read whole from a file: nothing to play, re-map or rebuild (the Map panel shows its figures).");
   } else {
     textWrapped(bench.ui().settings.last_sequence);
-    ImGui::TextWrapped("saved session: %d frames mapped, %zu keyframes", total, mapping.keyframes.size());
+    ImGui::TextWrapped("saved session: %s mapped, %s", counted(total, "frame").c_str(),
+                       counted(static_cast<long long>(mapping.keyframes.size()), "keyframe").c_str());
     tip("A .vdmap file: the keyframes with their local maps, poses and covisibility graph, and the parameters "
         "they were mapped with (the Re-run parameters show them).");
     if (!bench.files().whyPlayerOff().empty()) textWrapped(bench.files().whyPlayerOff());
@@ -164,7 +168,8 @@ void drawPlayer(Workbench& bench, WindowState& win, const PlayerStatus& status, 
   // Play, Step and Next keyframe cannot act once every frame is asked for (Pause still can).
   const bool at_end = status.target >= total;
   const std::string why_end =
-      "All " + std::to_string(total) + " frames are mapped: Back (Left) or the scrubber go back.";
+      (total == 1 ? std::string("The one frame is mapped") : "All " + std::to_string(total) + " frames are mapped") +
+      ": Back (Left) or the scrubber go back.";
   ImGui::BeginDisabled(at_end && !status.playing);
   if (ImGui::Button(status.playing ? "Pause" : "Play")) bench.key(KeyAction::kPlayPause);
   tip(saved                       ? why_saved
@@ -282,11 +287,10 @@ void drawSequencePanel(Workbench& bench, const render::MapMirror& mirror, Window
   ImGui::EndDisabled();
   // The short form where the long one would be cut (a narrow panel while working).
   const char* working = status.busy ? " (working)" : "";
-  std::string counts = std::to_string(mapped) + " / " + std::to_string(total) + " frames mapped, " +
-                       std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+  const std::string keyframes = counted(static_cast<long long>(win.mapping->keyframes.size()), "keyframe");
+  std::string counts = std::to_string(mapped) + " / " + counted(total, "frame") + " mapped, " + keyframes + working;
   if (ImGui::CalcTextSize(counts.c_str()).x > ImGui::GetContentRegionAvail().x)
-    counts = std::to_string(mapped) + "/" + std::to_string(total) + " frames, " +
-             std::to_string(win.mapping->keyframes.size()) + " keyframes" + working;
+    counts = std::to_string(mapped) + "/" + counted(total, "frame") + ", " + keyframes + working;
   ImGui::TextUnformatted(counts.c_str());
   checkFits(win.check);
   tip("Frames integrated into the keyframes' local maps so far, of the sequence's (or --frames') total, and the "

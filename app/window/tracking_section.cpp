@@ -6,6 +6,7 @@
 #include "app/window/map_sections.h"
 #include "app/window/widgets.h"
 #include "app/workbench/figures.h"
+#include "mapping/core/message_text.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -46,7 +47,7 @@ void drawTracking(Workbench& bench, WindowState& win) {
   const int placed = static_cast<int>(win.mapping->trajectory.size());
   swatch(render::kTrajectoryColor);
   ImGui::AlignTextToFramePadding();
-  ImGui::Text("tracked: %d frames placed, %d lost", placed, win.mapping->frames_lost);
+  ImGui::Text("tracked: %s placed, %d lost", counted(placed, "frame").c_str(), win.mapping->frames_lost);
   tip("The camera trajectory vdmap estimated (blue), every placed frame at its pose relative to its keyframe, so "
       "it follows each correction. Lost frames could not be placed and were skipped, never integrated.");
   if (win.mapping->frames_weak + win.mapping->frames_relocalised > 0) {

@@ -20,6 +20,7 @@
 #include <backends/imgui_impl_opengl3.h>
 #include <imgui.h>
 
+#include "app/cli/error_text.h"
 #include "app/window/container_window.h"
 #include "app/window/glfw_context.h"
 #include "app/window/map_panel.h"
@@ -383,7 +384,7 @@ class WorkbenchWindow {
       args.folder = preparing_.folder.get();
       bench_.files().open(args);
     } catch (const std::exception& e) {
-      bench_.report(StatusLine::Kind::kError, preparing_.what + ": " + e.what());
+      bench_.report(StatusLine::Kind::kError, preparing_.what + ": " + errorMessage(e));
     }
     startScript(script_, bench_);
   }

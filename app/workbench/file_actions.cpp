@@ -5,9 +5,11 @@
 #include <filesystem>
 #include <utility>
 
+#include "app/cli/error_text.h"
 #include "app/cli/provenance.h"
 #include "app/view/view_file.h"
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 #include "mapping/files/map_export.h"
 
 namespace vdmap::app::gui {
@@ -40,7 +42,7 @@ std::optional<Sequence> framesAfter(const Session& saved, std::string* off, std:
       const std::size_t listed = Sequence::open(info.sequence).listedDepthFrames();
       if (listed <= static_cast<std::size_t>(info.state.last_frame_index) + 1) {
         *off = "mapped to the end of " + info.sequence + " (" + std::to_string(info.state.last_frame_index + 1) +
-               " of " + std::to_string(listed) + " frames): nothing to continue";
+               " of " + counted(static_cast<long long>(listed), "frame") + "): nothing to continue";
         return std::nullopt;
       }
     }
@@ -51,7 +53,7 @@ std::optional<Sequence> framesAfter(const Session& saved, std::string* off, std:
     return rest;
   } catch (const std::exception& e) {
     *off = *why = "the player is off: the session's sequence " + info.sequence + " has no frames to continue with (" +
-                  e.what() + ")";
+                  errorMessage(e) + ")";
     return std::nullopt;
   }
 }
@@ -92,7 +94,7 @@ bool FileActions::open(const SequenceArgs& args) {
     state_.opened_args.refine_given = state_.opened_args.refine != SequenceArgs{}.refine;
     state_.render_thresholds = GlobalMapParams{};
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   opened(absolute_args.folder);
@@ -124,7 +126,7 @@ bool FileActions::openSession(const std::string& file) {
     state_.opened_args = {};
     state_.render_thresholds = saved_thresholds;
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   opened(path);
@@ -139,7 +141,7 @@ bool FileActions::openPath(const std::string& path_in) {
   try {
     kind = detectMapFile(path);
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   bool ok = false;
@@ -156,7 +158,7 @@ bool FileActions::openPath(const std::string& path_in) {
         ok = true;
         addRecent(ui_.settings, path);  // opened() remembers the other kinds
       } catch (const std::exception& e) {
-        state_.report(StatusLine::Kind::kError, e.what());
+        state_.report(StatusLine::Kind::kError, errorMessage(e));
       }
       break;
     default: ok = openMapFile(path); break;
@@ -169,7 +171,7 @@ bool FileActions::openMapFile(const std::string& path_in) {
   try {
     return openMapFile(std::make_shared<const StaticMap>(loadStaticMap(path)));
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
 }
@@ -197,7 +199,7 @@ bool FileActions::openMapFile(std::shared_ptr<const StaticMap> map) {
                      (m.kind == MapFileKind::kOctomap ? " occupied leaves" : " ellipsoids");
   if (m.kind == MapFileKind::kPointPly) what += std::string(", points drawn at sigma ") + sigma;
   if (m.kind == MapFileKind::kOctomap) what += std::string(", resolution ") + sigma;
-  if (!m.keyframes.empty()) what += ", " + std::to_string(m.keyframes.size()) + " keyframes";
+  if (!m.keyframes.empty()) what += ", " + counted(static_cast<long long>(m.keyframes.size()), "keyframe");
   state_.report(StatusLine::Kind::kSuccess, "opened " + m.path.string() + " (" + what + ")");
   return true;
 }

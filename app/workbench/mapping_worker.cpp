@@ -2,6 +2,7 @@
 
 #include <algorithm>
 
+#include "app/cli/error_text.h"
 #include "app/cli/release_memory.h"
 #include "mapping/core/timing.h"
 #include "mapping/local_map/ellipsoid_filter.h"
@@ -155,7 +156,7 @@ void MappingWorker::run() {
       job();
     } catch (const std::exception& e) {
       std::lock_guard relock(mutex_);
-      error_ = e.what();
+      error_ = errorMessage(e);
     }
     lock.lock();
     working_ = false;
@@ -250,7 +251,7 @@ void MappingWorker::mapOneFrame() {
     }
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
-    error_ = "frame " + std::to_string(i) + ": " + e.what();
+    error_ = "frame " + std::to_string(i) + ": " + errorMessage(e);
     target_ = mapped_;
     playing_ = false;
   }
@@ -344,7 +345,7 @@ void MappingWorker::rebuildGlobal() {
     buildGlobal(params, before, publish);
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
-    error_ = std::string("global map: ") + e.what();
+    error_ = std::string("global map: ") + errorMessage(e);
     return;
   }
   std::lock_guard lock(mutex_);
@@ -359,7 +360,7 @@ void MappingWorker::buildQueries(const KeyframeGraph& graph, const GlobalSnapsho
     query->map = std::make_shared<const QueryMap>(QueryMap::build(graph, snap.map, QueryParams{}));
   } catch (const std::exception& e) {
     std::lock_guard lock(mutex_);
-    error_ = std::string("point queries: ") + e.what();
+    error_ = std::string("point queries: ") + errorMessage(e);
     return;
   }
   query->build_ms = 1e3 * secondsSince(t0);

@@ -2,6 +2,7 @@
 // state under the lock and wake the worker (mapping_worker.cpp runs them); the snapshots are read
 // under the same lock.
 #include "app/workbench/mapping_worker.h"
+#include "mapping/core/message_text.h"
 
 #include <algorithm>
 
@@ -123,8 +124,8 @@ void MappingWorker::loadTrajectory(const std::string& file) {
     publishMapping();
     std::lock_guard lock(mutex_);
     global_dirty_ = true;
-    message_ = file + ": " + std::to_string(m.matched) + " keyframe poses replaced, " + std::to_string(m.untouched) +
-               " kept, " + std::to_string(m.unknown) + " unmatched poses ignored";
+    message_ = file + ": " + counted(m.matched, "keyframe pose") + " replaced, " + std::to_string(m.untouched) +
+               " kept, " + counted(m.unknown, "unmatched pose") + " ignored";
   });
 }
 

@@ -1,5 +1,7 @@
 #include "app/workbench/parameter_editor.h"
 
+#include "app/cli/error_text.h"
+
 namespace vdmap::app::gui {
 
 std::string parameterHelp(const Parameter& p) {
@@ -18,7 +20,7 @@ bool ParameterEditor::edit(const Parameter& p, double value) {
     p.set(edited, value);
     validate(edited);
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   ui.params = edited;
@@ -37,7 +39,7 @@ void ParameterEditor::applyThresholds() {
   try {
     state_.worker->setThresholds(state_.ui.params.global);
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return;
   }
   state_.edit_diff.edited(std::move(shown), state_.ui.params.global);
@@ -50,7 +52,7 @@ void ParameterEditor::rerun() {
   try {
     ui.params.mapper.validate();
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return;
   }
   state_.worker->rerun(ui.params.mapper);

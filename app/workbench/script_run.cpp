@@ -5,8 +5,10 @@
 #include <ctime>
 #include <filesystem>
 
+#include "app/cli/error_text.h"
 #include "app/workbench/figures.h"
 #include "mapping/core/atomic_file.h"
+#include "mapping/core/message_text.h"
 #include "mapping/core/timing.h"
 #include "mapping/io/json_text.h"
 
@@ -88,7 +90,7 @@ void editScripted(Workbench& bench, const std::string& edit) {
   try {
     bench.parameters().edit(*p, parseValue(*p, edit.substr(eq + 1)));
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, std::string("--edit: ") + e.what());
+    bench.report(StatusLine::Kind::kError, std::string("--edit: ") + errorMessage(e));
   }
 }
 
@@ -98,9 +100,9 @@ void measureScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
   const std::vector<float>& m = run.options.measure;
   const auto a = window.pointUnder(m[0], m[1]), b = window.pointUnder(m[2], m[3]);
   if (!a || !b) {
-    bench.report(StatusLine::Kind::kError, std::string("--measure: nothing drawn under pixel ") +
-                                               (a ? std::to_string(m[2]) + "," + std::to_string(m[3])
-                                                  : std::to_string(m[0]) + "," + std::to_string(m[1])));
+    bench.report(StatusLine::Kind::kError,
+                 std::string("--measure: nothing drawn under pixel ") +
+                     (a ? shortNumber(m[2]) + "," + shortNumber(m[3]) : shortNumber(m[0]) + "," + shortNumber(m[1])));
     return;
   }
   bench.view().addMeasurePoint(*a);
@@ -115,8 +117,8 @@ void probeScripted(ScriptRun& run, Workbench& bench, ScriptWindow& window) {
   const UiState& ui = bench.ui();
   bench.queries().probeAt(at[0], at[1], ui.view_width, ui.view_height, window.pointUnder(at[0], at[1]));
   if (!ui.probe_result) {
-    bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + std::to_string(at[0]) + "," +
-                                               std::to_string(at[1]) + " (and no query slice there)");
+    bench.report(StatusLine::Kind::kError, "--probe: nothing drawn under pixel " + shortNumber(at[0]) + "," +
+                                               shortNumber(at[1]) + " (and no query slice there)");
     return;
   }
   const ProbeResult& r = *ui.probe_result;
@@ -225,7 +227,7 @@ void writeStats(const ScriptRun& run, Workbench& bench, const ScriptFrame& frame
   try {
     writeFileAtomically(file, jsonText(stats) + "\n");
   } catch (const std::exception& e) {
-    bench.report(StatusLine::Kind::kError, e.what());
+    bench.report(StatusLine::Kind::kError, errorMessage(e));
   }
 }
 

@@ -4,6 +4,7 @@
 #include <iostream>
 
 #include "app/cli/command_line.h"
+#include "app/cli/error_text.h"
 #include "app/cli/parameter_table.h"
 #include "app/view/view_file.h"
 
@@ -57,7 +58,7 @@ bool ViewFiles::load(const std::string& file, bool thresholds) {
     if (path.empty()) throw std::invalid_argument("Load view: type a file name first");
     spec = readViewFile(path, &params);
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   if (!view_.applySpec(spec)) return false;
@@ -80,7 +81,7 @@ bool ViewFiles::save(const std::string& file) {
     if (path.empty()) throw std::invalid_argument("Save view: type a file name first");
     writeViewFile(path, view_.spec(), state_.ui.params.global, source());
   } catch (const std::exception& e) {
-    state_.report(StatusLine::Kind::kError, e.what());
+    state_.report(StatusLine::Kind::kError, errorMessage(e));
     return false;
   }
   const std::string command = renderCommand(view_.spec(), commandSource(), path);
@@ -172,7 +173,7 @@ void ViewFiles::storeQuickView(int slot) {
       fs::create_directories(file.parent_path());
       writeViewFile(file, spec, state_.ui.params.global, source());
     } catch (const std::exception& e) {
-      return state_.report(StatusLine::Kind::kWarning, kept + ", for this run only: " + e.what());
+      return state_.report(StatusLine::Kind::kWarning, kept + ", for this run only: " + errorMessage(e));
     }
   }
   state_.report(StatusLine::Kind::kInfo, kept);
@@ -187,7 +188,8 @@ bool ViewFiles::recallQuickView(int slot) {
     try {
       spec = readViewFile(file);
     } catch (const std::exception& e) {
-      state_.report(StatusLine::Kind::kWarning, std::string("quick view ") + std::to_string(slot) + ": " + e.what());
+      state_.report(StatusLine::Kind::kWarning,
+                    std::string("quick view ") + std::to_string(slot) + ": " + errorMessage(e));
       return false;
     }
   }

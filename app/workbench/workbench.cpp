@@ -3,6 +3,8 @@
 #include <cmath>
 #include <filesystem>
 
+#include "app/cli/error_text.h"
+
 namespace vdmap::app::gui {
 namespace fs = std::filesystem;
 
@@ -120,7 +122,7 @@ double Workbench::autosaveSettings(SettingsAutosave::Clock::time_point now) {
     try {
       saveSettings();
     } catch (const std::exception& e) {
-      state_.report(StatusLine::Kind::kWarning, std::string("settings not saved: ") + e.what());
+      state_.report(StatusLine::Kind::kWarning, std::string("settings not saved: ") + errorMessage(e));
       autosave_->saved();  // a failure is not retried every frame: the next change tries again
     }
   }

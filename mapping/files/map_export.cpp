@@ -1,4 +1,5 @@
 #include "mapping/files/map_export.h"
+#include "mapping/core/message_text.h"
 
 #include <unistd.h>
 
@@ -58,8 +59,8 @@ void checkWritable(const fs::path& dir, const char* which, const EllipsoidSource
                              " (keyframe " + std::to_string(e.keyframe) +
                              ") has a mean or covariance that is not a "
                              "finite float (mean " +
-                             std::to_string(e.mean.x()) + " " + std::to_string(e.mean.y()) + " " +
-                             std::to_string(e.mean.z()) + ")");
+                             shortNumber(e.mean.x()) + " " + shortNumber(e.mean.y()) + " " + shortNumber(e.mean.z()) +
+                             ")");
   });
 }
 

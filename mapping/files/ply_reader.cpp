@@ -1,4 +1,5 @@
 #include "mapping/files/ply_reader.h"
+#include "mapping/core/message_text.h"
 
 #include <algorithm>
 #include <bit>
@@ -10,6 +11,7 @@
 #include <string>
 
 #include "mapping/core/error.h"
+#include "mapping/io/text_list.h"
 
 namespace vdmap {
 namespace {
@@ -58,6 +60,7 @@ bool isFloatType(const std::string& t) { return t == "float" || t == "float32" |
 class Reader {
  public:
   explicit Reader(const std::filesystem::path& file) : file_(file), in_(file, std::ios::binary) {
+    checkNotAFolder(file);
     if (!in_) throw InputError(file.string(), "cannot open the file");
   }
 
@@ -162,7 +165,7 @@ class Reader {
         fail("unexpected header line " + printable(line), n);
       }
     }
-    fail("header does not end with 'end_header' (" + std::to_string(n) + " lines read)");
+    fail("header does not end with 'end_header' (" + counted(n, "line") + " read)");
   }
 
   // A header may claim any number of records: reject counts the rest of the file cannot hold
@@ -179,8 +182,8 @@ class Reader {
       for (const Property& p : e.properties)
         record += format_ != Format::kAscii ? typeSize(p.count_type.empty() ? p.type : p.count_type) : 1;
       if (e.count > bytes / record)
-        fail("element " + printable(e.name) + " has " + std::to_string(e.count) + " records but only " +
-             std::to_string(bytes) + " bytes follow the header (truncated?)");
+        fail("element " + printable(e.name) + " has " + counted(static_cast<long long>(e.count), "record") +
+             " but only " + counted(static_cast<long long>(bytes), "byte") + " follow the header (truncated?)");
     }
   }
 

@@ -1,4 +1,5 @@
 #include "mapping/files/session_file.h"
+#include "mapping/io/text_list.h"
 
 #include <algorithm>
 #include <array>
@@ -806,6 +807,7 @@ bool isSessionPath(const std::filesystem::path& file) {
 }
 
 Session loadSession(const std::filesystem::path& file, const SessionDecodeOptions& options) {
+  checkNotAFolder(file);
   std::ifstream in(file, std::ios::binary | std::ios::ate);
   if (!in) throw InputError(file.string(), "cannot open the session file");
   // Read at its size in one piece: growing a string char by char held up to three times the file.

@@ -138,6 +138,7 @@ std::optional<ColourCamera> cameraPresetColour(const std::string& name) { return
 PinholeCamera readCameraFile(const std::filesystem::path& file, std::optional<ColourCamera>* colour) {
   const std::string name = file.string();
   YAML::Node root;
+  checkNotAFolder(file);
   try {
     root = YAML::LoadFile(name);
   } catch (const YAML::BadFile&) {

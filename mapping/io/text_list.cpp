@@ -1,35 +1,59 @@
 #include "mapping/io/text_list.h"
 
 #include <cctype>
+#include <cerrno>
 #include <charconv>
 #include <cmath>
 #include <cstdio>
+#include <cstring>
 #include <fstream>
 #include <sstream>
 
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 
 namespace vdmap {
 
 std::vector<ListLine> readListFile(const std::filesystem::path& file, int columns, const char* expected) {
+  checkNotAFolder(file);
   std::ifstream in(file);
   if (!in) throw InputError(file.string(), "cannot open (missing or unreadable)");
   std::vector<ListLine> lines;
   std::string text;
   for (int number = 1; std::getline(in, text); ++number) {
-    if (!text.empty() && text.back() == '\r') text.pop_back();
-    const auto first = text.find_first_not_of(" \t");
-    if (first == std::string::npos || text[first] == '#') continue;
-    std::istringstream words(text);
-    ListLine line{number, {}};
-    for (std::string w; words >> w;) line.tokens.push_back(w);
+    if (!text.empty() && text.back() == '\r') text.pop_back();  // a CRLF file: not part of the line shown
+    ListLine line{number, listWords(text)};
+    if (line.tokens.empty()) continue;
     if (static_cast<int>(line.tokens.size()) != columns)
-      throw InputError(
-          file.string(), number,
-          "expected '" + std::string(expected) + "', got " + std::to_string(line.tokens.size()) + " fields");
+      throw InputError(file.string(), number,
+                       "expected '" + std::string(expected) + "', got " +
+                           counted(static_cast<long long>(line.tokens.size()), "field") + ": " + printable(text));
     lines.push_back(std::move(line));
   }
+  if (in.bad()) throw InputError(file.string(), "cannot be read");
   return lines;
+}
+
+std::vector<std::string> listWords(const std::string& line) {
+  std::vector<std::string> words;
+  std::istringstream in(line);
+  for (std::string w; in >> w && w[0] != '#';) words.push_back(std::move(w));
+  return words;
+}
+
+void checkNotAFolder(const std::filesystem::path& file) {
+  std::error_code ec;
+  if (std::filesystem::is_directory(file, ec)) throw InputError(file.string(), "is a folder, not a file");
+}
+
+std::string readWholeFile(const std::filesystem::path& file) {
+  checkNotAFolder(file);
+  std::ifstream in(file, std::ios::binary);
+  if (!in) throw InputError(file.string(), std::string("cannot be read (") + std::strerror(errno) + ")");
+  std::ostringstream text;
+  text << in.rdbuf();  // a read error sets the stream's state; it never throws from here
+  if (in.bad() || text.bad()) throw InputError(file.string(), "cannot be read");
+  return text.str();
 }
 
 double parseListNumber(const std::string& token, const std::filesystem::path& file, int line, const char* what) {

@@ -16,6 +16,18 @@ struct ListLine {
 /// Throws InputError when the file cannot be opened or a line has another number of fields.
 std::vector<ListLine> readListFile(const std::filesystem::path& file, int columns, const char* expected);
 
+/// The whitespace-separated words of one list line up to a comment: a word starting with '#'
+/// ends the line ("1 2 3  # a note" is 1 2 3). None for a blank or comment line.
+std::vector<std::string> listWords(const std::string& line);
+
+/// Throws InputError ("FILE: is a folder, not a file") when `file` is a folder: read as a file, a
+/// folder gives no lines on some systems and a raw library error on others.
+void checkNotAFolder(const std::filesystem::path& file);
+
+/// The whole of `file`. Throws InputError naming the file when it is a folder, does not exist or
+/// cannot be read (with the system's reason).
+std::string readWholeFile(const std::filesystem::path& file);
+
 /// The number in `token`; throws InputError ("expected a number for <what>") when it is not one
 /// or is not finite.
 double parseListNumber(const std::string& token, const std::filesystem::path& file, int line, const char* what);

@@ -1,4 +1,5 @@
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/core/message_text.h"
 
 #include <algorithm>
 #include <stdexcept>
@@ -56,8 +57,9 @@ TrajectoryMatch KeyframeGraph::applyTrajectory(std::span<const StampedPose> pose
   }
   match.untouched = static_cast<int>(std::count(seen.begin(), seen.end(), false));
   if (match.matched == 0)
-    throw std::invalid_argument("no pose matches a keyframe timestamp (" + std::to_string(poses.size()) + " poses, " +
-                                std::to_string(keyframes_.size()) + " keyframes)");
+    throw std::invalid_argument("no pose matches a keyframe timestamp (" +
+                                counted(static_cast<long long>(poses.size()), "pose") + ", " +
+                                counted(static_cast<long long>(keyframes_.size()), "keyframe") + ")");
   return match;
 }
 

@@ -7,6 +7,7 @@
 #include <stdexcept>
 #include <string>
 
+#include "mapping/core/message_text.h"
 #include "mapping/core/parallel.h"
 #include "mapping/query/detail/query_map_data.h"
 
@@ -63,10 +64,12 @@ const char* occupancyName(Occupancy state) {
 }
 
 void QueryParams::validate() const {
-  if (!(std::isfinite(gate_sigma) && gate_sigma > 0.0 && gate_sigma <= 100.0))
-    throw std::invalid_argument("gate_sigma must be within (0, 100], got " + std::to_string(gate_sigma));
-  if (!(std::isfinite(min_sigma_m) && min_sigma_m > 0.0 && min_sigma_m <= 1.0))
-    throw std::invalid_argument("min_sigma_m must be within (0, 1] m, got " + std::to_string(min_sigma_m));
+  if (!(std::isfinite(gate_sigma) && gate_sigma > 0.0 && gate_sigma <= kMaxGateSigma))
+    throw std::invalid_argument("gate_sigma must be > 0 and at most " + shortNumber(kMaxGateSigma) + ", got " +
+                                shortNumber(gate_sigma));
+  if (!(std::isfinite(min_sigma_m) && min_sigma_m > 0.0 && min_sigma_m <= kMaxMinSigmaM))
+    throw std::invalid_argument("min_sigma_m must be > 0 and at most " + shortNumber(kMaxMinSigmaM) + " m, got " +
+                                shortNumber(min_sigma_m));
   if (conflict != ConflictRule::kOccupied && conflict != ConflictRule::kRecent && conflict != ConflictRule::kPrecise)
     throw std::invalid_argument("conflict must be occupied, recent or precise");
   if (threads < 0 || threads > kMaxThreads)
@@ -131,7 +134,7 @@ void QueryMap::classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d>
   const Data& d = *data_;
   if (keyframe < 0 || static_cast<std::size_t>(keyframe) >= d.views.size())
     throw std::invalid_argument("keyframe " + std::to_string(keyframe) + " is not in the map (" +
-                                std::to_string(d.views.size()) + " keyframes)");
+                                counted(static_cast<long long>(d.views.size()), "keyframe") + ")");
   checkPoints(q_W, out.size());
   forEachPoint(d.params.threads, q_W.size(),
                [&](std::size_t i) { out[i] = fromVerdict(d.views.verdict(keyframe, q_W[i]), keyframe); });

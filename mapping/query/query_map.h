@@ -34,6 +34,8 @@ enum class ConflictRule : std::uint8_t {
 };
 
 struct QueryParams {
+  static constexpr double kMaxGateSigma = 100.0;  ///< gate_sigma lies in (0, kMaxGateSigma]
+  static constexpr double kMaxMinSigmaM = 1.0;    ///< min_sigma_m lies in (0, kMaxMinSigmaM] m
   double gate_sigma = 3.0;     ///< k: occupied within k sigma of an ellipsoid; free more than k sigma in front
   double min_sigma_m = 0.001;  ///< added as min_sigma^2 I to every covariance before it is inverted
   ConflictRule conflict = ConflictRule::kOccupied;

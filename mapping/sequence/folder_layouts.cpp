@@ -6,6 +6,7 @@
 #include <map>
 
 #include "mapping/core/error.h"
+#include "mapping/core/message_text.h"
 #include "mapping/io/image_codec.h"
 #include "mapping/io/text_list.h"
 #include "mapping/io/trajectory_io.h"
@@ -70,7 +71,8 @@ std::vector<double> readNumbers(const fs::path& file, std::size_t count, const c
     values.push_back(v);
   }
   if (values.size() != count)
-    throw InputError(file.string(), "holds " + std::to_string(values.size()) + " numbers; expected " + expected);
+    throw InputError(file.string(),
+                     "holds " + counted(static_cast<long long>(values.size()), "number") + "; expected " + expected);
   return values;
 }
 

@@ -1,4 +1,5 @@
 #include "mapping/sequence/sequence.h"
+#include "mapping/core/message_text.h"
 
 #include <algorithm>
 #include <charconv>
@@ -61,7 +62,7 @@ void checkContinuation(const fs::path& folder, int listed, std::optional<double>
     throw InputError(folder.string(), "is not the recording " + c.session + " was mapped on (" + c.folder.string() +
                                           "); continue it on that folder");
   if (!t_last)
-    throw InputError(folder.string(), "lists " + std::to_string(listed) + " depth frames, but " + c.session +
+    throw InputError(folder.string(), "lists " + counted(listed, "depth frame") + ", but " + c.session +
                                           " stopped at its " + frame + " (t = " + seconds(c.last_timestamp) + ")" +
                                           mapped_on + ": not the recording it was mapped on");
   if (std::abs(*t_last - c.last_timestamp) > 1e-6)

@@ -124,7 +124,7 @@ const std::vector<Input>& inputs() {
 }
 
 /// One bad case. `damage` changes the good input in the folder (for the command line it returns
-/// the arguments); `fragment` must appear in the message.
+/// the arguments); `fragment` must appear in the message ({dir} is the folder there too).
 struct BadCase {
   const char* input;
   const char* name;
@@ -176,6 +176,14 @@ std::function<std::string(const fs::path&)> then(std::function<std::string(const
   return [=](const fs::path& d) {
     damage(d);
     return arguments;
+  };
+}
+// Puts a folder where `file` is (a folder given as a file).
+std::function<std::string(const fs::path&)> folderAt(const char* file) {
+  return [file](const fs::path& d) {
+    fs::remove_all(d / file);
+    fs::create_directory(d / file);
+    return std::string();
   };
 }
 std::function<std::string(const fs::path&)> removeFile(const char* file) {
@@ -535,7 +543,7 @@ const std::vector<BadCase>& badCases() {
       {"command_line", "load_on_another_recording_of_that_name", E::kCliError,
        "depth frame 1 is at t = 10.033333 s, but",
        then(savedSession("0:2", "b/seq", 10.0), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
-      {"command_line", "load_on_a_shorter_recording", E::kCliError, "lists 1 depth frames, but",
+      {"command_line", "load_on_a_shorter_recording", E::kCliError, "lists 1 depth frame, but",
        then(savedSession("0:2", "b/seq", 0.0, 1), "map {dir}/b/seq --out {dir}/out --load {dir}/s.vdmap")},
       {"command_line", "load_a_finished_session", E::kCliError, "s.vdmap already covers the whole sequence",
        then(savedSession("0:3", ""), "map {dir}/seq --out {dir}/out --load {dir}/s.vdmap")},
@@ -747,7 +755,8 @@ const std::vector<BadCase>& badCases() {
        then(write("pts.txt", "0 0 1\n"), "query {dir} --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
       {"session", "query_keyframe_outside_the_graph", E::kCliError, "--keyframe 40: the session has",
        then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --keyframe 40 --points {dir}/pts.txt --out {dir}/out.txt")},
-      {"session", "query_keyframe_poses_match_nothing", E::kCliError, "poses.txt",
+      {"session", "query_keyframe_poses_match_nothing", E::kCliError,
+       "poses.txt: no pose matches a keyframe timestamp (1 pose, ",
        then([](const fs::path& d) {
               writeText(d / "pts.txt", "0 0 1\n");
               writeText(d / "poses.txt", "1000.0 0 0 0 0 0 0 1\n");
@@ -778,6 +787,57 @@ const std::vector<BadCase>& badCases() {
        then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op grid --band 0:1 --points {dir}/pts.txt --out {dir}/out.yaml")},
       {"session", "query_octomap_resolution_zero", E::kCliUsage, "--resolution: must be a number > 0, got 0",
        args("query {dir}/s.vdmap --op octomap --resolution 0 --out {dir}/out.bt")},
+      // Messages name the option or the file, echo the value short and say the rule.
+      {"session", "query_min_sigma_zero", E::kCliUsage, "--min-sigma: must be a number > 0 and at most 1, got 0",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --min-sigma 0 --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_gate_sigma_huge", E::kCliUsage, "--gate-sigma: must be a number > 0 and at most 100, got 1e308",
+       then(write("pts.txt", "0 0 1\n"), "query {dir}/s.vdmap --op classify --gate-sigma 1e308 --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_points_one_column", E::kCliError, "pts.txt:2: expected x y z (--op distance), got 1 field: '0'",
+       then(write("pts.txt", "0 0 1  # a comment after the columns\n0\n"),
+            "query {dir}/s.vdmap --op distance --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "render_view_file_camera_and_keyframe_view", E::kCliError,
+       "v.json: 'camera' places the global view, but 'view' is 'keyframe:0'",
+       then(viewFile([](nlohmann::json& j) {
+              j["view"] = "keyframe:0";
+              j["camera"] = {{"eye", {7, 1, 1}}, {"target", {0, 0, 0}}, {"up", {0, 0, 1}}, {"fov_y_deg", 60}};
+            }),
+            "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_look_at_with_the_view_files_keyframe_view", E::kCliError,
+       "--look-at places the global view's camera; {dir}/v.json's view 'keyframe:0' has its keyframe's",
+       then(viewFile([](nlohmann::json& j) { j["view"] = "keyframe:0"; }),
+            "render {dir}/s.vdmap --view-file {dir}/v.json --look-at 1,1,1,0,0,0 --out {dir}/o.png")},
+      // A folder where a file is read, and paths the system cannot look up: the path and what is
+      // wrong, never a library's exception text.
+      {"session", "render_view_file_is_a_folder", E::kCliError, "v.json: is a folder, not a file",
+       then(folderAt("v.json"),
+            "render {dir}/s.vdmap --view-file {dir}/v.json --out {dir}/o.png")},
+      {"session", "render_settings_is_a_folder", E::kCliError, "set.json: is a folder, not a file",
+       then(folderAt("set.json"),
+            "render {dir}/s.vdmap --settings {dir}/set.json --out {dir}/o.png")},
+      {"session", "render_suite_is_a_folder", E::kCliError, "views.yaml: is a folder, not a file",
+       then(folderAt("views.yaml"),
+            "render --suite {dir}/views.yaml")},
+      {"session", "query_keyframe_poses_is_a_folder", E::kCliError, "poses.txt: is a folder, not a file",
+       then(
+           [](const fs::path& d) {
+             folderAt("poses.txt")(d);
+             return write("pts.txt", "0 0 1\n")(d);
+           },
+            "query {dir}/s.vdmap --op classify --keyframe-poses {dir}/poses.txt --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"session", "query_points_is_a_folder", E::kCliError, "pts.txt: is a folder, not a file (--points)",
+       then(folderAt("pts.txt"),
+            "query {dir}/s.vdmap --op classify --points {dir}/pts.txt --out {dir}/out.txt")},
+      {"trajectory", "is_a_folder", E::kInputError, "poses.txt: is a folder, not a file",
+       folderAt("poses.txt")},
+      {"ply_mesh", "is_a_folder", E::kInputError, "m.ply: is a folder, not a file",
+       folderAt("m.ply")},
+      {"camera_yaml", "is_a_folder", E::kInputError, "camera.yaml: is a folder, not a file",
+       folderAt("camera.yaml")},
+      {"session", "query_points_in_a_symlink_loop", E::kCliError, "loop/pts.txt: too many levels of symbolic links",
+       then([](const fs::path& d) { fs::create_symlink("loop", d / "loop"); return std::string(); },
+            "query {dir}/s.vdmap --op classify --points {dir}/loop/pts.txt --out {dir}/out.txt")},
+      {"session", "render_out_name_too_long", E::kCliError, "aaaaaaaaaaaaaaaaaaaaa/o.png: file name too long",
+       args("render {dir}/s.vdmap --out {dir}/" + std::string(300, 'a') + "/o.png")},
   };
   return all;
 }
@@ -815,7 +875,7 @@ TEST_P(BadInputMatrix, GivesTheExpectedErrorClass) {
   if (c.expect == Expect::kCliError || c.expect == Expect::kCliUsage) {
     const test::RunResult r = test::runVdmap(replaceAll(arguments, "{dir}", dir.path().string()));
     ASSERT_NE(r.exit_code, 0) << r.out;
-    EXPECT_NE(r.err.find(c.fragment), std::string::npos) << r.err;
+    EXPECT_NE(r.err.find(replaceAll(c.fragment, "{dir}", dir.path().string())), std::string::npos) << r.err;
     EXPECT_FALSE(fs::exists(dir / "out")) << "a failed run leaves no output";
     EXPECT_EQ(r.err.rfind("vdmap", 0), 0u) << r.err;
     EXPECT_NE(r.err.find(": error: "), std::string::npos) << r.err;
@@ -901,6 +961,16 @@ TEST(BadInputMatrixBaseline, CompactSessionsSeedTheFuzzerWhole) {
     }
     writeText(corpus / (tracked ? "session-compact-tracked" : "session-compact"), bytes);
   }
+}
+
+// A '#' after a record's columns starts a comment, as one at the start of a line does (it was
+// read as more fields: "got 9 fields").
+TEST(BadInputMatrixBaseline, ACommentAfterTheColumnsIsAComment) {
+  test::TempDir dir;
+  writeText(dir / "poses.txt", "0.5 1 2 3 0 0 0 1  # the first pose\n0.6 1 2 3 0 0 0 1\t#second\n");
+  const auto poses = readTumTrajectory(dir / "poses.txt");
+  ASSERT_EQ(poses.size(), 2u);
+  EXPECT_EQ(poses[1].t, 0.6);
 }
 
 TEST(BadInputMatrixBaseline, EveryInputHasBadCases) {

@@ -1,10 +1,15 @@
 // End-to-end tests of the vdmap command line: exit codes and one-line errors.
 #include <algorithm>
+#include <limits>
+#include <new>
 #include <regex>
+#include <sstream>
 
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include "app/view/progress.h"
+#include "mapping/core/message_text.h"
 #include "tests/support/test_util.h"
 #include "vdmap_version.h"
 
@@ -19,6 +24,47 @@ TEST(Cli, HelpListsVerbs) {
   for (const char* verb : {"info", "map", "render", "bench", "synth", "eval", "gui", "query"})
     EXPECT_NE(r.out.find(verb), std::string::npos) << verb;
   EXPECT_EQ(runVdmap("info --help").exit_code, 0);
+}
+
+// CLI11 prints each description on one line (some were 700 characters): every line of every
+// verb's help fits 100 columns, and no word of a description is lost to the wrapping.
+TEST(Cli, HelpLinesFitAHundredColumns) {
+  for (const char* verb : {"", "info", "map", "render", "bench", "synth", "eval", "gui", "params", "query"}) {
+    const auto r = runVdmap(std::string(verb) + " --help");
+    ASSERT_EQ(r.exit_code, 0) << verb;
+    std::istringstream lines(r.out);
+    for (std::string line; std::getline(lines, line);) EXPECT_LE(line.size(), 100u) << verb << ": " << line;
+  }
+  const auto gui = runVdmap("gui --help");
+  std::string flat = std::regex_replace(gui.out, std::regex("\\s+"), " ");
+  EXPECT_NE(flat.find("KEY=VALUE for this run (as in settings.json; not saved): thresholds: filter_sigma_factor,"),
+            std::string::npos);
+}
+
+// std::bad_alloc says nothing of what was being built: a stage's error names it.
+TEST(Cli, MemoryRunningOutNamesTheStage) {
+  try {
+    app::withStageBar("global map", []() -> int { throw std::bad_alloc(); });
+    FAIL() << "no error";
+  } catch (const std::runtime_error& e) {
+    EXPECT_EQ(std::string(e.what()).rfind("out of memory building the global map: ", 0), 0u) << e.what();
+  }
+}
+
+TEST(Cli, CountsAgreeWithTheirNounsAndNumbersAreShort) {
+  EXPECT_EQ(counted(1, "point"), "1 point");
+  EXPECT_EQ(counted(0, "point"), "0 points");
+  EXPECT_EQ(counted(20, "body"), "20 bodies");
+  EXPECT_EQ(counted(2, "key"), "2 keys");
+  EXPECT_EQ(counted(2, "box"), "2 boxes");
+  EXPECT_EQ(counted(2, "miss"), "2 misses");
+  EXPECT_EQ(counted(3, "leaf", "leaves"), "3 leaves");
+  EXPECT_EQ(shortNumber(1e308), "1e+308");
+  EXPECT_EQ(shortNumber(std::numeric_limits<double>::max()), "1.79769313e+308");
+  EXPECT_EQ(shortNumber(0.1), "0.1");
+  EXPECT_EQ(shortNumber(1e38f), "1e+38");
+  EXPECT_EQ(shortNumber(0.1f), "0.1");
+  EXPECT_EQ(shortNumber(123456000.0), "123456000");
 }
 
 TEST(Cli, InfoOnTinySequence) {
@@ -107,7 +153,8 @@ TEST(Cli, AMissingOutHasTheSameCodeInEveryVerb) {
 TEST(Cli, MapHelpSaysTheEdgeToThePreviousKeyframeIsKept) {
   const auto r = runVdmap("map --help");
   EXPECT_EQ(r.exit_code, 0);
-  EXPECT_NE(r.out.find("the edge to the previous keyframe is always kept"), std::string::npos) << r.out;
+  const std::string flat = std::regex_replace(r.out, std::regex("\\s+"), " ");  // lines wrap at 100 columns
+  EXPECT_NE(flat.find("the edge to the previous keyframe is always kept"), std::string::npos) << r.out;
 }
 
 // vdmap info reports the range of valid depth and the share of invalid pixels;

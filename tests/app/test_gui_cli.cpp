@@ -728,6 +728,18 @@ TEST(GuiCli, MeasuredPointsLieOnTheBuiltinMesh) {
   EXPECT_LT(d[1], 0.01) << pb.transpose();
 }
 
+// A pixel beyond the view is echoed short (it was printed as std::to_string does, 39 digits and
+// six decimals for 1e38), and the scripted run fails with that one line.
+TEST(GuiCli, AProbeBeyondTheViewEchoesItsPixelShort) {
+  VDMAP_REQUIRE_XVFB();
+  TempDir home;
+  const RunResult r = runInXvfb(home, "--frames 0:3 --play-to-end --exit --probe 1e38,0");
+  EXPECT_EQ(r.exit_code, 1);
+  EXPECT_NE(r.err.find("error: --probe: nothing drawn under pixel 1e+38,0 (and no query slice there)\n"),
+            std::string::npos)
+      << r.err;
+}
+
 // Point queries (docs/workbench.md "Queries"): --probe at a pixel where the view shows a surface
 // finds the point 5 cm in front of it (so within 5 cm of a gate surface; occupied exactly when
 // at distance 0), and with --query-slice the point lies on the slice's plane; the stats give the

@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <fstream>
 #include <random>
+#include <regex>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -369,6 +370,37 @@ TEST(QueryCli, SummaryAsJsonCountsEveryPoint) {
       << plain.out;
 }
 
+// The summary line prints lengths to the millimetre, every digit (a length was cut to 8
+// characters: 17318.605 m read "17318.60 m"), and counts agree with their nouns.
+TEST(QueryCli, SummaryPrintsWholeLengthsAndCountedNouns) {
+  const Fixture& f = fixture();
+  TempDir tmp;
+  writeText(tmp / "far.txt", "9999 9999 9999\n");
+  const std::string asked =
+      "query " + q(f.session) + " --op distance --points " + q(tmp / "far.txt") + " --out " + q(tmp / "d.txt");
+  const RunResult json = runVdmap(asked + " --json");
+  ASSERT_EQ(json.exit_code, 0) << json.err;
+  const double median_m = nlohmann::json::parse(json.out)["median_m"].get<double>();
+  ASSERT_GT(median_m, 1e4);
+  char metres[32];
+  std::snprintf(metres, sizeof metres, "%.9g m", std::round(median_m * 1e3) / 1e3);
+  const RunResult plain = runVdmap(asked);
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  EXPECT_NE(plain.out.find(std::string("distance of 1 point: min ") + metres + ", median " + metres), std::string::npos)
+      << plain.out;
+
+  writeText(tmp / "spheres.txt", "0 0 1 0.1 1\n0 0 2 0.1 2\n");
+  const RunResult collide = runVdmap("query " + q(f.session) + " --op collide --points " + q(tmp / "spheres.txt") +
+                                     " --out " + q(tmp / "c.txt"));
+  ASSERT_EQ(collide.exit_code, 0) << collide.err;
+  EXPECT_NE(collide.out.find("collide 2 spheres in 2 bodies:"), std::string::npos) << collide.out;
+  writeText(tmp / "ray.txt", "0 0 1 1 0 0\n");
+  const RunResult ray =
+      runVdmap("query " + q(f.session) + " --op ray --points " + q(tmp / "ray.txt") + " --out " + q(tmp / "r.txt"));
+  ASSERT_EQ(ray.exit_code, 0) << ray.err;
+  EXPECT_TRUE(std::regex_search(ray.out, std::regex("^ray 1 ray: (1 hit, 0 misses|0 hits, 1 miss),"))) << ray.out;
+}
+
 TEST(QueryCli, OneAndTwoThreadsWriteTheSameBytes) {
   const Fixture& f = fixture();
   TempDir tmp;
@@ -456,7 +488,11 @@ TEST(QueryCli, RecordsAreCheckedPerOp) {
     }
     return std::string("no error");
   };
-  EXPECT_EQ(error("1 2 3\n1 2\n", QueryOp::kClassify), ":2: expected x y z (--op classify), got 2 fields");
+  EXPECT_EQ(error("1 2 3\n1 2\n", QueryOp::kClassify), ":2: expected x y z (--op classify), got 2 fields: '1 2'");
+  // A comment after the columns is a comment, not a field.
+  EXPECT_EQ(error("1 2 3 # a note\n1 2 # x y\n", QueryOp::kClassify),
+            ":2: expected x y z (--op classify), got 2 fields: '1 2 # x y'");
+  EXPECT_EQ(error("1 2 3\r\n1 2\r\n", QueryOp::kClassify), ":2: expected x y z (--op classify), got 2 fields: '1 2'");
   EXPECT_EQ(error("1 2 3 0.1 0\n1 2 3 0 1\n", QueryOp::kCollide), ":2: the radius must be > 0, got 0");
   EXPECT_EQ(error("1 2 3 0.1 0.5\n", QueryOp::kCollide), ":1: the body must be a whole number, got 0.5");
   EXPECT_EQ(error("0 0 0 0 0 0\n", QueryOp::kRay), ":1: the direction dx dy dz is zero (expected a length > 0)");

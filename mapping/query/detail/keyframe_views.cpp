@@ -1,4 +1,5 @@
 #include "mapping/query/detail/keyframe_views.h"
+#include "mapping/core/message_text.h"
 
 #include <algorithm>
 #include <cmath>
@@ -477,8 +478,8 @@ void KeyframeViews::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const {
 
 ViewVerdict KeyframeViews::verdict(int id, const Eigen::Vector3d& q_W) const {
   if (!impl_ || id < 0 || static_cast<std::size_t>(id) >= impl_->views.size())
-    throw std::invalid_argument("keyframe " + std::to_string(id) + " is not in the map (" + std::to_string(size()) +
-                                " keyframes)");
+    throw std::invalid_argument("keyframe " + std::to_string(id) + " is not in the map (" +
+                                counted(static_cast<long long>(size()), "keyframe") + ")");
   return impl_->verdict(impl_->views[static_cast<std::size_t>(id)], q_W);
 }
 
