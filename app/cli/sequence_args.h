@@ -14,14 +14,14 @@ namespace vdmap::app {
 /// verbs that map it --poses.
 struct SequenceArgs {
   std::string folder;
-  std::string camera;
-  std::string frames;
-  std::string poses;  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
+  std::string camera{};
+  std::string frames{};
+  std::string poses{};  ///< "gt", "track" or empty: gt when the folder has groundtruth.txt, else track
   std::string refine =
       "joint";  ///< tracked poses: "joint", "pairwise" or "none" (MapRefinementMethod; none: keep them as tracked)
   bool refine_given = false;  ///< --refine was on the command line
   SequenceOptions::Topics
-      topics;  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
+      topics{};  ///< a recording's --depth-topic, --rgb-topic, --info-topic, --pose-topic, --pose-frames
   double rgb_window_s = SequenceOptions{}.max_rgb_dt_s;  ///< --rgb-window
 };
 /// SEQ, --camera (a preset name, checked while parsing) and --frames (its syntax checked while

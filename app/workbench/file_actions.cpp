@@ -146,7 +146,7 @@ bool FileActions::openPath(const std::string& path_in) {
   }
   bool ok = false;
   switch (kind) {
-    case MapFileKind::kSequence: ok = open({path, "", "", ""}); break;
+    case MapFileKind::kSequence: ok = open({.folder = path}); break;
     case MapFileKind::kSession: ok = openSession(path); break;
     case MapFileKind::kViewFile:
       try {

@@ -36,7 +36,7 @@ struct TinyBench {
   Workbench bench{settings()};
   TinyBench() {
     test::writeTinySequence(dir / "seq", 10);
-    EXPECT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.files().open({.folder = (dir / "seq").string()})) << bench.ui().status.text;
   }
   static Settings settings() {
     Settings s;
@@ -240,12 +240,12 @@ TEST(GuiAppendLog, ViewsKeepTheirItemsWhileTheLogGrowsAndClears) {
 TEST(GuiWorkbench, BadSequenceShowsTheErrorAndKeepsTheOpenOne) {
   TinyBench t;
   Workbench& bench = t.bench;
-  EXPECT_FALSE(bench.files().open({(t.dir / "nowhere").string(), "", "", ""}));
+  EXPECT_FALSE(bench.files().open({.folder = (t.dir / "nowhere").string()}));
   EXPECT_NE(bench.ui().status.text.find("nowhere"), std::string::npos) << bench.ui().status.text;
   ASSERT_NE(bench.worker(), nullptr);  // the sequence opened before is still there
   EXPECT_EQ(bench.worker()->sequence()->folder(), t.dir / "seq");
   Workbench empty{Settings{}};
-  EXPECT_FALSE(empty.files().open({(t.dir / "nowhere").string(), "", "", ""}));
+  EXPECT_FALSE(empty.files().open({.folder = (t.dir / "nowhere").string()}));
   EXPECT_EQ(empty.worker(), nullptr);
 }
 
@@ -922,7 +922,7 @@ TEST(GuiWorkbench, PlayPauseFpsAndSeekGoThroughTheWorkbench) {
   // The limit is a setting: a sequence opened later plays at it. Slow enough that play, then
   // pause, finds the player still playing.
   bench.player().setFps(2.f);
-  ASSERT_TRUE(bench.files().open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({.folder = (t.dir / "seq").string()})) << bench.ui().status.text;
   EXPECT_EQ(bench.sessionSerial(), 2);
   EXPECT_FLOAT_EQ(bench.player().status().fps, 2.f);
   bench.player().play();
@@ -963,7 +963,7 @@ TEST(GuiWorkbench, TheOnChangeHookFollowsEverySessionOpened) {
   bench.key(KeyAction::kStepForward);
   t.worker().waitIdle();
   EXPECT_GT(calls.load(), 0);
-  ASSERT_TRUE(bench.files().open({(t.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({.folder = (t.dir / "seq").string()})) << bench.ui().status.text;
   t.worker().waitIdle();
   calls = 0;
   bench.key(KeyAction::kStepForward);
@@ -1450,7 +1450,7 @@ TEST(GuiTracking, TheGroundTruthTrajectoryIsShownIffTheSequenceHasOne) {
   }
   fs::remove(dir / "seq" / "groundtruth.txt");  // no ground truth: tracked by default, none shown
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({.folder = (dir / "seq").string()})) << bench.ui().status.text;
   bench.worker()->play();
   bench.worker()->waitIdle();
   EXPECT_EQ(bench.worker()->mapping()->mapper.poses, PoseSource::kTrack);
@@ -1484,7 +1484,7 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
   joint.method = MapRefinementMethod::kJoint;
   for (const std::optional<MapRefinementParams>& refine :
        {std::optional(joint), std::optional<MapRefinementParams>()}) {
-    const Sequence sequence = openSequence({(dir / "seq").string(), "", "", ""});
+    const Sequence sequence = openSequence({.folder = (dir / "seq").string()});
     MapperParams params = Settings{}.mapper;
     params.poses = PoseSource::kTrack;
     Mapper reference(sequence.camera(), params);
@@ -1495,7 +1495,7 @@ TEST(GuiTracking, TheKeyframePosesAreRefinedAsTheCommandLineSays) {
 
     Workbench bench{Settings{}};
     bench.files().setRefinement(refine);
-    ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+    ASSERT_TRUE(bench.files().open({.folder = (dir / "seq").string()})) << bench.ui().status.text;
     bench.worker()->play();
     bench.worker()->waitIdle();
     const std::string message = bench.worker()->status().message;  // before withMapper's replaces it
@@ -1768,7 +1768,7 @@ TEST(GuiViewTools, QuickViewsLastBeyondTheRun) {
   // The next start, with the same settings folder.
   Workbench next{TinyBench::settings()};
   next.enableSettingsAutosave(settings.string(), next.ui().settings);
-  ASSERT_TRUE(next.files().open({(t.dir / "seq").string(), "", "", ""})) << next.ui().status.text;
+  ASSERT_TRUE(next.files().open({.folder = (t.dir / "seq").string()})) << next.ui().status.text;
   next.ui().view_width = 640;
   next.ui().view_height = 480;
   next.worker()->play();
@@ -1949,7 +1949,7 @@ TEST(GuiSettings, AParameterEditedWithNothingOpenIsKept) {
   ASSERT_TRUE(bench.parameters().edit(*findParameter("keyframe_every"), 4));
   EXPECT_EQ(bench.ui().settings.thresholds.filter.min_points, 12);
   test::writeTinySequence(dir / "seq", 4);
-  ASSERT_TRUE(bench.files().open({(dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({.folder = (dir / "seq").string()})) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().params.global.filter.min_points, 12);
   EXPECT_EQ(bench.ui().params.mapper.keyframe_every, 4);
 }

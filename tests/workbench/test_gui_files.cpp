@@ -120,7 +120,7 @@ TEST(GuiFiles, WhatTheCommandLineOpensIsRecent) {
   const MapFolder m;
   test::writeTinySequence(m.dir / "seq", 3);
   Workbench bench{Settings{}};
-  ASSERT_TRUE(bench.files().open({(m.dir / "seq").string(), "", "", ""})) << bench.ui().status.text;
+  ASSERT_TRUE(bench.files().open({.folder = (m.dir / "seq").string()})) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().settings.recent, (std::vector<std::string>{(m.dir / "seq").string()}));
   ASSERT_TRUE(bench.files().openMapFile((m.folder / "global.bt").string())) << bench.ui().status.text;
   EXPECT_EQ(bench.ui().settings.recent.front(), (m.folder / "global.bt").string());

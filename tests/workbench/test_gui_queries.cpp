@@ -28,7 +28,7 @@ namespace fs = std::filesystem;
 struct BuiltinBench {
   Workbench bench{Settings{}};
   BuiltinBench() {
-    EXPECT_TRUE(bench.files().open({test::builtinSequence(40).string(), "", "", ""})) << bench.ui().status.text;
+    EXPECT_TRUE(bench.files().open({.folder = test::builtinSequence(40).string()})) << bench.ui().status.text;
     bench.ui().settings.probe = true;
     bench.sync();  // asks the worker for the queries
     bench.player().play();
