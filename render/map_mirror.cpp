@@ -119,6 +119,7 @@ MapMirror::~MapMirror() = default;
 void MapMirror::setStyle(const MirrorStyle& style) {
   if (!(style == style_)) ++content_serial_;
   style_ = style;
+  if (surface_renderer_) surface_renderer_->setStyle(style.mesh_style);
   ellipsoids_.setStyle({.sigma = style.sigma,
                         .color = style.color,
                         .point_below_px = style.points_below_px,
@@ -226,6 +227,7 @@ void MapMirror::drawLegend(int height) const {
 void MapMirror::drawContainer(int width, int height) const { container_.draw(width, height); }
 
 void MapMirror::draw(const ViewCamera& view, bool with_lines) const {
+  if (style_.mesh && surface_renderer_) surface_renderer_->draw(view);
   if (!style_.map) {
   } else if (drawsFast()) {
     ellipsoids_.drawFast(view, fast_budget_);
@@ -244,6 +246,16 @@ void MapMirror::setQuerySlice(std::shared_ptr<const QuerySliceImage> slice) {
   if (slice == query_slice_) return;
   query_slice_ = std::move(slice);
   query_slice_renderer_.set(query_slice_.get());
+  ++content_serial_;
+}
+
+void MapMirror::setSurfaceMesh(std::shared_ptr<const ColoredMesh> mesh) {
+  if (mesh == surface_) return;
+  surface_ = std::move(mesh);
+  if (!surface_renderer_) surface_renderer_ = std::make_unique<MeshRenderer>(*gl_);
+  surface_renderer_->set(surface_ ? *surface_ : ColoredMesh{});
+  surface_renderer_->setStyle(style_.mesh_style);
+  ++uploads_.mesh;
   ++content_serial_;
 }
 

@@ -20,6 +20,7 @@
 #include "render/ellipsoid_renderer.h"
 #include "render/framebuffer.h"
 #include "render/legend.h"
+#include "render/mesh_renderer.h"
 #include "render/overlay_renderer.h"
 #include "render/primitive_renderer.h"
 #include "render/query_slice.h"
@@ -39,6 +40,8 @@ struct MirrorStyle {
   float points_below_px = 4.f;  ///< EllipsoidStyle::point_below_px
   HeightFrame height{};         ///< height colours: up axis and floor (heightFrame of the whole map)
   HeightSlice slice{};          ///< height colours: the ramp spans the slice when it is on
+  bool mesh = false;            ///< the surface mesh layer (setSurfaceMesh), drawn in mesh_style
+  MeshStyle mesh_style = MeshStyle::kShaded;
   bool operator==(const MirrorStyle&) const = default;
 };
 
@@ -97,6 +100,9 @@ class MapMirror {
   /// uploaded when the pointer differs from the one shown; null: none.
   void setQuerySlice(std::shared_ptr<const QuerySliceImage> slice);
   const QuerySliceImage* querySlice() const { return query_slice_.get(); }
+  /// The surface mesh drawn while the style's mesh layer is on: uploaded when the pointer differs
+  /// from the one shown; null: none.
+  void setSurfaceMesh(std::shared_ptr<const ColoredMesh> mesh);
   /// Marks one ellipsoid (the picked one) with a wire diamond drawn over everything; empty: none.
   /// Re-sent only when the ellipsoid differs from the one marked.
   void setHighlight(const std::optional<Ellipsoid>& ellipsoid);
@@ -135,7 +141,7 @@ class MapMirror {
 
   /// How often each part was re-uploaded (tests check that an unchanged generation costs nothing).
   struct Uploads {
-    int map = 0, graph = 0, frame = 0, container = 0;
+    int map = 0, graph = 0, frame = 0, container = 0, mesh = 0;
   };
   const Uploads& uploads() const { return uploads_; }
 
@@ -149,6 +155,8 @@ class MapMirror {
   std::unique_ptr<OverlayRenderer> legend_;
   QuerySliceRenderer query_slice_renderer_;
   std::shared_ptr<const QuerySliceImage> query_slice_;  // what query_slice_renderer_ holds
+  std::unique_ptr<MeshRenderer> surface_renderer_;      // made with the first surface mesh
+  std::shared_ptr<const ColoredMesh> surface_;          // what surface_renderer_ holds
   Legend legend_shown_;
   glm::vec3 legend_background_{-1.f};
   int legend_width_ = -1;

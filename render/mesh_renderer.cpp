@@ -38,9 +38,13 @@ void MeshRenderer::draw(const ViewCamera& view) const {
   if (index_count_ == 0) return;
   const Gl& gl = *gl_;
   program_->useWithView(view);
-  program_->set("u_shaded", shaded_ ? 1 : 0);
+  // u_mode: 0 the raw colour, 1 lit colour, 2 lit grey, 3 flat light grey (the wireframe's edges).
+  const bool wire = shaded_ && style_ == MeshStyle::kWireframe;
+  program_->set("u_mode", !shaded_ ? 0 : style_ == MeshStyle::kColour ? 1 : style_ == MeshStyle::kShaded ? 2 : 3);
   vao_.bind();
+  if (wire) gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
   gl.DrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
+  if (wire) gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   gl.BindVertexArray(0);
 }
 

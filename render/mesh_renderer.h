@@ -8,8 +8,9 @@
 
 namespace vdmap::render {
 
-/// A triangle mesh with vertex colours. Shaded for viewing, or unshaded for synthetic images;
-/// into a Framebuffer with a float target it also writes camera z (m) and |cos incidence|.
+/// A triangle mesh with vertex colours. Shaded for viewing (in a MeshStyle: its colours, grey, or
+/// its edges), or unshaded for synthetic images; into a Framebuffer with a float target it also
+/// writes camera z (m) and |cos incidence|.
 class MeshRenderer {
  public:
   explicit MeshRenderer(const Gl& gl);
@@ -17,6 +18,9 @@ class MeshRenderer {
   /// Uploads the mesh (throws std::invalid_argument when an index is out of range).
   void set(const ColoredMesh& mesh);
   void setShaded(bool shaded) { shaded_ = shaded; }
+  /// How a shaded mesh is drawn (default kColour).
+  void setStyle(MeshStyle style) { style_ = style; }
+  std::size_t triangles() const { return static_cast<std::size_t>(index_count_ / 3); }
   void draw(const ViewCamera& view) const;
 
  private:
@@ -26,6 +30,7 @@ class MeshRenderer {
   GpuBuffer positions_, colors_, indices_;
   GLsizei index_count_ = 0;
   bool shaded_ = true;
+  MeshStyle style_ = MeshStyle::kColour;
 };
 
 }  // namespace vdmap::render

@@ -28,6 +28,12 @@ enum class DrawMode { kEllipsoids, kCentres, kNone };
 /// Names in view files, `render --draw` and the window's combo, indexed by DrawMode.
 inline constexpr const char* kDrawModeNames[] = {"ellipsoids", "centres", "none"};
 
+/// How the surface mesh layer is drawn: grey lit by its faces' normals, its vertex colours lit the
+/// same way, or its triangles' edges.
+enum class MeshStyle { kShaded, kColour, kWireframe };
+/// Names in the settings file, view files and `render --mesh-style`, indexed by MeshStyle.
+inline constexpr const char* kMeshStyleNames[] = {"shaded", "colour", "wireframe"};
+
 /// Where heights are measured from: height = dot(p, up) - floor_m. The floor is the 2nd
 /// percentile of dot(mean, up) over the map (heightFrame, view_framing.h).
 struct HeightFrame {

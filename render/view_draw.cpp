@@ -15,7 +15,9 @@ MirrorStyle mirrorStyle(const ViewSpec& spec, const HeightFrame& height) {
           .groundtruth = spec.layers.groundtruth,
           .points_below_px = spec.points_below_px,
           .height = height,
-          .slice = spec.slice};
+          .slice = spec.slice,
+          .mesh = spec.layers.mesh,
+          .mesh_style = spec.mesh_style};
 }
 
 void drawMapView(const Gl& gl, const MapMirror& mirror, const FramedView& view, const glm::vec3& background,

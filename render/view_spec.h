@@ -50,19 +50,20 @@ struct Orbit {
   bool operator==(const Orbit&) const = default;
 };
 
-/// What is drawn besides the map. grid and bounds are the container view's.
+/// What is drawn besides the map. grid and bounds are the container view's; mesh is the surface
+/// mesh of the local maps (docs/method.md 14), off by default.
 struct ViewLayers {
   bool frustums = true, graph = true, trajectory = true, groundtruth = true, legend = true;
-  bool grid = false, bounds = true;
+  bool grid = false, bounds = true, mesh = false;
   bool operator==(const ViewLayers&) const = default;
 };
 
 /// The layers' names (--layers, view files) and their fields, in the same order.
 inline constexpr const char* kViewLayerNames[] = {"frustums", "graph", "trajectory", "groundtruth",
-                                                  "legend",   "grid",  "bounds"};
+                                                  "legend",   "grid",  "bounds",     "mesh"};
 inline constexpr bool ViewLayers::*kViewLayerFields[] = {
     &ViewLayers::frustums, &ViewLayers::graph, &ViewLayers::trajectory, &ViewLayers::groundtruth,
-    &ViewLayers::legend,   &ViewLayers::grid,  &ViewLayers::bounds};
+    &ViewLayers::legend,   &ViewLayers::grid,  &ViewLayers::bounds,     &ViewLayers::mesh};
 
 /// One view, fully described.
 struct ViewSpec {
@@ -84,6 +85,7 @@ struct ViewSpec {
   int sphere_level = 0;         ///< icosphere subdivisions (0: icosahedra, as the window)
   float points_below_px = 4.f;  ///< ellipsoids smaller than this are drawn as splats
   ViewLayers layers;
+  MeshStyle mesh_style = MeshStyle::kShaded;  ///< how the mesh layer is drawn
   glm::vec3 background = kDarkBackground;
   int selected_keyframe = -1;  ///< drawn white (the window's selection)
   bool operator==(const ViewSpec&) const = default;

@@ -8,6 +8,7 @@
 #include "mapping/core/error.h"
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
+#include "mapping/mesh/surface_mesh.h"
 #include "mapping/pipeline/parameters.h"
 #include "render/colormap.h"
 #include "render/context.h"
@@ -72,6 +73,10 @@ struct RenderSource::Impl {
   std::unique_ptr<render::MapMirror> mirror;
   int mirror_level = -1;
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
+  // The mesh layer's surface mesh of the last map asked for (by its paramsKey).
+  std::optional<std::vector<double>> surface_for;
+  std::shared_ptr<const render::ColoredMesh> surface;
+  std::size_t surface_drawn = 0;  // its triangles, when the last view drew it
   int container_serial = 0;
   std::vector<Ellipsoid> sliced;  // the map's ellipsoids a --slice keeps
   int slice_serial = 0;
@@ -141,7 +146,7 @@ std::optional<GlobalMapParams> RenderSource::sessionThresholds() const {
 
 int RenderSource::framesMapped() const { return impl_->frames; }
 
-std::size_t RenderSource::meshTriangles() const { return impl_->mesh.triangles.size(); }
+std::size_t RenderSource::meshTriangles() const { return impl_->mesh.triangles.size() + impl_->surface_drawn; }
 
 const std::vector<Ellipsoid>& RenderSource::globalMap(const GlobalMapParams& params) {
   Impl& m = *impl_;
@@ -196,6 +201,20 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
   return m.slice_image;
 }
 
+std::shared_ptr<const render::ColoredMesh> RenderSource::surfaceOf(const GlobalMapParams& params) {
+  Impl& m = *impl_;
+  const std::vector<double> key = paramsKey(params);
+  if (m.surface_for != key) {
+    const std::vector<Ellipsoid>& map = globalMap(params);
+    for (const auto& entry : m.maps)
+      if (&entry.second.ellipsoids == &map)
+        m.surface = std::make_shared<const render::ColoredMesh>(
+            render::toColoredMesh(buildSurfaceMesh(*m.graph, entry.second, MeshParams{}, params)));
+    m.surface_for = key;
+  }
+  return m.surface;
+}
+
 const render::QuerySliceImage* RenderSource::lastQuerySlice() const { return impl_->slice_image.get(); }
 
 glm::vec3 RenderSource::up(render::UpAxis axis, const GlobalMapParams& params) {
@@ -216,6 +235,10 @@ void RenderSource::checkView(const render::ViewSpec& spec) const {
     throw std::invalid_argument(
         "--select " + std::to_string(spec.selected_keyframe) + ": " + name_ +
         (keyframes == 0 ? std::string(" has no keyframe") : " has keyframes 0.." + std::to_string(keyframes - 1)));
+  if (spec.layers.mesh && !impl_->graph)
+    throw std::invalid_argument("--layers mesh draws the surface mesh of local maps: give a sequence (SEQ) or a "
+                                "session (.vdmap); " +
+                                name_ + " has none");
   if (spec.kind == render::ViewKind::kGlobal) return;
   const std::string view = viewName(spec);
   if (!impl_->graph)
@@ -239,6 +262,7 @@ std::pair<int, int> RenderSource::imageSize(const render::ViewSpec& spec) const 
 cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapParams& params) {
   checkView(spec_in);
   Impl& m = *impl_;
+  m.surface_drawn = 0;
   const render::Gl& gl = sharedOffscreenGl();
   render::ViewSpec spec = spec_in;
   const auto [w, h] = imageSize(spec);
@@ -281,6 +305,9 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   }
   mirror.setMap(generation, *shown);
   mirror.setQuerySlice(querySliceOf(map, scene.height));  // --query-slice (null: none)
+  const std::shared_ptr<const render::ColoredMesh> surface = spec.layers.mesh ? surfaceOf(params) : nullptr;
+  if (surface) mirror.setSurfaceMesh(surface);
+  m.surface_drawn = surface ? surface->triangles.size() : 0;
   render::GraphScene graph = m.file_graph;
   if (m.graph) graph = render::graphSceneOf(*m.graph, *m.state, m.camera, m.tracked);
   graph.selected_keyframe = spec.selected_keyframe;
@@ -290,15 +317,18 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
     graph.tracked = false;  // the window shows no tracking key through a keyframe
   }
   // The frame holds what is drawn: each ellipsoid's extent at the sigma (strays left out), and a
-  // mesh whole.
+  // --mesh and the mesh layer whole.
   render::DrawnBounds drawn =
       render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, render::frameAxes(map, scene.up));
-  for (const auto& p : m.mesh.positions) {
-    const glm::vec3 q = glm::transpose(drawn.axes) * glm::vec3(p.x(), p.y(), p.z());
+  const auto hold = [&](const glm::vec3& p) {
+    const glm::vec3 q = glm::transpose(drawn.axes) * p;
     drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
     drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
     drawn.empty = false;
-  }
+  };
+  for (const auto& p : m.mesh.positions) hold(glm::vec3(p.x(), p.y(), p.z()));
+  if (surface)
+    for (const glm::vec3& p : surface->positions) hold(p);
   last_strays_ = drawn.strays;
   scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;

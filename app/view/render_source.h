@@ -45,7 +45,7 @@ class RenderSource {
   std::optional<GlobalMapParams> sessionThresholds() const;
   /// Frames mapped (sessions and sequences; 0 otherwise).
   int framesMapped() const;
-  /// Triangles of the --mesh (0 without one).
+  /// Triangles of the --mesh (0 without one) and of the mesh layer when the last render() drew it.
   std::size_t meshTriangles() const;
   /// The global map for `params` (built once per distinct params; a map file's own map).
   const std::vector<Ellipsoid>& globalMap(const GlobalMapParams& params);
@@ -79,6 +79,9 @@ class RenderSource {
   // The slice of `map` (a globalMap() result) at `height`, computed when the map or spec changed.
   std::shared_ptr<const render::QuerySliceImage> querySliceOf(const std::vector<Ellipsoid>& map,
                                                               const render::HeightFrame& height);
+  // The mesh layer's surface mesh (docs/method.md 14, default MeshParams) of the map for `params`,
+  // built once per map.
+  std::shared_ptr<const render::ColoredMesh> surfaceOf(const GlobalMapParams& params);
   std::unique_ptr<Impl> impl_;
   std::string name_;
   std::size_t last_drawn_ = 0;

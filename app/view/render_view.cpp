@@ -1,5 +1,6 @@
 #include "app/view/render_view.h"
 
+#include <algorithm>
 #include <cmath>
 #include <regex>
 
@@ -60,7 +61,7 @@ render::ViewLayers parseLayers(const std::string& text) {
     if (!known)
       throw std::invalid_argument("'" + item +
                                   "': expected none or a comma-separated list of frustums, graph, "
-                                  "trajectory, groundtruth, legend, grid, bounds");
+                                  "trajectory, groundtruth, legend, grid, bounds, mesh");
     if (comma == std::string::npos) break;
     start = comma + 1;
   }
@@ -113,6 +114,8 @@ void copyView(const render::ViewSpec& spec, gui::Settings* s) {
   s->show_legend = spec.layers.legend;
   s->container_grid = spec.layers.grid;
   s->container_bounds = spec.layers.bounds;
+  s->show_mesh = spec.layers.mesh;
+  s->mesh_style = spec.mesh_style;
   s->background = spec.background;
 }
 
@@ -152,8 +155,13 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
       ->check(parsedBy(gui::parseBackground, "COLOUR"));
   verb.add_option("--layers", a.layers,
                   "what is drawn besides the map: none, or a comma-separated list of frustums, graph, trajectory, "
-                  "groundtruth, legend, grid, bounds (default: all but grid, as the window)")
+                  "groundtruth, legend, grid, bounds, mesh (the surface mesh of the local maps; default: all but "
+                  "grid and mesh, as the window)")
       ->check(parsedBy(parseLayers, "LIST"));
+  verb.add_option("--mesh-style", a.mesh_style,
+                  "how the mesh layer is drawn: shaded (grey, lit; the default) | colour (its colours, lit) | "
+                  "wireframe (its triangles' edges)")
+      ->check(CLI::IsMember({render::kMeshStyleNames[0], render::kMeshStyleNames[1], render::kMeshStyleNames[2]}));
   verb.add_option("--up", a.up,
                   "the world's up axis: data (estimated from the cameras and the map's floor, or a map file's level "
                   "planes; the default) | +z | +y | -y | a direction X,Y,Z; with --look-at, X,Y,Z is the image's up")
@@ -246,6 +254,7 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
     spec.ellipsoids = from_set.ellipsoids;
     spec.sigma = from_set.sigma;
     spec.layers = from_set.layers;
+    spec.mesh_style = from_set.mesh_style;
     spec.background = from_set.background;
   }
   if (!a.size.empty()) std::tie(spec.width, spec.height) = parseViewSize(a.size);
@@ -253,6 +262,10 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
   if (!a.background.empty()) spec.background = gui::parseBackground(a.background);
   if (!a.layers.empty()) spec.layers = parseLayers(a.layers);
   if (a.grid) spec.layers.grid = true;
+  if (!a.mesh_style.empty())
+    spec.mesh_style = static_cast<render::MeshStyle>(
+        std::find(std::begin(render::kMeshStyleNames), std::end(render::kMeshStyleNames), a.mesh_style) -
+        std::begin(render::kMeshStyleNames));
   if (!a.draw.empty()) spec.setDraw(parseDraw(a.draw));
   if (!a.slice.empty()) spec.slice = parseSlice(a.slice);
   if (a.sigma) spec.sigma = *a.sigma;

@@ -22,6 +22,7 @@ struct RenderViewArgs {
   std::string color;                              ///< --color MODE
   std::string background;                         ///< --background dark|white|#rrggbb
   std::string layers;                             ///< --layers LIST|none
+  std::string mesh_style;                         ///< --mesh-style shaded|colour|wireframe
   std::string up;                                 ///< --up data|+z|+y|-y|X,Y,Z (with --look-at: the image's up)
   std::string projection;                         ///< --projection perspective|orthographic
   std::string draw;                               ///< --draw ellipsoids|centres|none

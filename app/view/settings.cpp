@@ -73,6 +73,8 @@ json toJson(const Settings& s) {
         {"container_bounds", s.container_bounds},
         {"background", backgroundName(s.background)},
         {"show_legend", s.show_legend},
+        {"show_mesh", s.show_mesh},
+        {"mesh_style", render::kMeshStyleNames[static_cast<int>(s.mesh_style)]},
         {"slice", s.slice.on},
         {"slice_lo", s.slice.lo_m},
         {"slice_hi", s.slice.hi_m},
@@ -209,6 +211,10 @@ Settings fromJson(const json& j, const Settings& base = {}) {
       throw std::invalid_argument(std::string("view.background: ") + e.what());
     }
     read(v, "view", "show_legend", s.show_legend);
+    read(v, "view", "show_mesh", s.show_mesh);
+    std::string mesh_style = render::kMeshStyleNames[static_cast<int>(s.mesh_style)];
+    read(v, "view", "mesh_style", mesh_style);
+    s.mesh_style = static_cast<render::MeshStyle>(nameIndex(render::kMeshStyleNames, mesh_style, "view.mesh_style"));
     read(v, "view", "slice", s.slice.on);
     read(v, "view", "slice_lo", s.slice.lo_m);
     read(v, "view", "slice_hi", s.slice.hi_m);
@@ -288,6 +294,8 @@ render::ViewSpec viewSpecOf(const Settings& s) {
   spec.layers.legend = s.show_legend;
   spec.layers.grid = s.container_grid;
   spec.layers.bounds = s.container_bounds;
+  spec.layers.mesh = s.show_mesh;
+  spec.mesh_style = s.mesh_style;
   spec.slice = s.slice;
   spec.background = s.background;
   return spec;

@@ -40,6 +40,10 @@ struct Settings {
   bool container_bounds = true;                          ///< the container view's image outline
   glm::vec3 background = render::kDarkBackground;        ///< "dark", "white" or "#rrggbb"
   bool show_legend = true;                               ///< the colour legend and tracking key over the 3-D view
+  /// The surface mesh layer (keys show_mesh, mesh_style): built by the mapping worker with every
+  /// global map while it is on.
+  bool show_mesh = false;
+  render::MeshStyle mesh_style = render::MeshStyle::kShaded;
   /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
   /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
   render::HeightSlice slice;

@@ -25,7 +25,8 @@ using nlohmann::json;
 
 namespace {
 
-// 2 added "slice", 3 the optional "projection", "rotation" and "up_vector"; older files still read.
+// 2 added "slice", 3 the optional "projection", "rotation", "up_vector", "mesh_style" and
+// "layers.mesh" (the last two written only when the mesh is asked for); older files still read.
 constexpr int kVersion = 3;
 // What a number too large for a double (1e999) is replaced by before parsing, so that the reader
 // can name its key ("must be finite") rather than the parser refuse the whole file.
@@ -144,9 +145,26 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
                  "points_below_px", "background", "layers", "selected_keyframe", "thresholds", "slice"});
   else
     R::onlyKeys(j, "",
-                {"vdmap_view", "source", "view", "size", "camera", "up_axis", "color", "draw", "sigma", "sphere_level",
-                 "points_below_px", "background", "layers", "selected_keyframe", "thresholds", "slice", "projection",
-                 "rotation", "up_vector"});
+                {"vdmap_view",
+                 "source",
+                 "view",
+                 "size",
+                 "camera",
+                 "up_axis",
+                 "color",
+                 "draw",
+                 "sigma",
+                 "sphere_level",
+                 "points_below_px",
+                 "background",
+                 "layers",
+                 "selected_keyframe",
+                 "thresholds",
+                 "slice",
+                 "projection",
+                 "rotation",
+                 "up_vector",
+                 "mesh_style"});
   R::string(R::key(j, "", "source"), "source");
   render::ViewSpec spec;
   try {
@@ -193,6 +211,9 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   if (j.contains("rotation"))
     spec.rotation = static_cast<render::Rotation>(
         R::name(j.at("rotation"), "rotation", render::kRotationNames, "orbit or trackball"));
+  if (j.contains("mesh_style"))
+    spec.mesh_style = static_cast<render::MeshStyle>(
+        R::name(j.at("mesh_style"), "mesh_style", render::kMeshStyleNames, "shaded, colour or wireframe"));
   try {
     spec.color = render::parseColorMode(R::string(R::key(j, "", "color"), "color"));
   } catch (const std::invalid_argument& e) {
@@ -224,10 +245,13 @@ render::ViewSpec specFromJson(const json& j, GlobalMapParams* thresholds) {
   }
   const json& layers = R::key(j, "", "layers");
   if (!layers.is_object()) R::fail("layers must be an object, got " + layers.dump());
-  R::onlyKeys(layers, "layers.", {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid", "bounds"});
-  for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
-    spec.layers.*render::kViewLayerFields[i] = R::boolean(R::key(layers, "layers.", render::kViewLayerNames[i]),
-                                                          std::string("layers.") + render::kViewLayerNames[i]);
+  R::onlyKeys(layers, "layers.",
+              {"frustums", "graph", "trajectory", "groundtruth", "legend", "grid", "bounds", "mesh"});
+  for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i) {
+    const std::string name = render::kViewLayerNames[i];
+    if (name == "mesh" && !layers.contains(name)) continue;  // optional: off
+    spec.layers.*render::kViewLayerFields[i] = R::boolean(R::key(layers, "layers.", name.c_str()), "layers." + name);
+  }
   spec.selected_keyframe = R::integer(R::key(j, "", "selected_keyframe"), "selected_keyframe", -1, 1 << 30);
   const json& t = R::key(j, "", "thresholds");
   if (!t.is_object()) R::fail("thresholds must be an object, got " + t.dump());
@@ -331,6 +355,10 @@ void writeViewFile(const fs::path& file, const render::ViewSpec& spec, const Glo
   json layers = json::object();
   for (std::size_t i = 0; i < std::size(render::kViewLayerNames); ++i)
     layers[render::kViewLayerNames[i]] = spec.layers.*render::kViewLayerFields[i];
+  const render::ViewSpec defaults;
+  if (!spec.layers.mesh) layers.erase("mesh");  // as files without the mesh read
+  if (spec.mesh_style != defaults.mesh_style)
+    j["mesh_style"] = render::kMeshStyleNames[static_cast<int>(spec.mesh_style)];
   j["layers"] = layers;
   j["selected_keyframe"] = spec.selected_keyframe;
   ParameterValues params;
@@ -390,6 +418,8 @@ std::string renderCommand(const render::ViewSpec& spec, const CommandSource& sou
         list += (list.empty() ? "" : ",") + std::string(render::kViewLayerNames[i]);
     cmd += " --layers " + (list.empty() ? std::string("none") : list);
   }
+  if (spec.mesh_style != defaults.mesh_style)
+    cmd += std::string(" --mesh-style ") + render::kMeshStyleNames[static_cast<int>(spec.mesh_style)];
   if (spec.selected_keyframe >= 0) cmd += " --select " + std::to_string(spec.selected_keyframe);
   return cmd + " --out " + shellQuoted(out);
 }

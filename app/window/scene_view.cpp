@@ -142,6 +142,7 @@ void syncMirror(Workbench& bench, render::MapMirror& mirror, WindowState& win) {
                   ui.show_before_optimisation);
   mirror.setHighlight(ui.picked);
   mirror.setQuerySlice(bench.queries().slice());  // point queries: the slice computed for this map (or none)
+  if (s.show_mesh && win.global) mirror.setSurfaceMesh(win.global->mesh);  // the mesh layer, built with the map
   const auto selection = bench.selection();
   if (selection && selection->keyframe < static_cast<int>(mapping->keyframes.size())) {
     const int id = selection->keyframe;

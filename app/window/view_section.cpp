@@ -174,6 +174,16 @@ void drawView(Workbench& bench, WindowState& win) {
     ImGui::SameLine();
     ImGui::Checkbox("trajectory", &s.show_trajectory);
     checkFits(win.check);
+    label(win.check, "mesh",
+          "The surface mesh of the local maps (docs/method.md 14), built with every global map while it is on "
+          "(a threshold or pose edit re-meshes): shaded grey, in its colours, or its triangles' edges.");
+    ImGui::Checkbox("##mesh", &s.show_mesh);
+    ImGui::SameLine();
+    int mesh_style = static_cast<int>(s.mesh_style);
+    ImGui::BeginDisabled(!s.show_mesh);
+    if (ImGui::Combo("##mesh_style", &mesh_style, render::kMeshStyleNames, 3))
+      s.mesh_style = static_cast<render::MeshStyle>(mesh_style);
+    ImGui::EndDisabled();
     ImGui::EndTable();
   }
   drawSliceControls(bench, win);

@@ -7,6 +7,7 @@
 #include "mapping/core/timing.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "render/lod_order.h"
+#include "render/map_scene.h"
 
 namespace vdmap::app::gui {
 namespace {
@@ -309,13 +310,16 @@ std::shared_ptr<GlobalSnapshot> MappingWorker::buildGlobal(
 
 void MappingWorker::rebuildGlobal() {
   GlobalMapParams params;
-  bool before = false, queries = false;
+  bool before = false, queries = false, mesh = false;
+  MeshParams mesh_params;
   Clock::time_point t_edit;
   {
     std::lock_guard lock(mutex_);
     params = thresholds_;
     before = before_optimisation_;
     queries = queries_wanted_;
+    mesh = mesh_wanted_;
+    mesh_params = mesh_params_;
     global_dirty_ = false;
     t_edit = last_edit_;
   }
@@ -326,6 +330,7 @@ void MappingWorker::rebuildGlobal() {
     snap->t_edit = t_edit;
     snap->t_build_start = t0;
     snap->lod_order = render::lodOrder(snap->map.ellipsoids);
+    if (mesh) buildMesh(graph, mesh_params, *snap);
     snap->t_build_end = Clock::now();
     releaseFreedMemory();  // the build's other temporaries, before the next frames
     {
@@ -350,6 +355,18 @@ void MappingWorker::rebuildGlobal() {
   }
   std::lock_guard lock(mutex_);
   last_build_s_ = secondsSince(t0);  // the queries' build counts in the worker's share of map building
+}
+
+void MappingWorker::buildMesh(const KeyframeGraph& graph, const MeshParams& params, GlobalSnapshot& snap) {
+  const auto t0 = Clock::now();
+  try {
+    snap.mesh = std::make_shared<const render::ColoredMesh>(
+        render::toColoredMesh(buildSurfaceMesh(graph, snap.map, params, snap.params)));
+  } catch (const std::exception& e) {  // too large (max_triangles): the map is published without it
+    std::lock_guard lock(mutex_);
+    error_ = std::string("surface mesh: ") + errorMessage(e);
+  }
+  snap.mesh_ms = 1e3 * secondsSince(t0);
 }
 
 void MappingWorker::buildQueries(const KeyframeGraph& graph, const GlobalSnapshot& snap) {

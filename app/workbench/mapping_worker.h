@@ -20,9 +20,11 @@
 #include "mapping/files/map_file.h"
 #include "mapping/files/session_file.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/mesh/surface_mesh.h"
 #include "mapping/pipeline/mapper.h"
 #include "mapping/query/query_map.h"
 #include "mapping/sequence/sequence.h"
+#include "render/scene_types.h"
 
 namespace vdmap::app::gui {
 
@@ -121,6 +123,11 @@ struct GlobalSnapshot {
   /// render::lodOrder of map.ellipsoids: the 3-D view's fast-pass order, computed by the worker
   /// so that a new map costs the UI thread no sort (0.13 s at 1M ellipsoids).
   std::vector<std::uint32_t> lod_order;
+  /// The surface mesh (docs/method.md 14) of the same local maps, poses and kept cells, while the
+  /// mesh layer is wanted (MappingWorker::wantMesh): built with the map, before it is published,
+  /// so the two arrive together. Null when not wanted (or when it failed: status().error says why).
+  std::shared_ptr<const render::ColoredMesh> mesh;
+  double mesh_ms = 0;  ///< buildSurfaceMesh's time
   /// Built with the keyframe poses before the last pose-graph optimisation
   /// (MappingWorker::showBeforeOptimisation).
   bool before_optimisation = false;
@@ -236,6 +243,10 @@ class MappingWorker {
   /// they cost memory and worker time only when the probe or the query slice is used). Turning
   /// them on builds them for the map shown (a rebuild of a session's global map).
   void wantQueries(bool on);
+  /// Whether the worker builds the surface mesh with every global map, with `params` (off by
+  /// default: the mesh layer costs worker time only while it is shown). Turning it on, or new
+  /// params, rebuilds the map shown. A map file has no local maps: it never gets a mesh.
+  void wantMesh(bool on, const MeshParams& params = {});
   /// The newest point queries; null until built (and while not wanted). Its generation may lag
   /// global()'s by one build while the queries are being built.
   std::shared_ptr<const QuerySnapshot> query() const;
@@ -259,6 +270,8 @@ class MappingWorker {
   std::shared_ptr<GlobalSnapshot> buildGlobal(
       const GlobalMapParams& params, bool before_optimisation,
       const std::function<void(const KeyframeGraph&, const std::shared_ptr<GlobalSnapshot>&)>& with_graph = {});
+  // Builds the surface mesh of `snap`'s map into it (worker thread; `graph` at its poses).
+  void buildMesh(const KeyframeGraph& graph, const MeshParams& params, GlobalSnapshot& snap);
   // Builds and publishes the point queries of `snap` (worker thread; `graph` at its poses).
   void buildQueries(const KeyframeGraph& graph, const GlobalSnapshot& snap);
   // The poses MappingSnapshot::keyframes_before holds (worker thread).
@@ -322,6 +335,8 @@ class MappingWorker {
   std::shared_ptr<const SelectionSnapshot> selection_;
   std::shared_ptr<const QuerySnapshot> query_;
   bool queries_wanted_ = false;
+  bool mesh_wanted_ = false;
+  MeshParams mesh_params_;
   int queries_tried_ = -1;         // static maps: the generation the queries were last built for (mutex_ held)
   bool staticQueriesDue() const {  // mutex_ held
     return static_map_ && queries_wanted_ && global_ && queries_tried_ != global_->generation;

@@ -165,6 +165,18 @@ void MappingWorker::wantQueries(bool on) {
   wake_.notify_all();
 }
 
+void MappingWorker::wantMesh(bool on, const MeshParams& params) {
+  params.validate();
+  {
+    std::lock_guard lock(mutex_);
+    if (mesh_wanted_ == on && (!on || mesh_params_ == params)) return;
+    mesh_wanted_ = on;
+    mesh_params_ = params;
+    if (on && !static_map_) global_dirty_ = true;  // the mesh comes with the next map
+  }
+  wake_.notify_all();
+}
+
 std::shared_ptr<const QuerySnapshot> MappingWorker::query() const {
   std::lock_guard lock(mutex_);
   return query_;

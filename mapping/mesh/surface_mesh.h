@@ -30,6 +30,7 @@ struct MeshParams {
   int threads = 0;  ///< 0: all cores. The mesh does not depend on it.
   /// Throws std::invalid_argument naming the first value out of range.
   void validate() const;
+  bool operator==(const MeshParams&) const = default;
 };
 
 /// The mesh's figures.

@@ -98,6 +98,9 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
       {"render --map '" + (tmp / "missing.ply").string() + "'" + out, "cannot open"},
       {"render" + map + out + " --view keyframe:0", "needs keyframes"},
       {"render" + map + out + " --view side", "expected global, keyframe:K or container:K", true},
+      {"render" + map + out + " --mesh-style flat", "--mesh-style: flat not in {shaded,colour,wireframe}", true},
+      {"render" + map + out + " --layers mesh", "--layers mesh draws the surface mesh of local maps"},
+      {"render" + map + out + " --set mesh_style=flat", "view.mesh_style must be shaded or colour or wireframe"},
       {"render '" + tmp.path().string() + "'" + map + out, "SEQ excludes --map", true},
       {"render '" + (tmp / "no_such_sequence").string() + "'" + out, "no_such_sequence"},
   };
@@ -356,6 +359,51 @@ TEST_F(RenderSessionCli, EachLayerCanBeSwitchedOffAlone) {
   EXPECT_EQ(png(out("white.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(255, 255, 255));
   ASSERT_EQ(render("hex.png", "--color keyframe --layers none --background '#102030'").exit_code, 0);
   EXPECT_EQ(png(out("hex.png")).at<cv::Vec3b>(0, 0), cv::Vec3b(0x30, 0x20, 0x10));
+}
+
+// The mesh layer: off by default (the default picture is unchanged by its style), drawn where the
+// map's surfaces are, and each style draws its own picture.
+TEST_F(RenderSessionCli, TheMeshLayerDrawsTheSurfaceWhereTheMapIs) {
+  ASSERT_EQ(render("plain.png", "").exit_code, 0);
+  ASSERT_EQ(render("plain-wire.png", "--mesh-style wireframe").exit_code, 0);
+  EXPECT_EQ(maxDifference(png(out("plain.png")), png(out("plain-wire.png"))), 0.0) << "the layer is off by default";
+  // The ellipsoids alone, the mesh alone, from one camera (the mesh lies on the ellipsoids' surfaces).
+  const std::string camera = " --look-at 0,-5,4,0,0,1 --up 0,0,1";
+  ASSERT_EQ(render("ellipsoids.png", "--layers none --color keyframe" + camera).exit_code, 0);
+  const auto shaded = render("shaded.png", "--layers mesh --draw none" + camera);
+  ASSERT_EQ(shaded.exit_code, 0) << shaded.err;
+  EXPECT_EQ(shaded.out.find(" 0 triangles"), std::string::npos) << "the summary counts the mesh's: " << shaded.out;
+  ASSERT_EQ(render("colour.png", "--layers mesh --draw none --mesh-style colour" + camera).exit_code, 0);
+  ASSERT_EQ(render("wire.png", "--layers mesh --draw none --mesh-style wireframe" + camera).exit_code, 0);
+  ASSERT_EQ(render("nothing.png", "--layers none --draw none" + camera).exit_code, 0);
+  // What each draws besides what is always drawn (the camera now).
+  const cv::Mat always = png(out("nothing.png"));
+  const cv::Vec3b background = always.at<cv::Vec3b>(0, 0);
+  const auto drawn = [&](const cv::Mat& image) {
+    cv::Mat mask, camera;
+    cv::inRange(image, background, background, mask);
+    cv::inRange(always, background, background, camera);
+    return (mask == 0) & (camera != 0);
+  };
+  const cv::Mat wire = png(out("wire.png")), colour = png(out("colour.png")), grey = png(out("shaded.png"));
+  const cv::Mat mesh = drawn(grey), map = drawn(png(out("ellipsoids.png")));
+  EXPECT_GT(cv::countNonZero(mesh), 320 * 240 / 10) << "the mesh covers the room";
+  cv::Mat near_map;
+  cv::dilate(map, near_map, cv::Mat::ones(7, 7, CV_8U));
+  EXPECT_GT(cv::countNonZero(mesh & near_map), 0.95 * cv::countNonZero(mesh)) << "drawn where the map is";
+  // Pixels where two images differ by more than 8 counts.
+  const auto differing = [](const cv::Mat& a, const cv::Mat& b) {
+    cv::Mat diff;
+    cv::absdiff(a, b, diff);
+    cv::cvtColor(diff, diff, cv::COLOR_BGR2GRAY);
+    return cv::countNonZero(diff > 8);
+  };
+  EXPECT_GT(differing(grey, wire), cv::countNonZero(mesh) / 10) << "the wireframe is its triangles' edges";
+  EXPECT_GT(differing(grey, colour), cv::countNonZero(mesh) / 10) << "the mesh's colours, not grey";
+  // Shaded is grey: every pixel it draws has equal channels.
+  std::vector<cv::Mat> bgr;
+  cv::split(grey, bgr);
+  EXPECT_EQ(cv::countNonZero(cv::Mat(((bgr[0] != bgr[2]) | (bgr[1] != bgr[2])) & mesh)), 0);
 }
 
 TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {
