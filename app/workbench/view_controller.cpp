@@ -307,6 +307,8 @@ bool ViewController::applySpec(const render::ViewSpec& spec) {
   s.show_legend = spec.layers.legend;
   s.container_grid = spec.layers.grid;
   s.container_bounds = spec.layers.bounds;
+  s.show_mesh = spec.layers.mesh;
+  s.mesh_style = spec.mesh_style;
   s.background = spec.background;
   s.slice = spec.slice;  // height slice
   ui_.show_container = false;

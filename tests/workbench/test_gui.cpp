@@ -1083,6 +1083,8 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   ui.settings.color = render::ColorMode::kUncertainty;
   ui.settings.ellipsoid_sigma = 1.5f;
   ui.settings.show_graph = false;
+  ui.settings.show_mesh = true;
+  ui.settings.mesh_style = render::MeshStyle::kWireframe;
   ui.settings.up_axis = render::UpAxis::kPlusY;
   bench.poses().selectKeyframe(1);
   const render::OrbitCamera camera = ui.camera;
@@ -1093,6 +1095,8 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   ASSERT_TRUE(global.look_at.has_value());
   EXPECT_EQ(global.color, render::ColorMode::kUncertainty);
   EXPECT_FALSE(global.layers.graph);
+  EXPECT_TRUE(global.layers.mesh);
+  EXPECT_EQ(global.mesh_style, render::MeshStyle::kWireframe);
   EXPECT_EQ(global.selected_keyframe, 1);
 
   // Elsewhere, with other options: applying the spec brings the view back.
@@ -1100,6 +1104,8 @@ TEST(GuiView, ViewSpecRoundTripsThroughApplyViewSpec) {
   ui.settings.color = defaults.color;
   ui.settings.ellipsoid_sigma = defaults.ellipsoid_sigma;
   ui.settings.show_graph = defaults.show_graph;
+  ui.settings.show_mesh = defaults.show_mesh;
+  ui.settings.mesh_style = defaults.mesh_style;
   ui.settings.up_axis = defaults.up_axis;
   bench.key(KeyAction::kResetView);
   bench.poses().selectKeyframe(-1);
