@@ -42,7 +42,10 @@ void MeshRenderer::draw(const ViewCamera& view) const {
   const bool wire = shaded_ && style_ == MeshStyle::kWireframe;
   program_->set("u_mode", !shaded_ ? 0 : style_ == MeshStyle::kColour ? 1 : style_ == MeshStyle::kShaded ? 2 : 3);
   vao_.bind();
-  if (wire) gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+  if (wire) {  // 1 px edges, whatever width the last lines were drawn at
+    gl.LineWidth(1.f);
+    gl.PolygonMode(GL_FRONT_AND_BACK, GL_LINE);
+  }
   gl.DrawElements(GL_TRIANGLES, index_count_, GL_UNSIGNED_INT, nullptr);
   if (wire) gl.PolygonMode(GL_FRONT_AND_BACK, GL_FILL);
   gl.BindVertexArray(0);

@@ -429,6 +429,8 @@ TEST_F(RenderSuite, EveryOptionTheWorkbenchSpellsOutIsAViewKey) {
   spec.background = render::kWhiteBackground;
   spec.layers.graph = false;
   spec.layers.bounds = false;
+  spec.layers.mesh = true;
+  spec.mesh_style = render::MeshStyle::kWireframe;
   spec.selected_keyframe = 1;
   app::writeViewFile(tmp / "v.json", spec, GlobalMapParams{}, "s.vdmap");
   std::istringstream command(app::renderCommand(spec, "s.vdmap"));
@@ -449,6 +451,10 @@ TEST_F(RenderSuite, EveryOptionTheWorkbenchSpellsOutIsAViewKey) {
                 file = test::readImage(tmp / "goldens" / "file.png");
   ASSERT_EQ(all.size(), cv::Size(96, 72));
   EXPECT_EQ(cv::norm(all, file, cv::NORM_INF), 0.0) << "the keys draw what the view file draws";
+  EXPECT_NE(view.find("mesh-style: \"wireframe\""), std::string::npos) << view;
+  const render::ViewSpec read = app::readViewFile(tmp / "v.json");
+  EXPECT_TRUE(read.layers.mesh);
+  EXPECT_EQ(read.mesh_style, render::MeshStyle::kWireframe);
 }
 
 // --- the nearby compare: another driver passes, a real change fails --------------------------
