@@ -17,6 +17,7 @@
 #include "app/bench/bench_report.h"
 #include "app/bench/octomap_timing.h"
 #include "app/bench/query_detail.h"
+#include "app/bench/query_heldout.h"
 #include "app/bench/vdmap_timing.h"
 #include "app/view/progress.h"
 #include "mapping/core/box_tree.h"
@@ -29,9 +30,10 @@
 namespace vdmap::app {
 namespace {
 
-constexpr int kPasses = 3;             // every speed figure is the median of this many passes
-constexpr std::uint32_t kSeed = 36;    // the speed points' draw
-constexpr std::size_t kOctoViews = 3;  // OctoMap's per-pixel castRay costs seconds a view: the first 3 views
+constexpr int kPasses = 3;                     // every speed figure is the median of this many passes
+constexpr std::uint32_t kSeed = 36;            // the speed points' draw
+constexpr std::size_t kHeldOutPerFrame = 200;  // pixels of each frame's own depth (query_heldout.h)
+constexpr std::size_t kOctoViews = 3;          // OctoMap's per-pixel castRay costs seconds a view: the first 3 views
 
 // One OctoMap peer: the tree, and for its distance a BoxTree over its occupied leaves' boxes
 // (the exact distance to the nearest occupied leaf).
@@ -87,6 +89,7 @@ struct Maps {
   double query_build_ms = 0;
   std::vector<std::unique_ptr<OctoPeer>> peers;
   std::optional<OccupancyTruth> truth;
+  HeldOutPoints held_out;
 };
 
 Maps buildMaps(const BenchArgs& args) {
@@ -130,6 +133,7 @@ Maps buildMaps(const BenchArgs& args) {
             cpuTimeMs([&] { peer->tree.insertPointCloud(cloud, octomap::point3d(c.x(), c.y(), c.z())); }));
       ++m.octomap_frames;
     }
+    addHeldOut(frame, cam, range.min_m, range.max_m, i, kHeldOutPerFrame, &m.held_out);
     m.mapper->addFrame(frame);
     if (exact) {
       const RgbdFrame e = exact->load(i);
@@ -406,6 +410,7 @@ nlohmann::json reportAccuracy(const Maps& m, const ColoredTriangleMesh& mesh, co
   const OccupancyTruthSets sets = m.truth->sample(mesh);
   progress.update(1);
   const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
+  const nlohmann::json misses = reportSurfaceMisses(sets.occupied, "O", m.mapper->graph(), m.global, m.query, &text);
   std::snprintf(buf, sizeof buf,
                 "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
                 "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
@@ -424,7 +429,8 @@ nlohmann::json reportAccuracy(const Maps& m, const ColoredTriangleMesh& mesh, co
                         {"seen_triangles", sets.seen_triangles},
                         {"truth_frames", m.truth->frames()},
                         {"vdmap_query_bytes", m.query.memoryBytes()},
-                        {"vdmap_kept_cell_bytes", kept_bytes}};
+                        {"vdmap_kept_cell_bytes", kept_bytes},
+                        {"vdmap_O_misses", misses}};
   for (const Accuracy& a : rows) {
     std::snprintf(buf, sizeof buf, "%-16s %8.3f %7.3f %7.3f %8.3f %7.3f %8.4f %6.1f mm %6.1f mm %8.3f %11.2f\n",
                   a.name.c_str(), a.balanced, a.o.occupied, a.f.free, a.f_near.free, a.u.unknown, a.o.free,
@@ -493,6 +499,10 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
                           {"speed", speed},
                           {"vdmap", s.detail}};
 
+  std::vector<HeldOutPeer> held_out_peers;
+  for (const auto& peer : m.peers)
+    held_out_peers.push_back({peer->name(), peer->key(), [&](const Eigen::Vector3d& q) { return peer->state(q); }});
+  query["held_out"] = reportHeldOut(m.held_out, m.mapper->graph(), m.global, m.query, held_out_peers, &text);
   if (m.truth && mesh) query["accuracy"] = reportAccuracy(m, *mesh, args, kept_bytes, text);
   writeQueryBenchReport(query, text.str(), args, out_dir);
 }

@@ -65,6 +65,22 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
   EXPECT_GT(bytes.at("surface").get<std::size_t>(), 0u);
   EXPECT_GE(bytes.at("total").get<std::size_t>(),
             bytes.at("keyframe_views").get<std::size_t>() + bytes.at("surface").get<std::size_t>());
+  // The held-out points of the frames' own depth: every method's shares add up to one, and the
+  // causes of vdmap's surface points not called occupied add up to those points.
+  const auto& held = j.at("held_out");
+  for (const char* key : {"vdmap", "octomap_005", "octomap_002"})
+    for (const char* set : {"surface", "front_2cm", "front_5cm", "half_way"}) {
+      const auto& h = held.at(key).at(set);
+      EXPECT_EQ(h.at("points"), 12 * 200) << key << " " << set;
+      EXPECT_NEAR(h.at("occupied").get<double>() + h.at("free").get<double>() + h.at("unknown").get<double>(), 1.0,
+                  1e-4)
+          << key << " " << set;
+    }
+  EXPECT_GT(held["vdmap"]["surface"]["occupied"].get<double>(), 0.9);
+  EXPECT_GT(held["vdmap"]["half_way"]["free"].get<double>(), 0.5);
+  std::size_t misses = 0;
+  for (const auto& [cause, n] : held.at("vdmap_surface_misses").items()) misses += n.get<std::size_t>();
+  EXPECT_NEAR(static_cast<double>(misses) / 2400.0, 1.0 - held["vdmap"]["surface"]["occupied"].get<double>(), 1e-3);
   EXPECT_EQ(j["accuracy"]["sets"]["occupied"], 300);
   EXPECT_EQ(j["accuracy"]["sets"]["free_near"], 150);
   const std::string md = readFile(tmp / "out" / "bench.md");
