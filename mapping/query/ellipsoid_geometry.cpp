@@ -159,15 +159,17 @@ double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen:
   return d;
 }
 
-double distanceToGate(const EllipsoidGate& g, const Eigen::Vector3d& q, Eigen::Vector3d* closest) {
-  if (gateDistance2(g, q) <= g.k2) {
+double distanceToGate(const double mean[3], const double a[6], double k2, const Eigen::Matrix3d& axes,
+                      const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& q, Eigen::Vector3d* closest) {
+  if (gateQuadratic(q.x() - mean[0], q.y() - mean[1], q.z() - mean[2], a[0], a[1], a[2], a[3], a[4], a[5]) <= k2) {
     if (closest) *closest = q;
     return 0;
   }
-  const Eigen::Vector3d y = g.axes.transpose() * (q - g.mean);
+  const Eigen::Vector3d m(mean[0], mean[1], mean[2]);
+  const Eigen::Vector3d y = axes.transpose() * (q - m);
   Eigen::Vector3d x;
-  const double d = distanceToEllipsoidSurface(g.semi_axes, y, closest ? &x : nullptr);
-  if (closest) *closest = g.mean + g.axes * x;
+  const double d = distanceToEllipsoidSurface(semi_axes, y, closest ? &x : nullptr);
+  if (closest) *closest = m + axes * x;
   return d;
 }
 
