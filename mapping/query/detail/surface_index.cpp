@@ -233,9 +233,7 @@ std::size_t SurfaceIndex::memoryBytes() const {
   std::size_t bytes = impl_->gates.capacity() * sizeof(StoredGate) + impl_->test_ellipsoid.capacity() * 4 +
                       impl_->rank_of.capacity() * 4 + impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
-  // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
-  bytes += size() / 2 * 40 + size() * 4;
-  return bytes;
+  return bytes + impl_->tree->memoryBytes();
 }
 
 EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
