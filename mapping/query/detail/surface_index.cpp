@@ -31,11 +31,12 @@ struct StoredGate {
   float half_extent[3];
 };
 
-// One level: the sorted (voxel key, ellipsoid) pairs, and an open-addressing table from a voxel
-// key to its run of pairs, filled in key order (deterministic).
+// One level: the gate ranks sorted by (voxel key, rank), and an open-addressing table from a
+// voxel key to its run of ranks, filled in key order (deterministic). The keys are in the table
+// alone.
 struct GridLevel {
   double side = 0;
-  std::vector<std::pair<std::uint64_t, std::int32_t>> entries;
+  std::vector<std::int32_t> entries;
   struct Slot {  // one cache access per probe
     std::uint64_t key = kEmpty;
     std::uint32_t begin = 0, end = 0;
@@ -51,21 +52,24 @@ struct GridLevel {
     return key;
   }
 
-  void buildTable() {
+  /// From the sorted (voxel key, rank) pairs.
+  void build(const std::vector<std::pair<std::uint64_t, std::int32_t>>& pairs) {
     std::size_t voxels = 0;
-    for (std::size_t i = 0; i < entries.size(); ++i) voxels += i == 0 || entries[i].first != entries[i - 1].first;
+    for (std::size_t i = 0; i < pairs.size(); ++i) voxels += i == 0 || pairs[i].first != pairs[i - 1].first;
     std::size_t size = 16;
     while (size < 2 * voxels) size *= 2;
     mask = size - 1;
     slots.assign(size, Slot{});
-    for (std::size_t i = 0; i < entries.size();) {
+    for (std::size_t i = 0; i < pairs.size();) {
       std::size_t j = i;
-      while (j < entries.size() && entries[j].first == entries[i].first) ++j;
-      std::uint64_t s = hash(entries[i].first) & mask;
+      while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
+      std::uint64_t s = hash(pairs[i].first) & mask;
       while (slots[s].key != kEmpty) s = (s + 1) & mask;
-      slots[s] = {entries[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
+      slots[s] = {pairs[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
       i = j;
     }
+    entries.resize(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) entries[i] = pairs[i].second;
   }
 
   // The pairs of voxel `key`, or an empty run.
@@ -77,7 +81,9 @@ struct GridLevel {
     }
   }
 
-  std::size_t memoryBytes() const { return entries.capacity() * sizeof(entries[0]) + slots.capacity() * sizeof(Slot); }
+  std::size_t memoryBytes() const {
+    return entries.capacity() * sizeof(std::int32_t) + slots.capacity() * sizeof(Slot);
+  }
 };
 
 // Integer voxel coordinate of x along an axis, or nothing outside the key's range.
@@ -198,6 +204,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   });
   for (int l = 0; l < kLevels; ++l) {
     GridLevel& level = impl->levels[l];
+    std::vector<std::pair<std::uint64_t, std::int32_t>> pairs;
     for (std::size_t r = 0; r < n; ++r) {
       const auto i = static_cast<std::size_t>(impl->test_ellipsoid[r]);
       if (level_of[i] != l) continue;
@@ -211,10 +218,10 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
         for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
           for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-            level.entries.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(r)});
+            pairs.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(r)});
     }
-    parallelSort(params.threads, level.entries.begin(), level.entries.end());
-    level.buildTable();
+    parallelSort(params.threads, pairs.begin(), pairs.end());
+    level.build(pairs);
     if (!level.entries.empty()) impl->levels_used.push_back(l);
   }
   for (std::size_t r = 0; r < n; ++r)
@@ -271,7 +278,7 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
     const auto z = voxelCoord(q_W.z(), impl_->origin.z(), level.side);
     if (!x || !y || !z) continue;
     const auto [b, e] = level.find(VoxelKey::pack(*x, *y, *z));
-    for (std::uint32_t k = b; k < e; ++k) consider(level.entries[k].second);
+    for (std::uint32_t k = b; k < e; ++k) consider(level.entries[k]);
   }
   for (const std::int32_t i : impl_->oversize) consider(i);
   return best;
