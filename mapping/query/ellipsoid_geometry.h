@@ -14,7 +14,9 @@
 
 namespace vdmap {
 
-/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1.
+/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. A, axes
+/// and semi_axes are float values (rounded, 6e-8 relative: far below what a covariance of a few
+/// hundred noisy points knows), so that the query map stores them in float and answers as the gate.
 struct EllipsoidGate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Matrix3d A = Eigen::Matrix3d::Identity();

@@ -19,16 +19,31 @@ namespace {
 constexpr int kLevels = 12;
 constexpr double kLevelRatio = 2.0;
 
-// An ellipsoid's gate as stored (184 B instead of an EllipsoidGate's 224 and the 112 of the
+// An ellipsoid's gate as stored (108 B instead of an EllipsoidGate's 224 and the 112 of the
 // copies the lookups read): what the gate test reads first (mean, A's upper triangle), then the
-// principal frame for distances and views. k^2 is the index's; the box's half-extent is kept
-// rounded up to float (it only bounds: a larger box is still a box of the gate).
+// principal frame for distances and views. makeGate's shape is in float, so the float copy is
+// exact. k^2 is the index's; the box's half-extent is kept grown by a millionth and rounded up to
+// float (it only bounds: a larger box is still a box of the gate).
 struct StoredGate {
   double mean[3];
-  double a[6];           // A00, A11, A22, A01, A02, A12
-  Eigen::Matrix3d axes;  // columns: unit axes, longest first
-  Eigen::Vector3d semi_axes;
+  float a[6];     // A00, A11, A22, A01, A02, A12
+  float axes[9];  // column-major: unit axes, longest first
+  float semi_axes[3];
   float half_extent[3];
+
+  void upper(double out[6]) const { std::copy(a, a + 6, out); }
+  Eigen::Matrix3d axesMatrix() const {
+    Eigen::Matrix3d m;
+    std::copy(axes, axes + 9, m.data());
+    return m;
+  }
+  Eigen::Vector3d semiAxes() const { return {semi_axes[0], semi_axes[1], semi_axes[2]}; }
+  /// distanceToGate of this gate.
+  double distance(double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
+    double u[6];
+    upper(u);
+    return distanceToGate(mean, u, k2, axesMatrix(), semiAxes(), q, closest);
+  }
 };
 
 // One level: the gate ranks sorted by (voxel key, rank), and an open-addressing table from a
@@ -178,10 +193,14 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       const EllipsoidGate& g = gates[static_cast<std::size_t>(order[r].second)];
       StoredGate& s = impl->gates[r];
       std::copy(g.mean.data(), g.mean.data() + 3, s.mean);
-      gateUpper(g, s.a);
-      s.axes = g.axes;
-      s.semi_axes = g.semi_axes;
-      for (int k = 0; k < 3; ++k) s.half_extent[k] = std::nextafter(static_cast<float>(g.half_extent[k]), INFINITY);
+      double a[6];
+      gateUpper(g, a);
+      for (int k = 0; k < 6; ++k) s.a[k] = static_cast<float>(a[k]);
+      for (int k = 0; k < 9; ++k) s.axes[k] = static_cast<float>(g.axes.data()[k]);
+      for (int k = 0; k < 3; ++k) {
+        s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
+        s.half_extent[k] = std::nextafter(static_cast<float>(g.half_extent[k] * (1 + 1e-6) + 1e-9), INFINITY);
+      }
       impl->test_ellipsoid[r] = order[r].second;
       impl->rank_of[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
     });
@@ -248,8 +267,8 @@ EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
   EllipsoidGate g;
   g.mean = Eigen::Vector3d(s.mean);
   g.A << s.a[0], s.a[3], s.a[4], s.a[3], s.a[1], s.a[5], s.a[4], s.a[5], s.a[2];
-  g.axes = s.axes;
-  g.semi_axes = s.semi_axes;
+  g.axes = s.axesMatrix();
+  g.semi_axes = s.semiAxes();
   g.half_extent = Eigen::Vector3f(s.half_extent).cast<double>();
   g.k2 = impl_->k2;
   return g;
@@ -305,19 +324,19 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
         // patches of a surface, of which many are almost equally near a point far from them.
         const Eigen::Vector3d r = q - Eigen::Vector3d(g.mean);
         const double box2 = (r.cwiseAbs() - Eigen::Vector3f(g.half_extent).cast<double>()).cwiseMax(0.0).squaredNorm();
-        const double h = r.dot(g.axes.col(2));
+        const double h = r.x() * g.axes[6] + r.y() * g.axes[7] + r.z() * g.axes[8];
         const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
         const double lower2 = std::max(box2, dh * dh + da * da);
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
-        const double d = distanceToGate(g.mean, g.a, im.k2, g.axes, g.semi_axes, q, nullptr);
+        const double d = g.distance(im.k2, q, nullptr);
         return d * d;
       },
       max_distance * max_distance);
   if (i < 0) return best;
   best.ellipsoid = static_cast<std::int32_t>(i);
   const StoredGate& g = stored(static_cast<std::uint32_t>(i));
-  best.distance = distanceToGate(g.mean, g.a, im.k2, g.axes, g.semi_axes, q_W, &best.closest);
+  best.distance = g.distance(im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -328,7 +347,9 @@ SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::
   const Impl& im = *impl_;
   const auto [i, t] = im.tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
     const StoredGate& g = im.gates[static_cast<std::size_t>(im.rank_of[j])];
-    return gateRayEntry(g.a, gateRayOrigin(g.mean, g.a, im.k2, o), d, bound);
+    double a[6];
+    g.upper(a);
+    return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
   });
   if (i >= 0) best = {static_cast<std::int32_t>(i), t};
   return best;
