@@ -52,6 +52,10 @@ struct OctoPeer {
     return buf;
   }
   std::string key() const { return res_m > 0.03 ? "octomap_005" : "octomap_002"; }
+  /// The box tree over the occupied leaves that its distance needs beside the tree.
+  std::size_t distanceIndexBytes() const {
+    return (lo.capacity() + hi.capacity()) * sizeof(Eigen::Vector3f) + (boxes ? boxes->memoryBytes() : 0);
+  }
 
   void indexOccupied() {
     for (auto it = tree.begin_leafs(), end = tree.end_leafs(); it != end; ++it) {
@@ -361,15 +365,18 @@ nlohmann::json sharesJson(const Accuracy::Shares& s) {
 }
 
 // The speed table: vdmap and each OctoMap peer, and the peers' ratios to vdmap.
-nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::ostringstream& text) {
+nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::size_t kept_bytes, std::ostringstream& text) {
   char buf[512];
-  std::snprintf(buf, sizeof buf, "%-16s %14s %10s %14s %10s %12s %10s\n", "method", "classify [/s]", "x vdmap",
-                "distance [/s]", "x vdmap", "view [ms]", "x vdmap");
+  std::snprintf(buf, sizeof buf, "%-16s %14s %10s %14s %10s %12s %10s %12s %10s\n", "method", "classify [/s]",
+                "x vdmap", "distance [/s]", "x vdmap", "view [ms]", "x vdmap", "memory [MB]", "x vdmap");
   text << buf;
   const auto ratio = [](double a, double b) { return b > 0 ? a / b : 0.0; };  // 0: not timed
   const auto perSec = [](std::size_t n, double ms) { return ms > 0 ? 1e3 * static_cast<double>(n) / ms : 0.0; };
-  std::snprintf(buf, sizeof buf, "%-16s %14.0f %10s %14.0f %10s %12.2f %10s\n", "vdmap",
-                perSec(s.points, s.classify_ms), "1", perSec(s.distance_points, s.distance_ms), "1", s.view_ms, "1");
+  const auto mb = [](std::size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); };
+  const std::size_t vdmap_bytes = m.query.memoryBytes();
+  std::snprintf(buf, sizeof buf, "%-16s %14.0f %10s %14.0f %10s %12.2f %10s %12.1f %10s\n", "vdmap",
+                perSec(s.points, s.classify_ms), "1", perSec(s.distance_points, s.distance_ms), "1", s.view_ms, "1",
+                mb(vdmap_bytes), "1");
   text << buf;
   nlohmann::json speed = {{"points", s.points},
                           {"distance_points", s.distance_points},
@@ -381,24 +388,36 @@ nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::ostringstream& te
                             {"classify_per_s", rounded(perSec(s.points, s.classify_ms))},
                             {"distance_ms", rounded(s.distance_ms)},
                             {"distance_per_s", rounded(perSec(s.distance_points, s.distance_ms))},
-                            {"view_ms", rounded(s.view_ms)}}}};
+                            {"view_ms", rounded(s.view_ms)},
+                            {"memory_bytes", vdmap_bytes},
+                            {"kept_cell_bytes", kept_bytes}}}};
   for (std::size_t p = 0; p < m.peers.size(); ++p) {
     const double c = s.octo_classify_ms[p], d = s.octo_distance_ms[p], v = s.octo_view_ms[p];
-    std::snprintf(buf, sizeof buf, "%-16s %14.0f %10.2f %14.0f %10.2f %12.2f %10.2f\n", m.peers[p]->name().c_str(),
-                  perSec(s.points, c), ratio(c, s.classify_ms), perSec(s.distance_points, d), ratio(d, s.distance_ms),
-                  v, ratio(v, s.view_ms));
+    const std::size_t bytes = m.peers[p]->tree.memoryUsage();
+    std::snprintf(buf, sizeof buf, "%-16s %14.0f %10.2f %14.0f %10.2f %12.2f %10.2f %12.1f %10.2f\n",
+                  m.peers[p]->name().c_str(), perSec(s.points, c), ratio(c, s.classify_ms),
+                  perSec(s.distance_points, d), ratio(d, s.distance_ms), v, ratio(v, s.view_ms), mb(bytes),
+                  ratio(static_cast<double>(bytes), static_cast<double>(vdmap_bytes)));
     text << buf;
-    speed[m.peers[p]->key()] = {{"classify_ms", rounded(c)},
-                                {"classify_per_s", rounded(perSec(s.points, c))},
-                                {"classify_ratio_to_vdmap", rounded(ratio(c, s.classify_ms))},
-                                {"distance_ms", rounded(d)},
-                                {"distance_ratio_to_vdmap", rounded(ratio(d, s.distance_ms))},
-                                {"view_ms", rounded(v)},
-                                {"view_ratio_to_vdmap", rounded(ratio(v, s.view_ms))},
-                                {"insert_ms_median", rounded(median(m.peers[p]->insert_ms))}};
+    speed[m.peers[p]->key()] = {
+        {"classify_ms", rounded(c)},
+        {"classify_per_s", rounded(perSec(s.points, c))},
+        {"classify_ratio_to_vdmap", rounded(ratio(c, s.classify_ms))},
+        {"distance_ms", rounded(d)},
+        {"distance_ratio_to_vdmap", rounded(ratio(d, s.distance_ms))},
+        {"view_ms", rounded(v)},
+        {"view_ratio_to_vdmap", rounded(ratio(v, s.view_ms))},
+        {"insert_ms_median", rounded(median(m.peers[p]->insert_ms))},
+        {"memory_bytes", bytes},
+        {"memory_ratio_to_vdmap", rounded(ratio(static_cast<double>(bytes), static_cast<double>(vdmap_bytes)))},
+        {"distance_index_bytes", m.peers[p]->distanceIndexBytes()}};
   }
-  text << "(x vdmap: the peer's time over vdmap's; OctoMap's distance is to the nearest occupied leaf's box through "
-          "a BoxTree)\n";
+  std::snprintf(buf, sizeof buf,
+                "(x vdmap: the peer's time or memory over vdmap's; OctoMap's distance is to the nearest occupied "
+                "leaf's box through a BoxTree; memory: QueryMap::memoryBytes, without the %.1f MB of kept local-map "
+                "cells it is built from, and OctoMap's memoryUsage, without its distance's BoxTree)\n",
+                mb(kept_bytes));
+  text << buf;
   return speed;
 }
 
@@ -487,7 +506,7 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
                                    " views, castRay per pixel, unknown ignored)")
                                       .c_str());
   text << buf;
-  nlohmann::json speed = reportSpeed(m, s, text);
+  nlohmann::json speed = reportSpeed(m, s, kept_bytes, text);
   text << s.detail_text;
   nlohmann::json query = {{"frames", m.frames},
                           {"keyframes", m.mapper->graph().size()},

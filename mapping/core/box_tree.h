@@ -20,6 +20,11 @@ class BoxTree {
   /// Item i has the box [lo[i], hi[i]] (metres). The tree keeps no reference to the inputs.
   BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi);
 
+  /// Heap bytes held (nodes and item indices).
+  std::size_t memoryBytes() const {
+    return nodes_.capacity() * sizeof(Node) + items_.capacity() * sizeof(std::uint32_t);
+  }
+
   /// Index and squared distance of the nearest item to q, where sq_dist(i, q) is the exact
   /// squared distance to item i; ties go to the lower index. {-1, inf} when there are no
   /// items, or none nearer than sqrt(max_sq_dist). Const, so safe to call from many threads.

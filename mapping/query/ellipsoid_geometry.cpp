@@ -126,6 +126,15 @@ double distanceEllipsoid(const double e[3], const double y[3], double x[3]) {
   return distanceEllipse(e[0], e[1], y[0], y[1], &x[0], &x[1]);
 }
 
+// Each of v[0..n) rounded to the nearest float. Through a volatile float: GCC 12 at -O3 left
+// coefficients unrounded here when written as v[i] = float(v[i]) (or through a float array).
+void roundToFloat(double* v, int n) {
+  for (int i = 0; i < n; ++i) {
+    const volatile float f = static_cast<float>(v[i]);
+    v[i] = f;
+  }
+}
+
 }  // namespace
 
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m) {
@@ -146,6 +155,8 @@ EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m
   g.semi_axes[1] = std::min(g.semi_axes[1], g.semi_axes[0]);
   g.semi_axes[2] = std::min(g.semi_axes[2], g.semi_axes[1]);
   g.half_extent = gate_sigma * cov.diagonal().cwiseSqrt();
+  // The shape in float (rounding is monotone: the order of the semi-axes and A's symmetry stay).
+  roundToFloat(g.A.data(), 9), roundToFloat(g.axes.data(), 9), roundToFloat(g.semi_axes.data(), 3);
   return g;
 }
 
@@ -159,15 +170,17 @@ double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen:
   return d;
 }
 
-double distanceToGate(const EllipsoidGate& g, const Eigen::Vector3d& q, Eigen::Vector3d* closest) {
-  if (gateDistance2(g, q) <= g.k2) {
+double distanceToGate(const double mean[3], const double a[6], double k2, const Eigen::Matrix3d& axes,
+                      const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& q, Eigen::Vector3d* closest) {
+  if (gateQuadratic(q.x() - mean[0], q.y() - mean[1], q.z() - mean[2], a[0], a[1], a[2], a[3], a[4], a[5]) <= k2) {
     if (closest) *closest = q;
     return 0;
   }
-  const Eigen::Vector3d y = g.axes.transpose() * (q - g.mean);
+  const Eigen::Vector3d m(mean[0], mean[1], mean[2]);
+  const Eigen::Vector3d y = axes.transpose() * (q - m);
   Eigen::Vector3d x;
-  const double d = distanceToEllipsoidSurface(g.semi_axes, y, closest ? &x : nullptr);
-  if (closest) *closest = g.mean + g.axes * x;
+  const double d = distanceToEllipsoidSurface(semi_axes, y, closest ? &x : nullptr);
+  if (closest) *closest = m + axes * x;
   return d;
 }
 

@@ -14,7 +14,9 @@
 
 namespace vdmap {
 
-/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1.
+/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. A, axes
+/// and semi_axes are float values (rounded, 6e-8 relative: far below what a covariance of a few
+/// hundred noisy points knows), so that the query map stores them in float and answers as the gate.
 struct EllipsoidGate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
@@ -51,9 +53,23 @@ inline double gateDistance2(const EllipsoidGate& g, const Eigen::Vector3d& q) {
 double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y,
                                   Eigen::Vector3d* closest = nullptr);
 
+/// A's upper triangle A00, A11, A22, A01, A02, A12: the packed form every kernel reads, so that a
+/// compact copy of a gate gives the same bits as the EllipsoidGate.
+inline void gateUpper(const EllipsoidGate& g, double a[6]) {
+  a[0] = g.A(0, 0), a[1] = g.A(1, 1), a[2] = g.A(2, 2), a[3] = g.A(0, 1), a[4] = g.A(0, 2), a[5] = g.A(1, 2);
+}
+
+/// distanceToGate of the gate given by its parts (mean, A's upper triangle, k^2, principal frame).
+double distanceToGate(const double mean[3], const double a[6], double k2, const Eigen::Matrix3d& axes,
+                      const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& q, Eigen::Vector3d* closest);
+
 /// Distance from q to the gate's surface: 0 inside the gate (gateDistance2 <= k^2, closest = q),
 /// else the exact Euclidean distance to {x : (x - mean)^T A (x - mean) = k^2}.
-double distanceToGate(const EllipsoidGate& g, const Eigen::Vector3d& q, Eigen::Vector3d* closest = nullptr);
+inline double distanceToGate(const EllipsoidGate& g, const Eigen::Vector3d& q, Eigen::Vector3d* closest = nullptr) {
+  double a[6];
+  gateUpper(g, a);
+  return distanceToGate(g.mean.data(), a, g.k2, g.axes, g.semi_axes, q, closest);
+}
 
 /// What a ray's gate entry needs of its origin o alone (so a view computes it once per ellipsoid).
 struct GateRayOrigin {
@@ -61,12 +77,19 @@ struct GateRayOrigin {
   double gamma = 0;                                ///< (o - mean)^T A (o - mean) - k^2
 };
 
-inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d& o) {
+/// gateRayOrigin of the gate given by its mean, A's upper triangle and k^2.
+inline GateRayOrigin gateRayOrigin(const double mean[3], const double a[6], double k2, const Eigen::Vector3d& o) {
   GateRayOrigin r;
-  const Eigen::Vector3d oc = o - g.mean;
-  r.A_oc = g.A * oc;
-  r.gamma = oc.dot(r.A_oc) - g.k2;
+  const double x = o.x() - mean[0], y = o.y() - mean[1], z = o.z() - mean[2];
+  r.A_oc = {a[0] * x + a[3] * y + a[4] * z, a[3] * x + a[1] * y + a[5] * z, a[4] * x + a[5] * y + a[2] * z};
+  r.gamma = x * r.A_oc.x() + y * r.A_oc.y() + z * r.A_oc.z() - k2;
   return r;
+}
+
+inline GateRayOrigin gateRayOrigin(const EllipsoidGate& g, const Eigen::Vector3d& o) {
+  double a[6];
+  gateUpper(g, a);
+  return gateRayOrigin(g.mean.data(), a, g.k2, o);
 }
 
 /// The smallest t >= 0 at which o + t d (d unit) enters the gate, t = 0 when o is inside; +inf when
@@ -95,7 +118,8 @@ inline double gateRayEntry(const double a[6], const GateRayOrigin& o, const Eige
 /// gateRayEntry with the gate's A (its upper triangle a = A00, A11, A22, A01, A02, A12: the same
 /// bits from a packed copy).
 inline double gateRayEntry(const EllipsoidGate& g, const GateRayOrigin& o, const Eigen::Vector3d& d, double max_t) {
-  const double a[6] = {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)};
+  double a[6];
+  gateUpper(g, a);
   return gateRayEntry(a, o, d, max_t);
 }
 

@@ -167,13 +167,13 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
     int u0, u1, v0, v1;
     nearest[i] = {0.0, -1};
     // Cheap first: the gate's bounding ball behind the camera or outside a side of the frustum.
-    const Eigen::Vector4d& ball = surface.ballOf(i);
+    const Eigen::Vector4d ball = surface.ballOf(i);
     const Eigen::Vector3d c = T_C_W * Eigen::Vector3d(ball.head<3>());
     const double radius = ball[3] * (1 + 1e-9) + 1e-9;
     if (c.z() + radius <= 0) return;
     for (const Eigen::Vector3d& n : frustum_normals)
       if (n.dot(c) < -radius) return;
-    const EllipsoidGate& g = surface.gateOf(i);
+    const EllipsoidGate g = surface.gateOf(i);
     if (!gateImageBounds(g, camera, T_C_W, 1.0, &u0, &u1, &v0, &v1)) return;
     box[i] = {static_cast<std::int16_t>(u0), static_cast<std::int16_t>(u1), static_cast<std::int16_t>(v0),
               static_cast<std::int16_t>(v1)};
@@ -200,14 +200,13 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
   };
   std::vector<Splat> splats(order.size());
   parallelFor(threads, order.size(), [&](std::size_t k) {
-    const EllipsoidGate& g = surface.gateOf(static_cast<std::size_t>(order[k].second));
+    const EllipsoidGate g = surface.gateOf(static_cast<std::size_t>(order[k].second));
     Splat& s = splats[k];
     s.t_lo = order[k].first;
     s.index = order[k].second;
     const auto& bx = box[static_cast<std::size_t>(s.index)];
     s.u0 = bx[0], s.u1 = bx[1], s.v0 = bx[2], s.v1 = bx[3];
-    const double a[6] = {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)};
-    std::copy(a, a + 6, s.a);
+    gateUpper(g, s.a);
     s.origin = gateRayOrigin(g, o);
     s.w = R_C_W * s.origin.A_oc;
     const Eigen::Matrix3d B = R_C_W * g.A * R_C_W.transpose();

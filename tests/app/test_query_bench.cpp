@@ -37,6 +37,8 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
   EXPECT_EQ(j["octomap_frames"], 4);
   for (const char* key : {"vdmap", "octomap_005", "octomap_002"}) {
     EXPECT_GT(j["speed"][key]["classify_per_s"].get<double>(), 0.0) << key;
+    // Each method's memory beside its speed.
+    EXPECT_GT(j["speed"][key]["memory_bytes"].get<std::size_t>(), 0u) << key;
     const auto& a = j["accuracy"][key];
     // Every set is scored: the shares of each add up to one.
     for (const char* set : {"O", "F", "F_near", "U"})
@@ -48,6 +50,9 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
     EXPECT_GT(a["memory_mb"].get<double>(), 0.0) << key;
   }
   EXPECT_GT(j["speed"]["vdmap"]["view_ms"].get<double>(), 0.0);
+  EXPECT_GT(j["speed"]["vdmap"]["kept_cell_bytes"].get<std::size_t>(), 0u);
+  EXPECT_GT(j["speed"]["octomap_002"]["memory_ratio_to_vdmap"].get<double>(), 0.0);
+  EXPECT_GT(j["speed"]["octomap_002"]["distance_index_bytes"].get<std::size_t>(), 0u);
   // vdmap alone: every conflict rule's classes, the distance halves, rays, memory by part.
   const auto& v = j.at("vdmap");
   for (const char* rule : {"occupied", "recent", "precise"}) {
@@ -61,6 +66,7 @@ TEST(QueryBench, ReportsSpeedAndAccuracyOfEveryMap) {
   EXPECT_EQ(v.at("rays"), 640 * 480);
   EXPECT_EQ(v.at("view_rays_differ"), 0) << "castView answers as castRays on its pixel rays";
   const auto& bytes = v.at("memory_bytes");
+  EXPECT_EQ(bytes.at("total"), j["speed"]["vdmap"]["memory_bytes"]);
   EXPECT_GT(bytes.at("keyframe_views").get<std::size_t>(), 0u);
   EXPECT_GT(bytes.at("surface").get<std::size_t>(), 0u);
   EXPECT_GE(bytes.at("total").get<std::size_t>(),

@@ -186,15 +186,19 @@ TEST(QueryGeometry, DistanceToGateIsZeroInsideAndMatchesThePrincipalFrame) {
   Eigen::Vector3d closest;
   EXPECT_EQ(distanceToGate(g, e.mean, &closest), 0.0);
   EXPECT_EQ(closest, e.mean);
-  // Semi-axes k sqrt(sigma^2 + s0^2), longest first; A (Sigma + s0^2 I) = I.
-  EXPECT_NEAR(g.semi_axes[0], 3 * std::sqrt(0.05 * 0.05 + 1e-6), 1e-12);
-  EXPECT_NEAR(g.semi_axes[2], 3 * std::sqrt(0.004 * 0.004 + 1e-6), 1e-12);
-  EXPECT_TRUE((g.A * (e.cov + 1e-6 * Eigen::Matrix3d::Identity())).isApprox(Eigen::Matrix3d::Identity(), 1e-9));
+  // Semi-axes k sqrt(sigma^2 + s0^2), longest first; A (Sigma + s0^2 I) = I; all in float
+  // (6e-8 relative).
+  EXPECT_NEAR(g.semi_axes[0], 3 * std::sqrt(0.05 * 0.05 + 1e-6), 1.2e-7 * g.semi_axes[0]);
+  EXPECT_NEAR(g.semi_axes[2], 3 * std::sqrt(0.004 * 0.004 + 1e-6), 1.2e-7 * g.semi_axes[2]);
+  for (int i = 0; i < 3; ++i) EXPECT_EQ(g.semi_axes[i], static_cast<float>(g.semi_axes[i])) << i;
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(g.A.data()[i], static_cast<float>(g.A.data()[i])) << i;
+  for (int i = 0; i < 9; ++i) EXPECT_EQ(g.axes.data()[i], static_cast<float>(g.axes.data()[i])) << i;
+  EXPECT_TRUE((g.A * (e.cov + 1e-6 * Eigen::Matrix3d::Identity())).isApprox(Eigen::Matrix3d::Identity(), 1e-6));
   // A point 10 cm out along the shortest axis: the distance is 10 cm and the closest point is on
-  // the gate's surface (m^2 = k^2).
+  // the gate's surface (m^2 = k^2, to float rounding of the shape).
   const Eigen::Vector3d q = e.mean + (g.semi_axes[2] + 0.1) * g.axes.col(2);
-  EXPECT_NEAR(distanceToGate(g, q, &closest), 0.1, 1e-9);
-  EXPECT_NEAR(gateDistance2(g, closest), 9.0, 1e-9);
+  EXPECT_NEAR(distanceToGate(g, q, &closest), 0.1, 1e-7);
+  EXPECT_NEAR(gateDistance2(g, closest), 9.0, 1e-5);
   // Half-extent of the box: k sqrt(Sigma_ii + s0^2), and the gate inside it.
   for (int a = 0; a < 3; ++a) EXPECT_NEAR(g.half_extent[a], 3 * std::sqrt(e.cov(a, a) + 1e-6), 1e-12);
 }
@@ -483,8 +487,11 @@ TEST(QueryMapSurface, DistanceIsTheMinimumOverEveryEllipsoid) {
       } else {
         // Unit, from the closest surface point to q; the closest point is on that gate's surface.
         EXPECT_NEAR(out[i].gradient.norm(), 1.0, 1e-12);
-        EXPECT_NEAR(out[i].gradient.dot(pts[i] - out[i].closest_W), out[i].distance_m, 1e-9);
-        EXPECT_NEAR(gateDistance2(s.gates[static_cast<std::size_t>(ref.ellipsoid)], out[i].closest_W), 9.0, 1e-6);
+        // (To the float rounding of the gate's A and frame, each 6e-8 relative: its axes are
+        // orthonormal, and its surface m^2 = k^2, to that.)
+        EXPECT_NEAR(out[i].gradient.dot(pts[i] - out[i].closest_W), out[i].distance_m,
+                    1e-7 * std::max(1.0, out[i].distance_m));
+        EXPECT_NEAR(gateDistance2(s.gates[static_cast<std::size_t>(ref.ellipsoid)], out[i].closest_W), 9.0, 1e-5);
       }
     }
     EXPECT_GT(inside, 10);

@@ -75,8 +75,11 @@ struct View {
   double fx = 1, fy = 1, cx = 0, cy = 0;
   double width2 = 0, height2 = 0;  // 2W, 2H: the container's extent in container pixels
   double offset_u = 0, offset_v = 0;
-  int cell_px = 1, cols = 0, rows = 0;
-  std::vector<Slot> slot;  // per grid cell (empty when the keyframe has no kept cell)
+  int cell_px = 1;
+  // The slots cover the container's grid cells [col0, col0 + cols) x [row0, row0 + rows): the box
+  // of the kept cells grown by one (a point outside it has no kept cell among its 3x3).
+  int col0 = 0, row0 = 0, cols = 0, rows = 0;
+  std::vector<Slot> slot;  // per grid cell of the box (empty when the keyframe has no kept cell)
   std::vector<Cell> cells;
   int rank = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
@@ -96,9 +99,9 @@ struct View {
     const double u = fx * q->x() / q->z() + cx, v = fy * q->y() / q->z() + cy;
     const double up = u + offset_u + 0.5, vp = v + offset_v + 0.5;
     if (!(up >= 0.0 && vp >= 0.0 && up < width2 && vp < height2)) return false;
-    *col = static_cast<int>(up) / cell_px;
-    *row = static_cast<int>(vp) / cell_px;
-    return true;
+    *col = static_cast<int>(up) / cell_px - col0;
+    *row = static_cast<int>(vp) / cell_px - row0;
+    return *col >= 0 && *row >= 0 && *col < cols && *row < rows;
   }
 };
 
@@ -278,12 +281,21 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
   v.fx = cam.fx, v.fy = cam.fy, v.cx = cam.cx, v.cy = cam.cy;
   v.width2 = 2.0 * cam.width, v.height2 = 2.0 * cam.height;
   v.offset_u = container.offsetU(), v.offset_v = container.offsetV();
-  v.cell_px = container.cellSizePx(), v.cols = container.cols(), v.rows = container.rows();
+  v.cell_px = container.cellSizePx();
   v.rank = rank;
   const auto& cells = container.cells();
   std::size_t n_kept = 0;
-  for (std::size_t i = 0; i < cells.size(); ++i) n_kept += kept[i] ? 1 : 0;
+  int c_lo = container.cols(), c_hi = -1, r_lo = container.rows(), r_hi = -1;
+  for (std::size_t i = 0; i < cells.size(); ++i) {
+    if (!kept[i]) continue;
+    ++n_kept;
+    const int col = cells[i].grid_index % container.cols(), row = cells[i].grid_index / container.cols();
+    c_lo = std::min(c_lo, col), c_hi = std::max(c_hi, col), r_lo = std::min(r_lo, row), r_hi = std::max(r_hi, row);
+  }
   if (n_kept == 0) return v;
+  v.col0 = std::max(c_lo - 1, 0), v.row0 = std::max(r_lo - 1, 0);
+  v.cols = std::min(c_hi + 1, container.cols() - 1) - v.col0 + 1;
+  v.rows = std::min(r_hi + 1, container.rows() - 1) - v.row0 + 1;
   v.slot.assign(static_cast<std::size_t>(v.cols) * v.rows, Slot{});
   std::vector<double> z_near(v.slot.size(), std::numeric_limits<double>::infinity());
   v.cells.reserve(n_kept);
@@ -301,11 +313,13 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     for (int j = 0; j < 6; ++j) c.a[j] = static_cast<float>(upper[j]);
     for (int j = 0; j < 3; ++j) c.mu[j] = cells[i].mean[j];
     const double half_z = k * std::sqrt(cov(2, 2));
-    Slot& slot = v.slot[static_cast<std::size_t>(cells[i].grid_index)];
+    const std::size_t at = static_cast<std::size_t>(cells[i].grid_index / container.cols() - v.row0) * v.cols +
+                           static_cast<std::size_t>(cells[i].grid_index % container.cols() - v.col0);
+    Slot& slot = v.slot[at];
     slot.cell = static_cast<std::int32_t>(v.cells.size());
     slot.z_far =
         std::nextafter(static_cast<float>(e.mean.z() + half_z + kZMargin), std::numeric_limits<float>::infinity());
-    z_near[static_cast<std::size_t>(cells[i].grid_index)] = e.mean.z() - half_z - kZMargin;
+    z_near[at] = e.mean.z() - half_z - kZMargin;
     v.cells.push_back(c);
     // Every point with a verdict lies in a gate or on the segment from the centre to a gate:
     // inside the box of the centre and the gates' boxes, and no farther along z than a gate.
@@ -352,15 +366,16 @@ bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
   if (z0 < 1e-3) return true;  // the ball reaches the camera: its image is unbounded
   // The ball's box projects within the extreme ratios of its corners; its grid cells, grown by
   // one for the neighbours' gates, and the tiles that hold them.
-  const auto range = [&](double c, double f, double centre, double offset, int cells, int* lo, int* hi) {
+  const auto range = [&](double c, double f, double centre, double offset, double first, int cells, int* lo, int* hi) {
     const double a = std::min((c - r) / z0, (c - r) / z1), b = std::max((c + r) / z0, (c + r) / z1);
     const double p0 = f * a + centre + offset + 0.5, p1 = f * b + centre + offset + 0.5;
-    *lo = static_cast<int>(std::clamp(std::floor(p0 / v.cell_px) - 1, 0.0, cells - 1.0));
-    *hi = static_cast<int>(std::clamp(std::floor(p1 / v.cell_px) + 1, 0.0, cells - 1.0));
+    *lo = static_cast<int>(std::clamp(std::floor(p0 / v.cell_px) - 1 - first, 0.0, cells - 1.0));
+    *hi = static_cast<int>(std::clamp(std::floor(p1 / v.cell_px) + 1 - first, 0.0, cells - 1.0));
   };
+  // (Clamped to the slots' box: a superset when the ball's cells lie outside it.)
   int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
-  range(p.x(), v.fx, v.cx, v.offset_u, v.cols, &c0, &c1);
-  range(p.y(), v.fy, v.cy, v.offset_v, v.rows, &r0, &r1);
+  range(p.x(), v.fx, v.cx, v.offset_u, v.col0, v.cols, &c0, &c1);
+  range(p.y(), v.fy, v.cy, v.offset_v, v.row0, v.rows, &r0, &r1);
   for (int tr = r0 / kTile; tr <= r1 / kTile; ++tr)
     for (int tc = c0 / kTile; tc <= c1 / kTile; ++tc)
       if (v.tile_z_far[static_cast<std::size_t>(tr) * v.tile_cols + tc] >= z0) return true;

@@ -19,18 +19,39 @@ namespace {
 constexpr int kLevels = 12;
 constexpr double kLevelRatio = 2.0;
 
-// What the gate test reads, packed (80 B instead of a whole EllipsoidGate).
-struct GateTest {
+// An ellipsoid's gate as stored (108 B instead of an EllipsoidGate's 224 and the 112 of the
+// copies the lookups read): what the gate test reads first (mean, A's upper triangle), then the
+// principal frame for distances and views. makeGate's shape is in float, so the float copy is
+// exact. k^2 is the index's; the box's half-extent is kept grown by a millionth and rounded up to
+// float (it only bounds: a larger box is still a box of the gate).
+struct StoredGate {
   double mean[3];
-  double a[6];  // A00, A11, A22, A01, A02, A12
-  double k2;
+  float a[6];     // A00, A11, A22, A01, A02, A12
+  float axes[9];  // column-major: unit axes, longest first
+  float semi_axes[3];
+  float half_extent[3];
+
+  void upper(double out[6]) const { std::copy(a, a + 6, out); }
+  Eigen::Matrix3d axesMatrix() const {
+    Eigen::Matrix3d m;
+    std::copy(axes, axes + 9, m.data());
+    return m;
+  }
+  Eigen::Vector3d semiAxes() const { return {semi_axes[0], semi_axes[1], semi_axes[2]}; }
+  /// distanceToGate of this gate.
+  double distance(double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
+    double u[6];
+    upper(u);
+    return distanceToGate(mean, u, k2, axesMatrix(), semiAxes(), q, closest);
+  }
 };
 
-// One level: the sorted (voxel key, ellipsoid) pairs, and an open-addressing table from a voxel
-// key to its run of pairs, filled in key order (deterministic).
+// One level: the gate ranks sorted by (voxel key, rank), and an open-addressing table from a
+// voxel key to its run of ranks, filled in key order (deterministic). The keys are in the table
+// alone.
 struct GridLevel {
   double side = 0;
-  std::vector<std::pair<std::uint64_t, std::int32_t>> entries;
+  std::vector<std::int32_t> entries;
   struct Slot {  // one cache access per probe
     std::uint64_t key = kEmpty;
     std::uint32_t begin = 0, end = 0;
@@ -46,21 +67,24 @@ struct GridLevel {
     return key;
   }
 
-  void buildTable() {
+  /// From the sorted (voxel key, rank) pairs.
+  void build(const std::vector<std::pair<std::uint64_t, std::int32_t>>& pairs) {
     std::size_t voxels = 0;
-    for (std::size_t i = 0; i < entries.size(); ++i) voxels += i == 0 || entries[i].first != entries[i - 1].first;
+    for (std::size_t i = 0; i < pairs.size(); ++i) voxels += i == 0 || pairs[i].first != pairs[i - 1].first;
     std::size_t size = 16;
     while (size < 2 * voxels) size *= 2;
     mask = size - 1;
     slots.assign(size, Slot{});
-    for (std::size_t i = 0; i < entries.size();) {
+    for (std::size_t i = 0; i < pairs.size();) {
       std::size_t j = i;
-      while (j < entries.size() && entries[j].first == entries[i].first) ++j;
-      std::uint64_t s = hash(entries[i].first) & mask;
+      while (j < pairs.size() && pairs[j].first == pairs[i].first) ++j;
+      std::uint64_t s = hash(pairs[i].first) & mask;
       while (slots[s].key != kEmpty) s = (s + 1) & mask;
-      slots[s] = {entries[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
+      slots[s] = {pairs[i].first, static_cast<std::uint32_t>(i), static_cast<std::uint32_t>(j)};
       i = j;
     }
+    entries.resize(pairs.size());
+    for (std::size_t i = 0; i < pairs.size(); ++i) entries[i] = pairs[i].second;
   }
 
   // The pairs of voxel `key`, or an empty run.
@@ -72,7 +96,9 @@ struct GridLevel {
     }
   }
 
-  std::size_t memoryBytes() const { return entries.capacity() * sizeof(entries[0]) + slots.capacity() * sizeof(Slot); }
+  std::size_t memoryBytes() const {
+    return entries.capacity() * sizeof(std::int32_t) + slots.capacity() * sizeof(Slot);
+  }
 };
 
 // Integer voxel coordinate of x along an axis, or nothing outside the key's range.
@@ -95,12 +121,12 @@ void gateBox(const EllipsoidGate& g, Eigen::Vector3f* lo, Eigen::Vector3f* hi) {
 }  // namespace
 
 struct SurfaceIndex::Impl {
-  std::vector<EllipsoidGate> gates;
-  // The gate tests in Morton order of their means (a lookup's candidates are neighbours, so they
-  // share cache lines), and per test the ellipsoid's index. The grid's entries hold test ranks.
-  std::vector<GateTest> tests;
-  std::vector<std::int32_t> test_ellipsoid;
-  std::vector<Eigen::Vector4d> balls;                // per gate: mean, longest semi-axis
+  double k2 = 0;
+  // The gates in Morton order of their means (a lookup's candidates are neighbours, so they share
+  // cache lines); per rank the ellipsoid's index and per ellipsoid its rank. The grid's entries
+  // hold ranks.
+  std::vector<StoredGate> gates;
+  std::vector<std::int32_t> test_ellipsoid, rank_of;
   std::vector<int> levels_used;                      // the non-empty levels
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
@@ -111,17 +137,12 @@ struct SurfaceIndex::Impl {
 SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, const QueryParams& params) {
   auto impl = std::make_shared<Impl>();
   const std::size_t n = ellipsoids_W.size();
-  impl->gates.resize(n);
-  parallelFor(params.threads, n, [&](std::size_t i) {
-    impl->gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m);
-  });
+  impl->k2 = params.gate_sigma * params.gate_sigma;
+  std::vector<EllipsoidGate> gates(n);  // by index, while building
+  parallelFor(params.threads, n,
+              [&](std::size_t i) { gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m); });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
-  impl->balls.resize(n);
-  parallelFor(params.threads, n, [&](std::size_t i) {
-    const EllipsoidGate& g = impl->gates[i];
-    impl->balls[i] = Eigen::Vector4d(g.mean.x(), g.mean.y(), g.mean.z(), g.semi_axes[0]);
-    gateBox(g, &lo[i], &hi[i]);
-  });
+  parallelFor(params.threads, n, [&](std::size_t i) { gateBox(gates[i], &lo[i], &hi[i]); });
   impl->tree.emplace(lo, hi);
   if (n == 0) {
     SurfaceIndex index;
@@ -134,7 +155,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   std::vector<double> half(n);
   Eigen::Vector3d lo_all = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), hi_all = -lo_all;
   for (std::size_t i = 0; i < n; ++i) {
-    half[i] = impl->gates[i].half_extent.maxCoeff();
+    half[i] = gates[i].half_extent.maxCoeff();
     lo_all = lo_all.cwiseMin(lo[i].cast<double>());
     hi_all = hi_all.cwiseMax(hi[i].cast<double>());
   }
@@ -158,21 +179,30 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     parallelFor(params.threads, n, [&](std::size_t i) {
       std::uint64_t code = 0;
       for (int a = 0; a < 3; ++a) {
-        const double c = std::clamp(std::floor((impl->gates[i].mean[a] - impl->origin[a]) / side), 0.0,
+        const double c = std::clamp(std::floor((gates[i].mean[a] - impl->origin[a]) / side), 0.0,
                                     static_cast<double>(VoxelKey::kAxisMax));
         code |= spread(static_cast<std::uint64_t>(c)) << a;
       }
       order[i] = {code, static_cast<std::int32_t>(i)};
     });
     parallelSort(params.threads, order.begin(), order.end());
-    impl->tests.resize(n);
+    impl->gates.resize(n);
     impl->test_ellipsoid.resize(n);
+    impl->rank_of.resize(n);
     parallelFor(params.threads, n, [&](std::size_t r) {
-      const EllipsoidGate& g = impl->gates[static_cast<std::size_t>(order[r].second)];
-      impl->tests[r] = {{g.mean.x(), g.mean.y(), g.mean.z()},
-                        {g.A(0, 0), g.A(1, 1), g.A(2, 2), g.A(0, 1), g.A(0, 2), g.A(1, 2)},
-                        g.k2};
+      const EllipsoidGate& g = gates[static_cast<std::size_t>(order[r].second)];
+      StoredGate& s = impl->gates[r];
+      std::copy(g.mean.data(), g.mean.data() + 3, s.mean);
+      double a[6];
+      gateUpper(g, a);
+      for (int k = 0; k < 6; ++k) s.a[k] = static_cast<float>(a[k]);
+      for (int k = 0; k < 9; ++k) s.axes[k] = static_cast<float>(g.axes.data()[k]);
+      for (int k = 0; k < 3; ++k) {
+        s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
+        s.half_extent[k] = std::nextafter(static_cast<float>(g.half_extent[k] * (1 + 1e-6) + 1e-9), INFINITY);
+      }
       impl->test_ellipsoid[r] = order[r].second;
+      impl->rank_of[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
     });
   }
 
@@ -193,6 +223,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   });
   for (int l = 0; l < kLevels; ++l) {
     GridLevel& level = impl->levels[l];
+    std::vector<std::pair<std::uint64_t, std::int32_t>> pairs;
     for (std::size_t r = 0; r < n; ++r) {
       const auto i = static_cast<std::size_t>(impl->test_ellipsoid[r]);
       if (level_of[i] != l) continue;
@@ -206,10 +237,10 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       for (std::int64_t x = c0[0]; x <= c1[0]; ++x)
         for (std::int64_t y = c0[1]; y <= c1[1]; ++y)
           for (std::int64_t z = c0[2]; z <= c1[2]; ++z)
-            level.entries.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(r)});
+            pairs.push_back({VoxelKey::pack(x, y, z), static_cast<std::int32_t>(r)});
     }
-    parallelSort(params.threads, level.entries.begin(), level.entries.end());
-    level.buildTable();
+    parallelSort(params.threads, pairs.begin(), pairs.end());
+    level.build(pairs);
     if (!level.entries.empty()) impl->levels_used.push_back(l);
   }
   for (std::size_t r = 0; r < n; ++r)
@@ -225,27 +256,37 @@ std::size_t SurfaceIndex::size() const { return impl_ ? impl_->gates.size() : 0;
 
 std::size_t SurfaceIndex::memoryBytes() const {
   if (!impl_) return 0;
-  std::size_t bytes = impl_->gates.capacity() * sizeof(EllipsoidGate) + impl_->tests.capacity() * sizeof(GateTest) +
-                      impl_->test_ellipsoid.capacity() * 4 + impl_->balls.capacity() * sizeof(Eigen::Vector4d) +
-                      impl_->oversize.capacity() * 4;
+  std::size_t bytes = impl_->gates.capacity() * sizeof(StoredGate) + impl_->test_ellipsoid.capacity() * 4 +
+                      impl_->rank_of.capacity() * 4 + impl_->oversize.capacity() * 4;
   for (const GridLevel& level : impl_->levels) bytes += level.memoryBytes();
-  // BoxTree: about 2 n / 4 nodes of 40 B and n item indices.
-  bytes += size() / 2 * 40 + size() * 4;
-  return bytes;
+  return bytes + impl_->tree->memoryBytes();
 }
 
-const EllipsoidGate& SurfaceIndex::gateOf(std::size_t i) const { return impl_->gates[i]; }
+EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
+  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  EllipsoidGate g;
+  g.mean = Eigen::Vector3d(s.mean);
+  g.A << s.a[0], s.a[3], s.a[4], s.a[3], s.a[1], s.a[5], s.a[4], s.a[5], s.a[2];
+  g.axes = s.axesMatrix();
+  g.semi_axes = s.semiAxes();
+  g.half_extent = Eigen::Vector3f(s.half_extent).cast<double>();
+  g.k2 = impl_->k2;
+  return g;
+}
 
-const Eigen::Vector4d& SurfaceIndex::ballOf(std::size_t i) const { return impl_->balls[i]; }
+Eigen::Vector4d SurfaceIndex::ballOf(std::size_t i) const {
+  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  return {s.mean[0], s.mean[1], s.mean[2], s.semi_axes[0]};
+}
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
   std::pair<std::int32_t, double> best{-1, std::numeric_limits<double>::infinity()};
   if (!impl_) return best;
   const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
-    const GateTest& g = impl_->tests[static_cast<std::size_t>(r)];
+    const StoredGate& g = impl_->gates[static_cast<std::size_t>(r)];
     const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
                                     g.a[2], g.a[3], g.a[4], g.a[5]);
-    if (m2 > g.k2 || m2 > best.second) return;
+    if (m2 > impl_->k2 || m2 > best.second) return;
     const std::int32_t i = impl_->test_ellipsoid[static_cast<std::size_t>(r)];
     if (m2 < best.second || i < best.first) best = {i, m2};
   };
@@ -256,7 +297,7 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
     const auto z = voxelCoord(q_W.z(), impl_->origin.z(), level.side);
     if (!x || !y || !z) continue;
     const auto [b, e] = level.find(VoxelKey::pack(*x, *y, *z));
-    for (std::uint32_t k = b; k < e; ++k) consider(level.entries[k].second);
+    for (std::uint32_t k = b; k < e; ++k) consider(level.entries[k]);
   }
   for (const std::int32_t i : impl_->oversize) consider(i);
   return best;
@@ -270,28 +311,32 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
     best.ellipsoid = inside.first, best.distance = 0, best.closest = q_W;
     return best;
   }
-  const auto& gates = impl_->gates;
-  const auto [i, d2] = impl_->tree->nearest(
+  const Impl& im = *impl_;
+  const auto stored = [&](std::uint32_t i) -> const StoredGate& {
+    return im.gates[static_cast<std::size_t>(im.rank_of[i])];
+  };
+  const auto [i, d2] = im.tree->nearest(
       q_W,
       [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
-        const EllipsoidGate& g = gates[j];
+        const StoredGate& g = stored(j);
         // Lower bounds first (with slack for rounding): the gate's box, and the coin that holds
         // it (|offset along the shortest axis| <= e2, across it <= e0), tight for the flat
         // patches of a surface, of which many are almost equally near a point far from them.
-        const Eigen::Vector3d r = q - g.mean;
-        const double box2 = (r.cwiseAbs() - g.half_extent).cwiseMax(0.0).squaredNorm();
-        const double h = r.dot(g.axes.col(2));
+        const Eigen::Vector3d r = q - Eigen::Vector3d(g.mean);
+        const double box2 = (r.cwiseAbs() - Eigen::Vector3f(g.half_extent).cast<double>()).cwiseMax(0.0).squaredNorm();
+        const double h = r.x() * g.axes[6] + r.y() * g.axes[7] + r.z() * g.axes[8];
         const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
         const double lower2 = std::max(box2, dh * dh + da * da);
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
-        const double d = distanceToGate(g, q);
+        const double d = g.distance(im.k2, q, nullptr);
         return d * d;
       },
       max_distance * max_distance);
   if (i < 0) return best;
   best.ellipsoid = static_cast<std::int32_t>(i);
-  best.distance = distanceToGate(gates[static_cast<std::size_t>(i)], q_W, &best.closest);
+  const StoredGate& g = stored(static_cast<std::uint32_t>(i));
+  best.distance = g.distance(im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -299,10 +344,12 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
 SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const {
   Hit best;
   if (!impl_ || impl_->gates.empty()) return best;
-  const auto& gates = impl_->gates;
-  const auto [i, t] = impl_->tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
-    const EllipsoidGate& g = gates[j];
-    return gateRayEntry(g, gateRayOrigin(g, o), d, bound);
+  const Impl& im = *impl_;
+  const auto [i, t] = im.tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
+    const StoredGate& g = im.gates[static_cast<std::size_t>(im.rank_of[j])];
+    double a[6];
+    g.upper(a);
+    return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
   });
   if (i >= 0) best = {static_cast<std::int32_t>(i), t};
   return best;

@@ -43,10 +43,10 @@ class SurfaceIndex {
   /// (box tree, nearest node first).
   Hit firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const;
 
-  /// Ellipsoid i's gate (as built: the kernels' input).
-  const EllipsoidGate& gateOf(std::size_t i) const;
+  /// Ellipsoid i's gate (the kernels' input; half_extent rounded up to float).
+  EllipsoidGate gateOf(std::size_t i) const;
   /// A ball holding ellipsoid i's gate: its mean and longest semi-axis (packed, for culling).
-  const Eigen::Vector4d& ballOf(std::size_t i) const;
+  Eigen::Vector4d ballOf(std::size_t i) const;
 
  private:
   struct Impl;
