@@ -23,20 +23,34 @@ struct Shares {
   }
   double share(std::size_t k) const { return n ? static_cast<double>(k) / static_cast<double>(n) : 0.0; }
   nlohmann::json json() const {
-    return {{"points", n}, {"occupied", rounded(share(occupied))}, {"free", rounded(share(free))},
+    return {{"points", n},
+            {"occupied", rounded(share(occupied))},
+            {"free", rounded(share(free))},
             {"unknown", rounded(share(unknown))}};
   }
 };
 
 /// Why a surface point is not in a global gate: the first stage that does not hold it.
-enum Cause { kLostInMerge, kLostInOcclusion, kLostInFusion, kFilteredCell, kOutsideGate, kNoCell, kNoKeyframe, kCauses };
+enum Cause {
+  kLostInMerge,
+  kLostInOcclusion,
+  kLostInFusion,
+  kFilteredCell,
+  kOutsideGate,
+  kNoCell,
+  kNoKeyframe,
+  kCauses
+};
 const char* const kCauseName[kCauses] = {"in a kept local cell's gate, not in a merged ellipsoid's",
                                          "in a merged ellipsoid's gate, removed as an occluder",
                                          "in the gate of an ellipsoid fused away",
-                                         "only in a filtered cell's gate", "outside the gate of its pixel's cell",
-                                         "no cell at its pixel in any keyframe", "outside every keyframe's container"};
-const char* const kCauseKey[kCauses] = {"lost_in_merge", "lost_in_occlusion_removal", "lost_in_fusion", "filtered_cell", "outside_gate", "no_cell",
-                                        "no_keyframe"};
+                                         "only in a filtered cell's gate",
+                                         "outside the gate of its pixel's cell",
+                                         "no cell at its pixel in any keyframe",
+                                         "outside every keyframe's container"};
+const char* const kCauseKey[kCauses] = {
+    "lost_in_merge", "lost_in_occlusion_removal", "lost_in_fusion", "filtered_cell", "outside_gate", "no_cell",
+    "no_keyframe"};
 
 // The filtered cell (of any keyframe) at q's pixel whose gate holds q: its incidence angle (deg,
 // smallest-eigenvalue axis against the ray to its mean) and sqrt(lambda_max / lambda_max expected).
@@ -59,8 +73,8 @@ bool filteredCellShape(const KeyframeGraph& graph, const GlobalMap& global, cons
     if ((q - st.mean).dot(A * (q - st.mean)) > qp.gate_sigma * qp.gate_sigma) continue;
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> es(cov);
     const Eigen::Vector2d uv = cam.project(st.mean);
-    const Eigen::Matrix3d expected = expectedCellCovariance(FilterParams{}.model, cam, uv.x(), uv.y(),
-                                                            st.mean.z(), kf.container.cellSizePx());
+    const Eigen::Matrix3d expected =
+        expectedCellCovariance(FilterParams{}.model, cam, uv.x(), uv.y(), st.mean.z(), kf.container.cellSizePx());
     Eigen::SelfAdjointEigenSolver<Eigen::Matrix3d> ee(expected);
     *theta = std::acos(std::min(1.0, std::abs(es.eigenvectors().col(0).dot(st.mean.normalized())))) * 180 / M_PI;
     *ratio = std::sqrt(es.eigenvalues()(2) / ee.eigenvalues()(2));
@@ -124,8 +138,11 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
   const double k = qp.gate_sigma;
   // 0 beside the gate, 1 within k sigma of the surface, 2 behind it, 3 filtered cell, 4 empty cell, 5 outside
   const char* const names[] = {"in front of a kept cell, the ray beside its gate",
-                               "in front of a kept cell by less than k sigma", "behind a kept cell's surface",
-                               "a filtered cell at its pixel", "no cell at its pixel", "outside every container"};
+                               "in front of a kept cell by less than k sigma",
+                               "behind a kept cell's surface",
+                               "a filtered cell at its pixel",
+                               "no cell at its pixel",
+                               "outside every container"};
   std::size_t count[6] = {}, n_unknown = 0;
   std::vector<Classification> cls(1);
   for (const Eigen::Vector3d& q : points) {
@@ -168,8 +185,8 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
 
 nlohmann::json reportHeldOut(const HeldOutPoints& points, const KeyframeGraph& graph, const GlobalMap& global,
                              const QueryMap& query, const std::vector<HeldOutPeer>& peers, std::ostringstream* text) {
-  const std::vector<const std::vector<Eigen::Vector3d>*> sets = {&points.surface, &points.front_2cm,
-                                                                 &points.front_5cm, &points.half_way};
+  const std::vector<const std::vector<Eigen::Vector3d>*> sets = {&points.surface, &points.front_2cm, &points.front_5cm,
+                                                                 &points.half_way};
   const char* const set_key[] = {"surface", "front_2cm", "front_5cm", "half_way"};
   nlohmann::json out;
   char buf[256];
@@ -287,8 +304,10 @@ nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, c
   }
   std::snprintf(buf, sizeof buf, "  filtered: %zu in a cell of fewer than 6 points\n", filtered_few);
   *text << buf;
-  std::snprintf(buf, sizeof buf, "  filtered cells' incidence: <60 %zu, 60-65 %zu, 65-70 %zu, 70-75 %zu, 75-80 %zu, 80-85 %zu, >85 %zu\n",
-                theta_hist[0], theta_hist[1], theta_hist[2], theta_hist[3], theta_hist[4], theta_hist[5], theta_hist[6]);
+  std::snprintf(
+      buf, sizeof buf,
+      "  filtered cells' incidence: <60 %zu, 60-65 %zu, 65-70 %zu, 70-75 %zu, 75-80 %zu, 80-85 %zu, >85 %zu\n",
+      theta_hist[0], theta_hist[1], theta_hist[2], theta_hist[3], theta_hist[4], theta_hist[5], theta_hist[6]);
   *text << buf;
   if (!ratios.empty()) {
     std::sort(ratios.begin(), ratios.end());

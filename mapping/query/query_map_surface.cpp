@@ -161,19 +161,19 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
                        Eigen::Vector3d(0, 1, -t).normalized(), Eigen::Vector3d(0, -1, b).normalized()};
   }
   const std::size_t n = surface.size();
-  std::vector<std::pair<double, std::int32_t>> nearest(n);  // (t_lo, index); index -1: not in view
-  std::vector<std::array<std::int16_t, 4>> box(n);          // its image box
-  parallelFor(threads, n, [&](std::size_t i) {
+  std::vector<std::pair<double, std::int32_t>> nearest(n, {0.0, -1});  // (t_lo, index); index -1: not in view
+  std::vector<std::array<std::int16_t, 4>> box(n);                     // its image box
+  parallelFor(threads, n, [&](std::size_t r) {  // in storage order (SurfaceIndex::ellipsoidAtRank)
+    const std::size_t i = static_cast<std::size_t>(surface.ellipsoidAtRank(r));
     int u0, u1, v0, v1;
-    nearest[i] = {0.0, -1};
     // Cheap first: the gate's bounding ball behind the camera or outside a side of the frustum.
-    const Eigen::Vector4d ball = surface.ballOf(i);
+    const Eigen::Vector4d ball = surface.ballAtRank(r);
     const Eigen::Vector3d c = T_C_W * Eigen::Vector3d(ball.head<3>());
     const double radius = ball[3] * (1 + 1e-9) + 1e-9;
     if (c.z() + radius <= 0) return;
     for (const Eigen::Vector3d& n : frustum_normals)
       if (n.dot(c) < -radius) return;
-    const EllipsoidGate g = surface.gateOf(i);
+    const EllipsoidGate g = surface.gateAtRank(r);
     if (!gateImageBounds(g, camera, T_C_W, 1.0, &u0, &u1, &v0, &v1)) return;
     box[i] = {static_cast<std::int16_t>(u0), static_cast<std::int16_t>(u1), static_cast<std::int16_t>(v0),
               static_cast<std::int16_t>(v1)};

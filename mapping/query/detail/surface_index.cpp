@@ -263,7 +263,13 @@ std::size_t SurfaceIndex::memoryBytes() const {
 }
 
 EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
-  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  return gateAtRank(static_cast<std::size_t>(impl_->rank_of[i]));
+}
+
+std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->test_ellipsoid[r]; }
+
+EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
+  const StoredGate& s = impl_->gates[r];
   EllipsoidGate g;
   g.mean = Eigen::Vector3d(s.mean);
   g.A << s.a[0], s.a[3], s.a[4], s.a[3], s.a[1], s.a[5], s.a[4], s.a[5], s.a[2];
@@ -274,8 +280,8 @@ EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
   return g;
 }
 
-Eigen::Vector4d SurfaceIndex::ballOf(std::size_t i) const {
-  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+Eigen::Vector4d SurfaceIndex::ballAtRank(std::size_t r) const {
+  const StoredGate& s = impl_->gates[r];
   return {s.mean[0], s.mean[1], s.mean[2], s.semi_axes[0]};
 }
 

@@ -45,8 +45,12 @@ class SurfaceIndex {
 
   /// Ellipsoid i's gate (the kernels' input; half_extent rounded up to float).
   EllipsoidGate gateOf(std::size_t i) const;
-  /// A ball holding ellipsoid i's gate: its mean and longest semi-axis (packed, for culling).
-  Eigen::Vector4d ballOf(std::size_t i) const;
+  /// The gates are stored in Morton order of their means: the ellipsoid at storage rank r, and
+  /// its gate and bounding ball (mean, longest semi-axis). A pass over every gate reads memory in
+  /// order by rank, where one by ellipsoid index jumps.
+  std::int32_t ellipsoidAtRank(std::size_t r) const;
+  EllipsoidGate gateAtRank(std::size_t r) const;
+  Eigen::Vector4d ballAtRank(std::size_t r) const;
 
  private:
   struct Impl;
