@@ -184,8 +184,10 @@ double distanceToGate(const double mean[3], const double a[6], double k2, const 
   return d;
 }
 
-Eigen::Vector3d gateNormal(const EllipsoidGate& g, const Eigen::Vector3d& p) {
-  const Eigen::Vector3d n = g.A * (p - g.mean);
+Eigen::Vector3d gateNormal(const EllipsoidGate& g, const Eigen::Vector3d& p) { return gateNormal(g.A, g.mean, p); }
+
+Eigen::Vector3d gateNormal(const Eigen::Matrix3d& A, const Eigen::Vector3d& mean, const Eigen::Vector3d& p) {
+  const Eigen::Vector3d n = A * (p - mean);
   const double len = n.norm();
   return len > 0 ? Eigen::Vector3d(n / len) : Eigen::Vector3d::Zero();
 }

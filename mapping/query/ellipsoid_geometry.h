@@ -125,6 +125,8 @@ inline double gateRayEntry(const EllipsoidGate& g, const GateRayOrigin& o, const
 
 /// Outward unit normal of the gate's surface at p: A (p - mean) normalised.
 Eigen::Vector3d gateNormal(const EllipsoidGate& g, const Eigen::Vector3d& p);
+/// The same from the gate's A and mean alone.
+Eigen::Vector3d gateNormal(const Eigen::Matrix3d& A, const Eigen::Vector3d& mean, const Eigen::Vector3d& p);
 
 /// A ray direction as every query uses it: d / |d|. Throws nothing; the caller checks d.
 inline Eigen::Vector3d unitDirection(const Eigen::Vector3d& d) { return d / d.norm(); }

@@ -34,7 +34,7 @@ RayHit makeHit(const SurfaceIndex& surface, const Eigen::Vector3d& o, const Eige
   hit.hit = true;
   hit.t_m = h.t;
   hit.point_W = o + h.t * d;
-  hit.normal_W = gateNormal(surface.gateOf(static_cast<std::size_t>(h.ellipsoid)), hit.point_W);
+  hit.normal_W = surface.normalOf(static_cast<std::size_t>(h.ellipsoid), hit.point_W);
   hit.ellipsoid = h.ellipsoid;
   return hit;
 }

@@ -32,6 +32,11 @@ struct StoredGate {
   float half_extent[3];
 
   void upper(double out[6]) const { std::copy(a, a + 6, out); }
+  Eigen::Matrix3d matrixA() const {
+    Eigen::Matrix3d m;
+    m << a[0], a[3], a[4], a[3], a[1], a[5], a[4], a[5], a[2];
+    return m;
+  }
   Eigen::Matrix3d axesMatrix() const {
     Eigen::Matrix3d m;
     std::copy(axes, axes + 9, m.data());
@@ -268,11 +273,16 @@ EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
 
 std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->test_ellipsoid[r]; }
 
+Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) const {
+  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  return gateNormal(s.matrixA(), Eigen::Vector3d(s.mean), p);
+}
+
 EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
   EllipsoidGate g;
   g.mean = Eigen::Vector3d(s.mean);
-  g.A << s.a[0], s.a[3], s.a[4], s.a[3], s.a[1], s.a[5], s.a[4], s.a[5], s.a[2];
+  g.A = s.matrixA();
   g.axes = s.axesMatrix();
   g.semi_axes = s.semiAxes();
   g.half_extent = Eigen::Vector3f(s.half_extent).cast<double>();

@@ -45,6 +45,8 @@ class SurfaceIndex {
 
   /// Ellipsoid i's gate (the kernels' input; half_extent rounded up to float).
   EllipsoidGate gateOf(std::size_t i) const;
+  /// gateNormal(gateOf(i), p), bit for bit, without building the whole gate (a ray hit's normal).
+  Eigen::Vector3d normalOf(std::size_t i, const Eigen::Vector3d& p) const;
   /// The gates are stored in Morton order of their means: the ellipsoid at storage rank r, and
   /// its gate and bounding ball (mean, longest semi-axis). A pass over every gate reads memory in
   /// order by rank, where one by ellipsoid index jumps.
