@@ -10,7 +10,6 @@
 #include "app/bench/bench_report.h"
 #include "mapping/local_map/ellipsoid_filter.h"
 #include "mapping/local_map/sensor_model.h"
-#include "mapping/query/detail/keyframe_views.h"
 
 namespace vdmap::app {
 namespace {
@@ -93,9 +92,9 @@ GlobalMap everyCell(const KeyframeGraph& graph, const GlobalMap& global) {
   return every;
 }
 
-bool anyOccupied(const KeyframeViews& views, std::size_t keyframes, const Eigen::Vector3d& q) {
+bool anyOccupied(const QueryMap& views, std::size_t keyframes, const Eigen::Vector3d& q) {
   for (std::size_t id = 0; id < keyframes; ++id)
-    if (views.verdict(static_cast<int>(id), q).state == Occupancy::kOccupied) return true;
+    if (views.keyframeVerdict(static_cast<int>(id), q).state == Occupancy::kOccupied) return true;
   return false;
 }
 
@@ -133,8 +132,8 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
                                  const KeyframeGraph& graph, const GlobalMap& global, const QueryMap& query,
                                  std::ostringstream* text) {
   const QueryParams qp = query.params();
-  const KeyframeViews kept = KeyframeViews::build(graph, global, qp, {});
-  const KeyframeViews all = KeyframeViews::build(graph, everyCell(graph, global), qp, {});
+  const QueryMap& kept = query;
+  const QueryMap all = QueryMap::build(graph, everyCell(graph, global), qp);
   const double k = qp.gate_sigma;
   // 0 beside the gate, 1 within k sigma of the surface, 2 behind it, 3 filtered cell, 4 empty cell, 5 outside
   const char* const names[] = {"in front of a kept cell, the ray beside its gate",
@@ -151,12 +150,12 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
     ++n_unknown;
     int best = 5;
     for (std::size_t id = 0; id < graph.size(); ++id) {
-      const ViewVerdict v = kept.verdict(static_cast<int>(id), q);
+      const ViewVerdict v = kept.keyframeVerdict(static_cast<int>(id), q);
       if (v.sigma_t > 0) {
         best = std::min(best, v.z < -k ? 0 : v.z < 0 ? 1 : 2);
         continue;
       }
-      if (all.verdict(static_cast<int>(id), q).sigma_t > 0) {
+      if (all.keyframeVerdict(static_cast<int>(id), q).sigma_t > 0) {
         best = std::min(best, 3);
         continue;
       }
@@ -232,15 +231,15 @@ nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, c
   std::vector<Classification> cls(1);
   // Causes of vdmap's surface points outside every global gate.
   QueryParams qp = query.params();
-  const KeyframeViews kept = KeyframeViews::build(graph, global, qp, {});
+  const QueryMap& kept = query;
   GlobalMap many = global;  // also the cells with too few points
   for (std::size_t id = 0; id < graph.size(); ++id) {
     const auto& cells = graph.keyframe(static_cast<int>(id)).container.cells();
     for (std::size_t i = 0; i < cells.size(); ++i)
       many.kept[id][i] = many.kept[id][i] || (cells[i].n >= 2 && cells[i].n < FilterParams{}.min_points);
   }
-  const KeyframeViews all = KeyframeViews::build(graph, everyCell(graph, global), qp, {});
-  const KeyframeViews few = KeyframeViews::build(graph, many, qp, {});
+  const QueryMap all = QueryMap::build(graph, everyCell(graph, global), qp);
+  const QueryMap few = QueryMap::build(graph, many, qp);
   std::size_t filtered_few = 0;
   std::size_t theta_hist[7] = {};
   std::vector<double> ratios;
@@ -275,7 +274,7 @@ nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, c
     bool has_cell = false, in_image = false;
     double best_z = 1e300;
     for (std::size_t id = 0; id < graph.size(); ++id) {
-      const ViewVerdict v = all.verdict(static_cast<int>(id), q);
+      const ViewVerdict v = all.keyframeVerdict(static_cast<int>(id), q);
       if (v.sigma_t > 0) has_cell = true, best_z = std::min(best_z, std::abs(v.z));
       const Keyframe& kf = graph.keyframe(static_cast<int>(id));
       const Eigen::Vector3d k = kf.T_W_K.inverse() * q;

@@ -42,6 +42,12 @@ void checkPoints(std::span<const Eigen::Vector3d> q_W, std::size_t out_size) {
     if (!q_W[i].allFinite()) throw std::invalid_argument("point " + std::to_string(i) + " is not finite");
 }
 
+void checkKeyframe(int keyframe, std::size_t keyframes) {
+  if (keyframe < 0 || static_cast<std::size_t>(keyframe) >= keyframes)
+    throw std::invalid_argument("keyframe " + std::to_string(keyframe) + " is not in the map (" +
+                                counted(static_cast<long long>(keyframes), "keyframe") + ")");
+}
+
 /// body(i) for i in [0, n) through parallelFor in chunks of 1024 points (a point is cheap: a
 /// task per point would cost as much as the point).
 template <typename Body>
@@ -132,12 +138,16 @@ void QueryMap::classify(std::span<const Eigen::Vector3d> q_W, std::span<Classifi
 void QueryMap::classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d> q_W,
                                   std::span<Classification> out) const {
   const Data& d = *data_;
-  if (keyframe < 0 || static_cast<std::size_t>(keyframe) >= d.views.size())
-    throw std::invalid_argument("keyframe " + std::to_string(keyframe) + " is not in the map (" +
-                                counted(static_cast<long long>(d.views.size()), "keyframe") + ")");
+  checkKeyframe(keyframe, d.views.size());
   checkPoints(q_W, out.size());
   forEachPoint(d.params.threads, q_W.size(),
                [&](std::size_t i) { out[i] = fromVerdict(d.views.verdict(keyframe, q_W[i]), keyframe); });
+}
+
+ViewVerdict QueryMap::keyframeVerdict(int keyframe, const Eigen::Vector3d& q_W) const {
+  checkKeyframe(keyframe, data_->views.size());
+  if (!q_W.allFinite()) throw std::invalid_argument("the point is not finite");
+  return data_->views.verdict(keyframe, q_W);
 }
 
 }  // namespace vdmap

@@ -90,6 +90,14 @@ struct RayHit {
   std::int32_t ellipsoid = -1;
 };
 
+/// One keyframe's verdict about a point (docs/method.md 13.1).
+struct ViewVerdict {
+  Occupancy state = Occupancy::kUnknown;  ///< kUnknown: the keyframe does not see it (or sees it behind its surface)
+  double z = 0;                           ///< (|q| - t*) / sigma_t of the point's own cell: < -k free
+  double sigma_t = 0;                     ///< the deciding cell's sigma along the ray (m)
+  double m2 = 0;                          ///< squared gate distance to the nearest of the 3x3 cells (occupied)
+};
+
 /// Immutable after build(): every method is const and safe to call from many threads at once; a
 /// copy shares the built data. Batched calls run on params.threads threads and give the same
 /// answers for any thread count (each answer depends on its input alone).
@@ -125,6 +133,9 @@ class QueryMap {
   /// The paper's arm-planning case: what keyframe `keyframe`'s local map alone says (its own cells,
   /// occupied within their gates, free in front of them, unknown elsewhere).
   void classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d> q_W, std::span<Classification> out) const;
+  /// The same verdict with its terms, for diagnostics: the depth relative to the surface of the
+  /// point's own cell (sigma_t > 0 when the keyframe has a kept cell at the point's pixel).
+  ViewVerdict keyframeVerdict(int keyframe, const Eigen::Vector3d& q_W) const;
   void distance(std::span<const Eigen::Vector3d> q_W, std::span<DistanceResult> out,
                 double max_distance_m = std::numeric_limits<double>::infinity()) const;
   /// One entry per body, in ascending body number. Throws for radius <= 0 or clearance < 0.

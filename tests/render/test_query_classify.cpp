@@ -165,8 +165,11 @@ void checkAgainstOracle(const KeyframeGraph& graph, const GlobalMap& global, con
             ADD_FAILURE() << what << ": keyframe " << id << " sees " << points[i].transpose() << " but is no candidate";
         }
         expectMatchesOracle(classifyInKeyframe(map, id, points), one, points, what + " keyframe " + std::to_string(id));
+        for (std::size_t i = 0; i < points.size(); i += 97)  // the verdict with its terms says the same
+          EXPECT_EQ(map.keyframeVerdict(id, points[i]).state, one[i].state) << what << " keyframe " << id;
       }
       EXPECT_EQ(missing, 0) << what;
+      EXPECT_THROW((void)map.keyframeVerdict(static_cast<int>(graph.size()), points[0]), std::invalid_argument);
     }
   }
 }

@@ -13,14 +13,6 @@
 
 namespace vdmap {
 
-/// One keyframe's verdict about a point (docs/method.md 13.1).
-struct ViewVerdict {
-  Occupancy state = Occupancy::kUnknown;  ///< kUnknown: the keyframe does not see it (or sees it behind its surface)
-  double z = 0;                           ///< (|q| - t*) / sigma_t of the point's own cell: < -k free
-  double sigma_t = 0;                     ///< the deciding cell's sigma along the ray (m)
-  double m2 = 0;                          ///< squared gate distance to the nearest of the 3x3 cells (occupied)
-};
-
 /// Immutable after build; const methods are thread-safe. A copy shares the built data.
 class KeyframeViews {
  public:
