@@ -63,7 +63,7 @@ bool filteredCellShape(const KeyframeGraph& graph, const GlobalMap& global, cons
     const int g = kf.container.gridIndexOfPixel(cam.fx * q.x() / q.z() + cam.cx, cam.fy * q.y() / q.z() + cam.cy);
     if (g < 0) continue;
     const StoredCell* cell = kf.container.find(g);
-    if (!cell || cell->n < 6) continue;
+    if (!cell || cell->n < static_cast<std::uint32_t>(FilterParams{}.min_points)) continue;
     const std::size_t index = static_cast<std::size_t>(cell - kf.container.cells().data());
     if (global.kept[id][index]) continue;
     const CellStats st = cell->toStats();
@@ -132,7 +132,6 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
                                  const KeyframeGraph& graph, const GlobalMap& global, const QueryMap& query,
                                  std::ostringstream* text) {
   const QueryParams qp = query.params();
-  const QueryMap& kept = query;
   const QueryMap all = QueryMap::build(graph, everyCell(graph, global), qp);
   const double k = qp.gate_sigma;
   // 0 beside the gate, 1 within k sigma of the surface, 2 behind it, 3 filtered cell, 4 empty cell, 5 outside
@@ -150,7 +149,7 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
     ++n_unknown;
     int best = 5;
     for (std::size_t id = 0; id < graph.size(); ++id) {
-      const ViewVerdict v = kept.keyframeVerdict(static_cast<int>(id), q);
+      const ViewVerdict v = query.keyframeVerdict(static_cast<int>(id), q);
       if (v.sigma_t > 0) {
         best = std::min(best, v.z < -k ? 0 : v.z < 0 ? 1 : 2);
         continue;
@@ -231,7 +230,6 @@ nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, c
   std::vector<Classification> cls(1);
   // Causes of vdmap's surface points outside every global gate.
   QueryParams qp = query.params();
-  const QueryMap& kept = query;
   GlobalMap many = global;  // also the cells with too few points
   for (std::size_t id = 0; id < graph.size(); ++id) {
     const auto& cells = graph.keyframe(static_cast<int>(id)).container.cells();
@@ -257,7 +255,7 @@ nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, c
   for (const Eigen::Vector3d& q : points) {
     query.classify({&q, 1}, cls);
     if (cls[0].state == Occupancy::kOccupied) continue;
-    if (anyOccupied(kept, graph.size(), q)) {
+    if (anyOccupied(query, graph.size(), q)) {
       ++cause[occupiedIn(unfused, q) ? kLostInFusion : occupiedIn(merged, q) ? kLostInOcclusion : kLostInMerge];
       continue;
     }
