@@ -92,11 +92,14 @@ nlohmann::json timeQueryDetail(const QueryDetailInput& in, std::ostringstream* t
 
   const QueryMap::MemoryParts parts = in.query.memoryParts();
   const auto mb = [](std::size_t bytes) { return static_cast<double>(bytes) / (1024.0 * 1024.0); };
-  std::snprintf(buf, sizeof buf, "QueryMap memory [MB]: %.1f (keyframe views %.1f, surface index %.1f)\n",
-                mb(in.query.memoryBytes()), mb(parts.keyframe_views), mb(parts.surface));
+  std::snprintf(buf, sizeof buf,
+                "QueryMap memory [MB]: %.1f (keyframe views %.1f, frames' free space %.1f, surface index %.1f)\n",
+                mb(in.query.memoryBytes()), mb(parts.keyframe_views), mb(parts.frames), mb(parts.surface));
   *text << buf;
-  out["memory_bytes"] = {
-      {"total", in.query.memoryBytes()}, {"keyframe_views", parts.keyframe_views}, {"surface", parts.surface}};
+  out["memory_bytes"] = {{"total", in.query.memoryBytes()},
+                         {"keyframe_views", parts.keyframe_views},
+                         {"frames", parts.frames},
+                         {"surface", parts.surface}};
   return out;
 }
 

@@ -367,7 +367,7 @@ KeyframeGraph readMapFolderLocalMaps(const fs::path& dir, SensorModel* model) {
   try {
     for (const StampedPose& pose : readTumTrajectory(poses_file)) {
       Keyframe k{static_cast<int>(graph.size()),       0, pose.t, pose.T_W_C, {}, {}, {},
-                 KeyframeContainer(camera, cell_size), 0};
+                 KeyframeContainer(camera, cell_size), 0, {}};
       graph.add(std::move(k));
     }
   } catch (const std::invalid_argument& e) {

@@ -541,6 +541,45 @@ void readCells(SessionReader* r, std::uint32_t cells, KeyframeContainer* contain
   }
 }
 
+// --- the integrated frames' free space (version >= 7) ------------------------------------------
+// Their poses, then every frame's blocks (u16 each) in one zlib stream, by byte planes.
+
+void writeFramesFree(Writer* w, const std::vector<FrameFreeSpace>& frames) {
+  w->u32(static_cast<std::uint32_t>(frames.size()));
+  Writer blocks;
+  for (const FrameFreeSpace& f : frames) {
+    writeTransform(w, f.T_K_C);
+    for (std::uint16_t b : f.near_mm) blocks.u16(b);
+  }
+  if (frames.empty()) return;
+  const std::string packed = pack(toPlanes(blocks.str(), 2));
+  w->u32(static_cast<std::uint32_t>(packed.size()));
+  w->bytes(packed);
+}
+
+void readFramesFree(SessionReader* r, const PinholeCamera& camera, int frames_integrated,
+                    std::vector<FrameFreeSpace>* frames) {
+  const std::uint32_t n = r->count(kTransformBytes, "frames' free space");
+  r->check(n <= static_cast<std::uint32_t>(frames_integrated),
+           std::to_string(n) + " frames' free space in a keyframe of " + std::to_string(frames_integrated) + " frames");
+  frames->resize(n);
+  for (FrameFreeSpace& f : *frames) f.T_K_C = readTransform(r, "free-space frame pose");
+  if (n == 0) return;
+  const int cols = (camera.width + kFreeBlockPx - 1) / kFreeBlockPx,
+            rows = (camera.height + kFreeBlockPx - 1) / kFreeBlockPx;
+  const std::uint64_t per_frame = static_cast<std::uint64_t>(cols) * rows;
+  const std::uint32_t packed_bytes = r->count(1, "packed free-space blocks");
+  const std::string raw = fromPlanes(unpack(*r, r->bytes(packed_bytes, "packed free-space blocks"),
+                                            std::uint64_t{n} * per_frame * 2, "packed free-space blocks"),
+                                     2);
+  SessionReader blocks = r->over(raw);
+  for (FrameFreeSpace& f : *frames) {
+    f.cols = cols, f.rows = rows;
+    f.near_mm.resize(per_frame);
+    for (std::uint16_t& b : f.near_mm) b = blocks.u16("free-space block");
+  }
+}
+
 void writeKeyframe(Writer* w, const Keyframe& k) {
   w->i32(k.id);
   w->i32(k.frame_index);
@@ -567,14 +606,16 @@ void writeKeyframe(Writer* w, const Keyframe& k) {
   const std::string packed = pack(raw);
   w->u32(static_cast<std::uint32_t>(packed.size()));
   w->bytes(packed);
+  writeFramesFree(w, k.frames_free);
 }
 
 Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::uint32_t version,
                       const SessionDecodeOptions& options) {
   const bool decode_images = options.decode_images;
   const PinholeCamera& camera = info.camera;
-  Keyframe k{
-      id, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(camera, info.mapper.local_map.cell_size_px), 0};
+  Keyframe k{id, 0,  0.0, Transform::Identity(),
+             {}, {}, {},  KeyframeContainer(camera, info.mapper.local_map.cell_size_px),
+             0,  {}};
   r->check(r->i32("keyframe id") == id, "keyframe ids must be 0, 1, 2, ... in order");
   k.frame_index = r->i32("frame index");
   r->check(k.frame_index >= 0, "frame index must be >= 0");
@@ -620,6 +661,7 @@ Keyframe readKeyframe(SessionReader* r, int id, const SessionInfo& info, std::ui
     readCells(r, r->count(kCellBytes, "cells"), &k.container);
   }
   r->check(f.keypoints.empty() || !f.descriptors.empty(), "keypoints without descriptors");
+  if (version >= 7) readFramesFree(r, camera, k.frames_integrated, &k.frames_free);
   r->expectEnd();
   if (!options.keep_features) f = FrameFeatures{};
   if (!options.keep_images) {

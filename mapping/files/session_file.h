@@ -24,8 +24,10 @@ namespace vdmap {
 /// 6 stores each keyframe image as the PNG or JPEG file the keyframe holds and packs the
 /// keypoints, descriptors and cells with zlib (a third of the size), and no longer stores the
 /// loop closures' wall-clock optimisation times, so equal runs give equal files (4 and 5 load
-/// with those times dropped).
-inline constexpr std::uint32_t kSessionFormatVersion = 6;
+/// with those times dropped). 7 adds, per keyframe, what each integrated frame saw free (its
+/// pose in the keyframe and its blocks' nearest depths; 6 and older load without: free space then
+/// comes from the keyframes' views alone).
+inline constexpr std::uint32_t kSessionFormatVersion = 7;
 
 /// Everything of a session besides the keyframe graph.
 struct SessionInfo {

@@ -16,6 +16,7 @@ KeyframeMemory Keyframe::memory() const {
                features.depth_m.capacity() * sizeof(float);
   m.ellipsoids = container.cells().capacity() * sizeof(StoredCell);
   m.cell_slots = container.memoryBytes() - m.ellipsoids;
+  for (const FrameFreeSpace& f : frames_free) m.free_space += f.memoryBytes();
   return m;
 }
 

@@ -11,6 +11,7 @@
 #include "mapping/keyframe/covisibility_graph.h"
 #include "mapping/keyframe/frame_features.h"
 #include "mapping/keyframe/keyframe_selector.h"
+#include "mapping/local_map/frame_free_space.h"
 #include "mapping/local_map/keyframe_container.h"
 
 namespace vdmap {
@@ -21,6 +22,7 @@ struct KeyframeMemory {
   std::size_t features = 0;    ///< keypoints, descriptors, keypoint depths
   std::size_t cell_slots = 0;  ///< the local map's slot grid (4 B per grid cell)
   std::size_t ellipsoids = 0;  ///< the local map's stored cells
+  std::size_t free_space = 0;  ///< the integrated frames' free space (FrameFreeSpace blocks)
 };
 
 /// A keyframe (docs/method.md 2): its pose, its own images and features, and its local map.
@@ -37,6 +39,9 @@ struct Keyframe {
   FrameFeatures features;
   KeyframeContainer container;
   int frames_integrated = 0;
+  /// Per integrated frame (in order), what it saw free (docs/method.md 13.2); its pose is kept
+  /// relative to the keyframe, so it follows a corrected keyframe pose like the local map.
+  std::vector<FrameFreeSpace> frames_free;
 
   /// The colour image, decoded (a few ms; cache it where it is shown every UI frame).
   cv::Mat rgb() const { return rgb_image.decode(); }

@@ -87,7 +87,8 @@ int Mapper::newKeyframe(const RgbdFrame& frame, FrameFeatures features) {
              CompressedImage(frame.depth, frame.depth_file),
              std::move(features),
              KeyframeContainer(camera_, params_.local_map.cell_size_px),
-             0};
+             0,
+             {}};
   return graph_.add(std::move(k)).id;
 }
 
@@ -341,6 +342,9 @@ void Mapper::updateLocalMap(const RgbdFrame& frame, const TrackingOutcome& track
   if (report->integrated) {
     integrator_.integrateFrame(frame, camera_, keyframe.T_W_K, &keyframe.container, &report->touched_cells);
     ++keyframe.frames_integrated;
+    const Transform T_K_C = keyframe.T_W_K.inverse() * frame.T_W_C;
+    if (addsFreeSpace(keyframe.frames_free, T_K_C))
+      keyframe.frames_free.push_back(frameFreeSpace(frame, camera_, params_.local_map.depth_range, T_K_C));
   }
 }
 

@@ -105,10 +105,10 @@ std::size_t QueryMap::keyframes() const { return data_->views.size(); }
 std::size_t QueryMap::ellipsoids() const { return data_->surface.size(); }
 std::size_t QueryMap::memoryBytes() const {
   const MemoryParts parts = memoryParts();
-  return sizeof(Data) + parts.keyframe_views + parts.surface;
+  return sizeof(Data) + parts.keyframe_views + parts.frames + parts.surface;
 }
 QueryMap::MemoryParts QueryMap::memoryParts() const {
-  return {data_->views.memoryBytes(), data_->surface.memoryBytes()};
+  return {data_->views.memoryBytes(), data_->views.frameMemoryBytes(), data_->surface.memoryBytes()};
 }
 void QueryMap::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const { data_->views.seenBounds(lo, hi); }
 
@@ -141,7 +141,7 @@ void QueryMap::classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d>
   checkKeyframe(keyframe, d.views.size());
   checkPoints(q_W, out.size());
   forEachPoint(d.params.threads, q_W.size(),
-               [&](std::size_t i) { out[i] = fromVerdict(d.views.verdict(keyframe, q_W[i]), keyframe); });
+               [&](std::size_t i) { out[i] = fromVerdict(d.views.localMapVerdict(keyframe, q_W[i]), keyframe); });
 }
 
 ViewVerdict QueryMap::keyframeVerdict(int keyframe, const Eigen::Vector3d& q_W) const {

@@ -3,7 +3,8 @@
 // free or unknown; how far is it from the nearest surface; does a body of spheres collide; where
 // does a ray first meet a surface. Nothing is voxelised: occupied is the global map's ellipsoids'
 // gates, free is what some keyframe sees in front of its measured surface by more than that
-// surface's spread along the ray, unknown is what no keyframe sees. Local maps live in their
+// surface's spread along the ray (where no keyframe sees, what a frame integrated into one saw in
+// front of its depth), unknown is what nothing saw. Local maps live in their
 // keyframes' frames, so a map whose poses were corrected answers with the corrected poses after
 // QueryMap::build, without re-integration.
 #include <cstdint>
@@ -117,11 +118,11 @@ class QueryMap {
   std::size_t keyframes() const;
   std::size_t ellipsoids() const;
   std::size_t memoryBytes() const;  ///< heap bytes held by the built data
-  /// Heap bytes of the built data's two parts: the keyframes' views (what free is) and the
-  /// surface index of the global map's ellipsoids (occupied gates, distance, rays). memoryBytes()
-  /// is their sum plus the parameters.
+  /// Heap bytes of the built data's parts: the keyframes' views and the integrated frames' free
+  /// space (what free is), and the surface index of the global map's ellipsoids (occupied gates,
+  /// distance, rays). memoryBytes() is their sum plus the parameters.
   struct MemoryParts {
-    std::size_t keyframe_views = 0, surface = 0;
+    std::size_t keyframe_views = 0, frames = 0, surface = 0;
   };
   MemoryParts memoryParts() const;
   /// Axis-aligned box of everything some keyframe sees (its frusta cut at their farthest surface);
@@ -131,7 +132,8 @@ class QueryMap {
   /// Throw std::invalid_argument for a non-finite point (naming its index).
   void classify(std::span<const Eigen::Vector3d> q_W, std::span<Classification> out) const;
   /// The paper's arm-planning case: what keyframe `keyframe`'s local map alone says (its own cells,
-  /// occupied within their gates, free in front of them, unknown elsewhere).
+  /// occupied within their gates, free in front of them or in front of what a frame integrated
+  /// into it measured, unknown elsewhere).
   void classifyInKeyframe(int keyframe, std::span<const Eigen::Vector3d> q_W, std::span<Classification> out) const;
   /// The same verdict with its terms, for diagnostics: the depth relative to the surface of the
   /// point's own cell (sigma_t > 0 when the keyframe has a kept cell at the point's pixel).

@@ -943,6 +943,7 @@ std::string compactSession(bool tracked) {
       cells.findOrCreate(cell.grid_index) = cell;
     }
     kf.container = std::move(cells);
+    kf.frames_free.resize(std::min<std::size_t>(kf.frames_free.size(), 2));  // the section, not its bulk
   }
   return encodeSession(graph, sessionInfo(mapper, {}));
 }

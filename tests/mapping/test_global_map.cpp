@@ -448,7 +448,7 @@ TEST(GlobalMap, EmptyGraphAndBadParameters) {
   KeyframeGraph graph;
   const GlobalMap map = buildGlobalMap(graph, {});
   EXPECT_EQ(map.sigma_e_prime, 0u);
-  Keyframe empty{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(kGlobalMapCamera, 5), 0};
+  Keyframe empty{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(kGlobalMapCamera, 5), 0, {}};
   graph.add(std::move(empty));  // a keyframe with no kept ellipsoids
   EXPECT_EQ(buildGlobalMap(graph, {}).sigma_e_prime, 0u);
   GlobalMapParams p;

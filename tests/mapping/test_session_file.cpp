@@ -51,6 +51,12 @@ const Saved& smallSession() {
   return saved;
 }
 
+// `graph` without what its frames saw free (formats before 7 did not store it).
+KeyframeGraph withoutFramesFree(KeyframeGraph graph) {
+  for (std::size_t i = 0; i < graph.size(); ++i) graph.keyframe(static_cast<int>(i)).frames_free.clear();
+  return graph;
+}
+
 // The InputError message of decoding `bytes`, or "" when it decodes.
 std::string decodeError(const std::string& bytes) {
   try {
@@ -96,6 +102,14 @@ TEST(SessionFile, ReloadedSessionIsEqualReSavesByteIdenticalAndMergesIdentically
     EXPECT_EQ(cv::norm(a.depth(), b.depth(), cv::NORM_INF), 0.0);
     ASSERT_EQ(a.features.size(), b.features.size());
     EXPECT_EQ(cv::norm(a.features.descriptors, b.features.descriptors, cv::NORM_INF), 0.0);
+    ASSERT_EQ(a.frames_free.size(), b.frames_free.size());
+    EXPECT_GE(a.frames_free.size(), 1u);
+    EXPECT_LE(a.frames_free.size(), static_cast<std::size_t>(a.frames_integrated));
+    for (std::size_t f = 0; f < a.frames_free.size(); ++f) {
+      EXPECT_EQ(a.frames_free[f].T_K_C.matrix(), b.frames_free[f].T_K_C.matrix());
+      EXPECT_EQ(a.frames_free[f].near_mm, b.frames_free[f].near_mm);
+      EXPECT_EQ(a.frames_free[f].cols, b.frames_free[f].cols);
+    }
     ASSERT_EQ(a.container.size(), b.container.size());
     for (std::size_t c = 0; c < a.container.size(); ++c) {
       const StoredCell &x = a.container.cells()[c], &y = b.container.cells()[c];
@@ -269,7 +283,7 @@ TEST(SessionFile, Format5FilesLoadAsTheSameSession) {
   ASSERT_EQ(old.info.state.loops.size(), 1u);
   EXPECT_EQ(old.info.state.loops[0].correction_m, 0.01);
   EXPECT_EQ(old.info.state.loops[0].pose_graph_ms, 0.0) << "a wall time is not part of the session";
-  EXPECT_EQ(encodeSession(old.graph, old.info), bytes);
+  EXPECT_EQ(encodeSession(old.graph, old.info), encodeSession(withoutFramesFree(s.mapper.graph()), info));
   for (std::size_t k = 0; k < old.graph.size(); ++k) {
     EXPECT_EQ(cv::norm(old.graph.keyframe(static_cast<int>(k)).rgb(),
                        s.mapper.graph().keyframe(static_cast<int>(k)).rgb(), cv::NORM_INF),
@@ -278,6 +292,25 @@ TEST(SessionFile, Format5FilesLoadAsTheSameSession) {
                        s.mapper.graph().keyframe(static_cast<int>(k)).depth(), cv::NORM_INF),
               0);
   }
+}
+
+// Format 6 stored no frame's free space: each KFRM ends with the packed features and cells (here
+// the current format's without the frames' free space, its zero count cut off). It loads with
+// none, and the map then answers free from the keyframes' views alone.
+TEST(SessionFile, Format6FilesLoadWithoutTheFramesFreeSpace) {
+  const Saved& s = smallSession();
+  ASSERT_FALSE(s.mapper.graph().keyframe(0).frames_free.empty());
+  const std::string bare = encodeSession(withoutFramesFree(s.mapper.graph()), s.info);
+  std::string v6 = bare;
+  putU32(&v6, 8, 6);
+  resealHeader(&v6);
+  for (std::size_t at = 24; at < v6.size(); at += 16 + u64At(v6, at + 4))
+    if (v6.substr(at, 4) == "KFRM") eraseInSection(&v6, at, u64At(v6, at + 4) - 4, 4);
+  EXPECT_LT(v6.size(), bare.size());
+  const Session old = decodeSession(v6, "v6.vdmap");
+  EXPECT_EQ(old.info.format_version, 6u);
+  for (const Keyframe& k : old.graph.keyframes()) EXPECT_TRUE(k.frames_free.empty());
+  EXPECT_EQ(encodeSession(old.graph, old.info), bare);
 }
 
 // The session holds no wall-clock time: runs that differ only in how long the loop closures'
@@ -342,7 +375,7 @@ TEST(SessionFile, Format4FilesLoadWithoutTheWeakCounts) {
   EXPECT_EQ(old.info.state.frames_weak, 0);
   EXPECT_EQ(old.info.state.frames_relocalised, 0);
   EXPECT_EQ(old.info.state.frame_poses.size(), s.info.state.frame_poses.size());
-  EXPECT_EQ(encodeSession(old.graph, old.info), s.bytes);
+  EXPECT_EQ(encodeSession(old.graph, old.info), encodeSession(withoutFramesFree(s.mapper.graph()), s.info));
   // More weak and relocalised frames than placed ones is a damaged state.
   counted.state.frames_weak = static_cast<int>(s.info.state.frame_poses.size());
   EXPECT_THROW(encodeSession(s.mapper.graph(), counted), std::invalid_argument);
@@ -359,7 +392,7 @@ TEST(SessionFile, Format3FilesLoadWithGroundTruthPoses) {
   EXPECT_EQ(old.info.state.current_keyframe, s.info.state.current_keyframe);
   SessionInfo info = old.info;
   info.state.frame_poses = s.info.state.frame_poses;
-  EXPECT_EQ(encodeSession(old.graph, info), s.bytes);
+  EXPECT_EQ(encodeSession(old.graph, info), encodeSession(withoutFramesFree(s.mapper.graph()), s.info));
 }
 
 TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
@@ -373,7 +406,8 @@ TEST(SessionFile, Format2FilesLoadWithFusionOffAsTheyWereBuilt) {
   SessionInfo info = old.info;
   info.global.fuse_across_groups = true;
   info.state.frame_poses = s.info.state.frame_poses;  // format 4 added the trajectory
-  EXPECT_EQ(encodeSession(old.graph, info), s.bytes) << "re-saved in the current format";
+  EXPECT_EQ(encodeSession(old.graph, info), encodeSession(withoutFramesFree(s.mapper.graph()), s.info))
+      << "re-saved in the current format";
 }
 
 TEST(SessionFile, DamagedHeadersNameWhatIsWrong) {
@@ -435,7 +469,7 @@ TEST(SessionFile, EveryFlippedByteIsAnError) {
 TEST(SessionFile, InconsistentContentWithValidChecksumsIsRejected) {
   const Saved& s = smallSession();
   KeyframeGraph graph;
-  graph.add(Keyframe{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(s.info.camera, 5), 0});
+  graph.add(Keyframe{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(s.info.camera, 5), 0, {}});
   graph.edges().strengthen(0, 3, 0.5);  // keyframe 3 does not exist
   SessionInfo info = s.info;
   info.state = {};  // a state that fits one keyframe

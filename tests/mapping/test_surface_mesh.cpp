@@ -165,7 +165,7 @@ TEST(SurfaceMesh, DepthStepIsLeftOpen) {
     for (int u = 0; u < kCamera.width; ++u)
       frame.depth.at<std::uint16_t>(v, u) =
           static_cast<std::uint16_t>((u < kCamera.width / 2 ? 1.0 : 2.0) * kCamera.depth_scale);
-  Keyframe k{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
+  Keyframe k{0, 0, 0.0, Transform::Identity(), {}, {}, {}, KeyframeContainer(kCamera, 5), 0, {}};
   LocalMapIntegrator().integrateFrame(frame, kCamera, Transform::Identity(), &k.container, nullptr);
   graph.add(std::move(k));
   const ColoredTriangleMesh mesh = buildSurfaceMesh(graph, keptOf(graph), MeshParams{});

@@ -11,7 +11,7 @@ namespace vdmap::test {
 /// Returns its id.
 inline int addBoxRoomKeyframe(KeyframeGraph* graph, const PinholeCamera& camera, const Transform& T_W_K,
                               const Transform& T_W_placed, int cell_size_px = 5) {
-  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(camera, cell_size_px), 0};
+  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(camera, cell_size_px), 0, {}};
   k.timestamp = static_cast<double>(graph->size());
   LocalMapIntegrator integrator;
   integrator.integrateFrame(renderBoxRoom(camera, T_W_K), camera, T_W_K, &k.container, nullptr);

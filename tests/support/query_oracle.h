@@ -77,6 +77,43 @@ class QueryOracle {
     return out;
   }
 
+  /// docs/method.md 13.2: free when some frame integrated into keyframe `id` saw q_W nearer than
+  /// its block's nearest depth d by more than k sigma, sigma^2 = sd_axial(d)^2 + s0^2.
+  OracleVerdict frameVerdict(int id, const Eigen::Vector3d& q_W) const {
+    const Keyframe& kf = graph_.keyframe(id);
+    const PinholeCamera& camera = kf.container.camera();
+    for (const FrameFreeSpace& f : kf.frames_free) {
+      const Eigen::Vector3d q = (kf.T_W_K * f.T_K_C).inverse() * q_W;
+      if (q.z() <= 0) continue;
+      const Eigen::Vector2d uv = camera.project(q);
+      if (uv.x() < 0 || uv.y() < 0 || uv.x() >= camera.width || uv.y() >= camera.height) continue;
+      const int block = static_cast<int>(std::floor(uv.y() / kFreeBlockPx)) * f.cols +
+                        static_cast<int>(std::floor(uv.x() / kFreeBlockPx));
+      const int mm = f.near_mm[static_cast<std::size_t>(block)];
+      if (mm == 0) continue;
+      const double d = mm / 1000.0, sd = 0.0012 + 0.0019 * (d - 0.4) * (d - 0.4);
+      const double sigma = std::sqrt(sd * sd + params_.min_sigma_m * params_.min_sigma_m);
+      const double z = (q.z() - d) / sigma;
+      if (z < -params_.gate_sigma) return {Occupancy::kFree, z, sigma, 0};
+    }
+    return {};
+  }
+
+  /// What keyframe `id`'s local map says: its own verdict, else its frames'.
+  OracleVerdict localMapVerdict(int id, const Eigen::Vector3d& q_W) const {
+    const OracleVerdict v = verdict(id, q_W);
+    return v.state != Occupancy::kUnknown ? v : frameVerdict(id, q_W);
+  }
+
+  /// No keyframe has a verdict: the first keyframe (by id) one of whose frames sees q_W free.
+  Classification framesFree(const Eigen::Vector3d& q_W) const {
+    for (int id = 0; id < static_cast<int>(graph_.size()); ++id) {
+      const OracleVerdict v = frameVerdict(id, q_W);
+      if (v.state == Occupancy::kFree) return fromVerdict(v, id);
+    }
+    return {};
+  }
+
   /// The global ellipsoid whose gate holds q_W with the smallest m^2 (ties: lower index), or -1.
   int gate(const Eigen::Vector3d& q_W, double* m2_out) const {
     int best = -1;
@@ -137,7 +174,7 @@ class QueryOracle {
         const OracleVerdict v = verdict(id, q_W);
         if (v.state == Occupancy::kFree) return fromVerdict(v, id);
       }
-      return {};
+      return framesFree(q_W);
     }
     int best = -1;
     OracleVerdict best_v;
@@ -148,7 +185,7 @@ class QueryOracle {
                                                                                : v.sigma_t < best_v.sigma_t);
       if (wins) best = id, best_v = v;
     }
-    return best < 0 ? Classification{} : fromVerdict(best_v, best);
+    return best < 0 ? framesFree(q_W) : fromVerdict(best_v, best);
   }
 
  private:

@@ -6,10 +6,12 @@
 #include <limits>
 #include <stdexcept>
 #include <string>
+#include <utility>
 
 #include <Eigen/Dense>
 
 #include "mapping/core/parallel.h"
+#include "mapping/local_map/sensor_model.h"
 
 namespace vdmap {
 namespace {
@@ -105,6 +107,89 @@ struct View {
   }
 };
 
+/// One integrated frame's free space (docs/method.md 13.2) at its keyframe's current pose.
+struct FrameView {
+  Eigen::Matrix3d R_F_W = Eigen::Matrix3d::Identity();
+  Eigen::Vector3d t_F_W = Eigen::Vector3d::Zero();
+  int keyframe = 0;
+  int cols = 0;
+  const std::uint16_t* near_mm = nullptr;  // into FrameViews' blocks
+  double z_max = 0;                        // farthest block, m
+  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
+};
+
+/// Per voxel of a grid over a box, the ascending ids of the items (keyframes or frames) that may
+/// see it: ids[begin[v] .. begin[v + 1]).
+struct VoxelLists {
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
+  double voxel_m = 0.25;
+  int nx = 0, ny = 0, nz = 0;
+  std::vector<std::uint32_t> begin;
+  std::vector<std::int32_t> ids;
+
+  std::span<const std::int32_t> at(const Eigen::Vector3d& q_W) const {
+    if (nx == 0) return {};
+    const Eigen::Vector3d f = (q_W - origin) / voxel_m;
+    if (!(f.x() >= 0 && f.y() >= 0 && f.z() >= 0 && f.x() < nx && f.y() < ny && f.z() < nz)) return {};
+    const std::size_t v =
+        (static_cast<std::size_t>(f.z()) * ny + static_cast<std::size_t>(f.y())) * nx + static_cast<std::size_t>(f.x());
+    return {ids.data() + begin[v], ids.data() + begin[v + 1]};
+  }
+  std::size_t memoryBytes() const {
+    return begin.capacity() * sizeof(std::uint32_t) + ids.capacity() * sizeof(std::int32_t);
+  }
+};
+
+/// Lists over the box [lo, hi] in voxels of at least `min_voxel_m` (coarser when the box would
+/// need more than 2^23 of them: the index stays under ~40 MB). Item i lists a voxel of its box
+/// [item_lo[i], item_hi[i]] when mayTouch(i, voxel centre, bounding radius) says so.
+template <typename MayTouch>
+VoxelLists buildVoxelLists(const Eigen::Vector3d& lo, const Eigen::Vector3d& hi, double min_voxel_m,
+                           const std::vector<Eigen::Vector3d>& item_lo, const std::vector<Eigen::Vector3d>& item_hi,
+                           int threads, const MayTouch& mayTouch) {
+  VoxelLists out;
+  if (!(lo.x() <= hi.x())) return out;
+  const std::size_t n = item_lo.size();
+  const Eigen::Vector3d extent = hi - lo;
+  const double volume = (extent.array() + 2 * min_voxel_m).prod();
+  out.voxel_m = std::max(min_voxel_m, std::cbrt(volume / double(1 << 23)) * 1.01);
+  out.origin = lo;
+  out.nx = static_cast<int>(std::floor(extent.x() / out.voxel_m)) + 1;
+  out.ny = static_cast<int>(std::floor(extent.y() / out.voxel_m)) + 1;
+  out.nz = static_cast<int>(std::floor(extent.z() / out.voxel_m)) + 1;
+  const std::size_t voxels = static_cast<std::size_t>(out.nx) * out.ny * out.nz;
+  std::vector<std::vector<std::uint32_t>> touched(n);
+  const double voxel = out.voxel_m, radius = 0.5 * std::sqrt(3.0) * voxel;
+  parallelFor(threads, n, [&](std::size_t id) {
+    if (!(item_lo[id].x() <= item_hi[id].x())) return;
+    const Eigen::Vector3i a = ((item_lo[id] - out.origin) / voxel).array().floor().cast<int>().max(0);
+    const Eigen::Vector3i b = ((item_hi[id] - out.origin) / voxel).array().floor().cast<int>();
+    for (int z = a.z(); z <= std::min(b.z(), out.nz - 1); ++z)
+      for (int y = a.y(); y <= std::min(b.y(), out.ny - 1); ++y)
+        for (int x = a.x(); x <= std::min(b.x(), out.nx - 1); ++x) {
+          const Eigen::Vector3d centre = out.origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
+          if (mayTouch(id, centre, radius))
+            touched[id].push_back(static_cast<std::uint32_t>((static_cast<std::size_t>(z) * out.ny + y) * out.nx + x));
+        }
+  });
+  // Counting sort by voxel; filling in id order keeps each voxel's list ascending.
+  std::size_t pairs = 0;
+  for (const auto& t : touched) pairs += t.size();
+  if (pairs > std::numeric_limits<std::uint32_t>::max())  // ~16 GB of lists: thousands of keyframes
+    throw std::invalid_argument("the visibility index would list " + std::to_string(pairs) +
+                                " (voxel, item) pairs, more than it can address");
+  out.begin.assign(voxels + 1, 0);
+  for (const auto& t : touched)
+    for (std::uint32_t vox : t) ++out.begin[vox + 1];
+  for (std::size_t i = 0; i < voxels; ++i) out.begin[i + 1] += out.begin[i];
+  out.ids.resize(out.begin[voxels]);
+  std::vector<std::uint32_t> fill(out.begin.begin(), out.begin.end() - 1);
+  for (std::size_t id = 0; id < n; ++id)
+    for (std::uint32_t vox : touched[id]) out.ids[fill[vox]++] = static_cast<std::int32_t>(id);
+  return out;
+}
+
 }  // namespace
 
 struct KeyframeViews::Impl {
@@ -112,12 +197,15 @@ struct KeyframeViews::Impl {
   double k = 3, k2 = 9;
   std::vector<View> views;
   // Visibility index (docs/method.md 13.1): a dense voxel grid over the seen box; per voxel the
-  // ascending ids of the keyframes whose cut frustum may touch it (ids[begin[v] .. begin[v + 1])).
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();
-  double voxel_m = 0.25;
-  int nx = 0, ny = 0, nz = 0;
-  std::vector<std::uint32_t> begin;
-  std::vector<std::int32_t> ids;
+  // ascending ids of the keyframes whose cut frustum may touch it.
+  VoxelLists index;
+  // The integrated frames' free space (docs/method.md 13.2), keyframe by keyframe in their order:
+  // keyframe K's are frames[first_frame[K] .. first_frame[K + 1]); their blocks, and their index.
+  PinholeCamera camera;
+  std::vector<FrameView> frames;
+  std::vector<std::uint32_t> first_frame;
+  std::vector<std::uint16_t> blocks;
+  VoxelLists frame_index;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
 
@@ -258,13 +346,37 @@ struct KeyframeViews::Impl {
     return -1;
   }
 
-  std::span<const std::int32_t> candidates(const Eigen::Vector3d& q_W) const {
-    if (nx == 0) return {};
-    const Eigen::Vector3d f = (q_W - origin) / voxel_m;
-    if (!(f.x() >= 0 && f.y() >= 0 && f.z() >= 0 && f.x() < nx && f.y() < ny && f.z() < nz)) return {};
-    const std::size_t v =
-        (static_cast<std::size_t>(f.z()) * ny + static_cast<std::size_t>(f.y())) * nx + static_cast<std::size_t>(f.x());
-    return {ids.data() + begin[v], ids.data() + begin[v + 1]};
+  std::span<const std::int32_t> candidates(const Eigen::Vector3d& q_W) const { return index.at(q_W); }
+
+  /// Frame f's verdict: free when q_W projects into a block with depth and lies nearer than the
+  /// block's nearest depth d by more than k sigma (sigma^2 = the sensor's axial variance at d +
+  /// s0^2); otherwise none.
+  bool frameFree(const FrameView& f, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
+    const Eigen::Vector3d q = f.R_F_W * q_W + f.t_F_W;
+    if (!(q.z() > 0.0)) return false;
+    const double u = camera.fx * q.x() / q.z() + camera.cx, v = camera.fy * q.y() / q.z() + camera.cy;
+    if (!(u >= 0.0 && v >= 0.0 && u < camera.width && v < camera.height)) return false;
+    const std::uint16_t mm = f.near_mm[static_cast<std::size_t>(static_cast<int>(v) / kFreeBlockPx) * f.cols +
+                                       static_cast<int>(u) / kFreeBlockPx];
+    if (mm == 0) return false;
+    const double d = 1e-3 * mm, sd = nguyenAxialSd(d);
+    const double sigma = std::sqrt(sd * sd + params.min_sigma_m * params.min_sigma_m);
+    const double z = (q.z() - d) / sigma;
+    if (!(z < -k)) return false;
+    out->state = Occupancy::kFree;
+    out->z = z;
+    out->sigma_t = sigma;
+    out->m2 = 0;
+    return true;
+  }
+
+  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1.
+  int firstFreeFrame(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
+    for (const std::int32_t id : ids) {
+      const FrameView& f = frames[static_cast<std::size_t>(id)];
+      if (frameFree(f, q_W, out)) return f.keyframe;
+    }
+    return -1;
   }
 };
 
@@ -351,24 +463,36 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
 /// True when a ball (centre c_W, radius r) may hold a point the view has a verdict about: a point
 /// that projects into a kept cell (or next to one: the 3x3 gates) no farther than that cell's gate
 /// reaches (z_far). False is exact; true may be wrong (a superset).
-bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
-  const Eigen::Vector3d p = v.R_K_W * c_W + v.t_K_W;
-  if (p.z() < -r || p.z() > v.z_max + r) return false;
-  // Container pixels u in [-offset_u - 0.5, 2W - offset_u - 0.5): x / z within [xl, xr].
-  const double xl = (-v.offset_u - 0.5 - v.cx) / v.fx, xr = (v.width2 - v.offset_u - 0.5 - v.cx) / v.fx;
-  const double yl = (-v.offset_v - 0.5 - v.cy) / v.fy, yr = (v.height2 - v.offset_v - 0.5 - v.cy) / v.fy;
+/// False when the ball (camera-frame centre p, radius r) lies wholly outside the frustum
+/// x / z in [xl, xr], y / z in [yl, yr], 0 <= z <= z_max. True may be wrong (a superset).
+bool ballMayMeetFrustum(const Eigen::Vector3d& p, double r, double xl, double xr, double yl, double yr, double z_max) {
+  if (p.z() < -r || p.z() > z_max + r) return false;
   const auto outside = [&](double nx, double nz, double px, double pz) {  // n . p < -r |n|
     return nx * px + nz * pz < -r * std::hypot(nx, nz);
   };
-  if (outside(1.0, -xl, p.x(), p.z()) || outside(-1.0, xr, p.x(), p.z())) return false;
-  if (outside(1.0, -yl, p.y(), p.z()) || outside(-1.0, yr, p.y(), p.z())) return false;
+  return !(outside(1.0, -xl, p.x(), p.z()) || outside(-1.0, xr, p.x(), p.z()) || outside(1.0, -yl, p.y(), p.z()) ||
+           outside(-1.0, yr, p.y(), p.z()));
+}
+
+/// The image interval f x / z + shift of a ball's extent [c - r, c + r] along one axis, at every
+/// depth z in [z0, z1] (z0 > 0): its box's extreme ratios.
+std::pair<double, double> projectedInterval(double c, double r, double z0, double z1, double f, double shift) {
+  const double a = std::min((c - r) / z0, (c - r) / z1), b = std::max((c + r) / z0, (c + r) / z1);
+  return {f * a + shift, f * b + shift};
+}
+
+bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
+  const Eigen::Vector3d p = v.R_K_W * c_W + v.t_K_W;
+  // Container pixels u in [-offset_u - 0.5, 2W - offset_u - 0.5): x / z within [xl, xr].
+  const double xl = (-v.offset_u - 0.5 - v.cx) / v.fx, xr = (v.width2 - v.offset_u - 0.5 - v.cx) / v.fx;
+  const double yl = (-v.offset_v - 0.5 - v.cy) / v.fy, yr = (v.height2 - v.offset_v - 0.5 - v.cy) / v.fy;
+  if (!ballMayMeetFrustum(p, r, xl, xr, yl, yr, v.z_max)) return false;
   const double z0 = p.z() - r, z1 = p.z() + r;
   if (z0 < 1e-3) return true;  // the ball reaches the camera: its image is unbounded
   // The ball's box projects within the extreme ratios of its corners; its grid cells, grown by
   // one for the neighbours' gates, and the tiles that hold them.
   const auto range = [&](double c, double f, double centre, double offset, double first, int cells, int* lo, int* hi) {
-    const double a = std::min((c - r) / z0, (c - r) / z1), b = std::max((c + r) / z0, (c + r) / z1);
-    const double p0 = f * a + centre + offset + 0.5, p1 = f * b + centre + offset + 0.5;
+    const auto [p0, p1] = projectedInterval(c, r, z0, z1, f, centre + offset + 0.5);
     *lo = static_cast<int>(std::clamp(std::floor(p0 / v.cell_px) - 1 - first, 0.0, cells - 1.0));
     *hi = static_cast<int>(std::clamp(std::floor(p1 / v.cell_px) + 1 - first, 0.0, cells - 1.0));
   };
@@ -380,6 +504,82 @@ bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
     for (int tc = c0 / kTile; tc <= c1 / kTile; ++tc)
       if (v.tile_z_far[static_cast<std::size_t>(tr) * v.tile_cols + tc] >= z0) return true;
   return false;
+}
+
+/// The integrated frames' free space at their keyframes' current poses, its bounds added to the
+/// seen box, and its index (voxels of 0.25 m: a frame's frustum is coarse, its blocks are 8 px).
+void addFrames(const KeyframeGraph& graph, int threads, KeyframeViews::Impl* impl) {
+  const std::size_t n = graph.size();
+  impl->first_frame.assign(n + 1, 0);
+  std::size_t blocks = 0;
+  for (std::size_t id = 0; id < n; ++id) {
+    const Keyframe& kf = graph.keyframe(static_cast<int>(id));
+    impl->first_frame[id + 1] = impl->first_frame[id] + static_cast<std::uint32_t>(kf.frames_free.size());
+    for (const FrameFreeSpace& f : kf.frames_free) blocks += f.near_mm.size();
+    if (!kf.frames_free.empty()) impl->camera = kf.container.camera();
+  }
+  impl->frames.resize(impl->first_frame[n]);
+  impl->blocks.resize(blocks);
+  const PinholeCamera& cam = impl->camera;
+  const double xl = -cam.cx / cam.fx, xr = (cam.width - cam.cx) / cam.fx;
+  const double yl = -cam.cy / cam.fy, yr = (cam.height - cam.cy) / cam.fy;
+  std::size_t at = 0;
+  for (std::size_t id = 0; id < n; ++id) {
+    const Keyframe& kf = graph.keyframe(static_cast<int>(id));
+    for (std::size_t j = 0; j < kf.frames_free.size(); ++j) {
+      const FrameFreeSpace& src = kf.frames_free[j];
+      FrameView& f = impl->frames[impl->first_frame[id] + j];
+      const Transform T_W_F = kf.T_W_K * src.T_K_C;
+      const Transform T_F_W = T_W_F.inverse();
+      f.R_F_W = T_F_W.linear();
+      f.t_F_W = T_F_W.translation();
+      f.keyframe = static_cast<int>(id);
+      f.cols = src.cols;
+      std::copy(src.near_mm.begin(), src.near_mm.end(), impl->blocks.begin() + static_cast<std::ptrdiff_t>(at));
+      f.near_mm = impl->blocks.data() + at;
+      at += src.near_mm.size();
+      f.z_max = 1e-3 * *std::max_element(src.near_mm.begin(), src.near_mm.end());
+      if (!(f.z_max > 0)) continue;  // no block with depth: sees nothing (its box stays empty)
+      f.lo = f.hi = T_W_F.translation();
+      for (const double x : {xl, xr})
+        for (const double y : {yl, yr}) {
+          const Eigen::Vector3d corner = T_W_F * Eigen::Vector3d(x * f.z_max, y * f.z_max, f.z_max);
+          f.lo = f.lo.cwiseMin(corner), f.hi = f.hi.cwiseMax(corner);
+        }
+      impl->lo = impl->lo.cwiseMin(f.lo);
+      impl->hi = impl->hi.cwiseMax(f.hi);
+    }
+  }
+  std::vector<Eigen::Vector3d> lo(impl->frames.size()), hi(impl->frames.size());
+  Eigen::Vector3d all_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), all_hi = -all_lo;
+  for (std::size_t i = 0; i < impl->frames.size(); ++i) {
+    lo[i] = impl->frames[i].lo, hi[i] = impl->frames[i].hi;
+    all_lo = all_lo.cwiseMin(lo[i]), all_hi = all_hi.cwiseMax(hi[i]);
+  }
+  // A frame lists a voxel whose ball meets its frustum and projects onto some block whose depth
+  // lies beyond the ball's nearest point (elsewhere no point of the ball is in front of the frame's
+  // depth): voxels behind the surfaces the frame saw are left out.
+  impl->frame_index =
+      buildVoxelLists(all_lo, all_hi, 0.25, lo, hi, threads, [&](std::size_t i, const Eigen::Vector3d& c, double r) {
+        const FrameView& f = impl->frames[i];
+        const Eigen::Vector3d p = f.R_F_W * c + f.t_F_W;
+        if (!ballMayMeetFrustum(p, r, xl, xr, yl, yr, f.z_max)) return false;
+        const double z0 = p.z() - r, z1 = p.z() + r;
+        if (z0 < 1e-3) return true;  // the ball reaches the camera: its image is unbounded
+        const auto blocks = [&](double centre, double focal, double shift, int count, int* b0, int* b1) {
+          const auto [p0, p1] = projectedInterval(centre, r, z0, z1, focal, shift);
+          *b0 = static_cast<int>(std::clamp(std::floor(p0 / kFreeBlockPx), 0.0, count - 1.0));
+          *b1 = static_cast<int>(std::clamp(std::floor(p1 / kFreeBlockPx), 0.0, count - 1.0));
+        };
+        const int rows = (cam.height + kFreeBlockPx - 1) / kFreeBlockPx;
+        int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
+        blocks(p.x(), cam.fx, cam.cx, f.cols, &c0, &c1);
+        blocks(p.y(), cam.fy, cam.cy, rows, &r0, &r1);
+        for (int row = r0; row <= r1; ++row)
+          for (int col = c0; col <= c1; ++col)
+            if (1e-3 * f.near_mm[static_cast<std::size_t>(row) * f.cols + col] > z0) return true;
+        return false;
+      });
 }
 
 }  // namespace
@@ -412,59 +612,24 @@ KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& 
     impl->lo = impl->lo.cwiseMin(v.lo);
     impl->hi = impl->hi.cwiseMax(v.hi);
   }
-  if (impl->lo.x() <= impl->hi.x()) {
-    // Voxels of 0.125 m (a room is a few ten thousand), coarser when the box would need more than
-    // 2^23 of them (a large map: the index stays under ~40 MB).
-    const Eigen::Vector3d extent = impl->hi - impl->lo;
-    const double volume = (extent.array() + 0.25).prod();
-    impl->voxel_m = std::max(0.125, std::cbrt(volume / double(1 << 23)) * 1.01);
-    impl->origin = impl->lo;
-    impl->nx = static_cast<int>(std::floor(extent.x() / impl->voxel_m)) + 1;
-    impl->ny = static_cast<int>(std::floor(extent.y() / impl->voxel_m)) + 1;
-    impl->nz = static_cast<int>(std::floor(extent.z() / impl->voxel_m)) + 1;
-    const std::size_t voxels = static_cast<std::size_t>(impl->nx) * impl->ny * impl->nz;
-    // Per keyframe, the voxels of its box whose bounding ball meets its frustum (a superset).
-    std::vector<std::vector<std::uint32_t>> touched(n);
-    const double voxel = impl->voxel_m, radius = 0.5 * std::sqrt(3.0) * voxel;
-    parallelFor(params.threads, n, [&](std::size_t id) {
-      const View& v = impl->views[id];
-      if (v.cells.empty()) return;
-      const Eigen::Vector3i a = ((v.lo - impl->origin) / voxel).array().floor().cast<int>().max(0);
-      const Eigen::Vector3i b = ((v.hi - impl->origin) / voxel).array().floor().cast<int>();
-      for (int z = a.z(); z <= std::min(b.z(), impl->nz - 1); ++z)
-        for (int y = a.y(); y <= std::min(b.y(), impl->ny - 1); ++y)
-          for (int x = a.x(); x <= std::min(b.x(), impl->nx - 1); ++x) {
-            const Eigen::Vector3d centre = impl->origin + voxel * Eigen::Vector3d(x + 0.5, y + 0.5, z + 0.5);
-            if (ballMaySee(v, centre, radius))
-              touched[id].push_back(
-                  static_cast<std::uint32_t>((static_cast<std::size_t>(z) * impl->ny + y) * impl->nx + x));
-          }
-    });
-    // Counting sort by voxel; filling in id order keeps each voxel's list ascending.
-    std::size_t pairs = 0;
-    for (const auto& t : touched) pairs += t.size();
-    if (pairs > std::numeric_limits<std::uint32_t>::max())  // ~16 GB of lists: thousands of keyframes
-      throw std::invalid_argument("the visibility index would list " + std::to_string(pairs) +
-                                  " (voxel, keyframe) pairs, more than it can address");
-    impl->begin.assign(voxels + 1, 0);
-    for (const auto& t : touched)
-      for (std::uint32_t vox : t) ++impl->begin[vox + 1];
-    for (std::size_t i = 0; i < voxels; ++i) impl->begin[i + 1] += impl->begin[i];
-    impl->ids.resize(impl->begin[voxels]);
-    std::vector<std::uint32_t> fill(impl->begin.begin(), impl->begin.end() - 1);
-    for (std::size_t id = 0; id < n; ++id)
-      for (std::uint32_t vox : touched[id]) impl->ids[fill[vox]++] = static_cast<std::int32_t>(id);
-    // kRecent scans the highest rank first (ties: lower id) and stops at the first verdict.
-    if (params.conflict == ConflictRule::kRecent)
-      parallelFor(params.threads, voxels, [&](std::size_t vox) {
-        std::sort(impl->ids.begin() + impl->begin[vox], impl->ids.begin() + impl->begin[vox + 1],
-                  [&](std::int32_t a, std::int32_t b) {
-                    const int ra = impl->views[static_cast<std::size_t>(a)].rank,
-                              rb = impl->views[static_cast<std::size_t>(b)].rank;
-                    return ra != rb ? ra > rb : a < b;
-                  });
+  std::vector<Eigen::Vector3d> view_lo(n), view_hi(n);  // a view without cells has lo > hi: lists nothing
+  for (std::size_t id = 0; id < n; ++id) view_lo[id] = impl->views[id].lo, view_hi[id] = impl->views[id].hi;
+  // Voxels of 0.125 m (a room is a few ten thousand).
+  impl->index = buildVoxelLists(
+      impl->lo, impl->hi, 0.125, view_lo, view_hi, params.threads,
+      [&](std::size_t id, const Eigen::Vector3d& c, double r) { return ballMaySee(impl->views[id], c, r); });
+  // kRecent scans the highest rank first (ties: lower id) and stops at the first verdict.
+  if (params.conflict == ConflictRule::kRecent) {
+    VoxelLists& x = impl->index;
+    parallelFor(params.threads, x.begin.empty() ? 0 : x.begin.size() - 1, [&](std::size_t vox) {
+      std::sort(x.ids.begin() + x.begin[vox], x.ids.begin() + x.begin[vox + 1], [&](std::int32_t a, std::int32_t b) {
+        const int ra = impl->views[static_cast<std::size_t>(a)].rank,
+                  rb = impl->views[static_cast<std::size_t>(b)].rank;
+        return ra != rb ? ra > rb : a < b;
       });
+    });
   }
+  addFrames(graph, params.threads, impl.get());
   for (View& v : impl->views) v.tile_z_far = {};
   KeyframeViews out;
   out.impl_ = std::move(impl);
@@ -475,10 +640,17 @@ std::size_t KeyframeViews::size() const { return impl_ ? impl_->views.size() : 0
 
 std::size_t KeyframeViews::memoryBytes() const {
   if (!impl_) return 0;
-  std::size_t bytes = sizeof(Impl) + impl_->views.capacity() * sizeof(View) +
-                      impl_->begin.capacity() * sizeof(std::uint32_t) + impl_->ids.capacity() * sizeof(std::int32_t);
-  for (const View& v : impl_->views) bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
+  const Impl& im = *impl_;
+  std::size_t bytes = sizeof(Impl) + im.views.capacity() * sizeof(View) + im.index.memoryBytes();
+  for (const View& v : im.views) bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
   return bytes;
+}
+
+std::size_t KeyframeViews::frameMemoryBytes() const {
+  if (!impl_) return 0;
+  const Impl& im = *impl_;
+  return im.frames.capacity() * sizeof(FrameView) + im.first_frame.capacity() * sizeof(std::uint32_t) +
+         im.blocks.capacity() * sizeof(std::uint16_t) + im.frame_index.memoryBytes();
 }
 
 void KeyframeViews::seenBounds(Eigen::Vector3d* lo, Eigen::Vector3d* hi) const {
@@ -498,6 +670,16 @@ ViewVerdict KeyframeViews::verdict(int id, const Eigen::Vector3d& q_W) const {
   return impl_->verdict(impl_->views[static_cast<std::size_t>(id)], q_W);
 }
 
+ViewVerdict KeyframeViews::localMapVerdict(int id, const Eigen::Vector3d& q_W) const {
+  ViewVerdict v = verdict(id, q_W);
+  if (v.state != Occupancy::kUnknown) return v;
+  const Impl& im = *impl_;
+  for (std::uint32_t f = im.first_frame[static_cast<std::size_t>(id)];
+       f < im.first_frame[static_cast<std::size_t>(id) + 1]; ++f)
+    if (im.frameFree(im.frames[f], q_W, &v)) return v;
+  return ViewVerdict{};
+}
+
 std::span<const std::int32_t> KeyframeViews::candidates(const Eigen::Vector3d& q_W) const {
   return impl_ ? impl_->candidates(q_W) : std::span<const std::int32_t>{};
 }
@@ -509,24 +691,26 @@ ViewVerdict KeyframeViews::combined(const Eigen::Vector3d& q_W, int* keyframe) c
   const Impl& im = *impl_;
   const std::span<const std::int32_t> ids = im.candidates(q_W);
   switch (im.params.conflict) {
-    case ConflictRule::kOccupied:
-      *keyframe = im.firstFree(ids, q_W, &best);
-      return *keyframe >= 0 ? best : ViewVerdict{};
+    case ConflictRule::kOccupied: *keyframe = im.firstFree(ids, q_W, &best); break;
     case ConflictRule::kRecent:  // candidates by rank, highest first: the first verdict decides
       im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
         if (v.state == Occupancy::kUnknown) return true;
         best = v, *keyframe = id;
         return false;
       });
-      return best;
+      break;
     case ConflictRule::kPrecise:
       im.scanVerdicts(ids, q_W, [&](std::int32_t id, const ViewVerdict& v) {
         if (v.state != Occupancy::kUnknown && (*keyframe < 0 || v.sigma_t < best.sigma_t)) best = v, *keyframe = id;
         return true;
       });
-      return best;
+      break;
   }
-  return best;
+  if (*keyframe >= 0) return best;
+  // No keyframe's view has a verdict: what the integrated frames saw free (docs/method.md 13.2).
+  best = ViewVerdict{};
+  *keyframe = im.firstFreeFrame(im.frame_index.at(q_W), q_W, &best);
+  return *keyframe >= 0 ? best : ViewVerdict{};
 }
 
 }  // namespace vdmap
