@@ -20,8 +20,9 @@ struct MeshParams {
   double max_slope_deg = 60.0;
   double edge_sigma = 3.0;
   /// Vertices sit on a grid of stride x stride cells: each is the count-weighted mean of the kept cells
-  /// there (those joined with the one of median depth). 1: one vertex per cell.
-  int stride = 2;
+  /// there (those joined with the one of median depth). 1: one vertex per cell (docs/method.md 14: on
+  /// Replica half the 95th percentile of the error of 2, and more of steep surfaces and edges).
+  int stride = 1;
   /// Sensor model whose depth noise the gates use (the global map's filter's).
   SensorModel model = SensorModel::kNguyen2012;
   /// Fuse the keyframes' pieces (drop a block that keyframes with denser measured points cover); false keeps

@@ -128,6 +128,10 @@ TEST(SurfaceMesh, NormalsFaceTheCameraThatSawThem) {
   }
 }
 
+// The tests below look at the +z wall (2 m away) from 2 m and from 0.8 m: a triangle of the default
+// mesh spans half a block of 5 px cells at the default stride, so one smaller than at 1.3 m is the near view's.
+const double kFineArea = 0.5 * std::pow(1.3 * 5 * MeshParams{}.stride / kCamera.fx, 2);
+
 TEST(SurfaceMesh, FusionKeepsTheFinerKeyframeWhereTwoSeeTheSameWall) {
   KeyframeGraph graph;
   const Transform far = test::lookAt({0, 0, 0}, {0, 0, 2}), near = test::lookAt({0, 0, 1.2}, {0, 0, 2});
@@ -148,7 +152,7 @@ TEST(SurfaceMesh, FusionKeepsTheFinerKeyframeWhereTwoSeeTheSameWall) {
   for (const auto& t : fused.triangles) {
     const Eigen::Vector3f c = (fused.positions[t[0]] + fused.positions[t[1]] + fused.positions[t[2]]) / 3.0f;
     if (std::abs(c.x()) < 0.2f && std::abs(c.y()) < 0.2f && c.z() > 1.9f)
-      (triangleArea(fused, t) < 3e-4 ? fine : coarse) += 1;
+      (triangleArea(fused, t) < kFineArea ? fine : coarse) += 1;
   }
   EXPECT_GT(fine, 100);
   EXPECT_EQ(coarse, 0);
@@ -189,7 +193,7 @@ TEST(SurfaceMesh, FusionKeepsTheBetterSupportedKeyframeWhereTheNearerHoldsFewNoi
   for (const auto& t : fused.triangles) {
     const Eigen::Vector3f c = (fused.positions[t[0]] + fused.positions[t[1]] + fused.positions[t[2]]) / 3.0f;
     if (std::abs(c.x()) < 0.2f && std::abs(c.y()) < 0.2f && c.z() > 1.9f) {
-      (triangleArea(fused, t) < 3e-4 ? fine : coarse) += 1;
+      (triangleArea(fused, t) < kFineArea ? fine : coarse) += 1;
       EXPECT_LT(std::abs(c.z() - 2.0f), 1e-3f);  // the near piece's vertices stray by about a millimetre
     }
   }
