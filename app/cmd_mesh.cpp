@@ -95,10 +95,11 @@ void runMesh(MeshArgs args) {
     std::cout << jsonText(out) << "\n";
     return;
   }
-  std::printf("%zu vertices, %zu triangles from %zu keyframes (%zu of %zu piece triangles covered by finer keyframes); "
-              "read in %.0f ms, meshed in %.0f ms (CPU %.0f ms) -> %s\n",
-              mesh.positions.size(), mesh.triangles.size(), stats.keyframes, stats.covered_triangles,
-              stats.piece_triangles, load_ms, stats.ms, cpu_ms, args.out.c_str());
+  std::printf(
+      "%zu vertices, %zu triangles from %zu keyframes (%zu of %zu piece triangles covered by better-supported keyframes); "
+      "read in %.0f ms, meshed in %.0f ms (CPU %.0f ms) -> %s\n",
+      mesh.positions.size(), mesh.triangles.size(), stats.keyframes, stats.covered_triangles, stats.piece_triangles,
+      load_ms, stats.ms, cpu_ms, args.out.c_str());
 }
 
 }  // namespace

@@ -2,8 +2,8 @@
 // 1. piece: a keyframe's kept cells joined into triangles block by block (a block is the square between
 //    the centres of 2 x 2 neighbouring cells), in the keyframe frame; pose-independent.
 // 2. cover: every block of every piece against the keyframes whose container may see it (a frustum test
-//    on the piece's bounding box); a block is dropped when one of them has a finer block there on the
-//    same surface.
+//    on the piece's bounding box); a block is dropped when its centre and its corners each lie on a
+//    block of another keyframe, on the same surface, with denser measured points.
 // 3. output: the surviving blocks' triangles in the world frame, keyframes in id order.
 #include "mapping/mesh/surface_mesh.h"
 
@@ -52,6 +52,13 @@ std::size_t meshEstimate(const KeyframeGraph& graph, const std::vector<std::vect
 
 namespace mesh_detail {
 namespace {
+
+bool usedBy(const Block& block, std::int32_t vertex) {
+  for (int t = 0; t < block.count; ++t)
+    for (std::int32_t x : block.triangles[static_cast<std::size_t>(t)])
+      if (x == vertex) return true;
+  return false;
+}
 
 constexpr double kAverageSlope = 1.0;  // tan(45 degrees)
 
@@ -105,6 +112,7 @@ Piece buildPiece(const Keyframe& keyframe, const std::vector<bool>& kept, const 
         n += cell->n;
       }
     slot[g] = static_cast<std::int32_t>(piece.points.size());
+    piece.support.push_back(n);
     piece.points.push_back(sum / n);
     piece.colors.push_back((color / n).cast<float>());
   }
@@ -132,6 +140,7 @@ Piece buildPiece(const Keyframe& keyframe, const std::vector<bool>& kept, const 
       Block block;
       block.index = static_cast<std::int32_t>(static_cast<std::size_t>(r) * piece.cols + col);
       Eigen::Vector3d centroid = Eigen::Vector3d::Zero();
+      double area = 0;
       for (int t = use12 ? 2 : 0; t < (use12 ? 4 : 2); ++t) {
         if (!good[t]) continue;
         std::array<std::int32_t, 3> tri = {v[tris[t][0]], v[tris[t][1]], v[tris[t][2]]};
@@ -140,23 +149,31 @@ Piece buildPiece(const Keyframe& keyframe, const std::vector<bool>& kept, const 
         if (!(n.norm() > 0.0)) continue;
         if (n.dot(a + b + d) > 0.0) std::swap(tri[1], tri[2]);  // the front faces the keyframe
         centroid += (a + b + d) / 3.0;
+        area += 0.5 * n.norm();
         block.z_min = std::min({block.z_min, a.z(), b.z(), d.z()});
         block.z_max = std::max({block.z_max, a.z(), b.z(), d.z()});
         block.triangles[static_cast<std::size_t>(block.count++)] = tri;
       }
       if (block.count == 0) continue;
       block.centroid = centroid / block.count;
-      // The footprint of a block at its distance: a keyframe nearer the surface resolves it finer. A smooth
-      // function of the place, so the cut between two keyframes' pieces is a clean line (a triangle area,
-      // noisy, cut a salt-and-pepper pattern).
-      block.fineness = block.centroid.norm() * piece.block_px / c.camera().fx;
+      // The points behind the block: its corners' (each vertex stands for one block's area of cells).
+      double points = 0;
+      for (std::int32_t corner : v)
+        if (corner >= 0 && usedBy(block, corner)) {
+          points += piece.support[static_cast<std::size_t>(corner)];
+          block.corners[static_cast<std::size_t>(block.corner_count++)] = corner;
+        }
+      // docs/method.md 14: the spacing of the measured points on the block's surface. A keyframe nearer the
+      // surface, one that holds more frames of it and one that sees it less obliquely all measured it densely.
+      const double block_area = block.count == 2 ? area : 2.0 * area;
+      block.spacing = std::sqrt(block_area * block.corner_count / points);
       piece.block_of[static_cast<std::size_t>(block.index)] = static_cast<std::int32_t>(piece.blocks.size());
       piece.blocks.push_back(block);
     }
   return piece;
 }
 
-bool covers(const Piece& other, const Keyframe& other_kf, const Eigen::Vector3d& p_W, double fineness, int self,
+bool covers(const Piece& other, const Keyframe& other_kf, const Eigen::Vector3d& p_W, double spacing, int self,
             const MeshParams& params) {
   const Eigen::Vector3d q = other.T_K_W * p_W;
   if (!(q.z() > 0.0) || other.blocks.empty()) return false;
@@ -170,7 +187,7 @@ bool covers(const Piece& other, const Keyframe& other_kf, const Eigen::Vector3d&
   const Block& block = other.blocks[static_cast<std::size_t>(b)];
   const double tol = params.edge_sigma * std::sqrt(2.0) * depthSd(params.model, q.z());
   if (q.z() < block.z_min - tol || q.z() > block.z_max + tol) return false;
-  return block.fineness < fineness || (block.fineness == fineness && other_kf.id < self);
+  return block.spacing < spacing || (block.spacing == spacing && other_kf.id < self);
 }
 
 // Whether keyframe `other`'s container may see any point of the box [lo, hi] (world): false only when
@@ -218,20 +235,29 @@ std::vector<std::vector<bool>> coveredBlocks(const KeyframeGraph& graph, const s
     for (std::size_t o = 0; o < n; ++o)
       if (o != a && !pieces[o].blocks.empty() && (!prune || maySee(graph.keyframe(static_cast<int>(o)), lo, hi)))
         candidates.push_back(static_cast<int>(o));
-    // The keyframe that covered the last block is asked first (neighbouring blocks are mostly covered
+    // The keyframe that covered the last point is asked first (neighbouring blocks are mostly covered
     // by the same one); the answer does not depend on the order.
     std::size_t last = 0;
-    for (std::size_t i = 0; i < piece.blocks.size(); ++i) {
-      const Eigen::Vector3d p_W = kf.T_W_K * piece.blocks[i].centroid;
-      for (std::size_t j = 0; j < candidates.size() && !covered[a][i]; ++j) {
+    auto coveredAt = [&](const Eigen::Vector3d& p_K, double spacing) {
+      const Eigen::Vector3d p_W = kf.T_W_K * p_K;
+      for (std::size_t j = 0; j < candidates.size(); ++j) {
         const std::size_t at = (last + j) % candidates.size();
         const int o = candidates[at];
-        if (covers(pieces[static_cast<std::size_t>(o)], graph.keyframe(o), p_W, piece.blocks[i].fineness,
-                   static_cast<int>(a), params)) {
-          covered[a][i] = true;
+        if (covers(pieces[static_cast<std::size_t>(o)], graph.keyframe(o), p_W, spacing, static_cast<int>(a), params)) {
           last = at;
+          return true;
         }
       }
+      return false;
+    };
+    // A block is dropped only when its centre and all its corners are covered (by any keyframes): a
+    // block covered at its centre alone, where the denser piece ends inside it, would leave a gap.
+    for (std::size_t i = 0; i < piece.blocks.size(); ++i) {
+      const Block& b = piece.blocks[i];
+      bool all = coveredAt(b.centroid, b.spacing);
+      for (int j = 0; j < b.corner_count && all; ++j)
+        all = coveredAt(piece.points[static_cast<std::size_t>(b.corners[static_cast<std::size_t>(j)])], b.spacing);
+      covered[a][i] = all;
     }
   });
   return covered;

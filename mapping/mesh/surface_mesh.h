@@ -1,7 +1,8 @@
 #pragma once
 // A triangle mesh of the surfaces the local maps saw (docs/method.md 14): each keyframe's kept cells
 // meshed as the 2.5-D surface they are over its image plane, depth edges left open, and the pieces
-// fused by keeping, where keyframes saw the same surface, the finest keyframe's triangles.
+// fused by keeping, where keyframes saw the same surface, the triangles of the keyframe that measured it
+// most densely.
 #include <cstddef>
 #include <vector>
 
@@ -19,11 +20,13 @@ struct MeshParams {
   double max_slope_deg = 60.0;
   double edge_sigma = 3.0;
   /// Vertices sit on a grid of stride x stride cells: each is the count-weighted mean of the kept cells
-  /// there (those joined with the one of median depth). 1: one vertex per cell.
-  int stride = 2;
+  /// there (those joined with the one of median depth). 1: one vertex per cell (docs/method.md 14: on
+  /// Replica half the 95th percentile of the error of 2, and more of steep surfaces and edges).
+  int stride = 1;
   /// Sensor model whose depth noise the gates use (the global map's filter's).
   SensorModel model = SensorModel::kNguyen2012;
-  /// Fuse the keyframes' pieces (drop a triangle that a finer keyframe covers); false keeps every piece.
+  /// Fuse the keyframes' pieces (drop a block that keyframes with denser measured points cover); false keeps
+  /// every piece.
   bool fuse = true;
   /// A mesh estimated larger than this (triangles) is refused before any work (meshEstimate).
   std::size_t max_triangles = 30'000'000;
@@ -37,7 +40,7 @@ struct MeshParams {
 struct MeshStats {
   std::size_t keyframes = 0;          ///< keyframes with a piece
   std::size_t piece_triangles = 0;    ///< triangles of all pieces before fusion
-  std::size_t covered_triangles = 0;  ///< dropped because a finer keyframe covers them
+  std::size_t covered_triangles = 0;  ///< dropped because keyframes with denser points cover them
   double ms = 0;                      ///< wall time
 };
 

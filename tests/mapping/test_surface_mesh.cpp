@@ -128,6 +128,10 @@ TEST(SurfaceMesh, NormalsFaceTheCameraThatSawThem) {
   }
 }
 
+// The tests below look at the +z wall (2 m away) from 2 m and from 0.8 m: a triangle of the default
+// mesh spans half a block of 5 px cells at the default stride, so one smaller than at 1.3 m is the near view's.
+const double kFineArea = 0.5 * std::pow(1.3 * 5 * MeshParams{}.stride / kCamera.fx, 2);
+
 TEST(SurfaceMesh, FusionKeepsTheFinerKeyframeWhereTwoSeeTheSameWall) {
   KeyframeGraph graph;
   const Transform far = test::lookAt({0, 0, 0}, {0, 0, 2}), near = test::lookAt({0, 0, 1.2}, {0, 0, 2});
@@ -148,10 +152,53 @@ TEST(SurfaceMesh, FusionKeepsTheFinerKeyframeWhereTwoSeeTheSameWall) {
   for (const auto& t : fused.triangles) {
     const Eigen::Vector3f c = (fused.positions[t[0]] + fused.positions[t[1]] + fused.positions[t[2]]) / 3.0f;
     if (std::abs(c.x()) < 0.2f && std::abs(c.y()) < 0.2f && c.z() > 1.9f)
-      (triangleArea(fused, t) < 3e-4 ? fine : coarse) += 1;
+      (triangleArea(fused, t) < kFineArea ? fine : coarse) += 1;
   }
   EXPECT_GT(fine, 100);
   EXPECT_EQ(coarse, 0);
+}
+
+// A keyframe whose local map holds `frames` ray-cast frames of the box room from T_W_K, of every
+// `every`-th pixel each way, with Gaussian depth noise of sd `noise_m` (seeded).
+int addBoxRoomViews(KeyframeGraph* graph, const Transform& T_W_K, int frames, int every, double noise_m) {
+  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
+  cv::RNG rng(11);
+  for (int f = 0; f < frames; ++f) {
+    RgbdFrame frame = test::renderBoxRoom(kCamera, T_W_K);
+    for (int v = 0; v < frame.depth.rows; ++v)
+      for (int u = 0; u < frame.depth.cols; ++u) {
+        std::uint16_t& d = frame.depth.at<std::uint16_t>(v, u);
+        d = (u % every || v % every)
+                ? 0
+                : static_cast<std::uint16_t>(std::lround(d + rng.gaussian(noise_m) * kCamera.depth_scale));
+      }
+    LocalMapIntegrator().integrateFrame(frame, kCamera, T_W_K, &k.container, nullptr);
+  }
+  return graph->add(std::move(k)).id;
+}
+
+TEST(SurfaceMesh, FusionKeepsTheBetterSupportedKeyframeWhereTheNearerHoldsFewNoisyPoints) {
+  // A far keyframe holding 8 exact frames of the +z wall (2 m away) and a near one (0.8 m away) holding
+  // one frame of every 3rd pixel with 3 mm of depth noise: the near one resolves the wall finer, the far
+  // one measured it with more points per square metre (8 / 2^2 against 1 / 9 / 0.8^2), and its surface
+  // is the exact one. Every cell is kept, so the near piece is not lost to the filter.
+  KeyframeGraph graph;
+  addBoxRoomViews(&graph, test::lookAt({0, 0, 0}, {0, 0, 2}), 8, 1, 0.0);
+  addBoxRoomViews(&graph, test::lookAt({0, 0, 1.2}, {0, 0, 2}), 1, 3, 0.003);
+  std::vector<std::vector<bool>> kept;
+  for (const Keyframe& k : graph.keyframes()) kept.emplace_back(k.container.size(), true);
+  const ColoredTriangleMesh fused = buildSurfaceMesh(graph, kept, MeshParams{});
+  // Where both see the wall, the triangles are the far view's (coarser ones) and lie on the wall.
+  std::size_t fine = 0, coarse = 0;
+  for (const auto& t : fused.triangles) {
+    const Eigen::Vector3f c = (fused.positions[t[0]] + fused.positions[t[1]] + fused.positions[t[2]]) / 3.0f;
+    if (std::abs(c.x()) < 0.2f && std::abs(c.y()) < 0.2f && c.z() > 1.9f) {
+      (triangleArea(fused, t) < kFineArea ? fine : coarse) += 1;
+      EXPECT_LT(std::abs(c.z() - 2.0f), 1e-3f);  // the near piece's vertices stray by about a millimetre
+    }
+  }
+  EXPECT_EQ(fine, 0u);
+  EXPECT_GT(coarse, 50u);
 }
 
 TEST(SurfaceMesh, DepthStepIsLeftOpen) {

@@ -18,8 +18,12 @@ struct Block {
   int count = 0;            ///< triangles
   std::array<std::array<std::int32_t, 3>, 2> triangles{};  ///< Piece::points indices, front facing the keyframe
   double z_min = std::numeric_limits<double>::infinity(), z_max = -std::numeric_limits<double>::infinity();
-  double fineness = 0;  ///< the block's footprint at its centroid's distance (m): smaller is finer
+  /// The spacing of the measured points on the block's surface (m): sqrt(its area / the points per
+  /// corner). Smaller is better supported.
+  double spacing = 0;
   Eigen::Vector3d centroid = Eigen::Vector3d::Zero();  ///< keyframe frame
+  int corner_count = 0;                                ///< corners the triangles use
+  std::array<std::int32_t, 4> corners{};               ///< their Piece::points indices
 };
 
 /// One keyframe's mesh in its own frame.
@@ -28,6 +32,7 @@ struct Piece {
   int block_px = 0;                     ///< container pixels between neighbouring vertex positions (cell size x stride)
   std::vector<Eigen::Vector3d> points;  ///< per vertex position, its kept cells' mean (keyframe frame)
   std::vector<Eigen::Vector3f> colors;
+  std::vector<double> support;              ///< per vertex position, the points of its cells (the count weights' sum)
   std::vector<Block> blocks;                ///< in block order
   std::vector<std::int32_t> block_of;       ///< per block index: its place in blocks, or -1
   Transform T_K_W = Transform::Identity();  ///< the keyframe's current pose, inverted (the cover test's)
@@ -36,9 +41,9 @@ struct Piece {
 Piece buildPiece(const Keyframe& keyframe, const std::vector<bool>& kept, const MeshParams& params);
 
 /// Whether `other` (keyframe `other_kf`, other.T_K_W its pose) has, where world point p_W falls in its container, a block on
-/// the same surface (its depth range widened by the depth noise) finer than `fineness` (ties: the lower
-/// keyframe id than `self` wins).
-bool covers(const Piece& other, const Keyframe& other_kf, const Eigen::Vector3d& p_W, double fineness, int self,
+/// the same surface (its depth range widened by the depth noise) with a smaller point spacing than `spacing`
+/// (ties: the lower keyframe id than `self` wins).
+bool covers(const Piece& other, const Keyframe& other_kf, const Eigen::Vector3d& p_W, double spacing, int self,
             const MeshParams& params);
 
 /// buildSurfaceMesh; prune = false tries every keyframe in the cover test (the reference).
