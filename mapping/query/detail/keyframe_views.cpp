@@ -113,7 +113,7 @@ struct FrameView {
   Eigen::Vector3d t_F_W = Eigen::Vector3d::Zero();
   int keyframe = 0;
   int cols = 0;
-  const std::uint16_t* near_mm = nullptr;  // into FrameViews' blocks
+  const std::uint16_t* near_mm = nullptr;  // into KeyframeViews::Impl::blocks
   double z_max = 0;                        // farthest block, m
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
