@@ -320,15 +320,10 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   // --mesh and the mesh layer whole.
   render::DrawnBounds drawn =
       render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, render::frameAxes(map, scene.up));
-  const auto hold = [&](const glm::vec3& p) {
-    const glm::vec3 q = glm::transpose(drawn.axes) * p;
-    drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
-    drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
-    drawn.empty = false;
-  };
-  for (const auto& p : m.mesh.positions) hold(glm::vec3(p.x(), p.y(), p.z()));
-  if (surface)
-    for (const glm::vec3& p : surface->positions) hold(p);
+  std::vector<glm::vec3> mesh_positions;
+  for (const auto& p : m.mesh.positions) mesh_positions.emplace_back(p.x(), p.y(), p.z());
+  render::holdPoints(drawn, mesh_positions);
+  if (surface) render::holdPoints(drawn, surface->positions);
   last_strays_ = drawn.strays;
   scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;
