@@ -75,6 +75,7 @@ struct RenderSource::Impl {
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
   // The mesh layer's surface mesh of the last map asked for (by its paramsKey).
   std::optional<std::vector<double>> surface_for;
+  MeshParams mesh_params, surface_params;  // asked for; what `surface` was made with
   std::shared_ptr<const render::ColoredMesh> surface;
   std::size_t surface_drawn = 0;  // its triangles, when the last view drew it
   int container_serial = 0;
@@ -204,15 +205,21 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
 std::shared_ptr<const render::ColoredMesh> RenderSource::surfaceOf(const GlobalMapParams& params) {
   Impl& m = *impl_;
   const std::vector<double> key = paramsKey(params);
-  if (m.surface_for != key) {
+  if (m.surface_for != key || m.surface_params != m.mesh_params) {
     const std::vector<Ellipsoid>& map = globalMap(params);
     for (const auto& entry : m.maps)
       if (&entry.second.ellipsoids == &map)
         m.surface = std::make_shared<const render::ColoredMesh>(
-            render::toColoredMesh(buildSurfaceMesh(*m.graph, entry.second, MeshParams{}, params)));
+            render::toColoredMesh(buildSurfaceMesh(*m.graph, entry.second, m.mesh_params, params)));
     m.surface_for = key;
+    m.surface_params = m.mesh_params;
   }
   return m.surface;
+}
+
+void RenderSource::setMeshParams(const MeshParams& params) {
+  params.validate();
+  impl_->mesh_params = params;
 }
 
 const render::QuerySliceImage* RenderSource::lastQuerySlice() const { return impl_->slice_image.get(); }

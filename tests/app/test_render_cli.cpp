@@ -406,6 +406,38 @@ TEST_F(RenderSessionCli, TheMeshLayerDrawsTheSurfaceWhereTheMapIs) {
   EXPECT_EQ(cv::countNonZero(cv::Mat(((bgr[0] != bgr[2]) | (bgr[1] != bgr[2])) & mesh)), 0);
 }
 
+// `vdmap mesh`'s options make render's mesh layer too, as the settings' mesh keys do.
+TEST_F(RenderSessionCli, TheMeshOptionsChangeTheMeshLayer) {
+  const auto triangles = [](const test::RunResult& r) {
+    const std::size_t at = r.out.find(" triangles");
+    const std::size_t from = r.out.rfind(' ', at - 1);
+    return at == std::string::npos ? 0ul : std::stoul(r.out.substr(from + 1, at - from - 1));
+  };
+  const auto plain = render("m.png", "--layers mesh");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto steep = render("m-slope.png", "--layers mesh --mesh-max-slope 20");
+  ASSERT_EQ(steep.exit_code, 0) << steep.err;
+  EXPECT_LT(triangles(steep), triangles(plain)) << steep.out << plain.out;
+  EXPECT_GT(maxDifference(png(out("m.png")), png(out("m-slope.png"))), 0.0);
+  const auto set = render("m-set.png", "--layers mesh --set mesh_max_slope=20");
+  ASSERT_EQ(set.exit_code, 0) << set.err;
+  EXPECT_EQ(maxDifference(png(out("m-slope.png")), png(out("m-set.png"))), 0.0) << "the flag is the key";
+  const auto both = render("m-both.png", "--layers mesh --set mesh_max_slope=20 --mesh-max-slope 60");
+  EXPECT_EQ(maxDifference(png(out("m.png")), png(out("m-both.png"))), 0.0) << "the flag over --set";
+  const auto coarse = render("m-stride.png", "--layers mesh --mesh-stride 4 --mesh-no-fuse");
+  ASSERT_EQ(coarse.exit_code, 0) << coarse.err;
+  EXPECT_NE(triangles(coarse), triangles(plain));
+  for (const auto& [options, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--layers mesh --mesh-stride 0", "--mesh-stride: Value 0 not in range 1 to 16"},
+           {"--layers mesh --mesh-max-slope 95", "--mesh-max-slope: Value 95 not in range"},
+           {"--layers mesh --set mesh_stride=40", "view.mesh_stride must be in 1..16"}}) {
+    const auto r = render("bad.png", options);
+    EXPECT_NE(r.exit_code, 0) << options;
+    EXPECT_NE(r.err.find(named), std::string::npos) << options << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  }
+}
+
 TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {
   ASSERT_EQ(render("c.png", "--view container:1").exit_code, 0);
   ASSERT_EQ(render("cn.png", "--view container:1 --layers none").exit_code, 0);

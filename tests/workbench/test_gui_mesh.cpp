@@ -71,6 +71,16 @@ TEST(GuiMesh, TheLayerOnMeshesEveryMapAndAThresholdOrPoseEditRemeshes) {
   EXPECT_EQ(bench.mapping()->frames_mapped, 20) << "nothing was mapped again";
   EXPECT_GT(bench.mapping()->generation, mapping_generation);  // the pose edit's snapshot, not a re-run
 
+  // How the mesh is made (the Mesh section, settings' mesh keys): re-meshed, nothing mapped again.
+  bench.ui().settings.mesh.stride = 4;
+  bench.sync();
+  worker.waitIdle();
+  const auto coarse = bench.global();
+  ASSERT_TRUE(coarse && coarse->mesh);
+  EXPECT_LT(coarse->mesh->triangles.size(), posed->mesh->triangles.size() / 2) << "a vertex per 4x4 cells";
+  EXPECT_EQ(bench.mapping()->frames_mapped, 20);
+  bench.ui().settings.mesh = {};
+
   // Off: the next map comes without one.
   bench.ui().settings.show_mesh = false;
   bench.sync();
