@@ -99,7 +99,8 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
       {"render" + map + out + " --view keyframe:0", "needs keyframes"},
       {"render" + map + out + " --view side", "expected global, keyframe:K or container:K", true},
       {"render" + map + out + " --mesh-style flat", "--mesh-style: flat not in {shaded,colour,wireframe}", true},
-      {"render" + map + out + " --layers mesh", "--layers mesh draws the surface mesh of local maps"},
+      {"render" + map + out + " --layers mesh",
+       "--layers mesh draws the surface mesh of local maps: give a sequence (SEQ), a session (.vdmap) or a `vdmap map` folder"},
       {"render" + map + out + " --set mesh_style=flat", "view.mesh_style must be shaded or colour or wireframe"},
       {"render '" + tmp.path().string() + "'" + map + out, "SEQ excludes --map", true},
       {"render '" + (tmp / "no_such_sequence").string() + "'" + out, "no_such_sequence"},
@@ -436,6 +437,33 @@ TEST_F(RenderSessionCli, TheMeshOptionsChangeTheMeshLayer) {
     EXPECT_NE(r.err.find(named), std::string::npos) << options << ": " << r.err;
     EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
   }
+}
+
+// A `vdmap map` folder's local maps (local_maps.ply, the cells its map kept) give the mesh layer:
+// the mesh `vdmap mesh` makes of the folder; a folder without them says which file is missing.
+TEST_F(RenderSessionCli, AMapFolderDrawsTheMeshOfItsLocalMaps) {
+  const auto folder = runVdmap("render --map '" + out("m") + "' --size 320x240 --layers mesh --draw none --out '" +
+                               out("folder-mesh.png") + "'");
+  ASSERT_EQ(folder.exit_code, 0) << folder.err;
+  const auto meshed = runVdmap("mesh '" + out("m") + "' --out '" + out("folder.ply") + "' --json");
+  ASSERT_EQ(meshed.exit_code, 0) << meshed.err;
+  const std::size_t triangles = nlohmann::json::parse(meshed.out).at("triangles").get<std::size_t>();
+  EXPECT_GT(triangles, 0u);
+  EXPECT_NE(folder.out.find(" " + std::to_string(triangles) + " triangles"), std::string::npos)
+      << folder.out << " expected " << triangles;
+  const auto bare = runVdmap("render --map '" + out("m") + "' --size 320x240 --layers none --draw none --out '" +
+                             out("folder-bare.png") + "'");
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  EXPECT_GT(maxDifference(png(out("folder-mesh.png")), png(out("folder-bare.png"))), 0.0) << "the mesh is drawn";
+
+  TempDir copy;
+  std::filesystem::copy(out("m"), copy.path() / "m");
+  std::filesystem::remove(copy.path() / "m" / "local_maps.ply");
+  const auto missing = runVdmap("render --map '" + (copy.path() / "m").string() + "' --layers mesh --out '" +
+                                (copy.path() / "x.png").string() + "'");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("local_maps.ply: missing"), std::string::npos) << missing.err;
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << "one line: " << missing.err;
 }
 
 TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {
