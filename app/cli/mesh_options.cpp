@@ -13,6 +13,18 @@ MeshParams MeshOptions::over(MeshParams base) const {
   return base;
 }
 
+std::string meshFlags(const MeshParams& params) {
+  const MeshParams d;
+  std::string flags;
+  if (params.max_slope_deg != d.max_slope_deg)
+    flags += " --mesh-max-slope " + CLI::detail::to_string(params.max_slope_deg);
+  if (params.edge_sigma != d.edge_sigma) flags += " --mesh-edge-sigma " + CLI::detail::to_string(params.edge_sigma);
+  if (params.stride != d.stride) flags += " --mesh-stride " + std::to_string(params.stride);
+  if (!params.fuse) flags += " --mesh-no-fuse";
+  if (params.max_triangles != d.max_triangles) flags += " --max-triangles " + std::to_string(params.max_triangles);
+  return flags;
+}
+
 void addMeshOptions(CLI::App& verb, MeshOptions& options) {
   const MeshParams defaults;
   verb.add_option("--mesh-max-slope", options.max_slope_deg,

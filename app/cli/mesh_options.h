@@ -3,6 +3,7 @@
 // `vdmap mesh`, `vdmap map --mesh` and `vdmap render --layers mesh`.
 #include <cstddef>
 #include <optional>
+#include <string>
 
 #include <CLI/CLI.hpp>
 
@@ -23,6 +24,10 @@ struct MeshOptions {
   /// `base` with the options given over it.
   MeshParams over(MeshParams base) const;
 };
+
+/// The options that give `params` over the defaults (" --mesh-stride 3 --mesh-no-fuse"; "" for the
+/// defaults), as a printed command spells them. The sensor model and threads are no options.
+std::string meshFlags(const MeshParams& params);
 
 /// Registers --mesh-max-slope, --mesh-edge-sigma, --mesh-stride, --mesh-no-fuse and --max-triangles
 /// on `verb`, writing into `options` (which must outlive the parse); ranges are checked while parsing.

@@ -2054,6 +2054,12 @@ TEST(GuiViewFiles, TheRenderCommandNamesTheFramesPlayedAndTheChangedParameters) 
   t.worker().play();
   t.worker().waitIdle();
   EXPECT_EQ(t.bench.viewFiles().commandSource().flags, " --poses gt --set keyframe_every=3");
+  // The mesh layer's mesh as the Mesh section makes it.
+  t.bench.ui().settings.show_mesh = true;
+  t.bench.ui().settings.mesh.stride = 3;
+  t.bench.ui().settings.mesh.fuse = false;
+  EXPECT_EQ(t.bench.viewFiles().commandSource().flags,
+            " --poses gt --set keyframe_every=3 --mesh-stride 3 --mesh-no-fuse");
 }
 
 }  // namespace
