@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "app/cli/command_line.h"
+#include "app/cli/mesh_options.h"
 #include "app/cli/parameter_table.h"
 #include "app/cli/provenance.h"
 #include "app/cli/release_memory.h"
@@ -47,8 +48,7 @@ struct MapArgs {
   std::string grid_band;
   std::string grid_up = "+z";
   bool mesh = false;  // --mesh: also global_mesh.ply (docs/method.md 14)
-  bool mesh_no_fuse = false;
-  MeshParams mesh_params;
+  MeshOptions mesh_options;
 };
 
 // OctoMap carves free space along each ray from the camera to a surface it measured. vdmap maps
@@ -280,10 +280,10 @@ void runMap(MapArgs args) {
   // --mesh: computed before anything is written, like the grid.
   std::optional<ColoredTriangleMesh> mesh;
   if (args.mesh) {
-    args.mesh_params.fuse = !args.mesh_no_fuse;
-    args.mesh_params.model = args.params.global.filter.model;
-    args.mesh_params.threads = args.params.global.threads;
-    mesh = withStageBar("mesh", [&] { return buildSurfaceMesh(graph, global.kept, args.mesh_params); });
+    MeshParams mesh_params = args.mesh_options.over({});
+    mesh_params.model = args.params.global.filter.model;
+    mesh_params.threads = args.params.global.threads;
+    mesh = withStageBar("mesh", [&] { return buildSurfaceMesh(graph, global.kept, mesh_params); });
     if (mesh->triangles.empty())
       std::fprintf(stderr, "vdmap map: note: the map has no surface to mesh: the mesh is empty\n");
   }
@@ -348,7 +348,7 @@ void addMapCommand(CLI::App& app) {
   band->needs(grid);
   auto* mesh = verb->add_flag("--mesh", args->mesh,
                               "also write global_mesh.ply, a triangle mesh of the local maps (vdmap mesh)");
-  addMeshOptions(*verb, args->mesh_params, &args->mesh_no_fuse);
+  addMeshOptions(*verb, args->mesh_options);
   for (const char* name :
        {"--mesh-max-slope", "--mesh-edge-sigma", "--mesh-stride", "--mesh-no-fuse", "--max-triangles"})
     verb->get_option(name)->needs(mesh);

@@ -7,6 +7,7 @@
 #include <memory>
 
 #include "app/cli/command_line.h"
+#include "app/cli/mesh_options.h"
 #include "app/verbs.h"
 #include "mapping/core/error.h"
 #include "mapping/core/parallel.h"
@@ -24,8 +25,8 @@ struct MeshArgs {
   std::string out;
   std::string keyframe_poses;
   bool json = false;
-  bool no_fuse = false;
-  MeshParams params;
+  MeshOptions options;
+  int threads = 0;
 };
 
 // The graph and the cells the map keeps: a session's local maps through its filter, a map folder's
@@ -60,22 +61,23 @@ MeshInput readMeshInput(const std::string& path, int threads) {
   return in;
 }
 
-void runMesh(MeshArgs args) {
+void runMesh(const MeshArgs& args) {
   namespace fs = std::filesystem;
-  args.params.fuse = !args.no_fuse;
-  args.params.validate();
+  MeshParams params = args.options.over({});
+  params.threads = args.threads;
+  params.validate();
   checkMeshFileName(args.out);
   checkOutputFile(args.out, "--out");
   checkNotAnInput(args.out, "--out", {{"MAP", args.map}, {"--keyframe-poses", args.keyframe_poses}});
   const auto start = std::chrono::steady_clock::now();
-  MeshInput in = readMeshInput(args.map, args.params.threads);
+  MeshInput in = readMeshInput(args.map, params.threads);
   if (!args.keyframe_poses.empty()) applyTrajectoryFile(in.graph, args.keyframe_poses);
   const double load_ms = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
-  args.params.model = in.model;
+  params.model = in.model;
   MeshStats stats;
   ColoredTriangleMesh mesh;
   // The process's CPU time too: on a busy machine the wall time says little of the work.
-  const double cpu_ms = cpuTimeMs([&] { mesh = buildSurfaceMesh(in.graph, in.kept, args.params, &stats); });
+  const double cpu_ms = cpuTimeMs([&] { mesh = buildSurfaceMesh(in.graph, in.kept, params, &stats); });
   if (mesh.triangles.empty())
     std::cerr << "vdmap mesh: note: " << args.map
               << (in.graph.size() ? " has no surface the filter kept" : " has no keyframes") << ": the mesh is empty\n";
@@ -88,7 +90,7 @@ void runMesh(MeshArgs args) {
                                 {"triangles", mesh.triangles.size()},
                                 {"piece_triangles", stats.piece_triangles},
                                 {"covered_triangles", stats.covered_triangles},
-                                {"estimate", meshEstimate(in.graph, in.kept, args.params.stride)},
+                                {"estimate", meshEstimate(in.graph, in.kept, params.stride)},
                                 {"load_ms", load_ms},
                                 {"mesh_ms", stats.ms},
                                 {"mesh_cpu_ms", cpu_ms}};
@@ -104,27 +106,6 @@ void runMesh(MeshArgs args) {
 
 }  // namespace
 
-void addMeshOptions(CLI::App& verb, MeshParams& params, bool* no_fuse) {
-  verb.add_option("--mesh-max-slope", params.max_slope_deg,
-                  "degrees: neighbouring cells are joined while the surface between them is turned at most this "
-                  "far from the camera (plus the depth noise); steeper, and depth steps, stay open")
-      ->check(CLI::Range(0.0, 89.9))
-      ->capture_default_str();
-  verb.add_option("--mesh-edge-sigma", params.edge_sigma,
-                  "the depth noise (in sensor-model standard deviations) a join and the fusion allow")
-      ->check(CLI::Range(0.0, 100.0))
-      ->capture_default_str();
-  verb.add_option("--mesh-stride", params.stride,
-                  "vertices on a grid of this many cells each way, each the mean of its kept cells (1: one per cell)")
-      ->check(CLI::Range(1, 16))
-      ->capture_default_str();
-  verb.add_flag("--mesh-no-fuse", *no_fuse, "keep every keyframe's piece whole (overlapping copies stay)");
-  verb.add_option("--max-triangles", params.max_triangles,
-                  "refuse, before any work, a mesh estimated above this many triangles")
-      ->check(CLI::Range(std::size_t{1}, std::size_t{2'000'000'000}))
-      ->capture_default_str();
-}
-
 void addMeshCommand(CLI::App& app) {
   auto* verb = app.add_subcommand(
       "mesh", "A triangle mesh of a map's surfaces (docs/method.md 14): binary PLY, or OBJ for a .obj --out");
@@ -135,8 +116,8 @@ void addMeshCommand(CLI::App& app) {
   verb->add_option("--keyframe-poses", args->keyframe_poses,
                    "corrected keyframe poses (TUM, matched by keyframe timestamp): the mesh follows them, "
                    "nothing is re-integrated");
-  addMeshOptions(*verb, args->params, &args->no_fuse);
-  verb->add_option("--threads", args->params.threads,
+  addMeshOptions(*verb, args->options);
+  verb->add_option("--threads", args->threads,
                    "threads, 0.." + std::to_string(kMaxThreads) + " (0: all); the mesh does not depend on it")
       ->check(CLI::Range(0, kMaxThreads))
       ->capture_default_str();

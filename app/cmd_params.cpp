@@ -6,6 +6,7 @@
 #include <sstream>
 #include <string>
 
+#include "app/cli/mesh_options.h"
 #include "app/cli/parameter_table.h"
 #include "app/verbs.h"
 
@@ -96,9 +97,8 @@ void printMarkdown(std::ostream& out) {
          "parameters are options of `vdmap mesh` and `vdmap map --mesh`, not of the map.\n\n"
          "| flag | default | what it does |\n|---|---|---|\n";
   CLI::App mesh_options;
-  MeshParams mesh;
-  bool no_fuse = false;
-  addMeshOptions(mesh_options, mesh, &no_fuse);
+  MeshOptions mesh;
+  addMeshOptions(mesh_options, mesh);
   for (const CLI::Option* o : mesh_options.get_options())
     if (o->get_name() != "--help")
       out << "| `" << o->get_name() << "` | " << (o->get_default_str().empty() ? "off" : o->get_default_str()) << " | "

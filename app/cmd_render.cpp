@@ -117,6 +117,7 @@ void runRender(RenderArgs args) {
     checkGoldenSize(args.check.expect, golden.size(), {w, h});
   if (args.check.timings && view.spec.kind != render::ViewKind::kContainer) source.globalMap(view.thresholds);
   times.mark("build");
+  source.setMeshParams(view.mesh);
   const cv::Mat image = source.render(view.spec, view.thresholds);
   times.mark("render");
   if (!args.out.empty()) writeImage(args.out, image);

@@ -5,8 +5,6 @@
 
 #include <CLI/CLI.hpp>
 
-#include "mapping/mesh/surface_mesh.h"
-
 namespace vdmap::app {
 
 void addInfoCommand(CLI::App& app);
@@ -22,9 +20,6 @@ void addQueryCommand(CLI::App& app);
 void addParamsCommand(CLI::App& app);
 /// `vdmap mesh MAP --out FILE`: the surface mesh (docs/method.md 14).
 void addMeshCommand(CLI::App& app);
-/// The mesh's options (--mesh-max-slope, --mesh-edge-sigma, --mesh-no-fuse, --max-triangles), for
-/// `vdmap mesh` and `vdmap map --mesh`.
-void addMeshOptions(CLI::App& verb, MeshParams& params, bool* no_fuse);
 /// The workbench options of `vdmap` without a verb; the returned function opens the workbench
 /// on the built-in scene (throws std::runtime_error when it ends on an error).
 std::function<void()> addBuiltinWorkbenchOptions(CLI::App& app);

@@ -73,6 +73,16 @@ FrameBox frameBounds(const DrawnBounds& map, const GraphScene& graph) {
   return {lo, hi, map.axes};
 }
 
+void holdPoints(DrawnBounds& drawn, std::span<const glm::vec3> points) {
+  const glm::mat3 to_box = glm::transpose(drawn.axes);
+  for (const glm::vec3& p : points) {
+    const glm::vec3 q = to_box * p;
+    drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
+    drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
+    drawn.empty = false;
+  }
+}
+
 glm::mat3 frameAxes(std::span<const Ellipsoid> map, const glm::vec3& up_in) {
   const glm::vec3 up = glm::length(up_in) > 1e-6f ? glm::normalize(up_in) : glm::vec3(0.f, 0.f, 1.f);
   // A horizon basis (a, b), then the principal direction of the means' horizontal spread.

@@ -41,6 +41,9 @@ struct DrawnBounds {
 DrawnBounds drawnBounds(std::span<const Ellipsoid> map, float sigma, DrawMode mode, const HeightSlice& slice = {},
                         const HeightFrame& frame = {}, const glm::mat3& axes = glm::mat3(1.f));
 
+/// Grows `drawn` to hold `points` (world frame) whole, as a mesh drawn with the map is framed.
+void holdPoints(DrawnBounds& drawn, std::span<const glm::vec3> points);
+
 /// The axes a map is boxed along for framing: two horizontal directions, turned about `up` so
 /// the box of the means' horizontal 2-98 % extents is smallest (a room's walls), and `up`.
 glm::mat3 frameAxes(std::span<const Ellipsoid> map, const glm::vec3& up);

@@ -14,21 +14,6 @@
 namespace vdmap::app {
 namespace {
 
-struct Shares {
-  std::size_t n = 0, occupied = 0, free = 0, unknown = 0;
-  void add(Occupancy s) {
-    ++n;
-    occupied += s == Occupancy::kOccupied, free += s == Occupancy::kFree, unknown += s == Occupancy::kUnknown;
-  }
-  double share(std::size_t k) const { return n ? static_cast<double>(k) / static_cast<double>(n) : 0.0; }
-  nlohmann::json json() const {
-    return {{"points", n},
-            {"occupied", rounded(share(occupied))},
-            {"free", rounded(share(free))},
-            {"unknown", rounded(share(unknown))}};
-  }
-};
-
 /// Why a surface point is not in a global gate: the first stage that does not hold it.
 enum Cause {
   kLostInMerge,
@@ -92,6 +77,25 @@ GlobalMap everyCell(const KeyframeGraph& graph, const GlobalMap& global) {
   return every;
 }
 
+// `global` with the cells of too few points for the filter kept too.
+GlobalMap withFewPointCells(const KeyframeGraph& graph, const GlobalMap& global) {
+  GlobalMap many = global;
+  for (std::size_t id = 0; id < graph.size(); ++id) {
+    const auto& cells = graph.keyframe(static_cast<int>(id)).container.cells();
+    for (std::size_t i = 0; i < cells.size(); ++i)
+      many.kept[id][i] = many.kept[id][i] || (cells[i].n >= 2 && cells[i].n < FilterParams{}.min_points);
+  }
+  return many;
+}
+
+// The default thresholds with fusion across groups and occlusion removal on or off.
+GlobalMapParams withStages(bool fusion, bool occlusion_removal) {
+  GlobalMapParams params;
+  params.fuse_across_groups = fusion;
+  params.occlusion_removal = occlusion_removal;
+  return params;
+}
+
 bool anyOccupied(const QueryMap& views, std::size_t keyframes, const Eigen::Vector3d& q) {
   for (std::size_t id = 0; id < keyframes; ++id)
     if (views.keyframeVerdict(static_cast<int>(id), q).state == Occupancy::kOccupied) return true;
@@ -99,6 +103,21 @@ bool anyOccupied(const QueryMap& views, std::size_t keyframes, const Eigen::Vect
 }
 
 }  // namespace
+
+void OccupancyShares::add(Occupancy s) {
+  ++points;
+  n_occupied += s == Occupancy::kOccupied, n_free += s == Occupancy::kFree, n_unknown += s == Occupancy::kUnknown;
+}
+
+nlohmann::json OccupancyShares::json() const {
+  return {{"occupied", rounded(occupied())}, {"free", rounded(free())}, {"unknown", rounded(unknown())}};
+}
+
+HeldOutDiagnostics::HeldOutDiagnostics(const KeyframeGraph& graph, const GlobalMap& global, const QueryParams& qp)
+    : all(QueryMap::build(graph, everyCell(graph, global), qp)),
+      few(QueryMap::build(graph, withFewPointCells(graph, global), qp)),
+      unfused(QueryMap::build(graph, buildGlobalMap(graph, withStages(false, true)), qp)),
+      merged(QueryMap::build(graph, buildGlobalMap(graph, withStages(false, false)), qp)) {}
 
 void addHeldOut(const RgbdFrame& frame, const PinholeCamera& camera, double min_m, double max_m,
                 std::size_t frame_index, std::size_t per_frame, HeldOutPoints* out) {
@@ -129,11 +148,9 @@ void addHeldOut(const RgbdFrame& frame, const PinholeCamera& camera, double min_
 namespace {
 // Why a point that should be free is unknown: over the keyframes, the best of their reasons.
 nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, const char* what,
-                                 const KeyframeGraph& graph, const GlobalMap& global, const QueryMap& query,
+                                 const KeyframeGraph& graph, const QueryMap& query, const QueryMap& all,
                                  std::ostringstream* text) {
-  const QueryParams qp = query.params();
-  const QueryMap all = QueryMap::build(graph, everyCell(graph, global), qp);
-  const double k = qp.gate_sigma;
+  const double k = query.params().gate_sigma;
   // 0 beside the gate, 1 within k sigma of the surface, 2 behind it, 3 filtered cell, 4 empty cell, 5 outside
   const char* const names[] = {"in front of a kept cell, the ray beside its gate",
                                "in front of a kept cell by less than k sigma",
@@ -182,7 +199,8 @@ nlohmann::json reportFreeUnknown(const std::vector<Eigen::Vector3d>& points, con
 }  // namespace
 
 nlohmann::json reportHeldOut(const HeldOutPoints& points, const KeyframeGraph& graph, const GlobalMap& global,
-                             const QueryMap& query, const std::vector<HeldOutPeer>& peers, std::ostringstream* text) {
+                             const QueryMap& query, const HeldOutDiagnostics& diagnostics,
+                             const std::vector<HeldOutPeer>& peers, std::ostringstream* text) {
   const std::vector<const std::vector<Eigen::Vector3d>*> sets = {&points.surface, &points.front_2cm, &points.front_5cm,
                                                                  &points.half_way};
   const char* const set_key[] = {"surface", "front_2cm", "front_5cm", "half_way"};
@@ -200,11 +218,12 @@ nlohmann::json reportHeldOut(const HeldOutPoints& points, const KeyframeGraph& g
     std::snprintf(buf, sizeof buf, "%-16s", name.c_str());
     *text << buf;
     for (std::size_t s = 0; s < sets.size(); ++s) {
-      Shares sh;
+      OccupancyShares sh;
       for (const Eigen::Vector3d& q : *sets[s]) sh.add(classify(q));
       out[key][set_key[s]] = sh.json();
-      std::snprintf(buf, sizeof buf, "  o%5.1f f%5.1f u%5.1f", 100 * sh.share(sh.occupied), 100 * sh.share(sh.free),
-                    100 * sh.share(sh.unknown));
+      out[key][set_key[s]]["points"] = sh.points;
+      std::snprintf(buf, sizeof buf, "  o%5.1f f%5.1f u%5.1f", 100 * sh.occupied(), 100 * sh.free(),
+                    100 * sh.unknown());
       *text << buf;
     }
     *text << "\n";
@@ -216,36 +235,27 @@ nlohmann::json reportHeldOut(const HeldOutPoints& points, const KeyframeGraph& g
   });
   for (const HeldOutPeer& p : peers) row(p.name, p.key, p.classify);
 
-  out["vdmap_half_way_unknown"] = reportFreeUnknown(points.half_way, "half-way", graph, global, query, text);
-  out["vdmap_front_5cm_unknown"] = reportFreeUnknown(points.front_5cm, "5 cm in front", graph, global, query, text);
-  out["vdmap_surface_misses"] = reportSurfaceMisses(points.surface, "held-out surface", graph, global, query, text);
+  out["vdmap_half_way_unknown"] = reportFreeUnknown(points.half_way, "half-way", graph, query, diagnostics.all, text);
+  out["vdmap_front_5cm_unknown"] =
+      reportFreeUnknown(points.front_5cm, "5 cm in front", graph, query, diagnostics.all, text);
+  out["vdmap_surface_misses"] =
+      reportSurfaceMisses(points.surface, "held-out surface", graph, global, query, diagnostics, text);
   return out;
 }
 
 nlohmann::json reportSurfaceMisses(const std::vector<Eigen::Vector3d>& points, const char* what,
                                    const KeyframeGraph& graph, const GlobalMap& global, const QueryMap& query,
-                                   std::ostringstream* text) {
+                                   const HeldOutDiagnostics& diagnostics, std::ostringstream* text) {
   char buf[256];
   nlohmann::json out;
   std::vector<Classification> cls(1);
   // Causes of vdmap's surface points outside every global gate.
-  QueryParams qp = query.params();
-  GlobalMap many = global;  // also the cells with too few points
-  for (std::size_t id = 0; id < graph.size(); ++id) {
-    const auto& cells = graph.keyframe(static_cast<int>(id)).container.cells();
-    for (std::size_t i = 0; i < cells.size(); ++i)
-      many.kept[id][i] = many.kept[id][i] || (cells[i].n >= 2 && cells[i].n < FilterParams{}.min_points);
-  }
-  const QueryMap all = QueryMap::build(graph, everyCell(graph, global), qp);
-  const QueryMap few = QueryMap::build(graph, many, qp);
+  const QueryParams qp = query.params();
+  const QueryMap &all = diagnostics.all, &few = diagnostics.few, &unfused = diagnostics.unfused,
+                 &merged = diagnostics.merged;
   std::size_t filtered_few = 0;
   std::size_t theta_hist[7] = {};
   std::vector<double> ratios;
-  GlobalMapParams stage_params;
-  stage_params.fuse_across_groups = false;
-  const QueryMap unfused = QueryMap::build(graph, buildGlobalMap(graph, stage_params), qp);
-  stage_params.occlusion_removal = false;
-  const QueryMap merged = QueryMap::build(graph, buildGlobalMap(graph, stage_params), qp);
   const auto occupiedIn = [&](const QueryMap& map, const Eigen::Vector3d& q) {
     map.classify({&q, 1}, cls);
     return cls[0].state == Occupancy::kOccupied;

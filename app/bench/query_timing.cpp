@@ -256,11 +256,7 @@ Speed timeQueries(const Maps& m, const BenchArgs& args, const PinholeCamera& cam
 // One method's answers on the truth sets.
 struct Accuracy {
   std::string name, key;
-  // Share of each set classified occupied / free / unknown.
-  struct Shares {
-    double occupied = 0, free = 0, unknown = 0;
-  };
-  Shares o, f, f_near, u;
+  OccupancyShares o, f, f_near, u;  // each set's shares classified occupied / free / unknown
   double balanced = 0;
   double dist_median_mm = 0, dist_p95_mm = 0, over_1cm = 0;  // |error| and share over-estimated by > 1 cm
   double memory_mb = 0;
@@ -269,13 +265,9 @@ struct Accuracy {
 using Classifier = std::function<std::vector<Occupancy>(const std::vector<Eigen::Vector3d>&)>;
 using Distancer = std::function<std::vector<double>(const std::vector<Eigen::Vector3d>&)>;
 
-Accuracy::Shares shares(const std::vector<Occupancy>& states) {
-  Accuracy::Shares s;
-  if (states.empty()) return s;
-  for (const Occupancy o : states)
-    (o == Occupancy::kOccupied ? s.occupied : o == Occupancy::kFree ? s.free : s.unknown) += 1.0;
-  const double n = static_cast<double>(states.size());
-  s.occupied /= n, s.free /= n, s.unknown /= n;
+OccupancyShares shares(const std::vector<Occupancy>& states) {
+  OccupancyShares s;
+  for (const Occupancy o : states) s.add(o);
   return s;
 }
 
@@ -291,7 +283,7 @@ Accuracy score(const OccupancyTruthSets& sets, const Classifier& classify, const
   a.f = shares(classify(sets.free));
   a.f_near = shares(classify(sets.free_near));
   a.u = shares(classify(sets.unknown));
-  a.balanced = (a.o.occupied + a.f.free + a.u.unknown) / 3.0;
+  a.balanced = (a.o.occupied() + a.f.free() + a.u.unknown()) / 3.0;
   std::vector<Eigen::Vector3d> pts = sets.free;
   pts.insert(pts.end(), sets.free_near.begin(), sets.free_near.end());
   // Truth: the distance to the part of the mesh the frames saw (what a map of them can know).
@@ -360,10 +352,6 @@ std::size_t keptCellBytes(const GlobalMap& global) {
   return cells * sizeof(StoredCell);
 }
 
-nlohmann::json sharesJson(const Accuracy::Shares& s) {
-  return {{"occupied", rounded(s.occupied)}, {"free", rounded(s.free)}, {"unknown", rounded(s.unknown)}};
-}
-
 // The speed table: vdmap and each OctoMap peer, and the peers' ratios to vdmap.
 nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::size_t kept_bytes, std::ostringstream& text) {
   char buf[512];
@@ -423,13 +411,14 @@ nlohmann::json reportSpeed(const Maps& m, const Speed& s, std::size_t kept_bytes
 
 // The accuracy table against the exact frames' occupancy truth.
 nlohmann::json reportAccuracy(const Maps& m, const ColoredTriangleMesh& mesh, const BenchArgs& args,
-                              std::size_t kept_bytes, std::ostringstream& text) {
+                              std::size_t kept_bytes, const HeldOutDiagnostics& diagnostics, std::ostringstream& text) {
   char buf[512];
   ProgressBar progress("truth", 1);
   const OccupancyTruthSets sets = m.truth->sample(mesh);
   progress.update(1);
   const std::vector<Accuracy> rows = scoreMaps(m, sets, kept_bytes);
-  const nlohmann::json misses = reportSurfaceMisses(sets.occupied, "O", m.mapper->graph(), m.global, m.query, &text);
+  const nlohmann::json misses =
+      reportSurfaceMisses(sets.occupied, "O", m.mapper->graph(), m.global, m.query, diagnostics, &text);
   std::snprintf(buf, sizeof buf,
                 "\naccuracy against %s and %zu exact frames: O %zu, F %zu, F_near %zu, U %zu points (%zu O candidates "
                 "seen free by a grazing view left out); distance on F + F_near to the seen %zu of %zu triangles\n",
@@ -452,16 +441,16 @@ nlohmann::json reportAccuracy(const Maps& m, const ColoredTriangleMesh& mesh, co
                         {"vdmap_O_misses", misses}};
   for (const Accuracy& a : rows) {
     std::snprintf(buf, sizeof buf, "%-16s %8.3f %7.3f %7.3f %8.3f %7.3f %8.4f %6.1f mm %6.1f mm %8.3f %11.2f\n",
-                  a.name.c_str(), a.balanced, a.o.occupied, a.f.free, a.f_near.free, a.u.unknown, a.o.free,
+                  a.name.c_str(), a.balanced, a.o.occupied(), a.f.free(), a.f_near.free(), a.u.unknown(), a.o.free(),
                   a.dist_median_mm, a.dist_p95_mm, a.over_1cm, a.memory_mb);
     text << buf;
     acc[a.key] = {{"name", a.name},
                   {"balanced_accuracy", rounded(a.balanced)},
-                  {"O", sharesJson(a.o)},
-                  {"F", sharesJson(a.f)},
-                  {"F_near", sharesJson(a.f_near)},
-                  {"U", sharesJson(a.u)},
-                  {"false_free_O", rounded(a.o.free)},
+                  {"O", a.o.json()},
+                  {"F", a.f.json()},
+                  {"F_near", a.f_near.json()},
+                  {"U", a.u.json()},
+                  {"false_free_O", rounded(a.o.free())},
                   {"distance_abs_error_median_mm", rounded(a.dist_median_mm)},
                   {"distance_abs_error_p95_mm", rounded(a.dist_p95_mm)},
                   {"distance_over_1cm", rounded(a.over_1cm)},
@@ -521,8 +510,11 @@ void runQueryBench(const BenchArgs& args, const std::filesystem::path& out_dir) 
   std::vector<HeldOutPeer> held_out_peers;
   for (const auto& peer : m.peers)
     held_out_peers.push_back({peer->name(), peer->key(), [&](const Eigen::Vector3d& q) { return peer->state(q); }});
-  query["held_out"] = reportHeldOut(m.held_out, m.mapper->graph(), m.global, m.query, held_out_peers, &text);
-  if (m.truth && mesh) query["accuracy"] = reportAccuracy(m, *mesh, args, kept_bytes, text);
+  // The maps the causes of vdmap's misses are found with, for both reports.
+  const HeldOutDiagnostics diagnostics(m.mapper->graph(), m.global, m.query.params());
+  query["held_out"] =
+      reportHeldOut(m.held_out, m.mapper->graph(), m.global, m.query, diagnostics, held_out_peers, &text);
+  if (m.truth && mesh) query["accuracy"] = reportAccuracy(m, *mesh, args, kept_bytes, diagnostics, text);
   writeQueryBenchReport(query, text.str(), args, out_dir);
 }
 

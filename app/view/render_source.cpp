@@ -60,6 +60,7 @@ struct RenderSource::Impl {
   bool tracked = false;
   std::optional<std::vector<Ellipsoid>> map_file;  // a map file's own ellipsoids
   std::vector<Transform> map_cameras;              // a map folder's trajectory (else keyframes): the data up axis
+  std::string map_folder;                          // a `vdmap map` folder's path: its local maps give the mesh layer
   render::GraphScene file_graph;                   // a map folder's keyframes, edges and trajectory
   ColoredTriangleMesh mesh;
   std::vector<std::pair<std::vector<double>, GlobalMap>> maps;  // by paramsKey
@@ -75,6 +76,7 @@ struct RenderSource::Impl {
   std::unique_ptr<render::MeshRenderer> mesh_renderer;
   // The mesh layer's surface mesh of the last map asked for (by its paramsKey).
   std::optional<std::vector<double>> surface_for;
+  MeshParams mesh_params, surface_params;  // asked for; what `surface` was made with
   std::shared_ptr<const render::ColoredMesh> surface;
   std::size_t surface_drawn = 0;  // its triangles, when the last view drew it
   int container_serial = 0;
@@ -110,6 +112,7 @@ RenderSource::RenderSource(const SequenceArgs& sequence_in, const std::string& m
       m.map_cameras.push_back(p.T_W_C);
     m.file_graph = render::graphSceneOf(file);
     m.map_file = std::move(file.ellipsoids);
+    if (detectMapFile(map) == MapFileKind::kMapFolder) m.map_folder = map;
     name_ = map;
   }
   if (!mesh.empty()) {
@@ -204,15 +207,30 @@ std::shared_ptr<const render::QuerySliceImage> RenderSource::querySliceOf(const 
 std::shared_ptr<const render::ColoredMesh> RenderSource::surfaceOf(const GlobalMapParams& params) {
   Impl& m = *impl_;
   const std::vector<double> key = paramsKey(params);
-  if (m.surface_for != key) {
+  if (m.surface_for != key || m.surface_params != m.mesh_params) {
+    m.surface_for = key;
+    m.surface_params = m.mesh_params;
+    if (!m.map_folder.empty()) {  // local_maps.ply holds the cells its map kept, with its own thresholds
+      MeshParams mesh = m.mesh_params;
+      const KeyframeGraph graph = readMapFolderLocalMaps(m.map_folder, &mesh.model);
+      std::vector<std::vector<bool>> kept;
+      for (const Keyframe& k : graph.keyframes()) kept.emplace_back(k.container.size(), true);
+      m.surface =
+          std::make_shared<const render::ColoredMesh>(render::toColoredMesh(buildSurfaceMesh(graph, kept, mesh)));
+      return m.surface;
+    }
     const std::vector<Ellipsoid>& map = globalMap(params);
     for (const auto& entry : m.maps)
       if (&entry.second.ellipsoids == &map)
         m.surface = std::make_shared<const render::ColoredMesh>(
-            render::toColoredMesh(buildSurfaceMesh(*m.graph, entry.second, MeshParams{}, params)));
-    m.surface_for = key;
+            render::toColoredMesh(buildSurfaceMesh(*m.graph, entry.second, m.mesh_params, params)));
   }
   return m.surface;
+}
+
+void RenderSource::setMeshParams(const MeshParams& params) {
+  params.validate();
+  impl_->mesh_params = params;
 }
 
 const render::QuerySliceImage* RenderSource::lastQuerySlice() const { return impl_->slice_image.get(); }
@@ -235,9 +253,9 @@ void RenderSource::checkView(const render::ViewSpec& spec) const {
     throw std::invalid_argument(
         "--select " + std::to_string(spec.selected_keyframe) + ": " + name_ +
         (keyframes == 0 ? std::string(" has no keyframe") : " has keyframes 0.." + std::to_string(keyframes - 1)));
-  if (spec.layers.mesh && !impl_->graph)
-    throw std::invalid_argument("--layers mesh draws the surface mesh of local maps: give a sequence (SEQ) or a "
-                                "session (.vdmap); " +
+  if (spec.layers.mesh && !impl_->graph && impl_->map_folder.empty())
+    throw std::invalid_argument("--layers mesh draws the surface mesh of local maps: give a sequence (SEQ), a "
+                                "session (.vdmap) or a `vdmap map` folder; " +
                                 name_ + " has none");
   if (spec.kind == render::ViewKind::kGlobal) return;
   const std::string view = viewName(spec);
@@ -320,15 +338,10 @@ cv::Mat RenderSource::render(const render::ViewSpec& spec_in, const GlobalMapPar
   // --mesh and the mesh layer whole.
   render::DrawnBounds drawn =
       render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, scene.height, render::frameAxes(map, scene.up));
-  const auto hold = [&](const glm::vec3& p) {
-    const glm::vec3 q = glm::transpose(drawn.axes) * p;
-    drawn.lo = drawn.empty ? q : glm::min(drawn.lo, q);
-    drawn.hi = drawn.empty ? q : glm::max(drawn.hi, q);
-    drawn.empty = false;
-  };
-  for (const auto& p : m.mesh.positions) hold(glm::vec3(p.x(), p.y(), p.z()));
-  if (surface)
-    for (const glm::vec3& p : surface->positions) hold(p);
+  std::vector<glm::vec3> mesh_positions;
+  for (const auto& p : m.mesh.positions) mesh_positions.emplace_back(p.x(), p.y(), p.z());
+  render::holdPoints(drawn, mesh_positions);
+  if (surface) render::holdPoints(drawn, surface->positions);
   last_strays_ = drawn.strays;
   scene.bounds = render::frameBounds(drawn, graph);
   if (spec.look_at && glm::length(spec.look_at->up) < 1e-6f) spec.look_at->up = scene.up;

@@ -11,6 +11,7 @@
 
 #include "app/cli/sequence_args.h"
 #include "mapping/global_map/global_map.h"
+#include "mapping/mesh/surface_mesh.h"
 #include "render/map_scene.h"
 #include "render/query_slice.h"
 #include "render/view_spec.h"
@@ -54,6 +55,9 @@ class RenderSource {
   /// The query slice (`--query-slice`; docs/workbench.md "Queries") drawn in every global and
   /// keyframe view from now on (nullopt: none). The point queries are built once per map.
   void setQuerySlice(std::optional<render::QuerySliceSpec> spec);
+  /// How the mesh layer's mesh is made from now on (default MeshParams; its sensor model is the
+  /// thresholds' filter's).
+  void setMeshParams(const MeshParams& params);
   /// The slice the last render() drew (null: none).
   const render::QuerySliceImage* lastQuerySlice() const;
   /// Throws std::invalid_argument when `spec` names a keyframe this source lacks.
@@ -79,8 +83,8 @@ class RenderSource {
   // The slice of `map` (a globalMap() result) at `height`, computed when the map or spec changed.
   std::shared_ptr<const render::QuerySliceImage> querySliceOf(const std::vector<Ellipsoid>& map,
                                                               const render::HeightFrame& height);
-  // The mesh layer's surface mesh (docs/method.md 14, default MeshParams) of the map for `params`,
-  // built once per map.
+  // The mesh layer's surface mesh (docs/method.md 14, setMeshParams') of the map for `params`,
+  // built once per map and mesh parameters.
   std::shared_ptr<const render::ColoredMesh> surfaceOf(const GlobalMapParams& params);
   std::unique_ptr<Impl> impl_;
   std::string name_;

@@ -437,6 +437,7 @@ SuiteResult runSuite(const fs::path& file_path, const SuiteOptions& options) {
       p.map->global_maps.insert(source.globalMap(p.resolved.thresholds).data());  // one buffer per map built
     r.build_s = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();
+    source.setMeshParams(p.resolved.mesh);
     const cv::Mat rgb = source.render(p.resolved.spec, p.resolved.thresholds);
     r.render_s = secondsSince(t0);
     t0 = std::chrono::steady_clock::now();

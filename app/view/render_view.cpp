@@ -162,6 +162,7 @@ void addRenderViewOptions(CLI::App& verb, RenderViewArgs& a) {
                   "how the mesh layer is drawn: shaded (grey, lit; the default) | colour (its colours, lit) | "
                   "wireframe (its triangles' edges)")
       ->check(CLI::IsMember({render::kMeshStyleNames[0], render::kMeshStyleNames[1], render::kMeshStyleNames[2]}));
+  addMeshOptions(verb, a.mesh);
   verb.add_option("--up", a.up,
                   "the world's up axis: data (estimated from the cameras and the map's floor, or a map file's level "
                   "planes; the default) | +z | +y | -y | a direction X,Y,Z; with --look-at, X,Y,Z is the image's up")
@@ -327,6 +328,7 @@ ResolvedView resolveViewSpec(const RenderViewArgs& a, const std::optional<Global
   out.spec = spec;
   out.thresholds = settings.thresholds;
   out.mapper = settings.mapper;
+  out.mesh = a.mesh.over(settings.mesh);
   return out;
 }
 

@@ -8,6 +8,7 @@
 
 #include <CLI/CLI.hpp>
 
+#include "app/cli/mesh_options.h"
 #include "app/view/settings.h"
 #include "mapping/global_map/global_map.h"
 #include "render/view_spec.h"
@@ -23,6 +24,7 @@ struct RenderViewArgs {
   std::string background;                         ///< --background dark|white|#rrggbb
   std::string layers;                             ///< --layers LIST|none
   std::string mesh_style;                         ///< --mesh-style shaded|colour|wireframe
+  MeshOptions mesh;                               ///< --mesh-max-slope, --mesh-stride, ...
   std::string up;                                 ///< --up data|+z|+y|-y|X,Y,Z (with --look-at: the image's up)
   std::string projection;                         ///< --projection perspective|orthographic
   std::string draw;                               ///< --draw ellipsoids|centres|none
@@ -51,6 +53,7 @@ struct ResolvedView {
   render::ViewSpec spec;
   GlobalMapParams thresholds;
   MapperParams mapper;  ///< what a sequence is mapped with (--settings' and --set's re-run keys)
+  MeshParams mesh;      ///< how the mesh layer is made (the settings' mesh keys, then the --mesh-* flags)
   std::string settings_source;
 };
 ResolvedView resolveViewSpec(const RenderViewArgs& args, const std::optional<GlobalMapParams>& session_thresholds);

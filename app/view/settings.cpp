@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "app/cli/mesh_options.h"
 #include "app/cli/parameter_table.h"
 #include "app/view/json_file.h"
 #include "mapping/core/atomic_file.h"
@@ -75,6 +76,10 @@ json toJson(const Settings& s) {
         {"show_legend", s.show_legend},
         {"show_mesh", s.show_mesh},
         {"mesh_style", render::kMeshStyleNames[static_cast<int>(s.mesh_style)]},
+        {"mesh_max_slope", s.mesh.max_slope_deg},
+        {"mesh_edge_sigma", s.mesh.edge_sigma},
+        {"mesh_stride", s.mesh.stride},
+        {"mesh_fuse", s.mesh.fuse},
         {"slice", s.slice.on},
         {"slice_lo", s.slice.lo_m},
         {"slice_hi", s.slice.hi_m},
@@ -139,6 +144,22 @@ void readQueries(const json& v, Settings& s) {
   if (!(spec.max_distance_m > 0.0 && spec.max_distance_m <= 100.0))
     throw std::invalid_argument("view.query_slice_max_distance must be in (0, 100] m");
   s.query_slice_spec = spec;
+}
+
+// The view keys of how the mesh is made, checked as `vdmap mesh` checks its options.
+void readMesh(const json& v, MeshParams& mesh) {
+  read(v, "view", "mesh_max_slope", mesh.max_slope_deg);
+  read(v, "view", "mesh_edge_sigma", mesh.edge_sigma);
+  read(v, "view", "mesh_stride", mesh.stride);
+  read(v, "view", "mesh_fuse", mesh.fuse);
+  if (!(mesh.max_slope_deg >= 0.0 && mesh.max_slope_deg <= kMeshMaxSlopeDeg))
+    throw std::invalid_argument("view.mesh_max_slope must be in [0, " + CLI::detail::to_string(kMeshMaxSlopeDeg) +
+                                "] degrees");
+  if (!(mesh.edge_sigma >= 0.0 && mesh.edge_sigma <= kMeshMaxEdgeSigma))
+    throw std::invalid_argument("view.mesh_edge_sigma must be in [0, " + CLI::detail::to_string(kMeshMaxEdgeSigma) +
+                                "]");
+  if (mesh.stride < 1 || mesh.stride > kMeshMaxStride)
+    throw std::invalid_argument("view.mesh_stride must be in 1.." + std::to_string(kMeshMaxStride));
 }
 
 // The view keys up_vector (null or [x, y, z], not zero), projection and rotation.
@@ -215,6 +236,7 @@ Settings fromJson(const json& j, const Settings& base = {}) {
     std::string mesh_style = render::kMeshStyleNames[static_cast<int>(s.mesh_style)];
     read(v, "view", "mesh_style", mesh_style);
     s.mesh_style = static_cast<render::MeshStyle>(nameIndex(render::kMeshStyleNames, mesh_style, "view.mesh_style"));
+    readMesh(v, s.mesh);
     read(v, "view", "slice", s.slice.on);
     read(v, "view", "slice_lo", s.slice.lo_m);
     read(v, "view", "slice_hi", s.slice.hi_m);

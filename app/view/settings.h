@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "mapping/global_map/global_map.h"
+#include "mapping/mesh/surface_mesh.h"
 #include "mapping/pipeline/mapper.h"
 #include "render/query_slice.h"
 #include "render/scene_types.h"
@@ -44,6 +45,9 @@ struct Settings {
   /// global map while it is on.
   bool show_mesh = false;
   render::MeshStyle mesh_style = render::MeshStyle::kShaded;
+  /// How it is made (keys mesh_max_slope, mesh_edge_sigma, mesh_stride, mesh_fuse; `vdmap mesh`'s
+  /// options): a change re-meshes the local maps, nothing is integrated again.
+  MeshParams mesh;
   /// Height slice (keys `slice`, `slice_lo`, `slice_hi`): only ellipsoids whose centre lies
   /// slice_lo..slice_hi metres above the floor are drawn, picked and framed.
   render::HeightSlice slice;

@@ -13,6 +13,7 @@ void drawMapPanel(Workbench& bench, const render::MapMirror& mirror, WindowState
     const bool tracked = win.mapping->mapper.poses == PoseSource::kTrack;
     if (tracked && section(win.check, "Tracking and loop closures", true)) drawTracking(bench, win);
     if (section(win.check, "View", true)) drawView(bench, win);
+    if (!bench.staticMap() && section(win.check, "Mesh", bench.ui().settings.show_mesh)) drawMesh(bench, win);
     if (section(win.check, "Keyframes", true)) drawKeyframes(bench, mirror, win);
     if (section(win.check, "Picked ellipsoid", true)) drawPicked(bench, win);
     if (section(win.check, "Measure", bench.ui().measure_a.has_value())) drawMeasure(bench, win);

@@ -1,6 +1,6 @@
 #pragma once
 // The Map panel's sections (map_panel.cpp draws them in this order), each in the file named for
-// it: parameter_sections.cpp (Thresholds (live), Re-run parameters), tracking_section.cpp,
+// it: parameter_sections.cpp (Thresholds (live), Re-run parameters, Mesh), tracking_section.cpp,
 // view_section.cpp, keyframes_section.cpp, picked_section.cpp, measure_section.cpp,
 // queries_section.cpp, pose_correction_section.cpp, export_section.cpp, settings_section.cpp.
 #include "app/window/window_state.h"
@@ -11,6 +11,8 @@ namespace vdmap::app::gui {
 void drawThresholds(Workbench& bench, WindowState& win);
 /// "Re-run parameters": the re-run parameters, Re-run and Revert.
 void drawRerun(Workbench& bench, WindowState& win);
+/// "Mesh": how the mesh layer's mesh is made (max slope, edge sigma, stride, fuse).
+void drawMesh(Workbench& bench, WindowState& win);
 /// "Tracking and loop closures" (tracked poses only): placed, lost and relocalised frames, the
 /// ground truth and the tracking error, the loop closures and the map before the last
 /// pose-graph optimisation.

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <vector>
 
+#include "app/cli/mesh_options.h"
 #include "app/window/map_file_panel.h"
 #include "app/window/map_sections.h"
 #include "app/window/tg_parts.h"
@@ -173,6 +174,41 @@ void drawRerun(Workbench& bench, WindowState& win) {
     ImGui::SameLine();
     ImGui::TextColored(kPendingColor, "* pending");
   }
+}
+
+void drawMesh(Workbench& bench, WindowState& win) {
+  MeshParams& mesh = bench.ui().settings.mesh;
+  const MeshParams defaults;
+  const std::string made = " Changing it re-meshes the local maps; nothing is integrated again.";
+  if (beginRows("mesh")) {
+    label(win.check, "max slope (deg)",
+          "Neighbouring cells are joined while the surface between them is turned at most this far from the "
+          "camera (plus the depth noise); steeper surfaces and depth steps stay open. Default " +
+              shortNumber(defaults.max_slope_deg) + "." + made);
+    const double slope_lo = 0.0, slope_hi = kMeshMaxSlopeDeg;
+    ImGui::SliderScalar("##mesh_max_slope", ImGuiDataType_Double, &mesh.max_slope_deg, &slope_lo, &slope_hi, "%.0f",
+                        ImGuiSliderFlags_AlwaysClamp);
+    label(win.check, "edge sigma",
+          "The depth noise, in the sensor model's standard deviations, a join and the fusion allow. Default " +
+              shortNumber(defaults.edge_sigma) + "." + made);
+    const double sigma_lo = 0.0, sigma_hi = 10.0;  // up to kMeshMaxEdgeSigma typed (Ctrl+click)
+    ImGui::SliderScalar("##mesh_edge_sigma", ImGuiDataType_Double, &mesh.edge_sigma, &sigma_lo, &sigma_hi, "%.1f");
+    mesh.edge_sigma = std::clamp(mesh.edge_sigma, 0.0, kMeshMaxEdgeSigma);
+    label(win.check, "stride (cells)",
+          "Vertices on a grid of this many cells each way, each the mean of its kept cells (1: one per cell). "
+          "Default " +
+              std::to_string(defaults.stride) + "." + made);
+    ImGui::SliderInt("##mesh_stride", &mesh.stride, 1, kMeshMaxStride, "%d", ImGuiSliderFlags_AlwaysClamp);
+    label(win.check, "fuse",
+          "Drop the triangles a finer keyframe covers; off keeps every keyframe's piece whole (overlapping copies "
+          "stay). Default on." +
+              made);
+    ImGui::Checkbox("##mesh_fuse", &mesh.fuse);
+    ImGui::EndTable();
+  }
+  if (ImGui::Button("Defaults##mesh")) mesh = defaults;
+  tip("Puts the mesh's parameters back to vdmap mesh's defaults.");
+  if (!bench.ui().settings.show_mesh) ImGui::TextDisabled("the mesh layer is off (View: mesh)");
 }
 
 }  // namespace vdmap::app::gui

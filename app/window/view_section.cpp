@@ -176,8 +176,9 @@ void drawView(Workbench& bench, WindowState& win) {
     checkFits(win.check);
     label(win.check, "mesh",
           "The surface mesh of the local maps (docs/method.md 14), built with every global map while it is on "
-          "(a threshold or pose edit re-meshes): shaded grey, in its colours, or its triangles' edges. Draw "
-          "hidden shows it alone. A map file has no local maps, so no mesh.");
+          "(a threshold or pose edit re-meshes): shaded grey, in its colours, or its triangles' edges. The "
+          "ellipsoids lie on it and would cover it, so turning it on sets draw to hidden and turning it off brings "
+          "them back; set draw to ellipsoids to see both. A map file has no local maps, so no mesh.");
     ImGui::Checkbox("##mesh", &s.show_mesh);
     ImGui::SameLine();
     int mesh_style = static_cast<int>(s.mesh_style);

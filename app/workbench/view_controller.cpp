@@ -52,7 +52,10 @@ render::DrawnBounds ViewController::drawnMap() const {
   const render::ViewSpec spec = viewSpecOf(ui_.settings);
   const std::span<const Ellipsoid> map(global->map.ellipsoids);
   const render::HeightFrame frame = heightFrame();
-  return render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, frame.up));
+  render::DrawnBounds drawn =
+      render::drawnBounds(map, spec.sigma, spec.draw(), spec.slice, frame, render::frameAxes(map, frame.up));
+  if (ui_.settings.show_mesh && global->mesh) render::holdPoints(drawn, global->mesh->positions);  // as render
+  return drawn;
 }
 
 render::FrameBox ViewController::frameBounds(std::size_t* strays) const {
@@ -73,6 +76,7 @@ render::FrameBox ViewController::frameBounds(std::size_t* strays) const {
 void ViewController::frameMap() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
+  framed_mesh_ = ui_.settings.show_mesh && global && global->mesh;
   framed_frames_ = global ? global->frames_mapped : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
   if (ui_.settings.rotation == render::Rotation::kOrbit) ui_.camera.up = framingUp();  // a trackball's roll stays
@@ -85,6 +89,7 @@ void ViewController::frameMap() {
 void ViewController::resetView() {
   const auto global = worker_ ? worker_->global() : nullptr;
   framed_generation_ = global ? global->generation : 0;
+  framed_mesh_ = ui_.settings.show_mesh && global && global->mesh;
   framed_frames_ = global ? global->frames_mapped : 0;
   const render::FrameBox box = frameBounds(&framed_strays_);
   ui_.camera = render::defaultOrbit(box, framingUp(), static_cast<float>(ui_.view_width) / std::max(1, ui_.view_height),
@@ -309,6 +314,8 @@ bool ViewController::applySpec(const render::ViewSpec& spec) {
   s.container_bounds = spec.layers.bounds;
   s.show_mesh = spec.layers.mesh;
   s.mesh_style = spec.mesh_style;
+  mesh_shown_ = s.show_mesh && !state_.staticMap();  // the view's draw stands as it says
+  map_hidden_for_mesh_ = false;
   s.background = spec.background;
   s.slice = spec.slice;  // height slice
   ui_.show_container = false;
@@ -391,7 +398,22 @@ void ViewController::moveSlice(int direction) {
   s.hi_m += step;
 }
 
+void ViewController::syncMeshLayer() {
+  const bool shown = ui_.settings.show_mesh && !state_.staticMap();
+  if (shown == mesh_shown_) return;
+  mesh_shown_ = shown;
+  bool& hide = ui_.settings.hide_map;
+  if (shown) {
+    map_hidden_for_mesh_ = !hide;
+    hide = true;
+  } else {
+    if (map_hidden_for_mesh_) hide = false;
+    map_hidden_for_mesh_ = false;
+  }
+}
+
 void ViewController::sync() {
+  syncMeshLayer();
   const auto global = worker_->global();
   const int generation = global ? global->generation : 0;
   if (ui_.picked && ui_.picked_generation != generation) ui_.picked.reset();  // it may not exist in the new map
@@ -401,8 +423,11 @@ void ViewController::sync() {
   // Not for a new map of the same frames (a threshold change): the camera stays, so before and
   // after compare.
   const bool grown = generation != framed_generation_ && (!global || global->frames_mapped != framed_frames_);
-  if (ui_.follow_map && ui_.view_from_keyframe < 0 && (framed_generation_ < 0 || grown || size != framed_size_) &&
-      global && !global->map.ellipsoids.empty()) {
+  // The mesh layer's first mesh, built after the map it was turned on over: framed with it.
+  const bool new_mesh = ui_.settings.show_mesh && global && global->mesh && !framed_mesh_;
+  if (ui_.follow_map && ui_.view_from_keyframe < 0 &&
+      (framed_generation_ < 0 || grown || new_mesh || size != framed_size_) && global &&
+      !global->map.ellipsoids.empty()) {
     if (framed_generation_ < 0) resetView();
     else frameMap();
     framed_size_ = size;

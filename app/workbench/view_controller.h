@@ -115,8 +115,8 @@ class ViewController {
   /// PgUp / PgDn: the slice moves up (+1) or down (-1) by its thickness (one floor at a time).
   void moveSlice(int direction);
 
-  /// Once per UI frame: the pick cleared when the map changed, and the view re-framed while it
-  /// follows the map.
+  /// Once per UI frame: the pick cleared when the map changed, the view re-framed while it
+  /// follows the map, and the map hidden while the mesh layer comes on (syncMeshLayer).
   void sync();
   /// A new session is open: the view frames its first map afresh.
   void newSession() { framed_generation_ = -1; }
@@ -128,6 +128,10 @@ class ViewController {
   render::FrameBox frameBounds(std::size_t* strays = nullptr) const;
   // upVector(), from heightFrame's cache when it holds it.
   glm::vec3 framingUp() const;
+  // The ellipsoids lie on the mesh and cover it, so the mesh layer coming on (ticked, from the
+  // settings, or a session opened with it on) hides the map, and going off shows it again unless
+  // draw was set meanwhile. A map file has no mesh: the layer is not shown and hides nothing.
+  void syncMeshLayer();
 
   WorkbenchState& state_;
   UiState& ui_ = state_.ui;
@@ -137,6 +141,9 @@ class ViewController {
   int framed_frames_ = 0;                  // the frames it held (a threshold change keeps them)
   std::pair<int, int> framed_size_{0, 0};  // and the viewport it was framed in
   std::size_t framed_strays_ = 0;          // left out of that frame
+  bool framed_mesh_ = false;               // it held the mesh layer's mesh
+  bool mesh_shown_ = false;                // the mesh layer was on (with local maps) at the last sync
+  bool map_hidden_for_mesh_ = false;       // its coming on hid the map
   // heightFrame's and shownMap's cache, keyed by the global snapshot and the up axis.
   struct SliceCache {
     std::shared_ptr<const GlobalSnapshot> global;

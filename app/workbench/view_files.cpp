@@ -5,6 +5,7 @@
 
 #include "app/cli/command_line.h"
 #include "app/cli/error_text.h"
+#include "app/cli/mesh_options.h"
 #include "app/cli/parameter_table.h"
 #include "app/view/view_file.h"
 
@@ -124,6 +125,7 @@ CommandSource ViewFiles::commandSource() const {
     else if (!whole) args.refine = "none", args.refine_given = true;  // refined after the last frame
     out.flags = sequenceFlags(args) + changedParameters({mapping->mapper, {}}, {MapperParams{}, {}}, false);
   }
+  if (state_.ui.settings.show_mesh) out.flags += meshFlags(state_.ui.settings.mesh);  // how its mesh is made
   if (state_.render_thresholds)
     out.thresholds = changedParameters({{}, state_.ui.params.global}, {{}, *state_.render_thresholds}, true);
   return out;

@@ -64,8 +64,9 @@ void Workbench::setOnChange(std::function<void()> on_change) {
 
 void Workbench::sync() {
   if (!isOpen()) return;
-  queries_.sync();                                        // wanted by the probe or the slice; the slice's computation
-  state_.worker->wantMesh(state_.ui.settings.show_mesh);  // the mesh layer: built with every map while shown
+  queries_.sync();  // wanted by the probe or the slice; the slice's computation
+  state_.worker->wantMesh(state_.ui.settings.show_mesh,
+                          state_.ui.settings.mesh);  // the mesh layer: built with every map while shown
   poses_.sync();
   player_.sync();
   state_.edit_diff.sync(state_.worker->global());

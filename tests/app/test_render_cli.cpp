@@ -99,7 +99,8 @@ TEST(RenderCli, BadInputGivesOneLineErrors) {
       {"render" + map + out + " --view keyframe:0", "needs keyframes"},
       {"render" + map + out + " --view side", "expected global, keyframe:K or container:K", true},
       {"render" + map + out + " --mesh-style flat", "--mesh-style: flat not in {shaded,colour,wireframe}", true},
-      {"render" + map + out + " --layers mesh", "--layers mesh draws the surface mesh of local maps"},
+      {"render" + map + out + " --layers mesh",
+       "--layers mesh draws the surface mesh of local maps: give a sequence (SEQ), a session (.vdmap) or a `vdmap map` folder"},
       {"render" + map + out + " --set mesh_style=flat", "view.mesh_style must be shaded or colour or wireframe"},
       {"render '" + tmp.path().string() + "'" + map + out, "SEQ excludes --map", true},
       {"render '" + (tmp / "no_such_sequence").string() + "'" + out, "no_such_sequence"},
@@ -404,6 +405,65 @@ TEST_F(RenderSessionCli, TheMeshLayerDrawsTheSurfaceWhereTheMapIs) {
   std::vector<cv::Mat> bgr;
   cv::split(grey, bgr);
   EXPECT_EQ(cv::countNonZero(cv::Mat(((bgr[0] != bgr[2]) | (bgr[1] != bgr[2])) & mesh)), 0);
+}
+
+// `vdmap mesh`'s options make render's mesh layer too, as the settings' mesh keys do.
+TEST_F(RenderSessionCli, TheMeshOptionsChangeTheMeshLayer) {
+  const auto triangles = [](const test::RunResult& r) {
+    const std::size_t at = r.out.find(" triangles");
+    const std::size_t from = r.out.rfind(' ', at - 1);
+    return at == std::string::npos ? 0ul : std::stoul(r.out.substr(from + 1, at - from - 1));
+  };
+  const auto plain = render("m.png", "--layers mesh");
+  ASSERT_EQ(plain.exit_code, 0) << plain.err;
+  const auto steep = render("m-slope.png", "--layers mesh --mesh-max-slope 20");
+  ASSERT_EQ(steep.exit_code, 0) << steep.err;
+  EXPECT_LT(triangles(steep), triangles(plain)) << steep.out << plain.out;
+  EXPECT_GT(maxDifference(png(out("m.png")), png(out("m-slope.png"))), 0.0);
+  const auto set = render("m-set.png", "--layers mesh --set mesh_max_slope=20");
+  ASSERT_EQ(set.exit_code, 0) << set.err;
+  EXPECT_EQ(maxDifference(png(out("m-slope.png")), png(out("m-set.png"))), 0.0) << "the flag is the key";
+  const auto both = render("m-both.png", "--layers mesh --set mesh_max_slope=20 --mesh-max-slope 60");
+  EXPECT_EQ(maxDifference(png(out("m.png")), png(out("m-both.png"))), 0.0) << "the flag over --set";
+  const auto coarse = render("m-stride.png", "--layers mesh --mesh-stride 4 --mesh-no-fuse");
+  ASSERT_EQ(coarse.exit_code, 0) << coarse.err;
+  EXPECT_NE(triangles(coarse), triangles(plain));
+  for (const auto& [options, named] : std::vector<std::pair<std::string, std::string>>{
+           {"--layers mesh --mesh-stride 0", "--mesh-stride: Value 0 not in range 1 to 16"},
+           {"--layers mesh --mesh-max-slope 95", "--mesh-max-slope: Value 95 not in range"},
+           {"--layers mesh --set mesh_stride=40", "view.mesh_stride must be in 1..16"}}) {
+    const auto r = render("bad.png", options);
+    EXPECT_NE(r.exit_code, 0) << options;
+    EXPECT_NE(r.err.find(named), std::string::npos) << options << ": " << r.err;
+    EXPECT_EQ(std::count(r.err.begin(), r.err.end(), '\n'), 1) << "one line: " << r.err;
+  }
+}
+
+// A `vdmap map` folder's local maps (local_maps.ply, the cells its map kept) give the mesh layer:
+// the mesh `vdmap mesh` makes of the folder; a folder without them says which file is missing.
+TEST_F(RenderSessionCli, AMapFolderDrawsTheMeshOfItsLocalMaps) {
+  const auto folder = runVdmap("render --map '" + out("m") + "' --size 320x240 --layers mesh --draw none --out '" +
+                               out("folder-mesh.png") + "'");
+  ASSERT_EQ(folder.exit_code, 0) << folder.err;
+  const auto meshed = runVdmap("mesh '" + out("m") + "' --out '" + out("folder.ply") + "' --json");
+  ASSERT_EQ(meshed.exit_code, 0) << meshed.err;
+  const std::size_t triangles = nlohmann::json::parse(meshed.out).at("triangles").get<std::size_t>();
+  EXPECT_GT(triangles, 0u);
+  EXPECT_NE(folder.out.find(" " + std::to_string(triangles) + " triangles"), std::string::npos)
+      << folder.out << " expected " << triangles;
+  const auto bare = runVdmap("render --map '" + out("m") + "' --size 320x240 --layers none --draw none --out '" +
+                             out("folder-bare.png") + "'");
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  EXPECT_GT(maxDifference(png(out("folder-mesh.png")), png(out("folder-bare.png"))), 0.0) << "the mesh is drawn";
+
+  TempDir copy;
+  std::filesystem::copy(out("m"), copy.path() / "m");
+  std::filesystem::remove(copy.path() / "m" / "local_maps.ply");
+  const auto missing = runVdmap("render --map '" + (copy.path() / "m").string() + "' --layers mesh --out '" +
+                                (copy.path() / "x.png").string() + "'");
+  EXPECT_EQ(missing.exit_code, 1);
+  EXPECT_NE(missing.err.find("local_maps.ply: missing"), std::string::npos) << missing.err;
+  EXPECT_EQ(std::count(missing.err.begin(), missing.err.end(), '\n'), 1) << "one line: " << missing.err;
 }
 
 TEST_F(RenderSessionCli, TheContainerViewDrawsTheImagesOutlineAsTheBoundsLayer) {

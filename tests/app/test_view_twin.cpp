@@ -129,6 +129,26 @@ TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameHeightColoursAndSlice) {
   EXPECT_EQ(spec["slice"], nlohmann::json::array({0.3f, 1.2f}));
 }
 
+// --- mesh layer ---
+// The ellipsoids lie on the mesh and would cover it: the layer turned on shows the mesh alone
+// (draw hidden), as render draws the saved view, and the mesh's pixels are what differs from
+// the same view without it.
+TEST_F(ViewTwin, TheMeshLayerTurnedOnIsSeenAndRenderDrawsItAlike) {
+  VDMAP_REQUIRE_XVFB();
+  const nlohmann::json spec = expectTwins("mesh", "--set show_mesh=true");
+  EXPECT_EQ(spec.value("draw", ""), "none") << "the map that covers the mesh is hidden";
+  EXPECT_EQ(spec["layers"].value("mesh", false), true);
+  std::string layers;  // the same but the mesh
+  for (const auto& [layer, on] : spec["layers"].items())
+    if (on == true && layer != "mesh") layers += (layers.empty() ? "" : ",") + layer;
+  const RunResult bare = runVdmap("render '" + path("s.vdmap") + "' --view-file '" + path("mesh.json") + "' --layers " +
+                                  (layers.empty() ? "none" : layers) + " --out '" + path("meshless.png") + "'");
+  ASSERT_EQ(bare.exit_code, 0) << bare.err;
+  const render::ImageComparison c =
+      render::compareImages(readRgb(path("meshW.png")), readRgb(path("meshless.png")), render::ImageTolerance{});
+  EXPECT_GT(c.share, 0.05) << "the mesh's pixels: " << c.summary();
+}
+
 TEST_F(ViewTwin, TheWindowAndRenderDrawTheSameContainerView) {
   VDMAP_REQUIRE_XVFB();
   // The container window draws at 2 sigma whatever the 3-D view's sigma: its view file says so.

@@ -145,6 +145,45 @@ TEST(GuiSettings, TheProbeAndTheQuerySliceAreKept) {
   }
 }
 
+// How the mesh is made: kept in the file, taken by --set, a value out of range named in one line.
+TEST(GuiSettings, TheMeshParametersAreKept) {
+  test::TempDir dir;
+  Settings s;
+  s.mesh.max_slope_deg = 35;
+  s.mesh.edge_sigma = 1.5;
+  s.mesh.stride = 3;
+  s.mesh.fuse = false;
+  saveSettings(dir / "settings.json", s);
+  std::string warning;
+  const Settings r = loadSettings(dir / "settings.json", &warning);
+  EXPECT_TRUE(warning.empty()) << warning;
+  EXPECT_EQ(r.mesh, s.mesh);
+  EXPECT_TRUE(sameSettings(r, s));
+  EXPECT_FALSE(sameSettings(r, Settings{})) << "the mesh keys count as settings";
+  Settings t;
+  applySetting(t, "mesh_stride=4");
+  applySetting(t, "mesh_fuse=false");
+  EXPECT_EQ(t.mesh.stride, 4);
+  EXPECT_FALSE(t.mesh.fuse);
+  for (const auto& [kv, named] : std::vector<std::pair<std::string, std::string>>{
+           {"mesh_max_slope=95", "view.mesh_max_slope must be in [0, 89.9] degrees"},
+           {"mesh_edge_sigma=-1", "view.mesh_edge_sigma must be in [0, 100]"},
+           {"mesh_stride=0", "view.mesh_stride must be in 1..16"},
+           {"mesh_fuse=3", "view.mesh_fuse: expected true or false"}}) {
+    try {
+      applySetting(t, kv);
+      ADD_FAILURE() << kv << " taken";
+    } catch (const std::invalid_argument& e) {
+      EXPECT_NE(std::string(e.what()).find(named), std::string::npos) << e.what();
+      EXPECT_EQ(std::string(e.what()).find('\n'), std::string::npos) << "one line: " << e.what();
+    }
+  }
+  test::writeText(dir / "bad.json", R"({"view": {"mesh_stride": 99}})");
+  const Settings bad = loadSettings(dir / "bad.json", &warning);
+  EXPECT_NE(warning.find("view.mesh_stride"), std::string::npos) << warning;
+  EXPECT_EQ(bad.mesh, MeshParams{});
+}
+
 TEST(GuiSettings, CorruptFileGivesDefaultsWithAWarning) {
   test::TempDir dir;
   for (const char* text : {"{not json", R"({"thresholds": {"merge_distance": "far"}})",
@@ -2015,6 +2054,12 @@ TEST(GuiViewFiles, TheRenderCommandNamesTheFramesPlayedAndTheChangedParameters) 
   t.worker().play();
   t.worker().waitIdle();
   EXPECT_EQ(t.bench.viewFiles().commandSource().flags, " --poses gt --set keyframe_every=3");
+  // The mesh layer's mesh as the Mesh section makes it.
+  t.bench.ui().settings.show_mesh = true;
+  t.bench.ui().settings.mesh.stride = 3;
+  t.bench.ui().settings.mesh.fuse = false;
+  EXPECT_EQ(t.bench.viewFiles().commandSource().flags,
+            " --poses gt --set keyframe_every=3 --mesh-stride 3 --mesh-no-fuse");
 }
 
 }  // namespace
