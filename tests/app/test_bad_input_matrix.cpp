@@ -428,9 +428,9 @@ const std::vector<BadCase>& badCases() {
       {"session", "truncated_header", E::kInputError, "header: truncated", session([](std::string* b) { b->resize(20); })},
       {"session", "truncated_section", E::kInputError, "truncated", session([](std::string* b) { b->resize(b->size() - 9); })},
       {"session", "flipped_byte", E::kInputError, "checksum mismatch", session([](std::string* b) { (*b)[b->size() / 2] ^= 4; })},
-      {"session", "newer_version", E::kInputError, "format version 7 is newer",
+      {"session", "newer_version", E::kInputError, "format version 8 is newer",
        session([](std::string* b) {
-         setU32(b, 8, 7);
+         setU32(b, 8, 8);
          setU32(b, 20, crc32(std::string_view(*b).substr(0, 20)));
        })},
       {"session", "trailing_bytes", E::kInputError, "unexpected bytes at the end", session([](std::string* b) { *b += "x"; })},
