@@ -161,7 +161,7 @@ TEST(SurfaceMesh, FusionKeepsTheFinerKeyframeWhereTwoSeeTheSameWall) {
 // A keyframe whose local map holds `frames` ray-cast frames of the box room from T_W_K, of every
 // `every`-th pixel each way, with Gaussian depth noise of sd `noise_m` (seeded).
 int addBoxRoomViews(KeyframeGraph* graph, const Transform& T_W_K, int frames, int every, double noise_m) {
-  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(kCamera, 5), 0};
+  Keyframe k{0, 0, 0.0, T_W_K, {}, {}, {}, KeyframeContainer(kCamera, 5), 0, {}};
   cv::RNG rng(11);
   for (int f = 0; f < frames; ++f) {
     RgbdFrame frame = test::renderBoxRoom(kCamera, T_W_K);
