@@ -115,8 +115,6 @@ struct FrameView {
   int cols = 0;
   const std::uint16_t* near_mm = nullptr;  // into KeyframeViews::Impl::blocks
   double z_max = 0;                        // farthest block, m
-  Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
-  Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
 };
 
 /// Per voxel of a grid over a box, the ascending ids of the items (keyframes or frames) that may
@@ -523,12 +521,17 @@ void addFrames(const KeyframeGraph& graph, int threads, KeyframeViews::Impl* imp
   const PinholeCamera& cam = impl->camera;
   const double xl = -cam.cx / cam.fx, xr = (cam.width - cam.cx) / cam.fx;
   const double yl = -cam.cy / cam.fy, yr = (cam.height - cam.cy) / cam.fy;
+  // Each frame's world box (lo > hi: it sees nothing) and their union.
+  const Eigen::Vector3d inf = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
+  std::vector<Eigen::Vector3d> lo(impl->frames.size(), inf), hi(impl->frames.size(), -inf);
+  Eigen::Vector3d all_lo = inf, all_hi = -inf;
   std::size_t at = 0;
   for (std::size_t id = 0; id < n; ++id) {
     const Keyframe& kf = graph.keyframe(static_cast<int>(id));
     for (std::size_t j = 0; j < kf.frames_free.size(); ++j) {
       const FrameFreeSpace& src = kf.frames_free[j];
-      FrameView& f = impl->frames[impl->first_frame[id] + j];
+      const std::size_t i = impl->first_frame[id] + j;
+      FrameView& f = impl->frames[i];
       const Transform T_W_F = kf.T_W_K * src.T_K_C;
       const Transform T_F_W = T_W_F.inverse();
       f.R_F_W = T_F_W.linear();
@@ -540,22 +543,17 @@ void addFrames(const KeyframeGraph& graph, int threads, KeyframeViews::Impl* imp
       at += src.near_mm.size();
       f.z_max = 1e-3 * *std::max_element(src.near_mm.begin(), src.near_mm.end());
       if (!(f.z_max > 0)) continue;  // no block with depth: sees nothing (its box stays empty)
-      f.lo = f.hi = T_W_F.translation();
+      lo[i] = hi[i] = T_W_F.translation();
       for (const double x : {xl, xr})
         for (const double y : {yl, yr}) {
           const Eigen::Vector3d corner = T_W_F * Eigen::Vector3d(x * f.z_max, y * f.z_max, f.z_max);
-          f.lo = f.lo.cwiseMin(corner), f.hi = f.hi.cwiseMax(corner);
+          lo[i] = lo[i].cwiseMin(corner), hi[i] = hi[i].cwiseMax(corner);
         }
-      impl->lo = impl->lo.cwiseMin(f.lo);
-      impl->hi = impl->hi.cwiseMax(f.hi);
+      all_lo = all_lo.cwiseMin(lo[i]), all_hi = all_hi.cwiseMax(hi[i]);
     }
   }
-  std::vector<Eigen::Vector3d> lo(impl->frames.size()), hi(impl->frames.size());
-  Eigen::Vector3d all_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), all_hi = -all_lo;
-  for (std::size_t i = 0; i < impl->frames.size(); ++i) {
-    lo[i] = impl->frames[i].lo, hi[i] = impl->frames[i].hi;
-    all_lo = all_lo.cwiseMin(lo[i]), all_hi = all_hi.cwiseMax(hi[i]);
-  }
+  impl->lo = impl->lo.cwiseMin(all_lo);
+  impl->hi = impl->hi.cwiseMax(all_hi);
   // A frame lists a voxel whose ball meets its frustum and projects onto some block whose depth
   // lies beyond the ball's nearest point (elsewhere no point of the ball is in front of the frame's
   // depth): voxels behind the surfaces the frame saw are left out.
