@@ -154,11 +154,13 @@ struct FrameTimes {
 };
 
 void printKeyframeTable(const KeyframeGraph& graph, const GlobalMap& global) {
+  // memory: the local map (its cells and slot grid) and its frames' free space; not the images.
   std::printf("keyframe  frame  frames  ellipsoids    kept  memory\n");
   for (const Keyframe& k : graph.keyframes()) {
     const std::vector<bool>& kept = global.kept[static_cast<std::size_t>(k.id)];
+    const KeyframeMemory m = k.memory();
     std::printf("%8d  %5d  %6d  %10zu  %6td  %4.1f MB\n", k.id, k.frame_index, k.frames_integrated, k.container.size(),
-                std::count(kept.begin(), kept.end(), true), k.container.memoryBytes() / 1e6);
+                std::count(kept.begin(), kept.end(), true), (m.ellipsoids + m.cell_slots + m.free_space) / 1e6);
   }
 }
 
