@@ -280,10 +280,22 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
         }
       }
     }
+    // makeHit's answers. Neighbouring pixels mostly hit the same gate: its A and mean are read
+    // once per run of it (gateOf's are normalOf's, so the normals are castRays' bit for bit).
+    std::int32_t last = -1;
+    EllipsoidGate g;
     for (int v = row0; v <= row1; ++v)
       for (std::size_t u = 0; u < width; ++u) {
         const std::size_t p = static_cast<std::size_t>(v - row0) * width + u;
-        pixels[static_cast<std::size_t>(v) * width + u] = makeHit(surface, o, dir[p], {best_i[p], best_t[p]});
+        const std::int32_t i = best_i[p];
+        if (i < 0) continue;
+        if (i != last) g = surface.gateOf(static_cast<std::size_t>(i)), last = i;
+        RayHit& hit = pixels[static_cast<std::size_t>(v) * width + u];
+        hit.hit = true;
+        hit.t_m = best_t[p];
+        hit.point_W = o + hit.t_m * dir[p];
+        hit.normal_W = gateNormal(g, hit.point_W);
+        hit.ellipsoid = i;
       }
   });
   return pixels;
