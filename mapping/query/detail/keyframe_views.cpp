@@ -383,12 +383,23 @@ struct KeyframeViews::Impl {
   /// block's nearest depth d by more than k sigma (sigma^2 = the sensor's axial variance at d +
   /// s0^2); otherwise none.
   bool frameFree(const FrameView& f, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    const Eigen::Vector3d q = f.R_F_W * q_W + f.t_F_W;
-    if (!(q.z() > 0.0)) return false;
-    const double u = camera.fx * q.x() / q.z() + camera.cx, v = camera.fy * q.y() / q.z() + camera.cy;
-    if (!(u >= 0.0 && v >= 0.0 && u < camera.width && v < camera.height)) return false;
-    const std::uint16_t mm = f.near_mm[static_cast<std::size_t>(static_cast<int>(v) / kFreeBlockPx) * f.cols +
-                                       static_cast<int>(u) / kFreeBlockPx];
+    Eigen::Vector3d q;
+    const std::uint16_t* block = frameBlock(f, q_W, &q);
+    return block != nullptr && blockFree(*block, q, out);
+  }
+
+  /// The block of frame f that q_W (frame coordinates q) projects into, or nullptr.
+  const std::uint16_t* frameBlock(const FrameView& f, const Eigen::Vector3d& q_W, Eigen::Vector3d* q) const {
+    *q = f.R_F_W * q_W + f.t_F_W;
+    if (!(q->z() > 0.0)) return nullptr;
+    const double u = camera.fx * q->x() / q->z() + camera.cx, v = camera.fy * q->y() / q->z() + camera.cy;
+    if (!(u >= 0.0 && v >= 0.0 && u < camera.width && v < camera.height)) return nullptr;
+    return &f.near_mm[static_cast<std::size_t>(static_cast<int>(v) / kFreeBlockPx) * f.cols +
+                      static_cast<int>(u) / kFreeBlockPx];
+  }
+
+  /// frameFree() of a point q (frame coordinates) in the block of nearest depth `mm`.
+  bool blockFree(std::uint16_t mm, const Eigen::Vector3d& q, ViewVerdict* out) const {
     if (mm == 0) return false;
     const double d = 1e-3 * mm, sd = nguyenAxialSd(d);
     const double sigma = std::sqrt(sd * sd + params.min_sigma_m * params.min_sigma_m);
@@ -401,11 +412,24 @@ struct KeyframeViews::Impl {
     return true;
   }
 
-  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1.
+  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1. Frames go
+  /// in batches whose blocks are prefetched before any is read (as firstFree).
   int firstFreeFrame(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    for (const std::int32_t id : ids) {
-      const FrameView& f = frames[static_cast<std::size_t>(id)];
-      if (frameFree(f, q_W, out)) return f.keyframe;
+    constexpr std::size_t kBatch = 8;
+    struct Located {
+      Eigen::Vector3d q;
+      const std::uint16_t* block;
+    };
+    Located loc[kBatch];
+    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
+      const std::size_t m = std::min(kBatch, ids.size() - start);
+      for (std::size_t j = 0; j < m; ++j) {
+        loc[j].block = frameBlock(frames[static_cast<std::size_t>(ids[start + j])], q_W, &loc[j].q);
+        if (loc[j].block != nullptr) __builtin_prefetch(loc[j].block);
+      }
+      for (std::size_t j = 0; j < m; ++j)
+        if (loc[j].block != nullptr && blockFree(*loc[j].block, loc[j].q, out))
+          return frames[static_cast<std::size_t>(ids[start + j])].keyframe;
     }
     return -1;
   }
