@@ -20,12 +20,13 @@ namespace {
 /// One kept cell as the queries use it (docs/method.md 13.1): mean and A = (Sigma + s0^2 I)^-1 in
 /// the keyframe frame. The point's terms are taken relative to the mean (d = q - mu), so the gate
 /// distance m^2 = d^T A d has no cancellation; a = q^T A q and q^T A d = a - b follow from A q.
-/// Stored in float (40 B instead of 80: the cells are most of the views' memory and every cell
-/// read is a cache miss); the terms are evaluated in double. mu is the container's float mean
-/// exactly; A is rounded to float (1e-7 relative, far below the sensor's noise).
+/// Stored in 36 B (instead of 80 in double: the cells are most of the views' memory and every
+/// cell read is a cache miss); the terms are evaluated in double. A is rounded to float (1e-7
+/// relative, far below the sensor's noise); the mean as storedViewMean() (MeanCoder) reads it.
 struct Cell {
-  float a[6];  // A: xx xy xz yy yz zz
-  float mu[3];
+  float a[6];            // A: xx xy xz yy yz zz
+  float z;               // mu_z, the container's float mean's
+  std::uint16_t ray[2];  // mu_x / mu_z and mu_y / mu_z, in MeanCoder's steps
   /// Two bounds along z (keyframe frame) as offsets from mu_z in kZUnit, rounded outwards
   /// (kZNone: unbounded). far: the farthest z of this cell's gate; a point behind it is neither in
   /// the gate nor in front of the surface (its ray's closest approach t* q/|q| lies in the gate).
@@ -36,7 +37,7 @@ struct Cell {
   double zFar() const;
   double zNear3x3() const;
 };
-static_assert(sizeof(Cell) == 40);
+static_assert(sizeof(Cell) == 36);
 
 constexpr double kZUnit = 1e-4;  // m: the z bounds' step (they reach 6.5 m)
 constexpr std::uint16_t kZNone = 0xFFFF;
@@ -45,11 +46,9 @@ std::uint16_t zOffset(double metres) {
   const double units = std::ceil(metres / kZUnit);
   return units < kZNone ? static_cast<std::uint16_t>(std::max(units, 0.0)) : kZNone;
 }
-double Cell::zFar() const {
-  return far == kZNone ? std::numeric_limits<double>::infinity() : double(mu[2]) + far * kZUnit;
-}
+double Cell::zFar() const { return far == kZNone ? std::numeric_limits<double>::infinity() : double(z) + far * kZUnit; }
 double Cell::zNear3x3() const {
-  return near_3x3 == kZNone ? -std::numeric_limits<double>::infinity() : double(mu[2]) - near_3x3 * kZUnit;
+  return near_3x3 == kZNone ? -std::numeric_limits<double>::infinity() : double(z) - near_3x3 * kZUnit;
 }
 
 /// Which grid cells of a keyframe's box hold a kept cell: one bit per grid cell (row-major), and
@@ -72,6 +71,34 @@ struct CellTerms {
   double qad;  // q^T A (q - mu) = a - b
 };
 
+/// A kept cell's mean is stored as its z (the container's float) and its ray's tangents mu_x / mu_z
+/// and mu_y / mu_z in 16 bits each, over the tangents of its grid cell's rays grown by half a
+/// cell on each side (the mean of points seen through the cell lies in its cone): a step of
+/// 1/32768 of a cell (2.3e-7 rad at 8 px and a 525 px focal length, 0.7 um at 3 m).
+struct MeanCoder {
+  double base[2] = {0, 0}, cell[2] = {1, 1}, step[2] = {1, 1};  // per axis u, v
+  MeanCoder() = default;
+  explicit MeanCoder(const KeyframeContainer& c) {
+    const PinholeCamera& cam = c.camera();
+    // Grid column j covers container pixels [j s - 0.5, (j + 1) s - 0.5), keyframe u = u' - offset.
+    const double f[2] = {cam.fx, cam.fy}, centre[2] = {cam.cx, cam.cy};
+    const int offset[2] = {c.offsetU(), c.offsetV()};
+    for (int i = 0; i < 2; ++i) {
+      cell[i] = c.cellSizePx() / f[i];
+      base[i] = (-0.5 - offset[i] - centre[i]) / f[i] - 0.5 * cell[i];
+      step[i] = 2.0 * cell[i] / 65535.0;
+    }
+  }
+  std::uint16_t encode(int axis, int index, double tangent) const {
+    const double s = std::round((tangent - (base[axis] + index * cell[axis])) / step[axis]);
+    return static_cast<std::uint16_t>(std::clamp(s, 0.0, 65535.0));
+  }
+  /// The mean of a cell of container column col and row.
+  Eigen::Vector3d decode(float z, const std::uint16_t ray[2], int col, int row) const {
+    return {z * (base[0] + col * cell[0] + ray[0] * step[0]), z * (base[1] + row * cell[1] + ray[1] * step[1]), z};
+  }
+};
+
 // A v for the cell's symmetric A, stored as its upper triangle (a0 a1 a2 / a3 a4 / a5).
 inline Eigen::Vector3d timesA(const Cell& c, double x, double y, double z) {
   const double a0 = c.a[0], a1 = c.a[1], a2 = c.a[2], a3 = c.a[3], a4 = c.a[4], a5 = c.a[5];
@@ -79,14 +106,14 @@ inline Eigen::Vector3d timesA(const Cell& c, double x, double y, double z) {
 }
 
 // The gate's squared Mahalanobis distance (q - mu)^T A (q - mu).
-inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
-  const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
+inline double gate2(const Cell& c, const Eigen::Vector3d& mu, const Eigen::Vector3d& q) {
+  const double dx = q.x() - mu.x(), dy = q.y() - mu.y(), dz = q.z() - mu.z();
   const Eigen::Vector3d ad = timesA(c, dx, dy, dz);
   return dx * ad.x() + dy * ad.y() + dz * ad.z();
 }
 
-inline CellTerms terms(const Cell& c, const Eigen::Vector3d& q) {
-  const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
+inline CellTerms terms(const Cell& c, const Eigen::Vector3d& mu, const Eigen::Vector3d& q) {
+  const double dx = q.x() - mu.x(), dy = q.y() - mu.y(), dz = q.z() - mu.z();
   const Eigen::Vector3d ad = timesA(c, dx, dy, dz), aq = timesA(c, q.x(), q.y(), q.z());
   return {dx * ad.x() + dy * ad.y() + dz * ad.z(), q.x() * aq.x() + q.y() * aq.y() + q.z() * aq.z(),
           q.x() * ad.x() + q.y() * ad.y() + q.z() * ad.z()};
@@ -100,6 +127,7 @@ struct View {
   double width2 = 0, height2 = 0;  // 2W, 2H: the container's extent in container pixels
   double offset_u = 0, offset_v = 0;
   int cell_px = 1;
+  MeanCoder coder;
   // The box of the kept cells grown by one, the container's grid cells [col0, col0 + cols) x
   // [row0, row0 + rows) (a point outside it has no kept cell among its 3x3): which of them hold a
   // kept cell, and those cells in the box's row-major order.
@@ -124,6 +152,11 @@ struct View {
     const OccupancyWord& w = wordOf(row, col);
     if (!((w.bits >> bit) & 1)) return nullptr;
     return &cells[w.before + std::popcount(w.bits & ((std::uint64_t{1} << bit) - 1))];
+  }
+
+  /// The mean of `cell`, the kept cell of the box's grid cell (row, col).
+  Eigen::Vector3d meanOf(const Cell& cell, int row, int col) const {
+    return coder.decode(cell.z, cell.ray, col + col0, row + row0);
   }
 
   /// Keyframe-frame point, its grid column and row; false when the container does not hold it.
@@ -254,15 +287,17 @@ struct KeyframeViews::Impl {
     // Occupied: the nearest gate among the 3x3 cells (a gate reaches past its cell's border).
     double best_m2 = std::numeric_limits<double>::infinity();
     const Cell* best = nullptr;
+    Eigen::Vector3d best_mu = Eigen::Vector3d::Zero();
     for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
       for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
         const Cell* cell = view.cellAt(r, c);
         if (cell == nullptr || !(q.z() < cell->zFar())) continue;  // behind the gate: m^2 > k^2
-        const double m2 = gate2(*cell, q);
-        if (m2 < best_m2) best_m2 = m2, best = cell;
+        const Eigen::Vector3d mu = view.meanOf(*cell, r, c);
+        const double m2 = gate2(*cell, mu, q);
+        if (m2 < best_m2) best_m2 = m2, best = cell, best_mu = mu;
       }
     if (best != nullptr && best_m2 <= k2) {
-      const CellTerms t = terms(*best, q);
+      const CellTerms t = terms(*best, best_mu, q);
       out.state = Occupancy::kOccupied;
       out.m2 = best_m2;
       out.z = t.qad / std::sqrt(t.a);
@@ -271,7 +306,7 @@ struct KeyframeViews::Impl {
     }
     const Cell* own = view.cellAt(row, col);
     if (own == nullptr) return out;
-    const CellTerms t = terms(*own, q);
+    const CellTerms t = terms(*own, view.meanOf(*own, row, col), q);
     const double sqrt_a = std::sqrt(t.a);
     out.z = t.qad / sqrt_a;
     out.m2 = t.m2;
@@ -286,7 +321,7 @@ struct KeyframeViews::Impl {
   bool isFreeAt(const View& view, const Eigen::Vector3d& q, int col, int row, const Cell& cell,
                 ViewVerdict* out) const {
     if (!(q.z() < cell.zFar())) return false;  // behind the gate: not in front of the surface
-    const CellTerms t = terms(cell, q);
+    const CellTerms t = terms(cell, view.meanOf(cell, row, col), q);
     const double sqrt_a = std::sqrt(t.a);
     const double z = t.qad / sqrt_a;
     if (!(z < -k && t.m2 - z * z <= k2)) return false;
@@ -296,7 +331,7 @@ struct KeyframeViews::Impl {
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
           const Cell* other = view.cellAt(r, c);
-          if (other != nullptr && gate2(*other, q) <= k2) return false;
+          if (other != nullptr && gate2(*other, view.meanOf(*other, r, c), q) <= k2) return false;
         }
     out->state = Occupancy::kFree;
     out->z = z;
@@ -449,6 +484,7 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
   v.width2 = 2.0 * cam.width, v.height2 = 2.0 * cam.height;
   v.offset_u = container.offsetU(), v.offset_v = container.offsetV();
   v.cell_px = container.cellSizePx();
+  v.coder = MeanCoder(container);
   v.rank = rank;
   const auto& cells = container.cells();
   std::size_t n_kept = 0;
@@ -488,21 +524,24 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
     Cell c;
     const double upper[6] = {A(0, 0), A(0, 1), A(0, 2), A(1, 1), A(1, 2), A(2, 2)};
     for (int j = 0; j < 6; ++j) c.a[j] = static_cast<float>(upper[j]);
-    for (int j = 0; j < 3; ++j) c.mu[j] = stored.mean[j];
+    const int row = static_cast<int>(at / static_cast<std::size_t>(v.cols)), col = static_cast<int>(at % v.cols);
+    c.z = stored.mean.z();
+    c.ray[0] = v.coder.encode(0, col + v.col0, double(stored.mean.x()) / stored.mean.z());
+    c.ray[1] = v.coder.encode(1, row + v.row0, double(stored.mean.y()) / stored.mean.z());
+    const Eigen::Vector3d mean = v.meanOf(c, row, col);
     const double half_z = k * std::sqrt(cov(2, 2));
     c.far = zOffset(half_z + kZMargin);
-    z_near[at] = e.mean.z() - half_z - kZMargin;
+    z_near[at] = mean.z() - half_z - kZMargin;
     v.occupied[at / 64].bits |= std::uint64_t{1} << (at % 64);
     v.cells.push_back(c);
-    const int row = static_cast<int>(at / static_cast<std::size_t>(v.cols)), col = static_cast<int>(at % v.cols);
     double& tile = v.tile_z_far[static_cast<std::size_t>(row / kTile) * v.tile_cols + col / kTile];
     tile = std::max(tile, c.zFar());
     // Every point with a verdict lies in a gate or on the segment from the centre to a gate:
     // inside the box of the centre and the gates' boxes, and no farther along z than a gate.
-    v.z_max = std::max(v.z_max, e.mean.z() + half_z);
+    v.z_max = std::max(v.z_max, mean.z() + half_z);
     const Eigen::Matrix3d cov_W = R_W_K * cov * R_W_K.transpose();
     const Eigen::Vector3d half = k * cov_W.diagonal().cwiseSqrt();
-    const Eigen::Vector3d mean_W = kf.T_W_K * e.mean;
+    const Eigen::Vector3d mean_W = kf.T_W_K * mean;
     v.lo = v.lo.cwiseMin(mean_W - half);
     v.hi = v.hi.cwiseMax(mean_W + half);
   }
@@ -518,7 +557,7 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
           nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
       Cell& cell = v.cells[next++];
-      cell.near_3x3 = zOffset(cell.mu[2] - nearest);
+      cell.near_3x3 = zOffset(cell.z - nearest);
     }
   return v;
 }
@@ -646,6 +685,14 @@ void addFrames(const KeyframeGraph& graph, int threads, KeyframeViews::Impl* imp
 }
 
 }  // namespace
+
+Eigen::Vector3d storedViewMean(const KeyframeContainer& container, const StoredCell& cell) {
+  const MeanCoder coder(container);
+  const int col = cell.grid_index % container.cols(), row = cell.grid_index / container.cols();
+  const std::uint16_t ray[2] = {coder.encode(0, col, double(cell.mean.x()) / cell.mean.z()),
+                                coder.encode(1, row, double(cell.mean.y()) / cell.mean.z())};
+  return coder.decode(cell.mean.z(), ray, col, row);
+}
 
 KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& global, const QueryParams& params,
                                    std::span<const int> keyframe_rank) {
