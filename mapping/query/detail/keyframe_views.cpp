@@ -341,7 +341,7 @@ struct KeyframeViews::Impl {
   }
 
   /// Calls visit(id, verdict) for each of `ids` in turn until it returns false; the 3x3 cells'
-  /// occupancy words of each batch of candidates are prefetched first (as firstFree).
+  /// occupancy words, then the cells, of each batch of candidates are prefetched first (as firstFree).
   template <typename Visit>
   void scanVerdicts(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, const Visit& visit) const {
     constexpr std::size_t kBatch = 8;
@@ -362,6 +362,18 @@ struct KeyframeViews::Impl {
         for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
           __builtin_prefetch(&l.view->wordOf(r, std::max(l.col - 1, 0)));
           __builtin_prefetch(&l.view->wordOf(r, std::min(l.col + 1, l.view->cols - 1)));
+        }
+      }
+      for (std::size_t j = 0; j < m; ++j) {  // the 3x3's cells: a row's are contiguous
+        const Located& l = loc[j];
+        if (!l.ok) continue;
+        for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
+          const Cell *first = nullptr, *last = nullptr;
+          for (int c = std::max(l.col - 1, 0); c <= std::min(l.col + 1, l.view->cols - 1); ++c)
+            if (const Cell* cell = l.view->cellAt(r, c)) last = cell, first = first != nullptr ? first : cell;
+          if (first == nullptr) continue;
+          __builtin_prefetch(first);
+          __builtin_prefetch(reinterpret_cast<const char*>(last + 1) - 1);
         }
       }
       for (std::size_t j = 0; j < m; ++j) {
