@@ -183,6 +183,27 @@ TEST(QueryClassify, FastPathMatchesTheOracleOnTheBoxRoom) {
   checkAgainstOracle(graph, global, points, "box room");
 }
 
+/// The views' stored mean (the oracle's too) is the container's float mean with its ray rounded
+/// to 1/32768 of a grid cell: within half a step per axis of it on every cell of the box room.
+TEST(QueryClassify, StoredMeansLieWithinARoundingOfTheCellsMeans) {
+  KeyframeGraph graph;
+  addBoxRoomViews(&graph, smallCamera());
+  int cells = 0;
+  for (std::size_t id = 0; id < graph.size(); ++id) {
+    const KeyframeContainer& container = graph.keyframe(static_cast<int>(id)).container;
+    for (const StoredCell& cell : container.cells()) {
+      const Eigen::Vector3d mean = cell.mean.cast<double>(), stored = storedViewMean(container, cell);
+      EXPECT_EQ(stored.z(), mean.z());
+      const double half_step =
+          container.cellSizePx() / std::min(container.camera().fx, container.camera().fy) / 65535.0 * mean.z();
+      EXPECT_LE((stored - mean).norm(), std::sqrt(2.0) * half_step * (1 + 1e-9))
+          << "keyframe " << id << " cell " << cell.grid_index;
+      ++cells;
+    }
+  }
+  EXPECT_GT(cells, 1000);
+}
+
 TEST(QueryClassify, FastPathMatchesTheOracleOnABuiltinSceneMap) {
   // One lap in 40 frames: large steps between frames, so several keyframes around the table.
   const Sequence seq = Sequence::open(test::builtinSequence(40));

@@ -13,6 +13,7 @@
 
 #include "mapping/global_map/global_map.h"
 #include "mapping/keyframe/keyframe_graph.h"
+#include "mapping/query/detail/keyframe_views.h"
 #include "mapping/query/query_map.h"
 
 namespace vdmap::test {
@@ -65,7 +66,7 @@ class QueryOracle {
         if (cell == nullptr || !global_.kept[id][static_cast<std::size_t>(cell - container.cells().data())]) continue;
         const Ellipsoid e = cellEllipsoid(*cell, Transform::Identity(), id);
         const Eigen::Matrix3d A = floored(e.cov).inverse();
-        const Eigen::Vector3d mu = e.mean;
+        const Eigen::Vector3d mu = storedViewMean(container, *cell);  // the float mean, its ray rounded
         const double m2 = (q - mu).dot(A * (q - mu));
         const double a = q.dot(A * q), b = q.dot(A * mu), cc = mu.dot(A * mu);
         const double z = (a - b) / std::sqrt(a), sigma_t = q.norm() / std::sqrt(a);

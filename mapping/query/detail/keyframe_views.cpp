@@ -2,6 +2,7 @@
 #include "mapping/core/message_text.h"
 
 #include <algorithm>
+#include <bit>
 #include <cmath>
 #include <limits>
 #include <stdexcept>
@@ -19,35 +20,83 @@ namespace {
 /// One kept cell as the queries use it (docs/method.md 13.1): mean and A = (Sigma + s0^2 I)^-1 in
 /// the keyframe frame. The point's terms are taken relative to the mean (d = q - mu), so the gate
 /// distance m^2 = d^T A d has no cancellation; a = q^T A q and q^T A d = a - b follow from A q.
-/// Stored in float (40 B instead of 80: the cells are most of the views' memory and every cell
-/// read is a cache miss); the terms are evaluated in double. mu is the container's float mean
-/// exactly; A is rounded to float (1e-7 relative, far below the sensor's noise).
+/// Stored in 36 B (instead of 80 in double: the cells are most of the views' memory and every
+/// cell read is a cache miss); the terms are evaluated in double. A is rounded to float (1e-7
+/// relative, far below the sensor's noise); the mean as storedViewMean() (MeanCoder) reads it.
 struct Cell {
-  float a[6];  // A: xx xy xz yy yz zz
-  float mu[3];
-  /// Nearest z (keyframe frame) of the gates of the 3x3 cells around this one, rounded down: a
-  /// point nearer than this lies in none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z).
-  float z_near_3x3;
-};
+  float a[6];            // A: xx xy xz yy yz zz
+  float z;               // mu_z, the container's float mean's
+  std::uint16_t ray[2];  // mu_x / mu_z and mu_y / mu_z, in MeanCoder's steps
+  /// Two bounds along z (keyframe frame) as offsets from mu_z in kZUnit, rounded outwards
+  /// (kZNone: unbounded). far: the farthest z of this cell's gate; a point behind it is neither in
+  /// the gate nor in front of the surface (its ray's closest approach t* q/|q| lies in the gate).
+  /// near: the nearest z of the gates of the 3x3 cells around this one; a point nearer lies in
+  /// none of them (a gate spans mu_z +- k sqrt(Sigma'_zz) along z). Only rejections read them.
+  std::uint16_t near_3x3, far;
 
-/// A grid cell of a keyframe's container: its kept cell (-1: none) and the farthest z of that
-/// cell's gate. A point behind it is neither in the gate nor in front of the surface (its ray's
-/// closest approach t* q/|q| lies in the gate), so most points behind surfaces are rejected
-/// without reading the cell.
-struct Slot {
-  std::int32_t cell = -1;
-  float z_far = 0;
+  double zFar() const;
+  double zNear3x3() const;
+};
+static_assert(sizeof(Cell) == 36);
+
+constexpr double kZUnit = 1e-4;  // m: the z bounds' step (they reach 6.5 m)
+constexpr std::uint16_t kZNone = 0xFFFF;
+/// A bound's offset from mu_z in kZUnit, rounded up (kZNone when it does not fit).
+std::uint16_t zOffset(double metres) {
+  const double units = std::ceil(metres / kZUnit);
+  return units < kZNone ? static_cast<std::uint16_t>(std::max(units, 0.0)) : kZNone;
+}
+double Cell::zFar() const { return far == kZNone ? std::numeric_limits<double>::infinity() : double(z) + far * kZUnit; }
+double Cell::zNear3x3() const {
+  return near_3x3 == kZNone ? -std::numeric_limits<double>::infinity() : double(z) - near_3x3 * kZUnit;
+}
+
+/// Which grid cells of a keyframe's box hold a kept cell: one bit per grid cell (row-major), and
+/// per 64 of them the number of kept cells before. The cells are stored in the same order, so a
+/// grid cell's kept cell is its rank among the set bits: 2 bits per grid cell instead of an
+/// index and a bound (8 bytes).
+struct OccupancyWord {
+  std::uint64_t bits = 0;
+  std::uint32_t before = 0;
 };
 
 constexpr int kTile = 8;  // grid cells per side of a visibility tile
 
-/// Bounds of a gate along z in float, rounded outwards (a float is enough to reject, never to accept).
+/// Bounds of a gate along z rounded outwards (they reject, never accept).
 constexpr double kZMargin = 1e-6;  // m
 
 struct CellTerms {
   double m2;   // (q - mu)^T A (q - mu)
   double a;    // q^T A q
   double qad;  // q^T A (q - mu) = a - b
+};
+
+/// A kept cell's mean is stored as its z (the container's float) and its ray's tangents mu_x / mu_z
+/// and mu_y / mu_z in 16 bits each, over the tangents of its grid cell's rays grown by half a
+/// cell on each side (the mean of points seen through the cell lies in its cone): a step of
+/// 1/32768 of a cell (2.3e-7 rad at 8 px and a 525 px focal length, 0.7 um at 3 m).
+struct MeanCoder {
+  double base[2] = {0, 0}, cell[2] = {1, 1}, step[2] = {1, 1};  // per axis u, v
+  MeanCoder() = default;
+  explicit MeanCoder(const KeyframeContainer& c) {
+    const PinholeCamera& cam = c.camera();
+    // Grid column j covers container pixels [j s - 0.5, (j + 1) s - 0.5), keyframe u = u' - offset.
+    const double f[2] = {cam.fx, cam.fy}, centre[2] = {cam.cx, cam.cy};
+    const int offset[2] = {c.offsetU(), c.offsetV()};
+    for (int i = 0; i < 2; ++i) {
+      cell[i] = c.cellSizePx() / f[i];
+      base[i] = (-0.5 - offset[i] - centre[i]) / f[i] - 0.5 * cell[i];
+      step[i] = 2.0 * cell[i] / 65535.0;
+    }
+  }
+  std::uint16_t encode(int axis, int index, double tangent) const {
+    const double s = std::round((tangent - (base[axis] + index * cell[axis])) / step[axis]);
+    return static_cast<std::uint16_t>(std::clamp(s, 0.0, 65535.0));
+  }
+  /// The mean of a cell of container column col and row.
+  Eigen::Vector3d decode(float z, const std::uint16_t ray[2], int col, int row) const {
+    return {z * (base[0] + col * cell[0] + ray[0] * step[0]), z * (base[1] + row * cell[1] + ray[1] * step[1]), z};
+  }
 };
 
 // A v for the cell's symmetric A, stored as its upper triangle (a0 a1 a2 / a3 a4 / a5).
@@ -57,14 +106,14 @@ inline Eigen::Vector3d timesA(const Cell& c, double x, double y, double z) {
 }
 
 // The gate's squared Mahalanobis distance (q - mu)^T A (q - mu).
-inline double gate2(const Cell& c, const Eigen::Vector3d& q) {
-  const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
+inline double gate2(const Cell& c, const Eigen::Vector3d& mu, const Eigen::Vector3d& q) {
+  const double dx = q.x() - mu.x(), dy = q.y() - mu.y(), dz = q.z() - mu.z();
   const Eigen::Vector3d ad = timesA(c, dx, dy, dz);
   return dx * ad.x() + dy * ad.y() + dz * ad.z();
 }
 
-inline CellTerms terms(const Cell& c, const Eigen::Vector3d& q) {
-  const double dx = q.x() - c.mu[0], dy = q.y() - c.mu[1], dz = q.z() - c.mu[2];
+inline CellTerms terms(const Cell& c, const Eigen::Vector3d& mu, const Eigen::Vector3d& q) {
+  const double dx = q.x() - mu.x(), dy = q.y() - mu.y(), dz = q.z() - mu.z();
   const Eigen::Vector3d ad = timesA(c, dx, dy, dz), aq = timesA(c, q.x(), q.y(), q.z());
   return {dx * ad.x() + dy * ad.y() + dz * ad.z(), q.x() * aq.x() + q.y() * aq.y() + q.z() * aq.z(),
           q.x() * ad.x() + q.y() * ad.y() + q.z() * ad.z()};
@@ -78,19 +127,37 @@ struct View {
   double width2 = 0, height2 = 0;  // 2W, 2H: the container's extent in container pixels
   double offset_u = 0, offset_v = 0;
   int cell_px = 1;
-  // The slots cover the container's grid cells [col0, col0 + cols) x [row0, row0 + rows): the box
-  // of the kept cells grown by one (a point outside it has no kept cell among its 3x3).
+  MeanCoder coder;
+  // The box of the kept cells grown by one, the container's grid cells [col0, col0 + cols) x
+  // [row0, row0 + rows) (a point outside it has no kept cell among its 3x3): which of them hold a
+  // kept cell, and those cells in the box's row-major order.
   int col0 = 0, row0 = 0, cols = 0, rows = 0;
-  std::vector<Slot> slot;  // per grid cell of the box (empty when the keyframe has no kept cell)
+  std::vector<OccupancyWord> occupied;  // empty when the keyframe has no kept cell
   std::vector<Cell> cells;
   int rank = 0;
   Eigen::Vector3d lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity());
   Eigen::Vector3d hi = Eigen::Vector3d::Constant(-std::numeric_limits<double>::infinity());
   double z_max = 0;  // farthest gate along the optical axis (keyframe frame)
-  /// Build only: per tile of kTile x kTile grid cells, the farthest z_far of its kept cells
+  /// Build only: per tile of kTile x kTile grid cells, the farthest zFar() of its kept cells
   /// (-inf: none), for the visibility index.
   std::vector<double> tile_z_far;
   int tile_cols = 0, tile_rows = 0;
+
+  const OccupancyWord& wordOf(int row, int col) const {
+    return occupied[(static_cast<std::size_t>(row) * cols + col) / 64];
+  }
+  /// The kept cell of the box's grid cell (row, col), or nullptr.
+  const Cell* cellAt(int row, int col) const {
+    const unsigned bit = (static_cast<unsigned>(row) * cols + col) % 64;
+    const OccupancyWord& w = wordOf(row, col);
+    if (!((w.bits >> bit) & 1)) return nullptr;
+    return &cells[w.before + std::popcount(w.bits & ((std::uint64_t{1} << bit) - 1))];
+  }
+
+  /// The mean of `cell`, the kept cell of the box's grid cell (row, col).
+  Eigen::Vector3d meanOf(const Cell& cell, int row, int col) const {
+    return coder.decode(cell.z, cell.ray, col + col0, row + row0);
+  }
 
   /// Keyframe-frame point, its grid column and row; false when the container does not hold it.
   bool locate(const Eigen::Vector3d& q_W, Eigen::Vector3d* q, int* col, int* row) const {
@@ -220,24 +287,26 @@ struct KeyframeViews::Impl {
     // Occupied: the nearest gate among the 3x3 cells (a gate reaches past its cell's border).
     double best_m2 = std::numeric_limits<double>::infinity();
     const Cell* best = nullptr;
+    Eigen::Vector3d best_mu = Eigen::Vector3d::Zero();
     for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
       for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
-        const Slot& s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
-        if (s.cell < 0 || !(q.z() < s.z_far)) continue;  // behind the gate: m^2 > k^2
-        const double m2 = gate2(view.cells[s.cell], q);
-        if (m2 < best_m2) best_m2 = m2, best = &view.cells[s.cell];
+        const Cell* cell = view.cellAt(r, c);
+        if (cell == nullptr || !(q.z() < cell->zFar())) continue;  // behind the gate: m^2 > k^2
+        const Eigen::Vector3d mu = view.meanOf(*cell, r, c);
+        const double m2 = gate2(*cell, mu, q);
+        if (m2 < best_m2) best_m2 = m2, best = cell, best_mu = mu;
       }
     if (best != nullptr && best_m2 <= k2) {
-      const CellTerms t = terms(*best, q);
+      const CellTerms t = terms(*best, best_mu, q);
       out.state = Occupancy::kOccupied;
       out.m2 = best_m2;
       out.z = t.qad / std::sqrt(t.a);
       out.sigma_t = q.norm() / std::sqrt(t.a);
       return out;
     }
-    const std::int32_t own = view.slot[static_cast<std::size_t>(row) * view.cols + col].cell;
-    if (own < 0) return out;
-    const CellTerms t = terms(view.cells[own], q);
+    const Cell* own = view.cellAt(row, col);
+    if (own == nullptr) return out;
+    const CellTerms t = terms(*own, view.meanOf(*own, row, col), q);
     const double sqrt_a = std::sqrt(t.a);
     out.z = t.qad / sqrt_a;
     out.m2 = t.m2;
@@ -248,20 +317,21 @@ struct KeyframeViews::Impl {
     return out;
   }
 
-  /// verdict() == kFree for a located point whose own slot passed the z_far test (isFree's tail).
-  bool isFreeAt(const View& view, const Eigen::Vector3d& q, int col, int row, const Slot& own, ViewVerdict* out) const {
-    const Cell& cell = view.cells[own.cell];
-    const CellTerms t = terms(cell, q);
+  /// verdict() == kFree for a point located in the view, `cell` its own grid cell's kept cell.
+  bool isFreeAt(const View& view, const Eigen::Vector3d& q, int col, int row, const Cell& cell,
+                ViewVerdict* out) const {
+    if (!(q.z() < cell.zFar())) return false;  // behind the gate: not in front of the surface
+    const CellTerms t = terms(cell, view.meanOf(cell, row, col), q);
     const double sqrt_a = std::sqrt(t.a);
     const double z = t.qad / sqrt_a;
     if (!(z < -k && t.m2 - z * z <= k2)) return false;
     // No gate of the 3x3 cells may hold the point (the own cell's cannot: m^2 >= z^2 > k^2);
     // none can when the point is nearer than all of them (nearly always: free is far in front).
-    if (!(q.z() < cell.z_near_3x3))
+    if (!(q.z() < cell.zNear3x3()))
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, view.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, view.cols - 1); ++c) {
-          const Slot& s = view.slot[static_cast<std::size_t>(r) * view.cols + c];
-          if (s.cell >= 0 && gate2(view.cells[s.cell], q) <= k2) return false;
+          const Cell* other = view.cellAt(r, c);
+          if (other != nullptr && gate2(*other, view.meanOf(*other, r, c), q) <= k2) return false;
         }
     out->state = Occupancy::kFree;
     out->z = z;
@@ -270,8 +340,8 @@ struct KeyframeViews::Impl {
     return true;
   }
 
-  /// Calls visit(id, verdict) for each of `ids` in turn until it returns false; the 3x3 slots of
-  /// each batch of candidates are prefetched first (as firstFree).
+  /// Calls visit(id, verdict) for each of `ids` in turn until it returns false; the 3x3 cells'
+  /// occupancy words, then the cells, of each batch of candidates are prefetched first (as firstFree).
   template <typename Visit>
   void scanVerdicts(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, const Visit& visit) const {
     constexpr std::size_t kBatch = 8;
@@ -290,9 +360,20 @@ struct KeyframeViews::Impl {
         l.ok = l.view->locate(q_W, &l.q, &l.col, &l.row);
         if (!l.ok) continue;
         for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
-          const Slot* row = &l.view->slot[static_cast<std::size_t>(r) * l.view->cols];
-          __builtin_prefetch(row + std::max(l.col - 1, 0));
-          __builtin_prefetch(row + std::min(l.col + 1, l.view->cols - 1));
+          __builtin_prefetch(&l.view->wordOf(r, std::max(l.col - 1, 0)));
+          __builtin_prefetch(&l.view->wordOf(r, std::min(l.col + 1, l.view->cols - 1)));
+        }
+      }
+      for (std::size_t j = 0; j < m; ++j) {  // the 3x3's cells: a row's are contiguous
+        const Located& l = loc[j];
+        if (!l.ok) continue;
+        for (int r = std::max(l.row - 1, 0); r <= std::min(l.row + 1, l.view->rows - 1); ++r) {
+          const Cell *first = nullptr, *last = nullptr;
+          for (int c = std::max(l.col - 1, 0); c <= std::min(l.col + 1, l.view->cols - 1); ++c)
+            if (const Cell* cell = l.view->cellAt(r, c)) last = cell, first = first != nullptr ? first : cell;
+          if (first == nullptr) continue;
+          __builtin_prefetch(first);
+          __builtin_prefetch(reinterpret_cast<const char*>(last + 1) - 1);
         }
       }
       for (std::size_t j = 0; j < m; ++j) {
@@ -304,7 +385,7 @@ struct KeyframeViews::Impl {
 
   /// The first of `ids` (in their order) whose verdict is free, or -1: verdict() == kFree without
   /// the occupied answer's terms, the fast path of ConflictRule::kOccupied. Candidates go in
-  /// batches: each batch's slots, then cells, are prefetched before any is read, so that their
+  /// batches: each batch's occupancy words, then cells, are prefetched before any is read, so that their
   /// cache misses overlap instead of following one another (the answer is the sequential one).
   int firstFree(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
     constexpr std::size_t kBatch = 8;
@@ -312,7 +393,7 @@ struct KeyframeViews::Impl {
       const View* view;
       Eigen::Vector3d q;
       int col, row;
-      const Slot* slot;
+      const Cell* cell;
     };
     Located loc[kBatch];
     for (std::size_t start = 0; start < ids.size(); start += kBatch) {
@@ -320,25 +401,24 @@ struct KeyframeViews::Impl {
       for (std::size_t j = 0; j < m; ++j) {
         Located& l = loc[j];
         l.view = &views[static_cast<std::size_t>(ids[start + j])];
-        l.slot = nullptr;
-        if (!l.view->locate(q_W, &l.q, &l.col, &l.row)) continue;
-        l.slot = &l.view->slot[static_cast<std::size_t>(l.row) * l.view->cols + l.col];
-        __builtin_prefetch(l.slot);
+        l.cell = nullptr;
+        if (!l.view->locate(q_W, &l.q, &l.col, &l.row)) {
+          l.view = nullptr;
+          continue;
+        }
+        __builtin_prefetch(&l.view->wordOf(l.row, l.col));
       }
       for (std::size_t j = 0; j < m; ++j) {
         Located& l = loc[j];
-        if (l.slot == nullptr) continue;
-        if (l.slot->cell < 0 || !(l.q.z() < l.slot->z_far)) {
-          l.slot = nullptr;
-          continue;
-        }
-        const char* cell = reinterpret_cast<const char*>(&l.view->cells[l.slot->cell]);
-        __builtin_prefetch(cell);
-        __builtin_prefetch(cell + sizeof(Cell) - 1);
+        if (l.view == nullptr) continue;
+        l.cell = l.view->cellAt(l.row, l.col);
+        if (l.cell == nullptr) continue;
+        __builtin_prefetch(l.cell);
+        __builtin_prefetch(reinterpret_cast<const char*>(l.cell) + sizeof(Cell) - 1);
       }
       for (std::size_t j = 0; j < m; ++j) {
         const Located& l = loc[j];
-        if (l.slot != nullptr && isFreeAt(*l.view, l.q, l.col, l.row, *l.slot, out)) return ids[start + j];
+        if (l.cell != nullptr && isFreeAt(*l.view, l.q, l.col, l.row, *l.cell, out)) return ids[start + j];
       }
     }
     return -1;
@@ -350,12 +430,23 @@ struct KeyframeViews::Impl {
   /// block's nearest depth d by more than k sigma (sigma^2 = the sensor's axial variance at d +
   /// s0^2); otherwise none.
   bool frameFree(const FrameView& f, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    const Eigen::Vector3d q = f.R_F_W * q_W + f.t_F_W;
-    if (!(q.z() > 0.0)) return false;
-    const double u = camera.fx * q.x() / q.z() + camera.cx, v = camera.fy * q.y() / q.z() + camera.cy;
-    if (!(u >= 0.0 && v >= 0.0 && u < camera.width && v < camera.height)) return false;
-    const std::uint16_t mm = f.near_mm[static_cast<std::size_t>(static_cast<int>(v) / kFreeBlockPx) * f.cols +
-                                       static_cast<int>(u) / kFreeBlockPx];
+    Eigen::Vector3d q;
+    const std::uint16_t* block = frameBlock(f, q_W, &q);
+    return block != nullptr && blockFree(*block, q, out);
+  }
+
+  /// The block of frame f that q_W (frame coordinates q) projects into, or nullptr.
+  const std::uint16_t* frameBlock(const FrameView& f, const Eigen::Vector3d& q_W, Eigen::Vector3d* q) const {
+    *q = f.R_F_W * q_W + f.t_F_W;
+    if (!(q->z() > 0.0)) return nullptr;
+    const double u = camera.fx * q->x() / q->z() + camera.cx, v = camera.fy * q->y() / q->z() + camera.cy;
+    if (!(u >= 0.0 && v >= 0.0 && u < camera.width && v < camera.height)) return nullptr;
+    return &f.near_mm[static_cast<std::size_t>(static_cast<int>(v) / kFreeBlockPx) * f.cols +
+                      static_cast<int>(u) / kFreeBlockPx];
+  }
+
+  /// frameFree() of a point q (frame coordinates) in the block of nearest depth `mm`.
+  bool blockFree(std::uint16_t mm, const Eigen::Vector3d& q, ViewVerdict* out) const {
     if (mm == 0) return false;
     const double d = 1e-3 * mm, sd = nguyenAxialSd(d);
     const double sigma = std::sqrt(sd * sd + params.min_sigma_m * params.min_sigma_m);
@@ -368,11 +459,24 @@ struct KeyframeViews::Impl {
     return true;
   }
 
-  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1.
+  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1. Frames go
+  /// in batches whose blocks are prefetched before any is read (as firstFree).
   int firstFreeFrame(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    for (const std::int32_t id : ids) {
-      const FrameView& f = frames[static_cast<std::size_t>(id)];
-      if (frameFree(f, q_W, out)) return f.keyframe;
+    constexpr std::size_t kBatch = 8;
+    struct Located {
+      Eigen::Vector3d q;
+      const std::uint16_t* block;
+    };
+    Located loc[kBatch];
+    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
+      const std::size_t m = std::min(kBatch, ids.size() - start);
+      for (std::size_t j = 0; j < m; ++j) {
+        loc[j].block = frameBlock(frames[static_cast<std::size_t>(ids[start + j])], q_W, &loc[j].q);
+        if (loc[j].block != nullptr) __builtin_prefetch(loc[j].block);
+      }
+      for (std::size_t j = 0; j < m; ++j)
+        if (loc[j].block != nullptr && blockFree(*loc[j].block, loc[j].q, out))
+          return frames[static_cast<std::size_t>(ids[start + j])].keyframe;
     }
     return -1;
   }
@@ -392,6 +496,7 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
   v.width2 = 2.0 * cam.width, v.height2 = 2.0 * cam.height;
   v.offset_u = container.offsetU(), v.offset_v = container.offsetV();
   v.cell_px = container.cellSizePx();
+  v.coder = MeanCoder(container);
   v.rank = rank;
   const auto& cells = container.cells();
   std::size_t n_kept = 0;
@@ -406,54 +511,65 @@ View makeView(const Keyframe& kf, const std::vector<bool>& kept, double s0, doub
   v.col0 = std::max(c_lo - 1, 0), v.row0 = std::max(r_lo - 1, 0);
   v.cols = std::min(c_hi + 1, container.cols() - 1) - v.col0 + 1;
   v.rows = std::min(r_hi + 1, container.rows() - 1) - v.row0 + 1;
-  v.slot.assign(static_cast<std::size_t>(v.cols) * v.rows, Slot{});
-  std::vector<double> z_near(v.slot.size(), std::numeric_limits<double>::infinity());
+  // Per grid cell of the box, its kept cell's index in the container (-1: none).
+  const std::size_t box = static_cast<std::size_t>(v.cols) * v.rows;
+  std::vector<std::int32_t> source(box, -1);
+  for (std::size_t i = 0; i < cells.size(); ++i)
+    if (kept[i])
+      source[static_cast<std::size_t>(cells[i].grid_index / container.cols() - v.row0) * v.cols +
+             static_cast<std::size_t>(cells[i].grid_index % container.cols() - v.col0)] = static_cast<std::int32_t>(i);
+  v.occupied.assign((box + 63) / 64, OccupancyWord{});
+  std::vector<double> z_near(box, std::numeric_limits<double>::infinity());
   v.cells.reserve(n_kept);
+  v.tile_cols = (v.cols + kTile - 1) / kTile, v.tile_rows = (v.rows + kTile - 1) / kTile;
+  v.tile_z_far.assign(static_cast<std::size_t>(v.tile_cols) * v.tile_rows, -std::numeric_limits<double>::infinity());
   const Eigen::Matrix3d R_W_K = kf.T_W_K.linear();
   const Eigen::Vector3d centre_W = kf.T_W_K.translation();
   v.lo = v.hi = centre_W;
   v.z_max = 0;
-  for (std::size_t i = 0; i < cells.size(); ++i) {
-    if (!kept[i]) continue;
-    const Ellipsoid e = cellEllipsoid(cells[i], Transform::Identity(), 0);
+  for (std::size_t at = 0; at < box; ++at) {
+    if (source[at] < 0) continue;
+    const StoredCell& stored = cells[static_cast<std::size_t>(source[at])];
+    const Ellipsoid e = cellEllipsoid(stored, Transform::Identity(), 0);
     const Eigen::Matrix3d cov = e.cov + s0 * s0 * Eigen::Matrix3d::Identity();
     const Eigen::Matrix3d A = cov.inverse();
     Cell c;
     const double upper[6] = {A(0, 0), A(0, 1), A(0, 2), A(1, 1), A(1, 2), A(2, 2)};
     for (int j = 0; j < 6; ++j) c.a[j] = static_cast<float>(upper[j]);
-    for (int j = 0; j < 3; ++j) c.mu[j] = cells[i].mean[j];
+    const int row = static_cast<int>(at / static_cast<std::size_t>(v.cols)), col = static_cast<int>(at % v.cols);
+    c.z = stored.mean.z();
+    c.ray[0] = v.coder.encode(0, col + v.col0, double(stored.mean.x()) / stored.mean.z());
+    c.ray[1] = v.coder.encode(1, row + v.row0, double(stored.mean.y()) / stored.mean.z());
+    const Eigen::Vector3d mean = v.meanOf(c, row, col);
     const double half_z = k * std::sqrt(cov(2, 2));
-    const std::size_t at = static_cast<std::size_t>(cells[i].grid_index / container.cols() - v.row0) * v.cols +
-                           static_cast<std::size_t>(cells[i].grid_index % container.cols() - v.col0);
-    Slot& slot = v.slot[at];
-    slot.cell = static_cast<std::int32_t>(v.cells.size());
-    slot.z_far =
-        std::nextafter(static_cast<float>(e.mean.z() + half_z + kZMargin), std::numeric_limits<float>::infinity());
-    z_near[at] = e.mean.z() - half_z - kZMargin;
+    c.far = zOffset(half_z + kZMargin);
+    z_near[at] = mean.z() - half_z - kZMargin;
+    v.occupied[at / 64].bits |= std::uint64_t{1} << (at % 64);
     v.cells.push_back(c);
+    double& tile = v.tile_z_far[static_cast<std::size_t>(row / kTile) * v.tile_cols + col / kTile];
+    tile = std::max(tile, c.zFar());
     // Every point with a verdict lies in a gate or on the segment from the centre to a gate:
     // inside the box of the centre and the gates' boxes, and no farther along z than a gate.
-    v.z_max = std::max(v.z_max, e.mean.z() + k * std::sqrt(cov(2, 2)));
+    v.z_max = std::max(v.z_max, mean.z() + half_z);
     const Eigen::Matrix3d cov_W = R_W_K * cov * R_W_K.transpose();
     const Eigen::Vector3d half = k * cov_W.diagonal().cwiseSqrt();
-    const Eigen::Vector3d mean_W = kf.T_W_K * e.mean;
+    const Eigen::Vector3d mean_W = kf.T_W_K * mean;
     v.lo = v.lo.cwiseMin(mean_W - half);
     v.hi = v.hi.cwiseMax(mean_W + half);
   }
-  v.tile_cols = (v.cols + kTile - 1) / kTile, v.tile_rows = (v.rows + kTile - 1) / kTile;
-  v.tile_z_far.assign(static_cast<std::size_t>(v.tile_cols) * v.tile_rows, -std::numeric_limits<double>::infinity());
+  for (std::size_t w = 1; w < v.occupied.size(); ++w)
+    v.occupied[w].before = v.occupied[w - 1].before + static_cast<std::uint32_t>(std::popcount(v.occupied[w - 1].bits));
+  std::size_t next = 0;
   for (int row = 0; row < v.rows; ++row)
     for (int col = 0; col < v.cols; ++col) {
-      const Slot& slot = v.slot[static_cast<std::size_t>(row) * v.cols + col];
-      if (slot.cell < 0) continue;
-      double& tile = v.tile_z_far[static_cast<std::size_t>(row / kTile) * v.tile_cols + col / kTile];
-      tile = std::max(tile, static_cast<double>(slot.z_far));
+      const std::size_t at = static_cast<std::size_t>(row) * v.cols + col;
+      if (source[at] < 0) continue;
       double nearest = std::numeric_limits<double>::infinity();
       for (int r = std::max(row - 1, 0); r <= std::min(row + 1, v.rows - 1); ++r)
         for (int c = std::max(col - 1, 0); c <= std::min(col + 1, v.cols - 1); ++c)
           nearest = std::min(nearest, z_near[static_cast<std::size_t>(r) * v.cols + c]);
-      v.cells[slot.cell].z_near_3x3 =
-          std::nextafter(static_cast<float>(nearest), -std::numeric_limits<float>::infinity());
+      Cell& cell = v.cells[next++];
+      cell.near_3x3 = zOffset(cell.z - nearest);
     }
   return v;
 }
@@ -494,7 +610,7 @@ bool ballMaySee(const View& v, const Eigen::Vector3d& c_W, double r) {
     *lo = static_cast<int>(std::clamp(std::floor(p0 / v.cell_px) - 1 - first, 0.0, cells - 1.0));
     *hi = static_cast<int>(std::clamp(std::floor(p1 / v.cell_px) + 1 - first, 0.0, cells - 1.0));
   };
-  // (Clamped to the slots' box: a superset when the ball's cells lie outside it.)
+  // (Clamped to the view's box: a superset when the ball's cells lie outside it.)
   int c0 = 0, c1 = 0, r0 = 0, r1 = 0;
   range(p.x(), v.fx, v.cx, v.offset_u, v.col0, v.cols, &c0, &c1);
   range(p.y(), v.fy, v.cy, v.offset_v, v.row0, v.rows, &r0, &r1);
@@ -582,6 +698,14 @@ void addFrames(const KeyframeGraph& graph, int threads, KeyframeViews::Impl* imp
 
 }  // namespace
 
+Eigen::Vector3d storedViewMean(const KeyframeContainer& container, const StoredCell& cell) {
+  const MeanCoder coder(container);
+  const int col = cell.grid_index % container.cols(), row = cell.grid_index / container.cols();
+  const std::uint16_t ray[2] = {coder.encode(0, col, double(cell.mean.x()) / cell.mean.z()),
+                                coder.encode(1, row, double(cell.mean.y()) / cell.mean.z())};
+  return coder.decode(cell.mean.z(), ray, col, row);
+}
+
 KeyframeViews KeyframeViews::build(const KeyframeGraph& graph, const GlobalMap& global, const QueryParams& params,
                                    std::span<const int> keyframe_rank) {
   params.validate();
@@ -640,7 +764,8 @@ std::size_t KeyframeViews::memoryBytes() const {
   if (!impl_) return 0;
   const Impl& im = *impl_;
   std::size_t bytes = sizeof(Impl) + im.views.capacity() * sizeof(View) + im.index.memoryBytes();
-  for (const View& v : im.views) bytes += v.slot.capacity() * sizeof(Slot) + v.cells.capacity() * sizeof(Cell);
+  for (const View& v : im.views)
+    bytes += v.occupied.capacity() * sizeof(OccupancyWord) + v.cells.capacity() * sizeof(Cell);
   return bytes;
 }
 

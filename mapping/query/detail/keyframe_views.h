@@ -14,6 +14,10 @@
 
 namespace vdmap {
 
+/// A kept cell's mean (keyframe frame) as the views store it: its z, and its ray's tangents
+/// rounded to 1/32768 of a grid cell (0.7 um at 3 m with 8 px cells and a 525 px focal length).
+Eigen::Vector3d storedViewMean(const KeyframeContainer& container, const StoredCell& cell);
+
 /// Immutable after build; const methods are thread-safe. A copy shares the built data.
 class KeyframeViews {
  public:
