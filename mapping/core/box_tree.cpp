@@ -38,8 +38,8 @@ std::uint32_t BoxTree::build(std::uint32_t first, std::uint32_t count, const std
     std::nth_element(begin, mid, end, [&](std::uint32_t a, std::uint32_t b) {
       return centre[a](axis) < centre[b](axis) || (centre[a](axis) == centre[b](axis) && a < b);
     });
-    n.left = build(first, count / 2, lo, hi, centre);
-    n.right = build(first + count / 2, count - count / 2, lo, hi, centre);
+    build(first, count / 2, lo, hi, centre);  // the next node
+    n.first = build(first + count / 2, count - count / 2, lo, hi, centre);
   }
   nodes_[id] = n;
   return id;

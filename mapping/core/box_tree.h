@@ -43,10 +43,11 @@ class BoxTree {
                                            Hit&& hit) const;
 
  private:
+  // 32 bytes: the nodes in depth-first order, so an inner node's left child is the next node.
   struct Node {
     Eigen::Vector3f lo = Eigen::Vector3f::Zero(), hi = Eigen::Vector3f::Zero();
-    std::uint32_t first = 0, count = 0;  // leaf: items_[first, first + count); inner: count == 0
-    std::uint32_t left = 0, right = 0;   // children (inner nodes)
+    std::uint32_t first = 0;  // leaf: items_[first, first + count); inner: the right child
+    std::uint32_t count = 0;  // 0: inner
   };
   static constexpr std::uint32_t kLeafSize = 4;
 
@@ -101,10 +102,11 @@ std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDis
       }
       continue;
     }
-    const double dl = sqDistToBox(nodes_[n.left], q), dr = sqDistToBox(nodes_[n.right], q);
+    const std::uint32_t left = id + 1, right = n.first;
+    const double dl = sqDistToBox(nodes_[left], q), dr = sqDistToBox(nodes_[right], q);
     // Push the farther child first so the nearer one is searched first.
-    if (dl <= dr) stack[top++] = {dr, n.right}, stack[top++] = {dl, n.left};
-    else stack[top++] = {dl, n.left}, stack[top++] = {dr, n.right};
+    if (dl <= dr) stack[top++] = {dr, right}, stack[top++] = {dl, left};
+    else stack[top++] = {dl, left}, stack[top++] = {dr, right};
   }
   if (best < 0) best_d2 = std::numeric_limits<double>::infinity();
   return {best, best_d2};
@@ -134,14 +136,15 @@ std::pair<std::int64_t, double> BoxTree::firstHit(const Eigen::Vector3d& o, cons
       }
       continue;
     }
-    const double tl = rayEntry(nodes_[n.left], o, d, inv_d, bound), tr = rayEntry(nodes_[n.right], o, d, inv_d, bound);
+    const std::uint32_t left = id + 1, right = n.first;
+    const double tl = rayEntry(nodes_[left], o, d, inv_d, bound), tr = rayEntry(nodes_[right], o, d, inv_d, bound);
     // The farther child first on the stack, so the nearer one is searched first; misses not at all.
     if (tl <= tr) {
-      if (tr <= bound) stack[top++] = {tr, n.right};
-      if (tl <= bound) stack[top++] = {tl, n.left};
+      if (tr <= bound) stack[top++] = {tr, right};
+      if (tl <= bound) stack[top++] = {tl, left};
     } else {
-      if (tl <= bound) stack[top++] = {tl, n.left};
-      if (tr <= bound) stack[top++] = {tr, n.right};
+      if (tl <= bound) stack[top++] = {tl, left};
+      if (tr <= bound) stack[top++] = {tr, right};
     }
   }
   if (best_t > max_t) best = -1, best_t = std::numeric_limits<double>::infinity();

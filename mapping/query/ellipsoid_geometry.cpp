@@ -139,7 +139,7 @@ void roundToFloat(double* v, int n) {
 
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m) {
   EllipsoidGate g;
-  g.mean = e.mean;
+  g.mean = ((e.mean / kGateMeanStep).array().round() * kGateMeanStep).matrix();
   g.k2 = gate_sigma * gate_sigma;
   Eigen::Matrix3d cov = 0.5 * (e.cov + e.cov.transpose());
   cov.diagonal().array() += min_sigma_m * min_sigma_m;
@@ -155,8 +155,15 @@ EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m
   g.semi_axes[1] = std::min(g.semi_axes[1], g.semi_axes[0]);
   g.semi_axes[2] = std::min(g.semi_axes[2], g.semi_axes[1]);
   g.half_extent = gate_sigma * cov.diagonal().cwiseSqrt();
-  // The shape in float (rounding is monotone: the order of the semi-axes and A's symmetry stay).
-  roundToFloat(g.A.data(), 9), roundToFloat(g.axes.data(), 9), roundToFloat(g.semi_axes.data(), 3);
+  // The shape in float (rounding is monotone: the order of the semi-axes and A's symmetry stay);
+  // the frame as a rotation's quaternion in float (a mirrored frame flips its shortest axis).
+  roundToFloat(g.A.data(), 9), roundToFloat(g.semi_axes.data(), 3);
+  if (g.axes.determinant() < 0) g.axes.col(2) = -g.axes.col(2);
+  const Eigen::Quaterniond q(g.axes);
+  double c[4] = {q.x(), q.y(), q.z(), q.w()};
+  roundToFloat(c, 4);
+  g.rotation = Eigen::Vector4d(c[0], c[1], c[2], c[3]).cast<float>();
+  g.axes = axesFromQuaternion(g.rotation.data());
   return g;
 }
 

@@ -4,6 +4,7 @@
 #include <cmath>
 #include <limits>
 #include <optional>
+#include <stdexcept>
 
 #include "mapping/core/box_tree.h"
 #include "mapping/core/parallel.h"
@@ -19,37 +20,36 @@ namespace {
 constexpr int kLevels = 12;
 constexpr double kLevelRatio = 2.0;
 
-// An ellipsoid's gate as stored (108 B instead of an EllipsoidGate's 224 and the 112 of the
-// copies the lookups read): what the gate test reads first (mean, A's upper triangle), then the
-// principal frame for distances and views. makeGate's shape is in float, so the float copy is
-// exact. k^2 is the index's; the box's half-extent is kept grown by a millionth and rounded up to
-// float (it only bounds: a larger box is still a box of the gate).
-struct StoredGate {
-  double mean[3];
-  float a[6];     // A00, A11, A22, A01, A02, A12
-  float axes[9];  // column-major: unit axes, longest first
+// An ellipsoid's gate as stored in 64 bytes (one cache line, instead of an EllipsoidGate's 240):
+// what the gate test reads first (mean, A's upper triangle), then the principal frame for
+// distances and views. makeGate rounds the mean to kGateMeanStep and the shape to float, so the
+// integer mean (in steps from the index's origin) and the float copies are exact, and the axes
+// are rebuilt from the quaternion as makeGate built them. k^2 is the index's.
+struct alignas(64) StoredGate {
+  std::int32_t mean_steps[3];
+  float a[6];  // A00, A11, A22, A01, A02, A12
+  float rotation[4];
   float semi_axes[3];
-  float half_extent[3];
 
   void upper(double out[6]) const { std::copy(a, a + 6, out); }
+  Eigen::Vector3d mean(const Eigen::Vector3d& origin) const {
+    return origin + kGateMeanStep * Eigen::Vector3d(mean_steps[0], mean_steps[1], mean_steps[2]);
+  }
   Eigen::Matrix3d matrixA() const {
     Eigen::Matrix3d m;
     m << a[0], a[3], a[4], a[3], a[1], a[5], a[4], a[5], a[2];
     return m;
   }
-  Eigen::Matrix3d axesMatrix() const {
-    Eigen::Matrix3d m;
-    std::copy(axes, axes + 9, m.data());
-    return m;
-  }
   Eigen::Vector3d semiAxes() const { return {semi_axes[0], semi_axes[1], semi_axes[2]}; }
   /// distanceToGate of this gate.
-  double distance(double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
+  double distance(const Eigen::Vector3d& origin, double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
     double u[6];
     upper(u);
-    return distanceToGate(mean, u, k2, axesMatrix(), semiAxes(), q, closest);
+    const Eigen::Vector3d m = mean(origin);
+    return distanceToGate(m.data(), u, k2, axesFromQuaternion(rotation), semiAxes(), q, closest);
   }
 };
+static_assert(sizeof(StoredGate) == 64);
 
 // One level: the gate ranks sorted by (voxel key, rank), and an open-addressing table from a
 // voxel key to its run of ranks, filled in key order (deterministic). The keys are in the table
@@ -132,8 +132,9 @@ struct SurfaceIndex::Impl {
   // hold ranks.
   std::vector<StoredGate> gates;
   std::vector<std::int32_t> test_ellipsoid, rank_of;
-  std::vector<int> levels_used;                      // the non-empty levels
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
+  std::vector<int> levels_used;                           // the non-empty levels
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();       // the grid's lower corner
+  Eigen::Vector3d mean_origin = Eigen::Vector3d::Zero();  // the means' (a multiple of kGateMeanStep)
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
   std::optional<BoxTree> tree;         // over the gate boxes
@@ -168,6 +169,12 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   const double extent = (hi_all - lo_all).maxCoeff();
   double side = std::max({2.0 * half[n / 2], 1e-6, extent / static_cast<double>(VoxelKey::kAxisMax - 2)});
   impl->origin = lo_all;
+  // The means in whole steps from the lowest ones (exact: makeGate rounded them to the step).
+  Eigen::Vector3d mean_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), mean_hi = -mean_lo;
+  for (const EllipsoidGate& g : gates) mean_lo = mean_lo.cwiseMin(g.mean), mean_hi = mean_hi.cwiseMax(g.mean);
+  if (!((mean_hi - mean_lo).maxCoeff() / kGateMeanStep < 2147483647.0))
+    throw std::length_error("query map: the map's ellipsoids span more than 2 km");
+  impl->mean_origin = mean_lo;
 
   // Gate tests in Morton order of the means at the finest side (ties: index), ranks in the grid.
   {
@@ -197,15 +204,13 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     parallelFor(params.threads, n, [&](std::size_t r) {
       const EllipsoidGate& g = gates[static_cast<std::size_t>(order[r].second)];
       StoredGate& s = impl->gates[r];
-      std::copy(g.mean.data(), g.mean.data() + 3, s.mean);
+      for (int k = 0; k < 3; ++k)
+        s.mean_steps[k] = static_cast<std::int32_t>((g.mean[k] - impl->mean_origin[k]) / kGateMeanStep);
       double a[6];
       gateUpper(g, a);
       for (int k = 0; k < 6; ++k) s.a[k] = static_cast<float>(a[k]);
-      for (int k = 0; k < 9; ++k) s.axes[k] = static_cast<float>(g.axes.data()[k]);
-      for (int k = 0; k < 3; ++k) {
-        s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
-        s.half_extent[k] = std::nextafter(static_cast<float>(g.half_extent[k] * (1 + 1e-6) + 1e-9), INFINITY);
-      }
+      for (int k = 0; k < 4; ++k) s.rotation[k] = g.rotation[k];
+      for (int k = 0; k < 3; ++k) s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
       impl->test_ellipsoid[r] = order[r].second;
       impl->rank_of[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
     });
@@ -275,24 +280,27 @@ std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->
 
 Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) const {
   const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
-  return gateNormal(s.matrixA(), Eigen::Vector3d(s.mean), p);
+  return gateNormal(s.matrixA(), s.mean(impl_->mean_origin), p);
 }
 
 EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
   EllipsoidGate g;
-  g.mean = Eigen::Vector3d(s.mean);
+  g.mean = s.mean(impl_->mean_origin);
   g.A = s.matrixA();
-  g.axes = s.axesMatrix();
+  g.rotation = Eigen::Vector4f(s.rotation);
+  g.axes = axesFromQuaternion(s.rotation);
   g.semi_axes = s.semiAxes();
-  g.half_extent = Eigen::Vector3f(s.half_extent).cast<double>();
+  // k sqrt(Sigma_ii + s0^2) from the frame (the box itself is not kept).
+  g.half_extent = (g.axes.cwiseAbs2() * g.semi_axes.cwiseAbs2()).cwiseSqrt();
   g.k2 = impl_->k2;
   return g;
 }
 
 Eigen::Vector4d SurfaceIndex::ballAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
-  return {s.mean[0], s.mean[1], s.mean[2], s.semi_axes[0]};
+  const Eigen::Vector3d m = s.mean(impl_->mean_origin);
+  return {m.x(), m.y(), m.z(), s.semi_axes[0]};
 }
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
@@ -300,8 +308,9 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
   if (!impl_) return best;
   const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
     const StoredGate& g = impl_->gates[static_cast<std::size_t>(r)];
-    const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
-                                    g.a[2], g.a[3], g.a[4], g.a[5]);
+    const Eigen::Vector3d m = g.mean(impl_->mean_origin);
+    const double m2 = gateQuadratic(q_W.x() - m.x(), q_W.y() - m.y(), q_W.z() - m.z(), g.a[0], g.a[1], g.a[2], g.a[3],
+                                    g.a[4], g.a[5]);
     if (m2 > impl_->k2 || m2 > best.second) return;
     const std::int32_t i = impl_->test_ellipsoid[static_cast<std::size_t>(r)];
     if (m2 < best.second || i < best.first) best = {i, m2};
@@ -335,24 +344,23 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
       q_W,
       [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
         const StoredGate& g = stored(j);
-        // Lower bounds first (with slack for rounding): the gate's box, and the coin that holds
-        // it (|offset along the shortest axis| <= e2, across it <= e0), tight for the flat
-        // patches of a surface, of which many are almost equally near a point far from them.
-        const Eigen::Vector3d r = q - Eigen::Vector3d(g.mean);
-        const double box2 = (r.cwiseAbs() - Eigen::Vector3f(g.half_extent).cast<double>()).cwiseMax(0.0).squaredNorm();
-        const double h = r.x() * g.axes[6] + r.y() * g.axes[7] + r.z() * g.axes[8];
+        // A lower bound first (with slack for rounding): the coin that holds the gate (|offset
+        // along the shortest axis| <= e2, across it <= e0), tight for the flat patches of a
+        // surface, of which many are almost equally near a point far from them.
+        const Eigen::Vector3d r = q - g.mean(im.mean_origin);
+        const double h = r.dot(axesFromQuaternion(g.rotation).col(2));
         const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
-        const double lower2 = std::max(box2, dh * dh + da * da);
+        const double lower2 = dh * dh + da * da;
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
-        const double d = g.distance(im.k2, q, nullptr);
+        const double d = g.distance(im.mean_origin, im.k2, q, nullptr);
         return d * d;
       },
       max_distance * max_distance);
   if (i < 0) return best;
   best.ellipsoid = static_cast<std::int32_t>(i);
   const StoredGate& g = stored(static_cast<std::uint32_t>(i));
-  best.distance = g.distance(im.k2, q_W, &best.closest);
+  best.distance = g.distance(im.mean_origin, im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -365,7 +373,7 @@ SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::
     const StoredGate& g = im.gates[static_cast<std::size_t>(im.rank_of[j])];
     double a[6];
     g.upper(a);
-    return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
+    return gateRayEntry(a, gateRayOrigin(g.mean(im.mean_origin).data(), a, im.k2, o), d, bound);
   });
   if (i >= 0) best = {static_cast<std::int32_t>(i), t};
   return best;

@@ -43,7 +43,7 @@ class SurfaceIndex {
   /// (box tree, nearest node first).
   Hit firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const;
 
-  /// Ellipsoid i's gate (the kernels' input; half_extent rounded up to float).
+  /// Ellipsoid i's gate (the kernels' input; half_extent from the frame, to rounding).
   EllipsoidGate gateOf(std::size_t i) const;
   /// gateNormal(gateOf(i), p), bit for bit, without building the whole gate (a ray hit's normal).
   Eigen::Vector3d normalOf(std::size_t i, const Eigen::Vector3d& p) const;
