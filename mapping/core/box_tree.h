@@ -17,8 +17,10 @@ namespace vdmap {
 
 class BoxTree {
  public:
-  /// Item i has the box [lo[i], hi[i]] (metres). The tree keeps no reference to the inputs.
-  BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi);
+  /// Item i has the box [lo[i], hi[i]] (metres); a leaf holds at most leaf_size items (fewer,
+  /// larger leaves: less memory, more items tested a query). The tree keeps no reference to the
+  /// inputs.
+  BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi, std::uint32_t leaf_size = 4);
 
   /// Heap bytes held (nodes and item indices).
   std::size_t memoryBytes() const {
@@ -49,10 +51,10 @@ class BoxTree {
     std::uint32_t first = 0;  // leaf: items_[first, first + count); inner: the right child
     std::uint32_t count = 0;  // 0: inner
   };
-  static constexpr std::uint32_t kLeafSize = 4;
 
-  std::uint32_t build(std::uint32_t first, std::uint32_t count, const std::vector<Eigen::Vector3f>& lo,
-                      const std::vector<Eigen::Vector3f>& hi, const std::vector<Eigen::Vector3f>& centre);
+  std::uint32_t build(std::uint32_t first, std::uint32_t count, std::uint32_t leaf_size,
+                      const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi,
+                      const std::vector<Eigen::Vector3f>& centre);
   static double sqDistToBox(const Node& n, const Eigen::Vector3d& q) {
     const Eigen::Vector3d d = (n.lo.cast<double>() - q).cwiseMax(q - n.hi.cast<double>()).cwiseMax(0.0);
     return d.squaredNorm();
@@ -85,7 +87,7 @@ std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDis
   std::int64_t best = -1;
   double best_d2 = max_sq_dist;
   if (nodes_.empty()) return {best, best_d2};
-  std::pair<double, std::uint32_t> stack[64];  // depth <= log2(2^32 / kLeafSize) + 1 for median splits
+  std::pair<double, std::uint32_t> stack[64];  // depth <= log2(2^32) + 1 for median splits
   int top = 0;
   stack[top++] = {sqDistToBox(nodes_[0], q), 0};
   while (top > 0) {

@@ -19,6 +19,9 @@ namespace {
 // every lookup scans. A lookup visits one voxel per non-empty level.
 constexpr int kLevels = 12;
 constexpr double kLevelRatio = 2.0;
+// Gates a leaf of the box tree holds at most: 8 halves its nodes against 4 (each node 32 B), and
+// a query's leaf tests are cheap lower bounds before the exact distance or entry.
+constexpr std::uint32_t kTreeLeafSize = 8;
 
 // An ellipsoid's gate as stored in 64 bytes (one cache line, instead of an EllipsoidGate's 240):
 // what the gate test reads first (mean, A's upper triangle), then the principal frame for
@@ -149,7 +152,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
               [&](std::size_t i) { gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m); });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
   parallelFor(params.threads, n, [&](std::size_t i) { gateBox(gates[i], &lo[i], &hi[i]); });
-  impl->tree.emplace(lo, hi);
+  impl->tree.emplace(lo, hi, kTreeLeafSize);
   if (n == 0) {
     SurfaceIndex index;
     index.impl_ = std::move(impl);
