@@ -27,22 +27,29 @@ class BoxTree {
     return nodes_.capacity() * sizeof(Node) + items_.capacity() * sizeof(std::uint32_t);
   }
 
-  /// Index and squared distance of the nearest item to q, where sq_dist(i, q) is the exact
-  /// squared distance to item i; ties go to the lower index. {-1, inf} when there are no
-  /// items, or none nearer than sqrt(max_sq_dist). Const, so safe to call from many threads.
-  /// sq_dist may take the best squared distance so far as a third argument: it may then return
-  /// any value above that bound instead of the exact one for an item it proves farther.
-  template <typename SqDist>
-  std::pair<std::int64_t, double> nearest(const Eigen::Vector3d& q, SqDist&& sq_dist,
-                                          double max_sq_dist = std::numeric_limits<double>::infinity()) const;
+  /// The identity: ties between items go to the lower index.
+  struct ByIndex {
+    std::uint32_t operator()(std::uint32_t i) const { return i; }
+  };
 
-  /// The item with the smallest (t, index) hit by the ray o + t d, 0 <= t <= max_t, where
+  /// Index and squared distance of the nearest item to q, where sq_dist(i, q) is the exact
+  /// squared distance to item i; ties go to the lower tie_key(i) (by default the lower index).
+  /// {-1, inf} when there are no items, or none nearer than sqrt(max_sq_dist). Const, so safe to
+  /// call from many threads. sq_dist may take the best squared distance so far as a third
+  /// argument: it may then return any value above that bound instead of the exact one for an item
+  /// it proves farther.
+  template <typename SqDist, typename TieKey = ByIndex>
+  std::pair<std::int64_t, double> nearest(const Eigen::Vector3d& q, SqDist&& sq_dist,
+                                          double max_sq_dist = std::numeric_limits<double>::infinity(),
+                                          TieKey tie_key = {}) const;
+
+  /// The item with the smallest (t, tie_key(item)) hit by the ray o + t d, 0 <= t <= max_t, where
   /// hit(i, bound) returns item i's hit t or +inf, and may return +inf for any hit beyond `bound`
   /// (the best so far). An item's hits must lie within its box. {-1, inf} when nothing is hit.
   /// Nodes are visited nearest entry first (slab test) and pruned past the best hit.
-  template <typename Hit>
-  std::pair<std::int64_t, double> firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t,
-                                           Hit&& hit) const;
+  template <typename Hit, typename TieKey = ByIndex>
+  std::pair<std::int64_t, double> firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t, Hit&& hit,
+                                           TieKey tie_key = {}) const;
 
  private:
   // 32 bytes: the nodes in depth-first order, so an inner node's left child is the next node.
@@ -82,8 +89,9 @@ class BoxTree {
   std::vector<std::uint32_t> items_;
 };
 
-template <typename SqDist>
-std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDist&& sq_dist, double max_sq_dist) const {
+template <typename SqDist, typename TieKey>
+std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDist&& sq_dist, double max_sq_dist,
+                                                 TieKey tie_key) const {
   std::int64_t best = -1;
   double best_d2 = max_sq_dist;
   if (nodes_.empty()) return {best, best_d2};
@@ -100,7 +108,9 @@ std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDis
         if constexpr (std::is_invocable_v<SqDist, std::uint32_t, const Eigen::Vector3d&, double>)
           d2 = sq_dist(items_[j], q, best_d2);
         else d2 = sq_dist(items_[j], q);
-        if (d2 < best_d2 || (d2 == best_d2 && items_[j] < best)) best_d2 = d2, best = items_[j];
+        if (d2 < best_d2 ||
+            (d2 == best_d2 && best >= 0 && tie_key(items_[j]) < tie_key(static_cast<std::uint32_t>(best))))
+          best_d2 = d2, best = items_[j];
       }
       continue;
     }
@@ -114,9 +124,9 @@ std::pair<std::int64_t, double> BoxTree::nearest(const Eigen::Vector3d& q, SqDis
   return {best, best_d2};
 }
 
-template <typename Hit>
+template <typename Hit, typename TieKey>
 std::pair<std::int64_t, double> BoxTree::firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t,
-                                                  Hit&& hit) const {
+                                                  Hit&& hit, TieKey tie_key) const {
   std::int64_t best = -1;
   double best_t = std::numeric_limits<double>::infinity();
   if (nodes_.empty() || !(max_t >= 0)) return {best, best_t};
@@ -134,7 +144,9 @@ std::pair<std::int64_t, double> BoxTree::firstHit(const Eigen::Vector3d& o, cons
     if (n.count > 0) {
       for (std::uint32_t j = n.first; j < n.first + n.count; ++j) {
         const double t = hit(items_[j], bound);
-        if (t < best_t || (t == best_t && t <= max_t && items_[j] < best)) best_t = t, best = items_[j];
+        if (t < best_t ||
+            (t == best_t && t <= max_t && best >= 0 && tie_key(items_[j]) < tie_key(static_cast<std::uint32_t>(best))))
+          best_t = t, best = items_[j];
       }
       continue;
     }

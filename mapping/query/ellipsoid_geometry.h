@@ -62,8 +62,8 @@ inline double gateDistance2(const EllipsoidGate& g, const Eigen::Vector3d& q) {
 
 /// Euclidean distance from y to the surface of the axis-aligned ellipsoid with semi-axes
 /// e0 >= e1 >= e2 > 0 centred at the origin (Eberly, "Distance from a point to an ellipse, an
-/// ellipsoid, or a hyperellipsoid": robust bisection on the root of the 1-D equation, to the last
-/// bit). `closest` (optional) receives the nearest surface point. Works inside and outside.
+/// ellipsoid, or a hyperellipsoid": the root of the 1-D equation to the last bit, by Newton steps
+/// kept inside its bracket). `closest` (optional) receives the nearest surface point. Works inside and outside.
 double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y,
                                   Eigen::Vector3d* closest = nullptr);
 

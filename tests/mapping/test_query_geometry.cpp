@@ -416,6 +416,27 @@ TEST(SurfaceIndex, MatchesLoopsOverEveryEllipsoidOnTheBoxRoom) {
   expectIndexMatchesLoops(map.ellipsoids, params, 2000, 50, 200);
 }
 
+TEST(SurfaceIndex, TiesGoToTheLowerIndexWhateverTheStorageOrder) {
+  // Two equal spheres (gate radius 0.3 m) mirrored about x = 0, the one at +x first: the gates
+  // are stored in Morton order (the -x one first), yet a point or a ray equally near both
+  // answers ellipsoid 0.
+  const auto mirrored = [](double x) {
+    std::vector<Ellipsoid> ells(2);
+    ells[0].mean = {x, 0.25, 0.25}, ells[1].mean = {-x, 0.25, 0.25};
+    for (Ellipsoid& e : ells) e.cov = 0.01 * Eigen::Matrix3d::Identity();
+    return SurfaceIndex::build(ells, QueryParams{});
+  };
+  const SurfaceIndex apart = mirrored(0.5), overlapping = mirrored(0.2);
+  ASSERT_EQ(apart.ellipsoidAtRank(0), 1);
+  ASSERT_EQ(overlapping.ellipsoidAtRank(0), 1);
+  const SurfaceIndex::Nearest n = apart.nearest({0, 0.25, 0.25});
+  EXPECT_EQ(n.ellipsoid, 0);
+  EXPECT_GT(n.distance, 0);
+  const SurfaceIndex::Hit h = overlapping.firstHit({0, -2, 0.25}, {0, 1, 0}, 8.0);
+  EXPECT_EQ(h.ellipsoid, 0);
+  EXPECT_LT(h.t, 8.0);
+}
+
 TEST(SurfaceIndex, SameAnswersForAnyThreadCountAndEmpty) {
   const std::vector<Ellipsoid> ells = randomEllipsoids(2000, 2);
   QueryParams one, two;

@@ -140,7 +140,7 @@ struct SurfaceIndex::Impl {
   Eigen::Vector3d mean_origin = Eigen::Vector3d::Zero();  // the means' (a multiple of kGateMeanStep)
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
-  std::optional<BoxTree> tree;         // over the gate boxes
+  std::optional<BoxTree> tree;         // over the gate boxes; its items are ranks
 };
 
 SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, const QueryParams& params) {
@@ -152,8 +152,8 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
               [&](std::size_t i) { gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m); });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
   parallelFor(params.threads, n, [&](std::size_t i) { gateBox(gates[i], &lo[i], &hi[i]); });
-  impl->tree.emplace(lo, hi, kTreeLeafSize);
   if (n == 0) {
+    impl->tree.emplace(lo, hi);
     SurfaceIndex index;
     index.impl_ = std::move(impl);
     return index;
@@ -217,6 +217,15 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       impl->test_ellipsoid[r] = order[r].second;
       impl->rank_of[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
     });
+  }
+  // The box tree's items are ranks too: a leaf's gates are neighbours in memory, one lookup away.
+  {
+    std::vector<Eigen::Vector3f> lo_r(n), hi_r(n);
+    for (std::size_t r = 0; r < n; ++r) {
+      const auto i = static_cast<std::size_t>(impl->test_ellipsoid[r]);
+      lo_r[r] = lo[i], hi_r[r] = hi[i];
+    }
+    impl->tree.emplace(lo_r, hi_r, kTreeLeafSize);
   }
 
   // Per ellipsoid its level and its voxels there.
@@ -340,18 +349,21 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
     return best;
   }
   const Impl& im = *impl_;
-  const auto stored = [&](std::uint32_t i) -> const StoredGate& {
-    return im.gates[static_cast<std::size_t>(im.rank_of[i])];
-  };
-  const auto [i, d2] = im.tree->nearest(
+  const auto index_at = [&](std::uint32_t r) { return static_cast<std::uint32_t>(im.test_ellipsoid[r]); };
+  const auto [r, d2] = im.tree->nearest(
       q_W,
       [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
-        const StoredGate& g = stored(j);
+        const StoredGate& g = im.gates[j];
         // A lower bound first (with slack for rounding): the coin that holds the gate (|offset
         // along the shortest axis| <= e2, across it <= e0), tight for the flat patches of a
-        // surface, of which many are almost equally near a point far from them.
+        // surface, of which many are almost equally near a point far from them. The shortest
+        // axis is the quaternion's rotation's third column.
         const Eigen::Vector3d r = q - g.mean(im.mean_origin);
-        const double h = r.dot(axesFromQuaternion(g.rotation).col(2));
+        const double x = g.rotation[0], y = g.rotation[1], z = g.rotation[2], w = g.rotation[3];
+        const Eigen::Vector3d normal =
+            Eigen::Vector3d(2 * (x * z + w * y), 2 * (y * z - w * x), w * w + z * z - x * x - y * y) /
+            (x * x + y * y + z * z + w * w);
+        const double h = r.dot(normal);
         const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
         const double lower2 = dh * dh + da * da;
@@ -359,11 +371,10 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
         const double d = g.distance(im.mean_origin, im.k2, q, nullptr);
         return d * d;
       },
-      max_distance * max_distance);
-  if (i < 0) return best;
-  best.ellipsoid = static_cast<std::int32_t>(i);
-  const StoredGate& g = stored(static_cast<std::uint32_t>(i));
-  best.distance = g.distance(im.mean_origin, im.k2, q_W, &best.closest);
+      max_distance * max_distance, index_at);
+  if (r < 0) return best;
+  best.ellipsoid = im.test_ellipsoid[static_cast<std::size_t>(r)];
+  best.distance = im.gates[static_cast<std::size_t>(r)].distance(im.mean_origin, im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -372,13 +383,16 @@ SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::
   Hit best;
   if (!impl_ || impl_->gates.empty()) return best;
   const Impl& im = *impl_;
-  const auto [i, t] = im.tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
-    const StoredGate& g = im.gates[static_cast<std::size_t>(im.rank_of[j])];
-    double a[6];
-    g.upper(a);
-    return gateRayEntry(a, gateRayOrigin(g.mean(im.mean_origin).data(), a, im.k2, o), d, bound);
-  });
-  if (i >= 0) best = {static_cast<std::int32_t>(i), t};
+  const auto [r, t] = im.tree->firstHit(
+      o, d, max_t,
+      [&](std::uint32_t j, double bound) {
+        const StoredGate& g = im.gates[j];
+        double a[6];
+        g.upper(a);
+        return gateRayEntry(a, gateRayOrigin(g.mean(im.mean_origin).data(), a, im.k2, o), d, bound);
+      },
+      [&](std::uint32_t j) { return im.test_ellipsoid[j]; });
+  if (r >= 0) best = {im.test_ellipsoid[static_cast<std::size_t>(r)], t};
   return best;
 }
 
