@@ -200,7 +200,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
   };
   std::vector<Splat> splats(order.size());
   parallelFor(threads, order.size(), [&](std::size_t k) {
-    const EllipsoidGate g = surface.gateOf(static_cast<std::size_t>(order[k].second));
+    const EllipsoidGate g = surface.rayGateOf(static_cast<std::size_t>(order[k].second));
     Splat& s = splats[k];
     s.t_lo = order[k].first;
     s.index = order[k].second;

@@ -284,15 +284,20 @@ std::size_t SurfaceIndex::memoryBytes() const {
   return bytes + impl_->tree->memoryBytes();
 }
 
-EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
-  return gateAtRank(static_cast<std::size_t>(impl_->rank_of[i]));
-}
-
 std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->test_ellipsoid[r]; }
 
 Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) const {
   const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
   return gateNormal(s.matrixA(), s.mean(impl_->mean_origin), p);
+}
+
+EllipsoidGate SurfaceIndex::rayGateOf(std::size_t i) const {
+  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  EllipsoidGate g;
+  g.mean = s.mean(impl_->mean_origin);
+  g.A = s.matrixA();
+  g.k2 = impl_->k2;
+  return g;
 }
 
 EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
@@ -303,8 +308,6 @@ EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
   g.rotation = Eigen::Vector4f(s.rotation);
   g.axes = axesFromQuaternion(s.rotation);
   g.semi_axes = s.semiAxes();
-  // k sqrt(Sigma_ii + s0^2) from the frame (the box itself is not kept).
-  g.half_extent = (g.axes.cwiseAbs2() * g.semi_axes.cwiseAbs2()).cwiseSqrt();
   g.k2 = impl_->k2;
   return g;
 }
