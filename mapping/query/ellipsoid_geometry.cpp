@@ -145,7 +145,7 @@ void roundToFloat(double* v, int n) {
 
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m) {
   EllipsoidGate g;
-  g.mean = ((e.mean / kGateMeanStep).array().round() * kGateMeanStep).matrix();
+  g.mean = e.mean;
   g.k2 = gate_sigma * gate_sigma;
   Eigen::Matrix3d cov = 0.5 * (e.cov + e.cov.transpose());
   cov.diagonal().array() += min_sigma_m * min_sigma_m;

@@ -15,10 +15,10 @@
 
 namespace vdmap {
 
-/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. The mean
-/// is rounded to kGateMeanStep; A, semi_axes and the frame's quaternion are float values (rounded,
-/// 6e-8 relative: far below what a covariance of a few hundred noisy points knows), so that the
-/// query map stores them compactly and answers as the gate.
+/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. A,
+/// semi_axes and the frame's quaternion are float values (rounded, 6e-8 relative: far below what a
+/// covariance of a few hundred noisy points knows), so that the query map stores them in float and
+/// answers as the gate.
 struct EllipsoidGate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
@@ -37,11 +37,6 @@ struct EllipsoidGate {
 inline Eigen::Matrix3d axesFromQuaternion(const float q[4]) {
   return Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
 }
-
-/// The step a gate's mean is rounded to: 2^-20 m (0.95 um; a mean moves by at most 0.48 um, far
-/// below what a few hundred noisy points know), so that the query map keeps it in 12 bytes as
-/// whole steps from a corner of the map.
-constexpr double kGateMeanStep = 1.0 / (1 << 20);
 
 /// The gate of `e` at k = gate_sigma with covariance floor min_sigma_m (docs/method.md 13).
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m);

@@ -4,7 +4,6 @@
 #include <cmath>
 #include <limits>
 #include <optional>
-#include <stdexcept>
 
 #include "mapping/core/box_tree.h"
 #include "mapping/core/parallel.h"
@@ -23,21 +22,19 @@ constexpr double kLevelRatio = 2.0;
 // a query's leaf tests are cheap lower bounds before the exact distance or entry.
 constexpr std::uint32_t kTreeLeafSize = 8;
 
-// An ellipsoid's gate as stored in 64 bytes (one cache line, instead of an EllipsoidGate's 240):
-// what the gate test reads first (mean, A's upper triangle), then the principal frame for
-// distances and views. makeGate rounds the mean to kGateMeanStep and the shape to float, so the
-// integer mean (in steps from the index's origin) and the float copies are exact, and the axes
-// are rebuilt from the quaternion as makeGate built them. k^2 is the index's.
-struct alignas(64) StoredGate {
-  std::int32_t mean_steps[3];
+// An ellipsoid's gate as stored in 80 bytes (instead of an EllipsoidGate's 240): what the gate
+// test reads first (mean, A's upper triangle), then the principal frame for distances and views.
+// makeGate rounds the shape to float, so the float copies are exact, and the axes are rebuilt
+// from the quaternion as makeGate built them. k^2 is the index's. (The mean stays in double: in
+// whole 2^-20 m steps from the map's corner, 12 bytes less, it moved thin gates' squared gate
+// distances enough to change p_occupied by up to 5e-5 where the classification tests look.)
+struct StoredGate {
+  double mean[3];
   float a[6];  // A00, A11, A22, A01, A02, A12
   float rotation[4];
   float semi_axes[3];
 
   void upper(double out[6]) const { std::copy(a, a + 6, out); }
-  Eigen::Vector3d mean(const Eigen::Vector3d& origin) const {
-    return origin + kGateMeanStep * Eigen::Vector3d(mean_steps[0], mean_steps[1], mean_steps[2]);
-  }
   Eigen::Matrix3d matrixA() const {
     Eigen::Matrix3d m;
     m << a[0], a[3], a[4], a[3], a[1], a[5], a[4], a[5], a[2];
@@ -45,14 +42,12 @@ struct alignas(64) StoredGate {
   }
   Eigen::Vector3d semiAxes() const { return {semi_axes[0], semi_axes[1], semi_axes[2]}; }
   /// distanceToGate of this gate.
-  double distance(const Eigen::Vector3d& origin, double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
+  double distance(double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
     double u[6];
     upper(u);
-    const Eigen::Vector3d m = mean(origin);
-    return distanceToGate(m.data(), u, k2, axesFromQuaternion(rotation), semiAxes(), q, closest);
+    return distanceToGate(mean, u, k2, axesFromQuaternion(rotation), semiAxes(), q, closest);
   }
 };
-static_assert(sizeof(StoredGate) == 64);
 
 // One level: the gate ranks sorted by (voxel key, rank), and an open-addressing table from a
 // voxel key to its run of ranks, filled in key order (deterministic). The keys are in the table
@@ -135,9 +130,8 @@ struct SurfaceIndex::Impl {
   // hold ranks.
   std::vector<StoredGate> gates;
   std::vector<std::int32_t> test_ellipsoid, rank_of;
-  std::vector<int> levels_used;                           // the non-empty levels
-  Eigen::Vector3d origin = Eigen::Vector3d::Zero();       // the grid's lower corner
-  Eigen::Vector3d mean_origin = Eigen::Vector3d::Zero();  // the means' (a multiple of kGateMeanStep)
+  std::vector<int> levels_used;                      // the non-empty levels
+  Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
   std::optional<BoxTree> tree;         // over the gate boxes; its items are ranks
@@ -172,12 +166,6 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
   const double extent = (hi_all - lo_all).maxCoeff();
   double side = std::max({2.0 * half[n / 2], 1e-6, extent / static_cast<double>(VoxelKey::kAxisMax - 2)});
   impl->origin = lo_all;
-  // The means in whole steps from the lowest ones (exact: makeGate rounded them to the step).
-  Eigen::Vector3d mean_lo = Eigen::Vector3d::Constant(std::numeric_limits<double>::infinity()), mean_hi = -mean_lo;
-  for (const EllipsoidGate& g : gates) mean_lo = mean_lo.cwiseMin(g.mean), mean_hi = mean_hi.cwiseMax(g.mean);
-  if (!((mean_hi - mean_lo).maxCoeff() / kGateMeanStep < 2147483647.0))
-    throw std::length_error("query map: the map's ellipsoids span more than 2 km");
-  impl->mean_origin = mean_lo;
 
   // Gate tests in Morton order of the means at the finest side (ties: index), ranks in the grid.
   {
@@ -207,8 +195,7 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
     parallelFor(params.threads, n, [&](std::size_t r) {
       const EllipsoidGate& g = gates[static_cast<std::size_t>(order[r].second)];
       StoredGate& s = impl->gates[r];
-      for (int k = 0; k < 3; ++k)
-        s.mean_steps[k] = static_cast<std::int32_t>((g.mean[k] - impl->mean_origin[k]) / kGateMeanStep);
+      std::copy(g.mean.data(), g.mean.data() + 3, s.mean);
       double a[6];
       gateUpper(g, a);
       for (int k = 0; k < 6; ++k) s.a[k] = static_cast<float>(a[k]);
@@ -288,13 +275,13 @@ std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->
 
 Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) const {
   const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
-  return gateNormal(s.matrixA(), s.mean(impl_->mean_origin), p);
+  return gateNormal(s.matrixA(), Eigen::Vector3d(s.mean), p);
 }
 
 EllipsoidGate SurfaceIndex::rayGateOf(std::size_t i) const {
   const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
   EllipsoidGate g;
-  g.mean = s.mean(impl_->mean_origin);
+  g.mean = Eigen::Vector3d(s.mean);
   g.A = s.matrixA();
   g.k2 = impl_->k2;
   return g;
@@ -303,7 +290,7 @@ EllipsoidGate SurfaceIndex::rayGateOf(std::size_t i) const {
 EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
   EllipsoidGate g;
-  g.mean = s.mean(impl_->mean_origin);
+  g.mean = Eigen::Vector3d(s.mean);
   g.A = s.matrixA();
   g.rotation = Eigen::Vector4f(s.rotation);
   g.axes = axesFromQuaternion(s.rotation);
@@ -314,7 +301,7 @@ EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
 
 Eigen::Vector4d SurfaceIndex::ballAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
-  const Eigen::Vector3d m = s.mean(impl_->mean_origin);
+  const Eigen::Vector3d m = Eigen::Vector3d(s.mean);
   return {m.x(), m.y(), m.z(), s.semi_axes[0]};
 }
 
@@ -323,7 +310,7 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
   if (!impl_) return best;
   const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
     const StoredGate& g = impl_->gates[static_cast<std::size_t>(r)];
-    const Eigen::Vector3d m = g.mean(impl_->mean_origin);
+    const Eigen::Vector3d m = Eigen::Vector3d(g.mean);
     const double m2 = gateQuadratic(q_W.x() - m.x(), q_W.y() - m.y(), q_W.z() - m.z(), g.a[0], g.a[1], g.a[2], g.a[3],
                                     g.a[4], g.a[5]);
     if (m2 > impl_->k2 || m2 > best.second) return;
@@ -361,7 +348,7 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
         // along the shortest axis| <= e2, across it <= e0), tight for the flat patches of a
         // surface, of which many are almost equally near a point far from them. The shortest
         // axis is the quaternion's rotation's third column.
-        const Eigen::Vector3d r = q - g.mean(im.mean_origin);
+        const Eigen::Vector3d r = q - Eigen::Vector3d(g.mean);
         const double x = g.rotation[0], y = g.rotation[1], z = g.rotation[2], w = g.rotation[3];
         const Eigen::Vector3d normal =
             Eigen::Vector3d(2 * (x * z + w * y), 2 * (y * z - w * x), w * w + z * z - x * x - y * y) /
@@ -371,13 +358,13 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
         const double lower2 = dh * dh + da * da;
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
-        const double d = g.distance(im.mean_origin, im.k2, q, nullptr);
+        const double d = g.distance(im.k2, q, nullptr);
         return d * d;
       },
       max_distance * max_distance, index_at);
   if (r < 0) return best;
   best.ellipsoid = im.test_ellipsoid[static_cast<std::size_t>(r)];
-  best.distance = im.gates[static_cast<std::size_t>(r)].distance(im.mean_origin, im.k2, q_W, &best.closest);
+  best.distance = im.gates[static_cast<std::size_t>(r)].distance(im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -392,7 +379,7 @@ SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::
         const StoredGate& g = im.gates[j];
         double a[6];
         g.upper(a);
-        return gateRayEntry(a, gateRayOrigin(g.mean(im.mean_origin).data(), a, im.k2, o), d, bound);
+        return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
       },
       [&](std::uint32_t j) { return im.test_ellipsoid[j]; });
   if (r >= 0) best = {im.test_ellipsoid[static_cast<std::size_t>(r)], t};
