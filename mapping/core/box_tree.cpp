@@ -5,19 +5,21 @@
 
 namespace vdmap {
 
-BoxTree::BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi) {
+BoxTree::BoxTree(const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi,
+                 std::uint32_t leaf_size) {
   assert(lo.size() == hi.size());
   if (lo.empty()) return;
   std::vector<Eigen::Vector3f> centre(lo.size());
   for (std::size_t i = 0; i < lo.size(); ++i) centre[i] = 0.5f * (lo[i] + hi[i]);
   items_.resize(lo.size());
   for (std::size_t i = 0; i < items_.size(); ++i) items_[i] = static_cast<std::uint32_t>(i);
-  nodes_.reserve(2 * lo.size() / kLeafSize + 1);
-  build(0, static_cast<std::uint32_t>(items_.size()), lo, hi, centre);
+  build(0, static_cast<std::uint32_t>(items_.size()), std::max<std::uint32_t>(1, leaf_size), lo, hi, centre);
+  nodes_.shrink_to_fit();
 }
 
-std::uint32_t BoxTree::build(std::uint32_t first, std::uint32_t count, const std::vector<Eigen::Vector3f>& lo,
-                             const std::vector<Eigen::Vector3f>& hi, const std::vector<Eigen::Vector3f>& centre) {
+std::uint32_t BoxTree::build(std::uint32_t first, std::uint32_t count, std::uint32_t leaf_size,
+                             const std::vector<Eigen::Vector3f>& lo, const std::vector<Eigen::Vector3f>& hi,
+                             const std::vector<Eigen::Vector3f>& centre) {
   const auto id = static_cast<std::uint32_t>(nodes_.size());
   nodes_.push_back({});
   Node n;
@@ -27,7 +29,7 @@ std::uint32_t BoxTree::build(std::uint32_t first, std::uint32_t count, const std
     n.lo = n.lo.cwiseMin(lo[items_[j]]);
     n.hi = n.hi.cwiseMax(hi[items_[j]]);
   }
-  if (count <= kLeafSize) {
+  if (count <= leaf_size) {
     n.first = first;
     n.count = count;
   } else {
@@ -38,8 +40,8 @@ std::uint32_t BoxTree::build(std::uint32_t first, std::uint32_t count, const std
     std::nth_element(begin, mid, end, [&](std::uint32_t a, std::uint32_t b) {
       return centre[a](axis) < centre[b](axis) || (centre[a](axis) == centre[b](axis) && a < b);
     });
-    n.left = build(first, count / 2, lo, hi, centre);
-    n.right = build(first + count / 2, count - count / 2, lo, hi, centre);
+    build(first, count / 2, leaf_size, lo, hi, centre);  // the next node
+    n.first = build(first + count / 2, count - count / 2, leaf_size, lo, hi, centre);
   }
   nodes_[id] = n;
   return id;

@@ -25,36 +25,42 @@ double robustLength(double a, double b, double c) {
   return m * std::sqrt((a / m) * (a / m) + (b / m) * (b / m) + (c / m) * (c / m));
 }
 
-// Root s of (r0 z0 / (s + r0))^2 + (z1 / (s + 1))^2 = 1 (Eberly's GetRoot, 2-D).
-double getRoot2(double r0, double z0, double z1, double g) {
-  const double n0 = r0 * z0;
-  double s0 = z1 - 1, s1 = g < 0 ? 0 : robustLength(n0, z1) - 1, s = 0;
+// The root of the decreasing convex g(s) = sum_i (n_i / (s + r_i))^2 - 1 in [s0, s1], g(s0) >= 0 >=
+// g(s1) (Eberly's GetRoot), to the last bit: Newton steps from s0, which approach the root from the
+// left (the tangents of a convex decreasing function stay below it), kept inside the bracket and
+// replaced by bisection when rounding puts them outside; until the bracket cannot shrink. A few
+// steps where bisection takes 60 to 100.
+template <int N>
+double getRoot(const double n[N], const double r[N], double s0, double s1) {
+  double s = s0;
   for (int i = 0; i < kMaxBisections; ++i) {
-    s = 0.5 * (s0 + s1);
-    if (s == s0 || s == s1) break;
-    const double ratio0 = n0 / (s + r0), ratio1 = z1 / (s + 1);
-    g = ratio0 * ratio0 + ratio1 * ratio1 - 1;
+    double g = -1, slope = 0;
+    for (int k = 0; k < N; ++k) {
+      const double ratio = n[k] / (s + r[k]);
+      g += ratio * ratio;
+      slope -= 2 * ratio * ratio / (s + r[k]);
+    }
     if (g > 0) s0 = s;
-    else if (g < 0) s1 = s;
-    else break;
+    else if (g < 0 && i > 0) s1 = s;  // (at s0 only by rounding of s0 + r_i: keep the bracket)
+    else if (g == 0) break;
+    double next = s - g / slope;
+    if (!(next > s0 && next < s1)) next = 0.5 * (s0 + s1);
+    if (next == s0 || next == s1) break;
+    s = next;
   }
   return s;
 }
 
+// Root s of (r0 z0 / (s + r0))^2 + (z1 / (s + 1))^2 = 1 (Eberly's GetRoot, 2-D).
+double getRoot2(double r0, double z0, double z1, double g) {
+  const double n[2] = {r0 * z0, z1}, r[2] = {r0, 1};
+  return getRoot<2>(n, r, z1 - 1, g < 0 ? 0 : robustLength(n[0], z1) - 1);
+}
+
 // The 3-D GetRoot.
 double getRoot3(double r0, double r1, double z0, double z1, double z2, double g) {
-  const double n0 = r0 * z0, n1 = r1 * z1;
-  double s0 = z2 - 1, s1 = g < 0 ? 0 : robustLength(n0, n1, z2) - 1, s = 0;
-  for (int i = 0; i < kMaxBisections; ++i) {
-    s = 0.5 * (s0 + s1);
-    if (s == s0 || s == s1) break;
-    const double ratio0 = n0 / (s + r0), ratio1 = n1 / (s + r1), ratio2 = z2 / (s + 1);
-    g = ratio0 * ratio0 + ratio1 * ratio1 + ratio2 * ratio2 - 1;
-    if (g > 0) s0 = s;
-    else if (g < 0) s1 = s;
-    else break;
-  }
-  return s;
+  const double n[3] = {r0 * z0, r1 * z1, z2}, r[3] = {r0, r1, 1};
+  return getRoot<3>(n, r, z2 - 1, g < 0 ? 0 : robustLength(n[0], n[1], z2) - 1);
 }
 
 // Ellipse e0 >= e1 > 0, y0, y1 >= 0.
@@ -155,8 +161,15 @@ EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m
   g.semi_axes[1] = std::min(g.semi_axes[1], g.semi_axes[0]);
   g.semi_axes[2] = std::min(g.semi_axes[2], g.semi_axes[1]);
   g.half_extent = gate_sigma * cov.diagonal().cwiseSqrt();
-  // The shape in float (rounding is monotone: the order of the semi-axes and A's symmetry stay).
-  roundToFloat(g.A.data(), 9), roundToFloat(g.axes.data(), 9), roundToFloat(g.semi_axes.data(), 3);
+  // The shape in float (rounding is monotone: the order of the semi-axes and A's symmetry stay);
+  // the frame as a rotation's quaternion in float (a mirrored frame flips its shortest axis).
+  roundToFloat(g.A.data(), 9), roundToFloat(g.semi_axes.data(), 3);
+  if (g.axes.determinant() < 0) g.axes.col(2) = -g.axes.col(2);
+  const Eigen::Quaterniond q(g.axes);
+  double c[4] = {q.x(), q.y(), q.z(), q.w()};
+  roundToFloat(c, 4);
+  g.rotation = Eigen::Vector4d(c[0], c[1], c[2], c[3]).cast<float>();
+  g.axes = axesFromQuaternion(g.rotation.data());
   return g;
 }
 

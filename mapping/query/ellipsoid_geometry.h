@@ -7,6 +7,7 @@
 #include <limits>
 
 #include <Eigen/Core>
+#include <Eigen/Geometry>
 
 #include "mapping/core/camera.h"
 #include "mapping/core/types.h"
@@ -14,20 +15,28 @@
 
 namespace vdmap {
 
-/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. A, axes
-/// and semi_axes are float values (rounded, 6e-8 relative: far below what a covariance of a few
-/// hundred noisy points knows), so that the query map stores them in float and answers as the gate.
+/// An ellipsoid's gate {x : (x - mean)^T A (x - mean) <= k^2}, A = (Sigma + s0^2 I)^-1. A,
+/// semi_axes and the frame's quaternion are float values (rounded, 6e-8 relative: far below what a
+/// covariance of a few hundred noisy points knows), so that the query map stores them in float and
+/// answers as the gate.
 struct EllipsoidGate {
   Eigen::Vector3d mean = Eigen::Vector3d::Zero();
   Eigen::Matrix3d A = Eigen::Matrix3d::Identity();
-  /// Principal frame of Sigma + s0^2 I: columns are unit axes, longest first; semi_axes[i] =
-  /// k sqrt(lambda_i) along column i (descending).
+  /// Principal frame of Sigma + s0^2 I: columns are unit axes, longest first (a rotation:
+  /// axesFromQuaternion(rotation)); semi_axes[i] = k sqrt(lambda_i) along column i (descending).
   Eigen::Matrix3d axes = Eigen::Matrix3d::Identity();
+  Eigen::Vector4f rotation = Eigen::Vector4f(0, 0, 0, 1);  ///< axes as a quaternion x, y, z, w
   Eigen::Vector3d semi_axes = Eigen::Vector3d::Zero();
   /// Half-extent of the gate's axis-aligned bounding box: k sqrt(Sigma_ii + s0^2).
   Eigen::Vector3d half_extent = Eigen::Vector3d::Zero();
   double k2 = 0;  ///< k^2
 };
+
+/// The rotation matrix of the quaternion q = (x, y, z, w), normalised in double: a gate's axes
+/// from the 4 floats the query map keeps of them (instead of 9).
+inline Eigen::Matrix3d axesFromQuaternion(const float q[4]) {
+  return Eigen::Quaterniond(q[3], q[0], q[1], q[2]).normalized().toRotationMatrix();
+}
 
 /// The gate of `e` at k = gate_sigma with covariance floor min_sigma_m (docs/method.md 13).
 EllipsoidGate makeGate(const Ellipsoid& e, double gate_sigma, double min_sigma_m);
@@ -48,8 +57,8 @@ inline double gateDistance2(const EllipsoidGate& g, const Eigen::Vector3d& q) {
 
 /// Euclidean distance from y to the surface of the axis-aligned ellipsoid with semi-axes
 /// e0 >= e1 >= e2 > 0 centred at the origin (Eberly, "Distance from a point to an ellipse, an
-/// ellipsoid, or a hyperellipsoid": robust bisection on the root of the 1-D equation, to the last
-/// bit). `closest` (optional) receives the nearest surface point. Works inside and outside.
+/// ellipsoid, or a hyperellipsoid": the root of the 1-D equation to the last bit, by Newton steps
+/// kept inside its bracket). `closest` (optional) receives the nearest surface point. Works inside and outside.
 double distanceToEllipsoidSurface(const Eigen::Vector3d& semi_axes, const Eigen::Vector3d& y,
                                   Eigen::Vector3d* closest = nullptr);
 

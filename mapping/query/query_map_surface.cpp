@@ -200,7 +200,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
   };
   std::vector<Splat> splats(order.size());
   parallelFor(threads, order.size(), [&](std::size_t k) {
-    const EllipsoidGate g = surface.gateOf(static_cast<std::size_t>(order[k].second));
+    const EllipsoidGate g = surface.rayGateOf(static_cast<std::size_t>(order[k].second));
     Splat& s = splats[k];
     s.t_lo = order[k].first;
     s.index = order[k].second;
@@ -281,7 +281,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
       }
     }
     // makeHit's answers. Neighbouring pixels mostly hit the same gate: its A and mean are read
-    // once per run of it (gateOf's are normalOf's, so the normals are castRays' bit for bit).
+    // once per run of it (rayGateOf's are normalOf's, so the normals are castRays' bit for bit).
     std::int32_t last = -1;
     EllipsoidGate g;
     for (int v = row0; v <= row1; ++v)
@@ -289,7 +289,7 @@ std::vector<RayHit> QueryMap::castView(const PinholeCamera& camera, const Transf
         const std::size_t p = static_cast<std::size_t>(v - row0) * width + u;
         const std::int32_t i = best_i[p];
         if (i < 0) continue;
-        if (i != last) g = surface.gateOf(static_cast<std::size_t>(i)), last = i;
+        if (i != last) g = surface.rayGateOf(static_cast<std::size_t>(i)), last = i;
         RayHit& hit = pixels[static_cast<std::size_t>(v) * width + u];
         hit.hit = true;
         hit.t_m = best_t[p];

@@ -192,11 +192,15 @@ TEST(QueryGeometry, DistanceToGateIsZeroInsideAndMatchesThePrincipalFrame) {
   EXPECT_NEAR(g.semi_axes[2], 3 * std::sqrt(0.004 * 0.004 + 1e-6), 1.2e-7 * g.semi_axes[2]);
   for (int i = 0; i < 3; ++i) EXPECT_EQ(g.semi_axes[i], static_cast<float>(g.semi_axes[i])) << i;
   for (int i = 0; i < 9; ++i) EXPECT_EQ(g.A.data()[i], static_cast<float>(g.A.data()[i])) << i;
-  for (int i = 0; i < 9; ++i) EXPECT_EQ(g.axes.data()[i], static_cast<float>(g.axes.data()[i])) << i;
+  // The frame: the rotation of a float quaternion, whose columns diagonalise the covariance.
+  for (int i = 0; i < 4; ++i) EXPECT_EQ(g.rotation[i], static_cast<float>(g.rotation[i])) << i;
+  EXPECT_EQ(g.axes, axesFromQuaternion(g.rotation.data()));
+  const Eigen::Matrix3d S = 9 * g.axes.transpose() * (e.cov + 1e-6 * Eigen::Matrix3d::Identity()) * g.axes;
+  EXPECT_TRUE(S.isApprox(Eigen::Matrix3d(g.semi_axes.cwiseAbs2().asDiagonal()), 1e-6)) << S;
   EXPECT_TRUE((g.A * (e.cov + 1e-6 * Eigen::Matrix3d::Identity())).isApprox(Eigen::Matrix3d::Identity(), 1e-6));
   // A point 10 cm out along the shortest axis: the distance is 10 cm and the closest point is on
   // the gate's surface (m^2 = k^2, to float rounding of the shape).
-  const Eigen::Vector3d q = e.mean + (g.semi_axes[2] + 0.1) * g.axes.col(2);
+  const Eigen::Vector3d q = g.mean + (g.semi_axes[2] + 0.1) * g.axes.col(2);
   EXPECT_NEAR(distanceToGate(g, q, &closest), 0.1, 1e-7);
   EXPECT_NEAR(gateDistance2(g, closest), 9.0, 1e-5);
   // Half-extent of the box: k sqrt(Sigma_ii + s0^2), and the gate inside it.
@@ -405,6 +409,27 @@ TEST(SurfaceIndex, MatchesLoopsOverEveryEllipsoidOnTheBoxRoom) {
   expectIndexMatchesLoops(map.ellipsoids, params, 20000, 200, 1000);
   params.gate_sigma = 2.0, params.min_sigma_m = 0.0001;
   expectIndexMatchesLoops(map.ellipsoids, params, 2000, 50, 200);
+}
+
+TEST(SurfaceIndex, TiesGoToTheLowerIndexWhateverTheStorageOrder) {
+  // Two equal spheres (gate radius 0.3 m) mirrored about x = 0, the one at +x first: the gates
+  // are stored in Morton order (the -x one first), yet a point or a ray equally near both
+  // answers ellipsoid 0.
+  const auto mirrored = [](double x) {
+    std::vector<Ellipsoid> ells(2);
+    ells[0].mean = {x, 0.25, 0.25}, ells[1].mean = {-x, 0.25, 0.25};
+    for (Ellipsoid& e : ells) e.cov = 0.01 * Eigen::Matrix3d::Identity();
+    return SurfaceIndex::build(ells, QueryParams{});
+  };
+  const SurfaceIndex apart = mirrored(0.5), overlapping = mirrored(0.2);
+  ASSERT_EQ(apart.ellipsoidAtRank(0), 1);
+  ASSERT_EQ(overlapping.ellipsoidAtRank(0), 1);
+  const SurfaceIndex::Nearest n = apart.nearest({0, 0.25, 0.25});
+  EXPECT_EQ(n.ellipsoid, 0);
+  EXPECT_GT(n.distance, 0);
+  const SurfaceIndex::Hit h = overlapping.firstHit({0, -2, 0.25}, {0, 1, 0}, 8.0);
+  EXPECT_EQ(h.ellipsoid, 0);
+  EXPECT_LT(h.t, 8.0);
 }
 
 TEST(SurfaceIndex, SameAnswersForAnyThreadCountAndEmpty) {

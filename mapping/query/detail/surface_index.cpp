@@ -18,18 +18,21 @@ namespace {
 // every lookup scans. A lookup visits one voxel per non-empty level.
 constexpr int kLevels = 12;
 constexpr double kLevelRatio = 2.0;
+// Gates a leaf of the box tree holds at most: 8 halves its nodes against 4 (each node 32 B), and
+// a query's leaf tests are cheap lower bounds before the exact distance or entry.
+constexpr std::uint32_t kTreeLeafSize = 8;
 
-// An ellipsoid's gate as stored (108 B instead of an EllipsoidGate's 224 and the 112 of the
-// copies the lookups read): what the gate test reads first (mean, A's upper triangle), then the
-// principal frame for distances and views. makeGate's shape is in float, so the float copy is
-// exact. k^2 is the index's; the box's half-extent is kept grown by a millionth and rounded up to
-// float (it only bounds: a larger box is still a box of the gate).
+// An ellipsoid's gate as stored in 80 bytes (instead of an EllipsoidGate's 240): what the gate
+// test reads first (mean, A's upper triangle), then the principal frame for distances and views.
+// makeGate rounds the shape to float, so the float copies are exact, and the axes are rebuilt
+// from the quaternion as makeGate built them. k^2 is the index's. (The mean stays in double: in
+// whole 2^-20 m steps from the map's corner, 12 bytes less, it moved thin gates' squared gate
+// distances enough to change p_occupied by up to 5e-5 where the classification tests look.)
 struct StoredGate {
   double mean[3];
-  float a[6];     // A00, A11, A22, A01, A02, A12
-  float axes[9];  // column-major: unit axes, longest first
+  float a[6];  // A00, A11, A22, A01, A02, A12
+  float rotation[4];
   float semi_axes[3];
-  float half_extent[3];
 
   void upper(double out[6]) const { std::copy(a, a + 6, out); }
   Eigen::Matrix3d matrixA() const {
@@ -37,17 +40,12 @@ struct StoredGate {
     m << a[0], a[3], a[4], a[3], a[1], a[5], a[4], a[5], a[2];
     return m;
   }
-  Eigen::Matrix3d axesMatrix() const {
-    Eigen::Matrix3d m;
-    std::copy(axes, axes + 9, m.data());
-    return m;
-  }
   Eigen::Vector3d semiAxes() const { return {semi_axes[0], semi_axes[1], semi_axes[2]}; }
   /// distanceToGate of this gate.
   double distance(double k2, const Eigen::Vector3d& q, Eigen::Vector3d* closest) const {
     double u[6];
     upper(u);
-    return distanceToGate(mean, u, k2, axesMatrix(), semiAxes(), q, closest);
+    return distanceToGate(mean, u, k2, axesFromQuaternion(rotation), semiAxes(), q, closest);
   }
 };
 
@@ -136,7 +134,7 @@ struct SurfaceIndex::Impl {
   Eigen::Vector3d origin = Eigen::Vector3d::Zero();  // the grid's lower corner
   GridLevel levels[kLevels];
   std::vector<std::int32_t> oversize;  // the ranks of gates too large for every level, ascending
-  std::optional<BoxTree> tree;         // over the gate boxes
+  std::optional<BoxTree> tree;         // over the gate boxes; its items are ranks
 };
 
 SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, const QueryParams& params) {
@@ -148,8 +146,8 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
               [&](std::size_t i) { gates[i] = makeGate(ellipsoids_W[i], params.gate_sigma, params.min_sigma_m); });
   std::vector<Eigen::Vector3f> lo(n), hi(n);
   parallelFor(params.threads, n, [&](std::size_t i) { gateBox(gates[i], &lo[i], &hi[i]); });
-  impl->tree.emplace(lo, hi);
   if (n == 0) {
+    impl->tree.emplace(lo, hi);
     SurfaceIndex index;
     index.impl_ = std::move(impl);
     return index;
@@ -201,14 +199,20 @@ SurfaceIndex SurfaceIndex::build(const std::vector<Ellipsoid>& ellipsoids_W, con
       double a[6];
       gateUpper(g, a);
       for (int k = 0; k < 6; ++k) s.a[k] = static_cast<float>(a[k]);
-      for (int k = 0; k < 9; ++k) s.axes[k] = static_cast<float>(g.axes.data()[k]);
-      for (int k = 0; k < 3; ++k) {
-        s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
-        s.half_extent[k] = std::nextafter(static_cast<float>(g.half_extent[k] * (1 + 1e-6) + 1e-9), INFINITY);
-      }
+      for (int k = 0; k < 4; ++k) s.rotation[k] = g.rotation[k];
+      for (int k = 0; k < 3; ++k) s.semi_axes[k] = static_cast<float>(g.semi_axes[k]);
       impl->test_ellipsoid[r] = order[r].second;
       impl->rank_of[static_cast<std::size_t>(order[r].second)] = static_cast<std::int32_t>(r);
     });
+  }
+  // The box tree's items are ranks too: a leaf's gates are neighbours in memory, one lookup away.
+  {
+    std::vector<Eigen::Vector3f> lo_r(n), hi_r(n);
+    for (std::size_t r = 0; r < n; ++r) {
+      const auto i = static_cast<std::size_t>(impl->test_ellipsoid[r]);
+      lo_r[r] = lo[i], hi_r[r] = hi[i];
+    }
+    impl->tree.emplace(lo_r, hi_r, kTreeLeafSize);
   }
 
   // Per ellipsoid its level and its voxels there.
@@ -267,10 +271,6 @@ std::size_t SurfaceIndex::memoryBytes() const {
   return bytes + impl_->tree->memoryBytes();
 }
 
-EllipsoidGate SurfaceIndex::gateOf(std::size_t i) const {
-  return gateAtRank(static_cast<std::size_t>(impl_->rank_of[i]));
-}
-
 std::int32_t SurfaceIndex::ellipsoidAtRank(std::size_t r) const { return impl_->test_ellipsoid[r]; }
 
 Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) const {
@@ -278,21 +278,31 @@ Eigen::Vector3d SurfaceIndex::normalOf(std::size_t i, const Eigen::Vector3d& p) 
   return gateNormal(s.matrixA(), Eigen::Vector3d(s.mean), p);
 }
 
+EllipsoidGate SurfaceIndex::rayGateOf(std::size_t i) const {
+  const StoredGate& s = impl_->gates[static_cast<std::size_t>(impl_->rank_of[i])];
+  EllipsoidGate g;
+  g.mean = Eigen::Vector3d(s.mean);
+  g.A = s.matrixA();
+  g.k2 = impl_->k2;
+  return g;
+}
+
 EllipsoidGate SurfaceIndex::gateAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
   EllipsoidGate g;
   g.mean = Eigen::Vector3d(s.mean);
   g.A = s.matrixA();
-  g.axes = s.axesMatrix();
+  g.rotation = Eigen::Vector4f(s.rotation);
+  g.axes = axesFromQuaternion(s.rotation);
   g.semi_axes = s.semiAxes();
-  g.half_extent = Eigen::Vector3f(s.half_extent).cast<double>();
   g.k2 = impl_->k2;
   return g;
 }
 
 Eigen::Vector4d SurfaceIndex::ballAtRank(std::size_t r) const {
   const StoredGate& s = impl_->gates[r];
-  return {s.mean[0], s.mean[1], s.mean[2], s.semi_axes[0]};
+  const Eigen::Vector3d m = Eigen::Vector3d(s.mean);
+  return {m.x(), m.y(), m.z(), s.semi_axes[0]};
 }
 
 std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) const {
@@ -300,8 +310,9 @@ std::pair<std::int32_t, double> SurfaceIndex::gate(const Eigen::Vector3d& q_W) c
   if (!impl_) return best;
   const auto consider = [&](std::int32_t r) {  // a test's rank (Morton order)
     const StoredGate& g = impl_->gates[static_cast<std::size_t>(r)];
-    const double m2 = gateQuadratic(q_W.x() - g.mean[0], q_W.y() - g.mean[1], q_W.z() - g.mean[2], g.a[0], g.a[1],
-                                    g.a[2], g.a[3], g.a[4], g.a[5]);
+    const Eigen::Vector3d m = Eigen::Vector3d(g.mean);
+    const double m2 = gateQuadratic(q_W.x() - m.x(), q_W.y() - m.y(), q_W.z() - m.z(), g.a[0], g.a[1], g.a[2], g.a[3],
+                                    g.a[4], g.a[5]);
     if (m2 > impl_->k2 || m2 > best.second) return;
     const std::int32_t i = impl_->test_ellipsoid[static_cast<std::size_t>(r)];
     if (m2 < best.second || i < best.first) best = {i, m2};
@@ -328,31 +339,32 @@ SurfaceIndex::Nearest SurfaceIndex::nearest(const Eigen::Vector3d& q_W, double m
     return best;
   }
   const Impl& im = *impl_;
-  const auto stored = [&](std::uint32_t i) -> const StoredGate& {
-    return im.gates[static_cast<std::size_t>(im.rank_of[i])];
-  };
-  const auto [i, d2] = im.tree->nearest(
+  const auto index_at = [&](std::uint32_t r) { return static_cast<std::uint32_t>(im.test_ellipsoid[r]); };
+  const auto [r, d2] = im.tree->nearest(
       q_W,
       [&](std::uint32_t j, const Eigen::Vector3d& q, double bound) {
-        const StoredGate& g = stored(j);
-        // Lower bounds first (with slack for rounding): the gate's box, and the coin that holds
-        // it (|offset along the shortest axis| <= e2, across it <= e0), tight for the flat
-        // patches of a surface, of which many are almost equally near a point far from them.
+        const StoredGate& g = im.gates[j];
+        // A lower bound first (with slack for rounding): the coin that holds the gate (|offset
+        // along the shortest axis| <= e2, across it <= e0), tight for the flat patches of a
+        // surface, of which many are almost equally near a point far from them. The shortest
+        // axis is the quaternion's rotation's third column.
         const Eigen::Vector3d r = q - Eigen::Vector3d(g.mean);
-        const double box2 = (r.cwiseAbs() - Eigen::Vector3f(g.half_extent).cast<double>()).cwiseMax(0.0).squaredNorm();
-        const double h = r.x() * g.axes[6] + r.y() * g.axes[7] + r.z() * g.axes[8];
+        const double x = g.rotation[0], y = g.rotation[1], z = g.rotation[2], w = g.rotation[3];
+        const Eigen::Vector3d normal =
+            Eigen::Vector3d(2 * (x * z + w * y), 2 * (y * z - w * x), w * w + z * z - x * x - y * y) /
+            (x * x + y * y + z * z + w * w);
+        const double h = r.dot(normal);
         const double across = std::sqrt(std::max(0.0, r.squaredNorm() - h * h));
         const double dh = std::max(0.0, std::abs(h) - g.semi_axes[2]), da = std::max(0.0, across - g.semi_axes[0]);
-        const double lower2 = std::max(box2, dh * dh + da * da);
+        const double lower2 = dh * dh + da * da;
         if (lower2 > bound * (1 + 1e-9) + 1e-18) return lower2;
         const double d = g.distance(im.k2, q, nullptr);
         return d * d;
       },
-      max_distance * max_distance);
-  if (i < 0) return best;
-  best.ellipsoid = static_cast<std::int32_t>(i);
-  const StoredGate& g = stored(static_cast<std::uint32_t>(i));
-  best.distance = g.distance(im.k2, q_W, &best.closest);
+      max_distance * max_distance, index_at);
+  if (r < 0) return best;
+  best.ellipsoid = im.test_ellipsoid[static_cast<std::size_t>(r)];
+  best.distance = im.gates[static_cast<std::size_t>(r)].distance(im.k2, q_W, &best.closest);
   (void)d2;
   return best;
 }
@@ -361,13 +373,16 @@ SurfaceIndex::Hit SurfaceIndex::firstHit(const Eigen::Vector3d& o, const Eigen::
   Hit best;
   if (!impl_ || impl_->gates.empty()) return best;
   const Impl& im = *impl_;
-  const auto [i, t] = im.tree->firstHit(o, d, max_t, [&](std::uint32_t j, double bound) {
-    const StoredGate& g = im.gates[static_cast<std::size_t>(im.rank_of[j])];
-    double a[6];
-    g.upper(a);
-    return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
-  });
-  if (i >= 0) best = {static_cast<std::int32_t>(i), t};
+  const auto [r, t] = im.tree->firstHit(
+      o, d, max_t,
+      [&](std::uint32_t j, double bound) {
+        const StoredGate& g = im.gates[j];
+        double a[6];
+        g.upper(a);
+        return gateRayEntry(a, gateRayOrigin(g.mean, a, im.k2, o), d, bound);
+      },
+      [&](std::uint32_t j) { return im.test_ellipsoid[j]; });
+  if (r >= 0) best = {im.test_ellipsoid[static_cast<std::size_t>(r)], t};
   return best;
 }
 

@@ -43,13 +43,15 @@ class SurfaceIndex {
   /// (box tree, nearest node first).
   Hit firstHit(const Eigen::Vector3d& o, const Eigen::Vector3d& d, double max_t) const;
 
-  /// Ellipsoid i's gate (the kernels' input; half_extent rounded up to float).
-  EllipsoidGate gateOf(std::size_t i) const;
-  /// gateNormal(gateOf(i), p), bit for bit, without building the whole gate (a ray hit's normal).
+  /// What a ray's entry reads of ellipsoid i's gate: its mean, A and k^2 (the principal frame and
+  /// box left at identity and zero: rebuilding the frame would cost a view's splats).
+  EllipsoidGate rayGateOf(std::size_t i) const;
+  /// gateNormal of ellipsoid i's gate at p, bit for bit, from its A and mean alone (a ray hit's
+  /// normal).
   Eigen::Vector3d normalOf(std::size_t i, const Eigen::Vector3d& p) const;
   /// The gates are stored in Morton order of their means: the ellipsoid at storage rank r, and
-  /// its gate and bounding ball (mean, longest semi-axis). A pass over every gate reads memory in
-  /// order by rank, where one by ellipsoid index jumps.
+  /// its gate (without its box: half_extent zero) and bounding ball (mean, longest semi-axis). A
+  /// pass over every gate reads memory in order by rank, where one by ellipsoid index jumps.
   std::int32_t ellipsoidAtRank(std::size_t r) const;
   EllipsoidGate gateAtRank(std::size_t r) const;
   Eigen::Vector4d ballAtRank(std::size_t r) const;
