@@ -459,24 +459,11 @@ struct KeyframeViews::Impl {
     return true;
   }
 
-  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1. Frames go
-  /// in batches whose blocks are prefetched before any is read (as firstFree).
+  /// The keyframe of the first frame (in their order) of `ids` that sees q_W free, or -1.
   int firstFreeFrame(std::span<const std::int32_t> ids, const Eigen::Vector3d& q_W, ViewVerdict* out) const {
-    constexpr std::size_t kBatch = 8;
-    struct Located {
-      Eigen::Vector3d q;
-      const std::uint16_t* block;
-    };
-    Located loc[kBatch];
-    for (std::size_t start = 0; start < ids.size(); start += kBatch) {
-      const std::size_t m = std::min(kBatch, ids.size() - start);
-      for (std::size_t j = 0; j < m; ++j) {
-        loc[j].block = frameBlock(frames[static_cast<std::size_t>(ids[start + j])], q_W, &loc[j].q);
-        if (loc[j].block != nullptr) __builtin_prefetch(loc[j].block);
-      }
-      for (std::size_t j = 0; j < m; ++j)
-        if (loc[j].block != nullptr && blockFree(*loc[j].block, loc[j].q, out))
-          return frames[static_cast<std::size_t>(ids[start + j])].keyframe;
+    for (const std::int32_t id : ids) {
+      const FrameView& f = frames[static_cast<std::size_t>(id)];
+      if (frameFree(f, q_W, out)) return f.keyframe;
     }
     return -1;
   }
